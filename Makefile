@@ -1,0 +1,108 @@
+# saarsim: cycle-level simulator of a SaarCOR-style ray-tracing chip.
+#
+#   make            build everything (installs missing Debian packages first)
+#   make run        render the embedded default scene and print the report
+#   make test       build and run the Criterion test suite
+#   make bench      benchmarks; writes docs/PERFORMANCE.md
+#   make install    install binaries into $(PREFIX)/bin
+#   make SANITIZE=1 test   the same under ASan/UBSan (build-san/)
+#
+# One static library (libsaar.a) holds kernel-ref and the chip model; the
+# programs and the test binary link against it.
+
+PREFIX   ?= /usr/local
+CC       ?= cc
+CXX      ?= c++
+PKGS     := assimp OpenImageIO yaml-0.1 zlib
+TESTPKGS := criterion
+
+ifeq ($(SANITIZE),1)
+B        := build-san
+SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+OPT      := -O1 -g
+else
+B        := build
+SANFLAGS :=
+OPT      := -O2 -g
+endif
+
+WARN     := -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter
+CFLAGS   ?=
+CFLAGS   += -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) $(WARN) $(SANFLAGS) -MMD -MP \
+            -I. -Ikernel-ref -Isim -Iunits -Imem -Itraces
+CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra -Werror $(SANFLAGS) -MMD -MP -I. -Ikernel-ref
+LDLIBS   := -pthread -lm
+
+# Dependency check runs once per build dir; pkg-config must exist to ask.
+DEPSTAMP := $(B)/.deps-ok
+$(DEPSTAMP):
+	@mkdir -p $(B)
+	@if command -v pkg-config >/dev/null 2>&1 && pkg-config --exists $(PKGS) $(TESTPKGS) \
+	    && command -v gnuplot >/dev/null 2>&1 && command -v parallel >/dev/null 2>&1; then :; else \
+	  echo "make: some dependencies are missing; running scripts/install-deps.sh"; \
+	  sh scripts/install-deps.sh || { echo "make: error: could not install dependencies (see above)" >&2; exit 1; }; \
+	fi
+	@touch $@
+
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+PKG_LIBS   = $(shell pkg-config --libs $(PKGS) 2>/dev/null)
+TEST_LIBS  = $(shell pkg-config --libs $(TESTPKGS) 2>/dev/null)
+
+MAINS    := kernel-ref/rtref.c sim/main.c traces/replay.c
+LIB_C    := $(filter-out $(MAINS),$(wildcard kernel-ref/*.c sim/*.c units/*.c mem/*.c traces/*.c))
+LIB_CXX  := $(wildcard kernel-ref/*.cpp)
+LIB_OBJ  := $(LIB_C:%.c=$(B)/%.o) $(LIB_CXX:%.cpp=$(B)/%.o)
+TEST_C   := $(wildcard tests/*.c)
+TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
+PROGS    := $(B)/rtref $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
+
+.PHONY: all run test bench install clean deps
+all: $(PROGS)
+
+deps: $(DEPSTAMP)
+
+$(B)/%.o: %.c | $(DEPSTAMP)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -c $< -o $@
+
+$(B)/%.o: %.cpp | $(DEPSTAMP)
+	@mkdir -p $(dir $@)
+	$(CXX) $(CXXFLAGS) $(PKG_CFLAGS) -c $< -o $@
+
+$(B)/libsaar.a: $(LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+# The library has C++ objects (the OIIO shim), so link with the C++ driver.
+$(B)/rtref: $(B)/kernel-ref/rtref.o $(B)/libsaar.a
+	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+$(B)/saarsim: $(B)/sim/main.o $(B)/libsaar.a
+	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+$(B)/saarsim-replay: $(B)/traces/replay.o $(B)/libsaar.a
+	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+$(B)/saarsim-tests: $(TEST_OBJ) $(B)/libsaar.a
+	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(TEST_LIBS) $(LDLIBS)
+
+# The main job: the embedded default scene and config, report on stdout,
+# frame written to out/frame.png.
+RUN_PROG := $(if $(wildcard sim/main.c),saarsim,rtref)
+run: all
+	@mkdir -p out
+	./$(B)/$(RUN_PROG) --out out/frame.png --report out/report.json
+
+# Tests find the binaries and the shared scenes through the environment.
+test: all $(B)/saarsim-tests
+	SAAR_BIN=$(CURDIR)/$(B) SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) \
+	  ./$(B)/saarsim-tests --jobs 2
+
+bench: all
+	sh scripts/bench.sh $(B)
+
+install: all
+	install -d $(DESTDIR)$(PREFIX)/bin
+	install -m 755 $(PROGS) $(DESTDIR)$(PREFIX)/bin/
+
+clean:
+	rm -rf build build-san
+
+-include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(B)/kernel-ref/rtref.d $(B)/sim/main.d

@@ -1,0 +1,26 @@
+/*
+ * diag.h: how kernel-ref and the simulator report bad input.
+ *
+ * Library code never prints and never exits: a function that can fail on
+ * user input fills a diag with one line ("FILE:LINE:COL: message", or
+ * "FILE: message" where the format has no lines) and returns non-zero.
+ * Only the command-line front ends print it and exit with DIAG_EXIT (2).
+ */
+#ifndef SAAR_KREF_DIAG_H
+#define SAAR_KREF_DIAG_H
+
+#include <stddef.h>
+
+#define DIAG_EXIT 2
+
+typedef struct diag {
+	char msg[1024];
+} diag;
+
+/* Formats "file: message" (line <= 0) or "file:line:col: message" (col <= 0
+ * prints "file:line: message"). Always returns -1 so callers can write
+ * `return diag_set(...)`. d may be NULL. */
+int diag_set(diag *d, const char *file, int line, int col, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+#endif

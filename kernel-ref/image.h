@@ -1,0 +1,33 @@
+/*
+ * image.h: image files through OpenImageIO (image_oiio.cpp is the only C++
+ * file in saarsim: a small extern "C" shim).
+ *
+ * Writes go to a temporary file beside the target and are renamed into
+ * place, so a failed or interrupted write never leaves a partial file that
+ * looks complete.
+ */
+#ifndef SAAR_KREF_IMAGE_H
+#define SAAR_KREF_IMAGE_H
+
+#include <stdint.h>
+
+#include "diag.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Writes an 8-bit RGB image (w*h*3 bytes, row 0 at the top). The format
+ * follows the extension (.png, .exr, .ppm, .tif, ...); float formats such as
+ * EXR get the float buffer `rgbf` (w*h*3, linear) when it is non-NULL. */
+int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, diag *d);
+
+/* Reads any OIIO-readable image as RGBA8 (row 0 at the top). *rgba is
+ * malloc'd; the caller frees it. */
+int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,176 @@
+/*
+ * jsonw.c: streaming JSON writer (see jsonw.h). Indents two spaces per
+ * level so reports are readable and diff well.
+ */
+#include "jsonw.h"
+
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <string.h>
+#include <unistd.h>
+
+void jsonw_init_file(jsonw *w, FILE *f)
+{
+	memset(w, 0, sizeof *w);
+	w->f = f;
+	w->first[0] = 1;
+}
+
+int jsonw_open(jsonw *w, const char *path, diag *d)
+{
+	if (strcmp(path, "-") == 0) {
+		jsonw_init_file(w, stdout);
+		return 0;
+	}
+	memset(w, 0, sizeof *w);
+	snprintf(w->path, sizeof w->path, "%s", path);
+	snprintf(w->tmp, sizeof w->tmp, "%s.tmp", path);
+	FILE *f = fopen(w->tmp, "w");
+	if (!f)
+		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+	jsonw_init_file(w, f);
+	snprintf(w->path, sizeof w->path, "%s", path);
+	snprintf(w->tmp, sizeof w->tmp, "%s.tmp", path);
+	return 0;
+}
+
+int jsonw_close(jsonw *w, diag *d)
+{
+	if (!w->path[0]) {
+		fputc('\n', w->f);
+		fflush(w->f);
+		return 0;
+	}
+	fputc('\n', w->f);
+	int bad = ferror(w->f);
+	if (fclose(w->f) != 0)
+		bad = 1;
+	if (bad || rename(w->tmp, w->path) != 0) {
+		unlink(w->tmp);
+		return diag_set(d, w->path, 0, 0, "write failed");
+	}
+	return 0;
+}
+
+static void indent(jsonw *w)
+{
+	fputc('\n', w->f);
+	for (int i = 0; i < w->depth; i++)
+		fputs("  ", w->f);
+}
+
+/* Called before any value or key: commas and line breaks. */
+static void pre(jsonw *w)
+{
+	if (w->after_key) {
+		w->after_key = 0;
+		return;
+	}
+	if (!w->first[w->depth])
+		fputc(',', w->f);
+	w->first[w->depth] = 0;
+	if (w->depth > 0)
+		indent(w);
+}
+
+static void open_(jsonw *w, char c)
+{
+	pre(w);
+	fputc(c, w->f);
+	if (w->depth + 1 < JSONW_MAX_DEPTH)
+		w->depth++;
+	w->first[w->depth] = 1;
+}
+
+static void close_(jsonw *w, char c)
+{
+	int empty = w->first[w->depth];
+	if (w->depth > 0)
+		w->depth--;
+	if (!empty)
+		indent(w);
+	fputc(c, w->f);
+}
+
+void jsonw_obj_begin(jsonw *w)
+{
+	open_(w, '{');
+}
+void jsonw_obj_end(jsonw *w)
+{
+	close_(w, '}');
+}
+void jsonw_arr_begin(jsonw *w)
+{
+	open_(w, '[');
+}
+void jsonw_arr_end(jsonw *w)
+{
+	close_(w, ']');
+}
+
+static void put_str(FILE *f, const char *s)
+{
+	fputc('"', f);
+	for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+		if (*p == '"' || *p == '\\')
+			fprintf(f, "\\%c", *p);
+		else if (*p == '\n')
+			fputs("\\n", f);
+		else if (*p < 0x20)
+			fprintf(f, "\\u%04x", *p);
+		else
+			fputc(*p, f);
+	}
+	fputc('"', f);
+}
+
+void jsonw_key(jsonw *w, const char *k)
+{
+	pre(w);
+	put_str(w->f, k);
+	fputs(": ", w->f);
+	w->after_key = 1;
+}
+
+void jsonw_str(jsonw *w, const char *s)
+{
+	pre(w);
+	put_str(w->f, s ? s : "");
+}
+
+void jsonw_num(jsonw *w, double v)
+{
+	pre(w);
+	if (!isfinite(v))
+		fputs("null", w->f);
+	else if (v == floor(v) && fabs(v) < 1e15)
+		fprintf(w->f, "%.1f", v);
+	else
+		fprintf(w->f, "%.9g", v);
+}
+
+void jsonw_int(jsonw *w, int64_t v)
+{
+	pre(w);
+	fprintf(w->f, "%" PRId64, v);
+}
+
+void jsonw_uint(jsonw *w, uint64_t v)
+{
+	pre(w);
+	fprintf(w->f, "%" PRIu64, v);
+}
+
+void jsonw_bool(jsonw *w, int v)
+{
+	pre(w);
+	fputs(v ? "true" : "false", w->f);
+}
+
+void jsonw_null(jsonw *w)
+{
+	pre(w);
+	fputs("null", w->f);
+}

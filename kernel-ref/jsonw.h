@@ -1,0 +1,73 @@
+/*
+ * jsonw.h: a streaming JSON writer for reports and stats files.
+ *
+ * Emits one well-formed document: the writer tracks nesting and commas, so
+ * callers only say what comes next. Numbers that are NaN or infinite are
+ * written as null (JSON has no such numbers). Output goes to a FILE; the
+ * caller does the temporary-file-and-rename dance (see jsonw_open/close).
+ */
+#ifndef SAAR_KREF_JSONW_H
+#define SAAR_KREF_JSONW_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "diag.h"
+
+#define JSONW_MAX_DEPTH 32
+
+typedef struct jsonw {
+	FILE *f;
+	int depth;
+	int first[JSONW_MAX_DEPTH]; /* no element written yet at this depth */
+	int after_key;
+	char path[1024], tmp[1040]; /* final path and temporary file */
+} jsonw;
+
+/* Opens path.tmp for writing; jsonw_close renames it to path (0) or removes
+ * it and fills d (-1). A path of "-" writes to stdout. */
+int jsonw_open(jsonw *w, const char *path, diag *d);
+int jsonw_close(jsonw *w, diag *d);
+/* Writes into an already open FILE (no rename). */
+void jsonw_init_file(jsonw *w, FILE *f);
+
+void jsonw_obj_begin(jsonw *w);
+void jsonw_obj_end(jsonw *w);
+void jsonw_arr_begin(jsonw *w);
+void jsonw_arr_end(jsonw *w);
+void jsonw_key(jsonw *w, const char *k);
+void jsonw_str(jsonw *w, const char *s);
+void jsonw_num(jsonw *w, double v);
+void jsonw_int(jsonw *w, int64_t v);
+void jsonw_uint(jsonw *w, uint64_t v);
+void jsonw_bool(jsonw *w, int v);
+void jsonw_null(jsonw *w);
+
+/* key + value shorthands */
+static inline void jsonw_kstr(jsonw *w, const char *k, const char *s)
+{
+	jsonw_key(w, k);
+	jsonw_str(w, s);
+}
+static inline void jsonw_knum(jsonw *w, const char *k, double v)
+{
+	jsonw_key(w, k);
+	jsonw_num(w, v);
+}
+static inline void jsonw_kuint(jsonw *w, const char *k, uint64_t v)
+{
+	jsonw_key(w, k);
+	jsonw_uint(w, v);
+}
+static inline void jsonw_kint(jsonw *w, const char *k, int64_t v)
+{
+	jsonw_key(w, k);
+	jsonw_int(w, v);
+}
+static inline void jsonw_kbool(jsonw *w, const char *k, int v)
+{
+	jsonw_key(w, k);
+	jsonw_bool(w, v);
+}
+
+#endif

@@ -1,0 +1,100 @@
+/*
+ * kdtree.h: SAH kd-tree over a scene, built in O(n log n) with a sorted
+ * event sweep (Wald & Havran 2006, "On building fast kd-trees for ray
+ * tracing, and on doing that in O(N log N)").
+ *
+ * The node is the 8-byte SaarCOR/pbrt node that the chip reads from memory:
+ *
+ *   word a (32 bits)                    word b (32 bits)
+ *   inner: split position (float bits)  [31..2] index of the left child | [1..0] axis 0,1,2
+ *   leaf:  first list entry index       [31..2] triangle count          | [1..0] 3
+ *
+ * The right child of an inner node is always left + 1 (children stored as
+ * a pair), so one index serves both. Points exactly on a split plane belong
+ * to both children: a triangle lying in the plane is put on both sides
+ * ("flat cells"), so traversal may send a ray to either.
+ *
+ * Invariant: every triangle that overlaps a leaf's region (its clipped
+ * bounding box intersects the region with positive or zero extent) is in
+ * that leaf's list. The node array starts with the root at index 0.
+ */
+#ifndef SAAR_KREF_KDTREE_H
+#define SAAR_KREF_KDTREE_H
+
+#include <stdint.h>
+#include <string.h>
+
+#include "diag.h"
+#include "scene.h"
+
+typedef struct kd_params {
+	float cost_trav;   /* SAH cost of one traversal step (K_T) */
+	float cost_isect;  /* SAH cost of one triangle test (K_I) */
+	int max_depth;     /* hard depth limit; 0 = 8 + 1.3 log2(n) */
+	int leaf_size;     /* stop splitting at or below this many triangles */
+	float empty_bonus; /* in [0,1): SAH discount for cutting off empty space */
+} kd_params;
+
+typedef struct kd_node {
+	uint32_t a, b;
+} kd_node;
+
+typedef struct kdtree {
+	kd_node *nodes;
+	uint32_t nnodes;
+	uint32_t *list; /* triangle indices of all leaves, leaf after leaf */
+	uint32_t nlist;
+	aabb bounds; /* the scene box the root stands for */
+	/* build statistics */
+	uint32_t nleaves, nempty_leaves;
+	int depth;       /* deepest leaf */
+	double sah_cost; /* expected cost of the whole tree */
+	double build_ms; /* host wall time of kd_build */
+} kdtree;
+
+void kd_params_default(kd_params *p);
+
+/* Builds the tree. Fails (diag, -1) only on bad parameters or out of
+ * memory; any valid scene builds. */
+int kd_build(kdtree *t, const scene *s, const kd_params *p, diag *d);
+void kd_free(kdtree *t);
+
+static inline int kd_is_leaf(kd_node n)
+{
+	return (n.b & 3u) == 3u;
+}
+static inline int kd_axis(kd_node n)
+{
+	return (int)(n.b & 3u);
+}
+static inline uint32_t kd_left(kd_node n)
+{
+	return n.b >> 2;
+}
+static inline uint32_t kd_count(kd_node n)
+{
+	return n.b >> 2;
+}
+static inline uint32_t kd_first(kd_node n)
+{
+	return n.a;
+}
+static inline float kd_split(kd_node n)
+{
+	float f;
+	memcpy(&f, &n.a, sizeof f);
+	return f;
+}
+static inline kd_node kd_make_inner(int axis, float split, uint32_t left)
+{
+	kd_node n;
+	memcpy(&n.a, &split, sizeof split);
+	n.b = (left << 2) | (uint32_t)axis;
+	return n;
+}
+static inline kd_node kd_make_leaf(uint32_t first, uint32_t count)
+{
+	return (kd_node){first, (count << 2) | 3u};
+}
+
+#endif

@@ -1,0 +1,68 @@
+/*
+ * view.h: cameras and point lights, read from a views file.
+ *
+ * The views file format is the one of ../shared/scenes/views.yaml (see
+ * docs/views.md):
+ *
+ *   views:
+ *     NAME:
+ *       scene: relative/path.obj.gz      # relative to the views file
+ *       camera: {eye: [x,y,z], lookat: [x,y,z], up: [x,y,z], fov: degrees}
+ *       lights: [[x,y,z], ...]           # optional; white, intensity 1
+ *       note: "free text"                # optional, ignored
+ *
+ * A view without `lights` gets one light at lookat + (0, 2R, R), R = half
+ * the scene's bounding-box diagonal (view_place_default_light, once the
+ * scene is loaded). Parsing uses libyaml; every error names the file, line
+ * and column.
+ */
+#ifndef SAAR_KREF_VIEW_H
+#define SAAR_KREF_VIEW_H
+
+#include "diag.h"
+#include "scene.h"
+#include "vecmath.h"
+
+#define VIEW_MAX_LIGHTS 16
+#define VIEW_NAME_MAX   64
+
+typedef struct camera {
+	vec3 eye, lookat, up;
+	float fov_deg; /* vertical field of view, degrees, in (0, 180) */
+} camera;
+
+typedef struct light {
+	vec3 pos;
+	vec3 color; /* white (1,1,1) from views files */
+} light;
+
+typedef struct view {
+	char name[VIEW_NAME_MAX];
+	char scene[1024]; /* scene path resolved against the views file's folder; "" if none */
+	camera cam;
+	int lights_given; /* 0: place the default light once the scene is known */
+	int nlights;
+	light lights[VIEW_MAX_LIGHTS];
+} view;
+
+/* Reads view `name` from `file`. Unknown name: the diag lists the names
+ * that exist. Missing keys, wrong types, NaN/Inf numbers, fov out of range,
+ * up parallel to the view direction, eye == lookat: -1 with
+ * "file:line:col: message". */
+int view_load(view *v, const char *file, const char *name, diag *d);
+
+/* Lists the view names in `file` in file order (at most max); returns the
+ * count or -1 with diag. */
+int view_list(const char *file, char (*names)[VIEW_NAME_MAX], int max, diag *d);
+
+/* Checks a camera built from flags (same rules as view_load); `what` names
+ * the source in the message (e.g. "--eye"). */
+int camera_validate(const camera *c, const char *what, diag *d);
+
+/* The view of the embedded default scene (scene_default). */
+void view_default(view *v);
+
+/* If the view has no lights, places the default one for scene s. */
+void view_place_default_light(view *v, const scene *s);
+
+#endif
