@@ -26,9 +26,9 @@ SANFLAGS :=
 OPT      := -O2 -g
 endif
 
-WARN     := -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter
+WARN     := -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter -Wno-psabi
 CFLAGS   ?=
-CFLAGS   += -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) $(WARN) $(SANFLAGS) -MMD -MP \
+CFLAGS   += -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) -ffp-contract=off $(WARN) $(SANFLAGS) -MMD -MP \
             -I. -Ikernel-ref -Isim -Iunits -Imem -Itraces
 CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra -Werror $(SANFLAGS) -MMD -MP -I. -Ikernel-ref
 LDLIBS   := -pthread -lm

@@ -1,0 +1,606 @@
+/*
+ * import.c: scene_load(), scene files through Assimp's C API.
+ *
+ * Owns: the zlib-backed aiFileIO (so "x.obj.gz" loads as "x.obj" while the
+ * .mtl beside it is still read from disk), the OBJ text pre-scan that gives
+ * NaN/Inf and malformed numbers a line number, and the mapping of Assimp
+ * materials and textures onto scene.h. The rules are documented in
+ * docs/views.md ("Scene files").
+ */
+#include "image.h"
+#include "scene.h"
+
+#include <assimp/ObjMaterial.h>
+#include <assimp/cfileio.h>
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <ctype.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#define PATH_MAX_LEN 1024
+
+/* Files held in memory. Assimp opens the main file twice (an existence
+ * probe, then the read), so the decompressed (or pre-scanned) text is kept
+ * and served from memory instead of being inflated twice. Entries live
+ * until scene_load returns: a stream may still be reading one (the OBJ)
+ * while another (a gzipped MTL) is opened. */
+#define CACHE_MAX 8
+typedef struct memcache {
+	struct {
+		char path[PATH_MAX_LEN]; /* real path on disk */
+		char *buf;
+		size_t len;
+	} e[CACHE_MAX];
+	int n;
+	char err[512]; /* first I/O error, reported instead of Assimp's */
+} memcache;
+
+/* An open aiFile: either a stdio stream or a view of the cache. */
+typedef struct ofile {
+	FILE *fp;
+	const char *buf;
+	size_t len, pos;
+} ofile;
+
+static int ends_with(const char *s, const char *suffix)
+{
+	size_t n = strlen(s), k = strlen(suffix);
+	return n >= k && strcasecmp(s + n - k, suffix) == 0;
+}
+
+/* Reads a whole file, inflating it when gz is set (gzread also passes plain
+ * files through unchanged). The buffer is NUL-terminated for the scan. */
+static int read_all(const char *path, int gz, char **out, size_t *outlen, char *err, size_t errn)
+{
+	gzFile g = gz ? gzopen(path, "rb") : NULL;
+	FILE *f = gz ? NULL : fopen(path, "rb");
+	if (!g && !f) {
+		snprintf(err, errn, "cannot open: %s", strerror(errno ? errno : ENOENT));
+		return -1;
+	}
+	size_t cap = 1 << 16, len = 0;
+	char *buf = malloc(cap + 1);
+	for (;;) {
+		if (len == cap) {
+			cap *= 2;
+			char *nb = realloc(buf, cap + 1);
+			if (!nb) {
+				snprintf(err, errn, "out of memory reading the file");
+				goto fail;
+			}
+			buf = nb;
+		}
+		size_t want = cap - len;
+		long got;
+		if (g) {
+			int r =
+			    gzread(g, buf + len, want > (1u << 30) ? (1u << 30) : (unsigned)want);
+			if (r < 0) {
+				int zerr;
+				const char *m = gzerror(g, &zerr);
+				snprintf(err, errn, "gzip data is corrupt: %s", m);
+				goto fail;
+			}
+			got = r;
+		} else {
+			got = (long)fread(buf + len, 1, want, f);
+			if (got == 0 && ferror(f)) {
+				snprintf(err, errn, "read error: %s", strerror(errno));
+				goto fail;
+			}
+		}
+		if (got == 0)
+			break;
+		len += (size_t)got;
+	}
+	if (g) {
+		/* A truncated or corrupt stream ends reads early without -1. */
+		int zerr;
+		const char *m = gzerror(g, &zerr);
+		if (zerr != Z_OK) {
+			snprintf(err, errn, "gzip data is corrupt or truncated: %s", m);
+			goto fail;
+		}
+		gzclose(g);
+	} else {
+		fclose(f);
+	}
+	buf[len] = '\0';
+	*out = buf;
+	*outlen = len;
+	return 0;
+fail:
+	free(buf);
+	if (g)
+		gzclose(g);
+	else
+		fclose(f);
+	return -1;
+}
+
+/* Maps a name Assimp asks for to the file on disk: "X.gz" is inflated, and
+ * so is "X" when only "X.gz" exists (that is how "conference.obj" reaches
+ * "conference.obj.gz"). Returns 1 for gzip, 0 for a plain file. */
+static int real_path(const char *name, char *out, size_t n)
+{
+	snprintf(out, n, "%s", name);
+	if (ends_with(name, ".gz"))
+		return 1;
+	if (access(name, F_OK) != 0) {
+		snprintf(out, n, "%s.gz", name);
+		if (access(out, F_OK) == 0)
+			return 1;
+		snprintf(out, n, "%s", name);
+	}
+	return 0;
+}
+
+static size_t of_read(struct aiFile *af, char *dst, size_t size, size_t count)
+{
+	ofile *o = (ofile *)af->UserData;
+	if (o->fp)
+		return fread(dst, size, count, o->fp);
+	if (size == 0)
+		return 0;
+	size_t items = (o->len - o->pos) / size;
+	if (items > count)
+		items = count;
+	memcpy(dst, o->buf + o->pos, items * size);
+	o->pos += items * size;
+	return items;
+}
+
+static size_t of_write(struct aiFile *af, const char *src, size_t size, size_t count)
+{
+	return 0; /* import only */
+}
+
+static size_t of_tell(struct aiFile *af)
+{
+	ofile *o = (ofile *)af->UserData;
+	return o->fp ? (size_t)ftell(o->fp) : o->pos;
+}
+
+static size_t of_size(struct aiFile *af)
+{
+	ofile *o = (ofile *)af->UserData;
+	if (!o->fp)
+		return o->len;
+	long here = ftell(o->fp);
+	fseek(o->fp, 0, SEEK_END);
+	long end = ftell(o->fp);
+	fseek(o->fp, here, SEEK_SET);
+	return end < 0 ? 0 : (size_t)end;
+}
+
+static enum aiReturn of_seek(struct aiFile *af, size_t off, enum aiOrigin origin)
+{
+	ofile *o = (ofile *)af->UserData;
+	if (o->fp) {
+		int wh = origin == aiOrigin_SET   ? SEEK_SET
+		         : origin == aiOrigin_CUR ? SEEK_CUR
+		                                  : SEEK_END;
+		return fseek(o->fp, (long)off, wh) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+	}
+	size_t base = origin == aiOrigin_SET ? 0 : origin == aiOrigin_CUR ? o->pos : o->len;
+	if (off > o->len - base)
+		return aiReturn_FAILURE;
+	o->pos = base + off;
+	return aiReturn_SUCCESS;
+}
+
+static void of_flush(struct aiFile *af) {}
+
+static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char *mode)
+{
+	memcache *c = (memcache *)io->UserData;
+	if (strchr(mode, 'w') || strchr(mode, 'a'))
+		return NULL;
+	char rp[PATH_MAX_LEN];
+	int gz = real_path(name, rp, sizeof rp);
+	FILE *fp = NULL;
+	int k = 0;
+	while (k < c->n && strcmp(rp, c->e[k].path) != 0)
+		k++;
+	if (k == c->n) {
+		if (!gz) {
+			if (!(fp = fopen(rp, "rb")))
+				return NULL;
+		} else {
+			char err[256];
+			if (c->n == CACHE_MAX)
+				return NULL;
+			if (read_all(rp, 1, &c->e[k].buf, &c->e[k].len, err, sizeof err) != 0) {
+				if (!c->err[0] && access(rp, F_OK) == 0)
+					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp, err);
+				return NULL;
+			}
+			snprintf(c->e[k].path, sizeof c->e[k].path, "%s", rp);
+			c->n++;
+		}
+	}
+	struct aiFile *af = calloc(1, sizeof *af);
+	ofile *o = calloc(1, sizeof *o);
+	if (!af || !o) {
+		free(af);
+		free(o);
+		if (fp)
+			fclose(fp);
+		return NULL;
+	}
+	o->fp = fp;
+	if (!fp) {
+		o->buf = c->e[k].buf;
+		o->len = c->e[k].len;
+	}
+	af->ReadProc = of_read;
+	af->WriteProc = of_write;
+	af->TellProc = of_tell;
+	af->FileSizeProc = of_size;
+	af->SeekProc = of_seek;
+	af->FlushProc = of_flush;
+	af->UserData = (aiUserData)o;
+	return af;
+}
+
+static void io_close(struct aiFileIO *io, struct aiFile *af)
+{
+	if (!af)
+		return;
+	ofile *o = (ofile *)af->UserData;
+	if (o->fp)
+		fclose(o->fp);
+	free(o);
+	free(af);
+}
+
+/* OBJ pre-scan: Assimp's fast_atof reads "1.0x" as 1 and "nan" as NaN
+ * without complaint, and by the time a NaN reaches scene_finish the line
+ * is lost. So the `v` and `vn` lines are checked here, with their line. */
+static int obj_scan(const char *text, const char *file, diag *d)
+{
+	int line = 1;
+	for (const char *p = text; *p; line++) {
+		const char *eol = strchr(p, '\n');
+		if (!eol)
+			eol = p + strlen(p);
+		const char *q = p;
+		while (q < eol && (*q == ' ' || *q == '\t'))
+			q++;
+		int normal = q + 1 < eol && q[0] == 'v' && q[1] == 'n';
+		int vertex = q < eol && q[0] == 'v';
+		const char *t = q + (normal ? 2 : 1);
+		if ((normal || vertex) && t < eol && (*t == ' ' || *t == '\t')) {
+			while (t < eol && *t != '#') {
+				while (t < eol && isspace((unsigned char)*t))
+					t++;
+				const char *e = t;
+				while (e < eol && !isspace((unsigned char)*e) && *e != '#')
+					e++;
+				if (e == t)
+					break;
+				char tok[64];
+				size_t n = (size_t)(e - t);
+				char *end = tok;
+				double x = 0;
+				if (n < sizeof tok) {
+					memcpy(tok, t, n);
+					tok[n] = '\0';
+					x = strtod(tok, &end);
+				}
+				int col = (int)(t - p) + 1;
+				if (n >= sizeof tok || end != tok + n)
+					return diag_set(d, file, line, col,
+					                "malformed number '%.*s'",
+					                (int)(n > 40 ? 40 : n), t);
+				if (!isfinite(x))
+					return diag_set(
+					    d, file, line, 0,
+					    normal ? "normal has a NaN or infinite component"
+					           : "vertex has a NaN or infinite coordinate");
+				t = e;
+			}
+		}
+		p = *eol ? eol + 1 : eol;
+	}
+	return 0;
+}
+
+/* Assimp's messages sometimes carry "line N"; lift it into file:N. */
+static int msg_line(const char *msg)
+{
+	for (const char *p = msg; *p; p++) {
+		if (strncasecmp(p, "line", 4) == 0) {
+			const char *q = p + 4;
+			while (*q == ' ' || *q == ':' || *q == '#')
+				q++;
+			if (isdigit((unsigned char)*q))
+				return atoi(q);
+		}
+	}
+	return 0;
+}
+
+static float mean3(struct aiColor4D c)
+{
+	return (c.r + c.g + c.b) / 3.0f;
+}
+
+static float clamp01(float x)
+{
+	return x < 0.0f ? 0.0f : x > 1.0f ? 1.0f : x;
+}
+
+/* Loads (or finds, by resolved path) the texture `type` of material m.
+ * Returns 0 with *idx = texture index or -1 when there is none. */
+static int load_texture(scene *s, const struct aiMaterial *am, enum aiTextureType type,
+                        const char *dir, const char *file, const char *mname, int32_t *idx, diag *d)
+{
+	struct aiString str;
+	*idx = -1;
+	if (aiGetMaterialTexture(am, type, 0, &str, NULL, NULL, NULL, NULL, NULL, NULL) !=
+	    aiReturn_SUCCESS)
+		return 0;
+	/* "*N" names a texture embedded in the file (glTF/FBX); image.h only
+	 * reads files, so those are skipped (documented). */
+	if (str.length == 0 || str.data[0] == '*')
+		return 0;
+	for (char *c = str.data; *c; c++)
+		if (*c == '\\')
+			*c = '/'; /* MTL files written on Windows */
+	texture t;
+	memset(&t, 0, sizeof t);
+	int n = (str.data[0] == '/' || !dir[0])
+	            ? snprintf(t.path, sizeof t.path, "%s", str.data)
+	            : snprintf(t.path, sizeof t.path, "%s/%s", dir, str.data);
+	if (n < 0 || (size_t)n >= sizeof t.path)
+		return diag_set(d, file, 0, 0, "texture path of material '%s' is too long: %s",
+		                mname, str.data);
+	for (uint32_t i = 0; i < s->ntexs; i++) {
+		if (strcmp(s->texs[i].path, t.path) == 0) {
+			*idx = (int32_t)i;
+			return 0;
+		}
+	}
+	diag td;
+	if (img_read_rgba8(t.path, &t.w, &t.h, &t.rgba, &td) != 0)
+		return diag_set(d, file, 0, 0, "material '%s': texture %s", mname, td.msg);
+	texture *nt = realloc(s->texs, (s->ntexs + 1) * sizeof *nt);
+	if (!nt) {
+		free(t.rgba);
+		return diag_set(d, file, 0, 0, "out of memory loading textures");
+	}
+	s->texs = nt;
+	s->texs[s->ntexs] = t;
+	*idx = (int32_t)s->ntexs++;
+	return 0;
+}
+
+/* Converts one Assimp material; the rules are in docs/views.md. */
+static int convert_material(scene *s, const struct aiMaterial *am, const char *dir,
+                            const char *file, diag *d)
+{
+	struct aiString name;
+	if (aiGetMaterialString(am, AI_MATKEY_NAME, &name) != aiReturn_SUCCESS)
+		snprintf(name.data, sizeof name.data, "material%u", s->nmats);
+	material m = material_default(name.data);
+	struct aiColor4D c;
+	if (aiGetMaterialColor(am, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS)
+		m.kd = v3(c.r, c.g, c.b);
+	if (aiGetMaterialColor(am, AI_MATKEY_COLOR_AMBIENT, &c) == aiReturn_SUCCESS)
+		m.ka = v3(c.r, c.g, c.b);
+	if (aiGetMaterialColor(am, AI_MATKEY_COLOR_SPECULAR, &c) == aiReturn_SUCCESS)
+		m.ks = v3(c.r, c.g, c.b);
+	if (aiGetMaterialColor(am, AI_MATKEY_COLOR_EMISSIVE, &c) == aiReturn_SUCCESS)
+		m.ke = v3(c.r, c.g, c.b);
+	ai_real f;
+	unsigned int one = 1;
+	if (aiGetMaterialFloatArray(am, AI_MATKEY_SHININESS, &f, &one) == aiReturn_SUCCESS)
+		m.ns = f;
+	one = 1;
+	if (aiGetMaterialFloatArray(am, AI_MATKEY_REFRACTI, &f, &one) == aiReturn_SUCCESS &&
+	    f > 0.0f)
+		m.ni = f; /* "Ni 0" (BART) means absent */
+	int illum = -1;
+	one = 1;
+	aiGetMaterialIntegerArray(am, AI_MATKEY_OBJ_ILLUM, &illum, &one);
+
+	/* transmit: 1 - d (Assimp folds "Tr t" into the same opacity as
+	 * d = 1 - t). Tf is a transmission filter that Assimp reports as
+	 * (1,1,1) when absent, so it counts only where it cannot be that
+	 * default: with a transparent illum (4, 6, 7, 9), or strictly between
+	 * 0 and 1 (BART's "T" exported as Tf). "Tf 0 0 0" stays opaque. */
+	float transmit = 0.0f;
+	one = 1;
+	if (aiGetMaterialFloatArray(am, AI_MATKEY_OPACITY, &f, &one) == aiReturn_SUCCESS)
+		transmit = 1.0f - f;
+	if (aiGetMaterialColor(am, AI_MATKEY_COLOR_TRANSPARENT, &c) == aiReturn_SUCCESS) {
+		float tf = mean3(c);
+		int glass = illum == 4 || illum == 6 || illum == 7 || illum == 9;
+		if ((glass || (tf > 0.0f && tf < 1.0f)) && tf > transmit)
+			transmit = tf;
+	}
+	one = 1;
+	if (aiGetMaterialFloatArray(am, AI_MATKEY_TRANSPARENCYFACTOR, &f, &one) ==
+	        aiReturn_SUCCESS &&
+	    f > transmit)
+		transmit = f;
+	m.transmit = clamp01(transmit);
+
+	/* reflect: explicit reflectivity wins; else OBJ illum 3/5/7 (ray-traced
+	 * reflection) mirror with the strength of Ks. */
+	one = 1;
+	if (aiGetMaterialFloatArray(am, AI_MATKEY_REFLECTIVITY, &f, &one) == aiReturn_SUCCESS &&
+	    f > 0.0f)
+		m.reflect = clamp01(f);
+	else if (illum == 3 || illum == 5 || illum == 7)
+		m.reflect = clamp01((m.ks.x + m.ks.y + m.ks.z) / 3.0f);
+
+	if (load_texture(s, am, aiTextureType_DIFFUSE, dir, file, m.name, &m.tex_kd, d) != 0)
+		return -1;
+	enum aiTextureType bt = aiTextureType_HEIGHT;
+	if (load_texture(s, am, bt, dir, file, m.name, &m.tex_bump, d) != 0)
+		return -1;
+	if (m.tex_bump < 0) {
+		bt = aiTextureType_NORMALS;
+		if (load_texture(s, am, bt, dir, file, m.name, &m.tex_bump, d) != 0)
+			return -1;
+	}
+	one = 1;
+	if (m.tex_bump >= 0 && aiGetMaterialFloatArray(am, AI_MATKEY_OBJ_BUMPMULT(bt, 0), &f,
+	                                               &one) == aiReturn_SUCCESS)
+		m.bump_scale = f;
+	scene_add_material(s, &m);
+	return 0;
+}
+
+static int mesh_tris(const struct aiMesh *me)
+{
+	int n = 0;
+	for (unsigned f = 0; f < me->mNumFaces; f++)
+		n += me->mFaces[f].mNumIndices == 3;
+	return n;
+}
+
+/* Copies the used materials (compacted, Assimp's order) and the triangles. */
+static int convert_scene(scene *s, const struct aiScene *as, const char *dir, const char *file,
+                         diag *d)
+{
+	uint32_t *remap = malloc((as->mNumMaterials + 1) * sizeof *remap);
+	if (!remap)
+		return diag_set(d, file, 0, 0, "out of memory");
+	for (unsigned i = 0; i < as->mNumMaterials; i++)
+		remap[i] = UINT32_MAX;
+	for (unsigned i = 0; i < as->mNumMeshes; i++) {
+		const struct aiMesh *me = as->mMeshes[i];
+		if (me->mMaterialIndex < as->mNumMaterials && mesh_tris(me) > 0)
+			remap[me->mMaterialIndex] = 0;
+	}
+	for (unsigned i = 0; i < as->mNumMaterials; i++) {
+		if (remap[i] == UINT32_MAX)
+			continue;
+		remap[i] = s->nmats;
+		if (convert_material(s, as->mMaterials[i], dir, file, d) != 0) {
+			free(remap);
+			return -1;
+		}
+	}
+	for (unsigned i = 0; i < as->mNumMeshes; i++) {
+		const struct aiMesh *me = as->mMeshes[i];
+		uint32_t mat =
+		    me->mMaterialIndex < as->mNumMaterials ? remap[me->mMaterialIndex] : 0;
+		const struct aiVector3D *uvs = me->mTextureCoords[0];
+		for (unsigned f = 0; f < me->mNumFaces; f++) {
+			const struct aiFace *fa = &me->mFaces[f];
+			if (fa->mNumIndices != 3)
+				continue; /* points and lines are not ray-traceable */
+			vec3 p[3], n[3];
+			vec2 uv[3];
+			for (int k = 0; k < 3; k++) {
+				unsigned vi = fa->mIndices[k];
+				p[k] = v3(me->mVertices[vi].x, me->mVertices[vi].y,
+				          me->mVertices[vi].z);
+				if (me->mNormals) {
+					const struct aiVector3D *an = &me->mNormals[vi];
+					n[k] = v3(an->x, an->y, an->z);
+					if (!v3_finite(n[k])) {
+						free(remap);
+						return diag_set(d, file, 0, 0,
+						                "mesh %u vertex %u has a NaN or "
+						                "infinite normal",
+						                i, vi);
+					}
+				}
+				if (uvs)
+					uv[k] = (vec2){uvs[vi].x, uvs[vi].y};
+			}
+			scene_add_triangle(s, p, me->mNormals ? n : NULL, uvs ? uv : NULL, mat);
+		}
+	}
+	free(remap);
+	return 0;
+}
+
+int scene_load(scene *s, const char *path, diag *d)
+{
+	scene_init(s, path);
+	char virt[PATH_MAX_LEN], rp[PATH_MAX_LEN];
+	snprintf(virt, sizeof virt, "%s", path);
+	/* Assimp picks the importer from the extension, so it is handed the
+	 * name without ".gz"; io_open maps it back. */
+	if (ends_with(virt, ".gz"))
+		virt[strlen(virt) - 3] = '\0';
+	int gz = real_path(virt, rp, sizeof rp);
+	FILE *probe = fopen(rp, "rb");
+	if (!probe)
+		return diag_set(d, path, 0, 0, "cannot open scene file: %s", strerror(errno));
+	fclose(probe);
+
+	memcache cache;
+	memset(&cache, 0, sizeof cache);
+	int obj = ends_with(virt, ".obj"), ply = ends_with(virt, ".ply");
+	if (obj || ply) {
+		if (read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err,
+		             sizeof cache.err) != 0)
+			return diag_set(d, path, 0, 0, "%s", cache.err);
+		snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
+		cache.n = 1;
+		/* Assimp 5.2's PLY reader never returns on a header without
+		 * end_header, so that is checked first. */
+		if (ply && !strstr(cache.e[0].buf, "end_header")) {
+			free(cache.e[0].buf);
+			return diag_set(d, path, 0, 0, "PLY header has no end_header line");
+		}
+		if (obj && obj_scan(cache.e[0].buf, path, d) != 0) {
+			free(cache.e[0].buf);
+			return -1;
+		}
+	}
+
+	struct aiFileIO io = {io_open, io_close, (aiUserData)&cache};
+	struct aiPropertyStore *props = aiCreatePropertyStore();
+	aiSetImportPropertyInteger(props, AI_CONFIG_PP_SBP_REMOVE,
+	                           aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+	/* No GenNormals: files without normals get face normals in scene_finish. */
+	const struct aiScene *as = aiImportFileExWithProperties(
+	    virt, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices,
+	    &io, props);
+	aiReleasePropertyStore(props);
+	int rc;
+	if (!as) {
+		const char *msg = cache.err[0] ? cache.err : aiGetErrorString();
+		/* A file with vertices but no faces ends as Assimp's "No output
+		 * meshes"; say what that means for a ray tracer. */
+		if (strstr(msg, "No output meshes") || strstr(msg, "No meshes remaining"))
+			rc = diag_set(d, path, 0, 0, "scene has no triangles (assimp: %s)", msg);
+		else
+			rc = diag_set(d, path, msg_line(msg), 0, "cannot import scene: %s", msg);
+	} else {
+		char dir[PATH_MAX_LEN];
+		snprintf(dir, sizeof dir, "%s", path);
+		char *slash = strrchr(dir, '/');
+		if (slash)
+			slash[slash == dir] = '\0'; /* "/x.obj" keeps "/" */
+		else
+			dir[0] = '\0';
+		rc = convert_scene(s, as, dir, path, d);
+		aiReleaseImport(as);
+		if (rc == 0)
+			rc = scene_finish(s, path, d);
+	}
+	for (int i = 0; i < cache.n; i++)
+		free(cache.e[i].buf);
+	if (rc != 0) {
+		scene_free(s);
+		scene_init(s, path);
+	}
+	return rc;
+}

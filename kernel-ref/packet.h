@@ -1,0 +1,140 @@
+/*
+ * packet.h: 64-ray packets and their kd-tree traversal, one hardware
+ * operation at a time.
+ *
+ * This is the functional heart that kernel-ref and the chip model share.
+ * A packet (SaarCOR: 8x8 pixels, 64 rays) is traversed with per-ray active
+ * masks and ONE shared stack (OpenRT/SaarCOR style). The traversal is a
+ * state machine: pkt_trav_next() performs exactly one kd-node step, or
+ * reports a leaf whose triangles the caller then tests with pkt_isect_tri()
+ * (the list unit reads the entries; the intersection unit tests them).
+ * kernel-ref drives it in a plain loop; the chip model drives the very same
+ * calls from its traversal, list and intersection units and adds time and
+ * memory traffic in between. So both see the same rays, the same node and
+ * triangle addresses and the same hits.
+ *
+ * Hit rule, independent of visiting order: a ray keeps the hit with the
+ * smallest t, ties broken by the smaller triangle address. A node is
+ * skipped for a ray only when its entry distance exceeds the ray's best t
+ * (strictly), so every triangle that could tie is still tested. Hence the
+ * packet path, the single-ray path and any thread schedule agree exactly.
+ *
+ * Ray segments through a node are split at the plane distance widened by
+ * its rounding-error bound (gamma(3) relative, see trav_split), so the two
+ * children's segments overlap slightly rather than leave a gap a hit could
+ * fall through.
+ */
+#ifndef SAAR_KREF_PACKET_H
+#define SAAR_KREF_PACKET_H
+
+#include <stdint.h>
+
+#include "memimage.h"
+
+#define PKT_RAYS      64
+#define PKT_NOHIT     UINT32_MAX
+#define PKT_STACK_MAX 64 /* kernel-ref's stack; the chip's depth is a config key */
+
+enum pkt_type { PKT_PRIMARY, PKT_SHADOW, PKT_REFLECT, PKT_REFRACT, PKT_NTYPES };
+
+/* A packet of up to 64 self-contained rays. Secondary rays carry their
+ * pixel and weight, so a packet can finish in any order. Arrays are 32-byte
+ * aligned, laid out lane by lane for the 8-wide SIMD groups. */
+typedef struct packet {
+	float ox[PKT_RAYS], oy[PKT_RAYS], oz[PKT_RAYS];
+	float dx[PKT_RAYS], dy[PKT_RAYS], dz[PKT_RAYS];
+	float tmax[PKT_RAYS]; /* segment end: light distance for shadow rays */
+	/* payload */
+	uint32_t pixel[PKT_RAYS];                       /* y * width + x */
+	float wr[PKT_RAYS], wg[PKT_RAYS], wb[PKT_RAYS]; /* weight; shadow: the contribution */
+	/* results (closest hit; shadow rays: t < tmax means occluded) */
+	float t[PKT_RAYS];
+	uint32_t tri[PKT_RAYS];           /* triangle record address, PKT_NOHIT if none */
+	float bu[PKT_RAYS], bv[PKT_RAYS]; /* barycentrics of v1 and v2 */
+	uint64_t valid;                   /* rays present */
+	uint32_t n;                       /* number of rays (lanes 0..n-1 may be valid) */
+	uint8_t type, depth;
+	uint16_t tile; /* originating tile, for statistics */
+} __attribute__((aligned(32))) packet;
+
+/* Zeroes a packet and sets its type and depth (camera.c). */
+void pkt_clear(packet *p, int type, int depth);
+
+/* Per-ray constants for the watertight test (Woop et al., JCGT 2013):
+ * the axis permutation kx,ky,kz (kz = dominant direction axis) as lane
+ * masks, and the shear Sx,Sy,Sz. */
+typedef struct pkt_rayc {
+	float sx[PKT_RAYS], sy[PKT_RAYS], sz[PKT_RAYS];
+	int32_t kz0[PKT_RAYS], kz1[PKT_RAYS], kx0[PKT_RAYS], kx1[PKT_RAYS], ky0[PKT_RAYS],
+	    ky1[PKT_RAYS];                                 /* all-ones when kz==0 / kz==1, etc. */
+	float idx[PKT_RAYS], idy[PKT_RAYS], idz[PKT_RAYS]; /* 1/d */
+} __attribute__((aligned(32))) pkt_rayc;
+
+typedef struct trav_entry {
+	uint32_t node;
+	uint64_t mask;
+	float tn[PKT_RAYS], tf[PKT_RAYS];
+} __attribute__((aligned(32))) trav_entry;
+
+enum trav_op {
+	TRAV_NODE, /* one inner-node step was done */
+	TRAV_LEAF, /* a leaf was reached: test its list, then call again */
+	TRAV_DONE  /* no work left: every ray finished or left the scene */
+};
+
+/* What one operation touched, for the chip model's timing and traffic. */
+typedef struct trav_result {
+	int op;
+	uint32_t node;       /* node index read (TRAV_NODE, TRAV_LEAF) */
+	uint64_t mask;       /* active rays in this operation */
+	uint32_t leaf_first; /* TRAV_LEAF: first list entry index */
+	uint32_t leaf_count; /* TRAV_LEAF: number of entries */
+	int pushed, popped;  /* stack entries pushed / popped by this step */
+	int sp;              /* stack depth after the step */
+} trav_result;
+
+typedef struct trav_state {
+	pkt_rayc rc;
+	trav_entry cur; /* node being worked on and its per-ray segments */
+	trav_entry *stack;
+	int sp, stack_max;
+	int shadow; /* any-hit packet: a ray stops at its first occluder */
+} trav_state;
+
+/* Prepares traversal of p through the image's tree. Clips every valid ray
+ * to the scene box; returns the mask of rays that enter it (0: the packet
+ * skips the core). stack points at stack_max entries owned by the caller;
+ * stack_max must exceed the tree depth (PKT_STACK_MAX always does: kd_build
+ * caps the depth below it). A smaller hardware stack is the chip model's
+ * business: it sees trav_result.sp and charges spills and refills. */
+uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack, int stack_max);
+
+/* Performs one traversal operation: pops finished work (rays whose best hit
+ * lies before an entry's segment leave it), then either steps one inner
+ * node (near child next, far child pushed when both are needed) or reports
+ * a leaf. */
+void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r);
+
+/* Tests the rays in `mask` against the triangle at tri_addr; updates
+ * closest hits (shadow packets: marks occlusion). Returns the mask of rays
+ * whose result changed. */
+uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, uint32_t tri_addr);
+
+/* Convenience: the whole traversal in a loop (kernel-ref). Counts into the
+ * optional counters; returns the mask of rays that entered the scene box. */
+typedef struct trav_counts {
+	uint64_t node_steps, leaf_visits, tri_tests, ray_tri_tests, max_sp;
+} trav_counts;
+uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c);
+
+/* ---- single-ray path, for checking ---- */
+typedef struct ray_hit {
+	float t, bu, bv;
+	uint32_t tri; /* PKT_NOHIT if none */
+} ray_hit;
+
+/* Closest hit (or, with any_hit, the first occluder) in (0, tmax) by plain
+ * scalar kd-tree traversal; the same intersection math as the packets. */
+ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c);
+
+#endif

@@ -1,0 +1,193 @@
+/*
+ * render.c: the reference packet tracer's frame loop (see render.h).
+ */
+#include "render.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+const char *pkt_type_name(int type)
+{
+	static const char *const names[PKT_NTYPES] = {"primary", "shadow", "reflection",
+	                                              "refraction"};
+	return type >= 0 && type < PKT_NTYPES ? names[type] : "?";
+}
+
+void render_opts_default(render_opts *o)
+{
+	memset(o, 0, sizeof *o);
+	o->width = 512;
+	o->height = 512;
+	o->threads = 1;
+	o->max_depth = 3;
+	o->shadows = 1;
+	o->background = v3(0.05f, 0.05f, 0.08f);
+}
+
+typedef struct job {
+	const mimg *m;
+	const render_opts *o;
+	shade_ctx sc;
+	cam_frame cam;
+	int tiles_x, ntiles;
+	atomic_int next;
+} job;
+
+typedef struct worker {
+	job *j;
+	render_stats st;
+	packet *work; /* depth-first work stack of packets */
+	int cap;
+	packet *kids; /* shade_packet's output, copied onto the work stack */
+	int nkids;
+	trav_entry *stack;
+	pthread_t tid;
+} worker;
+
+/* Traces one packet with the single-ray path (for checking). */
+static void trace_single(const mimg *m, packet *p, trav_counts *c)
+{
+	for (uint64_t b = p->valid; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		ray_hit h =
+		    ray_trace(m, v3(p->ox[i], p->oy[i], p->oz[i]), v3(p->dx[i], p->dy[i], p->dz[i]),
+		              p->tmax[i], p->type == PKT_SHADOW, c);
+		p->t[i] = h.t;
+		p->tri[i] = h.tri;
+		p->bu[i] = h.bu;
+		p->bv[i] = h.bv;
+	}
+}
+
+static void do_tile(worker *w, int tile)
+{
+	job *j = w->j;
+	int n = 0;
+	cam_primary_packet(&j->cam, tile % j->tiles_x, tile / j->tiles_x, &w->work[n++]);
+	while (n > 0) {
+		packet *p = &w->work[--n];
+		int nrays = __builtin_popcountll(p->valid);
+		w->st.rays[p->type] += (uint64_t)nrays;
+		w->st.packets[p->type]++;
+		if (j->o->single_ray) {
+			trace_single(j->m, p, &w->st.trav);
+		} else {
+			uint64_t entered = pkt_trace(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav);
+			/* rays that miss the scene box skip traversal */
+			w->st.box_miss_rays += (uint64_t)__builtin_popcountll(p->valid & ~entered);
+			w->st.box_miss_packets += entered == 0;
+		}
+		if (p->type == PKT_SHADOW) {
+			shade_shadow_done(&j->sc, p, &w->st.shade);
+			continue;
+		}
+		/* children go on top of the work stack, in p's slot and above */
+		int made = shade_packet(&j->sc, p, w->kids, w->nkids, NULL, &w->st.shade);
+		for (int k = 0; k < made && n < w->cap; k++)
+			w->work[n++] = w->kids[k];
+	}
+}
+
+static void *worker_main(void *arg)
+{
+	worker *w = arg;
+	for (;;) {
+		int t = atomic_fetch_add(&w->j->next, 1);
+		if (t >= w->j->ntiles)
+			break;
+		do_tile(w, t);
+	}
+	return NULL;
+}
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static void add_stats(render_stats *a, const render_stats *b)
+{
+	for (int t = 0; t < PKT_NTYPES; t++) {
+		a->rays[t] += b->rays[t];
+		a->packets[t] += b->packets[t];
+	}
+	a->box_miss_packets += b->box_miss_packets;
+	a->box_miss_rays += b->box_miss_rays;
+	a->trav.node_steps += b->trav.node_steps;
+	a->trav.leaf_visits += b->trav.leaf_visits;
+	a->trav.tri_tests += b->trav.tri_tests;
+	a->trav.ray_tri_tests += b->trav.ray_tri_tests;
+	if (b->trav.max_sp > a->trav.max_sp)
+		a->trav.max_sp = b->trav.max_sp;
+	/* shade_counts is all uint64_t counters: add them field by field */
+	const uint64_t *bs = (const uint64_t *)&b->shade;
+	uint64_t *as = (uint64_t *)&a->shade;
+	for (size_t k = 0; k < sizeof a->shade / sizeof(uint64_t); k++)
+		as[k] += bs[k];
+}
+
+int render_frame(const mimg *m, const view *v, const render_opts *o, framebuf *fb, render_stats *st,
+                 diag *d)
+{
+	double t0 = now_ms();
+	job j;
+	memset(&j, 0, sizeof j);
+	j.m = m;
+	j.o = o;
+	j.sc.m = m;
+	j.sc.lights = v->lights;
+	j.sc.nlights = o->shadows ? v->nlights : 0;
+	j.sc.max_depth = o->max_depth;
+	j.sc.background = o->background;
+	j.sc.fb = fb;
+	cam_setup(&j.cam, &v->cam, o->width, o->height);
+	j.tiles_x = (o->width + TILE_W - 1) / TILE_W;
+	j.ntiles = j.tiles_x * ((o->height + TILE_H - 1) / TILE_H);
+	atomic_init(&j.next, 0);
+	int nt = o->threads;
+	worker *ws = calloc((size_t)nt, sizeof *ws);
+	/* depth-first: at most (nlights + 2) children per level, plus the root */
+	int cap = (o->max_depth + 2) * (v->nlights + 2) + 1;
+	int rc = 0;
+	for (int i = 0; i < nt && ws; i++) {
+		ws[i].j = &j;
+		ws[i].cap = cap;
+		ws[i].work = aligned_alloc(64, (size_t)cap * sizeof(packet));
+		ws[i].nkids = v->nlights + 2;
+		ws[i].kids = aligned_alloc(64, (size_t)ws[i].nkids * sizeof(packet));
+		ws[i].stack = aligned_alloc(64, PKT_STACK_MAX * sizeof(trav_entry));
+		if (!ws[i].work || !ws[i].stack || !ws[i].kids)
+			rc = -1;
+	}
+	if (!ws || rc) {
+		rc = diag_set(d, "render", 0, 0, "out of memory for %d threads", nt);
+	} else if (nt == 1) {
+		worker_main(&ws[0]);
+	} else {
+		int started = 0;
+		for (int i = 0; i < nt; i++) {
+			if (pthread_create(&ws[i].tid, NULL, worker_main, &ws[i]) != 0)
+				break;
+			started++;
+		}
+		if (started == 0)
+			worker_main(&ws[0]);
+		for (int i = 0; i < started; i++)
+			pthread_join(ws[i].tid, NULL);
+	}
+	memset(st, 0, sizeof *st);
+	for (int i = 0; ws && i < nt; i++) {
+		add_stats(st, &ws[i].st);
+		free(ws[i].work);
+		free(ws[i].kids);
+		free(ws[i].stack);
+	}
+	free(ws);
+	st->render_ms = now_ms() - t0;
+	return rc;
+}

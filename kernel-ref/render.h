@@ -1,0 +1,47 @@
+/*
+ * render.h: the reference packet tracer (kernel-ref): a whole frame, tile
+ * by tile, on host threads with dynamic load balancing.
+ *
+ * Each 8x8 tile is one primary packet; its secondary packets are traced
+ * depth first on the same host thread, and every ray adds into pixels of
+ * its own tile, so tiles never share frame-buffer words. Combined with the
+ * fixed-point frame buffer this makes the image bit-identical for any
+ * thread count.
+ */
+#ifndef SAAR_KREF_RENDER_H
+#define SAAR_KREF_RENDER_H
+
+#include "camera.h"
+#include "framebuf.h"
+#include "memimage.h"
+#include "packet.h"
+#include "shade.h"
+#include "view.h"
+
+typedef struct render_opts {
+	int width, height;
+	int threads;    /* host threads, >= 1 */
+	int max_depth;  /* reflection/refraction depth */
+	int shadows;    /* 0: primary rays only (no shadow packets) */
+	int single_ray; /* trace with the scalar single-ray path instead of packets */
+	vec3 background;
+} render_opts;
+
+typedef struct render_stats {
+	uint64_t rays[PKT_NTYPES], packets[PKT_NTYPES];
+	uint64_t box_miss_packets; /* packets whose rays all missed the scene box: no traversal */
+	uint64_t box_miss_rays;
+	trav_counts trav;
+	shade_counts shade;
+	double render_ms;
+} render_stats;
+
+void render_opts_default(render_opts *o);
+
+/* Renders v's camera into fb (already sized to width x height). */
+int render_frame(const mimg *m, const view *v, const render_opts *o, framebuf *fb, render_stats *st,
+                 diag *d);
+
+const char *pkt_type_name(int type);
+
+#endif

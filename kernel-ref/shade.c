@@ -1,0 +1,257 @@
+/*
+ * shade.c: the fixed SaarCOR shader and secondary rays (see shade.h).
+ *
+ * Secondary-ray origins follow pbrt's robust spawning: the hit point is
+ * recomputed from barycentrics with a conservative error bound
+ * (gamma(7) * sum |b_i p_i|), moved along the geometric normal by that
+ * bound to the side the new ray leaves on, and rounded one ulp further
+ * away. No magic epsilon: the origin is provably on the right side of the
+ * triangle's plane, so a secondary ray cannot hit its own surface.
+ */
+#include "shade.h"
+
+#include <math.h>
+#include <string.h>
+
+#define GAMMA7 (7.0f * 0x1p-24f / (1.0f - 7.0f * 0x1p-24f))
+
+static void log_read(shade_log *log, uint64_t addr, uint32_t bytes, int region)
+{
+	if (!log)
+		return;
+	if (log->n < log->cap)
+		log->e[log->n++] = (shade_read){addr, bytes, (uint32_t)region};
+	else
+		log->dropped++;
+}
+
+/* Nearest texel with repeat wrapping; returns RGB in [0,1] and logs it. */
+static vec3 texel(const mimg *m, int tex, vec2 uv, float du, float dv, shade_log *log,
+                  shade_counts *cnt)
+{
+	const mimg_texhdr *th = mimg_texhdr_at(m, (uint32_t)tex);
+	uint64_t hdr_addr = m->base[MIMG_TEXHDR] + (uint64_t)MIMG_TEXHDR_BYTES * (uint32_t)tex;
+	log_read(log, hdr_addr, MIMG_TEXHDR_BYTES, MIMG_TEXHDR);
+	float u = uv.u + du, v = uv.v + dv;
+	u -= floorf(u);
+	v -= floorf(v);
+	int x = (int)(u * (float)th->w), y = (int)((1.0f - v) * (float)th->h);
+	x = x < 0 ? 0 : x >= (int)th->w ? (int)th->w - 1 : x;
+	y = y < 0 ? 0 : y >= (int)th->h ? (int)th->h - 1 : y;
+	uint64_t a = th->texel_addr + 4ull * ((uint64_t)y * th->w + (uint64_t)x);
+	log_read(log, a, 4, MIMG_TEXELS);
+	cnt->texel_reads++;
+	const uint8_t *px = m->bytes + a;
+	return v3(px[0] / 255.0f, px[1] / 255.0f, px[2] / 255.0f);
+}
+
+static vec3 arr3(const float *f)
+{
+	return v3(f[0], f[1], f[2]);
+}
+
+/* Robust origin for a ray leaving the surface in direction d. */
+static vec3 spawn_origin(vec3 p, vec3 err, vec3 ng, vec3 d)
+{
+	float off = fabsf(ng.x) * err.x + fabsf(ng.y) * err.y + fabsf(ng.z) * err.z;
+	vec3 o = v3_scale(ng, off);
+	if (v3_dot(d, ng) < 0.0f)
+		o = v3_scale(o, -1.0f);
+	vec3 q = v3_add(p, o);
+	q.x = o.x > 0 ? nextafterf(q.x, INFINITY) : o.x < 0 ? nextafterf(q.x, -INFINITY) : q.x;
+	q.y = o.y > 0 ? nextafterf(q.y, INFINITY) : o.y < 0 ? nextafterf(q.y, -INFINITY) : q.y;
+	q.z = o.z > 0 ? nextafterf(q.z, INFINITY) : o.z < 0 ? nextafterf(q.z, -INFINITY) : q.z;
+	return q;
+}
+
+static void put_ray(packet *q, int lane, vec3 o, vec3 d, float tmax, uint32_t pixel, vec3 w)
+{
+	q->ox[lane] = o.x;
+	q->oy[lane] = o.y;
+	q->oz[lane] = o.z;
+	q->dx[lane] = d.x;
+	q->dy[lane] = d.y;
+	q->dz[lane] = d.z;
+	q->tmax[lane] = tmax;
+	q->pixel[lane] = pixel;
+	q->wr[lane] = w.x;
+	q->wg[lane] = w.y;
+	q->wb[lane] = w.z;
+	q->valid |= 1ull << lane;
+}
+
+int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, shade_log *log,
+                 shade_counts *cnt)
+{
+	const mimg *m = c->m;
+	int nl = c->nlights < max_out - 2 ? c->nlights : max_out - 2;
+	packet *shadow = out, *refl = out + nl, *refr = out + nl + 1;
+	for (int l = 0; l < nl; l++)
+		pkt_clear(&shadow[l], PKT_SHADOW, p->depth);
+	pkt_clear(refl, PKT_REFLECT, p->depth + 1);
+	pkt_clear(refr, PKT_REFRACT, p->depth + 1);
+	int can_recurse = p->depth < c->max_depth;
+	for (uint64_t b = p->valid; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		vec3 w = v3(p->wr[i], p->wg[i], p->wb[i]);
+		vec3 d = v3(p->dx[i], p->dy[i], p->dz[i]);
+		if (p->tri[i] == PKT_NOHIT) {
+			cnt->misses++;
+			vec3 bg = v3_mul(w, c->background);
+			fb_add(c->fb, p->pixel[i], bg.x, bg.y, bg.z);
+			continue;
+		}
+		cnt->hits++;
+		uint32_t ta = p->tri[i], tri = mimg_tri_index(m, ta);
+		const mimg_tri *tr = mimg_tri_at(m, ta);
+		const mimg_shade *sh = mimg_shade_at(m, tri);
+		log_read(log, ta, MIMG_TRI_BYTES, MIMG_TRIS);
+		log_read(log, mimg_shade_addr(m, tri), MIMG_SHADE_BYTES, MIMG_SHADE);
+		const mimg_mat *mt = mimg_mat_at(m, sh->mat);
+		log_read(log, mimg_mat_addr(m, sh->mat), MIMG_MAT_BYTES, MIMG_MATS);
+
+		/* hit point from barycentrics, with its error bound */
+		float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
+		vec3 p0 = arr3(tr->v[0]), p1 = arr3(tr->v[1]), p2 = arr3(tr->v[2]);
+		vec3 hp = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
+		vec3 err = v3_scale(
+		    v3_add(v3_add(v3(fabsf(b0 * p0.x), fabsf(b0 * p0.y), fabsf(b0 * p0.z)),
+		                  v3(fabsf(b1 * p1.x), fabsf(b1 * p1.y), fabsf(b1 * p1.z))),
+		           v3(fabsf(b2 * p2.x), fabsf(b2 * p2.y), fabsf(b2 * p2.z))),
+		    GAMMA7);
+		vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+		vec3 ns = v3_norm(
+		    v3_add(v3_add(v3_scale(arr3(sh->n[0]), b0), v3_scale(arr3(sh->n[1]), b1)),
+		           v3_scale(arr3(sh->n[2]), b2)));
+		vec2 uv = {b0 * sh->uv[0][0] + b1 * sh->uv[1][0] + b2 * sh->uv[2][0],
+		           b0 * sh->uv[0][1] + b1 * sh->uv[1][1] + b2 * sh->uv[2][1]};
+		int entering = v3_dot(d, ng) < 0.0f;
+		/* face-forward both normals towards the viewer */
+		if (!entering)
+			ng = v3_scale(ng, -1.0f);
+		if (v3_dot(ns, ng) < 0.0f)
+			ns = v3_scale(ns, -1.0f);
+
+		vec3 kd = arr3(mt->kd), ka = arr3(mt->ka);
+		if (mt->tex_kd >= 0) {
+			vec3 tx = texel(m, mt->tex_kd, uv, 0, 0, log, cnt);
+			kd = v3_mul(kd, tx);
+			ka = v3_mul(ka, tx);
+		}
+		if (mt->tex_bump >= 0) {
+			const mimg_texhdr *th = mimg_texhdr_at(m, (uint32_t)mt->tex_bump);
+			float du = 1.0f / (float)th->w, dv = 1.0f / (float)th->h;
+			vec3 h0 = texel(m, mt->tex_bump, uv, 0, 0, log, cnt);
+			vec3 hu = texel(m, mt->tex_bump, uv, du, 0, log, cnt);
+			vec3 hv = texel(m, mt->tex_bump, uv, 0, dv, log, cnt);
+			float l0 = (h0.x + h0.y + h0.z) / 3, lu = (hu.x + hu.y + hu.z) / 3,
+			      lv = (hv.x + hv.y + hv.z) / 3;
+			/* tangent frame from the triangle's uv parametrisation */
+			vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
+			float u1 = sh->uv[1][0] - sh->uv[0][0], v1 = sh->uv[1][1] - sh->uv[0][1];
+			float u2 = sh->uv[2][0] - sh->uv[0][0], v2 = sh->uv[2][1] - sh->uv[0][1];
+			float det = u1 * v2 - v1 * u2;
+			if (det != 0.0f && isfinite(1.0f / det)) {
+				vec3 dpdu = v3_norm(v3_scale(
+				    v3_sub(v3_scale(e1, v2), v3_scale(e2, v1)), 1.0f / det));
+				vec3 dpdv = v3_norm(v3_scale(
+				    v3_sub(v3_scale(e2, u1), v3_scale(e1, u2)), 1.0f / det));
+				vec3 nb = v3_sub(ns, v3_scale(v3_add(v3_scale(dpdu, lu - l0),
+				                                     v3_scale(dpdv, lv - l0)),
+				                              mt->bump_scale));
+				if (v3_len(nb) > 0.0f && v3_dot(nb, ng) > 0.0f)
+					ns = v3_norm(nb);
+			}
+		}
+		if (mt->tex_kd < 0 && mt->tex_bump < 0)
+			cnt->untextured_hits++;
+
+		float kr = mt->reflect, kt = mt->transmit;
+		float kl = 1.0f - kr - kt;
+		if (kl < 0.0f)
+			kl = 0.0f;
+		vec3 wl = v3_scale(w, kl);
+		vec3 amb = v3_scale(v3_mul(wl, ka), SHADE_AMBIENT);
+		fb_add(c->fb, p->pixel[i], amb.x, amb.y, amb.z);
+
+		/* shadow rays: one per light the surface faces */
+		if (c->nlights == 0 && kl > 0.0f)
+			cnt->shadow_skip_nolight++;
+		vec3 vdir = v3_scale(v3_norm(d), -1.0f);
+		for (int l = 0; l < nl && kl > 0.0f; l++) {
+			vec3 lp = c->lights[l].pos;
+			vec3 L = v3_sub(lp, hp);
+			vec3 ld = v3_norm(L);
+			float ndl = v3_dot(ns, ld);
+			if (ndl <= 0.0f || v3_dot(ng, L) <= 0.0f) {
+				cnt->shadow_skip_facing++;
+				continue;
+			}
+			vec3 r = v3_sub(v3_scale(ns, 2.0f * ndl), ld);
+			float rv = v3_dot(r, vdir);
+			float spec = rv > 0.0f ? powf(rv, mt->ns > 0.0f ? mt->ns : 1.0f) : 0.0f;
+			vec3 col = v3_add(v3_scale(kd, ndl), v3_scale(arr3(mt->ks), spec));
+			col = v3_mul(v3_mul(col, wl), c->lights[l].color);
+			vec3 o = spawn_origin(hp, err, ng, L);
+			put_ray(&shadow[l], i, o, v3_sub(lp, o), 1.0f, p->pixel[i], col);
+			cnt->shadow_rays_made++;
+		}
+
+		/* reflection and refraction */
+		if (kr <= 0.0f && kt <= 0.0f)
+			continue;
+		if (!can_recurse) {
+			cnt->depth_cut += (kr > 0.0f) + (kt > 0.0f);
+			continue;
+		}
+		vec3 rd = v3_sub(d, v3_scale(ns, 2.0f * v3_dot(d, ns)));
+		if (v3_dot(rd, ng) <= 0.0f) /* shading normal bent it under: use the true one */
+			rd = v3_sub(d, v3_scale(ng, 2.0f * v3_dot(d, ng)));
+		vec3 wr = v3_scale(w, kr);
+		if (kt > 0.0f) {
+			float eta = entering ? 1.0f / mt->ni : mt->ni;
+			float ci = -v3_dot(v3_norm(d), ns);
+			float k = 1.0f - eta * eta * (1.0f - ci * ci);
+			vec3 td = k >= 0.0f ? v3_add(v3_scale(v3_norm(d), eta),
+			                             v3_scale(ns, eta * ci - sqrtf(k)))
+			                    : v3(0, 0, 0);
+			if (k < 0.0f || v3_dot(td, ng) >= 0.0f) {
+				wr = v3_add(wr, v3_scale(w, kt)); /* total internal reflection */
+			} else {
+				vec3 o = spawn_origin(hp, err, ng, td);
+				put_ray(refr, i, o, td, INFINITY, p->pixel[i], v3_scale(w, kt));
+			}
+		}
+		if (wr.x > 0.0f || wr.y > 0.0f || wr.z > 0.0f) {
+			vec3 o = spawn_origin(hp, err, ng, rd);
+			put_ray(refl, i, o, rd, INFINITY, p->pixel[i], wr);
+		}
+	}
+	if (!refl->valid && !refr->valid && p->type != PKT_SHADOW)
+		cnt->secondary_skip++;
+	/* compact: keep only packets that carry rays */
+	int k = 0;
+	for (int l = 0; l < nl + 2; l++) {
+		if (!out[l].valid)
+			continue;
+		out[l].n = PKT_RAYS;
+		out[l].tile = p->tile;
+		if (k != l)
+			out[k] = out[l];
+		k++;
+	}
+	return k;
+}
+
+void shade_shadow_done(const shade_ctx *c, const packet *p, shade_counts *cnt)
+{
+	for (uint64_t b = p->valid; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		if (p->tri[i] != PKT_NOHIT) {
+			cnt->shadow_hits++;
+			continue;
+		}
+		cnt->shadow_lit++;
+		fb_add(c->fb, p->pixel[i], p->wr[i], p->wg[i], p->wb[i]);
+	}
+}

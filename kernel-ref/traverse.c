@@ -1,0 +1,463 @@
+/*
+ * traverse.c: packet kd-tree traversal and triangle tests (see packet.h),
+ * plus the scalar single-ray path used to check them.
+ *
+ * The packet code works on 8 groups of 8 lanes (simd.h). A group whose
+ * lanes are all inactive is skipped, so masked packets cost little. All
+ * segment arithmetic is written once as a lane operation and once as a
+ * scalar one with the same operation order, so the two paths agree to the
+ * bit.
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "isect.h"
+#include "kdtree.h"
+#include "packet.h"
+#include "simd.h"
+
+/* gamma(n) = n u / (1 - n u), u = 2^-24 (pbrt): relative error bound of n
+ * chained float roundings. A split distance (split - o) * (1/d) carries
+ * three roundings. */
+#define GAMMA3 (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f))
+
+#define NGROUPS (PKT_RAYS / SIMD_W)
+
+static inline unsigned grp_bits(uint64_t mask, int g)
+{
+	return (unsigned)(mask >> (SIMD_W * g)) & SIMD_MASK;
+}
+
+/* ---- setup ------------------------------------------------------------ */
+
+uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack, int stack_max)
+{
+	s->stack = stack;
+	s->stack_max = stack_max;
+	s->sp = 0;
+	s->shadow = p->type == PKT_SHADOW;
+	uint64_t enter = 0;
+	for (uint32_t i = 0; i < PKT_RAYS; i++) {
+		if (!((p->valid >> i) & 1)) {
+			/* Idle lanes still flow through the SIMD groups: keep them
+			 * defined and harmless. */
+			s->rc.sx[i] = s->rc.sy[i] = s->rc.sz[i] = 0.0f;
+			s->rc.kz0[i] = s->rc.kz1[i] = s->rc.kx0[i] = 0;
+			s->rc.kx1[i] = s->rc.ky0[i] = s->rc.ky1[i] = 0;
+			s->rc.idx[i] = s->rc.idy[i] = s->rc.idz[i] = 0.0f;
+			p->t[i] = 0.0f;
+			p->tri[i] = PKT_NOHIT;
+			s->cur.tn[i] = INFINITY;
+			s->cur.tf[i] = -INFINITY;
+			continue;
+		}
+		vec3 d = v3(p->dx[i], p->dy[i], p->dz[i]);
+		isect_ray r = isect_prepare(d);
+		s->rc.sx[i] = r.sx;
+		s->rc.sy[i] = r.sy;
+		s->rc.sz[i] = r.sz;
+		s->rc.kz0[i] = -(r.kz == 0);
+		s->rc.kz1[i] = -(r.kz == 1);
+		s->rc.kx0[i] = -(r.kx == 0);
+		s->rc.kx1[i] = -(r.kx == 1);
+		s->rc.ky0[i] = -(r.ky == 0);
+		s->rc.ky1[i] = -(r.ky == 1);
+		s->rc.idx[i] = 1.0f / d.x;
+		s->rc.idy[i] = 1.0f / d.y;
+		s->rc.idz[i] = 1.0f / d.z;
+		p->t[i] = p->tmax[i];
+		p->tri[i] = PKT_NOHIT;
+		/* Clip to the scene box, widened by the error bound. A NaN slab
+		 * distance (origin on a face, direction parallel) leaves the
+		 * segment open on that axis. */
+		float o[3] = {p->ox[i], p->oy[i], p->oz[i]};
+		float id[3] = {s->rc.idx[i], s->rc.idy[i], s->rc.idz[i]};
+		float lo[3] = {m->bounds.lo.x, m->bounds.lo.y, m->bounds.lo.z};
+		float hi[3] = {m->bounds.hi.x, m->bounds.hi.y, m->bounds.hi.z};
+		float tn = 0.0f, tf = p->tmax[i];
+		for (int a = 0; a < 3; a++) {
+			float t0 = (lo[a] - o[a]) * id[a], t1 = (hi[a] - o[a]) * id[a];
+			float n = fminf(t0, t1), f = fmaxf(t0, t1);
+			n -= fabsf(n) * GAMMA3;
+			f += fabsf(f) * GAMMA3;
+			if (n > tn)
+				tn = n;
+			if (f < tf)
+				tf = f;
+		}
+		s->cur.tn[i] = tn;
+		s->cur.tf[i] = tf;
+		if (tn <= tf)
+			enter |= 1ull << i;
+	}
+	s->cur.node = 0;
+	s->cur.mask = enter;
+	return enter;
+}
+
+/* ---- one traversal step ------------------------------------------------ */
+
+/* Rays of e still worth visiting: entry not beyond their best hit and, for
+ * shadow rays, not yet occluded. */
+static uint64_t live_mask(const trav_state *s, const packet *p, const trav_entry *e)
+{
+	uint64_t live = 0;
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(e->mask, g);
+		if (!gb)
+			continue;
+		iv keep = fv_load(e->tn + SIMD_W * g) <= fv_load(p->t + SIMD_W * g);
+		unsigned b = iv_bits(keep) & gb;
+		if (s->shadow)
+			for (unsigned k = b; k; k &= k - 1) {
+				int i = SIMD_W * g + __builtin_ctz(k);
+				if (p->tri[i] != PKT_NOHIT)
+					b &= ~(1u << (i - SIMD_W * g));
+			}
+		live |= (uint64_t)b << (SIMD_W * g);
+	}
+	return live;
+}
+
+void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
+{
+	const kd_node *nodes = mimg_nodes(m);
+	r->pushed = r->popped = 0;
+	/* Finished with the current node (or its rays all ended): pop. */
+	if (s->cur.mask)
+		s->cur.mask = live_mask(s, p, &s->cur);
+	while (!s->cur.mask) {
+		if (s->sp == 0) {
+			r->op = TRAV_DONE;
+			r->mask = 0;
+			r->sp = 0;
+			return;
+		}
+		s->sp--;
+		r->popped++;
+		s->cur.mask = live_mask(s, p, &s->stack[s->sp]);
+		if (s->cur.mask) {
+			s->cur.node = s->stack[s->sp].node;
+			memcpy(s->cur.tn, s->stack[s->sp].tn, sizeof s->cur.tn);
+			memcpy(s->cur.tf, s->stack[s->sp].tf, sizeof s->cur.tf);
+		}
+	}
+	kd_node n = nodes[s->cur.node];
+	r->node = s->cur.node;
+	r->mask = s->cur.mask;
+	if (kd_is_leaf(n)) {
+		r->op = TRAV_LEAF;
+		r->leaf_first = kd_first(n);
+		r->leaf_count = kd_count(n);
+		s->cur.mask = 0; /* the next call pops */
+		r->sp = s->sp;
+		return;
+	}
+	r->op = TRAV_NODE;
+	int axis = kd_axis(n);
+	fv split = fv_set1(kd_split(n));
+	const float *org = axis == 0 ? p->ox : axis == 1 ? p->oy : p->oz;
+	const float *idv = axis == 0 ? s->rc.idx : axis == 1 ? s->rc.idy : s->rc.idz;
+	uint64_t below = 0, above = 0;
+	int first = __builtin_ctzll(s->cur.mask);
+	int near_below = !signbit(idv[first]);
+	trav_entry *far = s->sp < s->stack_max ? &s->stack[s->sp] : NULL;
+	float btn[PKT_RAYS] __attribute__((aligned(32))),
+	    btf[PKT_RAYS] __attribute__((aligned(32)));
+	float atn[PKT_RAYS] __attribute__((aligned(32))),
+	    atf[PKT_RAYS] __attribute__((aligned(32)));
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(s->cur.mask, g);
+		if (!gb)
+			continue;
+		fv tn = fv_load(s->cur.tn + SIMD_W * g), tf = fv_load(s->cur.tf + SIMD_W * g);
+		fv id = fv_load(idv + SIMD_W * g);
+		fv ts = (split - fv_load(org + SIMD_W * g)) * id;
+		fv err = fv_abs(ts) * fv_set1(GAMMA3);
+		iv nan = ts != ts;
+		fv lo = fv_sel(nan, fv_set1(-INFINITY), ts - err);
+		fv hi = fv_sel(nan, fv_set1(INFINITY), ts + err);
+		iv pos = id > fv_set1(0.0f); /* 1/d is never 0: +inf for d = +0, -inf for -0 */
+		/* d >= 0: below is [tn, min(tf, hi)], above [max(tn, lo), tf]; d < 0 mirrored */
+		fv b_n = fv_sel(pos, tn, fv_max(tn, lo)), b_f = fv_sel(pos, fv_min(tf, hi), tf);
+		fv a_n = fv_sel(pos, fv_max(tn, lo), tn), a_f = fv_sel(pos, tf, fv_min(tf, hi));
+		fv_store(btn + SIMD_W * g, b_n);
+		fv_store(btf + SIMD_W * g, b_f);
+		fv_store(atn + SIMD_W * g, a_n);
+		fv_store(atf + SIMD_W * g, a_f);
+		below |= (uint64_t)(iv_bits(b_n <= b_f) & gb) << (SIMD_W * g);
+		above |= (uint64_t)(iv_bits(a_n <= a_f) & gb) << (SIMD_W * g);
+	}
+	uint32_t left = kd_left(n);
+	uint64_t nmask = near_below ? below : above, fmask = near_below ? above : below;
+	uint32_t nnode = near_below ? left : left + 1, fnode = near_below ? left + 1 : left;
+	if (!nmask) {
+		nmask = fmask;
+		nnode = fnode;
+		near_below = !near_below;
+		fmask = 0;
+	}
+	if (fmask && far) {
+		far->node = fnode;
+		far->mask = fmask;
+		memcpy(far->tn, near_below ? atn : btn, sizeof far->tn);
+		memcpy(far->tf, near_below ? atf : btf, sizeof far->tf);
+		s->sp++;
+		r->pushed = 1;
+	}
+	s->cur.node = nnode;
+	s->cur.mask = nmask;
+	memcpy(s->cur.tn, near_below ? btn : atn, sizeof s->cur.tn);
+	memcpy(s->cur.tf, near_below ? btf : atf, sizeof s->cur.tf);
+	r->sp = s->sp;
+}
+
+/* ---- triangle test, 8 lanes at a time ----------------------------------- */
+
+static inline fv sel3(iv k0, iv k1, fv x, fv y, fv z)
+{
+	return fv_sel(k0, x, fv_sel(k1, y, z));
+}
+
+uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, uint32_t tri_addr)
+{
+	const mimg_tri *tr = mimg_tri_at(m, tri_addr);
+	const pkt_rayc *rc = &s->rc;
+	uint64_t changed = 0;
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(mask, g);
+		if (!gb)
+			continue;
+		int o8 = SIMD_W * g;
+		fv ox = fv_load(p->ox + o8), oy = fv_load(p->oy + o8), oz = fv_load(p->oz + o8);
+		iv kz0 = iv_load(rc->kz0 + o8), kz1 = iv_load(rc->kz1 + o8);
+		iv kx0 = iv_load(rc->kx0 + o8), kx1 = iv_load(rc->kx1 + o8);
+		iv ky0 = iv_load(rc->ky0 + o8), ky1 = iv_load(rc->ky1 + o8);
+		fv sx = fv_load(rc->sx + o8), sy = fv_load(rc->sy + o8), sz = fv_load(rc->sz + o8);
+		fv vx[3], vy[3], vkz[3];
+		for (int k = 0; k < 3; k++) {
+			fv ax = fv_set1(tr->v[k][0]) - ox;
+			fv ay = fv_set1(tr->v[k][1]) - oy;
+			fv az = fv_set1(tr->v[k][2]) - oz;
+			vkz[k] = sel3(kz0, kz1, ax, ay, az);
+			vx[k] = sel3(kx0, kx1, ax, ay, az) - sx * vkz[k];
+			vy[k] = sel3(ky0, ky1, ax, ay, az) - sy * vkz[k];
+		}
+		fv u = vx[2] * vy[1] - vy[2] * vx[1];
+		fv v = vx[0] * vy[2] - vy[0] * vx[2];
+		fv w = vx[1] * vy[0] - vy[1] * vx[0];
+		fv zero = fv_set1(0.0f);
+		unsigned dbl = iv_bits((u == zero) | (v == zero) | (w == zero)) & gb;
+		for (unsigned k = dbl; k; k &= k - 1) {
+			int l = __builtin_ctz(k);
+			float uu, vv, ww;
+			isect_uvw_double(vx[0][l], vy[0][l], vx[1][l], vy[1][l], vx[2][l], vy[2][l],
+			                 &uu, &vv, &ww);
+			u[l] = uu;
+			v[l] = vv;
+			w[l] = ww;
+		}
+		iv neg = (u < zero) | (v < zero) | (w < zero);
+		iv posv = (u > zero) | (v > zero) | (w > zero);
+		fv det = u + v + w;
+		iv ok = ~(neg & posv) & (det != zero);
+		unsigned okb = iv_bits(ok) & gb;
+		if (!okb)
+			continue;
+		fv az = sz * vkz[0], bz = sz * vkz[1], cz = sz * vkz[2];
+		fv tt = u * az + v * bz + w * cz;
+		fv t = tt / det;
+		fv bu = v / det, bv = w / det;
+		/* conservative t > 0, as in isect_tri (pbrt's deltaT) */
+		fv mzt = fv_max(fv_abs(az), fv_max(fv_abs(bz), fv_abs(cz)));
+		fv mxt = fv_max(fv_abs(vx[0]), fv_max(fv_abs(vx[1]), fv_abs(vx[2])));
+		fv myt = fv_max(fv_abs(vy[0]), fv_max(fv_abs(vy[1]), fv_abs(vy[2])));
+		fv dz = fv_set1(ISECT_GAMMA(3)) * mzt;
+		fv dx = fv_set1(ISECT_GAMMA(5)) * (mxt + mzt),
+		   dy = fv_set1(ISECT_GAMMA(5)) * (myt + mzt);
+		fv de = fv_set1(2.0f) * (fv_set1(ISECT_GAMMA(2)) * mxt * myt + dy * mxt + dx * myt);
+		fv me = fv_max(fv_abs(u), fv_max(fv_abs(v), fv_abs(w)));
+		fv dt = fv_set1(3.0f) * (fv_set1(ISECT_GAMMA(3)) * me * mzt + de * mzt + dz * me) /
+		        fv_abs(det);
+		okb &= iv_bits(t > dt);
+		for (unsigned k = okb; k; k &= k - 1) {
+			int l = __builtin_ctz(k), i = o8 + l;
+			if (s->shadow) {
+				if (t[l] < p->tmax[i] && p->tri[i] == PKT_NOHIT) {
+					p->t[i] = t[l];
+					p->tri[i] = tri_addr;
+					changed |= 1ull << i;
+				}
+			} else if (isect_better(t[l], tri_addr, p->t[i], p->tri[i])) {
+				p->t[i] = t[l];
+				p->tri[i] = tri_addr;
+				p->bu[i] = bu[l];
+				p->bv[i] = bv[l];
+				changed |= 1ull << i;
+			}
+		}
+	}
+	return changed;
+}
+
+/* ---- whole traversal ----------------------------------------------------- */
+
+uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c)
+{
+	trav_state st;
+	trav_state *s = &st;
+	uint64_t entered = pkt_trav_begin(s, p, m, stack, stack_max);
+	if (!entered)
+		return 0;
+	const uint32_t *lists = mimg_lists(m);
+	trav_result r;
+	for (;;) {
+		pkt_trav_next(s, p, m, &r);
+		if (r.op == TRAV_DONE)
+			break;
+		if (c) {
+			c->node_steps++;
+			if ((uint64_t)r.sp > c->max_sp)
+				c->max_sp = (uint64_t)r.sp;
+		}
+		if (r.op == TRAV_LEAF) {
+			if (c) {
+				c->leaf_visits++;
+				c->tri_tests += r.leaf_count;
+				c->ray_tri_tests +=
+				    (uint64_t)r.leaf_count * (uint64_t)__builtin_popcountll(r.mask);
+			}
+			uint64_t mask = r.mask;
+			for (uint32_t k = 0; k < r.leaf_count && mask; k++) {
+				pkt_isect_tri(s, p, m, mask, lists[r.leaf_first + k]);
+				if (s->shadow)
+					for (uint64_t b = mask; b; b &= b - 1) {
+						int i = __builtin_ctzll(b);
+						if (p->tri[i] != PKT_NOHIT)
+							mask &= ~(1ull << i);
+					}
+			}
+		}
+	}
+	return entered;
+}
+
+/* ---- single-ray path ------------------------------------------------------ */
+
+ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)
+{
+	ray_hit h = {tmax, 0, 0, PKT_NOHIT};
+	isect_ray ir = isect_prepare(d);
+	float oa[3] = {o.x, o.y, o.z};
+	float id[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
+	float lo[3] = {m->bounds.lo.x, m->bounds.lo.y, m->bounds.lo.z};
+	float hi[3] = {m->bounds.hi.x, m->bounds.hi.y, m->bounds.hi.z};
+	float tn = 0.0f, tf = tmax;
+	for (int a = 0; a < 3; a++) {
+		float t0 = (lo[a] - oa[a]) * id[a], t1 = (hi[a] - oa[a]) * id[a];
+		float n = fminf(t0, t1), f = fmaxf(t0, t1);
+		n -= fabsf(n) * GAMMA3;
+		f += fabsf(f) * GAMMA3;
+		if (n > tn)
+			tn = n;
+		if (f < tf)
+			tf = f;
+	}
+	if (!(tn <= tf))
+		return h;
+	const kd_node *nodes = mimg_nodes(m);
+	const uint32_t *lists = mimg_lists(m);
+	struct {
+		uint32_t node;
+		float tn, tf;
+	} stack[PKT_STACK_MAX];
+	int sp = 0;
+	uint32_t node = 0;
+	for (;;) {
+		kd_node n = nodes[node];
+		if (c)
+			c->node_steps++;
+		if (kd_is_leaf(n)) {
+			if (c) {
+				c->leaf_visits++;
+				c->tri_tests += kd_count(n);
+				c->ray_tri_tests += kd_count(n);
+			}
+			for (uint32_t k = 0; k < kd_count(n); k++) {
+				uint32_t ta = lists[kd_first(n) + k];
+				float t, bu, bv;
+				if (!isect_tri(&ir, o, mimg_tri_at(m, ta)->v, &t, &bu, &bv))
+					continue;
+				if (any_hit) {
+					if (t < tmax) {
+						h.t = t;
+						h.tri = ta;
+						return h;
+					}
+				} else if (isect_better(t, ta, h.t, h.tri)) {
+					h.t = t;
+					h.tri = ta;
+					h.bu = bu;
+					h.bv = bv;
+				}
+			}
+			/* pop, skipping entries that start beyond the best hit */
+			for (;;) {
+				if (sp == 0)
+					return h;
+				sp--;
+				if (stack[sp].tn <= h.t)
+					break;
+			}
+			node = stack[sp].node;
+			tn = stack[sp].tn;
+			tf = stack[sp].tf;
+			continue;
+		}
+		int axis = kd_axis(n);
+		float ts = (kd_split(n) - oa[axis]) * id[axis];
+		float err = fabsf(ts) * GAMMA3;
+		float lo_ = ts - err, hi_ = ts + err;
+		if (ts != ts) {
+			lo_ = -INFINITY;
+			hi_ = INFINITY;
+		}
+		int pos = !signbit(id[axis]);
+		float b_n = pos ? tn : (tn > lo_ ? tn : lo_),
+		      b_f = pos ? (tf < hi_ ? tf : hi_) : tf;
+		float a_n = pos ? (tn > lo_ ? tn : lo_) : tn,
+		      a_f = pos ? tf : (tf < hi_ ? tf : hi_);
+		int bin = b_n <= b_f, ain = a_n <= a_f;
+		uint32_t left = kd_left(n);
+		/* near child first: below when d >= 0 */
+		uint32_t nn = pos ? left : left + 1, fn = pos ? left + 1 : left;
+		int nin = pos ? bin : ain, fin = pos ? ain : bin;
+		float nn_n = pos ? b_n : a_n, nn_f = pos ? b_f : a_f;
+		float fn_n = pos ? a_n : b_n, fn_f = pos ? a_f : b_f;
+		if (nin && fin) {
+			stack[sp].node = fn;
+			stack[sp].tn = fn_n;
+			stack[sp].tf = fn_f;
+			sp++;
+			node = nn;
+			tn = nn_n;
+			tf = nn_f;
+		} else if (nin || fin) {
+			node = nin ? nn : fn;
+			tn = nin ? nn_n : fn_n;
+			tf = nin ? nn_f : fn_f;
+		} else {
+			for (;;) {
+				if (sp == 0)
+					return h;
+				sp--;
+				if (stack[sp].tn <= h.t)
+					break;
+			}
+			node = stack[sp].node;
+			tn = stack[sp].tn;
+			tf = stack[sp].tf;
+		}
+	}
+}

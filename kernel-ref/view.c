@@ -1,0 +1,362 @@
+/*
+ * view.c: views files (cameras and point lights) through libyaml.
+ *
+ * Owns view_load, view_list, camera_validate and view_place_default_light
+ * (view_default lives with the geometry it frames, in default_scene.c).
+ * The file is loaded with libyaml's document API so every node keeps its
+ * start mark; each error points at the node it is about as
+ * "file:line:col: message". The format is described in docs/views.md.
+ */
+#include "view.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <yaml.h>
+
+typedef struct yfile {
+	const char *file;
+	yaml_document_t doc;
+	diag *d;
+} yfile;
+
+/* Which camera field a problem is about, so view_load can point at it. */
+enum cam_field { CAM_EYE, CAM_LOOKAT, CAM_UP, CAM_FOV };
+
+static int node_err(yfile *y, const yaml_node_t *n, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static int node_err(yfile *y, const yaml_node_t *n, const char *fmt, ...)
+{
+	char msg[768];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(msg, sizeof msg, fmt, ap);
+	va_end(ap);
+	int line = n ? (int)n->start_mark.line + 1 : 0;
+	int col = n ? (int)n->start_mark.column + 1 : 0;
+	return diag_set(y->d, y->file, line, col, "%s", msg);
+}
+
+static const char *scalar(const yaml_node_t *n)
+{
+	return n && n->type == YAML_SCALAR_NODE ? (const char *)n->data.scalar.value : NULL;
+}
+
+static yaml_node_t *node(yfile *y, int idx)
+{
+	return yaml_document_get_node(&y->doc, idx);
+}
+
+static int yfile_open(yfile *y, const char *file, diag *d)
+{
+	memset(y, 0, sizeof *y);
+	y->file = file;
+	y->d = d;
+	FILE *f = fopen(file, "rb");
+	if (!f)
+		return diag_set(d, file, 0, 0, "cannot open views file: %s", strerror(errno));
+	yaml_parser_t p;
+	yaml_parser_initialize(&p);
+	yaml_parser_set_input_file(&p, f);
+	int ok = yaml_parser_load(&p, &y->doc);
+	if (!ok) {
+		const char *ctx = p.context ? p.context : "";
+		diag_set(d, file, (int)p.problem_mark.line + 1, (int)p.problem_mark.column + 1,
+		         "not valid YAML: %s%s%s", p.problem ? p.problem : "parse error",
+		         *ctx ? " " : "", ctx);
+	}
+	yaml_parser_delete(&p);
+	fclose(f);
+	return ok ? 0 : -1;
+}
+
+/* Looks key up in a mapping node; NULL when absent. */
+static yaml_node_t *map_get(yfile *y, const yaml_node_t *map, const char *key,
+                            yaml_node_t **keynode)
+{
+	for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < map->data.mapping.pairs.top;
+	     p++) {
+		yaml_node_t *k = node(y, p->key);
+		const char *s = scalar(k);
+		if (s && strcmp(s, key) == 0) {
+			if (keynode)
+				*keynode = k;
+			return node(y, p->value);
+		}
+	}
+	return NULL;
+}
+
+/* The `views` mapping of the document, or NULL with diag filled. */
+static yaml_node_t *views_map(yfile *y)
+{
+	yaml_node_t *root = yaml_document_get_root_node(&y->doc);
+	if (!root) {
+		diag_set(y->d, y->file, 0, 0,
+		         "file is empty; expected a top-level `views` mapping");
+		return NULL;
+	}
+	yaml_node_t *views =
+	    root->type == YAML_MAPPING_NODE ? map_get(y, root, "views", NULL) : NULL;
+	if (!views) {
+		node_err(y, root, "no top-level `views` mapping");
+		return NULL;
+	}
+	if (views->type != YAML_MAPPING_NODE) {
+		node_err(y, views, "`views` must be a mapping of view names to views");
+		return NULL;
+	}
+	for (yaml_node_pair_t *p = views->data.mapping.pairs.start;
+	     p < views->data.mapping.pairs.top; p++) {
+		yaml_node_t *k = node(y, p->key);
+		const char *s = scalar(k);
+		if (!s) {
+			node_err(y, k, "view names must be plain strings");
+			return NULL;
+		}
+		if (strlen(s) >= VIEW_NAME_MAX) {
+			node_err(y, k, "view name is longer than %d characters", VIEW_NAME_MAX - 1);
+			return NULL;
+		}
+	}
+	return views;
+}
+
+/* A finite number: strtod must consume the whole scalar (so "1.0x" is an
+ * error, not 1.0) and the value must stay finite as a float. */
+static int get_num(yfile *y, const yaml_node_t *n, const char *what, float *out)
+{
+	const char *s = scalar(n);
+	if (!s)
+		return node_err(y, n, "%s must be a number", what);
+	char *end;
+	errno = 0;
+	double x = strtod(s, &end);
+	const char *t = s + strlen(s);
+	int nonfinite = !strcasecmp(s, ".nan") || !strcasecmp(s, ".inf") ||
+	                !strcasecmp(s, "-.inf") || !strcasecmp(s, "+.inf");
+	if (!nonfinite && (end == s || end != t))
+		return node_err(y, n, "%s: '%s' is not a number", what, s);
+	if (nonfinite || !isfinite(x) || !isfinite((float)x))
+		return node_err(y, n, "%s: '%s' is not a finite number (NaN and Inf are rejected)",
+		                what, s);
+	*out = (float)x;
+	return 0;
+}
+
+static int get_vec3(yfile *y, const yaml_node_t *n, const char *what, vec3 *out)
+{
+	if (!n || n->type != YAML_SEQUENCE_NODE)
+		return node_err(y, n, "%s must be a list of 3 numbers [x, y, z]", what);
+	long cnt = n->data.sequence.items.top - n->data.sequence.items.start;
+	if (cnt != 3)
+		return node_err(y, n, "%s must have exactly 3 numbers, got %ld", what, cnt);
+	float c[3];
+	for (int i = 0; i < 3; i++)
+		if (get_num(y, node(y, n->data.sequence.items.start[i]), what, &c[i]) != 0)
+			return -1;
+	*out = v3(c[0], c[1], c[2]);
+	return 0;
+}
+
+/* The checks shared by view files and command-line flags. Up must not be
+ * parallel to the view direction: the camera basis (right = dir x up)
+ * would be undefined, so it is rejected rather than guessed. */
+static const char *camera_problem(const camera *c, enum cam_field *field)
+{
+	*field = CAM_EYE;
+	if (!v3_finite(c->eye) || !v3_finite(c->lookat) || !v3_finite(c->up) ||
+	    !isfinite(c->fov_deg))
+		return "camera has a NaN or infinite number";
+	*field = CAM_FOV;
+	if (!(c->fov_deg > 0.0f && c->fov_deg < 180.0f))
+		return "fov must be between 0 and 180 degrees (exclusive)";
+	*field = CAM_LOOKAT;
+	vec3 dir = v3_sub(c->lookat, c->eye);
+	if (!(v3_len(dir) > 0.0f))
+		return "eye and lookat are the same point";
+	*field = CAM_UP;
+	if (!(v3_len(c->up) > 0.0f))
+		return "up must not be the zero vector";
+	if (v3_len(v3_cross(v3_norm(dir), v3_norm(c->up))) < 1e-3f)
+		return "up is parallel to the view direction (lookat - eye)";
+	return NULL;
+}
+
+int camera_validate(const camera *c, const char *what, diag *d)
+{
+	enum cam_field f;
+	const char *p = camera_problem(c, &f);
+	return p ? diag_set(d, what, 0, 0, "%s", p) : 0;
+}
+
+static int parse_camera(yfile *y, yaml_node_t *cn, const char *vname, camera *cam)
+{
+	static const char *const keys[] = {"eye", "lookat", "up", "fov"};
+	yaml_node_t *kn[4] = {0}, *vn[4] = {0};
+	if (cn->type != YAML_MAPPING_NODE)
+		return node_err(y, cn, "camera of view '%s' must be a mapping", vname);
+	for (yaml_node_pair_t *p = cn->data.mapping.pairs.start; p < cn->data.mapping.pairs.top;
+	     p++) {
+		yaml_node_t *k = node(y, p->key);
+		const char *s = scalar(k);
+		int i = 0;
+		while (i < 4 && !(s && strcmp(s, keys[i]) == 0))
+			i++;
+		if (i == 4)
+			return node_err(y, k,
+			                "unknown key '%s' in camera of view '%s' (expected eye, "
+			                "lookat, up, fov)",
+			                s ? s : "?", vname);
+		if (kn[i])
+			return node_err(y, k, "duplicate key '%s'", s);
+		kn[i] = k;
+		vn[i] = node(y, p->value);
+	}
+	for (int i = 0; i < 4; i++)
+		if (!vn[i])
+			return node_err(y, cn, "camera of view '%s' has no '%s'", vname, keys[i]);
+	if (get_vec3(y, vn[0], "eye", &cam->eye) || get_vec3(y, vn[1], "lookat", &cam->lookat) ||
+	    get_vec3(y, vn[2], "up", &cam->up) || get_num(y, vn[3], "fov", &cam->fov_deg))
+		return -1;
+	enum cam_field f;
+	const char *prob = camera_problem(cam, &f);
+	return prob ? node_err(y, vn[f], "%s", prob) : 0;
+}
+
+static int parse_lights(yfile *y, yaml_node_t *ln, view *v)
+{
+	if (ln->type != YAML_SEQUENCE_NODE)
+		return node_err(y, ln, "lights must be a list of [x, y, z] positions");
+	v->lights_given = 1;
+	v->nlights = 0;
+	for (yaml_node_item_t *it = ln->data.sequence.items.start; it < ln->data.sequence.items.top;
+	     it++) {
+		yaml_node_t *p = node(y, *it);
+		if (v->nlights == VIEW_MAX_LIGHTS)
+			return node_err(y, p, "more than %d lights", VIEW_MAX_LIGHTS);
+		light *l = &v->lights[v->nlights];
+		if (get_vec3(y, p, "light position", &l->pos) != 0)
+			return -1;
+		l->color = v3(1, 1, 1);
+		v->nlights++;
+	}
+	return 0;
+}
+
+/* The scene path is relative to the views file's folder. */
+static int resolve_scene(yfile *y, yaml_node_t *sn, view *v)
+{
+	const char *s = scalar(sn);
+	if (!s || !*s)
+		return node_err(y, sn, "scene must be a file path");
+	const char *slash = strrchr(y->file, '/');
+	int n;
+	if (s[0] == '/' || !slash)
+		n = snprintf(v->scene, sizeof v->scene, "%s", s);
+	else
+		n = snprintf(v->scene, sizeof v->scene, "%.*s/%s", (int)(slash - y->file), y->file,
+		             s);
+	if (n < 0 || (size_t)n >= sizeof v->scene)
+		return node_err(y, sn, "scene path is too long");
+	return 0;
+}
+
+static int parse_view(yfile *y, yaml_node_t *vn, const char *name, view *v)
+{
+	if (vn->type != YAML_MAPPING_NODE)
+		return node_err(y, vn, "view '%s' must be a mapping", name);
+	yaml_node_t *cam = NULL, *seen[4] = {0};
+	static const char *const keys[] = {"scene", "camera", "lights", "note"};
+	for (yaml_node_pair_t *p = vn->data.mapping.pairs.start; p < vn->data.mapping.pairs.top;
+	     p++) {
+		yaml_node_t *k = node(y, p->key), *val = node(y, p->value);
+		const char *s = scalar(k);
+		int i = 0;
+		while (i < 4 && !(s && strcmp(s, keys[i]) == 0))
+			i++;
+		if (i == 4)
+			return node_err(y, k,
+			                "unknown key '%s' in view '%s' (expected scene, camera, "
+			                "lights, note)",
+			                s ? s : "?", name);
+		if (seen[i])
+			return node_err(y, k, "duplicate key '%s'", s);
+		seen[i] = k;
+		int rc = 0;
+		if (i == 0)
+			rc = resolve_scene(y, val, v);
+		else if (i == 1)
+			cam = val;
+		else if (i == 2)
+			rc = parse_lights(y, val, v);
+		if (rc)
+			return rc;
+	}
+	if (!cam)
+		return node_err(y, vn, "view '%s' has no camera", name);
+	return parse_camera(y, cam, name, &v->cam);
+}
+
+int view_load(view *v, const char *file, const char *name, diag *d)
+{
+	memset(v, 0, sizeof *v);
+	yfile y;
+	if (yfile_open(&y, file, d) != 0)
+		return -1;
+	int rc = -1;
+	yaml_node_t *views = views_map(&y);
+	if (views) {
+		yaml_node_t *vn = map_get(&y, views, name, NULL);
+		if (vn) {
+			snprintf(v->name, sizeof v->name, "%s", name);
+			rc = parse_view(&y, vn, name, v);
+		} else {
+			char list[700] = "";
+			size_t len = 0;
+			for (yaml_node_pair_t *p = views->data.mapping.pairs.start;
+			     p < views->data.mapping.pairs.top && len < sizeof list; p++) {
+				int k = snprintf(list + len, sizeof list - len, "%s%s",
+				                 len ? ", " : "", scalar(node(&y, p->key)));
+				len += k > 0 ? (size_t)k : 0;
+			}
+			diag_set(d, file, 0, 0, "no view named '%s'; available views: %s", name,
+			         len ? list : "(none)");
+		}
+	}
+	yaml_document_delete(&y.doc);
+	if (rc != 0)
+		memset(v, 0, sizeof *v);
+	return rc;
+}
+
+int view_list(const char *file, char (*names)[VIEW_NAME_MAX], int max, diag *d)
+{
+	yfile y;
+	if (yfile_open(&y, file, d) != 0)
+		return -1;
+	int n = -1;
+	yaml_node_t *views = views_map(&y);
+	if (views) {
+		n = 0;
+		for (yaml_node_pair_t *p = views->data.mapping.pairs.start;
+		     p < views->data.mapping.pairs.top && n < max; p++)
+			snprintf(names[n++], VIEW_NAME_MAX, "%s", scalar(node(&y, p->key)));
+	}
+	yaml_document_delete(&y.doc);
+	return n;
+}
+
+void view_place_default_light(view *v, const scene *s)
+{
+	if (v->lights_given || v->nlights > 0)
+		return;
+	float r = 0.5f * v3_len(v3_sub(s->bounds.hi, s->bounds.lo));
+	v->lights[0].pos = v3_add(v->cam.lookat, v3(0, 2 * r, r));
+	v->lights[0].color = v3(1, 1, 1);
+	v->nlights = 1;
+}

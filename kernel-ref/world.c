@@ -1,0 +1,212 @@
+/*
+ * world.c: scene + view + kd-tree + memory image set-up (see world.h).
+ */
+#include "world.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+const char world_usage[] =
+    "  --scene PATH          scene file (OBJ/PLY/3DS/glTF, .gz ok); default: the view's scene,\n"
+    "                        else the embedded Cornell-like room\n"
+    "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
+    "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
+    "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
+    "  --no-lights           no lights: no shadow rays\n"
+    "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n";
+
+void world_opts_default(world_opts *o)
+{
+	memset(o, 0, sizeof *o);
+	kd_params_default(&o->kd);
+}
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static int parse_vec(const char *flag, const char *s, vec3 *v, diag *d)
+{
+	float f[3];
+	const char *p = s;
+	for (int k = 0; k < 3; k++) {
+		char *end;
+		errno = 0;
+		f[k] = strtof(p, &end);
+		if (end == p || errno || !isfinite(f[k]))
+			return diag_set(d, flag, 0, 0,
+			                "expected three finite numbers X,Y,Z, got '%s'", s);
+		p = end;
+		if (k < 2) {
+			if (*p != ',')
+				return diag_set(d, flag, 0, 0, "expected X,Y,Z, got '%s'", s);
+			p++;
+		}
+	}
+	if (*p)
+		return diag_set(d, flag, 0, 0, "trailing characters in '%s'", s);
+	*v = v3(f[0], f[1], f[2]);
+	return 0;
+}
+
+static int parse_num(const char *flag, const char *s, double lo, double hi, double *out, diag *d)
+{
+	char *end;
+	errno = 0;
+	double x = strtod(s, &end);
+	if (end == s || *end || errno || !isfinite(x))
+		return diag_set(d, flag, 0, 0, "expected a number, got '%s'", s);
+	if (x < lo || x > hi)
+		return diag_set(d, flag, 0, 0, "%s is out of range [%g, %g]", s, lo, hi);
+	*out = x;
+	return 0;
+}
+
+int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
+{
+	const char *a = argv[*i];
+	static const char *const with_value[] = {
+	    "--scene",         "--views",        "--view",
+	    "--eye",           "--lookat",       "--up",
+	    "--fov",           "--light",        "--kd-cost-trav",
+	    "--kd-cost-isect", "--kd-max-depth", "--kd-leaf-size",
+	    "--kd-empty-bonus"};
+	int takes = 0;
+	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
+		takes |= strcmp(a, with_value[k]) == 0;
+	if (!takes) {
+		if (strcmp(a, "--no-lights") == 0) {
+			o->no_lights = 1;
+			(*i)++;
+			return 1;
+		}
+		return 0;
+	}
+	if (*i + 1 >= argc)
+		return diag_set(d, a, 0, 0, "missing value");
+	const char *v = argv[*i + 1];
+	*i += 2;
+	double x;
+	if (!strcmp(a, "--scene"))
+		o->scene = v;
+	else if (!strcmp(a, "--views"))
+		o->views = v;
+	else if (!strcmp(a, "--view"))
+		o->view = v;
+	else if (!strcmp(a, "--eye")) {
+		o->have_eye = 1;
+		return parse_vec(a, v, &o->cam.eye, d) ? -1 : 1;
+	} else if (!strcmp(a, "--lookat")) {
+		o->have_lookat = 1;
+		return parse_vec(a, v, &o->cam.lookat, d) ? -1 : 1;
+	} else if (!strcmp(a, "--up")) {
+		o->have_up = 1;
+		return parse_vec(a, v, &o->cam.up, d) ? -1 : 1;
+	} else if (!strcmp(a, "--fov")) {
+		if (parse_num(a, v, 1e-3, 179.9, &x, d))
+			return -1;
+		o->have_fov = 1;
+		o->cam.fov_deg = (float)x;
+	} else if (!strcmp(a, "--light")) {
+		if (o->nlights == VIEW_MAX_LIGHTS)
+			return diag_set(d, a, 0, 0, "at most %d lights", VIEW_MAX_LIGHTS);
+		o->lights[o->nlights].color = v3(1, 1, 1);
+		if (parse_vec(a, v, &o->lights[o->nlights].pos, d))
+			return -1;
+		o->nlights++;
+	} else if (!strcmp(a, "--kd-cost-trav")) {
+		if (parse_num(a, v, 1e-6, 1e6, &x, d))
+			return -1;
+		o->kd.cost_trav = (float)x;
+	} else if (!strcmp(a, "--kd-cost-isect")) {
+		if (parse_num(a, v, 1e-6, 1e6, &x, d))
+			return -1;
+		o->kd.cost_isect = (float)x;
+	} else if (!strcmp(a, "--kd-max-depth")) {
+		if (parse_num(a, v, 0, 60, &x, d))
+			return -1;
+		o->kd.max_depth = (int)x;
+	} else if (!strcmp(a, "--kd-leaf-size")) {
+		if (parse_num(a, v, 1, 1e6, &x, d))
+			return -1;
+		o->kd.leaf_size = (int)x;
+	} else if (!strcmp(a, "--kd-empty-bonus")) {
+		if (parse_num(a, v, 0, 0.99, &x, d))
+			return -1;
+		o->kd.empty_bonus = (float)x;
+	}
+	return 1;
+}
+
+int world_load(world *w, const world_opts *o, diag *d)
+{
+	memset(w, 0, sizeof *w);
+	double t0 = now_ms();
+	if (o->view && !o->views)
+		return diag_set(d, "--view", 0, 0, "needs --views FILE");
+	if (o->views) {
+		if (!o->view)
+			return diag_set(d, "--views", 0, 0, "needs --view NAME");
+		if (view_load(&w->v, o->views, o->view, d))
+			return -1;
+	} else {
+		view_default(&w->v);
+	}
+	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
+	if (path) {
+		if (scene_load(&w->s, path, d))
+			return -1;
+		snprintf(w->scene_label, sizeof w->scene_label, "%s", path);
+	} else {
+		scene_default(&w->s);
+		snprintf(w->scene_label, sizeof w->scene_label, "%s", w->s.name);
+	}
+	w->load_ms = now_ms() - t0;
+	/* flags override the view */
+	if (o->have_eye)
+		w->v.cam.eye = o->cam.eye;
+	if (o->have_lookat)
+		w->v.cam.lookat = o->cam.lookat;
+	if (o->have_up)
+		w->v.cam.up = o->cam.up;
+	if (o->have_fov)
+		w->v.cam.fov_deg = o->cam.fov_deg;
+	if (o->have_eye || o->have_lookat || o->have_up || o->have_fov) {
+		if (camera_validate(&w->v.cam, "--eye/--lookat/--up/--fov", d))
+			goto fail;
+		snprintf(w->v.name, sizeof w->v.name, "%s", "custom");
+	}
+	if (o->nlights) {
+		w->v.nlights = o->nlights;
+		memcpy(w->v.lights, o->lights, sizeof o->lights);
+		w->v.lights_given = 1;
+	}
+	view_place_default_light(&w->v, &w->s);
+	if (o->no_lights)
+		w->v.nlights = 0;
+	t0 = now_ms();
+	if (kd_build(&w->kd, &w->s, &o->kd, d))
+		goto fail;
+	w->kd_ms = now_ms() - t0;
+	t0 = now_ms();
+	if (mimg_build(&w->m, &w->s, &w->kd, d))
+		goto fail;
+	w->image_ms = now_ms() - t0;
+	return 0;
+fail:
+	world_free(w);
+	return -1;
+}
+
+void world_free(world *w)
+{
+	mimg_free(&w->m);
+	kd_free(&w->kd);
+	scene_free(&w->s);
+}

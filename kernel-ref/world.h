@@ -1,0 +1,54 @@
+/*
+ * world.h: everything a frame needs before tracing starts, built the same
+ * way for rtref and saarsim: the scene (file, embedded default), the view
+ * (views file, flags or the default), the kd-tree and the memory image.
+ * Also parses the command-line flags that pick them, so both programs
+ * accept exactly the same scene/view/camera flags.
+ */
+#ifndef SAAR_KREF_WORLD_H
+#define SAAR_KREF_WORLD_H
+
+#include "diag.h"
+#include "kdtree.h"
+#include "memimage.h"
+#include "scene.h"
+#include "view.h"
+
+typedef struct world_opts {
+	const char *scene; /* path, or NULL: from the view, else embedded default */
+	const char *views; /* views file */
+	const char *view;  /* view name in it */
+	int have_eye, have_lookat, have_up, have_fov;
+	camera cam;  /* flags override the view's camera */
+	int nlights; /* --light flags (replace the view's lights) */
+	light lights[VIEW_MAX_LIGHTS];
+	int no_lights; /* --no-lights */
+	kd_params kd;
+} world_opts;
+
+typedef struct world {
+	scene s;
+	view v;
+	kdtree kd;
+	mimg m;
+	char scene_label[1024]; /* what the reports call the scene */
+	double load_ms, kd_ms, image_ms;
+} world;
+
+void world_opts_default(world_opts *o);
+
+/* If argv[*i] is a scene/view/camera/kd flag, consumes it (and its value),
+ * advances *i and returns 1; returns 0 if it is not one of ours; -1 with
+ * diag on a bad value. Flags: --scene P, --views F, --view N, --eye x,y,z,
+ * --lookat x,y,z, --up x,y,z, --fov deg, --light x,y,z (repeatable),
+ * --no-lights, --kd-cost-trav f, --kd-cost-isect f, --kd-max-depth n,
+ * --kd-leaf-size n, --kd-empty-bonus f. */
+int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
+
+/* Usage lines for those flags. */
+extern const char world_usage[];
+
+int world_load(world *w, const world_opts *o, diag *d);
+void world_free(world *w);
+
+#endif

@@ -1,0 +1,113 @@
+/*
+ * config.h: the hardware configuration (YAML) and its schema.
+ *
+ * One static table (config.c) describes every key: dotted path, type,
+ * default, range, unit, provenance and description. The YAML loader, the
+ * `--set key=value` overrides, the JSON dump in reports, `--list-config` and
+ * docs/config.md are all driven by that table, so they cannot disagree.
+ * Nested YAML mappings name dotted paths: `chip: {trav: {width: 4}}` sets
+ * chip.trav.width; a key may also be written dotted (`chip.trav.width: 4`).
+ *
+ * Usage: cfg_load (or cfg_defaults), then any number of cfg_set, then
+ * cfg_validate for the checks that involve several keys.
+ */
+#ifndef SAAR_SIM_CONFIG_H
+#define SAAR_SIM_CONFIG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "diag.h"
+#include "jsonw.h"
+
+/* Enum values; the names in the YAML are in config.c's tables, same order. */
+typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
+typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
+typedef enum { CFG_MEM_FIXED } cfg_mem_model;
+typedef enum { CFG_FIDELITY_CYCLE } cfg_fidelity;
+
+#define CFG_STR_MAX 128
+
+/* One kind of functional unit inside a ray-tracing pipeline (RTP). */
+typedef struct cfg_unit {
+	int count;   /* units of this kind per RTP */
+	int width;   /* rays accepted per cycle: a 64-ray op takes 64/width cycles */
+	int latency; /* pipeline latency in core cycles */
+} cfg_unit;
+
+typedef struct saar_config {
+	char name[CFG_STR_MAX]; /* label copied into reports */
+	struct {
+		double clock_mhz;
+		int rtps, threads_per_rtp, stack_depth;
+		int packet_w, packet_h;
+		bool masked_packets;
+		cfg_thread_sched thread_sched;
+		cfg_tile_order tile_order;
+		cfg_unit rgs, trav, list, isect;
+	} chip;
+	struct {
+		int width, height, frames;
+	} frame;
+	struct {
+		int max_depth;
+	} shading;
+	struct {
+		double cost_trav, cost_isect, empty_bonus;
+		int max_depth, leaf_size;
+	} kdtree;
+	struct {
+		cfg_mem_model model;
+		int latency;
+	} memory;
+	cfg_fidelity fidelity;
+} saar_config;
+
+/* ---- the schema ---- */
+
+typedef enum { CFG_INT, CFG_UINT, CFG_FLOAT, CFG_BOOL, CFG_ENUM, CFG_STR } cfg_type;
+
+typedef struct cfg_key {
+	const char *path; /* "chip.trav.width" */
+	cfg_type type;
+	size_t off;               /* offsetof(saar_config, ...) */
+	size_t size;              /* sizeof the field (CFG_STR: buffer size) */
+	double def, min, max;     /* numeric default and inclusive range; enum: index */
+	const char *sdef;         /* CFG_STR default */
+	const char *const *names; /* CFG_ENUM names, NULL-terminated */
+	const char *unit;         /* "" when dimensionless */
+	bool published;           /* value taken from a paper (else assumed) */
+	const char *source;       /* where published, or why assumed */
+	const char *desc;
+} cfg_key;
+
+/* The whole table, in documentation order (keys of a section contiguous). */
+const cfg_key *cfg_keys(size_t *n);
+/* The key with this exact dotted path, or NULL. */
+const cfg_key *cfg_find(const char *path);
+
+/* ---- loading ---- */
+
+void cfg_defaults(saar_config *c);
+/* Defaults, then the YAML file on top. Errors: "file:line:col: message". */
+int cfg_load(saar_config *c, const char *file, diag *d);
+/* One "key=value" override (the argument of --set). Errors: "--set: ...". */
+int cfg_set(saar_config *c, const char *assignment, diag *d);
+/* Checks that involve several keys. Errors: "config: ...". */
+int cfg_validate(const saar_config *c, diag *d);
+
+/* Name of an enum key's current value (for reports), NULL if not an enum. */
+const char *cfg_enum_name(const saar_config *c, const char *path);
+
+/* ---- output ---- */
+
+/* The resolved config as one JSON object, nested along the dotted paths. */
+void cfg_write_json(const saar_config *c, jsonw *w);
+/* Every key with type, default, unit, provenance and description. */
+void cfg_list(FILE *f);
+/* The content of docs/config.md. */
+void cfg_write_markdown(FILE *f);
+
+#endif

@@ -1,0 +1,357 @@
+/*
+ * test_config.c: the YAML config (sim/config.h): defaults, the standard
+ * config, every error with its exact location, --set, cross-key checks, the
+ * JSON dump and the generated listings.
+ */
+#include <string.h>
+
+#include "config.h"
+#include "testutil.h"
+
+/* Loads text from a fresh temporary file; returns cfg_load's result and
+ * leaves the file path in path. */
+static int load_text(saar_config *c, const char *text, diag *d, char *path, size_t n)
+{
+	char dir[64];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(path, n, dir, "cfg.yaml", text);
+	return cfg_load(c, path, d);
+}
+
+/* Asserts that text fails to load with exactly "<file>:<where>: <msg>". */
+static void expect_error(const char *text, const char *where_msg)
+{
+	saar_config c;
+	diag d = {{0}};
+	char path[128], want[1200];
+	cr_assert_eq(load_text(&c, text, &d, path, sizeof path), -1, "accepted: %s", text);
+	snprintf(want, sizeof want, "%s:%s", path, where_msg);
+	cr_assert_str_eq(d.msg, want);
+}
+
+Test(config, defaults_resolve_and_validate)
+{
+	saar_config c;
+	diag d = {{0}};
+	cfg_defaults(&c);
+	cr_assert_float_eq(c.chip.clock_mhz, 533.0, 1e-9);
+	cr_assert_eq(c.chip.rtps, 4);
+	cr_assert_eq(c.chip.threads_per_rtp, 16);
+	cr_assert_eq(c.chip.packet_w * c.chip.packet_h, 64);
+	cr_assert(c.chip.masked_packets);
+	cr_assert_eq(c.chip.thread_sched, CFG_SCHED_ROUND_ROBIN);
+	cr_assert_eq(c.chip.tile_order, CFG_TILES_SCANLINE);
+	cr_assert_eq(c.chip.trav.width, 4 * c.chip.isect.width, "designed for 4:1 (seed 002 §4.7)");
+	cr_assert_eq(c.frame.width, 1024);
+	cr_assert_eq(c.frame.height, 768);
+	cr_assert_float_eq(c.kdtree.cost_isect, 1.5, 1e-9);
+	cr_assert_float_eq(c.kdtree.empty_bonus, 0.2, 1e-9);
+	cr_assert_eq(c.kdtree.leaf_size, 2);
+	cr_assert_eq(c.memory.model, CFG_MEM_FIXED);
+	cr_assert_eq(c.memory.latency, 20);
+	cr_assert_eq(c.fidelity, CFG_FIDELITY_CYCLE);
+	cr_assert_str_eq(c.name, "saarcor-std");
+	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
+}
+
+Test(config, schema_table_is_sound)
+{
+	size_t n;
+	const cfg_key *k = cfg_keys(&n);
+	cr_assert_gt(n, 30);
+	for (size_t i = 0; i < n; i++) {
+		cr_assert(k[i].desc && *k[i].desc && k[i].source && *k[i].source, "%s", k[i].path);
+		cr_assert_eq(cfg_find(k[i].path), &k[i], "duplicate path %s", k[i].path);
+		if (k[i].type == CFG_INT || k[i].type == CFG_FLOAT)
+			cr_assert(k[i].min <= k[i].def && k[i].def <= k[i].max, "%s", k[i].path);
+		/* the JSON writer needs each section's keys contiguous */
+		const char *dot = strrchr(k[i].path, '.');
+		size_t sl = dot ? (size_t)(dot - k[i].path) : 0;
+		for (size_t j = i + 2; sl && j < n; j++) {
+			if (!strncmp(k[j].path, k[i].path, sl) && k[j].path[sl] == '.')
+				cr_assert(!strncmp(k[j - 1].path, k[i].path, sl),
+				          "section of %s split before %s", k[i].path, k[j].path);
+		}
+	}
+	cr_assert_null(cfg_find("chip"));
+	cr_assert_null(cfg_find("chip.trav"));
+}
+
+Test(config, standard_config_equals_defaults)
+{
+	saar_config c, def;
+	diag d = {{0}};
+	int rc = cfg_load(&c, "configs/saarcor-std.yaml", &d);
+	cr_assert_eq(rc, 0, "%s", d.msg);
+	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
+	/* The defaults are the standard chip; both start from one memset, so
+	 * the padding matches too. */
+	cfg_defaults(&def);
+	cr_assert(!memcmp(&c, &def, sizeof c), "configs/saarcor-std.yaml differs from defaults");
+}
+
+Test(config, nested_and_dotted_keys)
+{
+	saar_config c;
+	diag d = {{0}};
+	char path[128];
+	int rc = load_text(&c,
+	                   "chip:\n"
+	                   "  trav: {width: 8, latency: 3}\n"
+	                   "  masked_packets: no\n"
+	                   "  thread_sched: oldest_first\n"
+	                   "chip.isect.count: 2\n"
+	                   "kdtree:\n"
+	                   "  cost_isect: 2.25   # comment\n"
+	                   "name: \"my chip\"\n",
+	                   &d, path, sizeof path);
+	cr_assert_eq(rc, 0, "%s", d.msg);
+	cr_assert_eq(c.chip.trav.width, 8);
+	cr_assert_eq(c.chip.trav.latency, 3);
+	cr_assert_eq(c.chip.trav.count, 1, "untouched keys keep defaults");
+	cr_assert_not(c.chip.masked_packets);
+	cr_assert_eq(c.chip.thread_sched, CFG_SCHED_OLDEST_FIRST);
+	cr_assert_str_eq(cfg_enum_name(&c, "chip.thread_sched"), "oldest_first");
+	cr_assert_eq(c.chip.isect.count, 2);
+	cr_assert_float_eq(c.kdtree.cost_isect, 2.25, 1e-12);
+	cr_assert_str_eq(c.name, "my chip");
+}
+
+Test(config, empty_file_is_defaults)
+{
+	saar_config c, def;
+	diag d = {{0}};
+	char path[128];
+	cr_assert_eq(load_text(&c, "# nothing but a comment\n", &d, path, sizeof path), 0);
+	cfg_defaults(&def);
+	cr_assert(!memcmp(&c, &def, sizeof c));
+}
+
+Test(config, missing_file)
+{
+	saar_config c;
+	diag d = {{0}};
+	cr_assert_eq(cfg_load(&c, "/nonexistent/x.yaml", &d), -1);
+	cr_assert_str_eq(d.msg, "/nonexistent/x.yaml: cannot open: No such file or directory");
+}
+
+Test(config, unknown_keys_with_suggestions)
+{
+	expect_error("chip:\n  rtps: 4\n  rtp: 4\n",
+	             "3:3: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)");
+	expect_error("chip:\n  tarv:\n    width: 3\n",
+	             "2:3: unknown key 'chip.tarv' (did you mean 'chip.trav'?)");
+	expect_error("chip:\n  trav: {widht: 3}\n",
+	             "2:10: unknown key 'chip.trav.widht' (did you mean 'chip.trav.width'?)");
+	expect_error("rtps: 4\n", "1:1: unknown key 'rtps' (did you mean 'chip.rtps'?)");
+	expect_error("bogus: 4\n", "1:1: unknown key 'bogus'");
+}
+
+Test(config, wrong_types)
+{
+	expect_error("chip:\n  rtps: four\n", "2:9: chip.rtps: expected an integer, got 'four'");
+	expect_error("chip:\n  rtps: 4.5\n", "2:9: chip.rtps: expected an integer, got '4.5'");
+	expect_error("chip:\n  rtps:\n", "2:8: chip.rtps: expected an integer, got nothing");
+	expect_error("chip.clock_mhz: fast\n",
+	             "1:17: chip.clock_mhz: expected a number, got 'fast'");
+	expect_error("chip.clock_mhz: .nan\n",
+	             "1:17: chip.clock_mhz: expected a number, got '.nan'");
+	expect_error("chip.masked_packets: maybe\n",
+	             "1:22: chip.masked_packets: expected true or false, got 'maybe'");
+	expect_error(
+	    "chip:\n  thread_sched: lifo\n",
+	    "2:17: chip.thread_sched: expected one of round_robin, oldest_first; got 'lifo'");
+	expect_error("chip.tile_order: Morton\n",
+	             "1:18: chip.tile_order: expected one of scanline, morton; got 'Morton'");
+}
+
+Test(config, out_of_range)
+{
+	expect_error("chip:\n  rtps: 0\n", "2:9: chip.rtps: must be in [1, 1024], got 0");
+	expect_error("chip:\n  packet_w: 65\n", "2:13: chip.packet_w: must be in [1, 64], got 65");
+	expect_error("kdtree.empty_bonus: 1\n",
+	             "1:21: kdtree.empty_bonus: must be in [0, 0.99], got 1");
+	expect_error("chip.clock_mhz: 0.5\n",
+	             "1:17: chip.clock_mhz: must be in [1, 10000], got 0.5");
+	expect_error("chip.rtps: 99999999999999999999\n",
+	             "1:12: chip.rtps: expected an integer, got '99999999999999999999'");
+}
+
+Test(config, structure_errors)
+{
+	expect_error("chip:\n  rtps:\n    a: 1\n",
+	             "3:5: chip.rtps: expected a single value, got a mapping");
+	expect_error("chip:\n  rtps: [1]\n",
+	             "2:9: chip.rtps: expected a single value, got a sequence");
+	expect_error("chip: 4\n",
+	             "1:7: 'chip' is a section: expected a mapping of its keys, got a value");
+	expect_error("- a\n", "1:1: expected a mapping of keys at the top level, got a sequence");
+	expect_error("chip:\n  rtps: 4\n---\nchip:\n  rtps: 4\n",
+	             "4:1: only one YAML document is allowed");
+}
+
+Test(config, duplicate_keys)
+{
+	expect_error("chip:\n  rtps: 4\n  rtps: 5\n",
+	             "3:3: duplicate key 'rtps' (first at line 2)");
+	expect_error("chip: {rtps: 4}\nchip: {rtps: 5}\n",
+	             "2:1: duplicate key 'chip' (first at line 1)");
+	expect_error("chip:\n  rtps: 4\nchip.rtps: 5\n",
+	             "3:1: duplicate key 'chip.rtps' (first at line 2)");
+}
+
+Test(config, bad_yaml)
+{
+	expect_error("chip:\n  rtps: 4\n bad\n",
+	             "3:2: YAML syntax error: did not find expected key (while parsing a block "
+	             "mapping)");
+	expect_error("chip: {rtps: 4\n",
+	             "2:1: YAML syntax error: did not find expected ',' or '}' (while parsing a "
+	             "flow mapping)");
+	expect_error("chip:\n\trtps: 4\n", "2:1: YAML syntax error: found character that cannot "
+	                                   "start any token (while scanning for the next token)");
+}
+
+Test(config, set_overrides)
+{
+	saar_config c;
+	diag d = {{0}};
+	cfg_defaults(&c);
+	cr_assert_eq(cfg_set(&c, "chip.trav.width=8", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, " chip.rtps = 2 ", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "chip.masked_packets=false", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "chip.tile_order=morton", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "kdtree.cost_trav=0.5", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "name=a=b", &d), 0, "%s", d.msg);
+	cr_assert_eq(c.chip.trav.width, 8);
+	cr_assert_eq(c.chip.rtps, 2);
+	cr_assert_not(c.chip.masked_packets);
+	cr_assert_eq(c.chip.tile_order, CFG_TILES_MORTON);
+	cr_assert_float_eq(c.kdtree.cost_trav, 0.5, 1e-12);
+	cr_assert_str_eq(c.name, "a=b", "only the first '=' splits");
+}
+
+static void expect_set_error(const char *arg, const char *msg)
+{
+	saar_config c;
+	diag d = {{0}};
+	cfg_defaults(&c);
+	cr_assert_eq(cfg_set(&c, arg, &d), -1, "accepted %s", arg);
+	cr_assert_str_eq(d.msg, msg);
+}
+
+Test(config, set_errors)
+{
+	expect_set_error("chip.rtps", "--set: expected key=value, got 'chip.rtps'");
+	expect_set_error("chip.rtp=4", "--set: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)");
+	expect_set_error("chip.rtps=abc", "--set: chip.rtps: expected an integer, got 'abc'");
+	expect_set_error("chip.rtps=", "--set: chip.rtps: expected an integer, got nothing");
+	expect_set_error("chip.trav.latency=0",
+	                 "--set: chip.trav.latency: must be in [1, 10000], got 0");
+	expect_set_error("chip.trav=4", "--set: 'chip.trav' is a section; set one of its keys "
+	                                "(chip.trav.*)");
+	expect_set_error("fidelity=fast", "--set: fidelity: expected one of cycle; got 'fast'");
+}
+
+Test(config, validate_cross_keys)
+{
+	saar_config c;
+	diag d = {{0}};
+	cfg_defaults(&c);
+	cfg_set(&c, "chip.packet_w=16", &d);
+	cr_assert_eq(cfg_validate(&c, &d), -1);
+	cr_assert_str_eq(d.msg, "config: chip.packet_w x chip.packet_h = 16 x 8 = 128 rays; a "
+	                        "packet holds at most 64");
+	cfg_set(&c, "chip.packet_h=4", &d);
+	cr_assert_eq(cfg_validate(&c, &d), 0, "16x4 = 64 is fine");
+	cfg_set(&c, "chip.stack_depth=32", &d);
+	cr_assert_eq(cfg_validate(&c, &d), -1);
+	cr_assert_str_eq(d.msg, "config: kdtree.max_depth 0 (automatic) allows trees 60 deep but "
+	                        "chip.stack_depth is 32: set kdtree.max_depth <= 32");
+	cfg_set(&c, "kdtree.max_depth=32", &d);
+	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
+	cfg_set(&c, "kdtree.max_depth=40", &d);
+	cr_assert_eq(cfg_validate(&c, &d), -1);
+	cr_assert_str_eq(d.msg, "config: kdtree.max_depth (40) exceeds chip.stack_depth (32): the "
+	                        "traversal stack could overflow");
+}
+
+/* Runs a writer into a temporary file and returns its text (malloc'd). */
+static char *capture(void (*fn)(FILE *, const saar_config *), const saar_config *c)
+{
+	FILE *f = tmpfile();
+	cr_assert(f);
+	fn(f, c);
+	long n = ftell(f);
+	rewind(f);
+	char *s = calloc(1, (size_t)n + 1);
+	cr_assert_eq(fread(s, 1, (size_t)n, f), (size_t)n);
+	fclose(f);
+	return s;
+}
+
+static void json_fn(FILE *f, const saar_config *c)
+{
+	jsonw w;
+	jsonw_init_file(&w, f);
+	cfg_write_json(c, &w);
+}
+static void list_fn(FILE *f, const saar_config *c)
+{
+	cfg_list(f);
+}
+static void md_fn(FILE *f, const saar_config *c)
+{
+	cfg_write_markdown(f);
+}
+
+Test(config, json_dump_has_every_key_nested)
+{
+	saar_config c;
+	diag d = {{0}};
+	cfg_defaults(&c);
+	cfg_set(&c, "chip.thread_sched=oldest_first", &d);
+	char *s = capture(json_fn, &c);
+	size_t n;
+	const cfg_key *k = cfg_keys(&n);
+	for (size_t i = 0; i < n; i++) {
+		const char *dot = strrchr(k[i].path, '.');
+		char leaf[80];
+		snprintf(leaf, sizeof leaf, "\"%s\": ", dot ? dot + 1 : k[i].path);
+		cr_assert(strstr(s, leaf), "%s missing in %s", k[i].path, s);
+	}
+	/* nesting follows the dotted paths; enums are names, bools literals */
+	const char *chip = strstr(s, "\"chip\": {"), *trav = strstr(s, "\"trav\": {"),
+	           *frame = strstr(s, "\"frame\": {");
+	cr_assert(chip && trav && frame && chip < trav && trav < frame, "%s", s);
+	cr_assert(strstr(s, "\"thread_sched\": \"oldest_first\""), "%s", s);
+	cr_assert(strstr(s, "\"masked_packets\": true"), "%s", s);
+	cr_assert(strstr(s, "\"cost_isect\": 1.5"), "%s", s);
+	cr_assert(strstr(s, "\"rtps\": 4"), "%s", s);
+	int depth = 0, maxd = 0;
+	for (const char *p = s; *p; p++) {
+		depth += (*p == '{') - (*p == '}');
+		cr_assert_geq(depth, 0);
+		maxd = depth > maxd ? depth : maxd;
+	}
+	cr_assert_eq(depth, 0, "%s", s);
+	cr_assert_eq(maxd, 3, "top, chip, chip.trav");
+	free(s);
+}
+
+Test(config, list_and_markdown_name_every_key)
+{
+	char *l = capture(list_fn, NULL), *m = capture(md_fn, NULL);
+	size_t n;
+	const cfg_key *k = cfg_keys(&n);
+	for (size_t i = 0; i < n; i++) {
+		char want[96];
+		snprintf(want, sizeof want, "| `%s` |", k[i].path);
+		cr_assert(strstr(m, want), "%s missing in markdown", k[i].path);
+		cr_assert(strstr(l, k[i].path), "%s missing in list", k[i].path);
+	}
+	cr_assert(strstr(l, "round_robin, oldest_first"));
+	cr_assert(strstr(m, "## Errors"));
+	free(l);
+	free(m);
+}

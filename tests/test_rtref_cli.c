@@ -1,0 +1,144 @@
+/*
+ * test_rtref_cli.c: rtref end to end: a good run writes the image and a
+ * JSON stats file; every kind of bad input gives one line on stderr, exit
+ * status 2 and no output file.
+ */
+#include <string.h>
+#include <sys/stat.h>
+
+#include "testutil.h"
+
+static char dir[256];
+
+static void setup(void)
+{
+	tu_tmpdir(dir, sizeof dir);
+}
+
+/* Runs rtref with args; returns the exit status; stderr into dir/err. */
+static int rtref(const char *args)
+{
+	char cmd[4096];
+	snprintf(cmd, sizeof cmd, "%s/rtref %s >%s/out 2>%s/err", tu_bin_dir(), args, dir, dir);
+	return tu_run(cmd);
+}
+
+static int exists(const char *name)
+{
+	char p[512];
+	snprintf(p, sizeof p, "%s/%s", dir, name);
+	struct stat sb;
+	return stat(p, &sb) == 0;
+}
+
+/* stderr must be exactly one line containing `what`. */
+static void one_line_naming(const char *what)
+{
+	char p[512], buf[4096] = {0};
+	snprintf(p, sizeof p, "%s/err", dir);
+	FILE *f = fopen(p, "r");
+	cr_assert(f);
+	size_t n = fread(buf, 1, sizeof buf - 1, f);
+	fclose(f);
+	cr_assert_gt(n, 0, "nothing on stderr");
+	char *nl = strchr(buf, '\n');
+	cr_assert(nl && nl[1] == 0, "stderr is not one line: %s", buf);
+	cr_assert(strstr(buf, what), "stderr does not name '%s': %s", what, buf);
+}
+
+TestSuite(rtref_cli, .init = setup);
+
+Test(rtref_cli, good_run_writes_image_and_stats)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 64x48 --threads 2 --out %s/f.png --stats %s/s.json",
+	         dir, dir);
+	cr_assert_eq(rtref(args), 0);
+	cr_assert(exists("f.png") && exists("s.json"));
+	cr_assert_not(exists("f.png.tmp") || exists("s.json.tmp"));
+	char p[512], buf[8192] = {0};
+	snprintf(p, sizeof p, "%s/s.json", dir);
+	FILE *f = fopen(p, "r");
+	cr_assert(fread(buf, 1, sizeof buf - 1, f) > 0);
+	fclose(f);
+	const char *keys[] = {"\"rays\"",           "\"kd_node_visits\"", "\"leaf_visits\"",
+	                      "\"triangle_tests\"", "\"build_ms\"",       "\"render_ms\"",
+	                      "\"mrays_per_s\"",    "\"shadow\""};
+	for (size_t k = 0; k < sizeof keys / sizeof *keys; k++)
+		cr_assert(strstr(buf, keys[k]), "stats lack %s", keys[k]);
+}
+
+Test(rtref_cli, missing_scene_file)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--scene %s/nope.obj --out %s/f.png", dir, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("nope.obj");
+	cr_assert_not(exists("f.png"));
+}
+
+Test(rtref_cli, malformed_scene)
+{
+	char p[512], args[1024];
+	tu_write(p, sizeof p, dir, "bad.obj", "v 1 2\nf 1 2 x\n\x01\x02garbage\n");
+	snprintf(args, sizeof args, "--scene %s --out %s/f.png", p, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("bad.obj");
+	cr_assert_not(exists("f.png"));
+}
+
+Test(rtref_cli, nan_vertex_names_file_and_line)
+{
+	char p[512], args[1024];
+	tu_write(p, sizeof p, dir, "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+	snprintf(args, sizeof args, "--scene %s --out %s/f.png", p, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("nan.obj:3");
+	cr_assert_not(exists("f.png"));
+}
+
+Test(rtref_cli, zero_triangles)
+{
+	char p[512], args[1024];
+	tu_write(p, sizeof p, dir, "empty.obj", "v 0 0 0\nv 1 0 0\n");
+	snprintf(args, sizeof args, "--scene %s --out %s/f.png", p, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("empty.obj");
+}
+
+Test(rtref_cli, bad_view_file)
+{
+	char p[512], args[1024];
+	tu_write(
+	    p, sizeof p, dir, "v.yaml",
+	    "views:\n  a:\n    camera: {eye: [0,0,1], lookat: [0,0,0], up: [0,1,0], fov: 400}\n");
+	snprintf(args, sizeof args, "--views %s --view a --out %s/f.png", p, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("v.yaml:3");
+	cr_assert_not(exists("f.png"));
+}
+
+Test(rtref_cli, absurd_sizes_and_threads)
+{
+	char args[1024];
+	const char *bad[] = {"--size 0x10", "--size 100000x10", "--size 10",     "--size axb",
+	                     "--threads 0", "--threads 99999",  "--threads two", "--depth -1",
+	                     "--fov 0",     "--eye 1,2",        "--bogus-flag 3"};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		snprintf(args, sizeof args, "%s --out %s/f.png", bad[k], dir);
+		cr_assert_eq(rtref(args), 2, "'%s' should exit 2", bad[k]);
+		char flag[64];
+		snprintf(flag, sizeof flag, "%s", bad[k]);
+		flag[strcspn(flag, " ")] = 0;
+		one_line_naming(flag);
+		cr_assert_not(exists("f.png"));
+	}
+}
+
+Test(rtref_cli, unwritable_output_leaves_nothing)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 16x16 --out %s/no/such/dir/f.png", dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("f.png");
+}

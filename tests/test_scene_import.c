@@ -1,0 +1,450 @@
+/*
+ * test_scene_import.c: scene_load (Assimp + zlib), the material rules,
+ * textures through image_oiio.cpp, and the embedded default scene.
+ */
+#include "image.h"
+#include "scene.h"
+#include "testutil.h"
+
+#include <string.h>
+#include <zlib.h>
+
+static const char *TRI_OBJ = "mtllib m.mtl\n"
+                             "v 0 0 0\n"
+                             "v 1 0 0\n"
+                             "v 0 1 0\n"
+                             "v 0 0 1\n"
+                             "vt 0 0\n"
+                             "vt 1 0\n"
+                             "vt 0 1\n"
+                             "vn 0 0 1\n"
+                             "usemtl diffuse\n"
+                             "f 1/1/1 2/2/1 3/3/1\n"
+                             "usemtl mirror\n"
+                             "f 1 2 4\n"
+                             "usemtl glass\n"
+                             "f 1 3 4\n"
+                             "usemtl bart\n"
+                             "f 2 3 4\n";
+
+static const char *TRI_MTL = "newmtl diffuse\n"
+                             "Kd 0.25 0.5 0.75\n"
+                             "Ns 12\n"
+                             "d 1\n"
+                             "Ni 0\n"
+                             "illum 2\n"
+                             "newmtl mirror\n"
+                             "Kd 0.1 0.1 0.1\n"
+                             "Ks 0.6 0.9 0.9\n"
+                             "illum 3\n"
+                             "newmtl glass\n"
+                             "Kd 0 0 0\n"
+                             "d 0.25\n"
+                             "Ni 1.5\n"
+                             "illum 2\n"
+                             "newmtl bart\n"
+                             "Kd 0.5 0.5 0.5\n"
+                             "Tf 0.3 0.3 0.3\n"
+                             "Ni 0\n";
+
+static void load_ok(scene *s, const char *path)
+{
+	diag d = {{0}};
+	int rc = scene_load(s, path, &d);
+	cr_assert_eq(rc, 0, "scene_load(%s) failed: %s", path, d.msg);
+}
+
+static void load_fails(const char *path, diag *d)
+{
+	scene s;
+	cr_assert_eq(scene_load(&s, path, d), -1, "scene_load(%s) should fail", path);
+	cr_assert_eq(s.ntris, 0);
+	scene_free(&s);
+}
+
+static const material *find_mat(const scene *s, const char *name)
+{
+	for (uint32_t i = 0; i < s->nmats; i++)
+		if (strcmp(s->mats[i].name, name) == 0)
+			return &s->mats[i];
+	cr_assert_fail("material %s not found", name);
+	return NULL;
+}
+
+static void write_gz(const char *path, const char *text)
+{
+	gzFile g = gzopen(path, "wb");
+	cr_assert(g, "cannot write %s", path);
+	cr_assert_eq(gzputs(g, text), (int)strlen(text));
+	cr_assert_eq(gzclose(g), Z_OK);
+}
+
+Test(import, cornell_box)
+{
+	char path[1024];
+	SCENE_OR_SKIP(path, "cornell_box/CornellBox.obj");
+	scene s;
+	load_ok(&s, path);
+	cr_assert_eq(s.ntris, 32);
+	cr_assert_eq(s.nmats, 4);
+	cr_assert_float_eq(find_mat(&s, "Red")->kd.y, 0.05f, 1e-6);
+	cr_assert_float_eq(find_mat(&s, "Light")->ke.z, 5.0f, 1e-6);
+	cr_assert_float_eq(s.bounds.hi.y, 559.2f, 1e-3);
+	for (uint32_t i = 0; i < s.nmats; i++) {
+		cr_assert_eq(s.mats[i].transmit, 0.0f, "%s should be opaque", s.mats[i].name);
+		cr_assert_eq(s.mats[i].reflect, 0.0f);
+		cr_assert_eq(s.mats[i].ni, 1.0f);
+	}
+	scene_free(&s);
+}
+
+Test(import, conference_gz)
+{
+	char path[1024];
+	SCENE_OR_SKIP(path, "conference_69k/conference.obj.gz");
+	scene s;
+	load_ok(&s, path);
+	cr_assert_eq(s.ntris, 69047);
+	cr_assert_eq(s.nmats, 35);
+	const material *m = find_mat(&s, "mesh1_SG");
+	cr_assert_float_eq(m->kd.x, 0.639215708f, 1e-6);
+	cr_assert_float_eq(m->kd.y, 0.400000036f, 1e-6);
+	cr_assert_float_eq(m->kd.z, 0.129411772f, 1e-6);
+	cr_assert_float_eq(m->ns, 40.0f, 1e-6);
+	cr_assert_eq(m->transmit, 0.0f);
+	cr_assert_float_eq(s.bounds.lo.x, -1020.13f, 0.01);
+	cr_assert_float_eq(s.bounds.hi.y, 650.29f, 0.01);
+	scene_free(&s);
+}
+
+Test(import, obj_mtl_materials)
+{
+	char dir[256], obj[512], mtl[512];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(mtl, sizeof mtl, dir, "m.mtl", TRI_MTL);
+	tu_write(obj, sizeof obj, dir, "t.obj", TRI_OBJ);
+	scene s;
+	load_ok(&s, obj);
+	cr_assert_eq(s.ntris, 4);
+	cr_assert_eq(s.nmats, 4);
+	cr_assert(s.has_uv);
+
+	const material *m = find_mat(&s, "diffuse");
+	cr_assert_float_eq(m->kd.x, 0.25f, 1e-6);
+	cr_assert_float_eq(m->kd.z, 0.75f, 1e-6);
+	cr_assert_float_eq(m->ns, 12.0f, 1e-6);
+	cr_assert_eq(m->ni, 1.0f, "Ni 0 means absent");
+	cr_assert_eq(m->transmit, 0.0f);
+	cr_assert_eq(m->reflect, 0.0f);
+	cr_assert_eq(m->tex_kd, -1);
+
+	m = find_mat(&s, "mirror");
+	cr_assert_float_eq(m->reflect, 0.8f, 1e-6, "illum 3: reflect = mean(Ks)");
+	cr_assert_eq(m->transmit, 0.0f);
+
+	m = find_mat(&s, "glass");
+	cr_assert_float_eq(m->transmit, 0.75f, 1e-6, "d 0.25: transmit 0.75");
+	cr_assert_float_eq(m->ni, 1.5f, 1e-6);
+
+	m = find_mat(&s, "bart");
+	cr_assert_float_eq(m->transmit, 0.3f, 1e-6, "explicit Tf 0.3 is a filter");
+
+	/* The first triangle carries file normals and uvs; the others get the
+	 * face normal. */
+	cr_assert_float_eq(s.n[0].z, 1.0f, 1e-6);
+	cr_assert_float_eq(s.uv[1].u, 1.0f, 1e-6);
+	vec3 fn = scene_face_normal(&s, 1);
+	cr_assert_float_eq(v3_dot(fn, s.n[3]), 1.0f, 1e-6);
+	scene_free(&s);
+}
+
+Test(import, obj_gz_matches_plain)
+{
+	char dir[256], p[512], gz[512];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "m.mtl", TRI_MTL);
+	tu_write(p, sizeof p, dir, "plain.obj", TRI_OBJ);
+	snprintf(gz, sizeof gz, "%s/packed.obj.gz", dir);
+	write_gz(gz, TRI_OBJ);
+
+	scene a, b, c;
+	load_ok(&a, p);
+	load_ok(&b, gz);
+	/* "X" that does not exist while "X.gz" does is read from X.gz. */
+	snprintf(gz, sizeof gz, "%s/packed.obj", dir);
+	load_ok(&c, gz);
+	for (const scene *o = &b; o; o = o == &b ? &c : NULL) {
+		cr_assert_eq(o->ntris, a.ntris);
+		cr_assert_eq(o->nmats, a.nmats);
+		cr_assert_eq(memcmp(o->v, a.v, 3 * a.ntris * sizeof *a.v), 0);
+		cr_assert_eq(memcmp(o->n, a.n, 3 * a.ntris * sizeof *a.n), 0);
+		cr_assert_eq(memcmp(o->uv, a.uv, 3 * a.ntris * sizeof *a.uv), 0);
+		cr_assert_eq(memcmp(o->mat, a.mat, a.ntris * sizeof *a.mat), 0);
+		cr_assert_eq(memcmp(o->mats, a.mats, a.nmats * sizeof *a.mats), 0);
+	}
+	scene_free(&a);
+	scene_free(&b);
+	scene_free(&c);
+}
+
+Test(import, ply_ascii)
+{
+	char dir[256], p[512];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "quad.ply",
+	         "ply\n"
+	         "format ascii 1.0\n"
+	         "element vertex 5\n"
+	         "property float x\n"
+	         "property float y\n"
+	         "property float z\n"
+	         "element face 2\n"
+	         "property list uchar int vertex_indices\n"
+	         "end_header\n"
+	         "0 0 0\n"
+	         "2 0 0\n"
+	         "2 2 0\n"
+	         "0 2 0\n"
+	         "1 1 3\n"
+	         "4 0 1 2 3\n"
+	         "3 0 1 4\n");
+	scene s;
+	load_ok(&s, p);
+	cr_assert_eq(s.ntris, 3, "quad triangulated + one triangle");
+	cr_assert_float_eq(s.bounds.hi.z, 3.0f, 1e-6);
+	cr_assert_float_eq(s.bounds.hi.x, 2.0f, 1e-6);
+	scene_free(&s);
+}
+
+Test(import, missing_file)
+{
+	diag d = {{0}};
+	load_fails("/nonexistent/dir/nothing.obj", &d);
+	cr_assert(strstr(d.msg, "/nonexistent/dir/nothing.obj"), "message: %s", d.msg);
+	cr_assert(strstr(d.msg, "No such file"), "message: %s", d.msg);
+}
+
+Test(import, malformed_files)
+{
+	char dir[256], p[512];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "junk.obj", "this is not\na scene file {}\n");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, p), "message: %s", d.msg);
+	tu_write(p, sizeof p, dir, "junk.ply", "ply\nformat ascii 1.0\nelement vertex x\n");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, p), "message: %s", d.msg);
+	tu_write(p, sizeof p, dir, "junk.xyzq", "\x01\x02garbage\x7f");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, p), "message: %s", d.msg);
+	tu_write(p, sizeof p, dir, "badidx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+	load_fails(p, &d);
+	/* A corrupt .gz is reported, not crashed on. */
+	tu_write(p, sizeof p, dir, "bad.obj.gz", "\x1f\x8b\x08\x00garbage");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "bad.obj.gz"), "message: %s", d.msg);
+}
+
+Test(import, nan_vertex_names_line)
+{
+	char dir[256], p[512], want[600];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "nan.obj", "# comment\nv 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s:3: vertex has a NaN or infinite coordinate", p);
+	cr_assert_str_eq(d.msg, want);
+
+	tu_write(p, sizeof p, dir, "inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1 -inf\nf 1 2 3\n");
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s:3:", p);
+	cr_assert(strncmp(d.msg, want, strlen(want)) == 0, "message: %s", d.msg);
+
+	tu_write(p, sizeof p, dir, "nann.obj",
+	         "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn nan 0 1\nf 1//1 2//2 3//1\n");
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s:5: normal has a NaN or infinite component", p);
+	cr_assert_str_eq(d.msg, want);
+
+	tu_write(p, sizeof p, dir, "badnum.obj", "v 0 0 0\nv 1.0x 0 0\nv 0 1 0\nf 1 2 3\n");
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s:2:3: malformed number '1.0x'", p);
+	cr_assert_str_eq(d.msg, want);
+}
+
+Test(import, zero_normal_becomes_face_normal)
+{
+	char dir[256], p[512];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "zn.obj",
+	         "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
+	scene s;
+	load_ok(&s, p);
+	cr_assert_float_eq(s.n[0].z, 1.0f, 1e-6);
+	scene_free(&s);
+}
+
+Test(import, zero_triangles)
+{
+	char dir[256], p[512];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "no triangles"), "message: %s", d.msg);
+	tu_write(p, sizeof p, dir, "lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "no triangles"), "message: %s", d.msg);
+}
+
+Test(import, texture_map_kd)
+{
+	char dir[256], p[512], png[512];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(png, sizeof png, "%s/tex.png", dir);
+	uint8_t px[3 * 2 * 3];
+	for (int i = 0; i < (int)sizeof px; i++)
+		px[i] = (uint8_t)(i * 13);
+	cr_assert_eq(img_write(png, 3, 2, px, NULL, &d), 0, "%s", d.msg);
+	tu_write(p, sizeof p, dir, "t.mtl",
+	         "newmtl a\nKd 1 1 1\nmap_Kd tex.png\n"
+	         "newmtl b\nKd 1 1 1\nmap_Kd tex.png\nbump -bm 0.5 tex.png\n");
+	tu_write(p, sizeof p, dir, "t.obj",
+	         "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+	         "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 3/3 2/2 1/1\n");
+	scene s;
+	load_ok(&s, p);
+	cr_assert_eq(s.ntexs, 1, "the same file is loaded once");
+	cr_assert_eq(s.texs[0].w, 3);
+	cr_assert_eq(s.texs[0].h, 2);
+	for (int i = 0; i < 6; i++) {
+		cr_assert_eq(s.texs[0].rgba[4 * i + 0], px[3 * i + 0]);
+		cr_assert_eq(s.texs[0].rgba[4 * i + 2], px[3 * i + 2]);
+		cr_assert_eq(s.texs[0].rgba[4 * i + 3], 255);
+	}
+	const material *b = find_mat(&s, "b");
+	cr_assert_eq(find_mat(&s, "a")->tex_kd, 0);
+	cr_assert_eq(b->tex_kd, 0);
+	cr_assert_eq(b->tex_bump, 0);
+	cr_assert_float_eq(b->bump_scale, 0.5f, 1e-6);
+	scene_free(&s);
+}
+
+Test(import, missing_texture_is_an_error)
+{
+	char dir[256], p[512];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "t.mtl", "newmtl a\nmap_Kd nowhere.png\n");
+	tu_write(p, sizeof p, dir, "t.obj",
+	         "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, p), "names the scene: %s", d.msg);
+	cr_assert(strstr(d.msg, "nowhere.png"), "names the texture: %s", d.msg);
+}
+
+Test(image, write_read_formats)
+{
+	char dir[256], p[512];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	uint8_t px[4 * 3 * 3];
+	float pf[4 * 3 * 3];
+	for (int i = 0; i < (int)sizeof px; i++) {
+		px[i] = (uint8_t)(i * 7);
+		pf[i] = (float)px[i] / 255.0f;
+	}
+	static const char *const exts[] = {"png", "exr", "ppm", "tif", "jpg"};
+	for (int e = 0; e < 5; e++) {
+		snprintf(p, sizeof p, "%s/img.%s", dir, exts[e]);
+		cr_assert_eq(img_write(p, 4, 3, px, e == 1 ? pf : NULL, &d), 0, "%s", d.msg);
+		int w, h;
+		uint8_t *rgba;
+		cr_assert_eq(img_read_rgba8(p, &w, &h, &rgba, &d), 0, "%s", d.msg);
+		cr_assert(w == 4 && h == 3, "%s: %dx%d", p, w, h);
+		int tol = e == 4 ? 40 : 1; /* JPEG is lossy */
+		for (int i = 0; i < 12; i++)
+			cr_assert(abs(rgba[4 * i + 1] - px[3 * i + 1]) <= tol, "%s pixel %d", p, i);
+		free(rgba);
+	}
+	/* No temporary file is left behind. */
+	char cmd[600];
+	snprintf(cmd, sizeof cmd, "ls %s | grep -q tmp", dir);
+	cr_assert_neq(tu_run(cmd), 0);
+
+	snprintf(p, sizeof p, "%s/no/such/dir/x.png", dir);
+	cr_assert_eq(img_write(p, 4, 3, px, NULL, &d), -1);
+	cr_assert(strstr(d.msg, p), "%s", d.msg);
+	snprintf(p, sizeof p, "%s/x.unknownext", dir);
+	cr_assert_eq(img_write(p, 4, 3, px, NULL, &d), -1);
+	cr_assert_eq(tu_run(cmd), 1, "failed writes leave no temporary");
+	int w, h;
+	uint8_t *rgba;
+	cr_assert_eq(img_read_rgba8("/nonexistent.png", &w, &h, &rgba, &d), -1);
+	cr_assert(strstr(d.msg, "/nonexistent.png"), "%s", d.msg);
+}
+
+Test(default_scene, room_and_spheres)
+{
+	scene s;
+	scene_default(&s);
+	cr_assert_gt(s.ntris, 3000);
+	cr_assert_eq(s.ndegenerate, 0);
+	cr_assert_float_eq(s.bounds.lo.x, 0.0f, 1e-6);
+	cr_assert_float_eq(s.bounds.hi.y, 10.0f, 1e-6);
+	cr_assert_float_eq(s.bounds.hi.z, 10.0f, 1e-6);
+	int mirror = -1, glass = -1;
+	for (uint32_t i = 0; i < s.nmats; i++) {
+		if (s.mats[i].reflect >= 0.7f && s.mats[i].transmit == 0.0f)
+			mirror = (int)i;
+		if (s.mats[i].transmit >= 0.8f && s.mats[i].ni > 1.0f)
+			glass = (int)i;
+	}
+	cr_assert(mirror >= 0 && glass >= 0);
+
+	/* Every triangle faces the right way: walls into the room, sphere
+	 * faces along their smooth normals; every position is finite. */
+	for (uint32_t t = 0; t < s.ntris; t++) {
+		vec3 fn = scene_face_normal(&s, t);
+		const vec3 *p = s.v + 3 * t;
+		vec3 c = v3_scale(v3_add(v3_add(p[0], p[1]), p[2]), 1.0f / 3);
+		if (s.mat[t] == (uint32_t)mirror || s.mat[t] == (uint32_t)glass)
+			for (int k = 0; k < 3; k++)
+				cr_assert_gt(v3_dot(fn, s.n[3 * t + k]), 0.5f, "sphere tri %u", t);
+		else if (t < 10)
+			cr_assert_gt(v3_dot(fn, v3_sub(v3(5, 5, 5), c)), 0.0f, "wall tri %u", t);
+	}
+
+	/* Closed meshes: in each sphere and the box, every edge is shared by
+	 * exactly two triangles with bit-identical end points. */
+	for (uint32_t m = 3; m < s.nmats; m++) {
+		uint32_t edges = 0, unmatched = 0;
+		for (uint32_t t = 0; t < s.ntris; t++) {
+			if (s.mat[t] != m)
+				continue;
+			for (int k = 0; k < 3; k++) {
+				vec3 a = s.v[3 * t + k], b = s.v[3 * t + (k + 1) % 3];
+				int found = 0;
+				for (uint32_t u = 0; u < s.ntris && !found; u++) {
+					if (s.mat[u] != m || u == t)
+						continue;
+					for (int j = 0; j < 3; j++) {
+						vec3 c = s.v[3 * u + j],
+						     e = s.v[3 * u + (j + 1) % 3];
+						if (!memcmp(&a, &e, sizeof a) &&
+						    !memcmp(&b, &c, sizeof b))
+							found = 1;
+					}
+				}
+				edges++;
+				unmatched += !found;
+			}
+		}
+		cr_assert_gt(edges, 0);
+		cr_assert_eq(unmatched, 0, "material %s has %u open edges", s.mats[m].name,
+		             unmatched);
+	}
+	scene_free(&s);
+}

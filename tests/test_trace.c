@@ -1,0 +1,297 @@
+/*
+ * test_trace.c: intersection and traversal: watertightness, edge and
+ * vertex hits, packet path == single-ray path, thread-count determinism,
+ * and the golden image of the embedded scene.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "camera.h"
+#include "framebuf.h"
+#include "image.h"
+#include "isect.h"
+#include "render.h"
+#include "testutil.h"
+#include "world.h"
+
+/* A closed UV sphere whose triangles share exact vertex values. */
+static void make_sphere(scene *s, vec3 c, float r, int nu, int nv)
+{
+	scene_init(s, "test:sphere");
+	material m = material_default("s");
+	scene_add_material(s, &m);
+	for (int j = 0; j < nv; j++)
+		for (int i = 0; i < nu; i++) {
+			vec3 p[4];
+			for (int k = 0; k < 4; k++) {
+				int ii = (i + (k == 1 || k == 2)) % nu, jj = j + (k >= 2);
+				float th = (float)M_PI * (float)jj / (float)nv;
+				float ph = 2.0f * (float)M_PI * (float)ii / (float)nu;
+				/* the poles are one exact point */
+				float st = (jj == 0 || jj == nv) ? 0.0f : sinf(th);
+				float ct = jj == 0 ? 1.0f : jj == nv ? -1.0f : cosf(th);
+				p[k] = v3(c.x + r * st * cosf(ph), c.y + r * ct,
+				          c.z + r * st * sinf(ph));
+			}
+			vec3 a[3] = {p[0], p[1], p[2]}, b[3] = {p[0], p[2], p[3]};
+			if (j != 0)
+				scene_add_triangle(s, a, NULL, NULL, 0);
+			if (j != nv - 1)
+				scene_add_triangle(s, b, NULL, NULL, 0);
+		}
+	diag d;
+	cr_assert_eq(scene_finish(s, "sphere", &d), 0);
+}
+
+static void build(world *w, scene *s)
+{
+	diag d;
+	memset(w, 0, sizeof *w);
+	w->s = *s;
+	kd_params kp;
+	kd_params_default(&kp);
+	cr_assert_eq(kd_build(&w->kd, &w->s, &kp, &d), 0, "%s", d.msg);
+	cr_assert_eq(mimg_build(&w->m, &w->s, &w->kd, &d), 0, "%s", d.msg);
+}
+
+/* Traces a 512x512 frame of primary rays from eye towards c; for every hit,
+ * continues the ray beyond the hit: seen from outside it must hit the far
+ * side; from inside every ray must hit. Returns the number of leaks. */
+static uint64_t count_leaks(const world *w, vec3 eye, vec3 c, int inside)
+{
+	camera cam = {eye, c, v3(0, 1, 0.1f), inside ? 120.0f : 40.0f};
+	cam_frame cf;
+	cam_setup(&cf, &cam, 512, 512);
+	static trav_entry stack[PKT_STACK_MAX];
+	static packet p, q;
+	uint64_t leaks = 0, hits = 0;
+	for (int ty = 0; ty < 64; ty++)
+		for (int tx = 0; tx < 64; tx++) {
+			cam_primary_packet(&cf, tx, ty, &p);
+			pkt_trace(&p, &w->m, stack, PKT_STACK_MAX, NULL);
+			if (inside) {
+				for (uint64_t b = p.valid; b; b &= b - 1)
+					leaks += p.tri[__builtin_ctzll(b)] == PKT_NOHIT;
+				continue;
+			}
+			/* continue each hit ray from just inside the surface */
+			q = p;
+			q.valid = 0;
+			for (uint64_t b = p.valid; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				if (p.tri[i] == PKT_NOHIT)
+					continue;
+				hits++;
+				float t = nextafterf(p.t[i], INFINITY);
+				q.ox[i] = p.ox[i] + t * p.dx[i];
+				q.oy[i] = p.oy[i] + t * p.dy[i];
+				q.oz[i] = p.oz[i] + t * p.dz[i];
+				q.tmax[i] = INFINITY;
+				q.valid |= 1ull << i;
+			}
+			pkt_trace(&q, &w->m, stack, PKT_STACK_MAX, NULL);
+			for (uint64_t b = q.valid; b; b &= b - 1)
+				leaks += q.tri[__builtin_ctzll(b)] == PKT_NOHIT;
+		}
+	if (!inside)
+		cr_assert_gt(hits, 50000, "the sphere should fill much of the frame (%llu hits)",
+		             (unsigned long long)hits);
+	return leaks;
+}
+
+Test(trace, watertight_sphere_inside_and_outside)
+{
+	scene s;
+	make_sphere(&s, v3(0.3f, -0.2f, 0.1f), 1.0f, 48, 24);
+	world w;
+	build(&w, &s);
+	cr_assert_eq(count_leaks(&w, v3(0.31f, -0.18f, 0.12f), v3(0.3f, -0.2f, 2.0f), 1), 0);
+	cr_assert_eq(count_leaks(&w, v3(0.3f, 0.0f, 0.1f), v3(-2.0f, -0.4f, 0.5f), 1), 0);
+	cr_assert_eq(count_leaks(&w, v3(0.3f, 0.1f, 4.0f), v3(0.3f, -0.2f, 0.1f), 0), 0);
+	cr_assert_eq(count_leaks(&w, v3(-3.1f, 2.2f, -1.7f), v3(0.3f, -0.2f, 0.1f), 0), 0);
+	world_free(&w);
+}
+
+Test(trace, edge_and_vertex_hits)
+{
+	/* two triangles sharing the edge x = 0 in the plane z = 0 */
+	float t1[3][3] = {{0, -1, 0}, {0, 1, 0}, {-1, 0, 0}};
+	float t2[3][3] = {{0, 1, 0}, {0, -1, 0}, {1, 0, 0}};
+	vec3 d = v3(0, 0, -1);
+	isect_ray r = isect_prepare(d);
+	float t, bu, bv;
+	/* a ray exactly through the shared edge hits at least one triangle */
+	for (float y = -0.75f; y <= 0.75f; y += 0.25f) {
+		int h = isect_tri(&r, v3(0, y, 1), t1, &t, &bu, &bv) |
+		        isect_tri(&r, v3(0, y, 1), t2, &t, &bu, &bv);
+		cr_assert(h, "edge ray at y=%g leaked", y);
+		cr_assert_float_eq(t, 1.0f, 0.0f);
+	}
+	/* through a vertex shared by a fan of 6 triangles */
+	int hits = 0;
+	for (int k = 0; k < 6; k++) {
+		float a0 = (float)k * (float)M_PI / 3.0f, a1 = (float)(k + 1) * (float)M_PI / 3.0f;
+		float tv[3][3] = {{0, 0, 0}, {cosf(a0), sinf(a0), 0}, {cosf(a1), sinf(a1), 0}};
+		hits += isect_tri(&r, v3(0, 0, 5), tv, &t, &bu, &bv);
+	}
+	cr_assert_geq(hits, 1, "a ray through a shared vertex must hit the fan");
+	/* just outside a triangle misses; degenerate triangles never hit */
+	cr_assert_not(isect_tri(&r, v3(-1.0001f, 0, 1), t1, &t, &bu, &bv));
+	float deg[3][3] = {{0, 0, 0}, {1, 1, 0}, {2, 2, 0}};
+	cr_assert_not(isect_tri(&r, v3(1, 1, 1), deg, &t, &bu, &bv));
+	/* axis-parallel rays with -0 components */
+	isect_ray rz = isect_prepare(v3(-0.0f, 0.0f, -1.0f));
+	cr_assert(isect_tri(&rz, v3(-0.25f, 0.1f, 3), t1, &t, &bu, &bv));
+	cr_assert_float_eq(t, 3.0f, 0.0f);
+}
+
+/* Every primary ray of a view: packet hit == single-ray hit, bit for bit. */
+static void compare_paths(const world *w, int size)
+{
+	cam_frame cf;
+	cam_setup(&cf, &w->v.cam, size, size);
+	static trav_entry stack[PKT_STACK_MAX];
+	static packet p;
+	uint64_t hits = 0;
+	for (int ty = 0; ty < size / 8; ty++)
+		for (int tx = 0; tx < size / 8; tx++) {
+			cam_primary_packet(&cf, tx, ty, &p);
+			pkt_trace(&p, &w->m, stack, PKT_STACK_MAX, NULL);
+			for (uint64_t b = p.valid; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				ray_hit h =
+				    ray_trace(&w->m, v3(p.ox[i], p.oy[i], p.oz[i]),
+				              v3(p.dx[i], p.dy[i], p.dz[i]), INFINITY, 0, NULL);
+				cr_assert_eq(h.tri, p.tri[i],
+				             "%s: tile %d,%d ray %d: single-ray hit %u, packet %u",
+				             w->scene_label, tx, ty, i, h.tri, p.tri[i]);
+				if (h.tri != PKT_NOHIT) {
+					hits++;
+					cr_assert(h.t == p.t[i] && h.bu == p.bu[i] &&
+					          h.bv == p.bv[i]);
+				}
+			}
+		}
+	cr_assert_gt(hits, 0, "%s: no ray hit anything", w->scene_label);
+}
+
+Test(trace, packet_equals_single_ray_embedded)
+{
+	world_opts o;
+	world_opts_default(&o);
+	world w;
+	diag d;
+	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	compare_paths(&w, 256);
+	world_free(&w);
+}
+
+Test(trace, packet_equals_single_ray_on_shared_views, .timeout = 600)
+{
+	char views[1024];
+	SCENE_OR_SKIP(views, "views.yaml");
+	char names[32][VIEW_NAME_MAX];
+	diag d;
+	int n = view_list(views, names, 32, &d);
+	cr_assert_gt(n, 0, "%s", d.msg);
+	for (int k = 0; k < n; k++) {
+		world_opts o;
+		world_opts_default(&o);
+		o.views = views;
+		o.view = names[k];
+		world w;
+		cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+		compare_paths(&w, 256);
+		world_free(&w);
+	}
+}
+
+static void render_embedded(framebuf *fb, int threads, int size, render_stats *st)
+{
+	world_opts o;
+	world_opts_default(&o);
+	world w;
+	diag d;
+	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = ro.height = size;
+	ro.threads = threads;
+	cr_assert_eq(fb_init(fb, size, size), 0);
+	cr_assert_eq(render_frame(&w.m, &w.v, &ro, fb, st, &d), 0, "%s", d.msg);
+	world_free(&w);
+}
+
+Test(trace, image_identical_for_any_thread_count)
+{
+	framebuf a, b, c;
+	render_stats sa, sb, sc;
+	render_embedded(&a, 1, 200, &sa);
+	render_embedded(&b, 2, 200, &sb);
+	render_embedded(&c, 7, 200, &sc);
+	size_t n = 200 * 200 * 3 * sizeof(uint64_t);
+	cr_assert(memcmp(a.acc, b.acc, n) == 0, "1 vs 2 threads differ");
+	cr_assert(memcmp(a.acc, c.acc, n) == 0, "1 vs 7 threads differ");
+	cr_assert_eq(sa.rays[PKT_SHADOW], sc.rays[PKT_SHADOW]);
+	cr_assert_gt(sa.rays[PKT_REFLECT], 0, "the mirror sphere spawns reflection rays");
+	cr_assert_gt(sa.rays[PKT_REFRACT], 0, "the glass sphere spawns refraction rays");
+	fb_free(&a);
+	fb_free(&b);
+	fb_free(&c);
+}
+
+/* The golden image was written by `make golden` (rtref, embedded scene,
+ * 128x128) and reviewed; any change to it must be a deliberate update. */
+Test(trace, golden_image_of_embedded_scene)
+{
+	framebuf fb;
+	render_stats st;
+	render_embedded(&fb, 2, 128, &st);
+	uint8_t *img = malloc(128 * 128 * 3);
+	fb_to_rgb8(&fb, img, NULL);
+	int w, h;
+	uint8_t *gold;
+	diag d;
+	cr_assert_eq(img_read_rgba8("tests/golden/embedded-128.png", &w, &h, &gold, &d), 0, "%s",
+	             d.msg);
+	cr_assert(w == 128 && h == 128);
+	uint64_t differ = 0;
+	for (int p = 0; p < 128 * 128; p++)
+		differ += memcmp(img + 3 * p, gold + 4 * p, 3) != 0;
+	cr_assert_eq(differ, 0, "%llu pixels differ from tests/golden/embedded-128.png",
+	             (unsigned long long)differ);
+	free(img);
+	free(gold);
+	fb_free(&fb);
+}
+
+Test(trace, skips_are_counted)
+{
+	world_opts o;
+	world_opts_default(&o);
+	o.no_lights = 1;
+	world w;
+	diag d;
+	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = ro.height = 64;
+	framebuf fb;
+	fb_init(&fb, 64, 64);
+	render_stats st;
+	cr_assert_eq(render_frame(&w.m, &w.v, &ro, &fb, &st, &d), 0);
+	cr_assert_eq(st.rays[PKT_SHADOW], 0, "no lights: no shadow rays");
+	cr_assert_gt(st.shade.shadow_skip_nolight, 0);
+	cr_assert_gt(st.shade.untextured_hits, 0);
+	cr_assert_eq(st.shade.texel_reads, 0, "no textures: no texel reads");
+	/* a camera looking away from the scene: every packet skips traversal */
+	vec3 back = v3_sub(w.v.cam.eye, w.v.cam.lookat);
+	w.v.cam.eye = v3_add(w.v.cam.eye, v3_scale(back, 100.0f));
+	w.v.cam.lookat = v3_add(w.v.cam.eye, back);
+	fb_clear(&fb);
+	cr_assert_eq(render_frame(&w.m, &w.v, &ro, &fb, &st, &d), 0);
+	cr_assert_eq(st.box_miss_packets, st.packets[PKT_PRIMARY]);
+	cr_assert_eq(st.trav.node_steps, 0);
+	fb_free(&fb);
+	world_free(&w);
+}

@@ -1,0 +1,234 @@
+/*
+ * test_view.c: views files (view_load, view_list), camera checks and the
+ * default light. Every error must read "FILE:LINE:COL: ..." and point at
+ * the offending node.
+ */
+#include "testutil.h"
+#include "view.h"
+
+#include <math.h>
+#include <string.h>
+
+#define CAM "    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: 45}\n"
+
+/* Writes a views file whose view `a` has the given body (after "  a:\n"). */
+static void write_views(char *path, size_t n, const char *body)
+{
+	char dir[256], text[4096];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(text, sizeof text, "# test views\nviews:\n  a:\n%s  b:\n    scene: b.obj\n" CAM,
+	         body);
+	tu_write(path, n, dir, "views.yaml", text);
+}
+
+/* 1-based column of `needle` on 1-based `line` of the file's text. */
+static int col_of(const char *path, int line, const char *needle)
+{
+	char buf[512];
+	FILE *f = fopen(path, "r");
+	cr_assert(f);
+	for (int i = 0; i < line; i++)
+		cr_assert(fgets(buf, sizeof buf, f), "file has no line %d", line);
+	fclose(f);
+	const char *p = strstr(buf, needle);
+	cr_assert(p, "'%s' not on line %d", needle, line);
+	return (int)(p - buf) + 1;
+}
+
+/* view_load of `a` must fail with exactly "path:line:col: <starts with msg>". */
+static void expect_error(const char *body, int line, const char *needle, const char *msg)
+{
+	char path[512], want[1024];
+	write_views(path, sizeof path, body);
+	view v;
+	diag d = {{0}};
+	cr_assert_eq(view_load(&v, path, "a", &d), -1, "should fail: %s", body);
+	int col = needle ? col_of(path, line, needle) : 0;
+	snprintf(want, sizeof want, "%s:%d:%d: %s", path, line, col, msg);
+	cr_assert(strncmp(d.msg, want, strlen(want)) == 0, "got  '%s'\nwant '%s...'", d.msg, want);
+}
+
+Test(view, shared_views_file)
+{
+	char path[1024];
+	SCENE_OR_SKIP(path, "views.yaml");
+	char names[32][VIEW_NAME_MAX];
+	diag d = {{0}};
+	int n = view_list(path, names, 32, &d);
+	cr_assert_eq(n, 10, "%s", d.msg);
+	cr_assert_str_eq(names[0], "cornell");
+	cr_assert_str_eq(names[9], "sibenik");
+	for (int i = 0; i < n; i++) {
+		view v;
+		cr_assert_eq(view_load(&v, path, names[i], &d), 0, "%s: %s", names[i], d.msg);
+		cr_assert_str_eq(v.name, names[i]);
+		cr_assert(v.lights_given && v.nlights >= 1);
+		cr_assert(strncmp(v.scene, tu_scenes_dir(), strlen(tu_scenes_dir())) == 0,
+		          "scene path %s is resolved against the views file", v.scene);
+	}
+	view v;
+	cr_assert_eq(view_load(&v, path, "conference", &d), 0, "%s", d.msg);
+	cr_assert_eq(v.cam.eye.x, -800.0f);
+	cr_assert_eq(v.cam.eye.y, 400.0f);
+	cr_assert_eq(v.cam.eye.z, -800.0f);
+	cr_assert_eq(v.cam.lookat.x, 300.0f);
+	cr_assert_eq(v.cam.lookat.y, 100.0f);
+	cr_assert_eq(v.cam.lookat.z, 0.0f);
+	cr_assert_eq(v.cam.up.y, 1.0f);
+	cr_assert_eq(v.cam.fov_deg, 60.0f);
+	cr_assert_eq(v.nlights, 2);
+	cr_assert_eq(v.lights[0].pos.x, 300.0f);
+	cr_assert_eq(v.lights[0].pos.y, 500.0f);
+	cr_assert_eq(v.lights[0].pos.z, -200.0f);
+	cr_assert_eq(v.lights[1].pos.x, 700.0f);
+	cr_assert_eq(v.lights[1].pos.z, -400.0f);
+	cr_assert_eq(v.lights[1].color.x, 1.0f);
+	char want[1100];
+	snprintf(want, sizeof want, "%s/conference_69k/conference.obj.gz", tu_scenes_dir());
+	cr_assert_str_eq(v.scene, want);
+
+	cr_assert_eq(view_load(&v, path, "robots", &d), 0, "%s", d.msg);
+	cr_assert_float_eq(v.cam.fov_deg, 36.87f, 1e-5);
+}
+
+Test(view, minimal_view_and_default_light)
+{
+	char path[512];
+	write_views(path, sizeof path, "    scene: sub/s.obj\n" CAM "    note: \"free text\"\n");
+	view v;
+	diag d = {{0}};
+	cr_assert_eq(view_load(&v, path, "a", &d), 0, "%s", d.msg);
+	cr_assert_eq(v.lights_given, 0);
+	cr_assert_eq(v.nlights, 0);
+	cr_assert_eq(v.cam.eye.z, 5.0f);
+	cr_assert_eq(v.cam.fov_deg, 45.0f);
+	char want[600];
+	snprintf(want, sizeof want, "%.*s/sub/s.obj", (int)(strrchr(path, '/') - path), path);
+	cr_assert_str_eq(v.scene, want);
+
+	scene s;
+	scene_init(&s, "t");
+	s.bounds = (aabb){v3(-1, -2, -2), v3(1, 2, 2)}; /* half diagonal 3 */
+	view_place_default_light(&v, &s);
+	cr_assert_eq(v.nlights, 1);
+	cr_assert_float_eq(v.lights[0].pos.x, 0.0f, 1e-6);
+	cr_assert_float_eq(v.lights[0].pos.y, 6.0f, 1e-5);
+	cr_assert_float_eq(v.lights[0].pos.z, 3.0f, 1e-5);
+	cr_assert_eq(v.lights[0].color.y, 1.0f);
+	view_place_default_light(&v, &s);
+	cr_assert_eq(v.nlights, 1, "placed once");
+}
+
+Test(view, errors_point_at_the_node)
+{
+	expect_error("    scene: s.obj\n    colour: red\n" CAM, 5, "colour",
+	             "unknown key 'colour'");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: 45, "
+	             "zoom: 2}\n",
+	             4, "zoom", "unknown key 'zoom' in camera");
+	expect_error("    camera: {eye: [1.0x, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: 45}\n",
+	             4, "1.0x", "eye: '1.0x' is not a number");
+	expect_error("    camera: {eye: [0, nan, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: 45}\n",
+	             4, "nan", "eye: 'nan' is not a finite number");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: .inf}\n",
+	             4, ".inf", "fov: '.inf' is not a finite number");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 1e99], up: [0, 1, 0], fov: 4}\n",
+	             4, "1e99", "lookat: '1e99' is not a finite number");
+	expect_error("    scene: s.obj\n", 4, "scene", "view 'a' has no camera");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: 0}\n", 4,
+	             "0}", "fov must be between 0 and 180");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: 180}\n",
+	             4, "180", "fov must be between 0 and 180");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 0, -2], fov: 45}\n",
+	             4, "[0, 0, -2]", "up is parallel to the view direction");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 5], up: [0, 1, 0], fov: 45}\n", 4,
+	             "[0, 0, 5], up", "eye and lookat are the same point");
+	expect_error("    camera: {eye: [0, 0], lookat: [0, 0, 0], up: [0, 1, 0], fov: 45}\n", 4,
+	             "[0, 0]", "eye must have exactly 3 numbers, got 2");
+	expect_error("    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0]}\n", 4, "{eye",
+	             "camera of view 'a' has no 'fov'");
+	expect_error("    lights: [[1, 2, 3], [1, 2, x]]\n" CAM, 4, "x]", "light position: 'x'");
+	expect_error("    lights: [[1,2,3],[1,2,3],[1,2,3],[1,2,3],[1,2,3],[1,2,3],[1,2,3],"
+	             "[1,2,3],[1,2,3],[1,2,3],[1,2,3],[1,2,3],[1,2,3],[1,2,3],[1,2,3],"
+	             "[1,2,3],[9,9,9]]\n" CAM,
+	             4, "[9,9,9]", "more than 16 lights");
+}
+
+Test(view, unknown_name_lists_views)
+{
+	char path[512];
+	write_views(path, sizeof path, "    scene: s.obj\n" CAM);
+	view v;
+	diag d = {{0}};
+	cr_assert_eq(view_load(&v, path, "zz", &d), -1);
+	char want[700];
+	snprintf(want, sizeof want, "%s: no view named 'zz'; available views: a, b", path);
+	cr_assert_str_eq(d.msg, want);
+}
+
+Test(view, file_level_errors)
+{
+	char dir[256], path[512], want[700];
+	diag d = {{0}};
+	view v;
+	cr_assert_eq(view_load(&v, "/nonexistent/views.yaml", "a", &d), -1);
+	cr_assert(strncmp(d.msg, "/nonexistent/views.yaml: ", 25) == 0, "%s", d.msg);
+
+	tu_tmpdir(dir, sizeof dir);
+	/* Not YAML: an unclosed flow sequence. */
+	tu_write(path, sizeof path, dir, "bad.yaml", "views:\n  a: [1, 2\n  b: 3\n");
+	cr_assert_eq(view_load(&v, path, "a", &d), -1);
+	snprintf(want, sizeof want, "%s:3:4: not valid YAML: ", path);
+	cr_assert(strncmp(d.msg, want, strlen(want)) == 0, "got '%s', want '%s'", d.msg, want);
+	char names[4][VIEW_NAME_MAX];
+	cr_assert_eq(view_list(path, names, 4, &d), -1);
+	cr_assert(strncmp(d.msg, want, strlen(want)) == 0, "%s", d.msg);
+
+	tu_write(path, sizeof path, dir, "noviews.yaml", "cameras:\n  a: 1\n");
+	cr_assert_eq(view_load(&v, path, "a", &d), -1);
+	snprintf(want, sizeof want, "%s:1:1: no top-level `views` mapping", path);
+	cr_assert_str_eq(d.msg, want);
+
+	tu_write(path, sizeof path, dir, "prose.yaml", "just some words\n");
+	cr_assert_eq(view_list(path, names, 4, &d), -1);
+	snprintf(want, sizeof want, "%s:1:1: no top-level `views` mapping", path);
+	cr_assert_str_eq(d.msg, want);
+
+	tu_write(path, sizeof path, dir, "empty.yaml", "");
+	cr_assert_eq(view_list(path, names, 4, &d), -1);
+	cr_assert(strncmp(d.msg, path, strlen(path)) == 0, "%s", d.msg);
+}
+
+Test(view, camera_validate_flags)
+{
+	diag d = {{0}};
+	camera c = {v3(0, 0, 5), v3(0, 0, 0), v3(0, 1, 0), 45};
+	cr_assert_eq(camera_validate(&c, "--eye", &d), 0);
+	c.up = v3(0, 0, 3);
+	cr_assert_eq(camera_validate(&c, "--up", &d), -1);
+	cr_assert_str_eq(d.msg, "--up: up is parallel to the view direction (lookat - eye)");
+	c.up = v3(0, 1, 0);
+	c.fov_deg = NAN;
+	cr_assert_eq(camera_validate(&c, "--fov", &d), -1);
+	c.fov_deg = 200;
+	cr_assert_eq(camera_validate(&c, "--fov", &d), -1);
+	cr_assert(strstr(d.msg, "--fov: fov must be between"), "%s", d.msg);
+}
+
+Test(view, default_view_frames_default_scene)
+{
+	view v;
+	diag d = {{0}};
+	view_default(&v);
+	cr_assert_eq(camera_validate(&v.cam, "default", &d), 0, "%s", d.msg);
+	cr_assert_eq(v.nlights, 2);
+	scene s;
+	scene_default(&s);
+	for (int i = 0; i < v.nlights; i++) {
+		vec3 p = v.lights[i].pos;
+		cr_assert(p.x > s.bounds.lo.x && p.x < s.bounds.hi.x);
+		cr_assert(p.y > s.bounds.lo.y && p.y < s.bounds.hi.y, "below the ceiling");
+		cr_assert(p.z > s.bounds.lo.z && p.z < s.bounds.hi.z);
+	}
+	scene_free(&s);
+}
