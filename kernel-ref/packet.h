@@ -47,7 +47,8 @@ typedef struct packet {
 	/* payload */
 	uint32_t pixel[PKT_RAYS];                       /* y * width + x */
 	float wr[PKT_RAYS], wg[PKT_RAYS], wb[PKT_RAYS]; /* weight; shadow: the contribution */
-	/* results (closest hit; shadow rays: t < tmax means occluded) */
+	/* results: closest hit; a shadow ray is occluded when tri != PKT_NOHIT
+	 * (its t is then -inf, so traversal drops it at once) */
 	float t[PKT_RAYS];
 	uint32_t tri[PKT_RAYS];           /* triangle record address, PKT_NOHIT if none */
 	float bu[PKT_RAYS], bv[PKT_RAYS]; /* barycentrics of v1 and v2 */
@@ -68,6 +69,10 @@ typedef struct pkt_rayc {
 	int32_t kz0[PKT_RAYS], kz1[PKT_RAYS], kx0[PKT_RAYS], kx1[PKT_RAYS], ky0[PKT_RAYS],
 	    ky1[PKT_RAYS];                                 /* all-ones when kz==0 / kz==1, etc. */
 	float idx[PKT_RAYS], idy[PKT_RAYS], idz[PKT_RAYS]; /* 1/d */
+	/* When every ray shares one permutation (coherent packets, nearly
+	 * always), origins pre-permuted so the test needs no lane selects. */
+	float okx[PKT_RAYS], oky[PKT_RAYS], okz[PKT_RAYS];
+	int uniform, ukx, uky, ukz;
 } __attribute__((aligned(32))) pkt_rayc;
 
 typedef struct trav_entry {
@@ -96,6 +101,8 @@ typedef struct trav_result {
 typedef struct trav_state {
 	pkt_rayc rc;
 	trav_entry cur; /* node being worked on and its per-ray segments */
+	trav_entry
+	    spare; /* far-child scratch when the stack is full (never, by kd_build's depth cap) */
 	trav_entry *stack;
 	int sp, stack_max;
 	int shadow; /* any-hit packet: a ray stops at its first occluder */

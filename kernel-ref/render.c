@@ -47,6 +47,13 @@ typedef struct worker {
 	pthread_t tid;
 } worker;
 
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
 /* Traces one packet with the single-ray path (for checking). */
 static void trace_single(const mimg *m, packet *p, trav_counts *c)
 {
@@ -72,6 +79,7 @@ static void do_tile(worker *w, int tile)
 		int nrays = __builtin_popcountll(p->valid);
 		w->st.rays[p->type] += (uint64_t)nrays;
 		w->st.packets[p->type]++;
+		double t0 = now_ms();
 		if (j->o->single_ray) {
 			trace_single(j->m, p, &w->st.trav);
 		} else {
@@ -80,6 +88,7 @@ static void do_tile(worker *w, int tile)
 			w->st.box_miss_rays += (uint64_t)__builtin_popcountll(p->valid & ~entered);
 			w->st.box_miss_packets += entered == 0;
 		}
+		w->st.trace_ms += now_ms() - t0;
 		if (p->type == PKT_SHADOW) {
 			shade_shadow_done(&j->sc, p, &w->st.shade);
 			continue;
@@ -103,13 +112,6 @@ static void *worker_main(void *arg)
 	return NULL;
 }
 
-static double now_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
-
 static void add_stats(render_stats *a, const render_stats *b)
 {
 	for (int t = 0; t < PKT_NTYPES; t++) {
@@ -118,6 +120,7 @@ static void add_stats(render_stats *a, const render_stats *b)
 	}
 	a->box_miss_packets += b->box_miss_packets;
 	a->box_miss_rays += b->box_miss_rays;
+	a->trace_ms += b->trace_ms;
 	a->trav.node_steps += b->trav.node_steps;
 	a->trav.leaf_visits += b->trav.leaf_visits;
 	a->trav.tri_tests += b->trav.tri_tests;

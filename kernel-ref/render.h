@@ -33,7 +33,8 @@ typedef struct render_stats {
 	uint64_t box_miss_rays;
 	trav_counts trav;
 	shade_counts shade;
-	double render_ms;
+	double trace_ms;  /* host time inside traversal + intersection, summed over threads */
+	double render_ms; /* wall time of the whole frame (rays, tracing, shading) */
 } render_stats;
 
 void render_opts_default(render_opts *o);

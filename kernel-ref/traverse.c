@@ -38,6 +38,8 @@ uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *sta
 	s->sp = 0;
 	s->shadow = p->type == PKT_SHADOW;
 	uint64_t enter = 0;
+	s->rc.uniform = 1;
+	s->rc.ukz = -1;
 	for (uint32_t i = 0; i < PKT_RAYS; i++) {
 		if (!((p->valid >> i) & 1)) {
 			/* Idle lanes still flow through the SIMD groups: keep them
@@ -63,6 +65,13 @@ uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *sta
 		s->rc.kx1[i] = -(r.kx == 1);
 		s->rc.ky0[i] = -(r.ky == 0);
 		s->rc.ky1[i] = -(r.ky == 1);
+		if (s->rc.ukz < 0) {
+			s->rc.ukx = r.kx;
+			s->rc.uky = r.ky;
+			s->rc.ukz = r.kz;
+		} else if (r.kx != s->rc.ukx || r.ky != s->rc.uky || r.kz != s->rc.ukz) {
+			s->rc.uniform = 0;
+		}
 		s->rc.idx[i] = 1.0f / d.x;
 		s->rc.idy[i] = 1.0f / d.y;
 		s->rc.idz[i] = 1.0f / d.z;
@@ -91,6 +100,14 @@ uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *sta
 		if (tn <= tf)
 			enter |= 1ull << i;
 	}
+	if (s->rc.ukz < 0)
+		s->rc.uniform = 0;
+	if (s->rc.uniform) {
+		const float *o[3] = {p->ox, p->oy, p->oz};
+		memcpy(s->rc.okx, o[s->rc.ukx], sizeof s->rc.okx);
+		memcpy(s->rc.oky, o[s->rc.uky], sizeof s->rc.oky);
+		memcpy(s->rc.okz, o[s->rc.ukz], sizeof s->rc.okz);
+	}
 	s->cur.node = 0;
 	s->cur.mask = enter;
 	return enter;
@@ -98,9 +115,9 @@ uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *sta
 
 /* ---- one traversal step ------------------------------------------------ */
 
-/* Rays of e still worth visiting: entry not beyond their best hit and, for
- * shadow rays, not yet occluded. */
-static uint64_t live_mask(const trav_state *s, const packet *p, const trav_entry *e)
+/* Rays of e still worth visiting: entry not beyond their best hit (an
+ * occluded shadow ray has t = -inf). */
+static uint64_t live_mask(const packet *p, const trav_entry *e)
 {
 	uint64_t live = 0;
 	for (int g = 0; g < NGROUPS; g++) {
@@ -108,14 +125,7 @@ static uint64_t live_mask(const trav_state *s, const packet *p, const trav_entry
 		if (!gb)
 			continue;
 		iv keep = fv_load(e->tn + SIMD_W * g) <= fv_load(p->t + SIMD_W * g);
-		unsigned b = iv_bits(keep) & gb;
-		if (s->shadow)
-			for (unsigned k = b; k; k &= k - 1) {
-				int i = SIMD_W * g + __builtin_ctz(k);
-				if (p->tri[i] != PKT_NOHIT)
-					b &= ~(1u << (i - SIMD_W * g));
-			}
-		live |= (uint64_t)b << (SIMD_W * g);
+		live |= (uint64_t)(iv_bits(keep) & gb) << (SIMD_W * g);
 	}
 	return live;
 }
@@ -124,9 +134,8 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 {
 	const kd_node *nodes = mimg_nodes(m);
 	r->pushed = r->popped = 0;
-	/* Finished with the current node (or its rays all ended): pop. */
-	if (s->cur.mask)
-		s->cur.mask = live_mask(s, p, &s->cur);
+	/* cur is either fresh from a node step (its rays already filtered) or
+	 * empty after a leaf: then pop until an entry has live rays. */
 	while (!s->cur.mask) {
 		if (s->sp == 0) {
 			r->op = TRAV_DONE;
@@ -136,7 +145,7 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 		}
 		s->sp--;
 		r->popped++;
-		s->cur.mask = live_mask(s, p, &s->stack[s->sp]);
+		s->cur.mask = live_mask(p, &s->stack[s->sp]);
 		if (s->cur.mask) {
 			s->cur.node = s->stack[s->sp].node;
 			memcpy(s->cur.tn, s->stack[s->sp].tn, sizeof s->cur.tn);
@@ -159,21 +168,22 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 	fv split = fv_set1(kd_split(n));
 	const float *org = axis == 0 ? p->ox : axis == 1 ? p->oy : p->oz;
 	const float *idv = axis == 0 ? s->rc.idx : axis == 1 ? s->rc.idy : s->rc.idz;
-	uint64_t below = 0, above = 0;
-	int first = __builtin_ctzll(s->cur.mask);
-	int near_below = !signbit(idv[first]);
-	trav_entry *far = s->sp < s->stack_max ? &s->stack[s->sp] : NULL;
-	float btn[PKT_RAYS] __attribute__((aligned(32))),
-	    btf[PKT_RAYS] __attribute__((aligned(32)));
-	float atn[PKT_RAYS] __attribute__((aligned(32))),
-	    atf[PKT_RAYS] __attribute__((aligned(32)));
+	/* The near child is the first active ray's near side; its segments are
+	 * written in place into cur, the far child's straight into the next
+	 * stack slot (kept only if some ray needs it). A child also drops the
+	 * rays whose best hit lies before its entry. */
+	int near_below = !signbit(idv[__builtin_ctzll(s->cur.mask)]);
+	trav_entry *far = s->sp < s->stack_max ? &s->stack[s->sp] : &s->spare;
+	uint64_t nmask = 0, fmask = 0;
+	iv nb = iv_set1(near_below ? -1 : 0);
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(s->cur.mask, g);
 		if (!gb)
 			continue;
-		fv tn = fv_load(s->cur.tn + SIMD_W * g), tf = fv_load(s->cur.tf + SIMD_W * g);
-		fv id = fv_load(idv + SIMD_W * g);
-		fv ts = (split - fv_load(org + SIMD_W * g)) * id;
+		int o = SIMD_W * g;
+		fv tn = fv_load(s->cur.tn + o), tf = fv_load(s->cur.tf + o);
+		fv id = fv_load(idv + o);
+		fv ts = (split - fv_load(org + o)) * id;
 		fv err = fv_abs(ts) * fv_set1(GAMMA3);
 		iv nan = ts != ts;
 		fv lo = fv_sel(nan, fv_set1(-INFINITY), ts - err);
@@ -182,34 +192,34 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 		/* d >= 0: below is [tn, min(tf, hi)], above [max(tn, lo), tf]; d < 0 mirrored */
 		fv b_n = fv_sel(pos, tn, fv_max(tn, lo)), b_f = fv_sel(pos, fv_min(tf, hi), tf);
 		fv a_n = fv_sel(pos, fv_max(tn, lo), tn), a_f = fv_sel(pos, tf, fv_min(tf, hi));
-		fv_store(btn + SIMD_W * g, b_n);
-		fv_store(btf + SIMD_W * g, b_f);
-		fv_store(atn + SIMD_W * g, a_n);
-		fv_store(atf + SIMD_W * g, a_f);
-		below |= (uint64_t)(iv_bits(b_n <= b_f) & gb) << (SIMD_W * g);
-		above |= (uint64_t)(iv_bits(a_n <= a_f) & gb) << (SIMD_W * g);
+		fv n_n = fv_sel(nb, b_n, a_n), n_f = fv_sel(nb, b_f, a_f);
+		fv f_n = fv_sel(nb, a_n, b_n), f_f = fv_sel(nb, a_f, b_f);
+		fv best = fv_load(p->t + o);
+		fv_store(s->cur.tn + o, n_n);
+		fv_store(s->cur.tf + o, n_f);
+		fv_store(far->tn + o, f_n);
+		fv_store(far->tf + o, f_f);
+		nmask |= (uint64_t)(iv_bits((n_n <= n_f) & (n_n <= best)) & gb) << o;
+		fmask |= (uint64_t)(iv_bits((f_n <= f_f) & (f_n <= best)) & gb) << o;
 	}
 	uint32_t left = kd_left(n);
-	uint64_t nmask = near_below ? below : above, fmask = near_below ? above : below;
 	uint32_t nnode = near_below ? left : left + 1, fnode = near_below ? left + 1 : left;
 	if (!nmask) {
-		nmask = fmask;
-		nnode = fnode;
-		near_below = !near_below;
-		fmask = 0;
+		/* no ray needs the near child: continue in the far one (rare) */
+		s->cur.node = fnode;
+		s->cur.mask = fmask;
+		memcpy(s->cur.tn, far->tn, sizeof s->cur.tn);
+		memcpy(s->cur.tf, far->tf, sizeof s->cur.tf);
+	} else {
+		if (fmask) {
+			far->node = fnode;
+			far->mask = fmask;
+			s->sp++;
+			r->pushed = 1;
+		}
+		s->cur.node = nnode;
+		s->cur.mask = nmask;
 	}
-	if (fmask && far) {
-		far->node = fnode;
-		far->mask = fmask;
-		memcpy(far->tn, near_below ? atn : btn, sizeof far->tn);
-		memcpy(far->tf, near_below ? atf : btf, sizeof far->tf);
-		s->sp++;
-		r->pushed = 1;
-	}
-	s->cur.node = nnode;
-	s->cur.mask = nmask;
-	memcpy(s->cur.tn, near_below ? btn : atn, sizeof s->cur.tn);
-	memcpy(s->cur.tf, near_below ? btf : atf, sizeof s->cur.tf);
 	r->sp = s->sp;
 }
 
@@ -236,14 +246,24 @@ uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, u
 		iv ky0 = iv_load(rc->ky0 + o8), ky1 = iv_load(rc->ky1 + o8);
 		fv sx = fv_load(rc->sx + o8), sy = fv_load(rc->sy + o8), sz = fv_load(rc->sz + o8);
 		fv vx[3], vy[3], vkz[3];
-		for (int k = 0; k < 3; k++) {
-			fv ax = fv_set1(tr->v[k][0]) - ox;
-			fv ay = fv_set1(tr->v[k][1]) - oy;
-			fv az = fv_set1(tr->v[k][2]) - oz;
-			vkz[k] = sel3(kz0, kz1, ax, ay, az);
-			vx[k] = sel3(kx0, kx1, ax, ay, az) - sx * vkz[k];
-			vy[k] = sel3(ky0, ky1, ax, ay, az) - sy * vkz[k];
-		}
+		if (rc->uniform) {
+			/* the same subtractions as below, without the selects */
+			fv okx = fv_load(rc->okx + o8), oky = fv_load(rc->oky + o8);
+			fv okz = fv_load(rc->okz + o8);
+			for (int k = 0; k < 3; k++) {
+				vkz[k] = fv_set1(tr->v[k][rc->ukz]) - okz;
+				vx[k] = (fv_set1(tr->v[k][rc->ukx]) - okx) - sx * vkz[k];
+				vy[k] = (fv_set1(tr->v[k][rc->uky]) - oky) - sy * vkz[k];
+			}
+		} else
+			for (int k = 0; k < 3; k++) {
+				fv ax = fv_set1(tr->v[k][0]) - ox;
+				fv ay = fv_set1(tr->v[k][1]) - oy;
+				fv az = fv_set1(tr->v[k][2]) - oz;
+				vkz[k] = sel3(kz0, kz1, ax, ay, az);
+				vx[k] = sel3(kx0, kx1, ax, ay, az) - sx * vkz[k];
+				vy[k] = sel3(ky0, ky1, ax, ay, az) - sy * vkz[k];
+			}
 		fv u = vx[2] * vy[1] - vy[2] * vx[1];
 		fv v = vx[0] * vy[2] - vy[0] * vx[2];
 		fv w = vx[1] * vy[0] - vy[1] * vx[0];
@@ -285,7 +305,7 @@ uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, u
 			int l = __builtin_ctz(k), i = o8 + l;
 			if (s->shadow) {
 				if (t[l] < p->tmax[i] && p->tri[i] == PKT_NOHIT) {
-					p->t[i] = t[l];
+					p->t[i] = -INFINITY; /* occluded: every filter drops it */
 					p->tri[i] = tri_addr;
 					changed |= 1ull << i;
 				}
