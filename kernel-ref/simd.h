@@ -36,8 +36,16 @@ typedef int32_t iv __attribute__((vector_size(SIMD_W * 4)));
 static inline fv fv_set1(float x)
 {
 	fv v;
+#if defined(__AVX__)
+	__m256 b = _mm256_set1_ps(x);
+	memcpy(&v, &b, sizeof v);
+#elif defined(__SSE__)
+	__m128 b = _mm_set1_ps(x);
+	memcpy(&v, &b, sizeof v);
+#else
 	for (int i = 0; i < SIMD_W; i++)
 		v[i] = x;
+#endif
 	return v;
 }
 static inline iv iv_set1(int32_t x)
