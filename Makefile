@@ -96,11 +96,16 @@ $(B)/saarsim-tests: $(TEST_OBJ) $(B)/libsaar.a
 	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(TEST_LIBS) $(LDLIBS)
 
 # The main job: the embedded default scene and config, report on stdout,
-# frame written to out/frame.png.
-RUN_PROG := $(if $(wildcard sim/main.c),saarsim,rtref)
+# frame written to out/frame.png (saarsim once the chip model is built,
+# else the reference tracer).
+ifneq ($(wildcard sim/main.c),)
+RUN_CMD := ./$(B)/saarsim --out out/frame.png --report out/report.json
+else
+RUN_CMD := ./$(B)/rtref --out out/frame.png --stats out/stats.json
+endif
 run: all
 	@mkdir -p out
-	./$(B)/$(RUN_PROG) --out out/frame.png --report out/report.json
+	$(RUN_CMD)
 
 # Tests find the binaries and the shared scenes through the environment.
 test: all $(B)/saarsim-tests
