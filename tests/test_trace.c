@@ -295,3 +295,71 @@ Test(trace, skips_are_counted)
 	fb_free(&fb);
 	world_free(&w);
 }
+
+/* A quad with a red/blue checker map_Kd and a bump map, seen head-on:
+ * texels are read (and counted), the colours follow the texture, and the
+ * bump map changes the shading. */
+static void render_quad(const char *dir, const char *mtl_extra, framebuf *fb, render_stats *st)
+{
+	char obj[512], mtl[512], text[1024];
+	snprintf(text, sizeof text,
+	         "newmtl tex\nKd 1 1 1\nKa 1 1 1\nKs 0 0 0\nNs 1\nmap_Kd checker.png\n%s\n",
+	         mtl_extra);
+	tu_write(mtl, sizeof mtl, dir, "quad.mtl", text);
+	tu_write(obj, sizeof obj, dir, "quad.obj",
+	         "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+	         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl tex\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = obj;
+	o.have_eye = o.have_lookat = o.have_up = o.have_fov = 1;
+	o.cam = (camera){v3(0, 0, 3), v3(0, 0, 0), v3(0, 1, 0), 30.0f};
+	o.nlights = 1;
+	o.lights[0] = (light){v3(0.3f, 0.2f, 2.0f), v3(1, 1, 1)};
+	world w;
+	diag d;
+	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = ro.height = 64;
+	cr_assert_eq(fb_init(fb, 64, 64), 0);
+	cr_assert_eq(render_frame(&w.m, &w.v, &ro, fb, st, &d), 0, "%s", d.msg);
+	world_free(&w);
+}
+
+Test(trace, textures_and_bump_maps_are_shaded)
+{
+	char dir[256];
+	tu_tmpdir(dir, sizeof dir);
+	/* 2x2 checker: red top-left and bottom-right, blue elsewhere */
+	uint8_t px[2 * 2 * 3] = {255, 0, 0, 0, 0, 255, 0, 0, 255, 255, 0, 0};
+	char path[512];
+	diag d;
+	snprintf(path, sizeof path, "%s/checker.png", dir);
+	cr_assert_eq(img_write(path, 2, 2, px, NULL, &d), 0, "%s", d.msg);
+	uint8_t bump[4 * 4 * 3];
+	for (int i = 0; i < 16; i++)
+		memset(bump + 3 * i, (i * 53) % 256, 3); /* a rough height field */
+	snprintf(path, sizeof path, "%s/bump.png", dir);
+	cr_assert_eq(img_write(path, 4, 4, bump, NULL, &d), 0, "%s", d.msg);
+
+	framebuf plain, bumped;
+	render_stats sp, sb;
+	render_quad(dir, "", &plain, &sp);
+	render_quad(dir, "bump bump.png", &bumped, &sb);
+	cr_assert_gt(sp.shade.texel_reads, 0);
+	cr_assert_eq(sp.shade.untextured_hits, 0);
+	cr_assert_gt(sb.shade.texel_reads, sp.shade.texel_reads, "bump mapping reads more texels");
+	uint8_t a[64 * 64 * 3], b[64 * 64 * 3];
+	fb_to_rgb8(&plain, a, NULL);
+	fb_to_rgb8(&bumped, b, NULL);
+	/* pixel (16,16) is in the top-left quarter of the quad (red texel),
+	 * (48,16) in the top-right (blue texel) */
+	const uint8_t *tl = a + 3 * (16 * 64 + 16), *tr = a + 3 * (16 * 64 + 48);
+	cr_assert(tl[0] > 2 * tl[2] + 10, "top-left should be red: %d %d %d", tl[0], tl[1], tl[2]);
+	cr_assert(tr[2] > 2 * tr[0] + 10, "top-right should be blue: %d %d %d", tr[0], tr[1],
+	          tr[2]);
+	cr_assert(memcmp(a, b, sizeof a) != 0, "the bump map must change the shading");
+	fb_free(&plain);
+	fb_free(&bumped);
+}
