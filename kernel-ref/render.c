@@ -112,6 +112,9 @@ static void *worker_main(void *arg)
 	return NULL;
 }
 
+/* aligned_alloc wants the size to be a multiple of the alignment. */
+static void *alloc64(size_t n) { return aligned_alloc(64, (n + 63) & ~(size_t)63); }
+
 static void add_stats(render_stats *a, const render_stats *b)
 {
 	for (int t = 0; t < PKT_NTYPES; t++) {
@@ -160,10 +163,10 @@ int render_frame(const mimg *m, const view *v, const render_opts *o, framebuf *f
 	for (int i = 0; i < nt && ws; i++) {
 		ws[i].j = &j;
 		ws[i].cap = cap;
-		ws[i].work = aligned_alloc(64, (size_t)cap * sizeof(packet));
+		ws[i].work = alloc64((size_t)cap * sizeof(packet));
 		ws[i].nkids = v->nlights + 2;
-		ws[i].kids = aligned_alloc(64, (size_t)ws[i].nkids * sizeof(packet));
-		ws[i].stack = aligned_alloc(64, PKT_STACK_MAX * sizeof(trav_entry));
+		ws[i].kids = alloc64((size_t)ws[i].nkids * sizeof(packet));
+		ws[i].stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
 		if (!ws[i].work || !ws[i].stack || !ws[i].kids)
 			rc = -1;
 	}
