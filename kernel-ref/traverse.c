@@ -365,6 +365,45 @@ uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, t
 
 /* ---- single-ray path ------------------------------------------------------ */
 
+/* One inner-node step of the single-ray path: moves to the near child
+ * (pushing the far one when the ray needs both) and returns 1, or returns 0
+ * when the ray needs neither child (the caller pops). */
+typedef struct ray_entry {
+	uint32_t node;
+	float tn, tf;
+} ray_entry;
+
+static int ray_step(kd_node n, const float *oa, const float *id, uint32_t *node, float *tn,
+                    float *tf, ray_entry *stack, int *sp)
+{
+	int axis = kd_axis(n);
+	float ts = (kd_split(n) - oa[axis]) * id[axis];
+	float err = fabsf(ts) * GAMMA3;
+	float lo_ = ts - err, hi_ = ts + err;
+	if (ts != ts) {
+		lo_ = -INFINITY;
+		hi_ = INFINITY;
+	}
+	int pos = !signbit(id[axis]);
+	float b_n = pos ? *tn : (*tn > lo_ ? *tn : lo_), b_f = pos ? (*tf < hi_ ? *tf : hi_) : *tf;
+	float a_n = pos ? (*tn > lo_ ? *tn : lo_) : *tn, a_f = pos ? *tf : (*tf < hi_ ? *tf : hi_);
+	int bin = b_n <= b_f, ain = a_n <= a_f;
+	uint32_t left = kd_left(n);
+	/* near child first: below when d >= 0 */
+	uint32_t nn = pos ? left : left + 1, fn = pos ? left + 1 : left;
+	int nin = pos ? bin : ain, fin = pos ? ain : bin;
+	float nn_n = pos ? b_n : a_n, nn_f = pos ? b_f : a_f;
+	float fn_n = pos ? a_n : b_n, fn_f = pos ? a_f : b_f;
+	if (!nin && !fin)
+		return 0;
+	if (nin && fin)
+		stack[(*sp)++] = (ray_entry){fn, fn_n, fn_f};
+	*node = nin ? nn : fn;
+	*tn = nin ? nn_n : fn_n;
+	*tf = nin ? nn_f : fn_f;
+	return 1;
+}
+
 ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)
 {
 	ray_hit h = {tmax, 0, 0, PKT_NOHIT};
@@ -388,10 +427,7 @@ ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_c
 		return h;
 	const kd_node *nodes = mimg_nodes(m);
 	const uint32_t *lists = mimg_lists(m);
-	struct {
-		uint32_t node;
-		float tn, tf;
-	} stack[PKT_STACK_MAX];
+	ray_entry stack[PKT_STACK_MAX];
 	int sp = 0;
 	uint32_t node = 0;
 	for (;;) {
@@ -422,62 +458,18 @@ ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_c
 					h.bv = bv;
 				}
 			}
-			/* pop, skipping entries that start beyond the best hit */
-			for (;;) {
-				if (sp == 0)
-					return h;
-				sp--;
-				if (stack[sp].tn <= h.t)
-					break;
-			}
-			node = stack[sp].node;
-			tn = stack[sp].tn;
-			tf = stack[sp].tf;
-			continue;
-		}
-		int axis = kd_axis(n);
-		float ts = (kd_split(n) - oa[axis]) * id[axis];
-		float err = fabsf(ts) * GAMMA3;
-		float lo_ = ts - err, hi_ = ts + err;
-		if (ts != ts) {
-			lo_ = -INFINITY;
-			hi_ = INFINITY;
-		}
-		int pos = !signbit(id[axis]);
-		float b_n = pos ? tn : (tn > lo_ ? tn : lo_),
-		      b_f = pos ? (tf < hi_ ? tf : hi_) : tf;
-		float a_n = pos ? (tn > lo_ ? tn : lo_) : tn,
-		      a_f = pos ? tf : (tf < hi_ ? tf : hi_);
-		int bin = b_n <= b_f, ain = a_n <= a_f;
-		uint32_t left = kd_left(n);
-		/* near child first: below when d >= 0 */
-		uint32_t nn = pos ? left : left + 1, fn = pos ? left + 1 : left;
-		int nin = pos ? bin : ain, fin = pos ? ain : bin;
-		float nn_n = pos ? b_n : a_n, nn_f = pos ? b_f : a_f;
-		float fn_n = pos ? a_n : b_n, fn_f = pos ? a_f : b_f;
-		if (nin && fin) {
-			stack[sp].node = fn;
-			stack[sp].tn = fn_n;
-			stack[sp].tf = fn_f;
-			sp++;
-			node = nn;
-			tn = nn_n;
-			tf = nn_f;
-		} else if (nin || fin) {
-			node = nin ? nn : fn;
-			tn = nin ? nn_n : fn_n;
-			tf = nin ? nn_f : fn_f;
 		} else {
-			for (;;) {
-				if (sp == 0)
-					return h;
-				sp--;
-				if (stack[sp].tn <= h.t)
-					break;
-			}
-			node = stack[sp].node;
-			tn = stack[sp].tn;
-			tf = stack[sp].tf;
+			if (ray_step(n, oa, id, &node, &tn, &tf, stack, &sp))
+				continue;
 		}
+		/* pop, skipping entries that start beyond the best hit */
+		do {
+			if (sp == 0)
+				return h;
+			sp--;
+		} while (stack[sp].tn > h.t);
+		node = stack[sp].node;
+		tn = stack[sp].tn;
+		tf = stack[sp].tf;
 	}
 }
