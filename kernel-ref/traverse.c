@@ -31,82 +31,109 @@ static inline unsigned grp_bits(uint64_t mask, int g)
 
 /* ---- setup ------------------------------------------------------------ */
 
+/* fminf/fmaxf semantics lane by lane (a NaN operand yields the other), so
+ * the vector clip rounds exactly like ray_trace's scalar one. */
+static inline fv fv_fmin(fv a, fv b)
+{
+	return fv_sel((a < b) | (b != b), a, b);
+}
+static inline fv fv_fmax(fv a, fv b)
+{
+	return fv_sel((a > b) | (b != b), a, b);
+}
+static inline fv sel3(iv k0, iv k1, fv x, fv y, fv z)
+{
+	return fv_sel(k0, x, fv_sel(k1, y, z));
+}
+
 uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack, int stack_max)
 {
 	s->stack = stack;
 	s->stack_max = stack_max;
 	s->sp = 0;
 	s->shadow = p->type == PKT_SHADOW;
-	uint64_t enter = 0;
-	s->rc.uniform = 1;
-	s->rc.ukz = -1;
-	for (uint32_t i = 0; i < PKT_RAYS; i++) {
-		if (!((p->valid >> i) & 1)) {
-			/* Idle lanes still flow through the SIMD groups: keep them
-			 * defined and harmless. */
-			s->rc.sx[i] = s->rc.sy[i] = s->rc.sz[i] = 0.0f;
-			s->rc.kz0[i] = s->rc.kz1[i] = s->rc.kx0[i] = 0;
-			s->rc.kx1[i] = s->rc.ky0[i] = s->rc.ky1[i] = 0;
-			s->rc.idx[i] = s->rc.idy[i] = s->rc.idz[i] = 0.0f;
-			p->t[i] = 0.0f;
-			p->tri[i] = PKT_NOHIT;
-			s->cur.tn[i] = INFINITY;
-			s->cur.tf[i] = -INFINITY;
-			continue;
-		}
-		vec3 d = v3(p->dx[i], p->dy[i], p->dz[i]);
-		isect_ray r = isect_prepare(d);
-		s->rc.sx[i] = r.sx;
-		s->rc.sy[i] = r.sy;
-		s->rc.sz[i] = r.sz;
-		s->rc.kz0[i] = -(r.kz == 0);
-		s->rc.kz1[i] = -(r.kz == 1);
-		s->rc.kx0[i] = -(r.kx == 0);
-		s->rc.kx1[i] = -(r.kx == 1);
-		s->rc.ky0[i] = -(r.ky == 0);
-		s->rc.ky1[i] = -(r.ky == 1);
-		if (s->rc.ukz < 0) {
-			s->rc.ukx = r.kx;
-			s->rc.uky = r.ky;
-			s->rc.ukz = r.kz;
-		} else if (r.kx != s->rc.ukx || r.ky != s->rc.uky || r.kz != s->rc.ukz) {
-			s->rc.uniform = 0;
-		}
-		s->rc.idx[i] = 1.0f / d.x;
-		s->rc.idy[i] = 1.0f / d.y;
-		s->rc.idz[i] = 1.0f / d.z;
-		p->t[i] = p->tmax[i];
-		p->tri[i] = PKT_NOHIT;
+	pkt_rayc *rc = &s->rc;
+	uint64_t enter = 0, mk[6] = {0};
+	const fv zero = fv_set1(0.0f), one = fv_set1(1.0f);
+	const fv lo[3] = {fv_set1(m->bounds.lo.x), fv_set1(m->bounds.lo.y),
+	                  fv_set1(m->bounds.lo.z)};
+	const fv hi[3] = {fv_set1(m->bounds.hi.x), fv_set1(m->bounds.hi.y),
+	                  fv_set1(m->bounds.hi.z)};
+	for (int g = 0; g < NGROUPS; g++) {
+		int o = SIMD_W * g;
+		unsigned gb = grp_bits(p->valid, g);
+		/* invalid lanes: all-zero constants, empty segment, no hit */
+		iv valid = iv_set1(0);
+		for (int l = 0; l < SIMD_W; l++)
+			valid[l] = -(int32_t)((gb >> l) & 1u);
+		fv dx = fv_load(p->dx + o), dy = fv_load(p->dy + o), dz = fv_load(p->dz + o);
+		/* Woop's permutation, as isect_prepare: kz = dominant axis,
+		 * kx, ky the next ones cyclically, swapped when d[kz] < 0 */
+		fv ax = fv_abs(dx), ay = fv_abs(dy), az = fv_abs(dz);
+		iv xy = ax > ay;
+		iv kz0 = xy & (ax > az), kz1 = ~xy & (ay > az), kz2 = ~kz0 & ~kz1;
+		fv dkz = sel3(kz0, kz1, dx, dy, dz);
+		iv neg = dkz < zero;
+		/* unswapped: kx = kz + 1, ky = kz + 2 (mod 3); d[kz] < 0 swaps them */
+		iv kx0 = (iv)fv_sel(neg, (fv)kz1, (fv)kz2) & valid;
+		iv kx1 = (iv)fv_sel(neg, (fv)kz2, (fv)kz0) & valid;
+		iv ky0 = (iv)fv_sel(neg, (fv)kz2, (fv)kz1) & valid;
+		iv ky1 = (iv)fv_sel(neg, (fv)kz0, (fv)kz2) & valid;
+		kz0 &= valid;
+		kz1 &= valid;
+		fv dkx = sel3(kx0, kx1, dx, dy, dz), dky = sel3(ky0, ky1, dx, dy, dz);
+		fv_store(rc->sx + o, fv_sel(valid, dkx / dkz, zero));
+		fv_store(rc->sy + o, fv_sel(valid, dky / dkz, zero));
+		fv_store(rc->sz + o, fv_sel(valid, one / dkz, zero));
+		memcpy(rc->kz0 + o, &kz0, sizeof kz0);
+		memcpy(rc->kz1 + o, &kz1, sizeof kz1);
+		memcpy(rc->kx0 + o, &kx0, sizeof kx0);
+		memcpy(rc->kx1 + o, &kx1, sizeof kx1);
+		memcpy(rc->ky0 + o, &ky0, sizeof ky0);
+		memcpy(rc->ky1 + o, &ky1, sizeof ky1);
+		iv ks[6] = {kz0, kz1, kx0, kx1, ky0, ky1};
+		for (int k = 0; k < 6; k++)
+			mk[k] |= (uint64_t)iv_bits(ks[k]) << o;
+		fv id[3] = {fv_sel(valid, one / dx, zero), fv_sel(valid, one / dy, zero),
+		            fv_sel(valid, one / dz, zero)};
+		fv_store(rc->idx + o, id[0]);
+		fv_store(rc->idy + o, id[1]);
+		fv_store(rc->idz + o, id[2]);
+		fv tmax = fv_load(p->tmax + o);
+		fv_store(p->t + o, fv_sel(valid, tmax, zero));
+		for (int l = 0; l < SIMD_W; l++)
+			p->tri[o + l] = PKT_NOHIT;
 		/* Clip to the scene box, widened by the error bound. A NaN slab
 		 * distance (origin on a face, direction parallel) leaves the
 		 * segment open on that axis. */
-		float o[3] = {p->ox[i], p->oy[i], p->oz[i]};
-		float id[3] = {s->rc.idx[i], s->rc.idy[i], s->rc.idz[i]};
-		float lo[3] = {m->bounds.lo.x, m->bounds.lo.y, m->bounds.lo.z};
-		float hi[3] = {m->bounds.hi.x, m->bounds.hi.y, m->bounds.hi.z};
-		float tn = 0.0f, tf = p->tmax[i];
+		fv org[3] = {fv_load(p->ox + o), fv_load(p->oy + o), fv_load(p->oz + o)};
+		fv tn = zero, tf = tmax;
 		for (int a = 0; a < 3; a++) {
-			float t0 = (lo[a] - o[a]) * id[a], t1 = (hi[a] - o[a]) * id[a];
-			float n = fminf(t0, t1), f = fmaxf(t0, t1);
-			n -= fabsf(n) * GAMMA3;
-			f += fabsf(f) * GAMMA3;
-			if (n > tn)
-				tn = n;
-			if (f < tf)
-				tf = f;
+			fv t0 = (lo[a] - org[a]) * id[a], t1 = (hi[a] - org[a]) * id[a];
+			fv n = fv_fmin(t0, t1), f = fv_fmax(t0, t1);
+			n -= fv_abs(n) * fv_set1(GAMMA3);
+			f += fv_abs(f) * fv_set1(GAMMA3);
+			tn = fv_sel(n > tn, n, tn);
+			tf = fv_sel(f < tf, f, tf);
 		}
-		s->cur.tn[i] = tn;
-		s->cur.tf[i] = tf;
-		if (tn <= tf)
-			enter |= 1ull << i;
+		tn = fv_sel(valid, tn, fv_set1(INFINITY));
+		tf = fv_sel(valid, tf, fv_set1(-INFINITY));
+		fv_store(s->cur.tn + o, tn);
+		fv_store(s->cur.tf + o, tf);
+		enter |= (uint64_t)(iv_bits(tn <= tf) & gb) << o;
 	}
-	if (s->rc.ukz < 0)
-		s->rc.uniform = 0;
-	if (s->rc.uniform) {
-		const float *o[3] = {p->ox, p->oy, p->oz};
-		memcpy(s->rc.okx, o[s->rc.ukx], sizeof s->rc.okx);
-		memcpy(s->rc.oky, o[s->rc.uky], sizeof s->rc.oky);
-		memcpy(s->rc.okz, o[s->rc.ukz], sizeof s->rc.okz);
+	/* one permutation for the whole packet? (each mask all or nothing) */
+	rc->uniform = p->valid != 0;
+	for (int k = 0; k < 6; k++)
+		rc->uniform &= mk[k] == 0 || mk[k] == p->valid;
+	if (rc->uniform) {
+		rc->ukz = mk[0] ? 0 : mk[1] ? 1 : 2;
+		rc->ukx = mk[2] ? 0 : mk[3] ? 1 : 2;
+		rc->uky = mk[4] ? 0 : mk[5] ? 1 : 2;
+		const float *og[3] = {p->ox, p->oy, p->oz};
+		memcpy(rc->okx, og[rc->ukx], sizeof rc->okx);
+		memcpy(rc->oky, og[rc->uky], sizeof rc->oky);
+		memcpy(rc->okz, og[rc->ukz], sizeof rc->okz);
 	}
 	s->cur.node = 0;
 	s->cur.mask = enter;
@@ -224,11 +251,6 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 }
 
 /* ---- triangle test, 8 lanes at a time ----------------------------------- */
-
-static inline fv sel3(iv k0, iv k1, fv x, fv y, fv z)
-{
-	return fv_sel(k0, x, fv_sel(k1, y, z));
-}
 
 uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, uint32_t tri_addr)
 {
