@@ -1,0 +1,400 @@
+/*
+ * embree_bench.c: our comparison harness against Embree 3 (optional; built
+ * by scripts/bench.sh only when libembree-dev is installed).
+ *
+ * Owns one measurement: the primary rays of one frame, traced single
+ * threaded (a) by Embree 3 with 16-wide packets (rtcIntersect16), each 8x8
+ * tile as four 4x4 packets, and (b) by our packet tracer's traversal alone
+ * (pkt_trace on the 64-ray tile packet, no shading), both on exactly the
+ * same rays: the scene, view and camera come from world_load() and the rays
+ * from cam_primary_packet(), as in rtref. Each is timed best of N passes
+ * (ray generation included, shading excluded), and the per-pixel hits of
+ * the two are compared (hit/miss disagreements; different triangle, and
+ * whether the distances differ too, and if so which tracer is closer).
+ *
+ *   embree_bench --views F --view N [--size WxH] [--runs N] [--quality low|medium|high]
+ *                [--robust] [other scene/view flags of rtref]
+ *
+ * Prints key=value lines (parsed by scripts/bench.sh). Written from the
+ * Embree 3 API documentation (man pages rtcIntersect16, RTCRayHit16,
+ * rtcNewGeometry, rtcSetNewGeometryBuffer).
+ */
+#include <embree3/rtcore.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "camera.h"
+#include "packet.h"
+#include "world.h"
+
+#define QUAD 4 /* Embree packet: QUAD x QUAD = 16 rays */
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static void on_embree_error(void *user, enum RTCError code, const char *str)
+{
+	(void)user;
+	fprintf(stderr, "embree_bench: Embree error %d: %s\n", (int)code, str ? str : "");
+}
+
+static int usage(FILE *f, int rc)
+{
+	fprintf(f, "usage: embree_bench [options]\n"
+	           "  --size WxH            frame size (default 1024x1024)\n"
+	           "  --runs N              passes per tracer, best is reported (default 3)\n"
+	           "  --quality Q           Embree build quality: low, medium (default), high\n"
+	           "  --robust              Embree robust (watertight) mode\n"
+	           "  --list-diffs N        print up to N pixels where the hits differ (stderr)\n");
+	fputs(world_usage, f);
+	return rc;
+}
+
+/* Per-pixel results of one tracer. */
+typedef struct hits {
+	uint32_t *tri; /* triangle index, UINT32_MAX for a miss */
+	float *t;
+} hits;
+
+static int hits_alloc(hits *h, size_t n)
+{
+	h->tri = malloc(n * sizeof *h->tri);
+	h->t = malloc(n * sizeof *h->t);
+	if (!h->tri || !h->t)
+		return -1;
+	for (size_t i = 0; i < n; i++) {
+		h->tri[i] = UINT32_MAX;
+		h->t[i] = INFINITY;
+	}
+	return 0;
+}
+
+static RTCScene embree_scene(RTCDevice dev, const scene *s, enum RTCBuildQuality q, int robust)
+{
+	RTCScene sc = rtcNewScene(dev);
+	if (!sc)
+		return NULL;
+	rtcSetSceneBuildQuality(sc, q);
+	if (robust)
+		rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST);
+	RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+	if (!g)
+		return NULL;
+	rtcSetGeometryBuildQuality(g, q);
+	/* Our triangle soup: corner 3i+k of triangle i. Embree pads its own
+	 * buffers, so copy rather than share. */
+	size_t nv = 3 * (size_t)s->ntris;
+	float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+	                                    3 * sizeof(float), nv);
+	unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+	                                       3 * sizeof(unsigned), s->ntris);
+	if (!vb || !ib)
+		return NULL;
+	for (size_t i = 0; i < nv; i++) {
+		vb[3 * i + 0] = s->v[i].x;
+		vb[3 * i + 1] = s->v[i].y;
+		vb[3 * i + 2] = s->v[i].z;
+		ib[i] = (unsigned)i;
+	}
+	rtcCommitGeometry(g);
+	rtcAttachGeometry(sc, g); /* geomID 0 */
+	rtcReleaseGeometry(g);
+	rtcCommitScene(sc);
+	return sc;
+}
+
+/* One frame with Embree: each tile's 64 rays as four 16-ray packets. */
+static uint64_t embree_frame(RTCScene sc, const cam_frame *cf, packet *p, hits *h)
+{
+	int tw = (cf->width + TILE_W - 1) / TILE_W, th = (cf->height + TILE_H - 1) / TILE_H;
+	struct RTCIntersectContext ctx;
+	rtcInitIntersectContext(&ctx);
+	ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+	struct RTCRayHit16 rh;
+	int valid[16] __attribute__((aligned(64)));
+	uint64_t rays = 0;
+	for (int ty = 0; ty < th; ty++)
+		for (int tx = 0; tx < tw; tx++) {
+			if (cam_primary_packet(cf, tx, ty, p) == 0)
+				continue;
+			for (int q = 0; q < 4; q++) {
+				int qx = (q & 1) * QUAD, qy = (q >> 1) * QUAD, any = 0;
+				for (int k = 0; k < 16; k++) {
+					int lane = (qy + k / QUAD) * TILE_W + qx + k % QUAD;
+					int on = (int)((p->valid >> lane) & 1);
+					valid[k] = on ? -1 : 0;
+					any |= on;
+					rh.ray.org_x[k] = p->ox[lane];
+					rh.ray.org_y[k] = p->oy[lane];
+					rh.ray.org_z[k] = p->oz[lane];
+					rh.ray.dir_x[k] = p->dx[lane];
+					rh.ray.dir_y[k] = p->dy[lane];
+					rh.ray.dir_z[k] = p->dz[lane];
+					rh.ray.tnear[k] = 0.0f;
+					rh.ray.tfar[k] = p->tmax[lane];
+					rh.ray.time[k] = 0.0f;
+					rh.ray.mask[k] = UINT32_MAX;
+					rh.ray.id[k] = (unsigned)k;
+					rh.ray.flags[k] = 0;
+					rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+				}
+				if (!any)
+					continue;
+				rtcIntersect16(valid, sc, &ctx, &rh);
+				for (int k = 0; k < 16; k++) {
+					if (!valid[k])
+						continue;
+					rays++;
+					int lane = (qy + k / QUAD) * TILE_W + qx + k % QUAD;
+					uint32_t px = p->pixel[lane];
+					if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
+						h->tri[px] = rh.hit.primID[k];
+						h->t[px] = rh.ray.tfar[k];
+					} else {
+						h->tri[px] = UINT32_MAX;
+						h->t[px] = INFINITY;
+					}
+				}
+			}
+		}
+	return rays;
+}
+
+/* One frame with our packet traversal (no shading). */
+static uint64_t ours_frame(const mimg *m, const cam_frame *cf, packet *p, trav_entry *stack,
+                           hits *h)
+{
+	int tw = (cf->width + TILE_W - 1) / TILE_W, th = (cf->height + TILE_H - 1) / TILE_H;
+	uint64_t rays = 0;
+	for (int ty = 0; ty < th; ty++)
+		for (int tx = 0; tx < tw; tx++) {
+			if (cam_primary_packet(cf, tx, ty, p) == 0)
+				continue;
+			pkt_trace(p, m, stack, PKT_STACK_MAX, NULL);
+			for (int lane = 0; lane < PKT_RAYS; lane++) {
+				if (!((p->valid >> lane) & 1))
+					continue;
+				rays++;
+				uint32_t px = p->pixel[lane];
+				if (p->tri[lane] != PKT_NOHIT) {
+					h->tri[px] = mimg_tri_index(m, p->tri[lane]);
+					h->t[px] = p->t[lane];
+				} else {
+					h->tri[px] = UINT32_MAX;
+					h->t[px] = INFINITY;
+				}
+			}
+		}
+	return rays;
+}
+
+static int parse_size(const char *s, int *w, int *h)
+{
+	char *end;
+	errno = 0;
+	long a = strtol(s, &end, 10);
+	if (end == s || (*end != 'x' && *end != 'X') || errno)
+		return -1;
+	const char *q = end + 1;
+	long b = strtol(q, &end, 10);
+	if (end == q || *end || errno || a < 1 || a > 16384 || b < 1 || b > 16384)
+		return -1;
+	*w = (int)a;
+	*h = (int)b;
+	return 0;
+}
+
+int main(int argc, char **argv)
+{
+	world_opts wo;
+	world_opts_default(&wo);
+	diag d = {{0}};
+	int width = 1024, height = 1024, runs = 3, robust = 0, list_diffs = 0;
+	enum RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;
+	const char *qname = "medium";
+	for (int i = 1; i < argc;) {
+		int r = world_parse_arg(&wo, argc, argv, &i, &d);
+		if (r < 0) {
+			fprintf(stderr, "embree_bench: %s\n", d.msg);
+			return DIAG_EXIT;
+		}
+		if (r > 0)
+			continue;
+		const char *a = argv[i];
+		if (!strcmp(a, "-h") || !strcmp(a, "--help"))
+			return usage(stdout, 0);
+		if (!strcmp(a, "--robust")) {
+			robust = 1;
+			i++;
+			continue;
+		}
+		if (i + 1 >= argc) {
+			fprintf(stderr, "embree_bench: %s: unknown option or missing value\n", a);
+			return usage(stderr, DIAG_EXIT);
+		}
+		const char *v = argv[i + 1];
+		if (!strcmp(a, "--size")) {
+			if (parse_size(v, &width, &height)) {
+				fprintf(stderr,
+				        "embree_bench: --size: expected WxH (1..16384), got '%s'\n",
+				        v);
+				return DIAG_EXIT;
+			}
+		} else if (!strcmp(a, "--runs")) {
+			char *end;
+			long n = strtol(v, &end, 10);
+			if (end == v || *end || n < 1 || n > 100) {
+				fprintf(stderr, "embree_bench: --runs: expected 1..100, got '%s'\n",
+				        v);
+				return DIAG_EXIT;
+			}
+			runs = (int)n;
+		} else if (!strcmp(a, "--list-diffs")) {
+			char *end;
+			long n = strtol(v, &end, 10);
+			if (end == v || *end || n < 0 || n > 1000000) {
+				fprintf(
+				    stderr,
+				    "embree_bench: --list-diffs: expected 0..1000000, got '%s'\n",
+				    v);
+				return DIAG_EXIT;
+			}
+			list_diffs = (int)n;
+		} else if (!strcmp(a, "--quality")) {
+			if (!strcmp(v, "low"))
+				quality = RTC_BUILD_QUALITY_LOW;
+			else if (!strcmp(v, "medium"))
+				quality = RTC_BUILD_QUALITY_MEDIUM;
+			else if (!strcmp(v, "high"))
+				quality = RTC_BUILD_QUALITY_HIGH;
+			else {
+				fprintf(
+				    stderr,
+				    "embree_bench: --quality: expected low, medium or high, got "
+				    "'%s'\n",
+				    v);
+				return DIAG_EXIT;
+			}
+			qname = v;
+		} else {
+			fprintf(stderr, "embree_bench: %s: unknown option\n", a);
+			return usage(stderr, DIAG_EXIT);
+		}
+		i += 2;
+	}
+
+	world w;
+	if (world_load(&w, &wo, &d)) {
+		fprintf(stderr, "embree_bench: %s\n", d.msg);
+		return DIAG_EXIT;
+	}
+	/* Tracing runs on this thread only; one thread for the build too, so
+	 * no Embree worker competes with the measurement. */
+	RTCDevice dev = rtcNewDevice("threads=1");
+	if (!dev) {
+		fprintf(stderr, "embree_bench: rtcNewDevice failed (error %d)\n",
+		        (int)rtcGetDeviceError(NULL));
+		world_free(&w);
+		return 1;
+	}
+	rtcSetDeviceErrorFunction(dev, on_embree_error, NULL);
+	double t0 = now_ms();
+	RTCScene sc = embree_scene(dev, &w.s, quality, robust);
+	double embree_build_ms = now_ms() - t0;
+	size_t npix = (size_t)width * (size_t)height;
+	hits he, ho;
+	packet *p = aligned_alloc(64, (sizeof(packet) + 63) / 64 * 64);
+	trav_entry *stack = aligned_alloc(64, (sizeof(trav_entry) * PKT_STACK_MAX + 63) / 64 * 64);
+	if (!sc || rtcGetDeviceError(dev) != RTC_ERROR_NONE || hits_alloc(&he, npix) ||
+	    hits_alloc(&ho, npix) || !p || !stack) {
+		fprintf(stderr, "embree_bench: setup failed (Embree scene or out of memory)\n");
+		return 1;
+	}
+
+	cam_frame cf;
+	cam_setup(&cf, &w.v.cam, width, height);
+	double best_e = INFINITY, best_o = INFINITY;
+	uint64_t rays_e = 0, rays_o = 0;
+	for (int r = 0; r < runs; r++) {
+		t0 = now_ms();
+		rays_e = embree_frame(sc, &cf, p, &he);
+		double te = now_ms() - t0;
+		t0 = now_ms();
+		rays_o = ours_frame(&w.m, &cf, p, stack, &ho);
+		double to = now_ms() - t0;
+		best_e = te < best_e ? te : best_e;
+		best_o = to < best_o ? to : best_o;
+	}
+
+	/* Compare per pixel. A different triangle at the same distance (within
+	 * a relative 1e-4) is a tie on a shared edge or coplanar faces; a
+	 * different distance is a real disagreement. */
+	uint64_t hits_e = 0, hits_o = 0, only_e = 0, only_o = 0, diff_tri = 0, diff_t = 0,
+	         diff_t_ours = 0;
+	for (size_t i = 0; i < npix; i++) {
+		int a = he.tri[i] != UINT32_MAX, b = ho.tri[i] != UINT32_MAX;
+		hits_e += (uint64_t)a;
+		hits_o += (uint64_t)b;
+		only_e += (uint64_t)(a && !b);
+		only_o += (uint64_t)(b && !a);
+		int differ = a != b;
+		if (a && b && he.tri[i] != ho.tri[i]) {
+			diff_tri++;
+			float tol = 1e-4f * fmaxf(fabsf(he.t[i]), fabsf(ho.t[i]));
+			if (fabsf(he.t[i] - ho.t[i]) > tol) {
+				diff_t++;
+				diff_t_ours += (uint64_t)(ho.t[i] < he.t[i]);
+			}
+			differ = 1;
+		}
+		if (differ && list_diffs > 0) {
+			list_diffs--;
+			fprintf(stderr,
+			        "pixel %zu,%zu: embree tri %ld t %.9g, ours tri %ld t %.9g\n",
+			        i % (size_t)width, i / (size_t)width, a ? (long)he.tri[i] : -1L,
+			        (double)he.t[i], b ? (long)ho.tri[i] : -1L, (double)ho.t[i]);
+		}
+	}
+
+	printf("view=%s\n", w.v.name);
+	printf("triangles=%u\n", w.s.ntris);
+	printf("size=%dx%d\n", width, height);
+	printf("embree_version=%d.%d.%d\n", RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
+	       RTC_VERSION_PATCH);
+	printf("embree_quality=%s\n", qname);
+	printf("embree_robust=%d\n", robust);
+	printf("runs=%d\n", runs);
+	printf("rays=%llu\n", (unsigned long long)rays_e);
+	printf("embree_build_ms=%.1f\n", embree_build_ms);
+	printf("embree_ms=%.2f\n", best_e);
+	printf("embree_mrays=%.3f\n", (double)rays_e / (best_e * 1e3));
+	printf("embree_hits=%llu\n", (unsigned long long)hits_e);
+	printf("ours_trace_ms=%.2f\n", best_o);
+	printf("ours_trace_mrays=%.3f\n", (double)rays_o / (best_o * 1e3));
+	printf("ours_hits=%llu\n", (unsigned long long)hits_o);
+	printf("hit_only_embree=%llu\n", (unsigned long long)only_e);
+	printf("hit_only_ours=%llu\n", (unsigned long long)only_o);
+	printf("diff_triangle=%llu\n", (unsigned long long)diff_tri);
+	printf("diff_triangle_and_t=%llu\n", (unsigned long long)diff_t);
+	printf("diff_t_ours_closer=%llu\n", (unsigned long long)diff_t_ours);
+
+	free(he.tri);
+	free(he.t);
+	free(ho.tri);
+	free(ho.t);
+	free(p);
+	free(stack);
+	rtcReleaseScene(sc);
+	rtcReleaseDevice(dev);
+	world_free(&w);
+	return 0;
+}
