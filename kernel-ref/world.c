@@ -3,6 +3,8 @@
  */
 #include "world.h"
 
+#include "spd.h"
+
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,8 +12,9 @@
 #include <time.h>
 
 const char world_usage[] =
-    "  --scene PATH          scene file (OBJ/PLY/3DS/glTF, .gz ok); default: the view's scene,\n"
-    "                        else the embedded Cornell-like room\n"
+    "  --scene PATH          scene file (OBJ/PLY/3DS/glTF, .gz ok) or a procedural scene\n"
+    "                        spd:balls|tetra|mount|rings|cornell[:SIZE[:TESS]] (docs/spd.md);\n"
+    "                        default: the view's scene, else the embedded Cornell-like room\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
@@ -159,7 +162,15 @@ int world_load(world *w, const world_opts *o, diag *d)
 		view_default(&w->v);
 	}
 	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
-	if (path) {
+	if (path && strncmp(path, SPD_PREFIX, strlen(SPD_PREFIX)) == 0) {
+		/* procedural: its standard view unless a views file gave one */
+		view sv;
+		if (spd_generate(&w->s, &sv, path, d))
+			return -1;
+		if (!o->views)
+			w->v = sv;
+		snprintf(w->scene_label, sizeof w->scene_label, "%s", path);
+	} else if (path) {
 		if (scene_load(&w->s, path, d))
 			return -1;
 		snprintf(w->scene_label, sizeof w->scene_label, "%s", path);
