@@ -1,0 +1,74 @@
+/*
+ * memport.h: the one memory-port interface every unit uses.
+ *
+ * A unit asks for bytes by address and requester type (the four SaarCOR L1
+ * caches: shading, kd-nodes, lists, triangles; seed 002 §4.1) and gets its
+ * answer as an engine event at the tick the data is ready: done(e, ctx, arg).
+ * Stack spills are writes (requester KD, write flag); a write without a
+ * callback is posted: it is counted and charged but nobody waits for it.
+ *
+ * What stands behind the port is a model behind a small vtable
+ * (memport_model). This issue has one model, `fixed`: every access is ready
+ * memory.latency core cycles after it is issued (no queueing, no bandwidth
+ * limit). The next issue adds caches, SDRAM and the VMA as further models
+ * without touching the units. The port itself counts requests and bytes per
+ * requester type, whatever the model.
+ */
+#ifndef SAAR_MEM_MEMPORT_H
+#define SAAR_MEM_MEMPORT_H
+
+#include <stdint.h>
+
+#include "engine.h"
+
+enum mem_req_type { MEM_SHADE, MEM_KD, MEM_LIST, MEM_TRI, MEM_NTYPES };
+
+typedef struct mem_req {
+	uint64_t addr;
+	uint32_t bytes;
+	uint8_t type;  /* enum mem_req_type */
+	uint8_t write; /* stack spill */
+	uint16_t rtp;  /* requesting pipeline */
+} mem_req;
+
+typedef struct mem_counts {
+	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
+	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
+} mem_counts;
+
+/* A memory model: issue one request; call done (if not NULL) through the
+ * engine at the tick the data is ready. */
+typedef struct memport_model {
+	const char *name;
+	void (*access)(void *impl, const mem_req *r, eng_handler done, void *ctx, uint64_t arg);
+	void (*destroy)(void *impl);
+} memport_model;
+
+typedef struct memport {
+	const memport_model *model;
+	void *impl;
+	mem_counts n;
+} memport;
+
+/* The fixed-latency model: ready `latency` cycles of clk after the request
+ * (at the next edge of clk if issued between edges). */
+int mem_init_fixed(memport *p, eng *e, eng_clock clk, int latency);
+void mem_free(memport *p);
+
+/* Issues one request. done may be NULL only for writes. */
+static inline void mem_access(memport *p, const mem_req *r, eng_handler done, void *ctx,
+                              uint64_t arg)
+{
+	if (r->write) {
+		p->n.writes[r->type]++;
+		p->n.write_bytes[r->type] += r->bytes;
+	} else {
+		p->n.reads[r->type]++;
+		p->n.read_bytes[r->type] += r->bytes;
+	}
+	p->model->access(p->impl, r, done, ctx, arg);
+}
+
+const char *mem_type_name(int type); /* "shade", "kd", "list", "tri" */
+
+#endif

@@ -1,0 +1,357 @@
+/*
+ * chip.c: wiring and the frame loop of the chip model (see chip.h and
+ * docs/design.md, "Chip model").
+ *
+ * The chip holds rtps RTPs; each has threads_per_rtp thread contexts, one
+ * unit group per kind (RGS, traversal, list, intersection) and a FIFO of
+ * secondary packets waiting for a thread slot. One memory port (mem/memport.h)
+ * serves every unit. A frame starts by offering every thread slot a tile
+ * (slot by slot, RTP by RTP, so consecutive tiles go to different RTPs);
+ * from then on everything happens in event handlers, and the frame ends when
+ * the event queue runs dry.
+ */
+#include "chip.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "rgs.h"
+
+static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
+static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
+                                                     "waiting_unit"};
+
+const char *chip_unit_name(int kind)
+{
+	return kind >= 0 && kind < UNIT_NKINDS ? unit_names[kind] : "?";
+}
+
+const char *chip_state_name(int state)
+{
+	return state >= 0 && state < THR_NSTATES ? state_names[state] : "?";
+}
+
+static const struct {
+	int id;
+	const char *name, *unit, *desc;
+} chip_counters[] = {
+    {C_BOX_MISS_PACKETS, "skip.box_miss_packets", "packets",
+     "packets whose rays all miss the scene box: no traversal"},
+    {C_BOX_MISS_RAYS, "skip.box_miss_rays", "rays", "rays that miss the scene box"},
+    {C_NODE_STEPS, "trav.node_steps", "ops", "traversal steps (kd-node reads), leaves included"},
+    {C_LEAF_VISITS, "trav.leaf_visits", "ops", "leaves reached"},
+    {C_EMPTY_LEAVES, "trav.empty_leaves", "ops", "empty leaves (no list or intersection op)"},
+    {C_LIST_ENTRIES, "list.entries", "entries", "triangle addresses read by the list units"},
+    {C_TRI_TESTS, "isect.tri_tests", "ops", "packet-triangle tests"},
+    {C_RAY_TRI_TESTS, "isect.ray_tri_tests", "tests", "ray-triangle tests (active rays)"},
+    {C_STACK_OVERFLOWS, "trav.stack_overflows", "pushes",
+     "pushes beyond chip.stack_depth, spilled to memory"},
+    {C_STACK_REFILLS, "trav.stack_refills", "pops", "spilled entries read back"},
+    {C_MAX_SP, "trav.max_stack_depth", "entries", "deepest traversal stack"},
+    {C_SHADE_READS, "rgs.shade_reads", "reads", "scene reads of the shader, before coalescing"},
+    {C_SHADE_REQUESTS, "rgs.shade_requests", "requests",
+     "shading memory requests after coalescing within a packet"},
+    {C_SPAWNED, "rgs.spawned_packets", "packets", "secondary packets made by shading"},
+    {C_QUEUED, "rgs.queue_samples", "packets",
+     "sum over shading ops of the RTP queue length after spawning"},
+    {C_MAX_QUEUE, "rgs.max_queue", "packets", "longest queue of secondary packets of one RTP"},
+};
+
+static const char *const shade_names[11] = {"shade.hits",
+                                            "shade.misses",
+                                            "shade.shadow_rays_made",
+                                            "skip.shadow_no_light",
+                                            "skip.shadow_light_behind",
+                                            "skip.no_secondary",
+                                            "skip.depth_cut",
+                                            "shade.texel_reads",
+                                            "skip.untextured_hits",
+                                            "shade.shadow_occluded",
+                                            "shade.shadow_lit"};
+
+static void on_free(thr_ctx *t)
+{
+	chip *c = t->env->owner;
+	packet *p = rgs_dequeue(t->rtp);
+	if (p) {
+		rgs_secondary(t, p);
+		return;
+	}
+	int tx, ty;
+	if (!rgc_next(&c->g, &tx, &ty))
+		return;
+	c->tiles_given++;
+	if (c->progress && c->tiles_given % 64 == 0)
+		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
+	if (rgs_primary(t, tx, ty))
+		c->oom = 1;
+}
+
+static uint64_t *reg(chip *c, const char *name, const char *unit, const char *desc)
+{
+	uint64_t *p = stats_counter(&c->st, name, unit, desc);
+	if (!p)
+		c->oom = 1;
+	return p;
+}
+
+chip *chip_create(const saar_config *cfg, const world *w, diag *d)
+{
+	if (cfg->chip.packet_w != TILE_W || cfg->chip.packet_h != TILE_H) {
+		diag_set(d, "config", 0, 0,
+		         "chip.packet_w x chip.packet_h = %d x %d: only %d x %d packets are "
+		         "supported (kernel-ref tiles)",
+		         cfg->chip.packet_w, cfg->chip.packet_h, TILE_W, TILE_H);
+		return NULL;
+	}
+	chip *c = calloc(1, sizeof *c);
+	if (!c)
+		goto oom;
+	c->cfg = *cfg;
+	c->w = w;
+	c->nrtp = cfg->chip.rtps;
+	c->tpr = cfg->chip.threads_per_rtp;
+	c->clk = eng_clock_mhz(cfg->chip.clock_mhz);
+	stats_init(&c->st);
+	c->e = eng_create((size_t)(c->nrtp * c->tpr * 4 + 64));
+	c->frame_cycles = calloc((size_t)cfg->frame.frames, sizeof *c->frame_cycles);
+	if (!c->e || !c->frame_cycles || thr_env_init(&c->env) ||
+	    mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency) ||
+	    fb_init(&c->fb, cfg->frame.width, cfg->frame.height) ||
+	    rgc_init(&c->g, cfg->frame.width, cfg->frame.height, cfg->chip.tile_order))
+		goto oom;
+
+	thr_env *v = &c->env;
+	v->e = c->e;
+	v->clk = c->clk;
+	v->mem = &c->mem;
+	v->m = &w->m;
+	v->stack_depth = cfg->chip.stack_depth;
+	v->masked = cfg->chip.masked_packets;
+	v->nlights = w->v.nlights;
+	v->spill_base = (w->m.size + 4095) & ~(uint64_t)4095;
+	v->on_free = on_free;
+	v->owner = c;
+	render_opts ro;
+	render_opts_default(&ro);
+	v->sc = (shade_ctx){&w->m,         w->v.lights, w->v.nlights, cfg->shading.max_depth,
+	                    ro.background, &c->fb};
+	cam_setup(&v->cam, &w->v.cam, cfg->frame.width, cfg->frame.height);
+
+	/* counters */
+	char name[64];
+	for (int t = 0; t < PKT_NTYPES; t++) {
+		snprintf(name, sizeof name, "packets.%s", pkt_type_name(t));
+		v->c[C_PKT_PRIMARY + t] = reg(c, name, "packets", "packets that entered a thread");
+		snprintf(name, sizeof name, "rays.%s", pkt_type_name(t));
+		v->c[C_RAYS_PRIMARY + t] = reg(c, name, "rays", "valid rays of those packets");
+	}
+	for (size_t i = 0; i < sizeof chip_counters / sizeof *chip_counters; i++)
+		v->c[chip_counters[i].id] =
+		    reg(c, chip_counters[i].name, chip_counters[i].unit, chip_counters[i].desc);
+	for (int i = 0; i < 11; i++)
+		c->sh[i] = reg(c, shade_names[i], "", "kernel-ref shade_counts field");
+	static const char *const mk[4] = {"reads", "read_bytes", "writes", "write_bytes"};
+	for (int t = 0; t < MEM_NTYPES; t++)
+		for (int k = 0; k < 4; k++) {
+			snprintf(name, sizeof name, "mem.%s.%s", mem_type_name(t), mk[k]);
+			c->memc[t][k] = reg(c, name, k & 1 ? "bytes" : "requests",
+			                    "memory-port traffic of this requester type");
+		}
+
+	/* RTPs, units and threads */
+	c->rtp = calloc((size_t)c->nrtp, sizeof *c->rtp);
+	if (!c->rtp)
+		goto oom;
+	const cfg_unit *ucfg[UNIT_NKINDS] = {&cfg->chip.rgs, &cfg->chip.trav, &cfg->chip.list,
+	                                     &cfg->chip.isect};
+	int nkids = w->v.nlights + 2;
+	for (int r = 0; r < c->nrtp; r++) {
+		thr_rtp *rp = &c->rtp[r];
+		rp->env = v;
+		rp->id = r;
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			thr_unit *u = &rp->u[k];
+			if (thr_unit_init(u, c->e, c->clk, ucfg[k], cfg->chip.masked_packets,
+			                  cfg->chip.thread_sched, c->tpr))
+				goto oom;
+			u->on_start = thr_on_start;
+			snprintf(name, sizeof name, "rtp%d.%s.ops", r, unit_names[k]);
+			u->ops_n = reg(c, name, "ops", "operations issued");
+			snprintf(name, sizeof name, "rtp%d.%s.busy_cycles", r, unit_names[k]);
+			u->busy = reg(c, name, "cycles", "issue cycles (summed over the units)");
+			snprintf(name, sizeof name, "rtp%d.%s.rays", r, unit_names[k]);
+			u->rays = reg(c, name, "rays", "active rays of those operations");
+			if (c->oom)
+				goto oom;
+		}
+		for (int s = 0; s < THR_NSTATES; s++) {
+			snprintf(name, sizeof name, "rtp%d.threads.%s_ps", r, state_names[s]);
+			rp->occ[s] = reg(c, name, "ps", "thread time in this state, summed");
+		}
+		void *mem = NULL;
+		if (posix_memalign(&mem, 64, (size_t)c->tpr * sizeof(thr_ctx)))
+			goto oom;
+		rp->t = mem;
+		memset(rp->t, 0, (size_t)c->tpr * sizeof(thr_ctx));
+		rp->nt = c->tpr;
+		rp->nidle = c->tpr;
+		for (int i = 0; i < c->tpr; i++) {
+			thr_ctx *t = &rp->t[i];
+			t->rtp = rp;
+			t->env = v;
+			t->id = i;
+			t->gid = r * c->tpr + i;
+			t->state = THR_IDLE;
+			t->nkids = nkids;
+			void *st = NULL, *kids = NULL;
+			int e1 = posix_memalign(&st, 64, PKT_STACK_MAX * sizeof(trav_entry));
+			int e2 = posix_memalign(&kids, 64, (size_t)nkids * sizeof(packet));
+			t->stack = e1 ? NULL : st;
+			t->kids = e2 ? NULL : kids;
+			if (!t->stack || !t->kids)
+				goto oom;
+		}
+	}
+	if (c->oom)
+		goto oom;
+	return c;
+oom:
+	chip_destroy(c);
+	diag_set(d, "saarsim", 0, 0, "out of memory for %d RTPs x %d threads", cfg->chip.rtps,
+	         cfg->chip.threads_per_rtp);
+	return NULL;
+}
+
+void chip_destroy(chip *c)
+{
+	if (!c)
+		return;
+	for (int r = 0; c->rtp && r < c->nrtp; r++) {
+		thr_rtp *rp = &c->rtp[r];
+		for (int k = 0; k < UNIT_NKINDS; k++)
+			thr_unit_free(&rp->u[k]);
+		for (int i = 0; rp->t && i < rp->nt; i++) {
+			free(rp->t[i].stack);
+			free(rp->t[i].kids);
+		}
+		free(rp->t);
+		free(rp->q);
+	}
+	free(c->rtp);
+	rgc_free(&c->g);
+	fb_free(&c->fb);
+	mem_free(&c->mem);
+	thr_env_free(&c->env);
+	if (c->e)
+		eng_destroy(c->e);
+	free(c->frame_cycles);
+	stats_free(&c->st);
+	free(c);
+}
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* Copies counts kept outside the registry (memory port, shade_counts). */
+static void sync_counters(chip *c)
+{
+	const uint64_t *sc = (const uint64_t *)&c->env.sh;
+	_Static_assert(sizeof(shade_counts) == 11 * sizeof(uint64_t), "shade_counts changed");
+	for (int i = 0; i < 11; i++)
+		*c->sh[i] = sc[i];
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		*c->memc[t][0] = c->mem.n.reads[t];
+		*c->memc[t][1] = c->mem.n.read_bytes[t];
+		*c->memc[t][2] = c->mem.n.writes[t];
+		*c->memc[t][3] = c->mem.n.write_bytes[t];
+	}
+}
+
+int chip_run(chip *c, diag *d)
+{
+	double t0 = now_ms();
+	for (int f = 0; f < c->cfg.frame.frames; f++) {
+		fb_clear(&c->fb);
+		rgc_reset(&c->g);
+		c->tiles_given = 0;
+		uint64_t start = eng_now(c->e);
+		for (int s = 0; s < c->tpr; s++)
+			for (int r = 0; r < c->nrtp; r++)
+				if (c->rtp[r].t[s].state == THR_IDLE)
+					on_free(&c->rtp[r].t[s]);
+		eng_run(c->e, ENG_FOREVER);
+		uint64_t end = eng_now(c->e);
+		c->frame_cycles[f] = eng_ticks_to_cycles(c->clk, end - start);
+		for (int r = 0; r < c->nrtp; r++) {
+			for (int i = 0; i < c->tpr; i++)
+				thr_flush(&c->rtp[r].t[i]);
+			if (c->rtp[r].nidle != c->tpr || c->rtp[r].qn)
+				return diag_set(d, "saarsim", 0, 0,
+				                "internal error: frame ended with busy threads");
+		}
+		if (c->oom)
+			return diag_set(d, "saarsim", 0, 0, "out of memory during the frame");
+		c->frames_done = f + 1;
+	}
+	c->events = eng_events(c->e);
+	sync_counters(c);
+	c->sim_ms = now_ms() - t0;
+	return 0;
+}
+
+uint64_t chip_cycles(const chip *c)
+{
+	uint64_t s = 0;
+	for (int f = 0; f < c->frames_done; f++)
+		s += c->frame_cycles[f];
+	return s;
+}
+
+uint64_t chip_rtp_sum(const chip *c, const char *suffix)
+{
+	char name[64];
+	uint64_t s = 0;
+	for (int r = 0; r < c->nrtp; r++) {
+		snprintf(name, sizeof name, "rtp%d.%s", r, suffix);
+		s += stats_get(&c->st, name);
+	}
+	return s;
+}
+
+int chip_check_frame(chip *c, chip_check *out, diag *d)
+{
+	memset(out, 0, sizeof *out);
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = c->cfg.frame.width;
+	ro.height = c->cfg.frame.height;
+	ro.max_depth = c->cfg.shading.max_depth;
+	ro.threads = 1;
+	framebuf ref;
+	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
+	uint8_t *a = malloc(n), *b = malloc(n);
+	if (!a || !b || fb_init(&ref, ro.width, ro.height)) {
+		free(a);
+		free(b);
+		return diag_set(d, "saarsim", 0, 0, "out of memory for the reference frame");
+	}
+	int rc = render_frame(&c->w->m, &c->w->v, &ro, &ref, &out->ref, d);
+	if (!rc) {
+		fb_to_rgb8(&c->fb, a, NULL);
+		fb_to_rgb8(&ref, b, NULL);
+		out->cmp = img_compare(a, b, ro.width, ro.height);
+		out->ref_ms = out->ref.render_ms;
+		out->done = 1;
+	}
+	fb_free(&ref);
+	free(a);
+	free(b);
+	return rc;
+}

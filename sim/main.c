@@ -1,0 +1,223 @@
+/*
+ * main.c: the saarsim command line.
+ *
+ *   saarsim [--config FILE] [scene/view flags] [--size WxH] [--out frame.png]
+ *           [--report report.json] [--set key=value ...] [--no-check]
+ *           [--list-config] [--config-doc]
+ *
+ * Loads the config (built-in defaults = configs/saarcor-std.yaml, then the
+ * file, then --set and --size), the world (the same flags as rtref), runs
+ * the chip, checks the frame against kernel-ref, prints a summary and writes
+ * the frame and the JSON report. Bad input: one line "saarsim: ..." on
+ * stderr, exit status 2, no output file.
+ */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "chip.h"
+#include "config.h"
+#include "report.h"
+#include "world.h"
+
+static void usage(FILE *f)
+{
+	fprintf(f, "usage: saarsim [options]\n"
+	           "  --config FILE         hardware config (YAML; default: built-in saarcor-std)\n"
+	           "  --set KEY=VALUE       override one config key (repeatable)\n"
+	           "  --size WxH            frame size (sets frame.width and frame.height)\n"
+	           "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
+	           "  --report FILE.json    write the JSON report (docs/report.md)\n"
+	           "  --no-check            skip the comparison with kernel-ref\n"
+	           "  --list-config         print every config key and exit\n"
+	           "  --config-doc          print docs/config.md and exit\n");
+	fputs(world_usage, f);
+}
+
+static int bad(const char *msg)
+{
+	fprintf(stderr, "saarsim: %s\n", msg);
+	return DIAG_EXIT;
+}
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static int parse_size(const char *s, int *w, int *h, diag *d)
+{
+	char *end;
+	errno = 0;
+	long a = strtol(s, &end, 10);
+	if (end == s || (*end != 'x' && *end != 'X') || errno)
+		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
+	const char *q = end + 1;
+	long b = strtol(q, &end, 10);
+	if (end == q || *end || errno)
+		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
+	if (a < 1 || a > 16384 || b < 1 || b > 16384)
+		return diag_set(d, "--size", 0, 0, "%s is out of range (1..16384 each)", s);
+	*w = (int)a;
+	*h = (int)b;
+	return 0;
+}
+
+typedef struct progress {
+	double t0;
+	int shown;
+} progress;
+
+static void show_progress(void *ctx, int frame, int done, int total)
+{
+	progress *p = ctx;
+	if (now_ms() - p->t0 < 1000.0)
+		return;
+	fprintf(stderr, "\rsaarsim: frame %d: %d/%d tiles", frame + 1, done, total);
+	p->shown = 1;
+}
+
+int main(int argc, char **argv)
+{
+	double t_start = now_ms();
+	world_opts wo;
+	world_opts_default(&wo);
+	const char *config = NULL, *out = NULL, *report = NULL, *size = NULL;
+	int check = 1, list = 0, doc = 0;
+	diag d = {{0}};
+	for (int i = 1; i < argc;) {
+		int r = world_parse_arg(&wo, argc, argv, &i, &d);
+		if (r < 0)
+			return bad(d.msg);
+		if (r > 0)
+			continue;
+		const char *a = argv[i];
+		if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+			usage(stdout);
+			return 0;
+		}
+		if (!strcmp(a, "--no-check") || !strcmp(a, "--list-config") ||
+		    !strcmp(a, "--config-doc")) {
+			*(a[2] == 'n' ? &check : a[2] == 'l' ? &list : &doc) = a[2] != 'n';
+			i++;
+			continue;
+		}
+		if (i + 1 >= argc) {
+			fprintf(stderr,
+			        "saarsim: %s: unknown option or missing value (see --help)\n", a);
+			return DIAG_EXIT;
+		}
+		const char *v = argv[i + 1];
+		if (!strcmp(a, "--config"))
+			config = v;
+		else if (!strcmp(a, "--set"))
+			; /* applied below, in order, once the config file is read */
+		else if (!strcmp(a, "--size"))
+			size = v;
+		else if (!strcmp(a, "--out"))
+			out = v;
+		else if (!strcmp(a, "--report"))
+			report = v;
+		else {
+			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", a);
+			return DIAG_EXIT;
+		}
+		i += 2;
+	}
+	if (list || doc) {
+		if (list)
+			cfg_list(stdout);
+		if (doc)
+			cfg_write_markdown(stdout);
+		return 0;
+	}
+
+	/* the config: defaults, file, --set, --size, kd-tree flags */
+	saar_config cfg;
+	if (config ? cfg_load(&cfg, config, &d) : (cfg_defaults(&cfg), 0))
+		return bad(d.msg);
+	/* the first pass accepted every argument, so this walk sees the same
+	 * option/value pairs: world flags are skipped by the same parser */
+	world_opts skip;
+	world_opts_default(&skip);
+	for (int i = 1; i < argc;) {
+		if (world_parse_arg(&skip, argc, argv, &i, &d) > 0)
+			continue;
+		const char *a = argv[i];
+		if (!strcmp(a, "--no-check") || !strcmp(a, "--list-config") ||
+		    !strcmp(a, "--config-doc")) {
+			i++;
+			continue;
+		}
+		if (!strcmp(a, "--set") && cfg_set(&cfg, argv[i + 1], &d))
+			return bad(d.msg);
+		i += 2;
+	}
+	if (size && parse_size(size, &cfg.frame.width, &cfg.frame.height, &d))
+		return bad(d.msg);
+	kd_params kd0;
+	kd_params_default(&kd0);
+	if (wo.kd.cost_trav != kd0.cost_trav)
+		cfg.kdtree.cost_trav = wo.kd.cost_trav;
+	if (wo.kd.cost_isect != kd0.cost_isect)
+		cfg.kdtree.cost_isect = wo.kd.cost_isect;
+	if (wo.kd.max_depth != kd0.max_depth)
+		cfg.kdtree.max_depth = wo.kd.max_depth;
+	if (wo.kd.leaf_size != kd0.leaf_size)
+		cfg.kdtree.leaf_size = wo.kd.leaf_size;
+	if (wo.kd.empty_bonus != kd0.empty_bonus)
+		cfg.kdtree.empty_bonus = wo.kd.empty_bonus;
+	if (cfg_validate(&cfg, &d))
+		return bad(d.msg);
+	wo.kd.cost_trav = (float)cfg.kdtree.cost_trav;
+	wo.kd.cost_isect = (float)cfg.kdtree.cost_isect;
+	wo.kd.max_depth = cfg.kdtree.max_depth;
+	wo.kd.leaf_size = cfg.kdtree.leaf_size;
+	wo.kd.empty_bonus = (float)cfg.kdtree.empty_bonus;
+
+	double t0 = now_ms();
+	world w;
+	if (world_load(&w, &wo, &d))
+		return bad(d.msg);
+	double load_ms = now_ms() - t0;
+	chip *c = chip_create(&cfg, &w, &d);
+	if (!c) {
+		world_free(&w);
+		return bad(d.msg);
+	}
+	progress pr = {now_ms(), 0};
+	if (isatty(STDERR_FILENO)) {
+		c->progress = show_progress;
+		c->progress_ctx = &pr;
+	}
+	int rc = 0;
+	chip_check chk;
+	memset(&chk, 0, sizeof chk);
+	if (chip_run(c, &d) || (check && chip_check_frame(c, &chk, &d))) {
+		rc = bad(d.msg);
+		goto done;
+	}
+	if (pr.shown)
+		fputc('\n', stderr);
+	if (out && fb_write(&c->fb, out, &d)) {
+		rc = bad(d.msg);
+		goto done;
+	}
+	report_info ri = {c, &w, check ? &chk : NULL, load_ms, now_ms() - t_start};
+	if (report && report_json(report, &ri, &d)) {
+		if (out)
+			unlink(out);
+		rc = bad(d.msg);
+		goto done;
+	}
+	report_text(stdout, &ri);
+done:
+	chip_destroy(c);
+	world_free(&w);
+	return rc;
+}

@@ -1,0 +1,28 @@
+/*
+ * report.h: what a run says about itself: a text summary (stdout) and a
+ * JSON report (--report), both from the chip's stats registry and results.
+ * Every field is documented in docs/report.md. Host-time fields all live
+ * under "host", so two runs of the same input give reports that are
+ * identical once "host" is removed.
+ */
+#ifndef SAAR_SIM_REPORT_H
+#define SAAR_SIM_REPORT_H
+
+#include <stdio.h>
+
+#include "chip.h"
+#include "world.h"
+
+typedef struct report_info {
+	const chip *c;
+	const world *w;
+	const chip_check *check; /* NULL: --no-check */
+	double load_ms;          /* scene load, kd-tree, memory image */
+	double wall_ms;          /* whole run so far */
+} report_info;
+
+void report_text(FILE *f, const report_info *ri);
+/* Writes the JSON report atomically (tmp + rename). */
+int report_json(const char *path, const report_info *ri, diag *d);
+
+#endif

@@ -1,0 +1,308 @@
+/*
+ * test_chip.c: the chip model: unit timing (one op through an idle unit,
+ * N ops through one unit, several units, masked packets), the image equal
+ * to kernel-ref's on the embedded scene and every shared view for several
+ * thread and RTP counts, kernel-ref's traversal counts, stack overflow
+ * spilling, determinism, and the memory port.
+ */
+#include <string.h>
+
+#include "chip.h"
+#include "memport.h"
+#include "testutil.h"
+#include "thread.h"
+#include "view.h"
+#include "world.h"
+
+/* ---- unit timing ---- */
+
+static uint64_t done_at[64];
+static int ndone;
+
+static void on_done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)ctx;
+	done_at[arg] = eng_now(e);
+	ndone++;
+}
+
+static void one_unit(int count, int width, int latency, int masked, int n, int rays, eng_clock clk)
+{
+	eng *e = eng_create(0);
+	thr_unit u;
+	cfg_unit cu = {count, width, latency};
+	cr_assert_eq(thr_unit_init(&u, e, clk, &cu, masked, CFG_SCHED_ROUND_ROBIN, 64), 0);
+	ndone = 0;
+	for (int k = 0; k < n; k++)
+		thr_unit_request(&u, k, (uint64_t)k, rays, on_done, NULL, (uint64_t)k);
+	eng_run(e, ENG_FOREVER);
+	cr_assert_eq(ndone, n);
+	cr_assert_eq(*u.ops_n, (uint64_t)n);
+	thr_unit_free(&u);
+	eng_destroy(e);
+}
+
+Test(chip, one_packet_through_idle_unit_takes_issue_plus_latency)
+{
+	eng_clock clk = eng_clock_mhz(500); /* 2000 ps */
+	/* 13 active rays, width 4: ceil(13/4) = 4 issue cycles, + 10 latency */
+	one_unit(1, 4, 10, 0, 1, 13, clk);
+	cr_assert_eq(done_at[0], 14 * 2000ull);
+	/* masked packets always cost 64 rays: 16 issue cycles */
+	one_unit(1, 4, 10, 1, 1, 13, clk);
+	cr_assert_eq(done_at[0], 26 * 2000ull);
+}
+
+Test(chip, n_packets_through_one_unit_take_predicted_cycles)
+{
+	eng_clock clk = eng_clock_mhz(533);
+	int n = 10, w = 16, lat = 8, issue = 64 / w;
+	one_unit(1, w, lat, 1, n, 64, clk);
+	/* pipelined: op k issues at k*issue, completes issue + lat later */
+	for (int k = 0; k < n; k++)
+		cr_assert_eq(done_at[k], (uint64_t)((k + 1) * issue + lat) * clk.period, "op %d",
+		             k);
+	/* two units of the kind: pairs issue together */
+	one_unit(2, w, lat, 1, n, 64, clk);
+	for (int k = 0; k < n; k++)
+		cr_assert_eq(done_at[k], (uint64_t)((k / 2 + 1) * issue + lat) * clk.period,
+		             "op %d", k);
+}
+
+Test(chip, fixed_memory_answers_after_latency_and_counts)
+{
+	eng *e = eng_create(0);
+	eng_clock clk = eng_clock_mhz(500);
+	memport m;
+	cr_assert_eq(mem_init_fixed(&m, e, clk, 20), 0);
+	mem_req r = {4096, 36, MEM_TRI, 0, 0};
+	ndone = 0;
+	mem_access(&m, &r, on_done, NULL, 0);
+	mem_req wr = {8192, 524, MEM_KD, 1, 0};
+	mem_access(&m, &wr, NULL, NULL, 0);
+	eng_run(e, ENG_FOREVER);
+	cr_assert_eq(ndone, 1);
+	cr_assert_eq(done_at[0], 20 * 2000ull);
+	cr_assert_eq(m.n.reads[MEM_TRI], 1);
+	cr_assert_eq(m.n.read_bytes[MEM_TRI], 36);
+	cr_assert_eq(m.n.writes[MEM_KD], 1);
+	cr_assert_eq(m.n.write_bytes[MEM_KD], 524);
+	mem_free(&m);
+	eng_destroy(e);
+}
+
+/* ---- whole frames ---- */
+
+static void load(world *w, const char *views, const char *vname)
+{
+	world_opts o;
+	world_opts_default(&o);
+	o.views = views;
+	o.view = vname;
+	diag d;
+	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+}
+
+static void small_cfg(saar_config *c, int size)
+{
+	cfg_defaults(c);
+	c->frame.width = c->frame.height = size;
+}
+
+/* kernel-ref's 8-bit frame and stats */
+static uint8_t *reference(const world *w, const saar_config *c, render_stats *st)
+{
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = c->frame.width;
+	ro.height = c->frame.height;
+	ro.max_depth = c->shading.max_depth;
+	framebuf fb;
+	cr_assert_eq(fb_init(&fb, ro.width, ro.height), 0);
+	diag d;
+	cr_assert_eq(render_frame(&w->m, &w->v, &ro, &fb, st, &d), 0, "%s", d.msg);
+	uint8_t *rgb = malloc((size_t)ro.width * ro.height * 3);
+	fb_to_rgb8(&fb, rgb, NULL);
+	fb_free(&fb);
+	return rgb;
+}
+
+static chip *run(const world *w, const saar_config *c)
+{
+	diag d;
+	chip *ch = chip_create(c, w, &d);
+	cr_assert(ch, "%s", d.msg);
+	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
+	return ch;
+}
+
+static void assert_same_image(const chip *ch, const uint8_t *ref, const char *what)
+{
+	int n = ch->cfg.frame.width * ch->cfg.frame.height * 3;
+	uint8_t *a = malloc((size_t)n);
+	fb_to_rgb8(&ch->fb, a, NULL);
+	img_cmp cmp = img_compare(a, ref, ch->cfg.frame.width, ch->cfg.frame.height);
+	cr_assert(cmp.identical, "%s: %llu pixels differ from kernel-ref (PSNR %.2f)", what,
+	          (unsigned long long)cmp.differing_pixels, cmp.psnr);
+	free(a);
+}
+
+/* threads_per_rtp 1, 4, 32 x rtps 1, 4: every image equals kernel-ref's
+ * (so more threads never change it), and the functional counts agree. */
+static void image_matrix(const world *w, const char *what)
+{
+	saar_config c;
+	small_cfg(&c, 128);
+	render_stats st;
+	uint8_t *ref = reference(w, &c, &st);
+	static const int threads[] = {1, 4, 32}, rtps[] = {1, 4};
+	for (int a = 0; a < 3; a++)
+		for (int b = 0; b < 2; b++) {
+			c.chip.threads_per_rtp = threads[a];
+			c.chip.rtps = rtps[b];
+			chip *ch = run(w, &c);
+			char lbl[256];
+			snprintf(lbl, sizeof lbl, "%s, %d threads x %d RTPs", what, threads[a],
+			         rtps[b]);
+			assert_same_image(ch, ref, lbl);
+			cr_assert_eq(stats_get(&ch->st, "trav.node_steps"), st.trav.node_steps,
+			             "%s", lbl);
+			cr_assert_eq(stats_get(&ch->st, "trav.leaf_visits"), st.trav.leaf_visits,
+			             "%s", lbl);
+			for (int t = 0; t < PKT_NTYPES; t++) {
+				char nm[64];
+				snprintf(nm, sizeof nm, "rays.%s", pkt_type_name(t));
+				cr_assert_eq(stats_get(&ch->st, nm), st.rays[t], "%s: %s", lbl, nm);
+			}
+			cr_assert_eq(stats_get(&ch->st, "skip.box_miss_packets"),
+			             st.box_miss_packets);
+			cr_assert_gt(chip_cycles(ch), 0);
+			chip_destroy(ch);
+		}
+	free(ref);
+}
+
+Test(chip, image_identical_embedded_any_threads_and_rtps)
+{
+	world w;
+	load(&w, NULL, NULL);
+	image_matrix(&w, "embedded");
+	world_free(&w);
+}
+
+static void view_test(const char *name)
+{
+	char views[1024];
+	SCENE_OR_SKIP(views, "views.yaml");
+	world w;
+	load(&w, views, name);
+	image_matrix(&w, name);
+	world_free(&w);
+}
+
+#define VIEW_TEST(n)                                                                               \
+	Test(chip_views, n, .timeout = 600)                                                        \
+	{                                                                                          \
+		view_test(#n);                                                                     \
+	}
+VIEW_TEST(cornell)
+VIEW_TEST(teapot)
+VIEW_TEST(dragon4)
+VIEW_TEST(dragon3)
+VIEW_TEST(dragon2)
+VIEW_TEST(bunny)
+VIEW_TEST(sponza)
+VIEW_TEST(conference)
+VIEW_TEST(robots)
+VIEW_TEST(sibenik)
+
+Test(chip_views, every_view_has_a_test)
+{
+	static const char *const covered[] = {"cornell", "teapot", "dragon4", "dragon3",
+	                                      "dragon2", "bunny",  "sponza",  "conference",
+	                                      "robots",  "sibenik"};
+	char views[1024];
+	SCENE_OR_SKIP(views, "views.yaml");
+	char names[64][VIEW_NAME_MAX];
+	diag d;
+	int n = view_list(views, names, 64, &d);
+	cr_assert_gt(n, 0, "%s", d.msg);
+	for (int k = 0; k < n; k++) {
+		int ok = 0;
+		for (size_t i = 0; i < sizeof covered / sizeof *covered; i++)
+			ok |= !strcmp(names[k], covered[i]);
+		cr_assert(ok, "view %s of views.yaml has no chip test", names[k]);
+	}
+}
+
+Test(chip, stack_overflow_spills_and_keeps_the_image)
+{
+	world w;
+	load(&w, NULL, NULL);
+	saar_config c;
+	small_cfg(&c, 64);
+	c.chip.stack_depth = 2; /* below the tree depth: cfg_validate would refuse it */
+	c.chip.rtps = c.chip.threads_per_rtp = 1; /* nothing hides the refill latency */
+	render_stats st;
+	uint8_t *ref = reference(&w, &c, &st);
+	chip *ch = run(&w, &c);
+	assert_same_image(ch, ref, "stack depth 2");
+	uint64_t ov = stats_get(&ch->st, "trav.stack_overflows");
+	cr_assert_gt(ov, 0, "no overflow with a 2-entry stack");
+	cr_assert_gt(stats_get(&ch->st, "trav.stack_refills"), 0);
+	cr_assert_eq(stats_get(&ch->st, "mem.kd.writes"), ov);
+	cr_assert_eq(stats_get(&ch->st, "mem.kd.write_bytes"), ov * THR_STACK_ENTRY_BYTES);
+	/* a deep stack never spills, and refills cost time a single thread cannot hide */
+	c.chip.stack_depth = 64;
+	chip *deep = run(&w, &c);
+	cr_assert_eq(stats_get(&deep->st, "trav.stack_overflows"), 0);
+	cr_assert_gt(chip_cycles(ch), chip_cycles(deep));
+	chip_destroy(deep);
+	chip_destroy(ch);
+	free(ref);
+	world_free(&w);
+}
+
+Test(chip, deterministic_cycles_and_counters)
+{
+	world w;
+	load(&w, NULL, NULL);
+	saar_config c;
+	small_cfg(&c, 96);
+	c.chip.thread_sched = CFG_SCHED_OLDEST_FIRST;
+	c.chip.tile_order = CFG_TILES_MORTON;
+	c.frame.frames = 2;
+	chip *a = run(&w, &c), *b = run(&w, &c);
+	cr_assert_eq(a->frame_cycles[0], b->frame_cycles[0]);
+	cr_assert_eq(a->frame_cycles[1], b->frame_cycles[1]);
+	cr_assert_eq(a->st.n, b->st.n);
+	for (size_t i = 0; i < a->st.n; i++)
+		cr_assert_eq(*a->st.e[i].value, *b->st.e[i].value, "%s", a->st.e[i].name);
+	chip_destroy(a);
+	chip_destroy(b);
+	world_free(&w);
+}
+
+Test(chip, units_and_threads_account_for_all_time)
+{
+	world w;
+	load(&w, NULL, NULL);
+	saar_config c;
+	small_cfg(&c, 64);
+	c.chip.masked_packets = false;
+	chip *ch = run(&w, &c);
+	uint64_t cyc = chip_cycles(ch), tot = 0;
+	const char *st[] = {"threads.idle_ps", "threads.running_ps", "threads.waiting_memory_ps",
+	                    "threads.waiting_unit_ps"};
+	for (int s = 0; s < 4; s++)
+		tot += chip_rtp_sum(ch, st[s]);
+	cr_assert_eq(tot, cyc * ch->clk.period * (uint64_t)(ch->nrtp * ch->tpr));
+	/* one trav op per kd step, one isect op per triangle test */
+	cr_assert_eq(chip_rtp_sum(ch, "trav.ops"), stats_get(&ch->st, "trav.node_steps"));
+	cr_assert_eq(chip_rtp_sum(ch, "isect.ops"), stats_get(&ch->st, "isect.tri_tests"));
+	cr_assert_eq(stats_get(&ch->st, "mem.kd.reads"), stats_get(&ch->st, "trav.node_steps"));
+	cr_assert_eq(stats_get(&ch->st, "mem.tri.reads"), stats_get(&ch->st, "isect.tri_tests"));
+	cr_assert_leq(chip_rtp_sum(ch, "trav.busy_cycles"), cyc * (uint64_t)ch->nrtp);
+	chip_destroy(ch);
+	world_free(&w);
+}

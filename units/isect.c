@@ -1,0 +1,42 @@
+/*
+ * isect.c: the intersection unit (see isect.h).
+ */
+#include "isect.h"
+
+#include "traversal.h"
+
+static void done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	thr_ctx *t = ctx;
+	thr_env *v = t->env;
+	packet *p = t->p;
+	uint32_t ta = mimg_lists(v->m)[t->r.leaf_first + t->k];
+	++*v->c[C_TRI_TESTS];
+	*v->c[C_RAY_TRI_TESTS] += (uint64_t)thr_pop(t->mask);
+	pkt_isect_tri(&t->ts, p, v->m, t->mask, ta);
+	if (t->ts.shadow)
+		for (uint64_t b = t->mask; b; b &= b - 1) {
+			int i = __builtin_ctzll(b);
+			if (p->tri[i] != PKT_NOHIT)
+				t->mask &= ~(1ull << i);
+		}
+	t->k++;
+	isu_next(t);
+}
+
+static void fetched(thr_ctx *t)
+{
+	thr_use(t, UNIT_ISECT, thr_pop(t->mask), done);
+}
+
+void isu_next(thr_ctx *t)
+{
+	if (t->k >= t->r.leaf_count || !t->mask) {
+		tu_step(t);
+		return;
+	}
+	thr_read(t, MEM_TRI, mimg_lists(t->env->m)[t->r.leaf_first + t->k], MIMG_TRI_BYTES);
+	thr_wait_mem(t, fetched);
+}

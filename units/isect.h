@@ -1,0 +1,20 @@
+/*
+ * isect.h: the intersection unit (SaarCOR seed 002 §4.1: "the intersection
+ * unit then loads the data of a triangle and performs the intersection
+ * computation").
+ *
+ * One operation per triangle of a leaf, in list order: the 36-byte triangle
+ * record through the TRI port, then ceil(rays/width) issue cycles + latency;
+ * at completion pkt_isect_tri() (kernel-ref's watertight test) updates the
+ * packet. Shadow packets drop occluded rays after each triangle and stop
+ * testing the leaf once none is left, exactly as pkt_trace does.
+ */
+#ifndef SAAR_UNITS_ISECT_H
+#define SAAR_UNITS_ISECT_H
+
+#include "thread.h"
+
+/* Tests the next triangle of the current leaf, or resumes traversal. */
+void isu_next(thr_ctx *t);
+
+#endif

@@ -1,0 +1,18 @@
+/*
+ * list.h: the list unit (SaarCOR seed 002 §4.1: "leaf-nodes store lists of
+ * triangle addresses, which are then fetched by the list unit").
+ *
+ * One operation per non-empty leaf: the leaf's entries (4 bytes each, one
+ * contiguous request through the LIST port), then ceil(rays/width) issue
+ * cycles + latency; the intersection unit then tests the entries in list
+ * order. An empty leaf goes straight back to traversal (counted).
+ */
+#ifndef SAAR_UNITS_LIST_H
+#define SAAR_UNITS_LIST_H
+
+#include "thread.h"
+
+/* The thread's last traversal step reached a leaf (t->r). */
+void list_leaf(thr_ctx *t);
+
+#endif

@@ -1,0 +1,163 @@
+/*
+ * rgs.c: ray generation and shading (see rgs.h).
+ */
+#include "rgs.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "traversal.h"
+
+static void enter(thr_ctx *t, packet *p)
+{
+	thr_env *v = t->env;
+	t->p = p;
+	t->age = v->next_age++;
+	++*v->c[C_PKT_PRIMARY + p->type];
+	*v->c[C_RAYS_PRIMARY + p->type] += thr_rays(p);
+}
+
+static void gen_done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	tu_begin(ctx);
+}
+
+int rgs_primary(thr_ctx *t, int tx, int ty)
+{
+	packet *p = thr_pkt_alloc(t->env);
+	if (!p)
+		return -1;
+	cam_primary_packet(&t->env->cam, tx, ty, p);
+	enter(t, p);
+	thr_use(t, UNIT_RGS, (int)thr_rays(p), gen_done);
+	return 0;
+}
+
+void rgs_secondary(thr_ctx *t, packet *p)
+{
+	enter(t, p);
+	tu_begin(t);
+}
+
+static void shadow_done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	thr_release(ctx);
+}
+
+static int enqueue(thr_rtp *r, packet *p)
+{
+	if (r->qn == r->qcap) {
+		int cap = r->qcap ? 2 * r->qcap : 64;
+		packet **q = malloc((size_t)cap * sizeof *q);
+		if (!q)
+			return -1;
+		for (int i = 0; i < r->qn; i++)
+			q[i] = r->q[(r->qhead + i) % r->qcap];
+		free(r->q);
+		r->q = q;
+		r->qhead = 0;
+		r->qcap = cap;
+	}
+	r->q[(r->qhead + r->qn++) % r->qcap] = p;
+	thr_env *v = r->env;
+	if ((uint64_t)r->qn > *v->c[C_MAX_QUEUE])
+		*v->c[C_MAX_QUEUE] = (uint64_t)r->qn;
+	return 0;
+}
+
+packet *rgs_dequeue(thr_rtp *r)
+{
+	if (r->qn == 0)
+		return NULL;
+	packet *p = r->q[r->qhead];
+	r->qhead = (r->qhead + 1) % r->qcap;
+	r->qn--;
+	return p;
+}
+
+void rgs_dispatch(thr_rtp *r)
+{
+	for (int i = 0; i < r->nt && r->qn > 0 && r->nidle > 0; i++)
+		if (r->t[i].state == THR_IDLE)
+			r->env->on_free(&r->t[i]);
+}
+
+static void shade_done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	thr_ctx *t = ctx;
+	thr_env *v = t->env;
+	thr_rtp *r = t->rtp;
+	for (int k = 0; k < t->made; k++) {
+		packet *p = thr_pkt_alloc(v);
+		/* out of memory: the packet is lost and the image check says so */
+		if (!p || enqueue(r, p)) {
+			if (p)
+				thr_pkt_free(v, p);
+			continue;
+		}
+		memcpy(p, &t->kids[k], sizeof *p);
+		++*v->c[C_SPAWNED];
+	}
+	if (r->qn > 0)
+		*v->c[C_QUEUED] += (uint64_t)r->qn;
+	thr_release(t);
+	rgs_dispatch(r);
+}
+
+static void shade_fetched(thr_ctx *t)
+{
+	thr_use(t, UNIT_RGS, (int)thr_rays(t->p), shade_done);
+}
+
+/* Issues the packet's logged reads, one request per distinct (addr, bytes). */
+static void issue_reads(thr_ctx *t)
+{
+	thr_env *v = t->env;
+	const shade_log *log = &v->log;
+	const uint32_t mask = THR_HASH_SLOTS - 1;
+	if (++v->gen == 0) { /* wrapped: forget all stamps */
+		memset(v->hgen, 0, THR_HASH_SLOTS * sizeof *v->hgen);
+		v->gen = 1;
+	}
+	*v->c[C_SHADE_READS] += log->n;
+	for (uint32_t i = 0; i < log->n; i++) {
+		const shade_read *rd = &log->e[i];
+		uint64_t key = rd->addr << 8 | (rd->bytes & 0xff);
+		uint32_t h = (uint32_t)((key * 0x9E3779B97F4A7C15ull) >> 40) & mask;
+		int dup = 0;
+		while (v->hgen[h] == v->gen) {
+			if (v->hkey[h] == key) {
+				dup = 1;
+				break;
+			}
+			h = (h + 1) & mask;
+		}
+		if (dup)
+			continue;
+		v->hgen[h] = v->gen;
+		v->hkey[h] = key;
+		++*v->c[C_SHADE_REQUESTS];
+		thr_read(t, MEM_SHADE, rd->addr, rd->bytes);
+	}
+}
+
+void rgs_finish(thr_ctx *t)
+{
+	thr_env *v = t->env;
+	packet *p = t->p;
+	if (p->type == PKT_SHADOW) {
+		shade_shadow_done(&v->sc, p, &v->sh);
+		thr_use(t, UNIT_RGS, (int)thr_rays(p), shadow_done);
+		return;
+	}
+	v->log.n = 0;
+	t->made = shade_packet(&v->sc, p, t->kids, t->nkids, &v->log, &v->sh);
+	issue_reads(t);
+	thr_wait_mem(t, shade_fetched);
+}

@@ -1,0 +1,38 @@
+/*
+ * rgs.h: the ray-generation and shading unit, one per RTP (SaarCOR seed
+ * 002 §4.1, §4.3).
+ *
+ * Three jobs, each one RGS operation (ceil(rays/width) issue cycles +
+ * latency):
+ *  - primary rays: cam_primary_packet for a tile the RGC handed out, then
+ *    the packet enters the ray-tracing core;
+ *  - shading a traced primary/reflection/refraction packet: shade_packet()
+ *    (kernel-ref) adds each ray's direct terms into the frame buffer and
+ *    makes the child packets (one shadow packet per light, reflection,
+ *    refraction); every scene read it logged goes through the SHADE memory
+ *    port first, identical (address, size) reads of one packet coalesced
+ *    into one request (a packet shares its data: seed 002 §4.1);
+ *  - finishing a shadow packet: shade_shadow_done() adds the unoccluded
+ *    rays' contributions.
+ * Child packets are self-contained; they queue per RTP (FIFO) for a thread
+ * slot, and a freed thread takes a queued packet before a new tile.
+ * Frame-buffer adds go to the on-board frame buffer, not through memory.
+ */
+#ifndef SAAR_UNITS_RGS_H
+#define SAAR_UNITS_RGS_H
+
+#include "thread.h"
+
+/* Generates the primary packet of tile (tx, ty) on thread t; -1 if out of
+ * memory. */
+int rgs_primary(thr_ctx *t, int tx, int ty);
+/* Starts thread t on a queued secondary packet. */
+void rgs_secondary(thr_ctx *t, packet *p);
+/* Traversal is over: shade (or finish the shadow packet), then free t. */
+void rgs_finish(thr_ctx *t);
+/* Queued secondary packets of t's RTP, and taking the oldest one. */
+packet *rgs_dequeue(thr_rtp *r);
+/* Gives queued packets to idle threads of RTP r. */
+void rgs_dispatch(thr_rtp *r);
+
+#endif

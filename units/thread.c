@@ -1,0 +1,286 @@
+/*
+ * thread.c: pipelined units with waiting queues, thread state accounting,
+ * memory waits and the packet pool (see thread.h).
+ */
+#include "thread.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* ======================== pipelined units ======================== */
+
+int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int masked, int sched,
+                  int max_waiters)
+{
+	memset(u, 0, sizeof *u);
+	u->e = e;
+	u->clk = clk;
+	u->count = cfg->count > 0 ? cfg->count : 1;
+	u->width = cfg->width > 0 ? cfg->width : 1;
+	u->latency = cfg->latency > 0 ? cfg->latency : 0;
+	u->masked = masked;
+	u->sched = sched;
+	u->maxw = max_waiters;
+	u->rr = max_waiters - 1;
+	u->ops_n = &u->own[0];
+	u->busy = &u->own[1];
+	u->rays = &u->own[2];
+	u->free_at = calloc((size_t)u->count, sizeof *u->free_at);
+	u->ops = calloc((size_t)max_waiters, sizeof *u->ops);
+	u->wait = calloc((size_t)max_waiters, sizeof *u->wait);
+	return u->free_at && u->ops && u->wait ? 0 : -1;
+}
+
+void thr_unit_free(thr_unit *u)
+{
+	free(u->free_at);
+	free(u->ops);
+	free(u->wait);
+	memset(u, 0, sizeof *u);
+}
+
+uint64_t thr_unit_issue(const thr_unit *u, int rays)
+{
+	int r = u->masked ? PKT_RAYS : rays;
+	uint64_t c = ((uint64_t)r + (uint64_t)u->width - 1) / (uint64_t)u->width;
+	return c ? c : 1;
+}
+
+static void start(thr_unit *u, int inst, const thr_op *op)
+{
+	uint64_t t0 = eng_next_edge(u->clk, eng_now(u->e));
+	uint64_t issue = thr_unit_issue(u, op->rays);
+	u->free_at[inst] = t0 + eng_cycles_to_ticks(u->clk, issue);
+	++*u->ops_n;
+	*u->busy += issue;
+	*u->rays += (uint64_t)op->rays;
+	if (u->on_start)
+		u->on_start(op->ctx, op->arg);
+	eng_schedule(u->e, t0 + eng_cycles_to_ticks(u->clk, issue + (uint64_t)u->latency), op->done,
+	             op->ctx, op->arg);
+}
+
+/* The instance free earliest; *when = its free tick. */
+static int first_free(const thr_unit *u, uint64_t *when)
+{
+	int best = 0;
+	for (int i = 1; i < u->count; i++)
+		if (u->free_at[i] < u->free_at[best])
+			best = i;
+	*when = u->free_at[best];
+	return best;
+}
+
+static void wake(eng *e, void *ctx, uint64_t arg);
+
+static void arm(thr_unit *u)
+{
+	uint64_t when;
+	first_free(u, &when);
+	uint64_t now = eng_now(u->e);
+	u->wake_pending = 1;
+	eng_schedule(u->e, when > now ? when : now, wake, u, 0);
+}
+
+/* Index into u->wait of the waiter the policy serves next. */
+static int pick(const thr_unit *u)
+{
+	int best = 0;
+	if (u->sched == CFG_SCHED_OLDEST_FIRST) {
+		for (int i = 1; i < u->nwait; i++) {
+			const thr_op *a = &u->ops[u->wait[i]], *b = &u->ops[u->wait[best]];
+			if (a->age < b->age || (a->age == b->age && u->wait[i] < u->wait[best]))
+				best = i;
+		}
+		return best;
+	}
+	/* round robin: the first id after the one served last */
+	int bd = u->maxw + 1;
+	for (int i = 0; i < u->nwait; i++) {
+		int d = (u->wait[i] - u->rr - 1 + 2 * u->maxw) % u->maxw;
+		if (d < bd) {
+			bd = d;
+			best = i;
+		}
+	}
+	return best;
+}
+
+static void wake(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	thr_unit *u = ctx;
+	u->wake_pending = 0;
+	uint64_t now = eng_now(u->e), when;
+	while (u->nwait > 0) {
+		int inst = first_free(u, &when);
+		if (when > now)
+			break;
+		int k = pick(u);
+		int id = u->wait[k];
+		u->wait[k] = u->wait[--u->nwait];
+		u->rr = id;
+		thr_op op = u->ops[id];
+		start(u, inst, &op);
+	}
+	if (u->nwait > 0)
+		arm(u);
+}
+
+void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler done, void *ctx,
+                      uint64_t arg)
+{
+	thr_op op = {age, rays, done, ctx, arg};
+	if (u->nwait == 0) {
+		uint64_t when;
+		int inst = first_free(u, &when);
+		if (when <= eng_now(u->e)) {
+			u->rr = id;
+			start(u, inst, &op);
+			return;
+		}
+	}
+	u->ops[id] = op;
+	u->wait[u->nwait++] = id;
+	if (!u->wake_pending)
+		arm(u);
+}
+
+/* ======================== environment ======================== */
+
+#define POOL_CHUNK 64
+
+int thr_env_init(thr_env *v)
+{
+	memset(v, 0, sizeof *v);
+	v->log.cap = SHADE_LOG_CAP;
+	v->log.e = malloc(SHADE_LOG_CAP * sizeof *v->log.e);
+	v->hkey = malloc(THR_HASH_SLOTS * sizeof *v->hkey);
+	v->hgen = calloc(THR_HASH_SLOTS, sizeof *v->hgen);
+	return v->log.e && v->hkey && v->hgen ? 0 : -1;
+}
+
+void thr_env_free(thr_env *v)
+{
+	for (int i = 0; i < v->nchunks; i++)
+		free(v->chunks[i]);
+	free(v->chunks);
+	free(v->freel);
+	free(v->log.e);
+	free(v->hkey);
+	free(v->hgen);
+	memset(v, 0, sizeof *v);
+}
+
+packet *thr_pkt_alloc(thr_env *v)
+{
+	if (v->nfree == 0) {
+		packet **ch = realloc(v->chunks, (size_t)(v->nchunks + 1) * sizeof *ch);
+		if (!ch)
+			return NULL;
+		v->chunks = ch;
+		void *mem = NULL;
+		if (posix_memalign(&mem, 64, POOL_CHUNK * sizeof(packet)))
+			return NULL;
+		packet *blk = mem;
+		ch[v->nchunks++] = blk;
+		if (v->capfree < v->nchunks * POOL_CHUNK) {
+			int cap = v->nchunks * POOL_CHUNK * 2;
+			packet **fl = realloc(v->freel, (size_t)cap * sizeof *fl);
+			if (!fl)
+				return NULL;
+			v->freel = fl;
+			v->capfree = cap;
+		}
+		for (int i = POOL_CHUNK - 1; i >= 0; i--)
+			v->freel[v->nfree++] = &blk[i];
+	}
+	return v->freel[--v->nfree];
+}
+
+void thr_pkt_free(thr_env *v, packet *p)
+{
+	v->freel[v->nfree++] = p;
+}
+
+/* ======================== threads ======================== */
+
+void thr_flush(thr_ctx *t)
+{
+	uint64_t now = eng_now(t->env->e);
+	*t->rtp->occ[t->state] += now - t->since;
+	t->since = now;
+}
+
+void thr_set(thr_ctx *t, int state)
+{
+	if (state == t->state)
+		return;
+	thr_flush(t);
+	if (t->state == THR_IDLE)
+		t->rtp->nidle--;
+	if (state == THR_IDLE)
+		t->rtp->nidle++;
+	t->state = state;
+}
+
+static void mem_done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	thr_ctx *t = ctx;
+	if (--t->pending == 0 && t->cont) {
+		void (*c)(thr_ctx *) = t->cont;
+		t->cont = NULL;
+		c(t);
+	}
+}
+
+void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
+{
+	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id};
+	t->pending++;
+	mem_access(t->env->mem, &r, mem_done, t, 0);
+}
+
+void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
+{
+	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id};
+	mem_access(t->env->mem, &r, NULL, NULL, 0);
+}
+
+void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
+{
+	if (t->pending == 0) {
+		cont(t);
+		return;
+	}
+	t->cont = cont;
+	thr_set(t, THR_WAIT_MEM);
+}
+
+void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
+{
+	thr_set(t, THR_WAIT_UNIT);
+	thr_unit_request(&t->rtp->u[kind], t->id, t->age, rays, done, t, 0);
+}
+
+void thr_release(thr_ctx *t)
+{
+	thr_pkt_free(t->env, t->p);
+	t->p = NULL;
+	thr_set(t, THR_IDLE);
+	t->env->on_free(t);
+}
+
+uint64_t thr_rays(const packet *p)
+{
+	return (uint64_t)thr_pop(p->valid);
+}
+
+void thr_on_start(void *ctx, uint64_t arg)
+{
+	(void)arg;
+	thr_set(ctx, THR_RUN);
+}

@@ -1,0 +1,199 @@
+/*
+ * thread.h: thread contexts, pipelined units and how threads share them.
+ *
+ * A thread is one packet in flight on one RTP (SaarCOR seed 002 §4.4: "each
+ * packet of rays forms a thread"): the packet, its traversal state and
+ * stack, where it is in its life (ray generation, traversal, list,
+ * intersection, shading) and what it is doing right now (enum thr_state).
+ * A thread has at most one thing outstanding: memory reads, or one
+ * operation queued at or running in a unit. While it waits, other threads
+ * use the units: that is all the latency hiding there is.
+ *
+ * A unit kind of one RTP (thr_unit) is `count` identical pipelined units
+ * with issue width `width` rays/cycle and latency `latency` cycles. An op of
+ * r rays (r = 64 when chip.masked_packets, else the active rays) issues for
+ * ceil(r / width) cycles and completes `latency` cycles after its issue
+ * cycles end: done = start + issue + latency. The unit accepts the next op
+ * when the issue cycles end (pipelined). When every instance is busy the
+ * request waits; when one frees, the pick policy (round robin over thread
+ * ids, or oldest packet first) chooses among the waiting threads. All of it
+ * is events: an idle unit schedules nothing.
+ *
+ * Timing lives here and in the unit files; the functional work is done by
+ * kernel-ref calls (packet.h, shade.h) in exactly kernel-ref's order.
+ */
+#ifndef SAAR_UNITS_THREAD_H
+#define SAAR_UNITS_THREAD_H
+
+#include <stdint.h>
+
+#include "camera.h"
+#include "config.h"
+#include "engine.h"
+#include "memport.h"
+#include "packet.h"
+#include "shade.h"
+
+enum thr_state { THR_IDLE, THR_RUN, THR_WAIT_MEM, THR_WAIT_UNIT, THR_NSTATES };
+enum unit_kind { UNIT_RGS, UNIT_TRAV, UNIT_LIST, UNIT_ISECT, UNIT_NKINDS };
+
+/* Bytes of one hardware traversal stack entry: node index (4), ray mask
+ * (8), per-ray entry and exit distance (64 x 2 x 4). Spills move this much. */
+#define THR_STACK_ENTRY_BYTES 524u
+#define THR_SPILL_STRIDE      1024u
+#define THR_HASH_SLOTS        2048u /* shading read de-duplication, > 2 x SHADE_LOG_CAP */
+
+/* ---- pipelined units ---- */
+
+typedef struct thr_op {
+	uint64_t age;
+	int rays;
+	eng_handler done;
+	void *ctx;
+	uint64_t arg;
+} thr_op;
+
+typedef struct thr_unit {
+	eng *e;
+	eng_clock clk;
+	int count, width, latency, masked, sched;
+	uint64_t *free_at; /* per instance: tick it accepts the next op */
+	thr_op *ops;       /* per requester id: its waiting op */
+	int *wait, nwait, maxw;
+	int rr; /* round robin: id served last */
+	int wake_pending;
+	/* called when an op issues (the requester stops waiting) */
+	void (*on_start)(void *ctx, uint64_t arg);
+	uint64_t *ops_n, *busy, *rays; /* counters; point at own[] if unregistered */
+	uint64_t own[3];
+} thr_unit;
+
+/* count/width/latency from cfg; masked: charge 64 rays per op; sched: enum
+ * cfg_thread_sched; max_waiters: requester ids are 0..max_waiters-1. */
+int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int masked, int sched,
+                  int max_waiters);
+void thr_unit_free(thr_unit *u);
+/* Issue cycles of an op with `rays` active rays. */
+uint64_t thr_unit_issue(const thr_unit *u, int rays);
+/* Requests one op for requester id (at most one outstanding per id). done
+ * runs at issue start + issue cycles + latency. */
+void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler done, void *ctx,
+                      uint64_t arg);
+
+/* ---- chip-wide environment shared by the units ---- */
+
+/* Counters every unit file may bump (registered by the chip, sim/chip.c). */
+enum thr_counter {
+	C_PKT_PRIMARY, /* + type: packets entering a thread, by packet type */
+	C_RAYS_PRIMARY = C_PKT_PRIMARY + PKT_NTYPES,
+	C_BOX_MISS_PACKETS = C_RAYS_PRIMARY + PKT_NTYPES,
+	C_BOX_MISS_RAYS,
+	C_NODE_STEPS,
+	C_LEAF_VISITS,
+	C_EMPTY_LEAVES,
+	C_LIST_ENTRIES,
+	C_TRI_TESTS,
+	C_RAY_TRI_TESTS,
+	C_STACK_OVERFLOWS,
+	C_STACK_REFILLS,
+	C_MAX_SP,
+	C_SHADE_READS,
+	C_SHADE_REQUESTS,
+	C_SPAWNED,
+	C_QUEUED,
+	C_MAX_QUEUE,
+	C_NCOUNTERS
+};
+
+struct thr_ctx;
+struct thr_rtp;
+
+typedef struct thr_env {
+	eng *e;
+	eng_clock clk;
+	memport *mem;
+	const mimg *m;
+	shade_ctx sc;
+	cam_frame cam;
+	int stack_depth, masked, nlights;
+	uint64_t spill_base;
+	uint64_t next_age;
+	uint64_t *c[C_NCOUNTERS];
+	shade_counts sh;
+	/* a thread became free: give it work (set by the chip) */
+	void (*on_free)(struct thr_ctx *t);
+	void *owner;
+	/* packet pool: chunks, free list */
+	packet **chunks;
+	int nchunks;
+	packet **freel;
+	int nfree, capfree;
+	/* shading scratch: the read log and a de-duplication table */
+	shade_log log;
+	uint64_t *hkey;
+	uint32_t *hgen, gen;
+} thr_env;
+
+int thr_env_init(thr_env *v);
+void thr_env_free(thr_env *v);
+packet *thr_pkt_alloc(thr_env *v); /* NULL when out of memory */
+void thr_pkt_free(thr_env *v, packet *p);
+
+/* ---- threads ---- */
+
+typedef struct thr_ctx {
+	trav_state ts;
+	trav_result r;
+	struct thr_rtp *rtp;
+	thr_env *env;
+	int id, gid; /* index in the RTP, and chip-wide */
+	int state;
+	uint64_t since; /* tick of the last state change */
+	packet *p;
+	uint64_t age;      /* packet sequence number: smaller = older */
+	trav_entry *stack; /* functional stack (PKT_STACK_MAX entries) */
+	int sp;            /* stack depth after the last step */
+	uint64_t mask;     /* intersection: rays still testing this leaf */
+	uint32_t k;        /* intersection: next leaf entry */
+	int pending;       /* outstanding memory reads */
+	void (*cont)(struct thr_ctx *t);
+	packet *kids; /* shade_packet's output */
+	int nkids, made;
+} thr_ctx;
+
+typedef struct thr_rtp {
+	thr_env *env;
+	int id;
+	thr_unit u[UNIT_NKINDS];
+	thr_ctx *t;
+	int nt, nidle;
+	/* secondary packets waiting for a thread slot (FIFO ring) */
+	packet **q;
+	int qhead, qn, qcap;
+	uint64_t *occ[THR_NSTATES]; /* ticks spent in each state, summed over threads */
+} thr_rtp;
+
+void thr_set(thr_ctx *t, int state);
+/* Adds the time since the last change to the occupancy counters. */
+void thr_flush(thr_ctx *t);
+/* Issues a read for the thread; thr_wait_mem continues when all are in. */
+void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes);
+/* A posted write (stack spill). */
+void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes);
+/* Calls cont(t) once every read issued so far has arrived (at once if none). */
+void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t));
+/* Queues an op of the thread's `rays` rays at unit kind `kind`. */
+void thr_use(thr_ctx *t, int kind, int rays, eng_handler done);
+/* The packet is done: back to the pool; the thread is free for new work. */
+void thr_release(thr_ctx *t);
+/* The valid rays of a packet. */
+uint64_t thr_rays(const packet *p);
+/* thr_unit.on_start for units used by threads: the thread runs. */
+void thr_on_start(void *ctx, uint64_t arg);
+
+static inline int thr_pop(uint64_t m)
+{
+	return __builtin_popcountll(m);
+}
+
+#endif
