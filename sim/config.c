@@ -21,7 +21,11 @@
 
 static const char *const thread_sched_names[] = {"round_robin", "oldest_first", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
-static const char *const mem_model_names[] = {"fixed", NULL};
+static const char *const mem_model_names[] = {"fixed", "hierarchy", NULL};
+static const char *const memif_policy_names[] = {"fifo", "round_robin", NULL};
+static const char *const addr_hash_names[] = {"xor_fold", "none", NULL};
+static const char *const sdram_mapping_names[] = {"row:bank:col", "bank:row:col", NULL};
+static const char *const hostbus_preset_names[] = {"pci", "pci66", "agp", NULL};
 static const char *const fidelity_names[] = {"cycle", NULL};
 
 #define FIELD(f) .off = offsetof(saar_config, f), .size = sizeof(((saar_config *)0)->f)
@@ -45,6 +49,29 @@ static const char *const fidelity_names[] = {"cycle", NULL};
 	{INT("chip." #u ".latency", chip.u.latency, l, 1, 10000, "core cycles"),                   \
 	 .source = "pipeline depth not published; a few cycles per stage group",                   \
 	 .desc = "pipeline latency of one " what " unit"}
+/* One first-level cache: sizes and line sizes are published (seed 002 §4.1,
+ * §4.7); the timing-side parameters are ours. */
+#define L1(c, what, kb)                                                                            \
+	{INT("memory.l1." #c ".size_kb", memory.l1.c.size_kb, kb, 1, 1048576, "KB"), PUB "§4.7",   \
+	 .desc = "capacity of the " what " cache"},                                                \
+	{INT("memory.l1." #c ".ways", memory.l1.c.ways, 4, 1, 64, ""),                             \
+	 PUB "§4.7 (L1 caches are 4-way)", .desc = "associativity of the " what " cache (LRU)"},   \
+	{INT("memory.l1." #c ".line", memory.l1.c.line, L1LINE_##c, 1, 4096, "bytes"),             \
+	 PUB "§4.1 (8 B kd-nodes, 36 B triangles, 8 B shading/lists: 64-bit bus)",                \
+	 .desc = "line size of the " what " cache; any size (36 need not be a power of two)"},     \
+	{INT("memory.l1." #c ".hit_latency", memory.l1.c.hit_latency, 2, 1, 1000, "core cycles"),  \
+	 .source = "not published; a small pipelined SRAM",                                        \
+	 .desc = "cycles from access to data for a hit in the " what " cache"},                   \
+	{INT("memory.l1." #c ".ports", memory.l1.c.ports, 4, 1, 64, "accesses/cycle"),             \
+	 .source = "not published; one port per RTP of the standard chip",                         \
+	 .desc = "accesses the " what " cache accepts per core cycle (all RTPs together)"},        \
+	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, 16, 1, 4096, "lines"),                   \
+	 .source = "not published; one per thread of an RTP",                                      \
+	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"}
+#define L1LINE_shade 8
+#define L1LINE_kd    8
+#define L1LINE_list  8
+#define L1LINE_tri   36
 /* clang-format on */
 
 static const cfg_key keys[] = {
@@ -102,11 +129,79 @@ static const cfg_key keys[] = {
     {FLT("kdtree.empty_bonus", kdtree.empty_bonus, 0.2, 0, 0.99, ""),
      .source = "kernel-ref kd_params_default", .desc = "SAH discount for cutting off empty space"},
     {ENUM("memory.model", memory.model, mem_model_names),
-     .source = "placeholder until the cache/SDRAM model exists",
-     .desc = "memory model: fixed = every access takes memory.latency"},
+     .source = "fixed is the default until the chip model switches to hierarchy",
+     .desc = "memory model: fixed = every access takes memory.latency; hierarchy = L1 "
+             "caches, memory interface, SDRAM (and the VMA if memory.vma.enabled)"},
     {INT("memory.latency", memory.latency, 20, 0, 100000, "core cycles"),
      .source = "placeholder; an L1 hit plus some misses",
      .desc = "latency of every memory access in the fixed model"},
+    L1(shade, "shading (RGS)", 64),
+    L1(kd, "kd-node (traversal)", 64),
+    L1(list, "triangle-address list", 64),
+    L1(tri, "triangle (intersection)", 144),
+    {INT("memory.sdram.mb", memory.sdram.mb, 64, 1, 65536, "MB"), PUB "§4.7",
+     .desc = "on-board SDRAM; without VMA the whole memory image must fit"},
+    {FLT("memory.sdram.clock_mhz", memory.sdram.clock_mhz, 133, 1, 10000, "MHz"), PUB "§4.7",
+     .desc = "SDRAM clock (its own clock domain)"},
+    {INT("memory.sdram.bus_bits", memory.sdram.bus_bits, 128, 8, 4096, "bits"), PUB "§4.7",
+     .desc = "SDRAM data bus width; one beat per SDRAM cycle (128 bit x 133 MHz = 2 GB/s)"},
+    {INT("memory.sdram.banks", memory.sdram.banks, 4, 1, 64, ""),
+     .source = "not published; PC133 SDRAM devices have 4 internal banks",
+     .desc = "independent banks, each with one open row (power of two)"},
+    {INT("memory.sdram.row_bytes", memory.sdram.row_bytes, 8192, 16, 1048576, "bytes"),
+     .source = "not published; 512 columns x 16 bytes across the 128-bit bus",
+     .desc = "bytes of one row of one bank across the whole bus (power of two)"},
+    {INT("memory.sdram.cl", memory.sdram.cl, 3, 1, 100, "SDRAM cycles"),
+     .source = "not published; PC133 CL3", .desc = "CAS latency: read command to first data"},
+    {INT("memory.sdram.trcd", memory.sdram.trcd, 3, 1, 100, "SDRAM cycles"),
+     .source = "not published; PC133 (20 ns)", .desc = "ACTIVATE to READ/WRITE"},
+    {INT("memory.sdram.trp", memory.sdram.trp, 3, 1, 100, "SDRAM cycles"),
+     .source = "not published; PC133 (20 ns)", .desc = "PRECHARGE to ACTIVATE"},
+    {INT("memory.sdram.tras", memory.sdram.tras, 6, 1, 100, "SDRAM cycles"),
+     .source = "not published; PC133 (45 ns)", .desc = "ACTIVATE to PRECHARGE, at least"},
+    {INT("memory.sdram.burst", memory.sdram.burst, 1, 1, 256, "beats"),
+     .source = "not published; SDR burst length is programmable and L1 lines are 1-3 beats",
+     .desc = "beats per column command; transfers round up to whole bursts"},
+    {ENUM("memory.sdram.mapping", memory.sdram.mapping, sdram_mapping_names),
+     .source = "not published; consecutive rows interleave over the banks",
+     .desc = "address bits from most to least significant: row:bank:col or bank:row:col"},
+    {ENUM("memory.memif.policy", memory.memif.policy, memif_policy_names),
+     .source = "not published; the simplest arbitration",
+     .desc = "memory interface arbitration of the L1 miss streams (and VMA meta-data and "
+             "host fills): fifo = oldest first; round_robin = by requester"},
+    {BOOL("memory.vma.enabled", memory.vma.enabled, 0), PUB "§4.2, Table 5 (std. SaarCOR)",
+     .desc = "the virtual memory architecture: on-board SDRAM caches host memory"},
+    {INT("memory.vma.ways", memory.vma.ways, 4, 1, 64, ""), PUB "§4.2",
+     .desc = "associativity of the on-board L2 cache"},
+    {INT("memory.vma.line", memory.vma.line, 128, 8, 65536, "bytes"), PUB "§4.2",
+     .desc = "L2 line size; the unit of DMA over the host bus"},
+    {ENUM("memory.vma.hash", memory.vma.hash, addr_hash_names),
+     .source = "§4.2 says address hashing is used (published); the function is assumed",
+     .desc = "L2 set selection: xor_fold = line index XOR-folded onto the set bits; none = "
+             "line index mod sets"},
+    {INT("memory.vma.tag_cache_kb", memory.vma.tag_cache_kb, 64, 1, 1048576, "KB"),
+     PUB "§4.7 (64 KB for L2-cache meta data)", .desc = "on-chip cache of the L2 meta-data"},
+    {INT("memory.vma.tag_cache_ways", memory.vma.tag_cache_ways, 4, 1, 64, ""),
+     PUB "§4.7 (L1 caches are 4-way)", .desc = "associativity of the tag cache"},
+    {INT("memory.vma.tag_cache_latency", memory.vma.tag_cache_latency, 2, 1, 1000, "core cycles"),
+     .source = "not published; as the L1 caches", .desc = "tag cache hit latency"},
+    {BOOL("memory.vma.tag_cache_enabled", memory.vma.tag_cache_enabled, 1), PUB "§4.2",
+     .desc = "false: every meta-data lookup reads SDRAM (for studies)"},
+    {ENUM("memory.hostbus.preset", memory.hostbus.preset, hostbus_preset_names),
+     PUB "§4.7 (standard PCI)",
+     .desc = "host bus: pci = 32 bit/33 MHz, pci66 = 64 bit/66 MHz, agp = 32 bit at 266 MT/s "
+             "(AGP 4x); the keys below override single values"},
+    {INT("memory.hostbus.width_bits", memory.hostbus.width_bits, 0, 0, 1024, "bits"),
+     .source = "from the preset", .desc = "data width; 0 = the preset's"},
+    {FLT("memory.hostbus.clock_mhz", memory.hostbus.clock_mhz, 0, 0, 10000, "MHz"),
+     .source = "from the preset", .desc = "data phases per microsecond; 0 = the preset's"},
+    {INT("memory.hostbus.burst", memory.hostbus.burst, 0, 0, 4096, "data phases"),
+     .source = "not published; presets assume 32 (a 128-byte line is one PCI burst)",
+     .desc = "data phases per bus transaction; 0 = the preset's"},
+    {FLT("memory.hostbus.latency_ns", memory.hostbus.latency_ns, -1, -1, 1e6, "ns"),
+     .source = "not published; presets assume 300 ns (arbitration, address phase, host "
+               "memory read)",
+     .desc = "setup latency per transaction; negative = the preset's"},
 };
 
 #define NKEYS (sizeof keys / sizeof keys[0])

@@ -25,10 +25,21 @@
 /* Enum values; the names in the YAML are in config.c's tables, same order. */
 typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
 typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
-typedef enum { CFG_MEM_FIXED } cfg_mem_model;
+typedef enum { CFG_MEM_FIXED, CFG_MEM_HIERARCHY } cfg_mem_model;
+typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN } cfg_memif_policy;
+typedef enum { CFG_HASH_XOR_FOLD, CFG_HASH_NONE } cfg_addr_hash;
+typedef enum { CFG_SDRAM_ROW_BANK_COL, CFG_SDRAM_BANK_ROW_COL } cfg_sdram_mapping;
+typedef enum { CFG_HBUS_PCI, CFG_HBUS_PCI66, CFG_HBUS_AGP } cfg_hostbus_preset;
 typedef enum { CFG_FIDELITY_CYCLE } cfg_fidelity;
 
 #define CFG_STR_MAX 128
+
+/* One first-level cache (mem/cache.h). */
+typedef struct cfg_l1 {
+	int size_kb, ways, line; /* capacity, associativity, line bytes (any size) */
+	int hit_latency, ports;  /* core cycles; accesses accepted per core cycle */
+	int mshrs;               /* outstanding missed lines */
+} cfg_l1;
 
 /* One kind of functional unit inside a ray-tracing pipeline (RTP). */
 typedef struct cfg_unit {
@@ -61,6 +72,30 @@ typedef struct saar_config {
 	struct {
 		cfg_mem_model model;
 		int latency;
+		struct {
+			cfg_l1 shade, kd, list, tri;
+		} l1;
+		struct {
+			int mb;
+			double clock_mhz;
+			int bus_bits, banks, row_bytes, cl, trcd, trp, tras, burst;
+			cfg_sdram_mapping mapping;
+		} sdram;
+		struct {
+			cfg_memif_policy policy;
+		} memif;
+		struct {
+			bool enabled;
+			int ways, line;
+			cfg_addr_hash hash;
+			int tag_cache_kb, tag_cache_ways, tag_cache_latency;
+			bool tag_cache_enabled;
+		} vma;
+		struct {
+			cfg_hostbus_preset preset;
+			int width_bits, burst; /* 0 = the preset's value */
+			double clock_mhz, latency_ns;
+		} hostbus;
 	} memory;
 	cfg_fidelity fidelity;
 } saar_config;

@@ -335,7 +335,7 @@ Test(config, json_dump_has_every_key_nested)
 		maxd = depth > maxd ? depth : maxd;
 	}
 	cr_assert_eq(depth, 0, "%s", s);
-	cr_assert_eq(maxd, 3, "top, chip, chip.trav");
+	cr_assert_eq(maxd, 4, "top, memory, memory.l1, memory.l1.kd: nesting follows the dotted keys");
 	free(s);
 }
 

@@ -1,0 +1,200 @@
+/*
+ * cache.c: the generic set-associative cache (see cache.h).
+ *
+ * Storage is two flat arrays of nsets*ways words (tags, LRU stamps) and one
+ * of MSHR lines, allocated once in cache_init. LRU keeps a 64-bit use stamp
+ * per way: the victim is the way with the smallest stamp (empty ways first),
+ * which is exact LRU and needs no list manipulation; 2^64 accesses never wrap.
+ */
+#include "cache.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
+{
+	memset(c, 0, sizeof *c);
+	if (p->ways < 1 || p->line_bytes < 1 || p->mshrs < 1 || p->ports < 1)
+		return diag_set(d, "config", 0, 0, "%s: ways, line, mshrs and ports must be >= 1",
+		                what);
+	uint64_t per_set = (uint64_t)p->ways * p->line_bytes;
+	if (p->size_bytes < per_set)
+		return diag_set(d, "config", 0, 0,
+		                "%s: %llu bytes cannot hold one set of %u ways x %u-byte lines",
+		                what, (unsigned long long)p->size_bytes, p->ways, p->line_bytes);
+	if (p->size_bytes / per_set > UINT32_MAX)
+		return diag_set(d, "config", 0, 0, "%s: too many sets", what);
+	c->p = *p;
+	c->nsets = (uint32_t)(p->size_bytes / per_set);
+	while (c->hash_bits < 63 && (1ull << c->hash_bits) < c->nsets)
+		c->hash_bits++;
+	size_t n = (size_t)c->nsets * p->ways;
+	c->tag = malloc(n * sizeof *c->tag);
+	c->use = calloc(n, sizeof *c->use);
+	c->mshr_line = malloc(p->mshrs * sizeof *c->mshr_line);
+	if (!c->tag || !c->use || !c->mshr_line) {
+		cache_free(c);
+		return diag_set(d, "config", 0, 0, "%s: out of memory", what);
+	}
+	cache_flush(c);
+	return 0;
+}
+
+void cache_free(cache *c)
+{
+	free(c->tag);
+	free(c->use);
+	free(c->mshr_line);
+	c->tag = c->use = c->mshr_line = NULL;
+}
+
+void cache_flush(cache *c)
+{
+	size_t n = (size_t)c->nsets * c->p.ways;
+	for (size_t i = 0; i < n; i++) {
+		c->tag[i] = CACHE_INVALID;
+		c->use[i] = 0;
+	}
+	for (uint32_t i = 0; i < c->p.mshrs; i++)
+		c->mshr_line[i] = CACHE_INVALID;
+	c->mshr_used = 0;
+}
+
+/* XOR-fold: the line index folded onto itself in hash_bits-wide slices, so
+ * strides that are multiples of nsets (regions 128-byte aligned, records of
+ * equal size) spread over the sets instead of piling into one (seed 002 §4.2:
+ * "address-hashing is used to reduce the probability of collisions"). */
+uint32_t cache_set_of(const cache *c, uint64_t line)
+{
+	uint64_t h = line;
+	if (c->p.hash == CACHE_HASH_XOR && c->hash_bits) {
+		for (uint64_t x = line >> c->hash_bits; x; x >>= c->hash_bits)
+			h ^= x;
+	}
+	return (uint32_t)(h % c->nsets);
+}
+
+static int find_way(const cache *c, uint32_t set, uint64_t line)
+{
+	const uint64_t *t = c->tag + (size_t)set * c->p.ways;
+	for (uint32_t w = 0; w < c->p.ways; w++)
+		if (t[w] == line)
+			return (int)w;
+	return -1;
+}
+
+int cache_mshr_find(const cache *c, uint64_t line)
+{
+	if (!c->mshr_used)
+		return -1;
+	for (uint32_t i = 0; i < c->p.mshrs; i++)
+		if (c->mshr_line[i] == line)
+			return (int)i;
+	return -1;
+}
+
+int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
+{
+	uint32_t set = cache_set_of(c, line);
+	int w = find_way(c, set, line);
+	if (w >= 0 && slot)
+		*slot = set * c->p.ways + (uint32_t)w;
+	return w >= 0;
+}
+
+cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, uint32_t *slot)
+{
+	uint32_t set = cache_set_of(c, line);
+	int w = find_way(c, set, line);
+	if (w >= 0) {
+		size_t i = (size_t)set * c->p.ways + (size_t)w;
+		c->use[i] = ++c->stamp;
+		c->s.accesses++;
+		c->s.hits++;
+		c->s.bytes += bytes;
+		if (slot)
+			*slot = (uint32_t)i;
+		return CACHE_HIT;
+	}
+	int m = cache_mshr_find(c, line);
+	if (m >= 0) {
+		c->s.accesses++;
+		c->s.misses++;
+		c->s.merges++;
+		c->s.bytes += bytes;
+		if (mshr)
+			*mshr = m;
+		return CACHE_MISS_MERGED;
+	}
+	if (c->mshr_used == c->p.mshrs) {
+		c->s.mshr_full++;
+		return CACHE_MSHR_FULL;
+	}
+	for (uint32_t i = 0; i < c->p.mshrs; i++)
+		if (c->mshr_line[i] == CACHE_INVALID) {
+			c->mshr_line[i] = line;
+			c->mshr_used++;
+			c->s.accesses++;
+			c->s.misses++;
+			c->s.bytes += bytes;
+			if (mshr)
+				*mshr = (int)i;
+			return CACHE_MISS_NEW;
+		}
+	return CACHE_MSHR_FULL; /* unreachable: mshr_used < mshrs */
+}
+
+uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
+{
+	int m = cache_mshr_find(c, line);
+	if (m >= 0) {
+		c->mshr_line[m] = CACHE_INVALID;
+		c->mshr_used--;
+	}
+	if (victim)
+		*victim = CACHE_INVALID;
+	uint32_t set = cache_set_of(c, line);
+	size_t base = (size_t)set * c->p.ways;
+	int w = find_way(c, set, line);
+	if (w < 0) {
+		/* empty way first, else the least recently used */
+		uint32_t best = 0;
+		for (uint32_t i = 0; i < c->p.ways; i++) {
+			if (c->tag[base + i] == CACHE_INVALID) {
+				best = i;
+				break;
+			}
+			if (c->use[base + i] < c->use[base + best])
+				best = i;
+		}
+		if (c->tag[base + best] != CACHE_INVALID) {
+			c->s.evictions++;
+			if (victim)
+				*victim = c->tag[base + best];
+		}
+		c->tag[base + best] = line;
+		c->s.fills++;
+		c->s.fill_bytes += c->p.line_bytes;
+		w = (int)best;
+	}
+	c->use[base + (size_t)w] = ++c->stamp;
+	return (uint32_t)(base + (size_t)w);
+}
+
+uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes)
+{
+	uint64_t first = addr / c->p.line_bytes;
+	uint64_t last = (addr + (bytes ? bytes : 1) - 1) / c->p.line_bytes;
+	uint32_t missed = 0;
+	for (uint64_t l = first; l <= last; l++) {
+		/* bytes of this access that fall into line l */
+		uint64_t lo = l * c->p.line_bytes, hi = lo + c->p.line_bytes;
+		uint64_t a = addr > lo ? addr : lo, b = addr + bytes < hi ? addr + bytes : hi;
+		uint32_t nb = b > a ? (uint32_t)(b - a) : 0;
+		if (cache_lookup(c, l, nb, NULL, NULL) != CACHE_HIT) {
+			missed++;
+			cache_fill(c, l, NULL);
+		}
+	}
+	return missed;
+}

@@ -1,0 +1,109 @@
+/*
+ * cache.h: one generic set-associative cache with LRU and MSHRs.
+ *
+ * Every cache of the chip is an instance of this module: the four L1s
+ * (shading, kd-nodes, lists, triangles; seed 002 §4.1), the VMA tag cache
+ * (§4.2) and, functionally, the VMA's L2 (on-board SDRAM as a 4-way cache of
+ * host memory with 128-byte lines). Lines may be any size, 36 bytes included:
+ * line index = addr / line_bytes, set = hash(line) mod nsets, and nsets need
+ * not be a power of two.
+ *
+ * The module is the functional core only: which lines are present, which are
+ * in flight and which way LRU evicts. Time lives in the users (mem/hier.c,
+ * mem/vma.c): they call cache_lookup when an access reaches the cache and
+ * cache_fill when the line's data arrives from below. Between the two the
+ * line occupies an MSHR; further misses to it merge; when all MSHRs are busy
+ * a new miss gets CACHE_MSHR_FULL and changes nothing (the caller must retry
+ * later, after some fill). That split lets a brute-force model be compared
+ * access by access (tests/test_cache.c).
+ *
+ * Invariant: a line is never both present and in an MSHR; each set holds at
+ * most `ways` valid lines, no two equal. LRU is exact (per-way use stamps).
+ * cache_lookup and cache_fill are O(ways + mshrs) and never allocate.
+ */
+#ifndef SAAR_MEM_CACHE_H
+#define SAAR_MEM_CACHE_H
+
+#include <stdint.h>
+
+#include "diag.h"
+
+enum cache_hash { CACHE_HASH_NONE, CACHE_HASH_XOR };
+
+typedef struct cache_params {
+	uint64_t size_bytes;  /* capacity of the data array */
+	uint32_t ways;        /* associativity */
+	uint32_t line_bytes;  /* any size >= 1 (36 for triangles) */
+	uint32_t mshrs;       /* outstanding missed lines; 0 = unlimited in-flight is not
+	                         allowed: every miss needs one, so mshrs >= 1 */
+	uint32_t hit_latency; /* core cycles; used by the timing wrapper */
+	uint32_t ports;       /* accesses accepted per core cycle; timing wrapper */
+	int hash;             /* enum cache_hash: how a line index picks its set */
+} cache_params;
+
+typedef enum cache_result {
+	CACHE_HIT,         /* present; LRU updated */
+	CACHE_MISS_NEW,    /* absent; an MSHR was allocated: fetch the line, then cache_fill */
+	CACHE_MISS_MERGED, /* absent but already in flight: wait for that fill */
+	CACHE_MSHR_FULL,   /* absent and every MSHR busy: nothing changed, retry later */
+} cache_result;
+
+/* Counters. accesses = hits + misses; merges and mshr_full are not extra
+ * accesses: merges <= misses, and a MSHR_FULL attempt is counted when it is
+ * retried successfully (mshr_full counts the refusals). bytes = bytes the
+ * accesses asked for; fill_bytes = lines fetched from below x line size. */
+typedef struct cache_stats {
+	uint64_t accesses, hits, misses, merges, mshr_full;
+	uint64_t bytes, fills, fill_bytes, evictions;
+} cache_stats;
+
+typedef struct cache {
+	cache_params p;
+	uint32_t nsets;
+	uint32_t hash_bits; /* for xor-fold: bits of nsets rounded up */
+	uint64_t *tag;      /* nsets*ways line indices; CACHE_INVALID when empty */
+	uint64_t *use;      /* nsets*ways LRU stamps (larger = more recent) */
+	uint64_t stamp;
+	uint64_t *mshr_line; /* p.mshrs entries; CACHE_INVALID when free */
+	uint32_t mshr_used;
+	cache_stats s;
+} cache;
+
+#define CACHE_INVALID UINT64_MAX
+
+/* Validates p (sizes >= 1, at least one set) and allocates. Errors name
+ * `what` ("memory.l1.kd"). */
+int cache_init(cache *c, const cache_params *p, const char *what, diag *d);
+void cache_free(cache *c);
+/* Empties every line and MSHR; keeps the counters. */
+void cache_flush(cache *c);
+
+static inline uint64_t cache_line_of(const cache *c, uint64_t addr)
+{
+	return addr / c->p.line_bytes;
+}
+uint32_t cache_set_of(const cache *c, uint64_t line);
+
+/* One access to one line (an access spanning two lines is two lookups).
+ * bytes is only counted. *mshr receives the MSHR index for MISS_NEW and
+ * MISS_MERGED, *slot (set*ways+way) for HIT; either may be NULL. */
+cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, uint32_t *slot);
+/* Is the line present (no LRU or counter change)? */
+int cache_probe(const cache *c, uint64_t line, uint32_t *slot);
+/* The line's data arrived: frees its MSHR (if it had one), installs it in
+ * the LRU (or an empty) way and returns its slot; *victim receives the
+ * evicted line or CACHE_INVALID. Filling a present line only touches LRU. */
+uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim);
+/* The in-flight MSHR holding line, or -1. */
+int cache_mshr_find(const cache *c, uint64_t line);
+static inline int cache_mshr_free(const cache *c)
+{
+	return c->mshr_used < c->p.mshrs;
+}
+
+/* Functional access with an immediate fill (no time): what replay and the
+ * reference tests use. Touches every line of [addr, addr+bytes); returns the
+ * number of lines that missed (0 = hit). Never returns MSHR_FULL. */
+uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes);
+
+#endif

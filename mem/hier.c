@@ -1,0 +1,563 @@
+/*
+ * hier.c: the "hierarchy" memport model (see hier.h).
+ *
+ * Each L1 is a cache (mem/cache.h) plus its timing wrapper here: a port
+ * counter (ports accesses per core cycle), per-MSHR lists of the reads
+ * waiting for that line, and a FIFO of reads refused for lack of an MSHR,
+ * resumed in order when a fill frees one. A read (hreq) counts the lines it
+ * still waits for; the guard count of 1 held while its lines are looked up
+ * keeps it alive until the walk is done. hreq and wait records come from
+ * free lists that grow in chunks: the steady state never allocates.
+ */
+#include "hier.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct hreq hreq;
+struct hreq {
+	eng_handler done;
+	void *ctx;
+	uint64_t arg;
+	uint64_t issue, ready, since;
+	uint64_t next_line, last_line, addr;
+	uint32_t bytes, pending;
+	uint8_t type;
+	hreq *next;
+};
+
+typedef struct hwait hwait;
+struct hwait {
+	hreq *r;
+	hwait *next;
+};
+
+typedef struct hier hier;
+
+typedef struct hl1 {
+	hier *h;
+	int type;
+	cache c;
+	uint64_t port_cycle;
+	uint32_t port_used;
+	hwait **wait; /* per MSHR */
+	hreq *stall, *stall_tail;
+} hl1;
+
+typedef struct hchunk {
+	struct hchunk *next;
+} hchunk;
+
+struct hier {
+	eng *e;
+	eng_clock core;
+	uint64_t image_bytes;
+	hl1 l1[MEM_NTYPES];
+	sdram sd;
+	memif mi;
+	int use_vma;
+	vma v;
+	hbus hb;
+	hchunk *chunks;
+	hreq *free_r;
+	hwait *free_w;
+	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
+	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
+	uint64_t bypass[MEM_NTYPES], wait_ticks[MEM_NTYPES], stall_ticks[MEM_NTYPES];
+};
+
+/* ---- free lists ---- */
+
+#define HCHUNK 256
+
+static hreq *req_alloc(hier *h)
+{
+	if (!h->free_r) {
+		hchunk *c = malloc(sizeof(hchunk) + HCHUNK * sizeof(hreq));
+		if (!c)
+			return NULL;
+		c->next = h->chunks;
+		h->chunks = c;
+		hreq *a = (hreq *)(c + 1);
+		for (int i = 0; i < HCHUNK; i++) {
+			a[i].next = h->free_r;
+			h->free_r = &a[i];
+		}
+	}
+	hreq *r = h->free_r;
+	h->free_r = r->next;
+	return r;
+}
+
+static hwait *wait_alloc(hier *h)
+{
+	if (!h->free_w) {
+		hchunk *c = malloc(sizeof(hchunk) + HCHUNK * sizeof(hwait));
+		if (!c)
+			return NULL;
+		c->next = h->chunks;
+		h->chunks = c;
+		hwait *a = (hwait *)(c + 1);
+		for (int i = 0; i < HCHUNK; i++) {
+			a[i].next = h->free_w;
+			h->free_w = &a[i];
+		}
+	}
+	hwait *w = h->free_w;
+	h->free_w = w->next;
+	return w;
+}
+
+/* ---- below the L1s ---- */
+
+static void lower_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_handler cb,
+                       void *ctx, uint64_t arg)
+{
+	if (h->use_vma)
+		vma_read(&h->v, t, type, addr, bytes, cb, ctx, arg);
+	else
+		memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
+}
+
+/* ---- reads ---- */
+
+static void finish(hier *h, hreq *q)
+{
+	uint64_t now = eng_now(h->e);
+	uint64_t when = eng_next_edge(h->core, now);
+	if (q->ready > when)
+		when = q->ready;
+	h->wait_ticks[q->type] += when - q->issue;
+	if (q->done)
+		eng_schedule(h->e, when, q->done, q->ctx, q->arg);
+	q->next = h->free_r;
+	h->free_r = q;
+}
+
+static void l1_filled(eng *e, void *ctx, uint64_t line);
+
+/* Looks up q's remaining lines at tick t. Returns 0 when every line is
+ * either present or awaited, 1 when refused for lack of an MSHR (q keeps
+ * its place: next_line is the refused line). */
+static int walk(hl1 *l, hreq *q, uint64_t t)
+{
+	hier *h = l->h;
+	uint32_t lb = l->c.p.line_bytes;
+	for (; q->next_line <= q->last_line; q->next_line++) {
+		uint64_t line = q->next_line;
+		uint64_t lo = line * lb, hi = lo + lb, end = q->addr + q->bytes;
+		uint64_t a = q->addr > lo ? q->addr : lo, b = end < hi ? end : hi;
+		int m = -1;
+		switch (cache_lookup(&l->c, line, (uint32_t)(b - a), &m, NULL)) {
+		case CACHE_HIT:
+			break;
+		case CACHE_MISS_NEW:
+			lower_read(h, t, l->type, lo, lb, l1_filled, l, line);
+			/* fall through */
+		case CACHE_MISS_MERGED: {
+			hwait *w = wait_alloc(h);
+			w->r = q;
+			w->next = l->wait[m];
+			l->wait[m] = w;
+			q->pending++;
+			break;
+		}
+		case CACHE_MSHR_FULL:
+			return 1;
+		}
+	}
+	return 0;
+}
+
+static void l1_filled(eng *e, void *ctx, uint64_t line)
+{
+	hl1 *l = ctx;
+	hier *h = l->h;
+	uint64_t now = eng_now(e);
+	int m = cache_mshr_find(&l->c, line);
+	hwait *w = m >= 0 ? l->wait[m] : NULL;
+	if (m >= 0)
+		l->wait[m] = NULL;
+	cache_fill(&l->c, line, NULL);
+	while (w) {
+		hwait *n = w->next;
+		hreq *q = w->r;
+		w->next = h->free_w;
+		h->free_w = w;
+		if (--q->pending == 0)
+			finish(h, q);
+		w = n;
+	}
+	/* resume refused reads in order while MSHRs are free */
+	while (l->stall && cache_mshr_free(&l->c)) {
+		hreq *q = l->stall;
+		if (walk(l, q, now))
+			break; /* stays at the head */
+		l->stall = q->next;
+		if (!l->stall)
+			l->stall_tail = NULL;
+		h->stall_ticks[q->type] += now - q->since;
+		if (--q->pending == 0) /* the guard */
+			finish(h, q);
+	}
+}
+
+static void l1_bypass_done(eng *e, void *ctx, uint64_t arg)
+{
+	hreq *q = (hreq *)(uintptr_t)arg;
+	finish(ctx, q);
+}
+
+static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ctx, uint64_t arg)
+{
+	hier *h = impl;
+	uint64_t now = eng_now(h->e);
+	int type = r->type;
+	if (r->write) {
+		h->writes[type]++;
+		h->write_bytes[type] += r->bytes;
+		if (h->use_vma)
+			vma_write(&h->v, now, type, r->addr, r->bytes);
+		else
+			memif_submit(&h->mi, now, type, r->addr, r->bytes, 1, NULL, NULL, 0);
+		if (done) /* posted: a waiting caller gets its answer at once */
+			eng_schedule(h->e, eng_next_edge(h->core, now), done, ctx, arg);
+		return;
+	}
+	h->reads[type]++;
+	h->read_bytes[type] += r->bytes;
+	hreq *q = req_alloc(h);
+	if (!q)
+		return; /* out of memory: the unit never hears back (cannot happen in practice) */
+	uint32_t bytes = r->bytes ? r->bytes : 1;
+	*q = (hreq){done, ctx, arg, now, now, now, 0, 0, r->addr, bytes, 1, (uint8_t)type, NULL};
+	if (r->addr >= h->image_bytes) {
+		h->bypass[type]++;
+		lower_read(h, now, type, r->addr, bytes, l1_bypass_done, h, (uintptr_t)q);
+		return;
+	}
+	hl1 *l = &h->l1[type];
+	/* the port: ports accesses per core cycle, in arrival order */
+	uint64_t cyc = (now + h->core.period - 1) / h->core.period;
+	if (cyc > l->port_cycle) {
+		l->port_cycle = cyc;
+		l->port_used = 0;
+	}
+	if (l->port_used == l->c.p.ports) {
+		l->port_cycle++;
+		l->port_used = 0;
+	}
+	l->port_used++;
+	uint64_t start = l->port_cycle * h->core.period;
+	q->ready = start + (uint64_t)l->c.p.hit_latency * h->core.period;
+	q->next_line = r->addr / l->c.p.line_bytes;
+	q->last_line = (r->addr + bytes - 1) / l->c.p.line_bytes;
+	/* reads refused earlier go first: a new read never overtakes them */
+	if (l->stall || walk(l, q, start)) {
+		q->since = start;
+		q->next = NULL;
+		if (l->stall_tail)
+			l->stall_tail->next = q;
+		else
+			l->stall = q;
+		l->stall_tail = q;
+		return;
+	}
+	if (--q->pending == 0)
+		finish(h, q);
+}
+
+static void hier_destroy(void *impl)
+{
+	hier *h = impl;
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		cache_free(&h->l1[t].c);
+		free(h->l1[t].wait);
+	}
+	if (h->use_vma)
+		vma_free(&h->v);
+	memif_free(&h->mi);
+	for (hchunk *c = h->chunks, *n; c; c = n) {
+		n = c->next;
+		free(c);
+	}
+	free(h);
+}
+
+static const memport_model hier_model = {"hierarchy", hier_access, hier_destroy};
+
+/* ---- construction ---- */
+
+static const cfg_l1 *l1_cfg(const saar_config *cfg, int t)
+{
+	switch (t) {
+	case MEM_SHADE:
+		return &cfg->memory.l1.shade;
+	case MEM_KD:
+		return &cfg->memory.l1.kd;
+	case MEM_LIST:
+		return &cfg->memory.l1.list;
+	default:
+		return &cfg->memory.l1.tri;
+	}
+}
+
+cache_params hier_l1_params(const saar_config *cfg, int type)
+{
+	const cfg_l1 *c = l1_cfg(cfg, type);
+	return (cache_params){
+	    (uint64_t)c->size_kb << 10, (uint32_t)c->ways,  (uint32_t)c->line, (uint32_t)c->mshrs,
+	    (uint32_t)c->hit_latency,   (uint32_t)c->ports, CACHE_HASH_NONE};
+}
+
+vma_params hier_vma_params(const saar_config *cfg)
+{
+	const __typeof__(cfg->memory.vma) *v = &cfg->memory.vma;
+	return (vma_params){(uint32_t)v->ways,
+	                    (uint32_t)v->line,
+	                    v->hash == CFG_HASH_NONE ? CACHE_HASH_NONE : CACHE_HASH_XOR,
+	                    v->tag_cache_enabled,
+	                    (uint64_t)v->tag_cache_kb << 10,
+	                    (uint32_t)v->tag_cache_ways,
+	                    (uint32_t)v->tag_cache_latency};
+}
+
+void hier_hbus_params(const saar_config *cfg, hbus_params *hp)
+{
+	static const char *const pn[] = {"pci", "pci66", "agp"};
+	const __typeof__(cfg->memory.hostbus) *b = &cfg->memory.hostbus;
+	hbus_preset(pn[b->preset], hp);
+	if (b->width_bits > 0)
+		hp->width_bits = (uint32_t)b->width_bits;
+	if (b->clock_mhz > 0)
+		hp->clock_mhz = b->clock_mhz;
+	if (b->burst > 0)
+		hp->burst = (uint32_t)b->burst;
+	if (b->latency_ns >= 0)
+		hp->latency_ns = b->latency_ns;
+}
+
+int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
+                  diag *d)
+{
+	memset(p, 0, sizeof *p);
+	const __typeof__(cfg->memory) *M = &cfg->memory;
+	uint64_t sd_bytes = (uint64_t)M->sdram.mb << 20;
+	if (!M->vma.enabled && image_bytes > sd_bytes)
+		return diag_set(d, "config", 0, 0,
+		                "the memory image (%.1f MB) does not fit in on-board memory "
+		                "(memory.sdram.mb = %d); enable the virtual memory architecture "
+		                "(configs/saarcor-vma.yaml, memory.vma.enabled: true) or raise "
+		                "memory.sdram.mb",
+		                (double)image_bytes / (1 << 20), M->sdram.mb);
+	hier *h = calloc(1, sizeof *h);
+	if (!h)
+		return diag_set(d, "config", 0, 0, "out of memory");
+	h->e = e;
+	h->core = core;
+	h->image_bytes = image_bytes;
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		char what[32];
+		snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
+		cache_params cp = hier_l1_params(cfg, t);
+		h->l1[t].h = h;
+		h->l1[t].type = t;
+		if (cache_init(&h->l1[t].c, &cp, what, d))
+			goto fail;
+		h->l1[t].wait = calloc(cp.mshrs, sizeof *h->l1[t].wait);
+		if (!h->l1[t].wait) {
+			diag_set(d, "config", 0, 0, "out of memory");
+			goto fail;
+		}
+	}
+	sdram_params sp = {sd_bytes,
+	                   M->sdram.clock_mhz,
+	                   (uint32_t)M->sdram.bus_bits,
+	                   (uint32_t)M->sdram.banks,
+	                   (uint32_t)M->sdram.row_bytes,
+	                   (uint32_t)M->sdram.cl,
+	                   (uint32_t)M->sdram.trcd,
+	                   (uint32_t)M->sdram.trp,
+	                   (uint32_t)M->sdram.tras,
+	                   (uint32_t)M->sdram.burst,
+	                   M->sdram.mapping == CFG_SDRAM_BANK_ROW_COL ? SDRAM_MAP_BANK_ROW_COL
+	                                                              : SDRAM_MAP_ROW_BANK_COL};
+	if (sdram_init(&h->sd, &sp, d))
+		goto fail;
+	if (memif_init(&h->mi, e, &h->sd,
+	               M->memif.policy == CFG_MEMIF_ROUND_ROBIN ? MEMIF_ROUND_ROBIN : MEMIF_FIFO)) {
+		diag_set(d, "config", 0, 0, "out of memory");
+		goto fail;
+	}
+	if (M->vma.enabled) {
+		hbus_params hp;
+		hier_hbus_params(cfg, &hp);
+		if (hbus_init(&h->hb, &hp, d))
+			goto fail;
+		vma_params vp = hier_vma_params(cfg);
+		if (vma_init(&h->v, e, core, &h->mi, &h->hb, sd_bytes, &vp, d))
+			goto fail;
+		h->use_vma = 1;
+	}
+	p->model = &hier_model;
+	p->impl = h;
+	return 0;
+fail:
+	hier_destroy(h);
+	return -1;
+}
+
+int hier_is(const memport *p)
+{
+	return p->model == &hier_model;
+}
+
+int hier_get_stats(const memport *p, hier_stats *s)
+{
+	memset(s, 0, sizeof *s);
+	if (!hier_is(p))
+		return -1;
+	const hier *h = p->impl;
+	s->vma_enabled = h->use_vma;
+	s->now_ticks = eng_now(h->e);
+	s->core_period = h->core.period;
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		s->l1[t] = h->l1[t].c.s;
+		s->reads[t] = h->reads[t];
+		s->read_bytes[t] = h->read_bytes[t];
+		s->writes[t] = h->writes[t];
+		s->write_bytes[t] = h->write_bytes[t];
+		s->bypass_reads[t] = h->bypass[t];
+		s->wait_cycles[t] = h->wait_ticks[t] / h->core.period;
+		s->mshr_stall_cycles[t] = h->stall_ticks[t] / h->core.period;
+	}
+	s->memif = h->mi.s;
+	s->sdram = h->sd.s;
+	s->sdram_peak_bytes_per_s = sdram_peak_bw(&h->sd);
+	if (h->use_vma) {
+		s->tag_cache = h->v.tag.s;
+		s->l2 = h->v.l2.s;
+		s->vma = h->v.s;
+		s->hostbus = h->hb.s;
+		s->hostbus_peak_bytes_per_s = hbus_peak_bw(&h->hb);
+	}
+	return 0;
+}
+
+/* ---- JSON ---- */
+
+static double ratio(uint64_t a, uint64_t b)
+{
+	return b ? (double)a / (double)b : 0.0;
+}
+
+static void cache_json(jsonw *w, const char *key, const cache_stats *c)
+{
+	jsonw_key(w, key);
+	jsonw_obj_begin(w);
+	jsonw_kuint(w, "accesses", c->accesses);
+	jsonw_kuint(w, "hits", c->hits);
+	jsonw_kuint(w, "misses", c->misses);
+	jsonw_knum(w, "hit_rate", ratio(c->hits, c->accesses));
+	jsonw_kuint(w, "mshr_merges", c->merges);
+	jsonw_kuint(w, "mshr_full", c->mshr_full);
+	jsonw_kuint(w, "bytes", c->bytes);
+	jsonw_kuint(w, "fills", c->fills);
+	jsonw_kuint(w, "fill_bytes", c->fill_bytes);
+	jsonw_kuint(w, "evictions", c->evictions);
+	jsonw_obj_end(w);
+}
+
+void hier_write_json(const hier_stats *s, jsonw *w)
+{
+	double secs = (double)s->now_ticks * 1e-12;
+	jsonw_obj_begin(w);
+	jsonw_kstr(w, "model", "hierarchy");
+	jsonw_kbool(w, "vma", s->vma_enabled);
+	jsonw_knum(w, "elapsed_s", secs);
+
+	jsonw_key(w, "l1");
+	jsonw_obj_begin(w);
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		jsonw_key(w, mem_type_name(t));
+		jsonw_obj_begin(w);
+		jsonw_kuint(w, "reads", s->reads[t]);
+		jsonw_kuint(w, "read_bytes", s->read_bytes[t]);
+		jsonw_kuint(w, "writes", s->writes[t]);
+		jsonw_kuint(w, "write_bytes", s->write_bytes[t]);
+		jsonw_kuint(w, "bypass_reads", s->bypass_reads[t]);
+		jsonw_kuint(w, "wait_cycles", s->wait_cycles[t]);
+		jsonw_kuint(w, "mshr_stall_cycles", s->mshr_stall_cycles[t]);
+		cache_json(w, "cache", &s->l1[t]);
+		jsonw_obj_end(w);
+	}
+	jsonw_obj_end(w);
+
+	uint64_t meta = s->memif.reads[MEMIF_META] + s->memif.writes[MEMIF_META], all = 0;
+	jsonw_key(w, "memif");
+	jsonw_obj_begin(w);
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		all += s->memif.reads[r] + s->memif.writes[r];
+		jsonw_key(w, memif_requester_name(r));
+		jsonw_obj_begin(w);
+		jsonw_kuint(w, "reads", s->memif.reads[r]);
+		jsonw_kuint(w, "writes", s->memif.writes[r]);
+		jsonw_kuint(w, "bytes", s->memif.bytes[r]);
+		jsonw_kuint(w, "queue_cycles", s->memif.queue_ticks[r] / s->core_period);
+		jsonw_obj_end(w);
+	}
+	jsonw_obj_end(w);
+
+	const sdram_stats *d = &s->sdram;
+	uint64_t rows = d->row_hits + d->row_empty + d->row_conflicts;
+	jsonw_key(w, "sdram");
+	jsonw_obj_begin(w);
+	jsonw_kuint(w, "reads", d->reads);
+	jsonw_kuint(w, "writes", d->writes);
+	jsonw_kuint(w, "read_bytes", d->read_bytes);
+	jsonw_kuint(w, "write_bytes", d->write_bytes);
+	jsonw_kuint(w, "bytes", d->read_bytes + d->write_bytes);
+	jsonw_kuint(w, "meta_accesses", meta);
+	jsonw_kuint(w, "data_accesses", all - meta);
+	jsonw_knum(w, "meta_share", ratio(meta, all));
+	jsonw_kuint(w, "row_hits", d->row_hits);
+	jsonw_kuint(w, "row_empty", d->row_empty);
+	jsonw_kuint(w, "row_conflicts", d->row_conflicts);
+	jsonw_knum(w, "row_hit_rate", ratio(d->row_hits, rows));
+	jsonw_kuint(w, "busy_ns", d->busy_ticks / 1000);
+	jsonw_knum(w, "utilization", ratio(d->busy_ticks, s->now_ticks));
+	jsonw_knum(w, "bandwidth_gb_s",
+	           secs > 0 ? (double)(d->read_bytes + d->write_bytes) / secs / 1e9 : 0.0);
+	jsonw_knum(w, "peak_gb_s", s->sdram_peak_bytes_per_s / 1e9);
+	jsonw_obj_end(w);
+
+	if (s->vma_enabled) {
+		const vma_stats *v = &s->vma;
+		jsonw_key(w, "vma");
+		jsonw_obj_begin(w);
+		cache_json(w, "tag_cache", &s->tag_cache);
+		cache_json(w, "l2", &s->l2);
+		jsonw_kuint(w, "meta_reads", v->meta_reads);
+		jsonw_kuint(w, "meta_writes", v->meta_writes);
+		jsonw_kuint(w, "meta_bytes", v->meta_bytes);
+		jsonw_kuint(w, "data_reads", v->data_reads);
+		jsonw_kuint(w, "data_writes", v->data_writes);
+		jsonw_kuint(w, "data_bytes", v->data_bytes);
+		jsonw_kuint(w, "host_fetches", v->host_fetches);
+		jsonw_kuint(w, "host_fetch_bytes", v->host_fetch_bytes);
+		jsonw_kuint(w, "host_writes", v->host_writes);
+		jsonw_kuint(w, "host_write_bytes", v->host_write_bytes);
+		jsonw_kuint(w, "mshr_stall_cycles", v->stall_ticks / s->core_period);
+		jsonw_obj_end(w);
+		const hbus_stats *b = &s->hostbus;
+		jsonw_key(w, "hostbus");
+		jsonw_obj_begin(w);
+		jsonw_kuint(w, "transfers", b->transfers);
+		jsonw_kuint(w, "bytes", b->bytes);
+		jsonw_kuint(w, "busy_ns", b->busy_ticks / 1000);
+		jsonw_knum(w, "utilization", ratio(b->busy_ticks, s->now_ticks));
+		jsonw_knum(w, "peak_mb_s", s->hostbus_peak_bytes_per_s / 1e6);
+		jsonw_obj_end(w);
+	}
+	jsonw_obj_end(w);
+}

@@ -1,0 +1,76 @@
+/*
+ * hier.h: the memport model "hierarchy": SaarCOR's memory system.
+ *
+ * Wiring (seed 002 §4.1, §4.2, §4.7; docs/memory.md):
+ *
+ *   units --mem_access--> L1 of the request's type (shade, kd, list, tri;
+ *   each shared by all units of that type across all RTPs)
+ *     hit:  data after hit_latency core cycles (ports accesses per cycle)
+ *     miss: MSHR (merge / wait when full) -> line read below
+ *   below, without VMA: memif (arbitration) -> SDRAM at the same address
+ *   below, with VMA:    vma (tag cache -> SDRAM meta-data; SDRAM data or
+ *                       host-bus DMA) -> memif -> SDRAM
+ *
+ * Writes (stack spills) are posted and bypass the L1s (write-around; the
+ * spilled entry is read back once). Reads at or above image_bytes (the
+ * spill area the chip places after the memory image) bypass the L1s too.
+ * A read is answered at max(hit time, arrival of its last missing line).
+ */
+#ifndef SAAR_MEM_HIER_H
+#define SAAR_MEM_HIER_H
+
+#include <stdint.h>
+
+#include "cache.h"
+#include "config.h"
+#include "diag.h"
+#include "engine.h"
+#include "hostbus.h"
+#include "jsonw.h"
+#include "memif.h"
+#include "memport.h"
+#include "sdram.h"
+#include "vma.h"
+
+/* Every counter of the hierarchy, copied out by hier_get_stats. Ratios
+ * (hit rates, utilisation) are derived by hier_write_json, not counted. */
+typedef struct hier_stats {
+	int vma_enabled;
+	uint64_t now_ticks;         /* engine time when the stats were taken */
+	uint64_t core_period;       /* ticks per core cycle */
+	cache_stats l1[MEM_NTYPES]; /* per L1: accesses = hits + misses (lines) */
+	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
+	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
+	uint64_t bypass_reads[MEM_NTYPES];      /* spill-area reads that skip the L1 */
+	uint64_t wait_cycles[MEM_NTYPES];       /* sum over reads of issue -> data, core cycles */
+	uint64_t mshr_stall_cycles[MEM_NTYPES]; /* time reads waited for a free MSHR */
+	memif_stats memif;                      /* per requester: shade kd list tri meta fill */
+	sdram_stats sdram;
+	double sdram_peak_bytes_per_s;
+	/* with VMA */
+	cache_stats tag_cache, l2;
+	vma_stats vma;
+	hbus_stats hostbus;
+	double hostbus_peak_bytes_per_s;
+} hier_stats;
+
+/* Builds the hierarchy from cfg->memory and installs it in p (as
+ * mem_init_fixed does). core is the chip clock. image_bytes: size of the
+ * memory image; without VMA it must fit in memory.sdram.mb, else a one-line
+ * error suggesting configs/saarcor-vma.yaml. Returns 0, or -1 with d set. */
+int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
+                  diag *d);
+/* The parameters mem_init_hier derives from the config (trace replay
+ * builds the same caches from them). hier_hbus_params applies the preset
+ * and the overriding keys. */
+cache_params hier_l1_params(const saar_config *cfg, int type);
+vma_params hier_vma_params(const saar_config *cfg);
+void hier_hbus_params(const saar_config *cfg, hbus_params *p);
+/* Is p a hierarchy model? */
+int hier_is(const memport *p);
+/* Copies every counter; -1 if p is not a hierarchy. */
+int hier_get_stats(const memport *p, hier_stats *s);
+/* Writes the stats as one JSON object (a value: the caller writes the key). */
+void hier_write_json(const hier_stats *s, jsonw *w);
+
+#endif

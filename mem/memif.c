@@ -1,0 +1,159 @@
+/*
+ * memif.c: arbitration of requesters onto SDRAM (see memif.h).
+ *
+ * One dispatch event at a time: at its tick it issues every request it may
+ * (SDRAM look-ahead permitting, one pick per iteration by policy), then
+ * re-arms for the earliest tick something can go next.
+ */
+#include "memif.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int memif_policy_parse(const char *s)
+{
+	if (!strcmp(s, "fifo"))
+		return MEMIF_FIFO;
+	if (!strcmp(s, "round_robin"))
+		return MEMIF_ROUND_ROBIN;
+	return -1;
+}
+
+const char *memif_requester_name(int r)
+{
+	static const char *const n[MEMIF_NREQ] = {"shade", "kd", "list", "tri", "meta", "fill"};
+	return r >= 0 && r < MEMIF_NREQ ? n[r] : "?";
+}
+
+int memif_init(memif *m, eng *e, sdram *sd, int policy)
+{
+	memset(m, 0, sizeof *m);
+	m->e = e;
+	m->sd = sd;
+	m->policy = policy;
+	m->last = MEMIF_NREQ - 1;
+	m->lead = sd->t.trcd + sd->t.cl;
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		m->q[r].cap = 64;
+		m->q[r].q = malloc(64 * sizeof(memif_item));
+		if (!m->q[r].q) {
+			memif_free(m);
+			return -1;
+		}
+	}
+	return 0;
+}
+
+void memif_free(memif *m)
+{
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		free(m->q[r].q);
+		m->q[r].q = NULL;
+	}
+}
+
+static void dispatch(eng *e, void *ctx, uint64_t arg);
+
+static void arm(memif *m, uint64_t when)
+{
+	if (when < eng_now(m->e))
+		when = eng_now(m->e);
+	if (m->armed && m->armed_at <= when)
+		return;
+	/* An earlier need than the queued dispatch: queue another one; the
+	 * later one finds nothing or re-arms (harmless, deterministic). */
+	m->armed = 1;
+	m->armed_at = when;
+	eng_schedule(m->e, when, dispatch, m, 0);
+}
+
+/* The requester to serve now, or -1; *next_ready: earliest head not ready. */
+static int pick(memif *m, uint64_t now, uint64_t *next_ready)
+{
+	int best = -1;
+	*next_ready = UINT64_MAX;
+	for (int i = 0; i < MEMIF_NREQ; i++) {
+		int r = m->policy == MEMIF_ROUND_ROBIN ? (m->last + 1 + i) % MEMIF_NREQ : i;
+		memif_queue *q = &m->q[r];
+		if (!q->n)
+			continue;
+		const memif_item *it = &q->q[q->head];
+		if (it->ready > now) {
+			if (it->ready < *next_ready)
+				*next_ready = it->ready;
+			continue;
+		}
+		if (m->policy == MEMIF_ROUND_ROBIN)
+			return r;
+		if (best < 0 || it->seq < m->q[best].q[m->q[best].head].seq)
+			best = r;
+	}
+	return best;
+}
+
+static void dispatch(eng *e, void *ctx, uint64_t arg)
+{
+	(void)arg;
+	memif *m = ctx;
+	uint64_t now = eng_now(e);
+	if (m->armed && m->armed_at == now)
+		m->armed = 0;
+	for (;;) {
+		uint64_t next_ready;
+		if (m->sd->bus_free > now + m->lead) {
+			/* SDRAM busy: come back when issuing makes sense */
+			int any = 0;
+			for (int r = 0; r < MEMIF_NREQ; r++)
+				any |= m->q[r].n != 0;
+			if (any)
+				arm(m, m->sd->bus_free - m->lead);
+			return;
+		}
+		int r = pick(m, now, &next_ready);
+		if (r < 0) {
+			if (next_ready != UINT64_MAX)
+				arm(m, next_ready);
+			return;
+		}
+		memif_queue *q = &m->q[r];
+		memif_item it = q->q[q->head];
+		q->head = (q->head + 1) % q->cap;
+		q->n--;
+		m->last = r;
+		m->s.queue_ticks[r] += now - it.ready;
+		uint64_t done = sdram_access(m->sd, now, it.addr, it.bytes, it.write, NULL);
+		if (!it.write)
+			m->s.latency_ticks[r] += done - it.ready;
+		if (it.done)
+			eng_schedule(e, done, it.done, it.ctx, it.arg);
+	}
+}
+
+int memif_submit(memif *m, uint64_t t, int requester, uint64_t addr, uint32_t bytes, int write,
+                 eng_handler done, void *ctx, uint64_t arg)
+{
+	memif_queue *q = &m->q[requester];
+	if (q->n == q->cap) {
+		memif_item *nq = malloc(2 * (size_t)q->cap * sizeof *nq);
+		if (!nq)
+			return -1;
+		for (uint32_t i = 0; i < q->n; i++)
+			nq[i] = q->q[(q->head + i) % q->cap];
+		free(q->q);
+		q->q = nq;
+		q->head = 0;
+		q->cap *= 2;
+	}
+	if (t < eng_now(m->e))
+		t = eng_now(m->e);
+	q->q[(q->head + q->n) % q->cap] =
+	    (memif_item){m->seq++, t, addr, bytes, (uint8_t)write, done, ctx, arg};
+	q->n++;
+	if (write)
+		m->s.writes[requester]++;
+	else
+		m->s.reads[requester]++;
+	m->s.bytes[requester] += bytes;
+	arm(m, t);
+	return 0;
+}

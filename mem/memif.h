@@ -1,0 +1,82 @@
+/*
+ * memif.h: the memory interface: arbitration of the miss streams onto SDRAM.
+ *
+ * Seed 002 §4.1: "All memory requests by the pipelines are handled by the
+ * unified memory interface". Requesters are the four L1 miss streams and,
+ * with the VMA, its meta-data (tag) traffic and the host-bus fills that
+ * write fetched lines into SDRAM. Each requester has a FIFO queue; when the
+ * SDRAM can take a new request the interface picks one queue head by policy
+ * (fifo: the oldest request overall; round_robin: the next requester after
+ * the last one served that has a ready request) and issues it to mem/sdram.
+ *
+ * "Can take a new request": the interface looks ahead of the data bus by
+ * tRCD + CL, so a row hit issued now lands right behind the current
+ * transfer and requests arriving meanwhile still compete. Completions are
+ * engine events at the tick SDRAM returns. Queues are rings that double when
+ * full (amortized; the steady state never allocates).
+ */
+#ifndef SAAR_MEM_MEMIF_H
+#define SAAR_MEM_MEMIF_H
+
+#include <stdint.h>
+
+#include "engine.h"
+#include "memport.h"
+#include "sdram.h"
+
+enum memif_requester {
+	MEMIF_SHADE = MEM_SHADE,
+	MEMIF_KD = MEM_KD,
+	MEMIF_LIST = MEM_LIST,
+	MEMIF_TRI = MEM_TRI,
+	MEMIF_META, /* VMA tags and state */
+	MEMIF_FILL, /* VMA: lines fetched over the host bus, written to SDRAM */
+	MEMIF_NREQ
+};
+
+enum memif_policy { MEMIF_FIFO, MEMIF_ROUND_ROBIN };
+
+typedef struct memif_item {
+	uint64_t seq, ready, addr;
+	uint32_t bytes;
+	uint8_t write;
+	eng_handler done;
+	void *ctx;
+	uint64_t arg;
+} memif_item;
+
+typedef struct memif_queue {
+	memif_item *q;
+	uint32_t head, n, cap;
+} memif_queue;
+
+typedef struct memif_stats {
+	uint64_t reads[MEMIF_NREQ], writes[MEMIF_NREQ], bytes[MEMIF_NREQ];
+	uint64_t queue_ticks[MEMIF_NREQ];   /* time requests waited before SDRAM took them */
+	uint64_t latency_ticks[MEMIF_NREQ]; /* submit to data complete (reads) */
+} memif_stats;
+
+typedef struct memif {
+	eng *e;
+	sdram *sd;
+	int policy;
+	memif_queue q[MEMIF_NREQ];
+	uint64_t seq;
+	int last;  /* requester served last (round robin) */
+	int armed; /* a dispatch event is queued */
+	uint64_t armed_at;
+	uint64_t lead; /* look-ahead in ticks */
+	memif_stats s;
+} memif;
+
+int memif_init(memif *m, eng *e, sdram *sd, int policy);
+void memif_free(memif *m);
+int memif_policy_parse(const char *s); /* "fifo" | "round_robin", -1 unknown */
+/* Queues a request that becomes eligible at tick t (>= eng_now). done is
+ * called (if not NULL) through the engine when its data is complete.
+ * Returns -1 only when out of memory. */
+int memif_submit(memif *m, uint64_t t, int requester, uint64_t addr, uint32_t bytes, int write,
+                 eng_handler done, void *ctx, uint64_t arg);
+const char *memif_requester_name(int r); /* shade kd list tri meta fill */
+
+#endif

@@ -1,0 +1,186 @@
+/*
+ * sdram.c: SDRAM bank state and data-bus timing (see sdram.h).
+ *
+ * sdram_derive is the only place parameters become delays; sdram_access
+ * only walks bank state. All times are engine ticks (ps) on SDRAM edges.
+ */
+#include "sdram.h"
+
+#include <string.h>
+
+static int is_pow2(uint64_t x)
+{
+	return x && !(x & (x - 1));
+}
+
+static uint32_t log2u(uint64_t x)
+{
+	uint32_t n = 0;
+	while ((1ull << n) < x)
+		n++;
+	return n;
+}
+
+int sdram_mapping_parse(const char *s)
+{
+	if (!strcmp(s, "row:bank:col"))
+		return SDRAM_MAP_ROW_BANK_COL;
+	if (!strcmp(s, "bank:row:col"))
+		return SDRAM_MAP_BANK_ROW_COL;
+	return -1;
+}
+
+const char *sdram_mapping_name(int m)
+{
+	return m == SDRAM_MAP_BANK_ROW_COL ? "bank:row:col" : "row:bank:col";
+}
+
+int sdram_derive(const sdram_params *p, sdram_timing *t, diag *d)
+{
+	memset(t, 0, sizeof *t);
+	if (!(p->clock_mhz > 0))
+		return diag_set(d, "config", 0, 0, "memory.sdram.clock_mhz must be > 0");
+	if (p->bus_bits < 8 || p->bus_bits % 8)
+		return diag_set(d, "config", 0, 0,
+		                "memory.sdram.bus_bits must be a multiple of 8, got %u",
+		                p->bus_bits);
+	if (!is_pow2(p->banks) || p->banks > SDRAM_MAX_BANKS)
+		return diag_set(d, "config", 0, 0,
+		                "memory.sdram.banks must be a power of two <= %d, got %u",
+		                SDRAM_MAX_BANKS, p->banks);
+	if (!is_pow2(p->row_bytes) || p->row_bytes < p->bus_bits / 8)
+		return diag_set(
+		    d, "config", 0, 0,
+		    "memory.sdram.row_bytes must be a power of two >= the bus width, got %u",
+		    p->row_bytes);
+	if (p->burst < 1)
+		return diag_set(d, "config", 0, 0, "memory.sdram.burst must be >= 1");
+	if (p->bytes < (uint64_t)p->banks * p->row_bytes)
+		return diag_set(d, "config", 0, 0,
+		                "memory.sdram.mb: capacity below one row per bank");
+	t->clk = eng_clock_mhz(p->clock_mhz);
+	t->cl = eng_cycles_to_ticks(t->clk, p->cl);
+	t->trcd = eng_cycles_to_ticks(t->clk, p->trcd);
+	t->trp = eng_cycles_to_ticks(t->clk, p->trp);
+	t->tras = eng_cycles_to_ticks(t->clk, p->tras);
+	t->bus_bytes = p->bus_bits / 8;
+	t->col_bits = log2u(p->row_bytes);
+	t->bank_bits = log2u(p->banks);
+	return 0;
+}
+
+int sdram_init(sdram *s, const sdram_params *p, diag *d)
+{
+	memset(s, 0, sizeof *s);
+	s->p = *p;
+	if (sdram_derive(p, &s->t, d))
+		return -1;
+	for (uint32_t b = 0; b < SDRAM_MAX_BANKS; b++)
+		s->bank[b].open_row = SDRAM_NO_ROW;
+	return 0;
+}
+
+void sdram_decode(const sdram *s, uint64_t addr, uint32_t *bank, uint64_t *row, uint32_t *col)
+{
+	addr %= s->p.bytes;
+	*col = (uint32_t)(addr & (s->p.row_bytes - 1));
+	uint64_t hi = addr >> s->t.col_bits;
+	if (s->p.mapping == SDRAM_MAP_BANK_ROW_COL) {
+		uint64_t rows = s->p.bytes / s->p.banks / s->p.row_bytes;
+		*row = hi % rows;
+		*bank = (uint32_t)((hi / rows) & (s->p.banks - 1));
+	} else {
+		*bank = (uint32_t)(hi & (s->p.banks - 1));
+		*row = hi >> s->t.bank_bits;
+	}
+}
+
+uint64_t sdram_beats(const sdram *s, uint32_t bytes)
+{
+	uint64_t beats = (bytes + s->t.bus_bytes - 1) / s->t.bus_bytes;
+	if (!beats)
+		beats = 1;
+	return (beats + s->p.burst - 1) / s->p.burst * s->p.burst;
+}
+
+double sdram_peak_bw(const sdram *s)
+{
+	return (double)s->t.bus_bytes * 1e12 / (double)s->t.clk.period;
+}
+
+static uint64_t max64(uint64_t a, uint64_t b)
+{
+	return a > b ? a : b;
+}
+
+/* One row's worth of a request. */
+static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
+                        uint64_t *first)
+{
+	const sdram_timing *T = &s->t;
+	uint32_t b, col;
+	uint64_t row;
+	sdram_decode(s, addr, &b, &row, &col);
+	sdram_bank *k = &s->bank[b];
+	uint64_t c = eng_next_edge(T->clk, max64(t, k->col_ok));
+	uint64_t colcmd;
+	if (k->open_row == row) {
+		s->s.row_hits++;
+		colcmd = c;
+	} else {
+		uint64_t act = c;
+		if (k->open_row == SDRAM_NO_ROW) {
+			s->s.row_empty++;
+		} else {
+			s->s.row_conflicts++;
+			uint64_t pre = eng_next_edge(T->clk, max64(c, k->pre_ok));
+			act = pre + T->trp;
+		}
+		k->open_row = row;
+		k->act = act;
+		colcmd = act + T->trcd;
+	}
+	uint64_t beats = sdram_beats(s, bytes);
+	uint64_t len = eng_cycles_to_ticks(T->clk, beats);
+	uint64_t lat = write ? 0 : T->cl;
+	uint64_t data = max64(colcmd + lat, s->bus_free); /* the bus serializes */
+	uint64_t end = data + len;
+	s->bus_free = end;
+	s->s.busy_ticks += len;
+	s->s.beats += beats;
+	/* The next column command to this bank may follow once this burst has
+	 * been issued (seamless bursts); precharge waits for tRAS and the data. */
+	k->col_ok = data - lat + len;
+	k->pre_ok = max64(k->act + T->tras, end);
+	if (first)
+		*first = data;
+	return end;
+}
+
+uint64_t sdram_access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
+                      uint64_t *data_start)
+{
+	if (write) {
+		s->s.writes++;
+		s->s.write_bytes += bytes;
+	} else {
+		s->s.reads++;
+		s->s.read_bytes += bytes;
+	}
+	uint64_t end = t, first = UINT64_MAX;
+	uint32_t left = bytes ? bytes : 1;
+	while (left) {
+		/* split at row boundaries: each segment stays in one row */
+		uint32_t in_row = s->p.row_bytes - (uint32_t)(addr % s->p.row_bytes);
+		uint32_t n = left < in_row ? left : in_row;
+		uint64_t f;
+		end = segment(s, t, addr, n, write, &f);
+		if (f < first)
+			first = f;
+		addr += n;
+		left -= n;
+	}
+	if (data_start)
+		*data_start = first;
+	return end;
+}

@@ -1,0 +1,427 @@
+/*
+ * vma.c: the L2 virtual memory architecture (see vma.h).
+ *
+ * A read is split into pieces, one per L2 line it touches; each piece walks
+ * meta lookup -> L2 lookup -> SDRAM data read or host-bus DMA, as engine
+ * events. Pieces waiting on an MSHR hang on a per-MSHR list; pieces refused
+ * for lack of an MSHR wait in a FIFO and are retried when a fill frees one.
+ * Pieces and requests come from free lists that grow in chunks, so the
+ * steady state never allocates.
+ */
+#include "vma.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+struct vma_req {
+	eng_handler done;
+	void *ctx;
+	uint64_t arg;
+	uint32_t pending;
+	vma_req *next;
+};
+
+struct vma_piece {
+	vma_req *req;
+	uint64_t addr, line, since;
+	uint32_t bytes;
+	uint8_t type;
+	vma_piece *next;
+};
+
+/* ---- free lists ---- */
+
+typedef struct vchunk {
+	struct vchunk *next;
+} vchunk;
+
+typedef struct vpool {
+	vchunk *chunks;
+	vma_piece *fp;
+	vma_req *fr;
+} vpool;
+
+#define VCHUNK 256
+
+static vma_piece *piece_alloc(vma *v)
+{
+	vpool *P = v->pool;
+	if (!P->fp) {
+		vchunk *c = malloc(sizeof(vchunk) + VCHUNK * sizeof(vma_piece));
+		if (!c)
+			return NULL;
+		c->next = P->chunks;
+		P->chunks = c;
+		vma_piece *a = (vma_piece *)(c + 1);
+		for (int i = 0; i < VCHUNK; i++) {
+			a[i].next = P->fp;
+			P->fp = &a[i];
+		}
+	}
+	vma_piece *p = P->fp;
+	P->fp = p->next;
+	p->next = NULL;
+	return p;
+}
+
+static void piece_release(vma *v, vma_piece *p)
+{
+	vpool *P = v->pool;
+	p->next = P->fp;
+	P->fp = p;
+}
+
+static vma_req *req_alloc(vma *v)
+{
+	vpool *P = v->pool;
+	if (!P->fr) {
+		vchunk *c = malloc(sizeof(vchunk) + VCHUNK * sizeof(vma_req));
+		if (!c)
+			return NULL;
+		c->next = P->chunks;
+		P->chunks = c;
+		vma_req *a = (vma_req *)(c + 1);
+		for (int i = 0; i < VCHUNK; i++) {
+			a[i].next = P->fr;
+			P->fr = &a[i];
+		}
+	}
+	vma_req *r = P->fr;
+	P->fr = r->next;
+	return r;
+}
+
+/* ---- setup ---- */
+
+int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram_bytes,
+             const vma_params *p, diag *d)
+{
+	memset(v, 0, sizeof *v);
+	v->e = e;
+	v->core = core;
+	v->mi = mi;
+	v->hb = hb;
+	v->p = *p;
+	if (p->ways < 1 || p->line < 1)
+		return diag_set(d, "config", 0, 0,
+		                "memory.vma.ways and memory.vma.line must be >= 1");
+	v->meta_set_bytes = p->ways * VMA_META_BYTES_PER_LINE;
+	uint64_t per_set = (uint64_t)p->ways * p->line + v->meta_set_bytes;
+	uint64_t nsets = sdram_bytes / per_set;
+	if (nsets < 1)
+		return diag_set(d, "config", 0, 0,
+		                "memory.sdram.mb: on-board memory too small for one VMA set");
+	cache_params lp = {nsets * p->ways * p->line, p->ways, p->line, VMA_MSHRS, 0, 1, p->hash};
+	if (cache_init(&v->l2, &lp, "memory.vma", d))
+		return -1;
+	v->meta_base = nsets * p->ways * p->line;
+	if (p->tag_cache_enabled) {
+		cache_params tp = {p->tag_cache_bytes, p->tag_cache_ways,  v->meta_set_bytes,
+		                   VMA_TAG_MSHRS,      p->tag_hit_latency, 1,
+		                   CACHE_HASH_NONE};
+		if (cache_init(&v->tag, &tp, "memory.vma.tag_cache", d)) {
+			vma_free(v);
+			return -1;
+		}
+	}
+	v->pool = calloc(1, sizeof(vpool));
+	v->l2_wait = calloc(VMA_MSHRS, sizeof *v->l2_wait);
+	v->tag_wait = calloc(VMA_TAG_MSHRS, sizeof *v->tag_wait);
+	if (!v->pool || !v->l2_wait || !v->tag_wait) {
+		vma_free(v);
+		return diag_set(d, "config", 0, 0, "memory.vma: out of memory");
+	}
+	return 0;
+}
+
+void vma_free(vma *v)
+{
+	cache_free(&v->l2);
+	cache_free(&v->tag);
+	vpool *P = v->pool;
+	if (P)
+		for (vchunk *c = P->chunks, *n; c; c = n) {
+			n = c->next;
+			free(c);
+		}
+	free(P);
+	free(v->l2_wait);
+	free(v->tag_wait);
+	v->pool = NULL;
+	v->l2_wait = v->tag_wait = NULL;
+}
+
+uint64_t vma_capacity(const vma *v)
+{
+	return (uint64_t)v->l2.nsets * v->l2.p.ways;
+}
+
+/* ---- the walk of one piece ---- */
+
+static void meta_phase(vma *v, vma_piece *p, uint64_t t);
+static void data_phase(vma *v, vma_piece *p, uint64_t t);
+
+static void piece_finish(vma *v, vma_piece *p)
+{
+	vma_req *r = p->req;
+	piece_release(v, p);
+	if (--r->pending == 0) {
+		eng_handler done = r->done;
+		void *ctx = r->ctx;
+		uint64_t arg = r->arg;
+		r->next = ((vpool *)v->pool)->fr;
+		((vpool *)v->pool)->fr = r;
+		if (done)
+			done(v->e, ctx, arg);
+	}
+}
+
+static void ev_piece_done(eng *e, void *ctx, uint64_t arg)
+{
+	piece_finish(ctx, (vma_piece *)(uintptr_t)arg);
+}
+
+static void ev_data_phase(eng *e, void *ctx, uint64_t arg)
+{
+	data_phase(ctx, (vma_piece *)(uintptr_t)arg, eng_now(e));
+}
+
+static uint64_t meta_addr(const vma *v, uint32_t set)
+{
+	return v->meta_base + (uint64_t)set * v->meta_set_bytes;
+}
+
+static void stall_push(vma_piece **head, vma_piece **tail, vma_piece *p, uint64_t t)
+{
+	p->since = t;
+	p->next = NULL;
+	if (*tail)
+		(*tail)->next = p;
+	else
+		*head = p;
+	*tail = p;
+}
+
+static void tag_filled(eng *e, void *ctx, uint64_t set)
+{
+	vma *v = ctx;
+	uint64_t now = eng_now(e);
+	int m = cache_mshr_find(&v->tag, set);
+	vma_piece *w = m >= 0 ? v->tag_wait[m] : NULL;
+	if (m >= 0)
+		v->tag_wait[m] = NULL;
+	cache_fill(&v->tag, set, NULL);
+	while (w) {
+		vma_piece *n = w->next;
+		data_phase(v, w, now);
+		w = n;
+	}
+	while (v->tag_stall && cache_mshr_free(&v->tag)) {
+		vma_piece *p = v->tag_stall;
+		v->tag_stall = p->next;
+		if (!v->tag_stall)
+			v->tag_stall_tail = NULL;
+		v->s.stall_ticks += now - p->since;
+		meta_phase(v, p, now);
+	}
+}
+
+static void meta_phase(vma *v, vma_piece *p, uint64_t t)
+{
+	uint32_t set = cache_set_of(&v->l2, p->line);
+	if (!v->p.tag_cache_enabled) {
+		v->s.meta_reads++;
+		v->s.meta_bytes += v->meta_set_bytes;
+		memif_submit(v->mi, t, MEMIF_META, meta_addr(v, set), v->meta_set_bytes, 0,
+		             ev_data_phase, v, (uintptr_t)p);
+		return;
+	}
+	int m = -1;
+	switch (cache_lookup(&v->tag, set, v->meta_set_bytes, &m, NULL)) {
+	case CACHE_HIT:
+		eng_schedule(v->e,
+		             eng_next_edge(v->core, t) + v->p.tag_hit_latency * v->core.period,
+		             ev_data_phase, v, (uintptr_t)p);
+		break;
+	case CACHE_MISS_NEW:
+		v->s.meta_reads++;
+		v->s.meta_bytes += v->meta_set_bytes;
+		memif_submit(v->mi, t, MEMIF_META, meta_addr(v, set), v->meta_set_bytes, 0,
+		             tag_filled, v, set);
+		/* fall through */
+	case CACHE_MISS_MERGED:
+		p->next = v->tag_wait[m];
+		v->tag_wait[m] = p;
+		break;
+	case CACHE_MSHR_FULL:
+		stall_push(&v->tag_stall, &v->tag_stall_tail, p, t);
+		break;
+	}
+}
+
+static void dma_done(eng *e, void *ctx, uint64_t line)
+{
+	vma *v = ctx;
+	uint64_t now = eng_now(e);
+	int m = cache_mshr_find(&v->l2, line);
+	vma_piece *w = m >= 0 ? v->l2_wait[m] : NULL;
+	if (m >= 0)
+		v->l2_wait[m] = NULL;
+	uint32_t slot = cache_fill(&v->l2, line, NULL);
+	uint32_t set = cache_set_of(&v->l2, line);
+	/* posted: the fetched line into its slot, its record into the meta-data
+	 * (the tag cache, if it holds the record, is written through) */
+	v->s.data_writes++;
+	v->s.data_bytes += v->p.line;
+	memif_submit(v->mi, now, MEMIF_FILL, (uint64_t)slot * v->p.line, v->p.line, 1, NULL, NULL,
+	             0);
+	v->s.meta_writes++;
+	v->s.meta_bytes += v->meta_set_bytes;
+	memif_submit(v->mi, now, MEMIF_META, meta_addr(v, set), v->meta_set_bytes, 1, NULL, NULL,
+	             0);
+	/* the requested bytes are forwarded from the DMA buffer */
+	while (w) {
+		vma_piece *n = w->next;
+		piece_finish(v, w);
+		w = n;
+	}
+	while (v->l2_stall && cache_mshr_free(&v->l2)) {
+		vma_piece *p = v->l2_stall;
+		v->l2_stall = p->next;
+		if (!v->l2_stall)
+			v->l2_stall_tail = NULL;
+		v->s.stall_ticks += now - p->since;
+		data_phase(v, p, now);
+	}
+}
+
+static void data_phase(vma *v, vma_piece *p, uint64_t t)
+{
+	int m = -1;
+	uint32_t slot = 0;
+	switch (cache_lookup(&v->l2, p->line, p->bytes, &m, &slot)) {
+	case CACHE_HIT:
+		v->s.data_reads++;
+		v->s.data_bytes += p->bytes;
+		memif_submit(v->mi, t, p->type, (uint64_t)slot * v->p.line + p->addr % v->p.line,
+		             p->bytes, 0, ev_piece_done, v, (uintptr_t)p);
+		break;
+	case CACHE_MISS_NEW:
+		v->s.host_fetches++;
+		v->s.host_fetch_bytes += v->p.line;
+		eng_schedule(v->e, hbus_transfer(v->hb, t, v->p.line), dma_done, v, p->line);
+		/* fall through */
+	case CACHE_MISS_MERGED:
+		p->next = v->l2_wait[m];
+		v->l2_wait[m] = p;
+		break;
+	case CACHE_MSHR_FULL:
+		stall_push(&v->l2_stall, &v->l2_stall_tail, p, t);
+		break;
+	}
+}
+
+/* ---- entry points ---- */
+
+int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_handler done,
+             void *ctx, uint64_t arg)
+{
+	vma_req *r = req_alloc(v);
+	if (!r)
+		return -1;
+	*r = (vma_req){done, ctx, arg, 1, NULL};
+	v->s.reads++;
+	v->s.read_bytes += bytes;
+	uint64_t end = addr + (bytes ? bytes : 1);
+	for (uint64_t a = addr; a < end;) {
+		uint64_t line = a / v->p.line;
+		uint64_t lend = (line + 1) * v->p.line;
+		uint32_t n = (uint32_t)((end < lend ? end : lend) - a);
+		vma_piece *p = piece_alloc(v);
+		if (!p)
+			return -1;
+		*p = (vma_piece){r, a, line, 0, n, (uint8_t)type, NULL};
+		r->pending++;
+		meta_phase(v, p, t);
+		a += n;
+	}
+	if (--r->pending == 0) { /* cannot happen: every piece ends in an event */
+		r->next = ((vpool *)v->pool)->fr;
+		((vpool *)v->pool)->fr = r;
+		if (done)
+			eng_schedule(v->e, t, done, ctx, arg);
+	}
+	return 0;
+}
+
+int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes)
+{
+	v->s.writes++;
+	v->s.write_bytes += bytes;
+	uint64_t end = addr + (bytes ? bytes : 1);
+	for (uint64_t a = addr; a < end;) {
+		uint64_t line = a / v->p.line;
+		uint64_t lend = (line + 1) * v->p.line;
+		uint32_t n = (uint32_t)((end < lend ? end : lend) - a);
+		uint32_t slot;
+		if (cache_probe(&v->l2, line, &slot)) {
+			v->s.data_writes++;
+			v->s.data_bytes += n;
+			if (memif_submit(v->mi, t, type, (uint64_t)slot * v->p.line + a % v->p.line,
+			                 n, 1, NULL, NULL, 0))
+				return -1;
+		} else {
+			v->s.host_writes++;
+			v->s.host_write_bytes += n;
+			hbus_transfer(v->hb, t, n);
+		}
+		a += n;
+	}
+	return 0;
+}
+
+void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write)
+{
+	if (write) {
+		v->s.writes++;
+		v->s.write_bytes += bytes;
+	} else {
+		v->s.reads++;
+		v->s.read_bytes += bytes;
+	}
+	uint64_t end = addr + (bytes ? bytes : 1);
+	for (uint64_t a = addr; a < end;) {
+		uint64_t line = a / v->p.line;
+		uint64_t lend = (line + 1) * v->p.line;
+		uint32_t n = (uint32_t)((end < lend ? end : lend) - a);
+		a += n;
+		if (write) {
+			if (cache_probe(&v->l2, line, NULL)) {
+				v->s.data_writes++;
+				v->s.data_bytes += n;
+			} else {
+				v->s.host_writes++;
+				v->s.host_write_bytes += n;
+			}
+			continue;
+		}
+		uint32_t set = cache_set_of(&v->l2, line);
+		if (!v->p.tag_cache_enabled ||
+		    cache_access(&v->tag, (uint64_t)set * v->meta_set_bytes, v->meta_set_bytes)) {
+			v->s.meta_reads++;
+			v->s.meta_bytes += v->meta_set_bytes;
+		}
+		if (cache_lookup(&v->l2, line, n, NULL, NULL) == CACHE_HIT) {
+			v->s.data_reads++;
+			v->s.data_bytes += n;
+		} else {
+			cache_fill(&v->l2, line, NULL);
+			v->s.host_fetches++;
+			v->s.host_fetch_bytes += v->p.line;
+			v->s.data_writes++;
+			v->s.data_bytes += v->p.line;
+			v->s.meta_writes++;
+			v->s.meta_bytes += v->meta_set_bytes;
+		}
+	}
+}

@@ -1,0 +1,100 @@
+/*
+ * vma.h: the virtual memory architecture (L2): on-board SDRAM as a cache of
+ * host memory (seed 002 §4.2; Schmittler et al.).
+ *
+ * The chip addresses host memory. The on-board SDRAM holds a `ways`-way
+ * set-associative cache of it with `line`-byte lines (4-way, 128 B
+ * published) and address hashing (none | xor-fold) choosing the set. Its
+ * tags and state are meta-data in SDRAM too, one record per set of
+ * ways x 5 bytes (§4.2: 640 KB of meta-data manage 16 MB in 128-byte lines,
+ * i.e. 5 bytes per line); looking them up and updating them are SDRAM
+ * accesses of their own (requester MEMIF_META), counted apart from data.
+ * An on-chip tag cache (an instance of mem/cache with one set record per
+ * line; 64 KB published) caches the records; it can be disabled.
+ *
+ * SDRAM layout: data lines first (slot = set*ways + way, at slot*line), the
+ * meta-data region after them. nsets = SDRAM bytes / (ways*line + record).
+ *
+ * One read (any size; split at L2 lines) runs, per L2 line:
+ *   1. meta lookup: tag cache hit (hit_latency core cycles), or a META read
+ *      of the record from SDRAM (tag cache miss, or no tag cache);
+ *   2. L2 hit: a data read of the requested bytes from SDRAM;
+ *      L2 miss: a DMA of the whole line over the host bus; the line is
+ *      forwarded to the requester when the DMA completes and, posted, written
+ *      into SDRAM (MEMIF_FILL) together with its updated record (META).
+ * Misses to a line in flight merge (L2 MSHRs); scene data is read-only, so
+ * evictions write nothing back. Writes (stack spills) go to SDRAM if the
+ * line is on board, else around it over the host bus.
+ */
+#ifndef SAAR_MEM_VMA_H
+#define SAAR_MEM_VMA_H
+
+#include <stdint.h>
+
+#include "cache.h"
+#include "diag.h"
+#include "engine.h"
+#include "hostbus.h"
+#include "memif.h"
+
+#define VMA_META_BYTES_PER_LINE 5u  /* 40 bits of tag + state per line, §4.2 */
+#define VMA_MSHRS               32u /* outstanding line fetches; assumed */
+#define VMA_TAG_MSHRS           16u /* outstanding meta-data reads; assumed */
+
+typedef struct vma_params {
+	uint32_t ways, line;
+	int hash; /* enum cache_hash */
+	int tag_cache_enabled;
+	uint64_t tag_cache_bytes;
+	uint32_t tag_cache_ways;
+	uint32_t tag_hit_latency; /* core cycles */
+} vma_params;
+
+typedef struct vma_stats {
+	uint64_t reads, read_bytes, writes, write_bytes;
+	uint64_t meta_reads, meta_writes, meta_bytes; /* SDRAM meta-data traffic */
+	uint64_t data_reads, data_writes, data_bytes; /* SDRAM data traffic (incl. fills) */
+	uint64_t host_fetches, host_fetch_bytes;      /* lines fetched over the host bus */
+	uint64_t host_writes, host_write_bytes;       /* write-around */
+	uint64_t stall_ticks;                         /* waited for a free MSHR */
+} vma_stats;
+
+typedef struct vma_piece vma_piece;
+typedef struct vma_req vma_req;
+
+typedef struct vma {
+	eng *e;
+	eng_clock core;
+	memif *mi;
+	hbus *hb;
+	vma_params p;
+	cache l2;  /* functional state of the on-board cache */
+	cache tag; /* the on-chip tag cache (valid if p.tag_cache_enabled) */
+	uint32_t meta_set_bytes;
+	uint64_t meta_base;              /* SDRAM address of the meta-data region */
+	vma_piece **tag_wait, **l2_wait; /* per MSHR: pieces waiting for its fill */
+	vma_piece *tag_stall, *tag_stall_tail, *l2_stall, *l2_stall_tail;
+	void *pool; /* allocator of pieces and requests (vma.c) */
+	vma_stats s;
+} vma;
+
+/* Sizes the L2 from sdram_bytes; errors name the memory.vma keys. */
+int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram_bytes,
+             const vma_params *p, diag *d);
+void vma_free(vma *v);
+/* Lines the L2 holds (capacity = lines * line bytes). */
+uint64_t vma_capacity(const vma *v);
+
+/* A read of bytes at host address addr, issued at tick t (>= eng_now),
+ * for requester type (MEM_*): done(e, ctx, arg) when all bytes are there.
+ * Returns -1 only when out of memory. */
+int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_handler done,
+             void *ctx, uint64_t arg);
+/* A posted write. */
+int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes);
+
+/* The same walk without time (immediate fills, no SDRAM or bus timing):
+ * the counters move as in vma_read/vma_write. For trace replay. */
+void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write);
+
+#endif

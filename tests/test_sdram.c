@@ -1,0 +1,170 @@
+/*
+ * test_sdram.c: SDRAM latencies exactly as the timing parameters say (row
+ * hit, idle bank, row conflict with tRAS), data-bus serialization, address
+ * mapping bit by bit; host-bus transfer time and contention; memif order.
+ */
+#include "hostbus.h"
+#include "memif.h"
+#include "sdram.h"
+#include "testutil.h"
+
+static sdram_params std_params(void)
+{
+	/* 64 MB, 128 bit at 133 MHz, 4 banks, 8 KB rows, CL3 tRCD3 tRP3 tRAS6 */
+	return (sdram_params){
+	    64u << 20, 133.0, 128, 4, 8192, 3, 3, 3, 6, 1, SDRAM_MAP_ROW_BANK_COL};
+}
+
+Test(sdram, mapping_bits)
+{
+	sdram s;
+	diag d;
+	sdram_params p = std_params();
+	cr_assert_eq(sdram_init(&s, &p, &d), 0, "%s", d.msg);
+	uint32_t bank, col;
+	uint64_t row;
+	/* row:bank:col: col = bits 0-12, bank = bits 13-14, row = bits 15+ */
+	sdram_decode(&s, (5ull << 15) | (2ull << 13) | 100, &bank, &row, &col);
+	cr_assert_eq(col, 100);
+	cr_assert_eq(bank, 2);
+	cr_assert_eq(row, 5);
+	p.mapping = SDRAM_MAP_BANK_ROW_COL; /* 64 MB / 4 banks / 8 KB = 2048 rows */
+	cr_assert_eq(sdram_init(&s, &p, &d), 0);
+	sdram_decode(&s, (3ull * 2048 + 7) * 8192 + 9, &bank, &row, &col);
+	cr_assert_eq(bank, 3);
+	cr_assert_eq(row, 7);
+	cr_assert_eq(col, 9);
+	cr_assert_eq(sdram_mapping_parse("row:bank:col"), SDRAM_MAP_ROW_BANK_COL);
+	cr_assert_eq(sdram_mapping_parse("col:row"), -1);
+}
+
+Test(sdram, latencies_exact)
+{
+	sdram s;
+	diag d;
+	sdram_params p = std_params();
+	cr_assert_eq(sdram_init(&s, &p, &d), 0);
+	uint64_t T = s.t.clk.period;
+	cr_assert_eq(T, 7519);
+	cr_assert_eq(sdram_peak_bw(&s) > 2.12e9 && sdram_peak_bw(&s) < 2.13e9, 1);
+	/* idle bank: tRCD + CL + beats; 36 bytes on 16-byte beats = 3 beats */
+	uint64_t t0 = 100 * T;
+	cr_assert_eq(sdram_access(&s, t0, 0, 36, 0, NULL), t0 + (3 + 3 + 3) * T);
+	cr_assert_eq(s.s.row_empty, 1);
+	/* row hit after the bus went idle: CL + beats */
+	uint64_t t1 = 200 * T;
+	cr_assert_eq(sdram_access(&s, t1, 64, 8, 0, NULL), t1 + (3 + 1) * T);
+	cr_assert_eq(s.s.row_hits, 1);
+	/* row conflict in bank 0 long after tRAS: tRP + tRCD + CL + beats */
+	uint64_t t2 = 300 * T, other_row = 4ull << 15;
+	cr_assert_eq(sdram_access(&s, t2, other_row, 16, 0, NULL), t2 + (3 + 3 + 3 + 1) * T);
+	cr_assert_eq(s.s.row_conflicts, 1);
+	/* an immediate conflict back to row 0 waits for tRAS of that ACT:
+	 * ACT at t2+3T, PRE not before ACT+6T and the data end (t2+10T) */
+	uint64_t t3 = t2 + 10 * T;
+	uint64_t pre = t2 + 10 * T;
+	cr_assert_eq(sdram_access(&s, t3, 0, 16, 0, NULL), pre + (3 + 3 + 3 + 1) * T);
+	/* a request between edges starts at the next edge */
+	uint64_t t4 = 500 * T + 1;
+	cr_assert_eq(sdram_access(&s, t4, 16, 16, 0, NULL), 501 * T + (3 + 1) * T);
+	/* writes: data with the column command */
+	uint64_t t5 = 600 * T;
+	cr_assert_eq(sdram_access(&s, t5, 32, 32, 1, NULL), t5 + 2 * T);
+	cr_assert_eq(s.s.read_bytes, 36 + 8 + 16 + 16 + 16);
+	cr_assert_eq(s.s.write_bytes, 32);
+}
+
+Test(sdram, burst_rounding)
+{
+	sdram s;
+	diag d;
+	sdram_params p = std_params();
+	p.burst = 4;
+	cr_assert_eq(sdram_init(&s, &p, &d), 0);
+	cr_assert_eq(sdram_beats(&s, 8), 4);
+	cr_assert_eq(sdram_beats(&s, 128), 8);
+	cr_assert_eq(sdram_beats(&s, 129), 12);
+}
+
+Test(sdram, bus_serializes)
+{
+	sdram s;
+	diag d;
+	sdram_params p = std_params();
+	cr_assert_eq(sdram_init(&s, &p, &d), 0);
+	uint64_t T = s.t.clk.period, t = 10 * T;
+	/* open rows in banks 0 and 1 first */
+	sdram_access(&s, t, 0, 16, 0, NULL);
+	sdram_access(&s, t, 1u << 13, 16, 0, NULL);
+	t = 100 * T;
+	/* four 128-byte row hits at once, two banks: 8 beats each, back to back */
+	uint64_t first, end = 0;
+	for (int i = 0; i < 4; i++) {
+		uint64_t a = (uint64_t)(i & 1) << 13 | (uint64_t)(256 + 128 * i);
+		end = sdram_access(&s, t, a, 128, 0, i == 0 ? &first : NULL);
+	}
+	cr_assert_eq(first, t + 3 * T);
+	cr_assert_eq(end, t + 3 * T + 32 * T);
+	cr_assert_eq(s.s.busy_ticks, (1 + 1 + 32) * T);
+}
+
+Test(hostbus, pci_transfer_time)
+{
+	hbus h;
+	hbus_params p;
+	diag d;
+	cr_assert_eq(hbus_preset("pci", &p), 0);
+	cr_assert_eq(hbus_init(&h, &p, &d), 0);
+	uint64_t T = h.clk.period; /* 30303 ps */
+	cr_assert_eq(T, 30303);
+	/* 128 bytes on 32 bits = 32 data phases, one burst: 300 ns + 32 T */
+	cr_assert_eq(hbus_duration(&h, 128), 300000 + 32 * T);
+	/* 129 bytes: 33 phases, two bursts */
+	cr_assert_eq(hbus_duration(&h, 129), 2 * 300000 + 33 * T);
+	/* contention: the second transfer waits for the first */
+	uint64_t a = hbus_transfer(&h, 0, 128), b = hbus_transfer(&h, 0, 128);
+	cr_assert_eq(a, 300000 + 32 * T);
+	uint64_t start2 = eng_next_edge(h.clk, a); /* transactions start on bus edges */
+	cr_assert_eq(b, start2 + a);
+	cr_assert_eq(h.s.bytes, 256);
+	cr_assert_eq(h.s.busy_ticks, 2 * a);
+	cr_assert_eq(h.s.wait_ticks, start2);
+	cr_assert_eq(hbus_preset("pci66", &p), 0);
+	cr_assert_eq(p.width_bits, 64);
+	cr_assert_eq(hbus_preset("isa", &p), -1);
+}
+
+static uint64_t done_at[8];
+static void note(eng *e, void *ctx, uint64_t arg)
+{
+	done_at[arg] = eng_now(e);
+}
+
+Test(memif, fifo_and_round_robin)
+{
+	for (int pol = 0; pol < 2; pol++) {
+		eng *e = eng_create(16);
+		sdram s;
+		diag d;
+		sdram_params p = std_params();
+		cr_assert_eq(sdram_init(&s, &p, &d), 0);
+		memif m;
+		cr_assert_eq(memif_init(&m, e, &s, pol), 0);
+		/* three kd requests, then one shade request, all at tick 0 */
+		for (int i = 0; i < 3; i++)
+			memif_submit(&m, 0, MEMIF_KD, 128 * (uint64_t)i, 128, 0, note, NULL,
+			             (uint64_t)i);
+		memif_submit(&m, 0, MEMIF_SHADE, 4096, 128, 0, note, NULL, 3);
+		eng_run(e, ENG_FOREVER);
+		if (pol == MEMIF_FIFO) /* submission order */
+			cr_assert(done_at[0] < done_at[1] && done_at[1] < done_at[2] &&
+			          done_at[2] < done_at[3]);
+		else /* shade gets its turn before the kd queue drains */
+			cr_assert(done_at[3] < done_at[2], "rr: shade %llu kd2 %llu",
+			          (unsigned long long)done_at[3], (unsigned long long)done_at[2]);
+		cr_assert_eq(m.s.bytes[MEMIF_KD], 384);
+		cr_assert_eq(s.s.read_bytes, 512);
+		memif_free(&m);
+		eng_destroy(e);
+	}
+}

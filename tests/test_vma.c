@@ -1,0 +1,213 @@
+/*
+ * test_vma.c: the hierarchy model behind the memory port, with and without
+ * the VMA: every read is answered; a working set larger than on-board memory
+ * moves lines over PCI, one that fits moves 0 bytes on its second pass;
+ * disabling the tag cache raises meta-data SDRAM accesses; counters are
+ * consistent (hits + misses = accesses, bytes add up across levels); an
+ * image too large for on-board memory without VMA is a clear error.
+ */
+#include <string.h>
+
+#include "config.h"
+#include "hier.h"
+#include "testutil.h"
+
+typedef struct drv {
+	eng *e;
+	memport *mp;
+	eng_clock clk;
+	uint64_t issued, answered, n, base, span, stride;
+	int per_cycle, type;
+	uint32_t bytes;
+	uint64_t last_done;
+} drv;
+
+static void answered(eng *e, void *ctx, uint64_t arg)
+{
+	drv *d = ctx;
+	d->answered++;
+	d->last_done = eng_now(e);
+}
+
+/* Issues per_cycle reads every core cycle: a strided sweep over span. */
+static void issue(eng *e, void *ctx, uint64_t arg)
+{
+	drv *d = ctx;
+	for (int k = 0; k < d->per_cycle && d->issued < d->n; k++, d->issued++) {
+		mem_req r = {d->base + (d->issued * d->stride) % d->span, d->bytes,
+		             (uint8_t)d->type, 0, 0};
+		mem_access(d->mp, &r, answered, d, 0);
+	}
+	if (d->issued < d->n)
+		eng_schedule(e, eng_now(e) + d->clk.period, issue, d, 0);
+}
+
+static void run_pass(drv *d, uint64_t n)
+{
+	d->n += n;
+	eng_schedule(d->e, eng_next_edge(d->clk, eng_now(d->e)), issue, d, 0);
+	eng_run(d->e, ENG_FOREVER);
+	cr_assert_eq(d->answered, d->issued, "every read answered");
+}
+
+static void setup(saar_config *c, int use_vma, int sdram_mb)
+{
+	cfg_defaults(c);
+	c->memory.model = CFG_MEM_HIERARCHY;
+	c->memory.vma.enabled = use_vma;
+	c->memory.sdram.mb = sdram_mb;
+}
+
+static void check_consistent(const hier_stats *s)
+{
+	for (int t = 0; t < MEM_NTYPES; t++)
+		cr_assert_eq(s->l1[t].hits + s->l1[t].misses, s->l1[t].accesses);
+	uint64_t reads = 0, bytes = 0;
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		reads += s->memif.reads[r];
+		bytes += s->memif.bytes[r];
+	}
+	/* every memif request reached SDRAM, and the bytes add up */
+	cr_assert_eq(reads, s->sdram.reads);
+	cr_assert_eq(bytes, s->sdram.read_bytes + s->sdram.write_bytes);
+	cr_assert_eq(s->sdram.row_hits + s->sdram.row_empty + s->sdram.row_conflicts > 0, 1);
+	if (s->vma_enabled) {
+		cr_assert_eq(s->l2.hits + s->l2.misses, s->l2.accesses);
+		cr_assert_eq(s->vma.host_fetch_bytes + s->vma.host_write_bytes, s->hostbus.bytes);
+		cr_assert_eq(s->vma.meta_reads + s->vma.meta_writes,
+		             s->memif.reads[MEMIF_META] + s->memif.writes[MEMIF_META]);
+		cr_assert_eq(s->vma.meta_bytes, s->memif.bytes[MEMIF_META]);
+		cr_assert_eq(s->l2.fills, s->vma.host_fetches);
+	}
+}
+
+Test(hier, no_vma_bytes_add_up)
+{
+	saar_config c;
+	setup(&c, 0, 64);
+	eng *e = eng_create(64);
+	eng_clock clk = eng_clock_mhz(533);
+	memport mp;
+	diag d;
+	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 8 << 20, &d), 0, "%s", d.msg);
+	drv v = {e, &mp, clk, 0, 0, 0, 0, 1 << 20, 36, 4, MEM_TRI, 36, 0};
+	run_pass(&v, 100000);
+	hier_stats s;
+	cr_assert_eq(hier_get_stats(&mp, &s), 0);
+	check_consistent(&s);
+	/* 1 MB of 36-byte triangles, 100000 reads: 3.6 MB > 144 KB: misses */
+	cr_assert_gt(s.l1[MEM_TRI].misses, 0);
+	cr_assert_eq(s.l1[MEM_TRI].fill_bytes, s.memif.bytes[MEMIF_TRI]);
+	cr_assert_eq(s.l1[MEM_TRI].fills, s.memif.reads[MEMIF_TRI]);
+	cr_assert_eq(s.reads[MEM_TRI], 100000);
+	cr_assert_gt(s.wait_cycles[MEM_TRI], 100000 * 2 - 1);
+	/* JSON is well formed enough to contain the keys */
+	char *buf = NULL;
+	size_t len = 0;
+	FILE *f = open_memstream(&buf, &len);
+	jsonw w;
+	jsonw_init_file(&w, f);
+	hier_write_json(&s, &w);
+	fclose(f);
+	cr_assert(strstr(buf, "\"row_hit_rate\"") && strstr(buf, "\"tri\""), "%s", buf);
+	free(buf);
+	mem_free(&mp);
+	eng_destroy(e);
+}
+
+Test(hier, image_too_large_without_vma)
+{
+	saar_config c;
+	setup(&c, 0, 1);
+	eng *e = eng_create(4);
+	memport mp;
+	diag d;
+	cr_assert_neq(mem_init_hier(&mp, e, eng_clock_mhz(533), &c, 3 << 20, &d), 0);
+	cr_assert(strstr(d.msg, "saarcor-vma.yaml"), "%s", d.msg);
+	eng_destroy(e);
+}
+
+Test(hier, hit_latency_exact)
+{
+	saar_config c;
+	setup(&c, 0, 64);
+	eng *e = eng_create(16);
+	eng_clock clk = eng_clock_mhz(533);
+	memport mp;
+	diag d;
+	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 1 << 20, &d), 0, "%s", d.msg);
+	drv v = {e, &mp, clk, 0, 0, 0, 0, 64, 8, 1, MEM_KD, 8, 0};
+	run_pass(&v, 1); /* a miss */
+	uint64_t t0 = eng_now(e) + clk.period * 10;
+	t0 = eng_next_edge(clk, t0);
+	eng_schedule(e, t0, issue, &v, 0);
+	v.n = 2;
+	v.base = 0;
+	v.stride = 0;
+	eng_run(e, ENG_FOREVER);
+	cr_assert_eq(v.last_done, t0 + 2 * clk.period, "hit in hit_latency cycles");
+	mem_free(&mp);
+	eng_destroy(e);
+}
+
+static hier_stats vma_run(int tag_cache, int sdram_mb, uint64_t span, int passes,
+                          uint64_t *pci_per_pass)
+{
+	saar_config c;
+	setup(&c, 1, sdram_mb);
+	c.memory.vma.tag_cache_enabled = tag_cache;
+	c.memory.vma.tag_cache_kb = 4; /* small: meta-data misses show */
+	eng *e = eng_create(64);
+	eng_clock clk = eng_clock_mhz(533);
+	memport mp;
+	diag d;
+	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 64 << 20, &d), 0, "%s", d.msg);
+	/* 64-byte shading records: each L1 miss is an 8-byte line */
+	drv v = {e, &mp, clk, 0, 0, 0, 4096, span, 64, 2, MEM_SHADE, 8, 0};
+	hier_stats s;
+	uint64_t prev = 0;
+	for (int p = 0; p < passes; p++) {
+		run_pass(&v, span / 64);
+		hier_get_stats(&mp, &s);
+		if (pci_per_pass)
+			pci_per_pass[p] = s.hostbus.bytes - prev;
+		prev = s.hostbus.bytes;
+	}
+	check_consistent(&s);
+	mem_free(&mp);
+	eng_destroy(e);
+	return s;
+}
+
+Test(vma, larger_than_board_uses_pci)
+{
+	uint64_t pci[2];
+	/* 3 MB swept twice through 1 MB on board: the second pass misses again */
+	hier_stats s = vma_run(1, 1, 3 << 20, 2, pci);
+	cr_assert_gt(pci[0], 0);
+	cr_assert_gt(pci[1], 0);
+	cr_assert_gt(s.vma.host_fetches, (3u << 20) / 128);
+	cr_assert_gt(s.memif.reads[MEMIF_META] + s.memif.writes[MEMIF_META], 0);
+}
+
+Test(vma, fitting_set_second_pass_no_pci)
+{
+	uint64_t pci[2];
+	/* 512 KB twice through 1 MB on board (the 64 KB shading L1 cannot hold
+	 * it, so the second pass reaches the L2 and hits there) */
+	hier_stats s = vma_run(1, 1, 512 << 10, 2, pci);
+	cr_assert_eq(pci[0], (512u << 10), "first pass fetches every line once");
+	cr_assert_eq(pci[1], 0, "second pass: %llu bytes over PCI", (unsigned long long)pci[1]);
+	cr_assert_gt(s.l2.hits, 0);
+}
+
+Test(vma, no_tag_cache_more_meta_accesses)
+{
+	hier_stats with = vma_run(1, 1, 512 << 10, 2, NULL);
+	hier_stats without = vma_run(0, 1, 512 << 10, 2, NULL);
+	uint64_t mw = with.memif.reads[MEMIF_META], mo = without.memif.reads[MEMIF_META];
+	cr_assert_gt(mo, mw, "meta reads: %llu without vs %llu with tag cache",
+	             (unsigned long long)mo, (unsigned long long)mw);
+	cr_assert_eq(without.tag_cache.accesses, 0);
+	cr_assert_gt(with.tag_cache.hits, 0);
+}

@@ -1,0 +1,290 @@
+/*
+ * replay.c: saarsim-replay, runs a memory trace (traces/memtrace.h) through
+ * any cache/VMA configuration without simulating the units.
+ *
+ *   saarsim-replay [--config FILE] [--set key=value]... [--timing]
+ *                  [--image-bytes N] [--json FILE] TRACE.gz
+ *
+ * Default (functional): every request goes through its L1 (mem/cache) with
+ * immediate fills; L1 misses go to SDRAM, or with memory.vma.enabled through
+ * the VMA's tag cache and L2 (vma_access_func). Hit rates, bytes at every
+ * level and requests per host second; fast enough for cache-size and
+ * line-size sweeps. --timing instead issues each request at its trace cycle
+ * into the full timed hierarchy (mem/hier.c) and also reports the cycles.
+ * Reads at or above --image-bytes (the chip's stack-spill area) bypass the
+ * L1s, as in the chip. Bad input: one line on stderr, exit 2.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "config.h"
+#include "hier.h"
+#include "memtrace.h"
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int usage(void)
+{
+	fputs("usage: saarsim-replay [--config FILE] [--set key=value]... [--timing] "
+	      "[--image-bytes N] [--json FILE] TRACE.gz\n",
+	      stderr);
+	return DIAG_EXIT;
+}
+
+static int fail(const diag *d)
+{
+	fprintf(stderr, "%s\n", d->msg);
+	return DIAG_EXIT;
+}
+
+/* ---- timed replay: a feeder event issues the requests of each cycle ---- */
+
+typedef struct feeder {
+	eng *e;
+	eng_clock clk;
+	memport *mp;
+	mtr_reader *rd;
+	mtr_rec next;
+	int have, err;
+	uint64_t issued, answered;
+	diag *d;
+} feeder;
+
+static void answered(eng *e, void *ctx, uint64_t arg)
+{
+	((feeder *)ctx)->answered++;
+}
+
+static void feed(eng *e, void *ctx, uint64_t arg)
+{
+	feeder *f = ctx;
+	uint64_t cyc = eng_now(e) / f->clk.period;
+	while (f->have && f->next.cycle <= cyc) {
+		mem_req r = {f->next.addr, f->next.bytes, f->next.type, f->next.write, 0};
+		mem_access(f->mp, &r, r.write ? NULL : answered, f, 0);
+		f->issued++;
+		int rc = mtr_read(f->rd, &f->next, f->d);
+		f->have = rc == 1;
+		f->err |= rc < 0;
+	}
+	if (f->have)
+		eng_schedule(e, eng_cycles_to_ticks(f->clk, f->next.cycle), feed, f, 0);
+}
+
+int main(int argc, char **argv)
+{
+	saar_config cfg;
+	diag d = {{0}};
+	cfg_defaults(&cfg);
+	const char *trace = NULL, *json = NULL;
+	int timing = 0;
+	uint64_t image_bytes = UINT64_MAX;
+	for (int i = 1; i < argc; i++) {
+		const char *a = argv[i];
+		if (!strcmp(a, "--config") && i + 1 < argc) {
+			if (cfg_load(&cfg, argv[++i], &d))
+				return fail(&d);
+		} else if (!strcmp(a, "--set") && i + 1 < argc) {
+			if (cfg_set(&cfg, argv[++i], &d))
+				return fail(&d);
+		} else if (!strcmp(a, "--timing")) {
+			timing = 1;
+		} else if (!strcmp(a, "--image-bytes") && i + 1 < argc) {
+			char *end;
+			image_bytes = strtoull(argv[++i], &end, 10);
+			if (*end) {
+				fprintf(stderr, "--image-bytes: expected a number, got '%s'\n",
+				        argv[i]);
+				return DIAG_EXIT;
+			}
+		} else if (!strcmp(a, "--json") && i + 1 < argc) {
+			json = argv[++i];
+		} else if (a[0] == '-' && a[1]) {
+			fprintf(stderr, "unknown option '%s'\n", a);
+			return usage();
+		} else if (!trace) {
+			trace = a;
+		} else {
+			return usage();
+		}
+	}
+	if (!trace)
+		return usage();
+	if (cfg_validate(&cfg, &d))
+		return fail(&d);
+
+	static mtr_reader rd;
+	if (mtr_open_read(&rd, trace, &d))
+		return fail(&d);
+
+	hier_stats s;
+	memset(&s, 0, sizeof s);
+	uint64_t n = 0, cycles = 0;
+	double t0 = now_s();
+	if (timing) {
+		eng *e = eng_create(1024);
+		eng_clock clk = eng_clock_mhz(cfg.chip.clock_mhz);
+		memport mp;
+		/* The trace carries no image size. Without --image-bytes: with the VMA
+		 * every address is image; without it, whatever fits on board is
+		 * (reads above it take the spill-area path past the L1s). */
+		uint64_t img = image_bytes;
+		if (img == UINT64_MAX && !cfg.memory.vma.enabled)
+			img = (uint64_t)cfg.memory.sdram.mb << 20;
+		if (!e || mem_init_hier(&mp, e, clk, &cfg, img, &d))
+			return fail(&d);
+		feeder f = {e, clk, &mp, &rd, {0}, 0, 0, 0, 0, &d};
+		int rc = mtr_read(&rd, &f.next, &d);
+		if (rc < 0)
+			return fail(&d);
+		f.have = rc == 1;
+		if (f.have)
+			eng_schedule(e, eng_cycles_to_ticks(clk, f.next.cycle), feed, &f, 0);
+		eng_run(e, ENG_FOREVER);
+		if (f.err)
+			return fail(&d);
+		n = f.issued;
+		cycles = eng_now(e) / clk.period;
+		hier_get_stats(&mp, &s);
+		mem_free(&mp);
+		eng_destroy(e);
+	} else {
+		cache l1[MEM_NTYPES];
+		for (int t = 0; t < MEM_NTYPES; t++) {
+			cache_params cp = hier_l1_params(&cfg, t);
+			char what[32];
+			snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
+			if (cache_init(&l1[t], &cp, what, &d))
+				return fail(&d);
+		}
+		static vma v;
+		int use_vma = cfg.memory.vma.enabled;
+		if (use_vma) {
+			vma_params vp = hier_vma_params(&cfg);
+			if (vma_init(&v, NULL, eng_clock_mhz(cfg.chip.clock_mhz), NULL, NULL,
+			             (uint64_t)cfg.memory.sdram.mb << 20, &vp, &d))
+				return fail(&d);
+		}
+		uint64_t sd_read = 0, sd_write = 0;
+		mtr_rec r;
+		int rc;
+		while ((rc = mtr_read(&rd, &r, &d)) == 1) {
+			n++;
+			cycles = r.cycle;
+			int t = r.type;
+			if (r.write) {
+				s.writes[t]++;
+				s.write_bytes[t] += r.bytes;
+				if (use_vma)
+					vma_access_func(&v, r.addr, r.bytes, 1);
+				else
+					sd_write += r.bytes;
+				continue;
+			}
+			s.reads[t]++;
+			s.read_bytes[t] += r.bytes;
+			if (r.addr >= image_bytes) {
+				s.bypass_reads[t]++;
+				if (use_vma)
+					vma_access_func(&v, r.addr, r.bytes, 0);
+				else
+					sd_read += r.bytes;
+				continue;
+			}
+			cache *c = &l1[t];
+			uint32_t lb = c->p.line_bytes, bytes = r.bytes ? r.bytes : 1;
+			uint64_t first = r.addr / lb, last = (r.addr + bytes - 1) / lb;
+			for (uint64_t l = first; l <= last; l++) {
+				if (cache_lookup(c, l, first == last ? bytes : lb, NULL, NULL) ==
+				    CACHE_HIT)
+					continue;
+				cache_fill(c, l, NULL);
+				if (use_vma)
+					vma_access_func(&v, l * lb, lb, 0);
+				else
+					sd_read += lb;
+			}
+		}
+		if (rc < 0)
+			return fail(&d);
+		for (int t = 0; t < MEM_NTYPES; t++) {
+			s.l1[t] = l1[t].s;
+			cache_free(&l1[t]);
+		}
+		s.core_period = eng_clock_mhz(cfg.chip.clock_mhz).period;
+		if (use_vma) {
+			s.vma_enabled = 1;
+			s.vma = v.s;
+			s.tag_cache = v.tag.s;
+			s.l2 = v.l2.s;
+			s.hostbus.bytes = v.s.host_fetch_bytes + v.s.host_write_bytes;
+			s.hostbus.transfers = v.s.host_fetches + v.s.host_writes;
+			/* SDRAM bytes with VMA: data (reads, fills, writes) plus meta-data;
+			 * the functional path does not split reads from writes */
+			sd_read = v.s.data_bytes + v.s.meta_bytes;
+			s.memif.bytes[MEMIF_META] = v.s.meta_bytes;
+			s.memif.reads[MEMIF_META] = v.s.meta_reads;
+			s.memif.writes[MEMIF_META] = v.s.meta_writes;
+			vma_free(&v);
+		}
+		s.sdram.read_bytes = sd_read;
+		s.sdram.write_bytes = sd_write;
+	}
+	double secs = now_s() - t0;
+	mtr_close_read(&rd);
+
+	printf("trace %s: %llu requests, last cycle %llu, %s replay\n", trace,
+	       (unsigned long long)n, (unsigned long long)cycles, timing ? "timed" : "functional");
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		const cache_stats *c = &s.l1[t];
+		printf("  l1.%-5s accesses %12llu  hits %12llu  misses %10llu  hit rate %6.2f%%  "
+		       "merges %8llu  fill bytes %12llu\n",
+		       mem_type_name(t), (unsigned long long)c->accesses,
+		       (unsigned long long)c->hits, (unsigned long long)c->misses,
+		       c->accesses ? 100.0 * (double)c->hits / (double)c->accesses : 0.0,
+		       (unsigned long long)c->merges, (unsigned long long)c->fill_bytes);
+	}
+	if (s.vma_enabled) {
+		printf(
+		    "  tag cache hit rate %6.2f%%   L2 hit rate %6.2f%%   meta-data SDRAM accesses "
+		    "%llu (%.1f%% of SDRAM accesses)\n",
+		    s.tag_cache.accesses
+		        ? 100.0 * (double)s.tag_cache.hits / (double)s.tag_cache.accesses
+		        : 0.0,
+		    s.l2.accesses ? 100.0 * (double)s.l2.hits / (double)s.l2.accesses : 0.0,
+		    (unsigned long long)(s.vma.meta_reads + s.vma.meta_writes),
+		    100.0 * (double)(s.vma.meta_reads + s.vma.meta_writes) /
+		        (double)(s.vma.meta_reads + s.vma.meta_writes + s.vma.data_reads +
+		                 s.vma.data_writes + (s.vma.meta_reads + s.vma.data_reads == 0)));
+		printf("  host bus: %llu bytes in %llu transfers\n",
+		       (unsigned long long)s.hostbus.bytes,
+		       (unsigned long long)s.hostbus.transfers);
+	}
+	printf("  SDRAM bytes %llu (read %llu, write %llu)\n",
+	       (unsigned long long)(s.sdram.read_bytes + s.sdram.write_bytes),
+	       (unsigned long long)s.sdram.read_bytes, (unsigned long long)s.sdram.write_bytes);
+	if (timing)
+		printf("  SDRAM row hits %llu, row misses %llu, busy %.1f%%; %llu core cycles\n",
+		       (unsigned long long)s.sdram.row_hits,
+		       (unsigned long long)(s.sdram.row_empty + s.sdram.row_conflicts),
+		       s.now_ticks ? 100.0 * (double)s.sdram.busy_ticks / (double)s.now_ticks : 0.0,
+		       (unsigned long long)cycles);
+	printf("  replay speed: %.1f million requests per host second (%.3f s)\n",
+	       secs > 0 ? (double)n / secs / 1e6 : 0.0, secs);
+	if (json) {
+		jsonw w;
+		if (jsonw_open(&w, json, &d))
+			return fail(&d);
+		hier_write_json(&s, &w);
+		if (jsonw_close(&w, &d))
+			return fail(&d);
+	}
+	return 0;
+}
