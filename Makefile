@@ -60,15 +60,15 @@ PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS) 2>/dev/null)
 TEST_LIBS  = $(shell pkg-config --libs $(TESTPKGS) 2>/dev/null)
 
-MAINS    := kernel-ref/rtref.c sim/main.c traces/replay.c
+MAINS    := kernel-ref/rtref.c kernel-ref/stress_main.c sim/main.c traces/replay.c
 LIB_C    := $(filter-out $(MAINS),$(wildcard kernel-ref/*.c sim/*.c units/*.c mem/*.c traces/*.c))
 LIB_CXX  := $(wildcard kernel-ref/*.cpp)
 LIB_OBJ  := $(LIB_C:%.c=$(B)/%.o) $(LIB_CXX:%.cpp=$(B)/%.o)
 TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
-PROGS    := $(B)/rtref $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
+PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench install clean deps
+.PHONY: all run test bench stress install clean deps
 all: $(PROGS)
 
 deps: $(DEPSTAMP)
@@ -87,6 +87,8 @@ $(B)/libsaar.a: $(LIB_OBJ)
 
 # The library has C++ objects (the OIIO shim), so link with the C++ driver.
 $(B)/rtref: $(B)/kernel-ref/rtref.o $(B)/libsaar.a
+	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+$(B)/saarsim-stress: $(B)/kernel-ref/stress_main.o $(B)/libsaar.a
 	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
 $(B)/saarsim: $(B)/sim/main.o $(B)/libsaar.a
 	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
@@ -115,6 +117,10 @@ test: all $(B)/saarsim-tests
 bench: all
 	sh scripts/bench.sh $(B)
 
+# The numerical stress suite at full size; writes docs/NUMERICS.md.
+stress: all
+	./$(B)/saarsim-stress --out docs/NUMERICS.md
+
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin
 	install -m 755 $(PROGS) $(DESTDIR)$(PREFIX)/bin/
@@ -122,4 +128,4 @@ install: all
 clean:
 	rm -rf build build-san
 
--include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(B)/kernel-ref/rtref.d $(B)/sim/main.d
+-include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(MAINS:%.c=$(B)/%.d)

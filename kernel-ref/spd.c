@@ -22,7 +22,7 @@
 /* ---- tessellated primitives ------------------------------------------------ */
 
 /* UV sphere, nu segments around (>= 3), nu/2 rings: 2 nu (nu/2 - 1) triangles. */
-static void add_sphere(scene *s, vec3 c, float r, int nu, uint32_t mat)
+void spd_add_sphere(scene *s, vec3 c, float r, int nu, uint32_t mat)
 {
 	int nv = nu / 2 < 2 ? 2 : nu / 2;
 	vec3 *p = malloc(sizeof *p * (size_t)(nv + 1) * (size_t)nu);
@@ -135,7 +135,7 @@ static void set_view(view *v, const char *name, vec3 eye, vec3 at, vec3 up, floa
  * six around its equator, three above, turned 30 degrees. */
 static void flake(scene *s, vec3 c, float r, vec3 ax, int depth, int nu, uint32_t m)
 {
-	add_sphere(s, c, r, nu, m);
+	spd_add_sphere(s, c, r, nu, m);
 	if (depth == 0)
 		return;
 	vec3 u = fabsf(ax.x) < 0.9f ? v3(1, 0, 0) : v3(0, 1, 0);
@@ -360,7 +360,7 @@ int spd_generate(scene *s, view *v, const char *spec, diag *d)
 		vec3 c[4] = {v3(-0.7f, -0.9f, 0.9f), v3(0.6f, -0.7f, 1.0f), v3(0.0f, 0.3f, 1.3f),
 		             v3(-0.2f, -1.3f, 0.5f)};
 		for (int k = 0; k < 4; k++)
-			add_sphere(s, c[k], 0.25f, o.tess, glass);
+			spd_add_sphere(s, c[k], 0.25f, o.tess, glass);
 		vec3 l[1] = {v3(-2.0f, -4.0f, 6.0f)};
 		set_view(v, "spd-mount", v3(-0.3f, -5.2f, 1.6f), v3(0, 0, 0.6f), v3(0, 0, 1), 45, l,
 		         1);

@@ -32,4 +32,8 @@ int spd_generate(scene *s, view *v, const char *spec, diag *d);
  * users dial a size before generating, and lets tests check the formula). */
 uint64_t spd_triangles(const char *spec);
 
+/* A closed UV sphere (nu segments around, nu/2 rings; 2 nu (nu/2 - 1)
+ * triangles) with smooth normals, for generators and stress tests. */
+void spd_add_sphere(scene *s, vec3 c, float r, int nu, uint32_t mat);
+
 #endif

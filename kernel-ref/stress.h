@@ -1,0 +1,56 @@
+/*
+ * stress.h: the numerical stress cases (issue 7): each builds a hard scene
+ * in code, traces it with kernel-ref and counts what must stay zero.
+ *
+ *   leaked      rays that pass through a closed surface
+ *   acne        shadow rays from the lit side of a lone convex mesh that are
+ *               occluded (only their own surface could occlude them)
+ *   disagree    hits that differ from a double-precision reference by more
+ *               than a true tie (a hit within rounding of an edge)
+ *   mismatch    packet path != single-ray path, or results that change
+ *               with the thread count
+ *
+ * The fast variants run in `make test` (tests/test_stress.c); `make stress`
+ * runs larger ones and writes docs/NUMERICS.md (kernel-ref/stress_main.c).
+ */
+#ifndef SAAR_KREF_STRESS_H
+#define SAAR_KREF_STRESS_H
+
+#include <stdint.h>
+
+typedef struct stress_result {
+	char name[96];
+	uint64_t rays;
+	uint64_t leaked, acne, disagree, ties, mismatch;
+	double ms;
+} stress_result;
+
+/* A closed sphere of radius `scale` centred at (offset, offset/2, -offset/3),
+ * seen from inside and from outside at res x res; rays continued past every
+ * hit must hit again. */
+stress_result stress_sphere(double scale, double offset, int res);
+
+/* The same sphere, lit from outside with nothing else in the scene: every
+ * occluded shadow ray is a self-intersection. */
+stress_result stress_acne(double scale, double offset, int res);
+
+/* Rays aimed exactly at the shared vertex of a fan and along the shared
+ * edges of a strip (grid of unit squares); every ray must hit. */
+stress_result stress_vertices_edges(int n);
+
+/* A flat scene: n x n unit squares in the plane z = 0, rays straight down
+ * with direction components exactly +0 and -0, from origins on grid lines
+ * (that is, on kd split planes); every ray must hit. */
+stress_result stress_flat_axis_parallel(int n);
+
+/* Degenerate (zero area, collinear), sliver, duplicate and coplanar
+ * overlapping triangles, a very deep tree and grazing rays: packet ==
+ * single ray, and 1 == 2 == 5 threads, bit for bit. */
+stress_result stress_degenerate(int res);
+
+/* Random rays against random triangles compared with a double-precision
+ * test: disagreements are counted apart when the double result lies within
+ * rounding of an edge (ties). */
+stress_result stress_random(uint64_t n, uint32_t seed);
+
+#endif
