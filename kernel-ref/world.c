@@ -221,3 +221,42 @@ void world_free(world *w)
 	kd_free(&w->kd);
 	scene_free(&w->s);
 }
+
+/* ---- command-line helpers ---- */
+
+int cli_parse_int(const char *flag, const char *s, long lo, long hi, long *out, diag *d)
+{
+	char *end;
+	errno = 0;
+	long v = strtol(s, &end, 10);
+	if (end == s || *end || errno)
+		return diag_set(d, flag, 0, 0, "expected an integer, got '%s'", s);
+	if (v < lo || v > hi)
+		return diag_set(d, flag, 0, 0, "%ld is out of range [%ld, %ld]", v, lo, hi);
+	*out = v;
+	return 0;
+}
+
+int cli_parse_size(const char *s, int *w, int *h, diag *d)
+{
+	char *end;
+	errno = 0;
+	long a = strtol(s, &end, 10);
+	if (end == s || (*end != 'x' && *end != 'X') || errno)
+		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
+	const char *q = end + 1;
+	long b = strtol(q, &end, 10);
+	if (end == q || *end || errno)
+		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
+	if (a < 1 || a > 16384 || b < 1 || b > 16384)
+		return diag_set(d, "--size", 0, 0, "%s is out of range (1..16384 each)", s);
+	*w = (int)a;
+	*h = (int)b;
+	return 0;
+}
+
+int cli_bad(const char *prog, const char *msg)
+{
+	fprintf(stderr, "%s: %s\n", prog, msg);
+	return DIAG_EXIT;
+}

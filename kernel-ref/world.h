@@ -48,6 +48,14 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
 /* Usage lines for those flags. */
 extern const char world_usage[];
 
+/* Command-line helpers shared by rtref and saarsim. Errors go through d
+ * ("FLAG: message"); cli_bad prints "prog: msg" as the one stderr line and
+ * returns DIAG_EXIT for main to return. */
+int cli_parse_int(const char *flag, const char *s, long lo, long hi, long *out, diag *d);
+/* "WxH", each 1..16384 (flag --size in messages). */
+int cli_parse_size(const char *s, int *w, int *h, diag *d);
+int cli_bad(const char *prog, const char *msg);
+
 int world_load(world *w, const world_opts *o, diag *d);
 void world_free(world *w);
 

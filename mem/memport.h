@@ -10,9 +10,10 @@
  * What stands behind the port is a model behind a small vtable
  * (memport_model). This issue has one model, `fixed`: every access is ready
  * memory.latency core cycles after it is issued (no queueing, no bandwidth
- * limit). The next issue adds caches, SDRAM and the VMA as further models
+ * limit). mem/hier.h adds caches, SDRAM and the VMA as a second model
  * without touching the units. The port itself counts requests and bytes per
- * requester type, whatever the model.
+ * requester type, whatever the model, and can pass every request to an
+ * optional tap (the chip's --trace-mem writer) before the model sees it.
  */
 #ifndef SAAR_MEM_MEMPORT_H
 #define SAAR_MEM_MEMPORT_H
@@ -48,6 +49,10 @@ typedef struct memport {
 	const memport_model *model;
 	void *impl;
 	mem_counts n;
+	/* Observer of every request (memory traces); NULL: none. Set after the
+	 * mem_init_* call, which clears it. One predictable branch per request. */
+	void (*tap)(void *ctx, const mem_req *r);
+	void *tap_ctx;
 } memport;
 
 /* The fixed-latency model: ready `latency` cycles of clk after the request
@@ -66,6 +71,8 @@ static inline void mem_access(memport *p, const mem_req *r, eng_handler done, vo
 		p->n.reads[r->type]++;
 		p->n.read_bytes[r->type] += r->bytes;
 	}
+	if (p->tap)
+		p->tap(p->tap_ctx, r);
 	p->model->access(p->impl, r, done, ctx, arg);
 }
 

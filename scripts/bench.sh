@@ -12,14 +12,24 @@
 # 16-wide packets, single threaded, for the ours/Embree ratio and a per-pixel
 # hit cross-check.
 #
+# The saarsim part (section `saarsim`, after the rtref one) times the chip
+# model: Sponza 128x128 primary + shadow rays (target: <= 1 s simulating),
+# Conference 1024x768 against kernel-ref single-thread on the same frame in
+# the same run (target: sim/ref <= 20), the memory hierarchy against the
+# fixed-latency model on that frame (target: <= 2x), trace replay speed on
+# a trace recorded from a real frame (target: >= 20 M requests per host
+# second), and every view at BENCH_SIM_SIZE (256x256): host seconds per
+# frame and simulated cycles per host second. Target lines are computed.
+#
 # Writes the tables into docs/PERFORMANCE.md between the markers
-# <!-- BEGIN rtref --> and <!-- END rtref --> (other sections are kept;
-# the file is replaced atomically) and prints the section on stdout;
-# progress goes to stderr.
+# <!-- BEGIN name --> and <!-- END name --> (name = rtref, saarsim; other
+# sections are kept; the file is replaced atomically) and prints each
+# section on stdout; progress goes to stderr.
 #
 # Environment: SAAR_SCENES (shared scenes folder; default ../shared/scenes
 # beside the repository), BENCH_SIZE, BENCH_RUNS, BENCH_VIEWS (space-separated
-# subset of view names), CC / CXX (for the Embree harness).
+# subset of view names), BENCH_PARTS ("rtref saarsim" by default),
+# BENCH_SIM_SIZE, CC / CXX (for the Embree harness).
 # Needs only POSIX sh, awk, sed and tr (no python, no jq).
 set -eu
 
@@ -51,15 +61,23 @@ RUNS=${BENCH_RUNS:-3}
 case $RUNS in '' | *[!0-9]* | 0) die "BENCH_RUNS must be a positive integer, got '$RUNS'" ;; esac
 case $SIZE in *x*) ;; *) die "BENCH_SIZE must be WxH, got '$SIZE'" ;; esac
 
+PARTS=${BENCH_PARTS:-rtref saarsim}
+SIM_SIZE=${BENCH_SIM_SIZE:-256x256}
+case $SIM_SIZE in *x*) ;; *) die "BENCH_SIM_SIZE must be WxH, got '$SIM_SIZE'" ;; esac
+for p in $PARTS; do
+	case $p in rtref | saarsim) ;; *) die "BENCH_PARTS: unknown part '$p' (rtref, saarsim)" ;; esac
+done
+part() { case " $PARTS " in *" $1 "*) return 0 ;; *) return 1 ;; esac; }
+
 DOC=docs/PERFORMANCE.md
-BEGIN_MARK='<!-- BEGIN rtref -->'
-END_MARK='<!-- END rtref -->'
-if [ -f "$DOC" ]; then
-	nb=$(grep -c -F "$BEGIN_MARK" "$DOC" || :)
-	ne=$(grep -c -F "$END_MARK" "$DOC" || :)
-	[ "$nb" = "$ne" ] && [ "$nb" -le 1 ] ||
-		die "$DOC: markers '$BEGIN_MARK' / '$END_MARK' are unbalanced; fix the file by hand"
-fi
+for name in rtref saarsim; do
+	if [ -f "$DOC" ]; then
+		nb=$(grep -c -F "<!-- BEGIN $name -->" "$DOC" || :)
+		ne=$(grep -c -F "<!-- END $name -->" "$DOC" || :)
+		[ "$nb" = "$ne" ] && [ "$nb" -le 1 ] ||
+			die "$DOC: markers for section '$name' are unbalanced; fix the file by hand"
+	fi
+done
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-bench.XXXXXX")
 DOCTMP=$DOC.tmp.$$
@@ -70,6 +88,12 @@ trap 'exit 130' INT TERM
 # breaks it nor mixes two versions in one table.
 RTREF=$TMP/rtref
 cp "$B/rtref" "$RTREF"
+if part saarsim; then
+	[ -x "$B/saarsim" ] && [ -x "$B/saarsim-replay" ] ||
+		die "$B/saarsim or $B/saarsim-replay not found; run 'make' first"
+	cp "$B/saarsim" "$TMP/saarsim"
+	cp "$B/saarsim-replay" "$TMP/saarsim-replay"
+fi
 
 # Value of a scalar key in a JSON file (first occurrence): tiny and
 # layout-independent enough for our own jsonw output.
@@ -106,6 +130,45 @@ if [ -n "${BENCH_VIEWS:-}" ]; then
 	ALL_VIEWS=$BENCH_VIEWS
 fi
 
+# ---- write_section NAME FILE: replace NAME's section of docs/PERFORMANCE.md atomically ----
+write_section() {
+	mkdir -p docs
+	if [ -f "$DOC" ]; then
+		awk -v sec="$2" -v b="<!-- BEGIN $1 -->" -v e="<!-- END $1 -->" '
+		BEGIN { while ((getline l < sec) > 0) s = s l "\n" }
+		index($0, b) { printf "%s", s; skip = 1; done = 1; next }
+		index($0, e) { skip = 0; next }
+		!skip { print }
+		END { if (!done) printf "\n%s", s }' "$DOC" >"$DOCTMP"
+	else
+		{
+			echo "# saarsim performance"
+			echo
+			echo "Measured, never typed: each section below is written by a benchmark script" \
+			    "(\`make bench\`) between its own BEGIN/END markers; everything outside the markers is" \
+			    "kept as it is."
+			echo
+			cat "$2"
+		} >"$DOCTMP"
+	fi
+	mv -f "$DOCTMP" "$DOC"
+	say "wrote $DOC (section $1)"
+	cat "$2"
+}
+
+# ---- the machine ----
+GIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+if [ "$GIT" != unknown ] && [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ]; then
+	GIT="$GIT (plus uncommitted changes)"
+fi
+CPU=$(sed -n 's/^model name[[:space:]]*:[[:space:]]*//p' /proc/cpuinfo 2>/dev/null | head -n 1)
+[ -n "$CPU" ] || CPU=$(uname -m)
+NPROC=$(nproc 2>/dev/null || getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?')
+COMPILER=$($CC --version 2>/dev/null | head -n 1 || echo "$CC")
+DATE=$(date -u '+%Y-%m-%d %H:%M UTC')
+
+
+if part rtref; then
 # ---- Embree harness (optional) ----
 EMBREE=absent
 EMBREE_NOTE="Embree 3 not installed (apt-get install libembree-dev); comparison skipped."
@@ -218,20 +281,9 @@ done
 ELAPSED=$(($(date +%s) - START))
 LOAD_AT_END=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)
 
-# ---- the section ----
-GIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
-if [ "$GIT" != unknown ] && [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ]; then
-	GIT="$GIT (plus uncommitted changes)"
-fi
-CPU=$(sed -n 's/^model name[[:space:]]*:[[:space:]]*//p' /proc/cpuinfo 2>/dev/null | head -n 1)
-[ -n "$CPU" ] || CPU=$(uname -m)
-NPROC=$(nproc 2>/dev/null || getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?')
-COMPILER=$($CC --version 2>/dev/null | head -n 1 || echo "$CC")
-DATE=$(date -u '+%Y-%m-%d %H:%M UTC')
-
 SECTION=$TMP/section
 {
-	echo "$BEGIN_MARK"
+	echo "<!-- BEGIN rtref -->"
 	echo "## kernel-ref (rtref)"
 	echo
 	echo "Generated by \`make bench\` (scripts/bench.sh); do not edit by hand."
@@ -309,29 +361,163 @@ SECTION=$TMP/section
 	else
 		echo "$EMBREE_NOTE"
 	fi
-	echo "$END_MARK"
+	echo "<!-- END rtref -->"
 } >"$SECTION"
+write_section rtref "$SECTION"
 
-# ---- write docs/PERFORMANCE.md atomically ----
-mkdir -p docs
-if [ -f "$DOC" ]; then
-	awk -v sec="$SECTION" -v b="$BEGIN_MARK" -v e="$END_MARK" '
-	BEGIN { while ((getline l < sec) > 0) s = s l "\n" }
-	index($0, b) { printf "%s", s; skip = 1; done = 1; next }
-	index($0, e) { skip = 0; next }
-	!skip { print }
-	END { if (!done) printf "\n%s", s }' "$DOC" >"$DOCTMP"
-else
-	{
-		echo "# saarsim performance"
-		echo
-		echo "Measured, never typed: each section below is written by a benchmark script" \
-		    "(\`make bench\`) between its own BEGIN/END markers; everything outside the markers is" \
-		    "kept as it is."
-		echo
-		cat "$SECTION"
-	} >"$DOCTMP"
 fi
-mv -f "$DOCTMP" "$DOC"
-say "wrote $DOC"
-cat "$SECTION"
+
+# ---- saarsim: the chip model's host speed ----
+if part saarsim; then
+SIM=$TMP/saarsim
+REPLAY=$TMP/saarsim-replay
+S_LOAD_AT_START=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)
+S_START=$(date +%s)
+# run_sim JSON ARGS...: one saarsim run with --report JSON; WALL = whole
+# process seconds (load, simulation, check, writing).
+run_sim() {
+	out=$1
+	shift
+	rm -f "$out"
+	t0=$(date +%s%N)
+	if ! "$SIM" "$@" --report "$out" >"$TMP/sout" 2>"$TMP/serr"; then
+		cat "$TMP/serr" >&2
+		die "saarsim failed: $B/saarsim $*"
+	fi
+	t1=$(date +%s%N)
+	WALL=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", (b - a) / 1e9 }')
+}
+# best_sim JSON ARGS...: best of RUNS by host sim_s; sets SIM_S, WALL_S
+# (the wall time of the best run) and keeps the best run's report in JSON.
+best_sim() {
+	bout=$1
+	shift
+	SIM_S=
+	WALL_S=
+	r=1
+	while [ "$r" -le "$RUNS" ]; do
+		run_sim "$TMP/best.json" "$@"
+		s=$(jget "$TMP/best.json" sim_s)
+		[ -n "$s" ] || die "saarsim report lacks host.sim_s"
+		if [ -z "$SIM_S" ] || lt "$s" "$SIM_S"; then
+			SIM_S=$s
+			WALL_S=$WALL
+			cp "$TMP/best.json" "$bout"
+		fi
+		r=$((r + 1))
+	done
+}
+verdict() { awk -v a="$1" -v op="$2" -v b="$3" 'BEGIN {
+	ok = (op == "<=") ? (a + 0 <= b + 0) : (a + 0 >= b + 0); print (ok ? "met" : "NOT met") }'; }
+has_view() { printf '%s\n' "$(list_views "$VIEWS")" | grep -qx -F "$1"; }
+
+# (i) Sponza 128x128, primary + shadow rays
+SP=
+if has_view sponza; then
+	say "saarsim: sponza 128x128 primary + shadow"
+	best_sim "$TMP/sp.json" --views "$VIEWS" --view sponza --size 128x128 \
+	    --set shading.max_depth=0 --no-check
+	SP="$SIM_S $WALL_S $(jget "$TMP/sp.json" cycles)"
+fi
+# (ii) + (iii) Conference 1024x768: hierarchy with the kernel-ref check (the
+# same frame, one host thread, in the same process), then the fixed model
+CF=
+if has_view conference; then
+	say "saarsim: conference 1024x768, hierarchy (with the kernel-ref check)"
+	best_sim "$TMP/cf.json" --views "$VIEWS" --view conference --size 1024x768
+	cf_sim=$SIM_S
+	cf_wall=$WALL_S
+	cf_ref=$(jget "$TMP/cf.json" check_s)
+	cf_cyc=$(jget "$TMP/cf.json" cycles)
+	cf_fps=$(jget "$TMP/cf.json" fps)
+	say "saarsim: conference 1024x768, fixed-latency model"
+	best_sim "$TMP/cff.json" --views "$VIEWS" --view conference --size 1024x768 \
+	    --set memory.model=fixed --no-check
+	CF="$cf_sim $cf_wall $cf_ref $cf_cyc $cf_fps $SIM_S $(jget "$TMP/cff.json" cycles)"
+fi
+# (iv) trace replay: a trace recorded from a real frame
+RP=
+rp_view=conference
+has_view "$rp_view" || rp_view=$(printf '%s\n' $ALL_VIEWS | head -n 1)
+say "saarsim: recording a memory trace ($rp_view 512x384) and replaying it"
+run_sim "$TMP/tr.json" --views "$VIEWS" --view "$rp_view" --size 512x384 --no-check \
+    --trace-mem "$TMP/t.gz"
+rp_best=
+r=1
+while [ "$r" -le "$RUNS" ]; do
+	"$REPLAY" --image-bytes "$(jget "$TMP/tr.json" spill_base)" "$TMP/t.gz" >"$TMP/rp.txt" 2>"$TMP/rp.err" ||
+		{ cat "$TMP/rp.err" >&2; die "saarsim-replay failed"; }
+	m=$(sed -n 's/.*replay speed: \([0-9.]*\) million.*/\1/p' "$TMP/rp.txt")
+	[ -n "$m" ] || die "saarsim-replay printed no speed"
+	if [ -z "$rp_best" ] || lt "$rp_best" "$m"; then rp_best=$m; fi
+	r=$((r + 1))
+done
+rp_n=$(sed -n 's/^trace .*: \([0-9]*\) requests.*/\1/p' "$TMP/rp.txt")
+RP="$rp_view $rp_n $rp_best $(wc -c <"$TMP/t.gz")"
+# (v) every view at SIM_SIZE
+VROWS=$TMP/vrows
+: >"$VROWS"
+for view in $ALL_VIEWS; do
+	say "saarsim: $view $SIM_SIZE"
+	run_sim "$TMP/v.json" --views "$VIEWS" --view "$view" --size "$SIM_SIZE" --no-check
+	printf '%s %s %s %s %s %s %s\n' "$view" "$(jget "$TMP/v.json" cycles)" \
+	    "$(jget "$TMP/v.json" fps)" "$(jget "$TMP/v.json" sim_s)" \
+	    "$(jget "$TMP/v.json" sim_cycles_per_s)" "$WALL" \
+	    "$(jget "$TMP/v.json" sdram_mb_per_frame)" >>"$VROWS"
+done
+S_ELAPSED=$(($(date +%s) - S_START))
+S_LOAD_AT_END=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)
+
+SECTION=$TMP/section_saarsim
+{
+	echo "<!-- BEGIN saarsim -->"
+	echo "## saarsim (chip model and memory system)"
+	echo
+	echo "Generated by \`make bench\` (scripts/bench.sh); do not edit by hand."
+	echo
+	echo "- Date: $DATE (this part took ${S_ELAPSED} s)"
+	echo "- Machine: $NPROC CPUs (nproc), $CPU; load average $S_LOAD_AT_START at start, $S_LOAD_AT_END at the end"
+	echo "- Commit: $GIT"
+	echo "- Config: built-in saarcor-std (\`memory.model: hierarchy\`, no VMA) unless noted;" \
+	    "best of $RUNS runs by simulation time for the targeted figures (other jobs may share the machine)."
+	echo "- *sim s*: host time of \`chip_run\` (report \`host.sim_s\`); *process s*: the whole" \
+	    "saarsim process (scene load, kd-tree, simulation, check, writing)."
+	echo
+	echo "### Targets"
+	echo
+	if [ -n "$SP" ]; then
+		set -- $SP
+		echo "- Sponza 128x128, primary + shadow rays (\`--set shading.max_depth=0 --no-check\`):" \
+		    "$(printf '%.3f' "$1") s simulating ($3 cycles), $(printf '%.3f' "$2") s whole process;" \
+		    "target sim <= 1 s: $(verdict "$1" '<=' 1)."
+	else
+		echo "- Sponza: view absent from $VIEWS; not measured."
+	fi
+	if [ -n "$CF" ]; then
+		set -- $CF
+		ratio=$(awk -v a="$1" -v b="$3" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
+		hf=$(awk -v a="$1" -v b="$6" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
+		echo "- Conference 1024x768 (shading.max_depth 3): saarsim $(printf '%.3f' "$1") s simulating" \
+		    "($4 cycles, $(printf '%.1f' "$5") fps at 533 MHz), $(printf '%.3f' "$2") s whole process;" \
+		    "kernel-ref single thread on the same frame in the same run: $(printf '%.3f' "$3") s;" \
+		    "ratio $ratio, target <= 20: $(verdict "$ratio" '<=' 20)."
+		echo "- Conference 1024x768, memory hierarchy vs fixed-latency model (\`--set memory.model=fixed\`):" \
+		    "$(printf '%.3f' "$1") s vs $(printf '%.3f' "$6") s simulating ($7 cycles with the fixed model);" \
+		    "ratio $hf, target <= 2: $(verdict "$hf" '<=' 2)."
+	else
+		echo "- Conference: view absent from $VIEWS; not measured."
+	fi
+	set -- $RP
+	echo "- Trace replay (\`saarsim-replay\`, functional, default config): $2 requests recorded from" \
+	    "$1 512x384 ($4 bytes gzipped); best $3 million requests per host second;" \
+	    "target >= 20: $(verdict "$3" '>=' 20)."
+	echo
+	echo "### Every view at $SIM_SIZE (one run each, \`--no-check\`)"
+	echo
+	echo "| view | cycles/frame | fps at 533 MHz | SDRAM MB/frame | sim s/frame | simulated cycles per host s | process s |"
+	echo "|---|---:|---:|---:|---:|---:|---:|"
+	awk '{ printf "| %s | %d | %.1f | %.2f | %.3f | %.3g | %.2f |\n", $1, $2, $3, $7, $4, $5, $6 }' "$VROWS"
+	echo "<!-- END saarsim -->"
+} >"$SECTION"
+write_section saarsim "$SECTION"
+fi

@@ -5,10 +5,13 @@
  * The chip holds rtps RTPs; each has threads_per_rtp thread contexts, one
  * unit group per kind (RGS, traversal, list, intersection) and a FIFO of
  * secondary packets waiting for a thread slot. One memory port (mem/memport.h)
- * serves every unit. A frame starts by offering every thread slot a tile
- * (slot by slot, RTP by RTP, so consecutive tiles go to different RTPs);
- * from then on everything happens in event handlers, and the frame ends when
- * the event queue runs dry.
+ * serves every unit; behind it stands the model of memory.model: `fixed`
+ * (every access takes memory.latency) or `hierarchy` (mem/hier.h: L1s,
+ * memory interface, SDRAM, optionally the VMA over the host bus). The stack
+ * spill area follows the memory image (page aligned); reads there bypass
+ * the L1s, and without VMA the image up to it must fit on board. A frame starts by offering every
+ * thread slot a tile (slot by slot, RTP by RTP, so consecutive tiles go to different RTPs); from
+ * then on everything happens in event handlers, and the frame ends when the event queue runs dry.
  */
 #include "chip.h"
 
@@ -89,6 +92,55 @@ static void on_free(thr_ctx *t)
 		c->oom = 1;
 }
 
+/* posix_memalign takes any size, but the rounding keeps these blocks
+ * valid for aligned_alloc too (kernel-ref/render.c's alloc64). */
+static void *alloc64(size_t n)
+{
+	void *p = NULL;
+	return posix_memalign(&p, 64, (n + 63) & ~(size_t)63) ? NULL : p;
+}
+
+static void trace_tap(void *ctx, const mem_req *r)
+{
+	chip *c = ctx;
+	if (c->trace_err)
+		return;
+	mtr_rec m = {eng_ticks_to_cycles(c->clk, eng_now(c->e)), r->addr, r->bytes, r->type,
+	             r->write};
+	if (mtr_write(c->trace, &m, &c->trace_d))
+		c->trace_err = 1;
+}
+
+int chip_trace_mem(chip *c, const char *path, diag *d)
+{
+	c->trace = malloc(sizeof *c->trace);
+	if (!c->trace)
+		return diag_set(d, "saarsim", 0, 0, "out of memory for the trace writer");
+	if (mtr_open_write(c->trace, path, d)) {
+		free(c->trace);
+		c->trace = NULL;
+		return -1;
+	}
+	c->mem.tap = trace_tap;
+	c->mem.tap_ctx = c;
+	return 0;
+}
+
+int chip_trace_close(chip *c, diag *d)
+{
+	if (!c->trace)
+		return 0;
+	int rc = c->trace_err ? -1 : 0;
+	if (rc)
+		*d = c->trace_d;
+	if (mtr_close_write(c->trace, rc ? &c->trace_d : d))
+		rc = -1;
+	free(c->trace);
+	c->trace = NULL;
+	c->mem.tap = NULL;
+	return rc;
+}
+
 static uint64_t *reg(chip *c, const char *name, const char *unit, const char *desc)
 {
 	uint64_t *p = stats_counter(&c->st, name, unit, desc);
@@ -116,10 +168,28 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	c->clk = eng_clock_mhz(cfg->chip.clock_mhz);
 	stats_init(&c->st);
 	c->e = eng_create((size_t)(c->nrtp * c->tpr * 4 + 64));
-	c->frame_cycles = calloc((size_t)cfg->frame.frames, sizeof *c->frame_cycles);
-	if (!c->e || !c->frame_cycles || thr_env_init(&c->env) ||
-	    mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency) ||
-	    fb_init(&c->fb, cfg->frame.width, cfg->frame.height) ||
+	size_t nf = (size_t)cfg->frame.frames;
+	c->frame_cycles = calloc(nf, sizeof *c->frame_cycles);
+	c->frame_port = calloc(nf, sizeof *c->frame_port);
+	if (cfg->memory.model == CFG_MEM_HIERARCHY)
+		c->frame_mem = calloc(nf, sizeof *c->frame_mem);
+	c->spill_base = (w->m.size + 4095) & ~(uint64_t)4095;
+	if (!c->e || !c->frame_cycles || !c->frame_port ||
+	    (cfg->memory.model == CFG_MEM_HIERARCHY && !c->frame_mem))
+		goto oom;
+	/* a memory model the config cannot build (an image too big for the
+	 * board without VMA, a bad cache geometry) is the user's error: keep
+	 * its message */
+	int mrc;
+	if (cfg->memory.model == CFG_MEM_HIERARCHY)
+		mrc = mem_init_hier(&c->mem, c->e, c->clk, cfg, c->spill_base, d);
+	else if ((mrc = mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency)))
+		diag_set(d, "saarsim", 0, 0, "out of memory");
+	if (mrc) {
+		chip_destroy(c);
+		return NULL;
+	}
+	if (thr_env_init(&c->env) || fb_init(&c->fb, cfg->frame.width, cfg->frame.height) ||
 	    rgc_init(&c->g, cfg->frame.width, cfg->frame.height, cfg->chip.tile_order))
 		goto oom;
 
@@ -131,7 +201,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->stack_depth = cfg->chip.stack_depth;
 	v->masked = cfg->chip.masked_packets;
 	v->nlights = w->v.nlights;
-	v->spill_base = (w->m.size + 4095) & ~(uint64_t)4095;
+	v->spill_base = c->spill_base;
 	v->on_free = on_free;
 	v->owner = c;
 	render_opts ro;
@@ -191,10 +261,9 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 			snprintf(name, sizeof name, "rtp%d.threads.%s_ps", r, state_names[s]);
 			rp->occ[s] = reg(c, name, "ps", "thread time in this state, summed");
 		}
-		void *mem = NULL;
-		if (posix_memalign(&mem, 64, (size_t)c->tpr * sizeof(thr_ctx)))
+		rp->t = alloc64((size_t)c->tpr * sizeof(thr_ctx));
+		if (!rp->t)
 			goto oom;
-		rp->t = mem;
 		memset(rp->t, 0, (size_t)c->tpr * sizeof(thr_ctx));
 		rp->nt = c->tpr;
 		rp->nidle = c->tpr;
@@ -206,11 +275,8 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 			t->gid = r * c->tpr + i;
 			t->state = THR_IDLE;
 			t->nkids = nkids;
-			void *st = NULL, *kids = NULL;
-			int e1 = posix_memalign(&st, 64, PKT_STACK_MAX * sizeof(trav_entry));
-			int e2 = posix_memalign(&kids, 64, (size_t)nkids * sizeof(packet));
-			t->stack = e1 ? NULL : st;
-			t->kids = e2 ? NULL : kids;
+			t->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
+			t->kids = alloc64((size_t)nkids * sizeof(packet));
 			if (!t->stack || !t->kids)
 				goto oom;
 		}
@@ -248,6 +314,12 @@ void chip_destroy(chip *c)
 	if (c->e)
 		eng_destroy(c->e);
 	free(c->frame_cycles);
+	free(c->frame_port);
+	free(c->frame_mem);
+	if (c->trace) {
+		diag d;
+		chip_trace_close(c, &d);
+	}
 	stats_free(&c->st);
 	free(c);
 }
@@ -298,6 +370,9 @@ int chip_run(chip *c, diag *d)
 		}
 		if (c->oom)
 			return diag_set(d, "saarsim", 0, 0, "out of memory during the frame");
+		c->frame_port[f] = c->mem.n;
+		if (c->frame_mem)
+			hier_get_stats(&c->mem, &c->frame_mem[f]);
 		c->frames_done = f + 1;
 	}
 	c->events = eng_events(c->e);

@@ -3,7 +3,11 @@
  * event engine wired together; runs frames and owns the frame buffer.
  *
  * Build: chip_create (allocates everything: thread contexts, stacks, unit
- * queues; registers the stats), then chip_run (frame.frames frames), then
+ * queues, the memory model of memory.model; registers the stats),
+ * optionally chip_trace_mem, then chip_run (frame.frames frames of the same
+ * view; the memory model is never reset between frames, so caches, tag
+ * cache and VMA stay warm and a snapshot of the memory counters is taken
+ * after every frame for per-frame figures), then
  * read the results (cycles per frame, the stats registry, the frame buffer)
  * and optionally chip_check (kernel-ref renders the same frame; the 8-bit
  * images are compared). The hot path never allocates except to grow the
@@ -18,7 +22,9 @@
 #include "config.h"
 #include "engine.h"
 #include "framebuf.h"
+#include "hier.h"
 #include "memport.h"
+#include "memtrace.h"
 #include "render.h"
 #include "rgc.h"
 #include "stats.h"
@@ -45,6 +51,14 @@ typedef struct chip {
 	rgc g;
 	framebuf fb;
 	uint64_t *frame_cycles; /* per frame */
+	uint64_t spill_base;    /* stack spills live at and above it (after the image) */
+	/* cumulative counters at the end of each frame: frame f's own figures
+	 * are the difference to frame f-1 */
+	mem_counts *frame_port;
+	hier_stats *frame_mem; /* NULL with memory.model fixed */
+	mtr_writer *trace;     /* --trace-mem, NULL: off */
+	int trace_err;
+	diag trace_d;
 	int frames_done;
 	uint64_t events; /* engine events dispatched */
 	double sim_ms;   /* host time in chip_run */
@@ -61,6 +75,11 @@ typedef struct chip {
  * outlive the chip. Fails (diag) on an unsupported config or out of memory. */
 chip *chip_create(const saar_config *cfg, const world *w, diag *d);
 void chip_destroy(chip *c);
+/* Records every memory request into path (traces/memtrace.h) from now on;
+ * chip_trace_close writes the end record. The caller makes it atomic (tmp
+ * path + rename). */
+int chip_trace_mem(chip *c, const char *path, diag *d);
+int chip_trace_close(chip *c, diag *d);
 /* Simulates cfg.frame.frames frames (the frame buffer holds the last). */
 int chip_run(chip *c, diag *d);
 /* Renders the same frame with kernel-ref (render_frame, 1 host thread) and

@@ -87,7 +87,7 @@ static const cfg_key keys[] = {
      .desc = "thread contexts per RTP; one thread is one packet"},
     {INT("chip.stack_depth", chip.stack_depth, 64, 1, 1024, "entries"),
      .source = "not published; kernel-ref kd-trees are at most 64 deep (automatic limit <= 60)",
-     .desc = "traversal stack entries per thread"},
+     .desc = "on-chip traversal stack entries per thread; deeper entries spill to memory"},
     {INT("chip.packet_w", chip.packet_w, 8, 1, 64, "pixels"), PUB "§4.5",
      .desc = "packet (tile) width; packet_w * packet_h <= 64"},
     {INT("chip.packet_h", chip.packet_h, 8, 1, 64, "pixels"), PUB "§4.5",
@@ -122,14 +122,15 @@ static const cfg_key keys[] = {
      .source = "kernel-ref kd_params_default", .desc = "SAH cost of a triangle test (K_I)"},
     {INT("kdtree.max_depth", kdtree.max_depth, 0, 0, 64, "levels"),
      .source = "kernel-ref kd_params_default",
-     .desc = "kd-tree depth limit; 0 = 8 + 1.3 log2(triangles), at most 60; <= chip.stack_depth"},
+     .desc = "kd-tree depth limit; 0 = 8 + 1.3 log2(triangles), at most 60"},
     {INT("kdtree.leaf_size", kdtree.leaf_size, 2, 1, 1024, "triangles"),
      .source = "kernel-ref kd_params_default",
      .desc = "stop splitting at or below this many triangles"},
     {FLT("kdtree.empty_bonus", kdtree.empty_bonus, 0.2, 0, 0.99, ""),
      .source = "kernel-ref kd_params_default", .desc = "SAH discount for cutting off empty space"},
-    {ENUM("memory.model", memory.model, mem_model_names),
-     .source = "fixed is the default until the chip model switches to hierarchy",
+    {KEY("memory.model", CFG_ENUM, memory.model, CFG_MEM_HIERARCHY, 0, 0, ""),
+     .names = mem_model_names,
+     .source = "hierarchy models the published memory system; fixed isolates the units",
      .desc = "memory model: fixed = every access takes memory.latency; hierarchy = L1 "
              "caches, memory interface, SDRAM (and the VMA if memory.vma.enabled)"},
     {INT("memory.latency", memory.latency, 20, 0, 100000, "core cycles"),
@@ -599,19 +600,11 @@ int cfg_validate(const saar_config *c, diag *d)
 		    "chip.packet_w x chip.packet_h = %d x %d = %d rays; a packet holds at "
 		    "most 64",
 		    c->chip.packet_w, c->chip.packet_h, rays);
-	/* Traversal pushes at most one far child per tree level. kernel-ref's
-	 * automatic depth limit (max_depth 0) is at most 60 (kernel-ref/kdtree.c). */
-	if (c->kdtree.max_depth > c->chip.stack_depth)
-		return diag_set(
-		    d, "config", 0, 0,
-		    "kdtree.max_depth (%d) exceeds chip.stack_depth (%d): the traversal "
-		    "stack could overflow",
-		    c->kdtree.max_depth, c->chip.stack_depth);
-	if (c->kdtree.max_depth == 0 && c->chip.stack_depth < 60)
-		return diag_set(d, "config", 0, 0,
-		                "kdtree.max_depth 0 (automatic) allows trees 60 deep but "
-		                "chip.stack_depth is %d: set kdtree.max_depth <= %d",
-		                c->chip.stack_depth, c->chip.stack_depth);
+	/* chip.stack_depth may be below the tree depth: the traversal unit spills
+	 * the entries beyond it to memory and reads them back (units/traversal.c,
+	 * counted as trav.stack_overflows / trav.stack_refills). The spill area
+	 * always has room for PKT_STACK_MAX entries per thread, and
+	 * kdtree.max_depth is at most 64 = PKT_STACK_MAX by its range. */
 	return 0;
 }
 
@@ -815,10 +808,6 @@ void cfg_write_markdown(FILE *f)
 	    "--set: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)\n"
 	    "--set: chip.masked_packets: expected true or false, got 'maybe'\n"
 	    "config: chip.packet_w x chip.packet_h = 16 x 8 = 128 rays; a packet holds at most 64\n"
-	    "config: kdtree.max_depth (40) exceeds chip.stack_depth (32): the traversal stack "
-	    "could overflow\n"
-	    "config: kdtree.max_depth 0 (automatic) allows trees 60 deep but chip.stack_depth "
-	    "is 32: set kdtree.max_depth <= 32\n"
 	    "```\n",
 	    f);
 }

@@ -1,15 +1,18 @@
 /*
  * main.c: the saarsim command line.
  *
- *   saarsim [--config FILE] [scene/view flags] [--size WxH] [--out frame.png]
- *           [--report report.json] [--set key=value ...] [--no-check]
+ *   saarsim [--config FILE] [scene/view flags] [--size WxH] [--frames N]
+ *           [--out frame.png] [--report report.json] [--csv FILE]
+ *           [--trace-mem FILE.gz] [--set key=value ...] [--no-check]
  *           [--list-config] [--config-doc]
  *
  * Loads the config (built-in defaults = configs/saarcor-std.yaml, then the
- * file, then --set and --size), the world (the same flags as rtref), runs
- * the chip, checks the frame against kernel-ref, prints a summary and writes
- * the frame and the JSON report. Bad input: one line "saarsim: ..." on
- * stderr, exit status 2, no output file.
+ * file, then --set, --size and --frames), the world (the same flags as
+ * rtref), runs the chip, checks the (last) frame against kernel-ref, prints
+ * a summary and writes the frame, the JSON report, the memory trace and one
+ * CSV row. Bad input: one line "saarsim: ..." on stderr, exit status 2, no
+ * output file (each is written to a temporary file and renamed; the CSV row
+ * is appended last, when everything else has succeeded).
  */
 #include <errno.h>
 #include <stdio.h>
@@ -25,22 +28,20 @@
 
 static void usage(FILE *f)
 {
-	fprintf(f, "usage: saarsim [options]\n"
-	           "  --config FILE         hardware config (YAML; default: built-in saarcor-std)\n"
-	           "  --set KEY=VALUE       override one config key (repeatable)\n"
-	           "  --size WxH            frame size (sets frame.width and frame.height)\n"
-	           "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
-	           "  --report FILE.json    write the JSON report (docs/report.md)\n"
-	           "  --no-check            skip the comparison with kernel-ref\n"
-	           "  --list-config         print every config key and exit\n"
-	           "  --config-doc          print docs/config.md and exit\n");
+	fprintf(f,
+	        "usage: saarsim [options]\n"
+	        "  --config FILE         hardware config (YAML; default: built-in saarcor-std)\n"
+	        "  --set KEY=VALUE       override one config key (repeatable)\n"
+	        "  --size WxH            frame size (sets frame.width and frame.height)\n"
+	        "  --frames N            frames of the same view, memory kept warm (frame.frames)\n"
+	        "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
+	        "  --report FILE.json    write the JSON report (docs/report.md)\n"
+	        "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
+	        "  --trace-mem FILE.gz   record every memory request (traces/memtrace.h)\n"
+	        "  --no-check            skip the comparison with kernel-ref\n"
+	        "  --list-config         print every config key and exit\n"
+	        "  --config-doc          print docs/config.md and exit\n");
 	fputs(world_usage, f);
-}
-
-static int bad(const char *msg)
-{
-	fprintf(stderr, "saarsim: %s\n", msg);
-	return DIAG_EXIT;
 }
 
 static double now_ms(void)
@@ -48,24 +49,6 @@ static double now_ms(void)
 	struct timespec ts;
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
-
-static int parse_size(const char *s, int *w, int *h, diag *d)
-{
-	char *end;
-	errno = 0;
-	long a = strtol(s, &end, 10);
-	if (end == s || (*end != 'x' && *end != 'X') || errno)
-		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
-	const char *q = end + 1;
-	long b = strtol(q, &end, 10);
-	if (end == q || *end || errno)
-		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
-	if (a < 1 || a > 16384 || b < 1 || b > 16384)
-		return diag_set(d, "--size", 0, 0, "%s is out of range (1..16384 each)", s);
-	*w = (int)a;
-	*h = (int)b;
-	return 0;
 }
 
 typedef struct progress {
@@ -87,13 +70,14 @@ int main(int argc, char **argv)
 	double t_start = now_ms();
 	world_opts wo;
 	world_opts_default(&wo);
-	const char *config = NULL, *out = NULL, *report = NULL, *size = NULL;
+	const char *config = NULL, *out = NULL, *report = NULL, *size = NULL, *frames = NULL;
+	const char *csv = NULL, *trace = NULL;
 	int check = 1, list = 0, doc = 0;
 	diag d = {{0}};
 	for (int i = 1; i < argc;) {
 		int r = world_parse_arg(&wo, argc, argv, &i, &d);
 		if (r < 0)
-			return bad(d.msg);
+			return cli_bad("saarsim", d.msg);
 		if (r > 0)
 			continue;
 		const char *a = argv[i];
@@ -123,6 +107,12 @@ int main(int argc, char **argv)
 			out = v;
 		else if (!strcmp(a, "--report"))
 			report = v;
+		else if (!strcmp(a, "--frames"))
+			frames = v;
+		else if (!strcmp(a, "--csv"))
+			csv = v;
+		else if (!strcmp(a, "--trace-mem"))
+			trace = v;
 		else {
 			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", a);
 			return DIAG_EXIT;
@@ -140,7 +130,7 @@ int main(int argc, char **argv)
 	/* the config: defaults, file, --set, --size, kd-tree flags */
 	saar_config cfg;
 	if (config ? cfg_load(&cfg, config, &d) : (cfg_defaults(&cfg), 0))
-		return bad(d.msg);
+		return cli_bad("saarsim", d.msg);
 	/* the first pass accepted every argument, so this walk sees the same
 	 * option/value pairs: world flags are skipped by the same parser */
 	world_opts skip;
@@ -155,11 +145,17 @@ int main(int argc, char **argv)
 			continue;
 		}
 		if (!strcmp(a, "--set") && cfg_set(&cfg, argv[i + 1], &d))
-			return bad(d.msg);
+			return cli_bad("saarsim", d.msg);
 		i += 2;
 	}
-	if (size && parse_size(size, &cfg.frame.width, &cfg.frame.height, &d))
-		return bad(d.msg);
+	if (size && cli_parse_size(size, &cfg.frame.width, &cfg.frame.height, &d))
+		return cli_bad("saarsim", d.msg);
+	long nframes;
+	if (frames) {
+		if (cli_parse_int("--frames", frames, 1, 1000000, &nframes, &d))
+			return cli_bad("saarsim", d.msg);
+		cfg.frame.frames = (int)nframes;
+	}
 	kd_params kd0;
 	kd_params_default(&kd0);
 	if (wo.kd.cost_trav != kd0.cost_trav)
@@ -173,7 +169,7 @@ int main(int argc, char **argv)
 	if (wo.kd.empty_bonus != kd0.empty_bonus)
 		cfg.kdtree.empty_bonus = wo.kd.empty_bonus;
 	if (cfg_validate(&cfg, &d))
-		return bad(d.msg);
+		return cli_bad("saarsim", d.msg);
 	wo.kd.cost_trav = (float)cfg.kdtree.cost_trav;
 	wo.kd.cost_isect = (float)cfg.kdtree.cost_isect;
 	wo.kd.max_depth = cfg.kdtree.max_depth;
@@ -183,12 +179,12 @@ int main(int argc, char **argv)
 	double t0 = now_ms();
 	world w;
 	if (world_load(&w, &wo, &d))
-		return bad(d.msg);
+		return cli_bad("saarsim", d.msg);
 	double load_ms = now_ms() - t0;
 	chip *c = chip_create(&cfg, &w, &d);
 	if (!c) {
 		world_free(&w);
-		return bad(d.msg);
+		return cli_bad("saarsim", d.msg);
 	}
 	progress pr = {now_ms(), 0};
 	if (isatty(STDERR_FILENO)) {
@@ -198,26 +194,55 @@ int main(int argc, char **argv)
 	int rc = 0;
 	chip_check chk;
 	memset(&chk, 0, sizeof chk);
-	if (chip_run(c, &d) || (check && chip_check_frame(c, &chk, &d))) {
-		rc = bad(d.msg);
+	char trace_tmp[1100] = "";
+	if (trace) {
+		snprintf(trace_tmp, sizeof trace_tmp, "%s.tmp", trace);
+		if (chip_trace_mem(c, trace_tmp, &d)) {
+			rc = cli_bad("saarsim", d.msg);
+			goto done;
+		}
+	}
+	if (chip_run(c, &d) || chip_trace_close(c, &d) ||
+	    (check && chip_check_frame(c, &chk, &d))) {
+		rc = cli_bad("saarsim", d.msg);
 		goto done;
 	}
 	if (pr.shown)
 		fputc('\n', stderr);
 	if (out && fb_write(&c->fb, out, &d)) {
-		rc = bad(d.msg);
+		rc = cli_bad("saarsim", d.msg);
 		goto done;
 	}
 	report_info ri = {c, &w, check ? &chk : NULL, load_ms, now_ms() - t_start};
 	if (report && report_json(report, &ri, &d)) {
 		if (out)
 			unlink(out);
-		rc = bad(d.msg);
+		rc = cli_bad("saarsim", d.msg);
 		goto done;
 	}
+	if (trace && rename(trace_tmp, trace) != 0) {
+		diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
+		goto undo;
+	}
+	*trace_tmp = 0;
+	ri.wall_ms = now_ms() - t_start;
+	if (csv && report_csv(csv, &ri, &d)) {
+		if (trace)
+			unlink(trace);
+		goto undo;
+	}
 	report_text(stdout, &ri);
+	goto done;
+undo:
+	if (out)
+		unlink(out);
+	if (report)
+		unlink(report);
+	rc = cli_bad("saarsim", d.msg);
 done:
 	chip_destroy(c);
+	if (*trace_tmp)
+		unlink(trace_tmp);
 	world_free(&w);
 	return rc;
 }

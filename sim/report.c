@@ -1,10 +1,19 @@
 /*
- * report.c: text summary and JSON report (see report.h, docs/report.md).
+ * report.c: text summary, JSON report and CSV row (see report.h,
+ * docs/report.md).
+ *
+ * Memory figures per frame come from the cumulative snapshots chip_run takes
+ * after every frame (chip.frame_port, chip.frame_mem): a span of frames is
+ * the difference of two snapshots, so per-frame, steady-state and whole-run
+ * figures are computed the same way and always add up.
  */
 #include "report.h"
 
+#include <errno.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static double ratio(double a, double b)
 {
@@ -30,6 +39,154 @@ static double fps(const chip *c)
 	return ratio(c->cfg.chip.clock_mhz * 1e6, cyc);
 }
 
+/* ---- memory figures over a span of frames ---- */
+
+#define MB (1024.0 * 1024.0) /* MB = 2^20 bytes, as memory.sdram.mb */
+
+/* Hit-rate slots: the four L1s, then the VMA's tag cache and L2. */
+enum { HR_TAG = MEM_NTYPES, HR_L2, HR_N };
+static const char *const hr_names[HR_N] = {"shade", "kd", "list", "tri", "tag_cache", "l2"};
+
+typedef struct memfig {
+	int first, last;     /* frames first..last (1-based, inclusive) */
+	double cycles, fps;  /* mean core cycles per frame, fps at the clock */
+	double sdram_mb;     /* per frame; fixed model: bytes through the memory port */
+	double pci_mb;       /* per frame; 0 without VMA */
+	double hit[HR_N];    /* hits / accesses over the span; -1: no such cache or no access */
+	double meta_share;   /* meta-data share of SDRAM accesses */
+	double row_hit_rate; /* SDRAM row hits / (hits + empty + conflicts) */
+	double sdram_util;   /* SDRAM data bus busy / elapsed time */
+	double pci_util;     /* host bus busy / elapsed time */
+} memfig;
+
+static double rate(uint64_t hits, uint64_t acc)
+{
+	return acc ? (double)hits / (double)acc : -1.0;
+}
+
+/* Frames f0..f1-1 (0-based). */
+static void memfig_span(const chip *c, int f0, int f1, memfig *m)
+{
+	static const hier_stats zero_h;
+	static const mem_counts zero_p;
+	memset(m, 0, sizeof *m);
+	int n = f1 - f0;
+	m->first = f0 + 1;
+	m->last = f1;
+	uint64_t cyc = 0;
+	for (int f = f0; f < f1; f++)
+		cyc += c->frame_cycles[f];
+	m->cycles = ratio((double)cyc, n);
+	m->fps = ratio(c->cfg.chip.clock_mhz * 1e6, m->cycles);
+	for (int k = 0; k < HR_N; k++)
+		m->hit[k] = -1.0;
+	if (!c->frame_mem) {
+		const mem_counts *a = f0 ? &c->frame_port[f0 - 1] : &zero_p,
+		                 *b = &c->frame_port[f1 - 1];
+		uint64_t bytes = 0;
+		for (int t = 0; t < MEM_NTYPES; t++)
+			bytes += b->read_bytes[t] - a->read_bytes[t] + b->write_bytes[t] -
+			         a->write_bytes[t];
+		m->sdram_mb = (double)bytes / MB / n;
+		return;
+	}
+	const hier_stats *a = f0 ? &c->frame_mem[f0 - 1] : &zero_h, *b = &c->frame_mem[f1 - 1];
+	uint64_t sd =
+	    b->sdram.read_bytes + b->sdram.write_bytes - a->sdram.read_bytes - a->sdram.write_bytes;
+	m->sdram_mb = (double)sd / MB / n;
+	m->pci_mb = (double)(b->hostbus.bytes - a->hostbus.bytes) / MB / n;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		m->hit[t] =
+		    rate(b->l1[t].hits - a->l1[t].hits, b->l1[t].accesses - a->l1[t].accesses);
+	if (b->vma_enabled) {
+		m->hit[HR_TAG] = rate(b->tag_cache.hits - a->tag_cache.hits,
+		                      b->tag_cache.accesses - a->tag_cache.accesses);
+		m->hit[HR_L2] = rate(b->l2.hits - a->l2.hits, b->l2.accesses - a->l2.accesses);
+	}
+	uint64_t meta = 0, all = 0;
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		uint64_t x =
+		    b->memif.reads[r] + b->memif.writes[r] - a->memif.reads[r] - a->memif.writes[r];
+		all += x;
+		if (r == MEMIF_META)
+			meta = x;
+	}
+	m->meta_share = ratio((double)meta, (double)all);
+	uint64_t rh = b->sdram.row_hits - a->sdram.row_hits;
+	uint64_t rows = rh + b->sdram.row_empty - a->sdram.row_empty + b->sdram.row_conflicts -
+	                a->sdram.row_conflicts;
+	m->row_hit_rate = ratio((double)rh, (double)rows);
+	double ticks = (double)(b->now_ticks - a->now_ticks);
+	m->sdram_util = ratio((double)(b->sdram.busy_ticks - a->sdram.busy_ticks), ticks);
+	m->pci_util = ratio((double)(b->hostbus.busy_ticks - a->hostbus.busy_ticks), ticks);
+}
+
+/* The steady state: the mean of frames 2..N when there are several (the
+ * first frame warms the caches and the VMA), else frame 1. */
+static void memfig_steady(const chip *c, memfig *m)
+{
+	memfig_span(c, c->frames_done > 1 ? 1 : 0, c->frames_done, m);
+}
+
+/* Cycles each unit type's reads waited for memory (issue -> data, summed
+ * over reads; overlapping reads of one packet all count). The fixed model
+ * answers every read after memory.latency cycles. */
+static uint64_t stall_cycles(const chip *c, int type)
+{
+	hier_stats h;
+	if (!hier_get_stats(&c->mem, &h))
+		return h.wait_cycles[type];
+	return c->mem.n.reads[type] * (uint64_t)c->cfg.memory.latency;
+}
+
+static void memfig_json(jsonw *j, const memfig *m)
+{
+	jsonw_obj_begin(j);
+	jsonw_kint(j, "first_frame", m->first);
+	jsonw_kint(j, "last_frame", m->last);
+	jsonw_knum(j, "cycles", m->cycles);
+	jsonw_knum(j, "fps", m->fps);
+	jsonw_knum(j, "sdram_mb", m->sdram_mb);
+	jsonw_knum(j, "pci_mb", m->pci_mb);
+	jsonw_key(j, "hit_rate");
+	jsonw_obj_begin(j);
+	for (int k = 0; k < HR_N; k++) {
+		jsonw_key(j, hr_names[k]);
+		if (m->hit[k] < 0)
+			jsonw_null(j);
+		else
+			jsonw_num(j, m->hit[k]);
+	}
+	jsonw_obj_end(j);
+	jsonw_knum(j, "meta_share", m->meta_share);
+	jsonw_knum(j, "sdram_row_hit_rate", m->row_hit_rate);
+	jsonw_knum(j, "sdram_utilisation", m->sdram_util);
+	jsonw_knum(j, "pci_utilisation", m->pci_util);
+	jsonw_obj_end(j);
+}
+
+static void cache_fields(jsonw *j, const char *key, const cache_stats *s)
+{
+	jsonw_key(j, key);
+	jsonw_obj_begin(j);
+	jsonw_kuint(j, "accesses", s->accesses);
+	jsonw_kuint(j, "hits", s->hits);
+	jsonw_kuint(j, "misses", s->misses);
+	jsonw_knum(j, "hit_rate", ratio((double)s->hits, (double)s->accesses));
+	jsonw_kuint(j, "mshr_merges", s->merges);
+	jsonw_kuint(j, "bytes_requested", s->bytes);
+	jsonw_kuint(j, "fill_bytes", s->fill_bytes);
+	jsonw_obj_end(j);
+}
+
+static void pct(FILE *f, const char *name, double r)
+{
+	if (r < 0)
+		fprintf(f, " %s -", name);
+	else
+		fprintf(f, " %s %.1f%%", name, 100 * r);
+}
+
 void report_text(FILE *f, const report_info *ri)
 {
 	const chip *c = ri->c;
@@ -39,9 +196,16 @@ void report_text(FILE *f, const report_info *ri)
 	fprintf(f, "saarsim: %s, view %s, %dx%d, %d frame%s, config %s\n", ri->w->scene_label,
 	        ri->w->v.name, g->frame.width, g->frame.height, c->frames_done,
 	        c->frames_done == 1 ? "" : "s", g->name);
-	fprintf(f, "  chip: %d RTPs x %d threads at %g MHz, memory %s %d cycles\n", g->chip.rtps,
-	        g->chip.threads_per_rtp, g->chip.clock_mhz, cfg_enum_name(g, "memory.model"),
-	        g->memory.latency);
+	if (c->frame_mem)
+		fprintf(
+		    f,
+		    "  chip: %d RTPs x %d threads at %g MHz; memory hierarchy, %d MB SDRAM, %s\n",
+		    g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz, g->memory.sdram.mb,
+		    g->memory.vma.enabled ? "VMA over the host bus" : "no VMA");
+	else
+		fprintf(f, "  chip: %d RTPs x %d threads at %g MHz; memory fixed, %d cycles\n",
+		        g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz,
+		        g->memory.latency);
 	fprintf(f, "  cycles per frame %.0f = %.2f fps\n", ratio((double)cyc, c->frames_done),
 	        fps(c));
 	fputs("  units:", f);
@@ -67,6 +231,40 @@ void report_text(FILE *f, const report_info *ri)
 	        (unsigned long long)get(c, "rays.refraction"), (unsigned long long)steps,
 	        (unsigned long long)tests, ratio((double)steps, (double)tests),
 	        (unsigned long long)get(c, "trav.stack_overflows"));
+	memfig m;
+	if (c->frames_done > 1) {
+		for (int fr = 0; fr < c->frames_done; fr++) {
+			memfig_span(c, fr, fr + 1, &m);
+			fprintf(
+			    f,
+			    "  frame %d: %.0f cycles = %.2f fps, SDRAM %.2f MB, PCI %.2f MB, hits:",
+			    fr + 1, m.cycles, m.fps, m.sdram_mb, m.pci_mb);
+			for (int k = 0; k < HR_N; k++)
+				if (k < MEM_NTYPES || g->memory.vma.enabled)
+					pct(f, hr_names[k], m.hit[k]);
+			fputc('\n', f);
+		}
+	}
+	memfig_steady(c, &m);
+	fprintf(f, "  %s: %.2f fps, SDRAM %.2f MB/frame, PCI %.2f MB/frame\n",
+	        c->frames_done > 1 ? "steady state (mean of frames 2..N)" : "frame", m.fps,
+	        m.sdram_mb, m.pci_mb);
+	if (c->frame_mem) {
+		fputs("  hit rates:", f);
+		for (int k = 0; k < HR_N; k++)
+			if (k < MEM_NTYPES || g->memory.vma.enabled)
+				pct(f, hr_names[k], m.hit[k]);
+		fprintf(f,
+		        "\n  SDRAM: row hits %.1f%%, bus busy %.1f%%, meta-data %.1f%% of accesses",
+		        100 * m.row_hit_rate, 100 * m.sdram_util, 100 * m.meta_share);
+		if (g->memory.vma.enabled)
+			fprintf(f, "; PCI busy %.1f%%", 100 * m.pci_util);
+		fputc('\n', f);
+	}
+	fputs("  read cycles waiting for memory:", f);
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		fprintf(f, " %s %llu", chip_unit_name(k), (unsigned long long)stall_cycles(c, k));
+	fputc('\n', f);
 	if (ri->check && ri->check->done)
 		fprintf(f, "  check vs kernel-ref: %s (PSNR %.2f dB, %llu differing pixels)\n",
 		        ri->check->cmp.identical ? "identical" : "DIFFERENT", ri->check->cmp.psnr,
@@ -110,6 +308,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_kint(j, "depth", w->kd.depth);
 	jsonw_obj_end(j);
 	kv(j, "memory_image_bytes", w->m.size);
+	kv(j, "spill_base", c->spill_base);
 
 	kv(j, "frames", (uint64_t)c->frames_done);
 	jsonw_key(j, "cycles_per_frame");
@@ -238,7 +437,55 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	kv(j, "reads", tot_rd);
 	kv(j, "read_bytes", tot_b);
 	jsonw_knum(j, "read_bytes_per_frame", ratio((double)tot_b, c->frames_done));
+	/* unit kinds and requester types are in the same order (rgs = shade...) */
+	_Static_assert((int)UNIT_RGS == (int)MEM_SHADE && (int)UNIT_TRAV == (int)MEM_KD &&
+	                   (int)UNIT_LIST == (int)MEM_LIST && (int)UNIT_ISECT == (int)MEM_TRI,
+	               "unit kinds and memory requester types must line up");
+	jsonw_key(j, "stall_cycles");
+	jsonw_obj_begin(j);
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		kv(j, chip_unit_name(k), stall_cycles(c, k));
 	jsonw_obj_end(j);
+	hier_stats hs;
+	int have_h = !hier_get_stats(&c->mem, &hs);
+	jsonw_key(j, "hierarchy");
+	if (have_h)
+		hier_write_json(&hs, j);
+	else
+		jsonw_null(j);
+	jsonw_obj_end(j);
+
+	/* the published SaarCOR table's columns (seed 002 Table 5), steady state */
+	memfig m;
+	memfig_steady(c, &m);
+	jsonw_key(j, "table");
+	jsonw_obj_begin(j);
+	jsonw_knum(j, "fps", m.fps);
+	jsonw_knum(j, "sdram_mb_per_frame", m.sdram_mb);
+	jsonw_knum(j, "pci_mb_per_frame", m.pci_mb);
+	jsonw_obj_end(j);
+	jsonw_key(j, "steady_state");
+	memfig_json(j, &m);
+	jsonw_key(j, "per_frame");
+	jsonw_arr_begin(j);
+	for (int f = 0; f < c->frames_done; f++) {
+		memfig_span(c, f, f + 1, &m);
+		memfig_json(j, &m);
+	}
+	jsonw_arr_end(j);
+	jsonw_key(j, "caches");
+	if (have_h) {
+		jsonw_obj_begin(j);
+		for (int t = 0; t < MEM_NTYPES; t++)
+			cache_fields(j, mem_type_name(t), &hs.l1[t]);
+		if (hs.vma_enabled) {
+			cache_fields(j, "tag_cache", &hs.tag_cache);
+			cache_fields(j, "l2", &hs.l2);
+		}
+		jsonw_obj_end(j);
+	} else {
+		jsonw_null(j);
+	}
 
 	jsonw_key(j, "check");
 	if (ri->check && ri->check->done) {
@@ -269,4 +516,121 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_obj_end(j);
 	jsonw_obj_end(j);
 	return jsonw_close(j, d);
+}
+
+/* ---- CSV ---- */
+
+/* One field, quoted when it holds a comma, quote or newline (RFC 4180). */
+static void csv_str(FILE *f, const char *s, int last)
+{
+	if (strpbrk(s, ",\"\n")) {
+		fputc('"', f);
+		for (; *s; s++) {
+			if (*s == '"')
+				fputc('"', f);
+			fputc(*s, f);
+		}
+		fputc('"', f);
+	} else {
+		fputs(s, f);
+	}
+	fputc(last ? '\n' : ',', f);
+}
+
+static void csv_num(FILE *f, double v)
+{
+	if (v < 0 || !isfinite(v))
+		fputs(",", f); /* no such cache: empty field */
+	else
+		fprintf(f, "%.6g,", v);
+}
+
+static const char csv_header[] =
+    "config,scene,view,width,height,frames,memory_model,chip.rtps,chip.threads_per_rtp,"
+    "memory.l1.shade.size_kb,memory.l1.kd.size_kb,memory.l1.list.size_kb,"
+    "memory.l1.tri.size_kb,memory.sdram.mb,memory.vma.enabled,memory.hostbus.preset,"
+    "fps,util_rgs,util_trav,util_list,util_isect,hit_shade,hit_kd,hit_list,hit_tri,"
+    "hit_tag_cache,hit_l2,sdram_mb_per_frame,pci_mb_per_frame,meta_share,"
+    "sdram_row_hit_rate,sdram_utilisation,pci_utilisation,identical_8bit,host_sim_s,"
+    "host_wall_s\n";
+
+int report_csv(const char *path, const report_info *ri, diag *d)
+{
+	const chip *c = ri->c;
+	const saar_config *g = &c->cfg;
+	/* the old contents, if any */
+	char *old = NULL;
+	size_t nold = 0;
+	FILE *in = fopen(path, "rb");
+	if (in) {
+		fseek(in, 0, SEEK_END);
+		long n = ftell(in);
+		rewind(in);
+		if (n > 0 && !(old = malloc((size_t)n))) {
+			fclose(in);
+			return diag_set(d, path, 0, 0, "out of memory");
+		}
+		nold = n > 0 ? fread(old, 1, (size_t)n, in) : 0;
+		int err = n < 0 || nold != (size_t)n || ferror(in);
+		fclose(in);
+		if (err) {
+			free(old);
+			return diag_set(d, path, 0, 0, "cannot read: %s",
+			                strerror(errno ? errno : EIO));
+		}
+	} else if (errno != ENOENT) {
+		return diag_set(d, path, 0, 0, "cannot read: %s", strerror(errno));
+	}
+	char tmp[1100];
+	snprintf(tmp, sizeof tmp, "%s.tmp", path);
+	FILE *f = fopen(tmp, "wb");
+	if (!f) {
+		free(old);
+		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+	}
+	if (nold) {
+		fwrite(old, 1, nold, f);
+		if (old[nold - 1] != '\n')
+			fputc('\n', f);
+	} else {
+		fputs(csv_header, f);
+	}
+	free(old);
+
+	memfig m;
+	memfig_steady(c, &m);
+	csv_str(f, g->name, 0);
+	csv_str(f, ri->w->scene_label, 0);
+	csv_str(f, ri->w->v.name, 0);
+	fprintf(f, "%d,%d,%d,%s,%d,%d,%d,%d,%d,%d,%d,%d,%s,", g->frame.width, g->frame.height,
+	        c->frames_done, cfg_enum_name(g, "memory.model"), g->chip.rtps,
+	        g->chip.threads_per_rtp, g->memory.l1.shade.size_kb, g->memory.l1.kd.size_kb,
+	        g->memory.l1.list.size_kb, g->memory.l1.tri.size_kb, g->memory.sdram.mb,
+	        g->memory.vma.enabled ? 1 : 0, cfg_enum_name(g, "memory.hostbus.preset"));
+	csv_num(f, m.fps);
+	char sfx[64];
+	for (int k = 0; k < UNIT_NKINDS; k++) {
+		snprintf(sfx, sizeof sfx, "%s.busy_cycles", chip_unit_name(k));
+		csv_num(f, util(c, k, chip_rtp_sum(c, sfx)));
+	}
+	for (int k = 0; k < HR_N; k++)
+		csv_num(f, m.hit[k]);
+	csv_num(f, m.sdram_mb);
+	csv_num(f, m.pci_mb);
+	csv_num(f, m.meta_share);
+	csv_num(f, m.row_hit_rate);
+	csv_num(f, m.sdram_util);
+	csv_num(f, m.pci_util);
+	if (ri->check && ri->check->done)
+		fprintf(f, "%d,", ri->check->cmp.identical ? 1 : 0);
+	else
+		fputc(',', f);
+	fprintf(f, "%.4f,%.4f\n", c->sim_ms / 1e3, ri->wall_ms / 1e3);
+	int bad = ferror(f);
+	if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
+		int e = errno ? errno : EIO;
+		unlink(tmp);
+		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(e));
+	}
+	return 0;
 }

@@ -3,9 +3,6 @@
  * JSON stats file; every kind of bad input gives one line on stderr, exit
  * status 2 and no output file.
  */
-#include <string.h>
-#include <sys/stat.h>
-
 #include "testutil.h"
 
 static char dir[256];
@@ -15,36 +12,14 @@ static void setup(void)
 	tu_tmpdir(dir, sizeof dir);
 }
 
-/* Runs rtref with args; returns the exit status; stderr into dir/err. */
 static int rtref(const char *args)
 {
-	char cmd[4096];
-	snprintf(cmd, sizeof cmd, "%s/rtref %s >%s/out 2>%s/err", tu_bin_dir(), args, dir, dir);
-	return tu_run(cmd);
+	return tu_prog(dir, "rtref", args);
 }
 
-static int exists(const char *name)
-{
-	char p[512];
-	snprintf(p, sizeof p, "%s/%s", dir, name);
-	struct stat sb;
-	return stat(p, &sb) == 0;
-}
-
-/* stderr must be exactly one line containing `what`. */
-static void one_line_naming(const char *what)
-{
-	char p[512], buf[4096] = {0};
-	snprintf(p, sizeof p, "%s/err", dir);
-	FILE *f = fopen(p, "r");
-	cr_assert(f);
-	size_t n = fread(buf, 1, sizeof buf - 1, f);
-	fclose(f);
-	cr_assert_gt(n, 0, "nothing on stderr");
-	char *nl = strchr(buf, '\n');
-	cr_assert(nl && nl[1] == 0, "stderr is not one line: %s", buf);
-	cr_assert(strstr(buf, what), "stderr does not name '%s': %s", what, buf);
-}
+#define exists(name)          tu_exists(dir, name)
+#define slurp(name)           tu_slurp(dir, name)
+#define one_line_naming(what) tu_one_line(dir, "rtref", what)
 
 TestSuite(rtref_cli, .init = setup);
 

@@ -3,9 +3,11 @@
  * report whose check says identical; two runs give the same report except
  * host times; bad input (config key with file:line:col, --set, --size,
  * unknown option) gives one line on stderr, exit status 2, no output file.
+ * Issue 4: the memory report fields, multi-frame runs, the CSV row, the
+ * VMA error and config, small stacks, and --trace-mem replayed by
+ * saarsim-replay with the same L1 counts.
  */
-#include <string.h>
-#include <sys/stat.h>
+#include <math.h>
 
 #include "testutil.h"
 
@@ -18,43 +20,12 @@ static void setup(void)
 
 static int saarsim(const char *args)
 {
-	char cmd[4096];
-	snprintf(cmd, sizeof cmd, "%s/saarsim %s >%s/out 2>%s/err", tu_bin_dir(), args, dir, dir);
-	return tu_run(cmd);
+	return tu_prog(dir, "saarsim", args);
 }
 
-static int exists(const char *name)
-{
-	char p[512];
-	snprintf(p, sizeof p, "%s/%s", dir, name);
-	struct stat sb;
-	return stat(p, &sb) == 0;
-}
-
-static char *slurp(const char *name)
-{
-	char p[512];
-	snprintf(p, sizeof p, "%s/%s", dir, name);
-	FILE *f = fopen(p, "r");
-	cr_assert(f, "cannot read %s", p);
-	static char bufs[2][1 << 16];
-	static int which;
-	char *buf = bufs[which ^= 1];
-	size_t n = fread(buf, 1, sizeof bufs[0] - 1, f);
-	buf[n] = 0;
-	fclose(f);
-	return buf;
-}
-
-static void one_line_naming(const char *what)
-{
-	char *buf = slurp("err");
-	cr_assert(*buf, "nothing on stderr");
-	char *nl = strchr(buf, '\n');
-	cr_assert(nl && nl[1] == 0, "stderr is not one line: %s", buf);
-	cr_assert(!strncmp(buf, "saarsim: ", 9), "stderr does not start with 'saarsim: ': %s", buf);
-	cr_assert(strstr(buf, what), "stderr does not name '%s': %s", what, buf);
-}
+#define exists(name)          tu_exists(dir, name)
+#define slurp(name)           tu_slurp(dir, name)
+#define one_line_naming(what) tu_one_line(dir, "saarsim", what)
 
 TestSuite(saarsim_cli, .init = setup);
 
@@ -156,4 +127,159 @@ Test(saarsim_cli, config_doc_matches_docs)
 	snprintf(cmd, sizeof cmd, "%s/saarsim --config-doc | cmp -s - docs/config.md",
 	         tu_bin_dir());
 	cr_assert_eq(tu_run(cmd), 0, "docs/config.md is not `saarsim --config-doc`");
+}
+
+/* The unsigned number after the keys found one after the other in json
+ * (each key searched from where the previous one was found). */
+static unsigned long long jnum(const char *json, const char *const *keys, int n)
+{
+	const char *p = json;
+	for (int k = 0; k < n; k++) {
+		char q[128];
+		snprintf(q, sizeof q, "\"%s\"", keys[k]);
+		p = strstr(p, q);
+		cr_assert(p, "no key %s", q);
+		p += strlen(q);
+	}
+	cr_assert_eq(*p, ':');
+	return strtoull(p + 1, NULL, 10);
+}
+
+#define JNUM(json, ...)                                                                            \
+	jnum(json, (const char *const[]){__VA_ARGS__},                                             \
+	     sizeof((const char *const[]){__VA_ARGS__}) / sizeof(const char *))
+
+Test(saarsim_cli, image_too_big_without_vma_suggests_vma_config)
+{
+	char args[1024];
+	snprintf(args, sizeof args,
+	         "--scene spd:balls:2 --size 32x32 --set memory.sdram.mb=1 --out %s/f.png "
+	         "--report %s/r.json --csv %s/c.csv",
+	         dir, dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("configs/saarcor-vma.yaml");
+	cr_assert_not(exists("f.png") || exists("r.json") || exists("c.csv"));
+	snprintf(args, sizeof args,
+	         "--config configs/saarcor-vma.yaml --scene spd:balls:2 --size 32x32 --set "
+	         "memory.sdram.mb=1 --report %s/r.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *r = slurp("r.json");
+	cr_assert(strstr(r, "\"identical_8bit\": true"));
+	cr_assert_gt(JNUM(r, "hostbus", "bytes"), 0, "no PCI traffic");
+}
+
+Test(saarsim_cli, small_stack_spills_and_keeps_the_image)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 64x64 --set chip.stack_depth=4 --report %s/r.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *r = slurp("r.json");
+	cr_assert(strstr(r, "\"identical_8bit\": true"));
+	cr_assert_gt(JNUM(r, "traversal", "stack_overflows"), 0);
+}
+
+Test(saarsim_cli, frames_report_fields_and_csv_rows)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 64x64 --frames 3 --report %s/r.json --csv %s/c.csv",
+	         dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	snprintf(args, sizeof args, "--size 64x64 --set memory.l1.kd.size_kb=8 --csv %s/c.csv",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert_not(exists("c.csv.tmp"));
+	char *r = slurp("r.json");
+	const char *keys[] = {
+	    "\"table\"",           "\"sdram_mb_per_frame\"", "\"pci_mb_per_frame\"",
+	    "\"steady_state\"",    "\"per_frame\"",          "\"caches\"",
+	    "\"mshr_merges\"",     "\"fill_bytes\"",         "\"hit_rate\"",
+	    "\"meta_share\"",      "\"row_hit_rate\"",       "\"sdram_utilisation\"",
+	    "\"pci_utilisation\"", "\"stall_cycles\"",       "\"hierarchy\"",
+	    "\"spill_base\""};
+	for (size_t k = 0; k < sizeof keys / sizeof *keys; k++)
+		cr_assert(strstr(r, keys[k]), "report lacks %s", keys[k]);
+	cr_assert_eq(JNUM(r, "steady_state", "first_frame"), 2);
+	cr_assert_eq(JNUM(r, "steady_state", "last_frame"), 3);
+	cr_assert_eq(JNUM(r, "per_frame", "first_frame"), 1);
+	/* hits + misses = accesses, per L1 */
+	static const char *const l1[] = {"shade", "kd", "list", "tri"};
+	for (int t = 0; t < 4; t++) {
+		unsigned long long acc = JNUM(r, "caches", l1[t], "accesses"),
+		                   hits = JNUM(r, "caches", l1[t], "hits"),
+		                   miss = JNUM(r, "caches", l1[t], "misses");
+		cr_assert_eq(hits + miss, acc, "%s", l1[t]);
+	}
+	/* header once, then one row per run */
+	char *csv = slurp("c.csv");
+	cr_assert(!strncmp(csv, "config,scene,view,", 18), "%s", csv);
+	int lines = 0;
+	for (char *p = csv; *p; p++)
+		lines += *p == '\n';
+	cr_assert_eq(lines, 3, "%s", csv);
+	cr_assert(strstr(csv, "\nsaarcor-std,embedded:cornell,default,64,64,3,hierarchy,"), "%s",
+	          csv);
+	cr_assert(strstr(csv, ",64,8,64,144,64,0,pci,"), "swept L1 size not in the row: %s", csv);
+}
+
+Test(saarsim_cli, bad_frames_and_unwritable_trace)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--frames 0 --out %s/f.png", dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--frames");
+	snprintf(args, sizeof args, "--size 16x16 --trace-mem %s/nodir/t.gz --out %s/f.png", dir,
+	         dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("nodir/t.gz");
+	cr_assert_not(exists("f.png"));
+}
+
+/* The trace holds every request with its issue cycle. Replayed --timing
+ * through the same hierarchy, the requests arrive at the same cycles in the
+ * same order, so every L1 counter is identical. The functional replay fills
+ * lines at once: a chip MSHR merge (counted as a miss) is a hit there, and
+ * LRU order differs where the chip's fills arrive later, so only the
+ * accesses are exact and hits within 1%. docs/memory.md, "Traces". */
+Test(saarsim_cli, trace_replays_to_the_same_l1_counts, .timeout = 300)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 64x64 --trace-mem %s/t.gz --report %s/r.json", dir,
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(exists("t.gz") && !exists("t.gz.tmp"));
+	char *r = slurp("r.json");
+	unsigned long long spill = JNUM(r, "spill_base");
+	snprintf(args, sizeof args, "--timing --image-bytes %llu --json %s/rt.json %s/t.gz", spill,
+	         dir, dir);
+	char cmd[2048];
+	snprintf(cmd, sizeof cmd, "%s/saarsim-replay %s >%s/out 2>%s/err", tu_bin_dir(), args, dir,
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", slurp("err"));
+	snprintf(args, sizeof args, "--image-bytes %llu --json %s/rf.json %s/t.gz", spill, dir,
+	         dir);
+	snprintf(cmd, sizeof cmd, "%s/saarsim-replay %s >%s/out 2>%s/err", tu_bin_dir(), args, dir,
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", slurp("err"));
+	r = slurp("r.json");
+	char *rt = slurp("rt.json");
+	static const char *const l1[] = {"shade", "kd", "list", "tri"};
+	static const char *const f[] = {"accesses", "hits", "misses", "mshr_merges", "fill_bytes"};
+	for (int t = 0; t < 4; t++)
+		for (int k = 0; k < 5; k++)
+			cr_assert_eq(JNUM(r, "caches", l1[t], f[k]), JNUM(rt, "l1", l1[t], f[k]),
+			             "timed replay: l1.%s.%s", l1[t], f[k]);
+	char *rf = slurp("rf.json");
+	r = slurp("r.json");
+	for (int t = 0; t < 4; t++) {
+		unsigned long long acc = JNUM(r, "caches", l1[t], "accesses");
+		cr_assert_eq(acc, JNUM(rf, "l1", l1[t], "accesses"), "l1.%s", l1[t]);
+		double chip_hits = (double)(JNUM(r, "caches", l1[t], "hits") +
+		                            JNUM(r, "caches", l1[t], "mshr_merges"));
+		double rep_hits = (double)JNUM(rf, "l1", l1[t], "hits");
+		cr_assert_leq(fabs(chip_hits - rep_hits), 0.01 * (double)acc + 1,
+		              "functional replay: l1.%s hits %.0f vs chip hits + merges %.0f",
+		              l1[t], rep_hits, chip_hits);
+	}
 }

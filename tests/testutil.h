@@ -12,6 +12,8 @@
 #include <criterion/criterion.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -61,6 +63,55 @@ static inline int tu_run(const char *cmd)
 	if (st == -1 || !WIFEXITED(st))
 		return -1;
 	return WEXITSTATUS(st);
+}
+
+/* ---- command-line programs (rtref, saarsim, saarsim-replay) ---- */
+
+/* Runs SAAR_BIN/prog with args; stdout into dir/out, stderr into dir/err.
+ * Returns the exit status. */
+static inline int tu_prog(const char *dir, const char *prog, const char *args)
+{
+	char cmd[8192];
+	snprintf(cmd, sizeof cmd, "%s/%s %s >%s/out 2>%s/err", tu_bin_dir(), prog, args, dir, dir);
+	return tu_run(cmd);
+}
+
+static inline int tu_exists(const char *dir, const char *name)
+{
+	char p[1024];
+	snprintf(p, sizeof p, "%s/%s", dir, name);
+	struct stat sb;
+	return stat(p, &sb) == 0;
+}
+
+/* dir/name's text (up to 1 MB) in one of two static buffers, so two files
+ * can be held at once. */
+static inline char *tu_slurp(const char *dir, const char *name)
+{
+	char p[1024];
+	snprintf(p, sizeof p, "%s/%s", dir, name);
+	FILE *f = fopen(p, "r");
+	cr_assert(f, "cannot read %s", p);
+	static char bufs[2][1 << 20];
+	static int which;
+	char *buf = bufs[which ^= 1];
+	size_t n = fread(buf, 1, sizeof bufs[0] - 1, f);
+	buf[n] = 0;
+	fclose(f);
+	return buf;
+}
+
+/* dir/err must be exactly one line "prog: ..." containing what. */
+static inline void tu_one_line(const char *dir, const char *prog, const char *what)
+{
+	char *buf = tu_slurp(dir, "err");
+	cr_assert(*buf, "nothing on stderr");
+	char *nl = strchr(buf, '\n');
+	cr_assert(nl && nl[1] == 0, "stderr is not one line: %s", buf);
+	size_t n = strlen(prog);
+	cr_assert(!strncmp(buf, prog, n) && buf[n] == ':' && buf[n + 1] == ' ',
+	          "stderr does not start with '%s: ': %s", prog, buf);
+	cr_assert(strstr(buf, what), "stderr does not name '%s': %s", what, buf);
 }
 
 #endif

@@ -181,7 +181,7 @@ packet *thr_pkt_alloc(thr_env *v)
 			return NULL;
 		v->chunks = ch;
 		void *mem = NULL;
-		if (posix_memalign(&mem, 64, POOL_CHUNK * sizeof(packet)))
+		if (posix_memalign(&mem, 64, (POOL_CHUNK * sizeof(packet) + 63) & ~(size_t)63))
 			return NULL;
 		packet *blk = mem;
 		ch[v->nchunks++] = blk;

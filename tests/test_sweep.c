@@ -1,0 +1,289 @@
+/*
+ * test_sweep.c: scripts/sweep, scripts/sweep-plot and scripts/validate.sh
+ * end to end with the real saarsim (SAAR_BIN), on tiny grids: the CSV and
+ * PNG of a 2-point sweep, resume after an interruption (only the missing
+ * point runs), the Slurm array script, bad input, and the validation
+ * document at a tiny size. The scripts are found beside the tests
+ * (SAAR_ROOT, else the current folder: `make test` runs from the repo).
+ */
+#include "testutil.h"
+
+#include <string.h>
+#include <sys/stat.h>
+
+static const char *root(void)
+{
+	const char *r = getenv("SAAR_ROOT");
+	return r && *r ? r : ".";
+}
+
+/* saarsim for the scripts: a private copy of <SAAR_BIN>/saarsim, so a
+ * rebuild while the tests run does not pull it away; "SAARSIM='...'" */
+static void env_prefix(char *buf, size_t n)
+{
+	static char copy[300];
+	if (copy[0]) {
+		snprintf(buf, n, "SAARSIM='%s'", copy);
+		return;
+	}
+	char bin[4096];
+	const char *b = tu_bin_dir();
+	if (b[0] == '/')
+		snprintf(bin, sizeof bin, "%s", b);
+	else if (!getcwd(bin, sizeof bin - 200) ||
+	         strlen(bin) + strlen(b) + 2 >= sizeof bin)
+		cr_assert_fail("getcwd");
+	else
+		snprintf(bin + strlen(bin), sizeof bin - strlen(bin), "/%s", b);
+	char dir[256], cmd[8500];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(copy, sizeof copy, "%s/saarsim", dir);
+	snprintf(cmd, sizeof cmd, "cp '%s/saarsim' '%s'", bin, copy);
+	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	snprintf(buf, n, "SAARSIM='%s'", copy);
+}
+
+static char *slurp(const char *path)
+{
+	FILE *f = fopen(path, "rb");
+	if (!f)
+		return NULL;
+	fseek(f, 0, SEEK_END);
+	long n = ftell(f);
+	rewind(f);
+	char *s = malloc((size_t)n + 1);
+	cr_assert(s);
+	size_t got = fread(s, 1, (size_t)n, f);
+	s[got] = 0;
+	fclose(f);
+	return s;
+}
+
+static int count_lines(const char *path)
+{
+	char *s = slurp(path);
+	if (!s)
+		return -1;
+	int n = 0;
+	for (char *p = s; *p; p++)
+		n += *p == '\n';
+	free(s);
+	return n;
+}
+
+/* occurrences of needle in the file */
+static int count_in(const char *path, const char *needle)
+{
+	char *s = slurp(path);
+	if (!s)
+		return -1;
+	int n = 0;
+	for (char *p = s; (p = strstr(p, needle)); p += strlen(needle))
+		n++;
+	free(s);
+	return n;
+}
+
+static int exists(const char *path)
+{
+	struct stat st;
+	return stat(path, &st) == 0 && st.st_size > 0;
+}
+
+#define SWEEP_ARGS "--scene spd:tetra:2 --size 32x32 --set chip.threads_per_rtp=2,16"
+
+static void run_tiny_sweep(const char *dir, const char *extra, int want_rc)
+{
+	char env[4200], cmd[16384];
+	env_prefix(env, sizeof env);
+	snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep --out %s " SWEEP_ARGS " -j 2 %s 2>%s/stderr.txt",
+	         env, root(), dir, extra, dir);
+	cr_assert_eq(tu_run(cmd), want_rc, "%s", cmd);
+}
+
+Test(sweep, tiny_grid_csv_png_and_resume, .timeout = 120)
+{
+	char dir[256], path[512], cmd[16384];
+	tu_tmpdir(dir, sizeof dir);
+	run_tiny_sweep(dir, "--plot", 0);
+
+	snprintf(path, sizeof path, "%s/points.tsv", dir);
+	cr_assert_eq(count_lines(path), 3, "points.tsv: header + 2 points");
+	snprintf(path, sizeof path, "%s/results.csv", dir);
+	cr_assert_eq(count_lines(path), 3, "results.csv: header + 2 rows");
+	/* the swept key leads, saarsim's columns follow, found by name */
+	snprintf(cmd, sizeof cmd,
+	         "head -n 1 %s | grep -q '^id,target,chip.threads_per_rtp,' && "
+	         "head -n 1 %s | tr , '\\n' | grep -qx fps && "
+	         "head -n 1 %s | tr , '\\n' | grep -qx trav_isect_ratio && "
+	         "test \"$(head -n 1 %s | tr , '\\n' | grep -cx chip.threads_per_rtp)\" = 1",
+	         path, path, path, path);
+	cr_assert_eq(tu_run(cmd), 0, "results.csv header");
+	cr_assert_eq(count_in(path, "spd:tetra:2,2,"), 1);
+	cr_assert_eq(count_in(path, "spd:tetra:2,16,"), 1);
+	snprintf(path, sizeof path, "%s/plots/threads.png", dir);
+	cr_assert(exists(path), "%s missing", path);
+	snprintf(path, sizeof path, "%s/plots/threads-spd_tetra_2.png", dir);
+	cr_assert(exists(path), "%s missing", path);
+	snprintf(path, sizeof path, "%s/points/0001.json", dir);
+	cr_assert(exists(path));
+	snprintf(path, sizeof path, "%s/run.log", dir);
+	cr_assert_eq(count_in(path, " done "), 2);
+
+	/* rerun: nothing runs */
+	run_tiny_sweep(dir, "", 0);
+	cr_assert_eq(count_in(path, " start "), 2, "a finished sweep reran points");
+
+	/* an interruption lost point 2 (and left a temporary file): only it runs */
+	snprintf(cmd, sizeof cmd, "rm %s/points/0002.csv && touch %s/points/.0002.x.1.csv", dir, dir);
+	cr_assert_eq(tu_run(cmd), 0);
+	run_tiny_sweep(dir, "", 0);
+	cr_assert_eq(count_in(path, "0001 start"), 1, "point 1 was rerun");
+	cr_assert_eq(count_in(path, "0002 start"), 2, "point 2 was not rerun");
+	snprintf(path, sizeof path, "%s/results.csv", dir);
+	cr_assert_eq(count_lines(path), 3);
+
+	/* a different grid in the same folder is refused */
+	char env[4200];
+	env_prefix(env, sizeof env);
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s --scene spd:tetra:2 --set chip.rtps=1,2 2>/dev/null",
+	         env, root(), dir);
+	cr_assert_eq(tu_run(cmd), 2);
+}
+
+Test(sweep, interrupted_run_loses_nothing, .timeout = 120)
+{
+	/* kill the sweep while points run: no partial ID.csv, and the rerun
+	 * runs exactly the points that have none */
+	char dir[256], env[4200], cmd[16384], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	snprintf(cmd, sizeof cmd,
+	         "cd %s && (%s setsid sh %s/scripts/sweep --out %s --scene spd:tetra:3 --size 64x64 "
+	         "--set chip.threads_per_rtp=1,2,3,4,5,6 -j 1 >/dev/null 2>&1 & echo $! > pid; "
+	         "sleep 0.6; kill -TERM -- -$(cat pid) 2>/dev/null; wait) ; true",
+	         dir, env, root(), dir);
+	tu_run(cmd);
+	/* every ID.csv present is complete: header + one row */
+	snprintf(cmd, sizeof cmd,
+	         "for f in %s/points/*.csv; do [ -e \"$f\" ] || continue; "
+	         "[ \"$(wc -l < \"$f\")\" = 2 ] || exit 1; done", dir);
+	cr_assert_eq(tu_run(cmd), 0, "a partial point CSV");
+	snprintf(cmd, sizeof cmd, "ls %s/points/*.csv 2>/dev/null | wc -l > %s/before", dir, dir);
+	tu_run(cmd);
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s --scene spd:tetra:3 --size 64x64 "
+	         "--set chip.threads_per_rtp=1,2,3,4,5,6 -j 2 2>/dev/null",
+	         env, root(), dir);
+	cr_assert_eq(tu_run(cmd), 0);
+	snprintf(path, sizeof path, "%s/results.csv", dir);
+	cr_assert_eq(count_lines(path), 7);
+	/* each point finished exactly once ("done" lines) */
+	snprintf(cmd, sizeof cmd,
+	         "test \"$(grep ' done ' %s/run.log | cut -d' ' -f1 | sort | uniq -d)\" = '' && "
+	         "test \"$(grep -c ' done ' %s/run.log)\" = 6",
+	         dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "a point finished twice or not at all");
+}
+
+Test(sweep, slurm_script_array_size)
+{
+	char dir[256], env[4200], cmd[16384], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s --scene spd:tetra:1,spd:balls:1 --size 16x16 "
+	         "--set chip.threads_per_rtp=4,8,16 --set memory.l1.kd.size_kb=16,64 --slurm 2>/dev/null",
+	         env, root(), dir);
+	cr_assert_eq(tu_run(cmd), 0);
+	snprintf(path, sizeof path, "%s/sweep.slurm", dir);
+	cr_assert_eq(count_in(path, "#SBATCH --array=1-12\n"), 1, "2 scenes x 3 x 2 = 12 tasks");
+	cr_assert_eq(count_in(path, "--run-point"), 1);
+	snprintf(path, sizeof path, "%s/points.tsv", dir);
+	cr_assert_eq(count_lines(path), 13);
+	/* nothing ran */
+	snprintf(path, sizeof path, "%s/results.csv", dir);
+	cr_assert(!exists(path));
+	/* an array task runs its point */
+	snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep --run-point %s 5 && test -s %s/points/0005.csv",
+	         env, root(), dir, dir);
+	cr_assert_eq(tu_run(cmd), 0);
+}
+
+Test(sweep, bad_input_exit_2)
+{
+	char dir[256], env[4200], cmd[16384];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	const char *bad[] = {
+	    "--out %s --scene spd:tetra:1 --bogus",
+	    "--out %s --scene spd:tetra:1 --set chip.threads_per_rtp=",
+	    "--out %s --scene spd:tetra:1 --set chip.threads_per_rtp=1,,2",
+	    "--out %s --scene spd:tetra:1 --set no.such.key=1",
+	    "--out %s --scene spd:tetra:1 --set chip.rtps=x",
+	    "--out %s --set chip.rtps=1",
+	    "--scene spd:tetra:1 --set chip.rtps=1",
+	    "--out %s --scene spd:tetra:1 -j 0",
+	};
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		char args[512];
+		snprintf(args, sizeof args, bad[i], dir);
+		snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep %s 2>%s/err >/dev/null", env, root(),
+		         args, dir);
+		cr_expect_eq(tu_run(cmd), 2, "%s", args);
+		char path[512];
+		snprintf(path, sizeof path, "%s/err", dir);
+		cr_expect_eq(count_lines(path), 1, "one line for: %s", args);
+	}
+	snprintf(cmd, sizeof cmd,
+	         "SAARSIM=/nonexistent/saarsim sh %s/scripts/sweep --out %s --scene spd:tetra:1 "
+	         "--set chip.rtps=1 2>/dev/null",
+	         root(), dir);
+	cr_expect_eq(tu_run(cmd), 2, "missing saarsim");
+}
+
+Test(validate, tiny_end_to_end, .timeout = 150)
+{
+	char views[512], dir[256], cmd[16384], doc[512], png[512], env[4200];
+	SCENE_OR_SKIP(views, "views.yaml");
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	snprintf(doc, sizeof doc, "%s/doc/VALIDATION.md", dir);
+	snprintf(cmd, sizeof cmd,
+	         "%s VALIDATE_SIZE=64x48 VALIDATE_VIEWS=cornell VALIDATE_JOBS=2 VALIDATE_OUT=%s/out "
+	         "VALIDATE_DOC=%s SAAR_SCENES='%s' sh %s/scripts/validate.sh '%s' 2>%s/stderr.txt",
+	         env, dir, doc, tu_scenes_dir(), root(), tu_bin_dir(), dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	cr_assert(exists(doc));
+	snprintf(png, sizeof png, "%s/doc/validation-threads.png", dir);
+	cr_assert(exists(png));
+	const char *sections[] = {
+	    "## 1. Unit utilisation at 16 threads",  "## 2. Gain from 16 to 32 threads",
+	    "## 3. VMA overhead",                    "## 4. Share of SDRAM accesses",
+	    "## 5. The Conference row of Table 5",   "## 6. Traversal : intersection",
+	    "## Where we disagree",                  "## Known model differences",
+	    "| cornell |",                           "Mean busiest-unit utilisation",
+	    "Mean overhead: **",                     "Mean meta-data share: **",
+	};
+	for (size_t i = 0; i < sizeof sections / sizeof *sections; i++)
+		cr_expect_gt(count_in(doc, sections[i]), 0, "missing: %s", sections[i]);
+	/* no unfilled numbers */
+	cr_expect_eq(count_in(doc, "nan"), 0);
+	cr_expect_eq(count_in(doc, "inf%"), 0);
+}
+
+Test(validate, skips_without_scenes)
+{
+	char dir[256], cmd[16384], doc[512];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(doc, sizeof doc, "%s/VALIDATION.md", dir);
+	snprintf(cmd, sizeof cmd,
+	         "SAAR_SCENES=%s/none VALIDATE_DOC=%s VALIDATE_OUT=%s/out sh %s/scripts/validate.sh '%s' "
+	         "2>%s/err",
+	         dir, doc, dir, root(), tu_bin_dir(), dir);
+	cr_assert_eq(tu_run(cmd), 0);
+	cr_assert(!exists(doc));
+	snprintf(cmd, sizeof cmd, "grep -q 'skipping the validation' %s/err", dir);
+	cr_assert_eq(tu_run(cmd), 0);
+}
