@@ -17,6 +17,7 @@
 #ifndef SAAR_KREF_ISECT_H
 #define SAAR_KREF_ISECT_H
 
+#include "fpfmt.h"
 #include "vecmath.h"
 
 /* gamma(n) = n u / (1 - n u), u = 2^-24: the relative error bound of n
@@ -102,6 +103,132 @@ static inline int isect_tri(const isect_ray *r, vec3 o, const float v[3][3], flo
 	*t = tv;
 	*bu = vv / det;
 	*bv = w / det;
+	return 1;
+}
+
+/* The Woop test evaluated in a reduced format f (the chip's intersection
+ * unit at reduced precision; docs/NUMERICS.md). Every operation is rounded
+ * to f; the vertex and origin coordinates enter as the floats read from
+ * memory. Conservative instead of exact:
+ *
+ *  - Edge functions. deltaE bounds each edge function's error against the
+ *    exact value for the float inputs (pbrt-v4's derivation with f's gamma,
+ *    plus the second-order and flush-to-zero terms). An edge function with
+ *    |E| <= deltaE counts as zero, i.e. neutral; the test rejects only when
+ *    one edge function is below -deltaE and another above +deltaE. So
+ *    every triangle the float ray hits exactly (all exact edge functions
+ *    of one sign) is accepted: a computed sign that is not neutral is the
+ *    exact sign. A ray near a shared edge is accepted by both triangles;
+ *    the closest-hit rule picks one (at worst an extra hit, never a gap).
+ *    No double-precision fallback is needed: zero is inside the neutral band.
+ *  - t. A triangle whose vertices all lie provably in front of the origin
+ *    is accepted with t clamped to their range (its t may be rough, its
+ *    existence is not in doubt). Any other triangle needs t > deltaT, a
+ *    bound on t's error (see below), so a ray starting on a triangle's
+ *    plane still never hits it.
+ *
+ * What it cannot resolve: a triangle that straddles the origin's plane
+ * (across the ray) and whose projected size is within the error of its
+ * sheared coordinates (about u times its distance from the origin) is
+ * rejected, like the grazing case at full precision. */
+/* max/min without libm calls (the emulation path checks NaN itself). */
+static inline float fp_max_(float a, float b)
+{
+	return a > b ? a : b;
+}
+static inline float fp_min_(float a, float b)
+{
+	return a < b ? a : b;
+}
+
+static inline int isect_tri_fp(const fpfmt *f, const isect_ray *r, vec3 o, const float v[3][3],
+                               float *t, float *bu, float *bv)
+{
+	const float ok[3] = {v3_get(o, r->kx), v3_get(o, r->ky), v3_get(o, r->kz)};
+	float sx = fp_round(f, r->sx), sy = fp_round(f, r->sy), sz = fp_round(f, r->sz);
+	float x[3], y[3], z[3], zs[3];
+	float mxa = 0, mya = 0, mza = 0, mxt = 0, myt = 0, mzt = 0;
+	for (int k = 0; k < 3; k++) {
+		float ax = fp_round(f, v[k][r->kx] - ok[0]);
+		float ay = fp_round(f, v[k][r->ky] - ok[1]);
+		z[k] = fp_round(f, v[k][r->kz] - ok[2]);
+		x[k] = fp_round(f, ax - fp_round(f, sx * z[k]));
+		y[k] = fp_round(f, ay - fp_round(f, sy * z[k]));
+		zs[k] = fp_round(f, sz * z[k]);
+		mxa = fp_max_(mxa, fabsf(ax));
+		mya = fp_max_(mya, fabsf(ay));
+		mza = fp_max_(mza, fabsf(z[k]));
+		mxt = fp_max_(mxt, fabsf(x[k]));
+		myt = fp_max_(myt, fabsf(y[k]));
+		mzt = fp_max_(mzt, fabsf(zs[k]));
+	}
+	if (!(mxa + mya + mza + mxt + myt + mzt < INFINITY))
+		return 0; /* NaN or overflowed coordinates: beyond the format's range */
+	float u = fp_round(f, fp_round(f, x[2] * y[1]) - fp_round(f, y[2] * x[1]));
+	float vv = fp_round(f, fp_round(f, x[0] * y[2]) - fp_round(f, y[0] * x[2]));
+	float w = fp_round(f, fp_round(f, x[1] * y[0]) - fp_round(f, y[1] * x[0]));
+	/* error bounds (computed in float: their own rounding, 2^-24, is far
+	 * inside the slack of f's gammas). |sx|, |sy| <= 1 since kz is the
+	 * dominant axis, so |sx z| <= |z|. */
+	float tiny = fp_from_bits(f->minnorm);
+	float g2 = fp_gamma(f, 2), g5 = fp_gamma(f, 5);
+	float dx = g5 * (mxa + mza) + 2.0f * tiny, dy = g5 * (mya + mza) + 2.0f * tiny;
+	float de = 2.0f * (g2 * mxt * myt + dy * mxt + dx * myt + dx * dy) + 3.0f * tiny;
+	if (!(de == de))
+		return 0; /* no usable bound (overflowed coordinates) */
+	int neg = u < -de || vv < -de || w < -de;
+	int pos = u > de || vv > de || w > de;
+	if (neg && pos)
+		return 0;
+	float det = fp_round(f, fp_round(f, u + vv) + w);
+	float tt = fp_round(f, fp_round(f, fp_round(f, u * zs[0]) + fp_round(f, vv * zs[1])) +
+	                           fp_round(f, w * zs[2]));
+	float tv = fp_round(f, tt / det);
+	/* zs[k] is vertex k's distance along the ray, within dz of the exact
+	 * one. A triangle with every vertex in front of the origin lies in
+	 * front entirely: accept it whatever the precision of t, which is
+	 * clamped to the vertices' range (the exact hit of a triangle the ray
+	 * meets is a convex combination of them). This keeps a triangle too
+	 * small to resolve at this precision from being dropped: at worst its
+	 * t and barycentrics are rough (image error, no leak). */
+	float g4 = fp_gamma(f, 4), g6 = fp_gamma(f, 6);
+	float zlo = fp_min_(zs[0], fp_min_(zs[1], zs[2])),
+	      zhi = fp_max_(zs[0], fp_max_(zs[1], zs[2]));
+	float dz = g4 * mzt + tiny;
+	if (zlo > dz) {
+		if (!(tv >= zlo))
+			tv = zlo; /* also NaN: det rounded to zero */
+		else if (tv > zhi)
+			tv = zhi;
+	} else {
+		/* Otherwise t must be provably > 0 (a ray starting on the plane
+		 * never hits it). With computed edge functions e = E + eta the
+		 * computed t' = sum e z / sum e satisfies t' - t = sum eta
+		 * (z - t) / det, so with K = deltaE / |det|:
+		 * |t' - t| <= K sum |z - t'| / (1 - 3K); plus the roundings of
+		 * the sums, the product terms and the division (gamma(6) of
+		 * sum |e z| / |det|) and the error of z (dz sum |e| / |det|).
+		 * Tighter than pbrt's bound, which has max |z| where the spread
+		 * |z - t| suffices: at 8 to 12 mantissa bits that factor decides
+		 * whether any hit survives. */
+		if (det == 0.0f || det != det)
+			return 0;
+		float ad = fabsf(det), k = de / ad;
+		if (!(3.0f * k < 1.0f))
+			return 0; /* not resolvable: t's sign is unknown */
+		float sz_ = fabsf(zs[0] - tv) + fabsf(zs[1] - tv) + fabsf(zs[2] - tv);
+		float se = fabsf(u) + fabsf(vv) + fabsf(w);
+		float sez = fabsf(u * zs[0]) + fabsf(vv * zs[1]) + fabsf(w * zs[2]);
+		float dt = (k * sz_ / (1.0f - 3.0f * k) + (g6 * sez + dz * se) / ad) * 1.0001f;
+		if (!(tv > dt))
+			return 0;
+	}
+	float b1 = fp_round(f, vv / det), b2 = fp_round(f, w / det);
+	if (!(fabsf(b1) <= 2.0f && fabsf(b2) <= 2.0f))
+		b1 = b2 = 1.0f / 3.0f; /* unresolved: the centre, so shading stays finite */
+	*t = tv;
+	*bu = b1;
+	*bv = b2;
 	return 1;
 }
 

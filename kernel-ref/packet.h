@@ -23,12 +23,21 @@
  * its rounding-error bound (gamma(3) relative, see trav_split), so the two
  * children's segments overlap slightly rather than leave a gap a hit could
  * fall through.
+ *
+ * Reduced precision (pkt_precision, docs/NUMERICS.md): the chip model may
+ * run traversal and intersection in narrower formats (fpfmt.h). A packet
+ * picks its path once, in pkt_trav_begin_fp: full precision keeps the SIMD
+ * code below untouched; a reduced stage runs a scalar emulation that rounds
+ * after every operation and keeps traversal and the triangle test
+ * conservative (directed rounding of segment bounds widened by the
+ * format's gamma; edge functions within their error bound count as zero).
  */
 #ifndef SAAR_KREF_PACKET_H
 #define SAAR_KREF_PACKET_H
 
 #include <stdint.h>
 
+#include "fpfmt.h"
 #include "memimage.h"
 
 #define PKT_RAYS      64
@@ -98,6 +107,17 @@ typedef struct trav_result {
 	int sp;              /* stack depth after the step */
 } trav_result;
 
+/* Per-stage formats of the shared math. The identity format (fpfmt_full)
+ * in a stage keeps that stage on the full-precision path. */
+typedef struct pkt_precision {
+	fpfmt trav;  /* traversal: split distances, scene-box clip */
+	fpfmt isect; /* intersection: the Woop test */
+	fpfmt shade; /* shading (shade_ctx.fp): colours, normals, directions */
+} pkt_precision;
+
+/* All three stages at full precision (the reference). */
+void pkt_precision_full(pkt_precision *pp);
+
 typedef struct trav_state {
 	pkt_rayc rc;
 	trav_entry cur; /* node being worked on and its per-ray segments */
@@ -106,6 +126,9 @@ typedef struct trav_state {
 	trav_entry *stack;
 	int sp, stack_max;
 	int shadow; /* any-hit packet: a ray stops at its first occluder */
+	/* reduced formats of this packet's traversal and intersection; NULL:
+	 * full precision (the SIMD path). Set once by pkt_trav_begin_fp. */
+	const fpfmt *fpt, *fpi;
 } trav_state;
 
 /* Prepares traversal of p through the image's tree. Clips every valid ray
@@ -115,6 +138,12 @@ typedef struct trav_state {
  * caps the depth below it). A smaller hardware stack is the chip model's
  * business: it sees trav_result.sp and charges spills and refills. */
 uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack, int stack_max);
+
+/* The same with per-stage formats (prec NULL, or full formats: exactly
+ * pkt_trav_begin). prec must outlive the packet's traversal: the state
+ * keeps pointers into it. Its shade member is not used here. */
+uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *stack,
+                           int stack_max, const pkt_precision *prec);
 
 /* Performs one traversal operation: pops finished work (rays whose best hit
  * lies before an entry's segment leave it), then either steps one inner
@@ -133,6 +162,8 @@ typedef struct trav_counts {
 	uint64_t node_steps, leaf_visits, tri_tests, ray_tri_tests, max_sp;
 } trav_counts;
 uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c);
+uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                      const pkt_precision *prec);
 
 /* ---- single-ray path, for checking ---- */
 typedef struct ray_hit {
@@ -143,5 +174,9 @@ typedef struct ray_hit {
 /* Closest hit (or, with any_hit, the first occluder) in (0, tmax) by plain
  * scalar kd-tree traversal; the same intersection math as the packets. */
 ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c);
+/* The same with per-stage formats; bit-identical to the packet path with
+ * the same formats. */
+ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c,
+                     const pkt_precision *prec);
 
 #endif

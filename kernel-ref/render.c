@@ -55,13 +55,13 @@ static double now_ms(void)
 }
 
 /* Traces one packet with the single-ray path (for checking). */
-static void trace_single(const mimg *m, packet *p, trav_counts *c)
+static void trace_single(const mimg *m, packet *p, trav_counts *c, const pkt_precision *prec)
 {
 	for (uint64_t b = p->valid; b; b &= b - 1) {
 		int i = __builtin_ctzll(b);
-		ray_hit h =
-		    ray_trace(m, v3(p->ox[i], p->oy[i], p->oz[i]), v3(p->dx[i], p->dy[i], p->dz[i]),
-		              p->tmax[i], p->type == PKT_SHADOW, c);
+		ray_hit h = ray_trace_fp(m, v3(p->ox[i], p->oy[i], p->oz[i]),
+		                         v3(p->dx[i], p->dy[i], p->dz[i]), p->tmax[i],
+		                         p->type == PKT_SHADOW, c, prec);
 		p->t[i] = h.t;
 		p->tri[i] = h.tri;
 		p->bu[i] = h.bu;
@@ -81,9 +81,10 @@ static void do_tile(worker *w, int tile)
 		w->st.packets[p->type]++;
 		double t0 = now_ms();
 		if (j->o->single_ray) {
-			trace_single(j->m, p, &w->st.trav);
+			trace_single(j->m, p, &w->st.trav, j->o->prec);
 		} else {
-			uint64_t entered = pkt_trace(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav);
+			uint64_t entered =
+			    pkt_trace_fp(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav, j->o->prec);
 			/* rays that miss the scene box skip traversal */
 			w->st.box_miss_rays += (uint64_t)__builtin_popcountll(p->valid & ~entered);
 			w->st.box_miss_packets += entered == 0;
@@ -94,7 +95,8 @@ static void do_tile(worker *w, int tile)
 			continue;
 		}
 		/* children go on top of the work stack, in p's slot and above */
-		int made = shade_packet(&j->sc, p, w->kids, w->nkids, NULL, &w->st.shade);
+		int made = shade_packet_fp(&j->sc, j->o->prec ? &j->o->prec->shade : NULL, p,
+		                           w->kids, w->nkids, NULL, &w->st.shade);
 		for (int k = 0; k < made && n < w->cap; k++)
 			w->work[n++] = w->kids[k];
 	}
@@ -113,7 +115,10 @@ static void *worker_main(void *arg)
 }
 
 /* aligned_alloc wants the size to be a multiple of the alignment. */
-static void *alloc64(size_t n) { return aligned_alloc(64, (n + 63) & ~(size_t)63); }
+static void *alloc64(size_t n)
+{
+	return aligned_alloc(64, (n + 63) & ~(size_t)63);
+}
 
 static void add_stats(render_stats *a, const render_stats *b)
 {

@@ -25,6 +25,9 @@ typedef struct render_opts {
 	int shadows;    /* 0: primary rays only (no shadow packets) */
 	int single_ray; /* trace with the scalar single-ray path instead of packets */
 	vec3 background;
+	/* Reduced precision per stage (NULL: full precision, the reference).
+	 * Must outlive render_frame. */
+	const pkt_precision *prec;
 } render_opts;
 
 typedef struct render_stats {

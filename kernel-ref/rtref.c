@@ -3,6 +3,7 @@
  *
  *   rtref [--scene P | --views F --view N] [--size WxH] [--threads N]
  *         [--depth N] [--no-shadows] [--single-ray] [--out FILE] [--stats FILE.json]
+ *         [--fp-trav E,M] [--fp-isect E,M] [--fp-shade E,M] [--fp-round MODE]
  *
  * Prints one summary line; writes the frame (PNG, EXR, ... by extension)
  * and a JSON stats file. Bad input: one line on stderr, exit status 2, no
@@ -19,53 +20,21 @@
 
 static void usage(FILE *f)
 {
-	fprintf(f, "usage: rtref [options]\n"
-	           "  --size WxH            frame size (default 512x512; 1..16384 each)\n"
-	           "  --threads N           host threads (default 1; 1..1024)\n"
-	           "  --depth N             reflection/refraction depth (default 3; 0..16)\n"
-	           "  --no-shadows          primary (and secondary) rays only, no shadow rays\n"
-	           "  --single-ray          trace with the scalar single-ray path (for checking)\n"
-	           "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
-	           "  --stats FILE.json     write statistics as JSON\n");
+	fprintf(f,
+	        "usage: rtref [options]\n"
+	        "  --size WxH            frame size (default 512x512; 1..16384 each)\n"
+	        "  --threads N           host threads (default 1; 1..1024)\n"
+	        "  --depth N             reflection/refraction depth (default 3; 0..16)\n"
+	        "  --no-shadows          primary (and secondary) rays only, no shadow rays\n"
+	        "  --single-ray          trace with the scalar single-ray path (for checking)\n"
+	        "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
+	        "  --stats FILE.json     write statistics as JSON\n"
+	        "  --fp-trav E,M         traversal in a reduced format: E exponent (2..8) and M\n"
+	        "                        mantissa bits (1..23); default full float (8,23)\n"
+	        "  --fp-isect E,M        intersection (the Woop test) in a reduced format\n"
+	        "  --fp-shade E,M        shading in a reduced format\n"
+	        "  --fp-round MODE       their rounding: nearest (default), zero, up, down\n");
 	fputs(world_usage, f);
-}
-
-static int bad(const char *msg)
-{
-	fprintf(stderr, "rtref: %s\n", msg);
-	return DIAG_EXIT;
-}
-
-static int parse_int(const char *flag, const char *s, long lo, long hi, long *out, diag *d)
-{
-	char *end;
-	errno = 0;
-	long v = strtol(s, &end, 10);
-	if (end == s || *end || errno)
-		return diag_set(d, flag, 0, 0, "expected an integer, got '%s'", s);
-	if (v < lo || v > hi)
-		return diag_set(d, flag, 0, 0, "%ld is out of range [%ld, %ld]", v, lo, hi);
-	*out = v;
-	return 0;
-}
-
-int parse_size(const char *s, int *w, int *h, diag *d);
-int parse_size(const char *s, int *w, int *h, diag *d)
-{
-	char *end;
-	errno = 0;
-	long a = strtol(s, &end, 10);
-	if (end == s || (*end != 'x' && *end != 'X') || errno)
-		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
-	const char *q = end + 1;
-	long b = strtol(q, &end, 10);
-	if (end == q || *end || errno)
-		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
-	if (a < 1 || a > 16384 || b < 1 || b > 16384)
-		return diag_set(d, "--size", 0, 0, "%s is out of range (1..16384 each)", s);
-	*w = (int)a;
-	*h = (int)b;
-	return 0;
 }
 
 static void write_stats(jsonw *j, const world *w, const render_opts *o, const render_stats *st)
@@ -87,6 +56,18 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kint(j, "max_depth", o->max_depth);
 	jsonw_kint(j, "lights", w->v.nlights);
 	jsonw_kstr(j, "path", o->single_ray ? "single-ray" : "packet");
+	if (o->prec) {
+		char buf[64];
+		jsonw_key(j, "precision");
+		jsonw_obj_begin(j);
+		fpfmt_describe(&o->prec->trav, buf, sizeof buf);
+		jsonw_kstr(j, "traversal", buf);
+		fpfmt_describe(&o->prec->isect, buf, sizeof buf);
+		jsonw_kstr(j, "intersection", buf);
+		fpfmt_describe(&o->prec->shade, buf, sizeof buf);
+		jsonw_kstr(j, "shading", buf);
+		jsonw_obj_end(j);
+	}
 	jsonw_key(j, "rays");
 	jsonw_obj_begin(j);
 	for (int t = 0; t < PKT_NTYPES; t++)
@@ -144,11 +125,15 @@ int main(int argc, char **argv)
 	render_opts ro;
 	render_opts_default(&ro);
 	const char *out = NULL, *stats = NULL;
+	const char *fp_arg[3] = {NULL, NULL, NULL}; /* traversal, intersection, shading */
+	int fp_mode = FPR_NEAREST;
+	pkt_precision prec;
+	pkt_precision_full(&prec);
 	diag d = {{0}};
 	for (int i = 1; i < argc;) {
 		int r = world_parse_arg(&wo, argc, argv, &i, &d);
 		if (r < 0)
-			return bad(d.msg);
+			return cli_bad("rtref", d.msg);
 		if (r > 0)
 			continue;
 		const char *a = argv[i];
@@ -169,53 +154,74 @@ int main(int argc, char **argv)
 		const char *v = argv[i + 1];
 		long n;
 		if (!strcmp(a, "--size")) {
-			if (parse_size(v, &ro.width, &ro.height, &d))
-				return bad(d.msg);
+			if (cli_parse_size(v, &ro.width, &ro.height, &d))
+				return cli_bad("rtref", d.msg);
 		} else if (!strcmp(a, "--threads")) {
-			if (parse_int(a, v, 1, 1024, &n, &d))
-				return bad(d.msg);
+			if (cli_parse_int(a, v, 1, 1024, &n, &d))
+				return cli_bad("rtref", d.msg);
 			ro.threads = (int)n;
 		} else if (!strcmp(a, "--depth")) {
-			if (parse_int(a, v, 0, 16, &n, &d))
-				return bad(d.msg);
+			if (cli_parse_int(a, v, 0, 16, &n, &d))
+				return cli_bad("rtref", d.msg);
 			ro.max_depth = (int)n;
 		} else if (!strcmp(a, "--out")) {
 			out = v;
 		} else if (!strcmp(a, "--stats")) {
 			stats = v;
+		} else if (!strcmp(a, "--fp-trav") || !strcmp(a, "--fp-isect") ||
+		           !strcmp(a, "--fp-shade")) {
+			fp_arg[a[5] == 't' ? 0 : a[5] == 'i' ? 1 : 2] = v;
+		} else if (!strcmp(a, "--fp-round")) {
+			fp_mode = fp_rmode_parse(v);
+			if (fp_mode < 0) {
+				fprintf(
+				    stderr,
+				    "rtref: --fp-round: expected nearest, zero, up or down, got "
+				    "'%s'\n",
+				    v);
+				return DIAG_EXIT;
+			}
 		} else {
 			fprintf(stderr, "rtref: %s: unknown option (see --help)\n", a);
 			return DIAG_EXIT;
 		}
 		i += 2;
 	}
+	/* formats are parsed last: --fp-round may come after them */
+	static const char *const fp_flag[3] = {"--fp-trav", "--fp-isect", "--fp-shade"};
+	fpfmt *fp_dst[3] = {&prec.trav, &prec.isect, &prec.shade};
+	for (int k = 0; k < 3; k++)
+		if (fp_arg[k] && fpfmt_parse(fp_dst[k], fp_flag[k], fp_arg[k], fp_mode, &d))
+			return cli_bad("rtref", d.msg);
+	if (fp_arg[0] || fp_arg[1] || fp_arg[2])
+		ro.prec = &prec;
 	world w;
 	if (world_load(&w, &wo, &d))
-		return bad(d.msg);
+		return cli_bad("rtref", d.msg);
 	framebuf fb;
 	if (fb_init(&fb, ro.width, ro.height)) {
 		world_free(&w);
-		return bad("out of memory for the frame buffer");
+		return cli_bad("rtref", "out of memory for the frame buffer");
 	}
 	render_stats st;
 	int rc = 0;
 	if (render_frame(&w.m, &w.v, &ro, &fb, &st, &d)) {
-		rc = bad(d.msg);
+		rc = cli_bad("rtref", d.msg);
 		goto done;
 	}
 	if (out && fb_write(&fb, out, &d)) {
-		rc = bad(d.msg);
+		rc = cli_bad("rtref", d.msg);
 		goto done;
 	}
 	if (stats) {
 		jsonw j;
 		if (jsonw_open(&j, stats, &d)) {
-			rc = bad(d.msg);
+			rc = cli_bad("rtref", d.msg);
 			goto done;
 		}
 		write_stats(&j, &w, &ro, &st);
 		if (jsonw_close(&j, &d)) {
-			rc = bad(d.msg);
+			rc = cli_bad("rtref", d.msg);
 			goto done;
 		}
 	}

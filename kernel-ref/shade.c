@@ -64,6 +64,16 @@ static vec3 spawn_origin(vec3 p, vec3 err, vec3 ng, vec3 d)
 	return q;
 }
 
+/* Rounds to the shading format; full precision (NULL) passes through. */
+static inline float rnd(const fpfmt *f, float x)
+{
+	return f ? fp_round(f, x) : x;
+}
+static inline vec3 rnd3(const fpfmt *f, vec3 v)
+{
+	return f ? v3(fp_round(f, v.x), fp_round(f, v.y), fp_round(f, v.z)) : v;
+}
+
 static void put_ray(packet *q, int lane, vec3 o, vec3 d, float tmax, uint32_t pixel, vec3 w)
 {
 	q->ox[lane] = o.x;
@@ -83,7 +93,14 @@ static void put_ray(packet *q, int lane, vec3 o, vec3 d, float tmax, uint32_t pi
 int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, shade_log *log,
                  shade_counts *cnt)
 {
+	return shade_packet_fp(c, NULL, p, out, max_out, log, cnt);
+}
+
+int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet *out, int max_out,
+                    shade_log *log, shade_counts *cnt)
+{
 	const mimg *m = c->m;
+	const fpfmt *fq = fp && !fp->full ? fp : NULL;
 	int nl = c->nlights < max_out - 2 ? c->nlights : max_out - 2;
 	packet *shadow = out, *refl = out + nl, *refr = out + nl + 1;
 	for (int l = 0; l < nl; l++)
@@ -97,7 +114,7 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 		vec3 d = v3(p->dx[i], p->dy[i], p->dz[i]);
 		if (p->tri[i] == PKT_NOHIT) {
 			cnt->misses++;
-			vec3 bg = v3_mul(w, c->background);
+			vec3 bg = rnd3(fq, v3_mul(w, c->background));
 			fb_add(c->fb, p->pixel[i], bg.x, bg.y, bg.z);
 			continue;
 		}
@@ -165,13 +182,14 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 		}
 		if (mt->tex_kd < 0 && mt->tex_bump < 0)
 			cnt->untextured_hits++;
+		ns = rnd3(fq, ns);
 
 		float kr = mt->reflect, kt = mt->transmit;
 		float kl = 1.0f - kr - kt;
 		if (kl < 0.0f)
 			kl = 0.0f;
 		vec3 wl = v3_scale(w, kl);
-		vec3 amb = v3_scale(v3_mul(wl, ka), SHADE_AMBIENT);
+		vec3 amb = rnd3(fq, v3_scale(v3_mul(wl, ka), SHADE_AMBIENT));
 		fb_add(c->fb, p->pixel[i], amb.x, amb.y, amb.z);
 
 		/* shadow rays: one per light the surface faces */
@@ -182,16 +200,17 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 			vec3 lp = c->lights[l].pos;
 			vec3 L = v3_sub(lp, hp);
 			vec3 ld = v3_norm(L);
-			float ndl = v3_dot(ns, ld);
+			float ndl = rnd(fq, v3_dot(ns, ld));
 			if (ndl <= 0.0f || v3_dot(ng, L) <= 0.0f) {
 				cnt->shadow_skip_facing++;
 				continue;
 			}
 			vec3 r = v3_sub(v3_scale(ns, 2.0f * ndl), ld);
 			float rv = v3_dot(r, vdir);
-			float spec = rv > 0.0f ? powf(rv, mt->ns > 0.0f ? mt->ns : 1.0f) : 0.0f;
+			float spec =
+			    rnd(fq, rv > 0.0f ? powf(rv, mt->ns > 0.0f ? mt->ns : 1.0f) : 0.0f);
 			vec3 col = v3_add(v3_scale(kd, ndl), v3_scale(arr3(mt->ks), spec));
-			col = v3_mul(v3_mul(col, wl), c->lights[l].color);
+			col = rnd3(fq, v3_mul(v3_mul(col, wl), c->lights[l].color));
 			vec3 o = spawn_origin(hp, err, ng, L);
 			put_ray(&shadow[l], i, o, v3_sub(lp, o), 1.0f, p->pixel[i], col);
 			cnt->shadow_rays_made++;
@@ -207,7 +226,8 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 		vec3 rd = v3_sub(d, v3_scale(ns, 2.0f * v3_dot(d, ns)));
 		if (v3_dot(rd, ng) <= 0.0f) /* shading normal bent it under: use the true one */
 			rd = v3_sub(d, v3_scale(ng, 2.0f * v3_dot(d, ng)));
-		vec3 wr = v3_scale(w, kr);
+		rd = rnd3(fq, rd); /* spawn_origin picks its side from the rounded rd */
+		vec3 wr = rnd3(fq, v3_scale(w, kr));
 		if (kt > 0.0f) {
 			float eta = entering ? 1.0f / mt->ni : mt->ni;
 			float ci = -v3_dot(v3_norm(d), ns);
@@ -215,11 +235,15 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 			vec3 td = k >= 0.0f ? v3_add(v3_scale(v3_norm(d), eta),
 			                             v3_scale(ns, eta * ci - sqrtf(k)))
 			                    : v3(0, 0, 0);
+			td = rnd3(fq, td);
 			if (k < 0.0f || v3_dot(td, ng) >= 0.0f) {
-				wr = v3_add(wr, v3_scale(w, kt)); /* total internal reflection */
+				wr = rnd3(
+				    fq,
+				    v3_add(wr, v3_scale(w, kt))); /* total internal reflection */
 			} else {
 				vec3 o = spawn_origin(hp, err, ng, td);
-				put_ray(refr, i, o, td, INFINITY, p->pixel[i], v3_scale(w, kt));
+				put_ray(refr, i, o, td, INFINITY, p->pixel[i],
+				        rnd3(fq, v3_scale(w, kt)));
 			}
 		}
 		if (wr.x > 0.0f || wr.y > 0.0f || wr.z > 0.0f) {

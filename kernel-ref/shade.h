@@ -24,6 +24,7 @@
 #ifndef SAAR_KREF_SHADE_H
 #define SAAR_KREF_SHADE_H
 
+#include "fpfmt.h"
 #include "framebuf.h"
 #include "memimage.h"
 #include "packet.h"
@@ -75,6 +76,14 @@ typedef struct shade_counts {
  * Returns how many it made. */
 int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, shade_log *log,
                  shade_counts *cnt);
+
+/* The same at reduced shading precision fp (NULL or the identity format:
+ * exactly shade_packet). Rounds the colour terms, the shading normal, the
+ * weights and the secondary directions to fp; never the spawn point (its
+ * robust offset needs the float error bound), so it changes the image, not
+ * correctness. */
+int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet *out, int max_out,
+                    shade_log *log, shade_counts *cnt);
 
 /* Finishes a traced shadow packet: unoccluded rays add their contribution. */
 void shade_shadow_done(const shade_ctx *c, const packet *p, shade_counts *cnt);

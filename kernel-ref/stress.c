@@ -52,7 +52,7 @@ typedef struct tracer {
 /* Traces n arbitrary rays in packets of 64 and, for each, also the
  * single-ray path; returns misses and counts packet/single mismatches. */
 static uint64_t trace_rays(const world *w, const vec3 *o, const vec3 *d, size_t n, tracer *t,
-                           uint64_t *mismatch)
+                           uint64_t *mismatch, const pkt_precision *prec)
 {
 	uint64_t miss = 0;
 	for (size_t base = 0; base < n; base += PKT_RAYS) {
@@ -68,9 +68,10 @@ static uint64_t trace_rays(const world *w, const vec3 *o, const vec3 *d, size_t 
 			t->p.valid |= 1ull << k;
 		}
 		t->p.n = PKT_RAYS;
-		pkt_trace(&t->p, &w->m, t->stack, PKT_STACK_MAX, NULL);
+		pkt_trace_fp(&t->p, &w->m, t->stack, PKT_STACK_MAX, NULL, prec);
 		for (size_t k = 0; k < PKT_RAYS && base + k < n; k++) {
-			ray_hit h = ray_trace(&w->m, o[base + k], d[base + k], INFINITY, 0, NULL);
+			ray_hit h =
+			    ray_trace_fp(&w->m, o[base + k], d[base + k], INFINITY, 0, NULL, prec);
 			miss += t->p.tri[k] == PKT_NOHIT;
 			*mismatch +=
 			    h.tri != t->p.tri[k] || (h.tri != PKT_NOHIT && h.t != t->p.t[k]);
@@ -101,6 +102,11 @@ static void sphere_world(world *w, double scale, double offset)
 
 stress_result stress_sphere(double scale, double offset, int res)
 {
+	return stress_sphere_fp(scale, offset, res, NULL);
+}
+
+stress_result stress_sphere_fp(double scale, double offset, int res, const pkt_precision *prec)
+{
 	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0};
 	snprintf(r.name, sizeof r.name, "closed sphere, radius %g, centre at %g", scale, offset);
 	double t0 = now_ms();
@@ -116,7 +122,7 @@ stress_result stress_sphere(double scale, double offset, int res)
 		d[k] = dir_of(2 * M_PI * (double)(k % (size_t)res) / res + 0.01,
 		              M_PI * ((double)(k / (size_t)res) + 0.5) / res - M_PI / 2);
 	}
-	r.leaked += trace_rays(&w, o, d, n, t, &r.mismatch);
+	r.leaked += trace_rays(&w, o, d, n, t, &r.mismatch, prec);
 	r.rays += n;
 	/* outside: a camera 4 radii away; every hit continued past the surface
 	 * must hit the far side */
@@ -128,7 +134,7 @@ stress_result stress_sphere(double scale, double offset, int res)
 	for (int ty = 0; ty < res / 8; ty++)
 		for (int tx = 0; tx < res / 8; tx++) {
 			cam_primary_packet(&cf, tx, ty, &t->p);
-			pkt_trace(&t->p, &w.m, t->stack, PKT_STACK_MAX, NULL);
+			pkt_trace_fp(&t->p, &w.m, t->stack, PKT_STACK_MAX, NULL, prec);
 			r.rays += (uint64_t)__builtin_popcountll(t->p.valid);
 			for (uint64_t b = t->p.valid; b; b &= b - 1) {
 				int i = __builtin_ctzll(b);
@@ -159,7 +165,7 @@ stress_result stress_sphere(double scale, double offset, int res)
 				d[m++] = pd;
 			}
 		}
-	r.leaked += trace_rays(&w, o, d, m, t, &r.mismatch);
+	r.leaked += trace_rays(&w, o, d, m, t, &r.mismatch, prec);
 	r.rays += m;
 	free(o);
 	free(d);
@@ -263,7 +269,7 @@ stress_result stress_vertices_edges(int n)
 		m++;
 	}
 	tracer *t = aligned_alloc(64, (sizeof(tracer) + 63) & ~(size_t)63);
-	r.leaked = trace_rays(&w, o, d, m, t, &r.mismatch);
+	r.leaked = trace_rays(&w, o, d, m, t, &r.mismatch, NULL);
 	r.rays = m;
 	free(t);
 	free(o);
@@ -299,7 +305,7 @@ stress_result stress_flat_axis_parallel(int n)
 			}
 		}
 	tracer *t = aligned_alloc(64, (sizeof(tracer) + 63) & ~(size_t)63);
-	r.leaked = trace_rays(&w, o, d, m, t, &r.mismatch);
+	r.leaked = trace_rays(&w, o, d, m, t, &r.mismatch, NULL);
 	r.rays = m;
 	free(t);
 	free(o);
@@ -506,13 +512,14 @@ stress_result stress_random(uint64_t n, uint32_t seed)
 				r.disagree++;
 				if (getenv("SAAR_STRESS_DEBUG"))
 					fprintf(stderr,
-					        "disagree: cos %.3g float hit %d t %.9g, double hit %d t "
+					        "disagree: cos %.3g float hit %d t %.9g, double "
+					        "hit %d t "
 					        "%.9g edge %.3g; "
 					        "tri (%a %a %a) (%a %a %a) (%a %a %a) o (%a %a %a) "
 					        "d (%a %a %a)\n",
-					        cosi, hf, t, hd, tr, edge, v[0][0], v[0][1], v[0][2],
-					        v[1][0], v[1][1], v[1][2], v[2][0], v[2][1],
-					        v[2][2], o.x, o.y, o.z, d.x, d.y, d.z);
+					        cosi, hf, t, hd, tr, edge, v[0][0], v[0][1],
+					        v[0][2], v[1][0], v[1][1], v[1][2], v[2][0],
+					        v[2][1], v[2][2], o.x, o.y, o.z, d.x, d.y, d.z);
 			}
 		}
 	}

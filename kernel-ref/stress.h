@@ -18,6 +18,8 @@
 
 #include <stdint.h>
 
+#include "packet.h"
+
 typedef struct stress_result {
 	char name[96];
 	uint64_t rays;
@@ -29,6 +31,11 @@ typedef struct stress_result {
  * seen from inside and from outside at res x res; rays continued past every
  * hit must hit again. */
 stress_result stress_sphere(double scale, double offset, int res);
+
+/* The same with traversal and intersection in reduced formats (prec NULL:
+ * full precision, exactly stress_sphere). Packet and single-ray paths run
+ * the same formats, so mismatch must stay zero too. */
+stress_result stress_sphere_fp(double scale, double offset, int res, const pkt_precision *prec);
 
 /* The same sphere, lit from outside with nothing else in the scene: every
  * occluded shadow ray is a self-intersection. */

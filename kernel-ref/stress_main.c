@@ -5,17 +5,276 @@
  * <!-- BEGIN stress --> and <!-- END stress --> (the rest of the file is
  * kept; written to a temporary file and renamed).
  *
- *   saarsim-stress [--out docs/NUMERICS.md] [--quick]
+ *   saarsim-stress [--out docs/NUMERICS.md] [--quick] [--views FILE]
+ *
+ * It also writes the reduced-precision table between <!-- BEGIN precision
+ * --> and <!-- END precision -->: mantissa bits against image error,
+ * leaked rays and extra traversal steps, per shared view (views file from
+ * --views, else $SAAR_SCENES/views.yaml, else ../shared/scenes/views.yaml;
+ * skipped with a note when absent) and the embedded scene, and the plot
+ * docs/precision.png through gnuplot when it is installed.
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
 
+#include "render.h"
 #include "stress.h"
+#include "world.h"
 
 #define MAXR 64
+
+/* ---- reduced precision ---------------------------------------------------- */
+
+static const int prec_bits[] = {23, 20, 16, 14, 12, 10, 8};
+#define NBITS ((int)(sizeof prec_bits / sizeof *prec_bits))
+
+typedef struct prec_row {
+	double psnr_ti, psnr_sh; /* trav+isect, shading only */
+	uint64_t diff_ti, diff_sh;
+	double steps; /* kd-node steps relative to float, trav+isect */
+} prec_row;
+
+static pkt_precision prec_of(int m, int trav_isect, int shade)
+{
+	pkt_precision p;
+	pkt_precision_full(&p);
+	if (trav_isect) {
+		fpfmt_init(&p.trav, 8, m, FPR_NEAREST);
+		fpfmt_init(&p.isect, 8, m, FPR_NEAREST);
+	}
+	if (shade)
+		fpfmt_init(&p.shade, 8, m, FPR_NEAREST);
+	return p;
+}
+
+/* Renders w at res x res with prec into rgb (8-bit); returns node steps. */
+static int render_rgb(const world *w, int res, const pkt_precision *prec, uint8_t *rgb,
+                      uint64_t *steps)
+{
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = ro.height = res;
+	ro.threads = 2;
+	ro.prec = prec;
+	framebuf fb;
+	render_stats st;
+	diag d;
+	if (fb_init(&fb, res, res))
+		return -1;
+	if (render_frame(&w->m, &w->v, &ro, &fb, &st, &d)) {
+		fprintf(stderr, "saarsim-stress: %s\n", d.msg);
+		fb_free(&fb);
+		return -1;
+	}
+	fb_to_rgb8(&fb, rgb, NULL);
+	fb_free(&fb);
+	*steps = st.trav.node_steps;
+	return 0;
+}
+
+/* One view: every format against float. */
+static int prec_view(const world *w, int res, prec_row *rows)
+{
+	size_t n = (size_t)res * (size_t)res * 3;
+	uint8_t *ref = malloc(n), *img = malloc(n);
+	uint64_t ref_steps = 0, steps = 0;
+	int rc = !ref || !img || render_rgb(w, res, NULL, ref, &ref_steps);
+	for (int k = 0; k < NBITS && !rc; k++) {
+		pkt_precision ti = prec_of(prec_bits[k], 1, 0), sh = prec_of(prec_bits[k], 0, 1);
+		rc |= render_rgb(w, res, &ti, img, &steps);
+		img_cmp c = img_compare(ref, img, res, res);
+		rows[k].psnr_ti = c.psnr;
+		rows[k].diff_ti = c.differing_pixels;
+		rows[k].steps = ref_steps ? (double)steps / (double)ref_steps : 1.0;
+		rc |= render_rgb(w, res, &sh, img, &steps);
+		c = img_compare(ref, img, res, res);
+		rows[k].psnr_sh = c.psnr;
+		rows[k].diff_sh = c.differing_pixels;
+	}
+	free(ref);
+	free(img);
+	return rc;
+}
+
+static void fmt_psnr(char *b, size_t n, double p)
+{
+	if (isinf(p))
+		snprintf(b, n, "identical");
+	else
+		snprintf(b, n, "%.1f", p);
+}
+
+/* gnuplot: mantissa bits against mean PSNR and leaks; optional. */
+static void prec_plot(const char *png, const double *ti, const double *sh, const uint64_t *leaks)
+{
+	if (system("command -v gnuplot >/dev/null 2>&1") != 0) {
+		fprintf(stderr, "saarsim-stress: gnuplot not found; no %s\n", png);
+		return;
+	}
+	FILE *g = popen("gnuplot", "w");
+	if (!g)
+		return;
+	fprintf(g,
+	        "set terminal pngcairo size 800,480\nset output '%s'\n"
+	        "set title 'Reduced precision (8 exponent bits): image error against float'\n"
+	        "set xlabel 'mantissa bits'\nset ylabel 'PSNR (dB), mean over views'\n"
+	        "set y2label 'leaked rays (closed spheres)'\nset y2tics\nset y2range [0:*]\nset "
+	        "ytics nomirror\n"
+	        "set xrange [24:7]\nset key bottom left\nset grid\n"
+	        "plot '-' u 1:2 w lp lw 2 t 'traversal + intersection', "
+	        "'-' u 1:2 w lp lw 2 t 'shading only', "
+	        "'-' u 1:2 axes x1y2 w lp lw 2 t 'leaked rays (right axis)'\n",
+	        png);
+	for (int s = 0; s < 3; s++) {
+		for (int k = 0; k < NBITS; k++) {
+			double v = s == 0 ? ti[k] : s == 1 ? sh[k] : (double)leaks[k];
+			if (s < 2 && isinf(v))
+				continue; /* identical: no finite PSNR */
+			fprintf(g, "%d %g\n", prec_bits[k], v);
+		}
+		fputs("e\n", g);
+	}
+	if (pclose(g) != 0)
+		fprintf(stderr, "saarsim-stress: gnuplot failed; %s may be missing\n", png);
+}
+
+static size_t prec_section(char *t, size_t cap, int quick, const char *views, const char *png)
+{
+	size_t len = 0;
+	int res = quick ? 64 : 256, sres = quick ? 32 : 128;
+	time_t now = time(NULL);
+	char date[64];
+	strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&now));
+	len += (size_t)snprintf(
+	    t + len, cap - len,
+	    "Generated by `make stress` (kernel-ref/stress_main.c) on %s, %s run. Formats: 8 "
+	    "exponent bits, the given mantissa bits, round to nearest even; kernel-ref's "
+	    "emulation (kernel-ref/fpfmt.h).\n\n"
+	    "**Leaks** (traversal + intersection reduced): closed spheres of radius 1e-4, 1, 1e4, "
+	    "1e6 at the origin and 100 at 1e5, seen from inside and outside at %dx%d "
+	    "(stress_sphere_fp). *mismatch*: packet path against single-ray path at the same "
+	    "format.\n\n"
+	    "| mantissa bits | rays | leaked | mismatch | not judged | ms |\n"
+	    "|---:|---:|---:|---:|---:|---:|\n",
+	    date, quick ? "quick" : "full", sres, sres);
+	uint64_t leaks[NBITS];
+	for (int k = 0; k < NBITS; k++) {
+		pkt_precision p = prec_of(prec_bits[k], 1, 0);
+		const double sc[][2] = {{1e-4, 0}, {1, 0}, {1e4, 0}, {1e6, 0}, {100, 1e5}};
+		stress_result tot = {{0}, 0, 0, 0, 0, 0, 0, 0};
+		for (size_t i = 0; i < sizeof sc / sizeof *sc; i++) {
+			stress_result r = stress_sphere_fp(sc[i][0], sc[i][1], sres, &p);
+			tot.rays += r.rays;
+			tot.leaked += r.leaked;
+			tot.mismatch += r.mismatch;
+			tot.ties += r.ties;
+			tot.ms += r.ms;
+		}
+		leaks[k] = tot.leaked;
+		len += (size_t)snprintf(
+		    t + len, cap - len, "| %d | %llu | %llu | %llu | %llu | %.0f |\n", prec_bits[k],
+		    (unsigned long long)tot.rays, (unsigned long long)tot.leaked,
+		    (unsigned long long)tot.mismatch, (unsigned long long)tot.ties, tot.ms);
+	}
+	len += (size_t)snprintf(
+	    t + len, cap - len,
+	    "\n**Image error** against float at %dx%d (depth 3, shadows), per view: PSNR in dB "
+	    "and differing pixels of the 8-bit frame, with traversal + intersection reduced, "
+	    "and with shading alone reduced; *kd steps* is traversal steps relative to float "
+	    "(of all rays, secondary ones included: the conservative widening makes segments "
+	    "longer, while changed hits can change which secondary rays are made, so it can also "
+	    "fall). *fps* is the chip's: it comes "
+	    "from the chip model once `chip.fp` is wired into it (saarsim), not from "
+	    "kernel-ref.\n\n"
+	    "| view | mantissa bits | trav+isect PSNR | differing px | kd steps | shading PSNR "
+	    "| differing px | fps |\n"
+	    "|---|---:|---:|---:|---:|---:|---:|---|\n",
+	    res, res);
+	char names[16][VIEW_NAME_MAX];
+	diag d;
+	int nv = 0;
+	if (views && access(views, R_OK) == 0) {
+		nv = view_list(views, names, 16, &d);
+		if (nv < 0) {
+			fprintf(stderr, "saarsim-stress: %s\n", d.msg);
+			nv = 0;
+		}
+	}
+	double sum_ti[NBITS] = {0}, sum_sh[NBITS] = {0};
+	int nsum = 0;
+	for (int v = -1; v < nv; v++) {
+		world_opts o;
+		world_opts_default(&o);
+		if (v >= 0) {
+			o.views = views;
+			o.view = names[v];
+		}
+		world w;
+		if (world_load(&w, &o, &d)) {
+			fprintf(stderr, "saarsim-stress: %s (view skipped)\n", d.msg);
+			continue;
+		}
+		prec_row rows[NBITS];
+		double t0 = (double)clock();
+		int rc = prec_view(&w, res, rows);
+		fprintf(stderr, "saarsim-stress: precision, view %s: %.1f s CPU\n",
+		        v < 0 ? "embedded" : names[v], ((double)clock() - t0) / CLOCKS_PER_SEC);
+		if (!rc) {
+			for (int k = 0; k < NBITS; k++) {
+				char a[32], b[32];
+				fmt_psnr(a, sizeof a, rows[k].psnr_ti);
+				fmt_psnr(b, sizeof b, rows[k].psnr_sh);
+				len += (size_t)snprintf(
+				    t + len, cap - len,
+				    "| %s | %d | %s | %llu | %+.1f%% | %s | %llu | chip |\n",
+				    v < 0 ? "embedded (default)" : names[v], prec_bits[k], a,
+				    (unsigned long long)rows[k].diff_ti,
+				    100.0 * (rows[k].steps - 1.0), b,
+				    (unsigned long long)rows[k].diff_sh);
+				/* a capped PSNR (99 dB) keeps identical frames in the mean */
+				sum_ti[k] += isinf(rows[k].psnr_ti) ? 99.0 : rows[k].psnr_ti;
+				sum_sh[k] += isinf(rows[k].psnr_sh) ? 99.0 : rows[k].psnr_sh;
+			}
+			nsum++;
+		}
+		world_free(&w);
+	}
+	if (nv == 0)
+		len += (size_t)snprintf(t + len, cap - len,
+		                        "\nShared views skipped: %s not found (set SAAR_SCENES or "
+		                        "pass --views); the embedded scene only.\n",
+		                        views ? views : "views file");
+	if (nsum) {
+		double mt[NBITS], ms[NBITS];
+		for (int k = 0; k < NBITS; k++) {
+			mt[k] = sum_ti[k] / nsum;
+			ms[k] = sum_sh[k] / nsum;
+		}
+		prec_plot(png, mt, ms, leaks);
+		len +=
+		    (size_t)snprintf(t + len, cap - len,
+		                     "\n![mantissa bits against PSNR and leaks](precision.png)\n");
+	}
+	return len;
+}
+
+/* Replaces the text between the markers in doc (or appends them); returns
+ * a new string. */
+static char *splice(const char *doc, const char *begin, const char *end, const char *body)
+{
+	size_t n = (doc ? strlen(doc) : 0) + strlen(body) + strlen(begin) + strlen(end) + 8;
+	char *o = malloc(n);
+	const char *b = doc ? strstr(doc, begin) : NULL, *e = doc ? strstr(doc, end) : NULL;
+	if (b && e && e > b)
+		snprintf(o, n, "%.*s%s\n%s%s", (int)(b - doc), doc, begin, body, e);
+	else
+		snprintf(o, n, "%s\n%s\n%s%s\n", doc ? doc : "", begin, body, end);
+	return o;
+}
 
 static char *slurp(const char *path)
 {
@@ -34,17 +293,25 @@ static char *slurp(const char *path)
 
 int main(int argc, char **argv)
 {
-	const char *out = "docs/NUMERICS.md";
-	int quick = 0;
+	const char *out = "docs/NUMERICS.md", *views = NULL;
+	int quick = 0, precision = 1;
+	char vbuf[1024];
+	const char *sc = getenv("SAAR_SCENES");
+	snprintf(vbuf, sizeof vbuf, "%s/views.yaml", sc && *sc ? sc : "../shared/scenes");
+	views = vbuf;
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--out") && i + 1 < argc)
 			out = argv[++i];
+		else if (!strcmp(argv[i], "--views") && i + 1 < argc)
+			views = argv[++i];
 		else if (!strcmp(argv[i], "--quick"))
 			quick = 1;
+		else if (!strcmp(argv[i], "--no-precision"))
+			precision = 0;
 		else {
 			fprintf(stderr,
 			        "saarsim-stress: %s: unknown option (usage: saarsim-stress [--out "
-			        "FILE] [--quick])\n",
+			        "FILE] [--quick] [--views FILE] [--no-precision])\n",
 			        argv[i]);
 			return 2;
 		}
@@ -96,26 +363,38 @@ int main(int argc, char **argv)
 	    (unsigned long long)bad);
 	fputs(table, stdout);
 
+	/* the reduced-precision table, with its plot next to the document */
+	char *ptable = NULL;
+	if (precision) {
+		ptable = malloc(65536);
+		char png[1100];
+		const char *slash = strrchr(out, '/');
+		snprintf(png, sizeof png, "%.*sprecision.png", slash ? (int)(slash - out + 1) : 0,
+		         out);
+		prec_section(ptable, 65536, quick, views, png);
+		fputs(ptable, stdout);
+	}
+
 	/* splice into the document between the markers */
-	const char *begin = "<!-- BEGIN stress -->", *end = "<!-- END stress -->";
 	char *doc = slurp(out);
+	char *d1 = splice(doc, "<!-- BEGIN stress -->", "<!-- END stress -->", table);
+	free(doc);
+	if (ptable) {
+		char *d2 = splice(d1, "<!-- BEGIN precision -->", "<!-- END precision -->", ptable);
+		free(d1);
+		d1 = d2;
+		free(ptable);
+	}
 	char tmp[1100];
 	snprintf(tmp, sizeof tmp, "%s.tmp", out);
 	FILE *f = fopen(tmp, "w");
 	if (!f) {
 		fprintf(stderr, "saarsim-stress: %s: cannot write\n", tmp);
+		free(d1);
 		return 2;
 	}
-	char *b = doc ? strstr(doc, begin) : NULL, *e = doc ? strstr(doc, end) : NULL;
-	if (b && e && e > b) {
-		fwrite(doc, 1, (size_t)(b - doc), f);
-		fprintf(f, "%s\n%s%s", begin, table, e);
-	} else {
-		if (doc)
-			fputs(doc, f);
-		fprintf(f, "\n%s\n%s%s\n", begin, table, end);
-	}
-	free(doc);
+	fputs(d1, f);
+	free(d1);
 	if (fclose(f) != 0 || rename(tmp, out) != 0) {
 		unlink(tmp);
 		fprintf(stderr, "saarsim-stress: %s: write failed\n", out);

@@ -7,6 +7,11 @@
  * segment arithmetic is written once as a lane operation and once as a
  * scalar one with the same operation order, so the two paths agree to the
  * bit.
+ *
+ * Reduced precision (pkt_precision): a stage whose format is not the
+ * identity takes a scalar emulation (trav_plane_fp, trav_clip_fp,
+ * isect_tri_fp), chosen once per packet; the packet and single-ray paths
+ * call the same scalar functions, so they agree to the bit as well.
  */
 #include <float.h>
 #include <math.h>
@@ -23,6 +28,78 @@
 #define GAMMA3 (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f))
 
 #define NGROUPS (PKT_RAYS / SIMD_W)
+
+void pkt_precision_full(pkt_precision *pp)
+{
+	pp->trav = pp->isect = pp->shade = fpfmt_full();
+}
+
+/* ---- reduced-precision traversal arithmetic (scalar) ---------------------- */
+
+/* Conservative bounds lo <= t <= hi of the exact distance t = (plane - o) / d
+ * to an axis plane, computed in format f the way a reduced traversal unit
+ * would: the plane and the origin are floats from memory, the difference,
+ * 1/d (id, already rounded to f) and the product are each rounded to f.
+ * Three roundings give |ts - t| <= gamma(3) |t| <= gamma(4) |ts|; gamma(5)
+ * (g) leaves room for the float rounding of the bound itself, and lo and hi
+ * are then rounded outward to f (one float ulp first, for the float
+ * subtraction): the interval always holds the exact t, so a child cell's
+ * segment can only grow, never lose the part where a hit lies (Vaidyanathan,
+ * Akenine-Moller, Salvi 2016 do the same for box slabs). A flushed
+ * difference has an absolute error below the smallest normal, hence the
+ * tiny * |id| term. No bound (g infinite, 1- or 2-bit mantissas) or an
+ * origin in the plane of an axis-parallel ray (NaN): the whole line. */
+static inline void trav_plane_fp(const fpfmt *f, float g, float plane, float o, float id, float *lo,
+                                 float *hi)
+{
+	float ts = fp_round(f, fp_round(f, plane - o) * id);
+	if (ts != ts || g == INFINITY) {
+		*lo = -INFINITY;
+		*hi = INFINITY;
+		return;
+	}
+	if (ts == INFINITY || ts == -INFINITY) {
+		*lo = *hi = ts; /* d = +-0: the ray never reaches the plane */
+		return;
+	}
+	float err = fabsf(ts) * g + fabsf(id) * fp_from_bits(f->minnorm);
+	*lo = fp_round_down(f, fp_next_down(ts - err));
+	*hi = fp_round_up(f, fp_next_up(ts + err));
+}
+
+/* The scene-box clip of one ray in format f: [tn, tf] contains the exact
+ * box segment (each slab's entry is the smaller lower bound, its exit the
+ * larger upper bound). */
+static void trav_clip_fp(const fpfmt *f, float g, const aabb *b, const float o[3],
+                         const float id[3], float tmax, float *tn, float *tf)
+{
+	const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
+	float n = 0.0f, fa = tmax;
+	for (int a = 0; a < 3; a++) {
+		float l0, h0, l1, h1;
+		trav_plane_fp(f, g, lo[a], o[a], id[a], &l0, &h0);
+		trav_plane_fp(f, g, hi[a], o[a], id[a], &l1, &h1);
+		float en = fminf(l0, l1), ex = fmaxf(h0, h1);
+		if (en > n)
+			n = en;
+		if (ex < fa)
+			fa = ex;
+	}
+	*tn = n;
+	*tf = fa;
+}
+
+/* Splits the segment [tn, tf] at a plane whose distance lies in [lo, hi]:
+ * below and above child segments (as the SIMD loop and ray_step do). */
+static inline void trav_cut(int pos, float tn, float tf, float lo, float hi, float *b_n, float *b_f,
+                            float *a_n, float *a_f)
+{
+	float up = tn > lo ? tn : lo, dn = tf < hi ? tf : hi;
+	*b_n = pos ? tn : up;
+	*b_f = pos ? dn : tf;
+	*a_n = pos ? up : tn;
+	*a_f = pos ? tf : dn;
+}
 
 static inline unsigned grp_bits(uint64_t mask, int g)
 {
@@ -48,6 +125,14 @@ static inline fv sel3(iv k0, iv k1, fv x, fv y, fv z)
 
 uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack, int stack_max)
 {
+	return pkt_trav_begin_fp(s, p, m, stack, stack_max, NULL);
+}
+
+uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *stack,
+                           int stack_max, const pkt_precision *prec)
+{
+	s->fpt = prec && !prec->trav.full ? &prec->trav : NULL;
+	s->fpi = prec && !prec->isect.full ? &prec->isect : NULL;
 	s->stack = stack;
 	s->stack_max = stack_max;
 	s->sp = 0;
@@ -135,6 +220,22 @@ uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *sta
 		memcpy(rc->oky, og[rc->uky], sizeof rc->oky);
 		memcpy(rc->okz, og[rc->ukz], sizeof rc->okz);
 	}
+	if (s->fpt) {
+		/* reduced traversal: redo the clip in the format, lane by lane */
+		float g = fp_gamma(s->fpt, 5);
+		enter = 0;
+		for (uint64_t b = p->valid; b; b &= b - 1) {
+			int i = __builtin_ctzll(b);
+			const float o[3] = {p->ox[i], p->oy[i], p->oz[i]};
+			const float id[3] = {fp_round(s->fpt, rc->idx[i]),
+			                     fp_round(s->fpt, rc->idy[i]),
+			                     fp_round(s->fpt, rc->idz[i])};
+			trav_clip_fp(s->fpt, g, &m->bounds, o, id, p->tmax[i], &s->cur.tn[i],
+			             &s->cur.tf[i]);
+			if (s->cur.tn[i] <= s->cur.tf[i])
+				enter |= 1ull << i;
+		}
+	}
 	s->cur.node = 0;
 	s->cur.mask = enter;
 	return enter;
@@ -203,7 +304,28 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 	trav_entry *far = s->sp < s->stack_max ? &s->stack[s->sp] : &s->spare;
 	uint64_t nmask = 0, fmask = 0;
 	iv nb = iv_set1(near_below ? -1 : 0);
-	for (int g = 0; g < NGROUPS; g++) {
+	if (s->fpt) {
+		/* reduced precision: the scalar emulation, lane by lane */
+		float gam = fp_gamma(s->fpt, 5), sp = kd_split(n);
+		for (uint64_t b = s->cur.mask; b; b &= b - 1) {
+			int i = __builtin_ctzll(b);
+			float id = fp_round(s->fpt, idv[i]), lo, hi, b_n, b_f, a_n, a_f;
+			trav_plane_fp(s->fpt, gam, sp, org[i], id, &lo, &hi);
+			trav_cut(!signbit(id), s->cur.tn[i], s->cur.tf[i], lo, hi, &b_n, &b_f, &a_n,
+			         &a_f);
+			float n_n = near_below ? b_n : a_n, n_f = near_below ? b_f : a_f;
+			float f_n = near_below ? a_n : b_n, f_f = near_below ? a_f : b_f;
+			s->cur.tn[i] = n_n;
+			s->cur.tf[i] = n_f;
+			far->tn[i] = f_n;
+			far->tf[i] = f_f;
+			if (n_n <= n_f && n_n <= p->t[i])
+				nmask |= 1ull << i;
+			if (f_n <= f_f && f_n <= p->t[i])
+				fmask |= 1ull << i;
+		}
+	}
+	for (int g = 0; g < NGROUPS && !s->fpt; g++) {
 		unsigned gb = grp_bits(s->cur.mask, g);
 		if (!gb)
 			continue;
@@ -252,11 +374,60 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 
 /* ---- triangle test, 8 lanes at a time ----------------------------------- */
 
+/* Updates lane i's result with a hit (t, bu, bv) on tri_addr by the hit
+ * rule; returns 1 when the result changed. */
+static inline int take_hit(const trav_state *s, packet *p, int i, float t, float bu, float bv,
+                           uint32_t tri_addr)
+{
+	if (s->shadow) {
+		if (t < p->tmax[i] && p->tri[i] == PKT_NOHIT) {
+			p->t[i] = -INFINITY; /* occluded: every filter drops it */
+			p->tri[i] = tri_addr;
+			return 1;
+		}
+	} else if (isect_better(t, tri_addr, p->t[i], p->tri[i])) {
+		p->t[i] = t;
+		p->tri[i] = tri_addr;
+		p->bu[i] = bu;
+		p->bv[i] = bv;
+		return 1;
+	}
+	return 0;
+}
+
+/* Reduced-precision intersection: isect_tri_fp per ray, with the ray's
+ * permutation and shear exactly as isect_prepare makes them for the
+ * single-ray path. */
+static uint64_t isect_tri_fp_lanes(const trav_state *s, packet *p, const mimg_tri *tr,
+                                   uint64_t mask, uint32_t tri_addr)
+{
+	const pkt_rayc *rc = &s->rc;
+	uint64_t changed = 0;
+	for (uint64_t b = mask; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		isect_ray ir;
+		ir.kz = rc->kz0[i] ? 0 : rc->kz1[i] ? 1 : 2;
+		ir.kx = rc->kx0[i] ? 0 : rc->kx1[i] ? 1 : 2;
+		ir.ky = rc->ky0[i] ? 0 : rc->ky1[i] ? 1 : 2;
+		ir.sx = rc->sx[i];
+		ir.sy = rc->sy[i];
+		ir.sz = rc->sz[i];
+		float t, bu, bv;
+		if (isect_tri_fp(s->fpi, &ir, v3(p->ox[i], p->oy[i], p->oz[i]), tr->v, &t, &bu,
+		                 &bv) &&
+		    take_hit(s, p, i, t, bu, bv, tri_addr))
+			changed |= 1ull << i;
+	}
+	return changed;
+}
+
 uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, uint32_t tri_addr)
 {
 	const mimg_tri *tr = mimg_tri_at(m, tri_addr);
 	const pkt_rayc *rc = &s->rc;
 	uint64_t changed = 0;
+	if (s->fpi)
+		return isect_tri_fp_lanes(s, p, tr, mask, tri_addr);
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
 		if (!gb)
@@ -347,9 +518,15 @@ uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, u
 
 uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c)
 {
+	return pkt_trace_fp(p, m, stack, stack_max, c, NULL);
+}
+
+uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                      const pkt_precision *prec)
+{
 	trav_state st;
 	trav_state *s = &st;
-	uint64_t entered = pkt_trav_begin(s, p, m, stack, stack_max);
+	uint64_t entered = pkt_trav_begin_fp(s, p, m, stack, stack_max, prec);
 	if (!entered)
 		return 0;
 	const uint32_t *lists = mimg_lists(m);
@@ -396,15 +573,21 @@ typedef struct ray_entry {
 } ray_entry;
 
 static int ray_step(kd_node n, const float *oa, const float *id, uint32_t *node, float *tn,
-                    float *tf, ray_entry *stack, int *sp)
+                    float *tf, ray_entry *stack, int *sp, const fpfmt *ft, float g)
 {
 	int axis = kd_axis(n);
-	float ts = (kd_split(n) - oa[axis]) * id[axis];
-	float err = fabsf(ts) * GAMMA3;
-	float lo_ = ts - err, hi_ = ts + err;
-	if (ts != ts) {
-		lo_ = -INFINITY;
-		hi_ = INFINITY;
+	float lo_, hi_;
+	if (ft) {
+		trav_plane_fp(ft, g, kd_split(n), oa[axis], id[axis], &lo_, &hi_);
+	} else {
+		float ts = (kd_split(n) - oa[axis]) * id[axis];
+		float err = fabsf(ts) * GAMMA3;
+		lo_ = ts - err;
+		hi_ = ts + err;
+		if (ts != ts) {
+			lo_ = -INFINITY;
+			hi_ = INFINITY;
+		}
 	}
 	int pos = !signbit(id[axis]);
 	float b_n = pos ? *tn : (*tn > lo_ ? *tn : lo_), b_f = pos ? (*tf < hi_ ? *tf : hi_) : *tf;
@@ -428,14 +611,28 @@ static int ray_step(kd_node n, const float *oa, const float *id, uint32_t *node,
 
 ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)
 {
+	return ray_trace_fp(m, o, d, tmax, any_hit, c, NULL);
+}
+
+ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c,
+                     const pkt_precision *prec)
+{
+	const fpfmt *ft = prec && !prec->trav.full ? &prec->trav : NULL;
+	const fpfmt *fi = prec && !prec->isect.full ? &prec->isect : NULL;
 	ray_hit h = {tmax, 0, 0, PKT_NOHIT};
 	isect_ray ir = isect_prepare(d);
 	float oa[3] = {o.x, o.y, o.z};
 	float id[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
 	float lo[3] = {m->bounds.lo.x, m->bounds.lo.y, m->bounds.lo.z};
 	float hi[3] = {m->bounds.hi.x, m->bounds.hi.y, m->bounds.hi.z};
-	float tn = 0.0f, tf = tmax;
-	for (int a = 0; a < 3; a++) {
+	float tn = 0.0f, tf = tmax, g = 0.0f;
+	if (ft) {
+		g = fp_gamma(ft, 5);
+		for (int a = 0; a < 3; a++)
+			id[a] = fp_round(ft, id[a]);
+		trav_clip_fp(ft, g, &m->bounds, oa, id, tmax, &tn, &tf);
+	}
+	for (int a = 0; a < 3 && !ft; a++) {
 		float t0 = (lo[a] - oa[a]) * id[a], t1 = (hi[a] - oa[a]) * id[a];
 		float n = fminf(t0, t1), f = fmaxf(t0, t1);
 		n -= fabsf(n) * GAMMA3;
@@ -465,7 +662,9 @@ ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_c
 			for (uint32_t k = 0; k < kd_count(n); k++) {
 				uint32_t ta = lists[kd_first(n) + k];
 				float t, bu, bv;
-				if (!isect_tri(&ir, o, mimg_tri_at(m, ta)->v, &t, &bu, &bv))
+				const float(*tv)[3] = mimg_tri_at(m, ta)->v;
+				if (!(fi ? isect_tri_fp(fi, &ir, o, tv, &t, &bu, &bv)
+				         : isect_tri(&ir, o, tv, &t, &bu, &bv)))
 					continue;
 				if (any_hit) {
 					if (t < tmax) {
@@ -481,7 +680,7 @@ ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_c
 				}
 			}
 		} else {
-			if (ray_step(n, oa, id, &node, &tn, &tf, stack, &sp))
+			if (ray_step(n, oa, id, &node, &tn, &tf, stack, &sp, ft, g))
 				continue;
 		}
 		/* pop, skipping entries that start beyond the best hit */
