@@ -125,6 +125,7 @@ validate: all
 # The numerical stress suite at full size; writes docs/NUMERICS.md.
 stress: all
 	./$(B)/saarsim-stress --out docs/NUMERICS.md
+	sh scripts/precision-chip.sh $(B)
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin

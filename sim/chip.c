@@ -200,6 +200,17 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->m = &w->m;
 	v->stack_depth = cfg->chip.stack_depth;
 	v->masked = cfg->chip.masked_packets;
+	/* the datapath formats; kernel-ref's check frame stays full precision */
+	if (fpfmt_init(&v->prec.trav, cfg->chip.fp.trav.exp, cfg->chip.fp.trav.mant,
+	               cfg->chip.fp.round) ||
+	    fpfmt_init(&v->prec.isect, cfg->chip.fp.isect.exp, cfg->chip.fp.isect.mant,
+	               cfg->chip.fp.round) ||
+	    fpfmt_init(&v->prec.shade, cfg->chip.fp.shade.exp, cfg->chip.fp.shade.mant,
+	               cfg->chip.fp.round)) {
+		diag_set(d, "saarsim", 0, 0, "chip.fp: unsupported floating-point format");
+		chip_destroy(c);
+		return NULL;
+	}
 	v->nlights = w->v.nlights;
 	v->spill_base = c->spill_base;
 	v->on_free = on_free;

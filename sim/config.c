@@ -21,6 +21,8 @@
 
 static const char *const thread_sched_names[] = {"round_robin", "oldest_first", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
+/* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
+static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};
 static const char *const mem_model_names[] = {"fixed", "hierarchy", NULL};
 static const char *const memif_policy_names[] = {"fifo", "round_robin", NULL};
 static const char *const addr_hash_names[] = {"xor_fold", "none", NULL};
@@ -68,6 +70,13 @@ static const char *const fidelity_names[] = {"cycle", NULL};
 	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, 16, 1, 4096, "lines"),                   \
 	 .source = "not published; one per thread of an RTP",                                      \
 	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"}
+#define FP(st, what)                                                                               \
+	{INT("chip.fp." #st ".exp", chip.fp.st.exp, 8, 2, 8, "bits"),                              \
+	 .source = "§4.6: SaarCOR cut each stage's floats to the precision it needs; 8 = float",   \
+	 .desc = "exponent bits of the " what " datapath"},                                        \
+	{INT("chip.fp." #st ".mant", chip.fp.st.mant, 23, 1, 23, "bits"),                          \
+	 .source = "§4.6; the widths used are not published; 23 = float",                          \
+	 .desc = "mantissa bits of the " what " datapath (docs/NUMERICS.md)"}
 #define L1LINE_shade 8
 #define L1LINE_kd    8
 #define L1LINE_list  8
@@ -102,6 +111,13 @@ static const cfg_key keys[] = {
     {ENUM("chip.tile_order", chip.tile_order, tile_order_names),
      .source = "not published; the simplest order",
      .desc = "order in which the RGC hands out screen tiles"},
+    FP(trav, "traversal (split distances, scene-box clip)"),
+    FP(isect, "intersection (the Woop test)"),
+    FP(shade, "shading (colours, normals, directions)"),
+    {ENUM("chip.fp.round", chip.fp.round, fp_round_names),
+     .source = "IEEE default; SaarCOR's rounding is not published",
+     .desc = "rounding of the reduced formats; traversal and intersection bounds stay "
+             "conservative in every mode"},
     UNIT(rgs, "ray-generation and shading", 4, 24, "not published; shading is the costliest op"),
     UNIT(trav, "traversal", 16, 8, "not published; 4x isect width (§4.7: designed for 4:1)"),
     UNIT(list, "list", 64, 2, "not published; one list entry serves the whole packet"),

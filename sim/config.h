@@ -41,6 +41,11 @@ typedef struct cfg_l1 {
 	int mshrs;               /* outstanding missed lines */
 } cfg_l1;
 
+/* A floating-point format of one datapath stage (kernel-ref/fpfmt.h). */
+typedef struct cfg_fp {
+	int exp, mant; /* exponent and mantissa bits; 8, 23 = float */
+} cfg_fp;
+
 /* One kind of functional unit inside a ray-tracing pipeline (RTP). */
 typedef struct cfg_unit {
 	int count;   /* units of this kind per RTP */
@@ -58,6 +63,10 @@ typedef struct saar_config {
 		cfg_thread_sched thread_sched;
 		cfg_tile_order tile_order;
 		cfg_unit rgs, trav, list, isect;
+		struct {
+			cfg_fp trav, isect, shade;
+			int round; /* enum fp_rmode: nearest, zero, up, down */
+		} fp;
 	} chip;
 	struct {
 		int width, height, frames;

@@ -157,7 +157,7 @@ void rgs_finish(thr_ctx *t)
 		return;
 	}
 	v->log.n = 0;
-	t->made = shade_packet(&v->sc, p, t->kids, t->nkids, &v->log, &v->sh);
+	t->made = shade_packet_fp(&v->sc, &v->prec.shade, p, t->kids, t->nkids, &v->log, &v->sh);
 	issue_reads(t);
 	thr_wait_mem(t, shade_fetched);
 }

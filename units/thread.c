@@ -154,6 +154,7 @@ void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler d
 int thr_env_init(thr_env *v)
 {
 	memset(v, 0, sizeof *v);
+	pkt_precision_full(&v->prec);
 	v->log.cap = SHADE_LOG_CAP;
 	v->log.e = malloc(SHADE_LOG_CAP * sizeof *v->log.e);
 	v->hkey = malloc(THR_HASH_SLOTS * sizeof *v->hkey);

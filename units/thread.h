@@ -116,6 +116,7 @@ typedef struct thr_env {
 	shade_ctx sc;
 	cam_frame cam;
 	int stack_depth, masked, nlights;
+	pkt_precision prec; /* datapath formats (chip.fp); full = the SIMD path */
 	uint64_t spill_base;
 	uint64_t next_age;
 	uint64_t *c[C_NCOUNTERS];

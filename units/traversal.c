@@ -9,7 +9,7 @@
 void tu_begin(thr_ctx *t)
 {
 	thr_env *v = t->env;
-	uint64_t enter = pkt_trav_begin(&t->ts, t->p, v->m, t->stack, PKT_STACK_MAX);
+	uint64_t enter = pkt_trav_begin_fp(&t->ts, t->p, v->m, t->stack, PKT_STACK_MAX, &v->prec);
 	t->sp = 0;
 	*v->c[C_BOX_MISS_RAYS] += (uint64_t)thr_pop(t->p->valid & ~enter);
 	if (!enter) {
