@@ -32,7 +32,10 @@ int memif_init(memif *m, eng *e, sdram *sd, int policy)
 	m->sd = sd;
 	m->policy = policy;
 	m->last = MEMIF_NREQ - 1;
-	m->lead = sd->t.trcd + sd->t.cl;
+	/* issue far enough ahead that a row miss (precharge, activate, CAS) in
+	 * one bank overlaps the data transfer of another: the SDRAM model keeps
+	 * per-bank state and serializes the data bus itself */
+	m->lead = sd->t.trp + sd->t.trcd + sd->t.cl;
 	for (int r = 0; r < MEMIF_NREQ; r++) {
 		m->q[r].cap = 64;
 		m->q[r].q = malloc(64 * sizeof(memif_item));
