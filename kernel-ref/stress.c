@@ -107,8 +107,9 @@ stress_result stress_sphere(double scale, double offset, int res)
 
 stress_result stress_sphere_fp(double scale, double offset, int res, const pkt_precision *prec)
 {
-	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0};
+	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
 	snprintf(r.name, sizeof r.name, "closed sphere, radius %g, centre at %g", scale, offset);
+	r.measured = ST_LEAK | ST_MISMATCH;
 	double t0 = now_ms();
 	world w;
 	sphere_world(&w, scale, offset);
@@ -175,10 +176,115 @@ stress_result stress_sphere_fp(double scale, double offset, int res, const pkt_p
 	return r;
 }
 
+/* Is q inside the tetrahedron whose 4 triangles start at c (12 corners),
+ * farther than a few float steps from every face? Computed in double. */
+static int inside_tetra(const vec3 *c, vec3 q)
+{
+	for (int f = 0; f < 4; f++) {
+		const vec3 *t = c + 3 * f;
+		double e1[3] = {(double)t[1].x - t[0].x, (double)t[1].y - t[0].y,
+		                (double)t[1].z - t[0].z};
+		double e2[3] = {(double)t[2].x - t[0].x, (double)t[2].y - t[0].y,
+		                (double)t[2].z - t[0].z};
+		double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+		               e1[0] * e2[1] - e1[1] * e2[0]};
+		double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+		if (!(nl > 0))
+			return 0;
+		/* the opposite corner tells which side is inside */
+		const vec3 *o = c + 3 * ((f + 1) % 4);
+		vec3 opp = o[0];
+		for (int k = 0; k < 3; k++)
+			if (memcmp(&o[k], &t[0], sizeof(vec3)) &&
+			    memcmp(&o[k], &t[1], sizeof(vec3)) &&
+			    memcmp(&o[k], &t[2], sizeof(vec3)))
+				opp = o[k];
+		double so = (n[0] * ((double)opp.x - t[0].x) + n[1] * ((double)opp.y - t[0].y) +
+		             n[2] * ((double)opp.z - t[0].z)) /
+		            nl;
+		double sq = (n[0] * ((double)q.x - t[0].x) + n[1] * ((double)q.y - t[0].y) +
+		             n[2] * ((double)q.z - t[0].z)) /
+		            nl;
+		double scale = fmax(fabs((double)q.x), fmax(fabs((double)q.y), fabs((double)q.z)));
+		double margin = 4.0 * scale * 0x1p-24;
+		if (!(so * sq > 0) || fabs(sq) < margin)
+			return 0;
+	}
+	return 1;
+}
+
+stress_result stress_spd_tetra(double scale, double offset, int res)
+{
+	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, ST_LEAK | ST_MISMATCH};
+	snprintf(r.name, sizeof r.name, "SPD tetra (closed tetrahedra), scale %g, moved to %g",
+	         scale, offset);
+	double t0 = now_ms();
+	world w;
+	memset(&w, 0, sizeof w);
+	view sv;
+	diag d;
+	if (spd_generate(&w.s, &sv, "spd:tetra:4", &d))
+		abort();
+	vec3 off = v3((float)offset, (float)(offset / 2), (float)(-offset / 3));
+	for (uint32_t k = 0; k < 3 * w.s.ntris; k++)
+		w.s.v[k] = v3_add(v3_scale(w.s.v[k], (float)scale), off);
+	if (scene_finish(&w.s, "stress", &d))
+		abort();
+	build(&w, NULL);
+	camera cam = {v3_add(v3_scale(sv.cam.eye, (float)scale), off),
+	              v3_add(v3_scale(sv.cam.lookat, (float)scale), off), sv.cam.up,
+	              sv.cam.fov_deg};
+	cam_frame cf;
+	cam_setup(&cf, &cam, res, res);
+	size_t n = (size_t)res * (size_t)res;
+	vec3 *o = malloc(sizeof *o * n), *dd = malloc(sizeof *dd * n);
+	tracer *t = aligned_alloc(64, (sizeof(tracer) + 63) & ~(size_t)63);
+	size_t m = 0;
+	for (int ty = 0; ty < res / 8; ty++)
+		for (int tx = 0; tx < res / 8; tx++) {
+			cam_primary_packet(&cf, tx, ty, &t->p);
+			pkt_trace(&t->p, &w.m, t->stack, PKT_STACK_MAX, NULL);
+			r.rays += (uint64_t)__builtin_popcountll(t->p.valid);
+			for (uint64_t b = t->p.valid; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				if (t->p.tri[i] == PKT_NOHIT)
+					continue;
+				vec3 po = v3(t->p.ox[i], t->p.oy[i], t->p.oz[i]);
+				vec3 pd = v3(t->p.dx[i], t->p.dy[i], t->p.dz[i]);
+				/* step 16 float spacings of the hit point's magnitude past
+				 * the entry (pd is unit length), so that q can be judged
+				 * inside by the margin below */
+				vec3 hp = v3_add(po, v3_scale(pd, t->p.t[i]));
+				float mag = fmaxf(fabsf(hp.x), fmaxf(fabsf(hp.y), fabsf(hp.z)));
+				vec3 q =
+				    v3_add(po, v3_scale(pd, t->p.t[i] + 16.0f * mag * 0x1p-24f));
+				/* judge only if the (rounded) continuation origin lies
+				 * inside the tetrahedron it entered, by a margin, in
+				 * double: spd.c emits 4 triangles per tetrahedron */
+				uint32_t tet = mimg_tri_index(&w.m, t->p.tri[i]) / 4;
+				if (!inside_tetra(w.s.v + 12 * (size_t)tet, q)) {
+					r.ties++;
+					continue;
+				}
+				o[m] = q;
+				dd[m++] = pd;
+			}
+		}
+	r.leaked += trace_rays(&w, o, dd, m, t, &r.mismatch, NULL);
+	r.rays += m;
+	free(o);
+	free(dd);
+	free(t);
+	world_free(&w);
+	r.ms = now_ms() - t0;
+	return r;
+}
+
 stress_result stress_acne(double scale, double offset, int res)
 {
-	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0};
+	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
 	snprintf(r.name, sizeof r.name, "shadow acne, sphere radius %g at %g", scale, offset);
+	r.measured = ST_ACNE;
 	double t0 = now_ms();
 	world w;
 	sphere_world(&w, scale, offset);
@@ -238,7 +344,7 @@ static void grid_world(world *w, int n, const kd_params *kp)
 
 stress_result stress_vertices_edges(int n)
 {
-	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0};
+	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
 	snprintf(r.name, sizeof r.name,
 	         "rays at shared vertices and edges (%dx%d strip grid, 12-fan)", n, n);
 	double t0 = now_ms();
@@ -281,7 +387,7 @@ stress_result stress_vertices_edges(int n)
 
 stress_result stress_flat_axis_parallel(int n)
 {
-	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0};
+	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
 	snprintf(r.name, sizeof r.name, "flat %dx%d grid, axis-parallel rays with +0/-0 components",
 	         n, n);
 	double t0 = now_ms();
@@ -319,8 +425,9 @@ stress_result stress_flat_axis_parallel(int n)
 
 stress_result stress_degenerate(int res)
 {
-	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0};
+	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
 	snprintf(r.name, sizeof r.name, "degenerate, sliver, duplicate, coplanar; depth-60 tree");
+	r.measured = ST_LEAK | ST_MISMATCH;
 	double t0 = now_ms();
 	world w;
 	memset(&w, 0, sizeof w);
@@ -458,8 +565,9 @@ static int ref_hit(const double o[3], const double d[3], const double v[3][3], d
 
 stress_result stress_random(uint64_t n, uint32_t seed)
 {
-	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0};
+	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
 	snprintf(r.name, sizeof r.name, "random rays x random triangles vs double precision");
+	r.measured = ST_DISAGREE;
 	double t0 = now_ms();
 	uint64_t s = seed;
 	for (uint64_t k = 0; k < n; k++) {

@@ -20,11 +20,15 @@
 
 #include "packet.h"
 
+/* which counts a case measures (the table shows the others as "-") */
+enum { ST_LEAK = 1, ST_ACNE = 2, ST_DISAGREE = 4, ST_MISMATCH = 8 };
+
 typedef struct stress_result {
 	char name[96];
 	uint64_t rays;
 	uint64_t leaked, acne, disagree, ties, mismatch;
 	double ms;
+	unsigned measured; /* ST_* bits */
 } stress_result;
 
 /* A closed sphere of radius `scale` centred at (offset, offset/2, -offset/3),
@@ -36,6 +40,13 @@ stress_result stress_sphere(double scale, double offset, int res);
  * full precision, exactly stress_sphere). Packet and single-ray paths run
  * the same formats, so mismatch must stay zero too. */
 stress_result stress_sphere_fp(double scale, double offset, int res, const pkt_precision *prec);
+
+/* The SPD tetra scene (closed tetrahedra, spd.h) scaled by `scale` and
+ * moved by `offset`, seen from its standard view: every ray continued past
+ * an entry must hit again. A ray is judged only when its continuation
+ * origin (rounded to float) lies inside the tetrahedron it entered, checked
+ * in double: far from the origin, rounding can move it outside. */
+stress_result stress_spd_tetra(double scale, double offset, int res);
 
 /* The same sphere, lit from outside with nothing else in the scene: every
  * occluded shadow ray is a self-intersection. */

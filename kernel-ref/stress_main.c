@@ -165,7 +165,7 @@ static size_t prec_section(char *t, size_t cap, int quick, const char *views, co
 	for (int k = 0; k < NBITS; k++) {
 		pkt_precision p = prec_of(prec_bits[k], 1, 0);
 		const double sc[][2] = {{1e-4, 0}, {1, 0}, {1e4, 0}, {1e6, 0}, {100, 1e5}};
-		stress_result tot = {{0}, 0, 0, 0, 0, 0, 0, 0};
+		stress_result tot = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
 		for (size_t i = 0; i < sizeof sc / sizeof *sc; i++) {
 			stress_result r = stress_sphere_fp(sc[i][0], sc[i][1], sres, &p);
 			tot.rays += r.rays;
@@ -326,6 +326,10 @@ int main(int argc, char **argv)
 	for (size_t k = 0; k < sizeof far_scales / sizeof *far_scales; k++)
 		r[n++] = stress_sphere(far_scales[k], 1e5, res);
 	for (size_t k = 0; k < sizeof scales / sizeof *scales; k++)
+		r[n++] = stress_spd_tetra(scales[k], 0, res);
+	for (size_t k = 0; k < sizeof far_scales / sizeof *far_scales; k++)
+		r[n++] = stress_spd_tetra(far_scales[k], 1e5, res);
+	for (size_t k = 0; k < sizeof scales / sizeof *scales; k++)
 		r[n++] = stress_acne(scales[k], 0, res);
 	for (size_t k = 0; k < sizeof far_scales / sizeof *far_scales; k++)
 		r[n++] = stress_acne(far_scales[k], 1e5, res);
@@ -348,12 +352,20 @@ int main(int argc, char **argv)
 	    date, quick ? "quick" : "full", res, res);
 	uint64_t bad = 0;
 	for (int i = 0; i < n; i++) {
-		len += (size_t)snprintf(
-		    table + len, sizeof table - len,
-		    "| %s | %llu | %llu | %llu | %llu | %llu | %llu | %.0f |\n", r[i].name,
-		    (unsigned long long)r[i].rays, (unsigned long long)r[i].leaked,
-		    (unsigned long long)r[i].acne, (unsigned long long)r[i].disagree,
-		    (unsigned long long)r[i].mismatch, (unsigned long long)r[i].ties, r[i].ms);
+		/* a count the case does not measure shows as "-", never as 0 */
+		char col[4][32];
+		const uint64_t v[4] = {r[i].leaked, r[i].acne, r[i].disagree, r[i].mismatch};
+		const unsigned bit[4] = {ST_LEAK, ST_ACNE, ST_DISAGREE, ST_MISMATCH};
+		for (int k = 0; k < 4; k++) {
+			if (r[i].measured & bit[k])
+				snprintf(col[k], sizeof col[k], "%llu", (unsigned long long)v[k]);
+			else
+				snprintf(col[k], sizeof col[k], "-");
+		}
+		len += (size_t)snprintf(table + len, sizeof table - len,
+		                        "| %s | %llu | %s | %s | %s | %s | %llu | %.0f |\n",
+		                        r[i].name, (unsigned long long)r[i].rays, col[0], col[1],
+		                        col[2], col[3], (unsigned long long)r[i].ties, r[i].ms);
 		bad += r[i].leaked + r[i].acne + r[i].disagree + r[i].mismatch;
 	}
 	len += (size_t)snprintf(

@@ -33,6 +33,14 @@ Test(stress, closed_sphere_far_from_origin, .timeout = 300)
 		zero(stress_sphere(scales[k], 1e5, 64));
 }
 
+Test(stress, closed_spd_tetra_across_scales, .timeout = 300)
+{
+	const double scales[] = {1e-4, 1, 1e6};
+	for (size_t k = 0; k < sizeof scales / sizeof *scales; k++)
+		zero(stress_spd_tetra(scales[k], 0, 64));
+	zero(stress_spd_tetra(1e2, 1e5, 64));
+}
+
 Test(stress, no_shadow_acne, .timeout = 300)
 {
 	zero(stress_acne(1, 0, 64));
