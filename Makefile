@@ -68,7 +68,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench stress validate install clean deps
+.PHONY: all run test bench bench-fidelity stress validate install clean deps
 all: $(PROGS)
 
 deps: $(DEPSTAMP)
@@ -116,6 +116,10 @@ test: all $(B)/saarsim-tests
 
 bench: all
 	sh scripts/bench.sh $(B)
+
+# Run time against error of the fidelity modes; writes docs/FIDELITY.md.
+bench-fidelity: all
+	sh scripts/bench-fidelity.sh $(B)
 
 # Validation against the published SaarCOR results; writes docs/VALIDATION.md
 # and docs/validation-threads.png (VALIDATE_SIZE, VALIDATE_VIEWS: scripts/validate.sh).

@@ -101,6 +101,28 @@ static inline int cache_mshr_free(const cache *c)
 	return c->mshr_used < c->p.mshrs;
 }
 
+/* The hit half of cache_lookup, inline, for functional fast paths (replay):
+ * if line is present it does exactly what cache_lookup does on a hit (LRU
+ * stamp, counters) and returns 1; otherwise it changes nothing and returns
+ * 0, and the caller goes on with cache_lookup (and cache_fill). */
+static inline int cache_try_hit(cache *c, uint64_t line, uint32_t bytes)
+{
+	uint32_t n = c->nsets, ways = c->p.ways;
+	uint32_t set = c->p.hash == CACHE_HASH_NONE && !(n & (n - 1)) ? (uint32_t)(line & (n - 1))
+	                                                              : cache_set_of(c, line);
+	size_t base = (size_t)set * ways;
+	const uint64_t *t = c->tag + base;
+	for (uint32_t w = 0; w < ways; w++)
+		if (t[w] == line) {
+			c->use[base + w] = ++c->stamp;
+			c->s.accesses++;
+			c->s.hits++;
+			c->s.bytes += bytes;
+			return 1;
+		}
+	return 0;
+}
+
 /* Functional access with an immediate fill (no time): what replay and the
  * reference tests use. Touches every line of [addr, addr+bytes); returns the
  * number of lines that missed (0 = hit). Never returns MSHR_FULL. */

@@ -64,6 +64,13 @@ struct hier {
 	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
 	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
 	uint64_t bypass[MEM_NTYPES], wait_ticks[MEM_NTYPES], stall_ticks[MEM_NTYPES];
+	/* traffic of functional accesses (hier_access_func): what the timed
+	 * SDRAM, memory interface and host bus would have counted; busy_ticks
+	 * are data-bus occupancy without row or queueing overheads */
+	sdram_stats fsd;
+	memif_stats fmi;
+	hbus_stats fhb;
+	uint64_t freqs;
 };
 
 /* ---- free lists ---- */
@@ -267,6 +274,109 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 		finish(h, q);
 }
 
+/* ---- functional accesses (no time) ---- */
+
+/* One SDRAM access of bytes as the memory interface would submit it. */
+static void func_sdram(hier *h, int requester, uint32_t bytes, int write)
+{
+	if (write) {
+		h->fsd.writes++;
+		h->fsd.write_bytes += bytes;
+		h->fmi.writes[requester]++;
+	} else {
+		h->fsd.reads++;
+		h->fsd.read_bytes += bytes;
+		h->fmi.reads[requester]++;
+	}
+	h->fmi.bytes[requester] += bytes;
+	uint64_t beats = sdram_beats(&h->sd, bytes);
+	h->fsd.beats += beats;
+	h->fsd.busy_ticks += eng_cycles_to_ticks(h->sd.t.clk, beats);
+}
+
+/* n SDRAM accesses moving `bytes` together (the VMA counts sums only). */
+static void func_sdram_n(hier *h, int requester, uint64_t n, uint64_t bytes, int write)
+{
+	for (uint64_t i = 0; i < n; i++) {
+		uint64_t b = bytes / n + (i < bytes % n);
+		func_sdram(h, requester, (uint32_t)b, write);
+	}
+}
+
+/* Below the L1s without time: SDRAM directly, or the VMA's functional walk
+ * whose counter deltas become SDRAM and host-bus traffic. */
+static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int write)
+{
+	if (!h->use_vma) {
+		func_sdram(h, type, bytes, write);
+		return;
+	}
+	vma_stats a = h->v.s;
+	vma_access_func(&h->v, addr, bytes, write);
+	const vma_stats *b = &h->v.s;
+	uint32_t mb = h->v.meta_set_bytes;
+	for (uint64_t i = a.meta_reads; i < b->meta_reads; i++)
+		func_sdram(h, MEMIF_META, mb, 0);
+	for (uint64_t i = a.meta_writes; i < b->meta_writes; i++)
+		func_sdram(h, MEMIF_META, mb, 1);
+	uint64_t fetches = b->host_fetches - a.host_fetches;
+	uint64_t hw = b->host_writes - a.host_writes;
+	/* a fetched line is written into SDRAM (FILL); the rest is data */
+	uint64_t fill_bytes = fetches * h->v.p.line;
+	uint64_t dr = b->data_reads - a.data_reads, dw = b->data_writes - a.data_writes - fetches;
+	uint64_t db = b->data_bytes - a.data_bytes - fill_bytes;
+	func_sdram_n(h, MEMIF_FILL, fetches, fill_bytes, 1);
+	if (dr + dw)
+		func_sdram_n(h, type, dr + dw, db, dw > 0);
+	for (uint64_t i = 0; i < fetches; i++) {
+		h->fhb.transfers++;
+		h->fhb.bytes += h->v.p.line;
+		h->fhb.busy_ticks += hbus_duration(&h->hb, h->v.p.line);
+	}
+	if (hw) {
+		uint64_t wb = b->host_write_bytes - a.host_write_bytes;
+		h->fhb.transfers += hw;
+		h->fhb.bytes += wb;
+		h->fhb.busy_ticks += hbus_duration(&h->hb, (uint32_t)wb);
+	}
+}
+
+/* The functional twin of hier_access: the same L1 lookups, line by line,
+ * with the fill applied at once. Called only while no timed request is in
+ * flight (the chip drains its engine first), so no MSHR is busy and a miss
+ * never merges or waits: hits and misses follow from the line order alone. */
+static void hier_access_func(void *impl, const mem_req *r)
+{
+	hier *h = impl;
+	int type = r->type;
+	h->freqs++;
+	if (r->write) {
+		h->writes[type]++;
+		h->write_bytes[type] += r->bytes;
+		func_lower(h, type, r->addr, r->bytes, 1);
+		return;
+	}
+	h->reads[type]++;
+	h->read_bytes[type] += r->bytes;
+	uint32_t bytes = r->bytes ? r->bytes : 1;
+	if (r->addr >= h->image_bytes) {
+		h->bypass[type]++;
+		func_lower(h, type, r->addr, bytes, 0);
+		return;
+	}
+	cache *c = &h->l1[type].c;
+	uint32_t lb = c->p.line_bytes;
+	uint64_t first = r->addr / lb, last = (r->addr + bytes - 1) / lb, end = r->addr + bytes;
+	for (uint64_t line = first; line <= last; line++) {
+		uint64_t lo = line * lb, hi = lo + lb;
+		uint64_t a = r->addr > lo ? r->addr : lo, b = end < hi ? end : hi;
+		if (cache_lookup(c, line, (uint32_t)(b - a), NULL, NULL) == CACHE_HIT)
+			continue;
+		cache_fill(c, line, NULL);
+		func_lower(h, type, lo, lb, 0);
+	}
+}
+
 static void hier_destroy(void *impl)
 {
 	hier *h = impl;
@@ -284,7 +394,7 @@ static void hier_destroy(void *impl)
 	free(h);
 }
 
-static const memport_model hier_model = {"hierarchy", hier_access, hier_destroy};
+static const memport_model hier_model = {"hierarchy", hier_access, hier_destroy, hier_access_func};
 
 /* ---- construction ---- */
 
@@ -433,12 +543,28 @@ int hier_get_stats(const memport *p, hier_stats *s)
 	}
 	s->memif = h->mi.s;
 	s->sdram = h->sd.s;
+	/* functional traffic joins the counts; its busy time stays apart */
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		s->memif.reads[r] += h->fmi.reads[r];
+		s->memif.writes[r] += h->fmi.writes[r];
+		s->memif.bytes[r] += h->fmi.bytes[r];
+	}
+	s->sdram.reads += h->fsd.reads;
+	s->sdram.writes += h->fsd.writes;
+	s->sdram.read_bytes += h->fsd.read_bytes;
+	s->sdram.write_bytes += h->fsd.write_bytes;
+	s->sdram.beats += h->fsd.beats;
+	s->func_requests = h->freqs;
+	s->func_sdram_busy_ticks = h->fsd.busy_ticks;
+	s->func_hostbus_busy_ticks = h->fhb.busy_ticks;
 	s->sdram_peak_bytes_per_s = sdram_peak_bw(&h->sd);
 	if (h->use_vma) {
 		s->tag_cache = h->v.tag.s;
 		s->l2 = h->v.l2.s;
 		s->vma = h->v.s;
 		s->hostbus = h->hb.s;
+		s->hostbus.transfers += h->fhb.transfers;
+		s->hostbus.bytes += h->fhb.bytes;
 		s->hostbus_peak_bytes_per_s = hbus_peak_bw(&h->hb);
 	}
 	return 0;

@@ -52,6 +52,11 @@ typedef struct hier_stats {
 	vma_stats vma;
 	hbus_stats hostbus;
 	double hostbus_peak_bytes_per_s;
+	/* functional accesses (memport access_func; docs/fidelity.md): their
+	 * traffic is included in the counts above; the data-bus time they
+	 * would occupy (no row or queueing overheads) is kept apart here */
+	uint64_t func_requests;
+	uint64_t func_sdram_busy_ticks, func_hostbus_busy_ticks;
 } hier_stats;
 
 /* Builds the hierarchy from cfg->memory and installs it in p (as

@@ -25,7 +25,7 @@ static void fixed_destroy(void *impl)
 	free(impl);
 }
 
-static const memport_model fixed_model = {"fixed", fixed_access, fixed_destroy};
+static const memport_model fixed_model = {"fixed", fixed_access, fixed_destroy, NULL};
 
 int mem_init_fixed(memport *p, eng *e, eng_clock clk, int latency)
 {

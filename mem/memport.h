@@ -43,6 +43,11 @@ typedef struct memport_model {
 	const char *name;
 	void (*access)(void *impl, const mem_req *r, eng_handler done, void *ctx, uint64_t arg);
 	void (*destroy)(void *impl);
+	/* The same request without time (fidelity functional/sampled,
+	 * docs/fidelity.md): the functional state (caches, tag cache, VMA) and
+	 * the counters move as the timed path would move them; nothing is
+	 * scheduled. NULL: the model has no state (fixed). */
+	void (*access_func)(void *impl, const mem_req *r);
 } memport_model;
 
 typedef struct memport {
@@ -74,6 +79,23 @@ static inline void mem_access(memport *p, const mem_req *r, eng_handler done, vo
 	if (p->tap)
 		p->tap(p->tap_ctx, r);
 	p->model->access(p->impl, r, done, ctx, arg);
+}
+
+/* Issues one request functionally (no answer event; the caller goes on at
+ * once): counted like mem_access, then the model's access_func. */
+static inline void mem_access_func(memport *p, const mem_req *r)
+{
+	if (r->write) {
+		p->n.writes[r->type]++;
+		p->n.write_bytes[r->type] += r->bytes;
+	} else {
+		p->n.reads[r->type]++;
+		p->n.read_bytes[r->type] += r->bytes;
+	}
+	if (p->tap)
+		p->tap(p->tap_ctx, r);
+	if (p->model->access_func)
+		p->model->access_func(p->impl, r);
 }
 
 const char *mem_type_name(int type); /* "shade", "kd", "list", "tri" */

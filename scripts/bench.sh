@@ -509,7 +509,7 @@ SECTION=$TMP/section_saarsim
 	fi
 	set -- $RP
 	echo "- Trace replay (\`saarsim-replay\`, functional, default config): $2 requests recorded from" \
-	    "$1 512x384 ($4 bytes gzipped); best $3 million requests per host second;" \
+	    "$1 512x384 ($4 bytes, trace format v2); best $3 million requests per host second;" \
 	    "target >= 20: $(verdict "$3" '>=' 20)."
 	echo
 	echo "### Every view at $SIM_SIZE (one run each, \`--no-check\`)"

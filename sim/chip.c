@@ -15,6 +15,7 @@
  */
 #include "chip.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -77,10 +78,29 @@ static const char *const shade_names[11] = {"shade.hits",
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
+	if (c->env.func) /* func_tile drains the queue itself */
+		return;
 	packet *p = rgs_dequeue(t->rtp);
 	if (p) {
 		rgs_secondary(t, p);
 		return;
+	}
+	/* sampled: the marks that time a measured unit are the moments its
+	 * first tile is taken and the tile after it is wanted (docs/fidelity.md) */
+	chip_fidelity *F = &c->fid;
+	int next = c->g.next;
+	if (next >= F->region_end) {
+		if (F->ue_next < F->us_next) {
+			for (int k = 0; k < UNIT_NKINDS; k++)
+				F->work_e[F->ue_next * UNIT_NKINDS + k] = chip_work(c, k);
+			F->mark_e[F->ue_next++] = eng_now(c->e);
+		}
+		return;
+	}
+	if (F->us_next < F->nunits && F->unit_s[F->us_next] == next) {
+		for (int k = 0; k < UNIT_NKINDS; k++)
+			F->work_s[F->us_next * UNIT_NKINDS + k] = chip_work(c, k);
+		F->mark_s[F->us_next++] = eng_now(c->e);
 	}
 	int tx, ty;
 	if (!rgc_next(&c->g, &tx, &ty))
@@ -147,6 +167,56 @@ static uint64_t *reg(chip *c, const char *name, const char *unit, const char *de
 	if (!p)
 		c->oom = 1;
 	return p;
+}
+
+/* Sizes the sampling plan of one frame (the same for every frame). */
+static int fid_init(chip *c)
+{
+	chip_fidelity *F = &c->fid;
+	const saar_config *cfg = &c->cfg;
+	int threads = c->nrtp * c->tpr, N = c->g.ntiles;
+	F->mode = cfg->fidelity;
+	F->region_end = N;
+	/* a unit shorter than one tile per thread is over before any thread
+	 * has finished anything: its window would be empty */
+	F->unit_tiles = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;
+	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : threads;
+	size_t nf = (size_t)cfg->frame.frames;
+	F->est = calloc(nf, sizeof *F->est);
+	F->half = calloc(nf, sizeof *F->half);
+	if (!F->est || !F->half)
+		return -1;
+	if (F->mode != CFG_FIDELITY_SAMPLED)
+		return 0;
+	/* n units of U tiles, at least 2 for an interval; when the units and
+	 * their warm-ups would cover the frame anyway, simulate all of it */
+	int U = F->unit_tiles, W = F->warmup_tiles;
+	long n = lround((double)N * cfg->sampling.rate / U);
+	if (n < 2)
+		n = 2;
+	if (cfg->sampling.rate >= 1.0 || n * (long)(U + W) >= N) {
+		F->exact = 1;
+		return 0;
+	}
+	F->nunits = (int)n;
+	F->unit_s = calloc((size_t)n, sizeof *F->unit_s);
+	F->mark_s = calloc((size_t)n, sizeof *F->mark_s);
+	F->mark_e = calloc((size_t)n, sizeof *F->mark_e);
+	F->unit_rate = calloc((size_t)n, sizeof *F->unit_rate);
+	F->work_s = calloc((size_t)n * UNIT_NKINDS, sizeof *F->work_s);
+	F->work_e = calloc((size_t)n * UNIT_NKINDS, sizeof *F->work_e);
+	F->drain_t = calloc((size_t)n, sizeof *F->drain_t);
+	F->drain_w = calloc((size_t)n * UNIT_NKINDS, sizeof *F->drain_w);
+	if (!F->drain_t || !F->drain_w)
+		return -1;
+	if (!F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->work_s || !F->work_e)
+		return -1;
+	/* systematic: one unit per period P, centred in it, its warm-up just
+	 * before; P > U + W, so regions never touch */
+	double P = (double)N / (double)n;
+	for (int j = 0; j < n; j++)
+		F->unit_s[j] = (int)((double)j * P + (P - U) * 0.5);
+	return 0;
 }
 
 chip *chip_create(const saar_config *cfg, const world *w, diag *d)
@@ -292,7 +362,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 				goto oom;
 		}
 	}
-	if (c->oom)
+	if (c->oom || fid_init(c))
 		goto oom;
 	return c;
 oom:
@@ -327,6 +397,16 @@ void chip_destroy(chip *c)
 	free(c->frame_cycles);
 	free(c->frame_port);
 	free(c->frame_mem);
+	free(c->fid.unit_s);
+	free(c->fid.mark_s);
+	free(c->fid.mark_e);
+	free(c->fid.est);
+	free(c->fid.half);
+	free(c->fid.unit_rate);
+	free(c->fid.work_s);
+	free(c->fid.work_e);
+	free(c->fid.drain_t);
+	free(c->fid.drain_w);
 	if (c->trace) {
 		diag d;
 		chip_trace_close(c, &d);
@@ -357,21 +437,210 @@ static void sync_counters(chip *c)
 	}
 }
 
+/* Cycle-level simulation of the tiles from the RGC's position up to `end`
+ * (exclusive), until every packet they made is done: a frame starts by
+ * offering every thread slot a tile, slot by slot and RTP by RTP. Returns
+ * the ticks it took. */
+static uint64_t run_region(chip *c, int end)
+{
+	uint64_t t0 = eng_now(c->e);
+	int first = c->g.next;
+	c->fid.region_end = end;
+	for (int s = 0; s < c->tpr; s++)
+		for (int r = 0; r < c->nrtp; r++)
+			if (c->rtp[r].t[s].state == THR_IDLE)
+				on_free(&c->rtp[r].t[s]);
+	eng_run(c->e, ENG_FOREVER);
+	c->fid.detailed_tiles += (uint64_t)(end - first);
+	c->fid.detailed_cycles += eng_ticks_to_cycles(c->clk, eng_now(c->e) - t0);
+	return eng_now(c->e) - t0;
+}
+
+/* Functional processing of tiles from the RGC's position up to `end`: each
+ * tile's packet and every packet it spawns, one after the other, on thread
+ * slot 0 of RTP (tile mod rtps), with the same unit code in functional mode
+ * (thr_env.func). The engine is idle (no request in flight), so memory goes
+ * through the hierarchy's functional path with no MSHR busy. */
+static void func_range(chip *c, int end)
+{
+	c->env.func = 1;
+	int tx, ty;
+	while (c->g.next < end && !c->oom) {
+		thr_ctx *t = &c->rtp[c->g.next % c->nrtp].t[0];
+		if (!rgc_next(&c->g, &tx, &ty))
+			break;
+		c->tiles_given++;
+		c->fid.functional_tiles++;
+		if (c->progress && c->tiles_given % 64 == 0)
+			c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
+		if (rgs_primary(t, tx, ty)) {
+			c->oom = 1;
+			break;
+		}
+		thr_run_func(t);
+		packet *p;
+		while ((p = rgs_dequeue(t->rtp))) {
+			rgs_secondary(t, p);
+			thr_run_func(t);
+		}
+	}
+	c->env.func = 0;
+}
+
+double chip_t975(int df)
+{
+	static const double t[31] = {0,     12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365,
+	                             2.306, 2.262,  2.228, 2.201, 2.179, 2.160, 2.145, 2.131,
+	                             2.120, 2.110,  2.101, 2.093, 2.086, 2.080, 2.074, 2.069,
+	                             2.064, 2.060,  2.056, 2.052, 2.048, 2.045, 2.042};
+	if (df < 1)
+		return INFINITY;
+	if (df <= 30)
+		return t[df];
+	/* Cornish-Fisher: within 1e-3 of the table beyond 30 */
+	double z = 1.959964, z3 = z * z * z;
+	return z + (z3 + z) / (4.0 * df) + (5 * z3 * z * z + 16 * z3 + 3 * z) / (96.0 * df * df);
+}
+
+double chip_work(const chip *c, int k)
+{
+	double w = 0;
+	for (int r = 0; r < c->nrtp; r++)
+		w += (double)*c->rtp[r].u[k].busy / c->rtp[r].u[k].count;
+	return w;
+}
+
+/* Sampled frame: functional stretches and detailed regions (warm-up, then
+ * one measured unit). Cycles per tile vary tenfold across a frame, cycles
+ * per unit of work (chip_work: issue cycles, the analogue of CPI) far less,
+ * and the work of every tile is counted, detailed or functional; so the
+ * estimate is the ratio estimator frame work x sum(cycles) / sum(work) over
+ * the units' windows, with a 95% t-interval from the residuals (finite-
+ * population corrected). docs/fidelity.md. */
+static void sampled_frame(chip *c, int f)
+{
+	chip_fidelity *F = &c->fid;
+	int N = c->g.ntiles, U = F->unit_tiles, n = F->nunits;
+	double w0[UNIT_NKINDS];
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		w0[k] = chip_work(c, k);
+	F->us_next = F->ue_next = 0;
+	for (int j = 0; j < n; j++) {
+		int rs = F->unit_s[j] - F->warmup_tiles;
+		if (rs < c->g.next)
+			rs = c->g.next;
+		func_range(c, rs);
+		run_region(c, F->unit_s[j] + U);
+		/* the region drains as the frame's end does: kept to model it */
+		F->drain_t[j] = eng_now(c->e) - F->mark_e[j];
+		for (int k = 0; k < UNIT_NKINDS; k++)
+			F->drain_w[j * UNIT_NKINDS + k] =
+			    chip_work(c, k) - F->work_e[j * UNIT_NKINDS + k];
+	}
+	func_range(c, N);
+	F->region_end = N;
+	/* the work of the frame's busiest unit kind: the chip's pace follows it */
+	int K = 0;
+	double fw[UNIT_NKINDS];
+	for (int k = 0; k < UNIT_NKINDS; k++) {
+		fw[k] = chip_work(c, k) - w0[k];
+		if (fw[k] > fw[K])
+			K = k;
+	}
+	F->work_kind = K;
+	F->frame_work = fw[K];
+	double sc = 0, sw = 0, cyc[n > 0 ? n : 1], wk[n > 0 ? n : 1];
+	for (int j = 0; j < n; j++) {
+		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / (double)c->clk.period;
+		wk[j] = F->work_e[j * UNIT_NKINDS + K] - F->work_s[j * UNIT_NKINDS + K];
+		F->unit_rate[j] = wk[j] > 0 ? cyc[j] / wk[j] : 0;
+		sc += cyc[j];
+		sw += wk[j];
+	}
+	double R = sw > 0 ? sc / sw : 0, wbar = sw / n, s2 = 0;
+	for (int j = 0; j < n; j++)
+		s2 += (cyc[j] - R * wk[j]) * (cyc[j] - R * wk[j]);
+	s2 = n > 1 ? s2 / (n - 1) : 0;
+	double fpc = 1.0 - (double)n * U / N;
+	/* the frame ends with one drain (the last tiles finishing with ever
+	 * fewer threads busy): its mean time and work over the regions replace
+	 * that much steady-state work */
+	double dt = 0, dw = 0;
+	for (int j = 0; j < n; j++) {
+		dt += (double)F->drain_t[j] / (double)c->clk.period / n;
+		dw += F->drain_w[j * UNIT_NKINDS + K] / n;
+	}
+	F->est[f] = R * (F->frame_work - dw) + dt;
+	F->half[f] =
+	    wbar > 0 ? chip_t975(n - 1) * F->frame_work * sqrt(s2 * (fpc > 0 ? fpc : 0) / n) / wbar
+	             : INFINITY;
+}
+
+static const char *const res_names[RES_N] = {"rgs",   "trav",    "list",   "isect", "l1_shade",
+                                             "l1_kd", "l1_list", "l1_tri", "sdram", "hostbus"};
+
+const char *chip_res_name(int res)
+{
+	return res >= 0 && res < RES_N ? res_names[res] : "?";
+}
+
+/* The busiest-resource bound of frame f: the core cycles each resource
+ * needs at least for the frame's work (units: issue cycles per instance;
+ * L1s: requests / ports; SDRAM and host bus: data-bus time); the frame
+ * cannot be faster than the largest. Needs the frame's snapshot. */
+static void resource_bound(chip *c, int f)
+{
+	chip_fidelity *F = &c->fid;
+	const cfg_unit *ucfg[UNIT_NKINDS] = {&c->cfg.chip.rgs, &c->cfg.chip.trav, &c->cfg.chip.list,
+	                                     &c->cfg.chip.isect};
+	memset(F->res_cycles, 0, sizeof F->res_cycles);
+	for (int k = 0; k < UNIT_NKINDS; k++) {
+		char sfx[32];
+		snprintf(sfx, sizeof sfx, "%s.busy_cycles", unit_names[k]);
+		uint64_t b = chip_rtp_sum(c, sfx);
+		F->res_cycles[RES_RGS + k] =
+		    (double)(b - F->prev_busy[k]) / ((double)ucfg[k]->count * c->nrtp);
+		F->prev_busy[k] = b;
+	}
+	if (c->frame_mem) {
+		static const hier_stats zero;
+		const hier_stats *a = f ? &c->frame_mem[f - 1] : &zero, *b = &c->frame_mem[f];
+		for (int t = 0; t < MEM_NTYPES; t++) {
+			cache_params cp = hier_l1_params(&c->cfg, t);
+			uint64_t rq =
+			    (b->reads[t] - b->bypass_reads[t]) - (a->reads[t] - a->bypass_reads[t]);
+			F->res_cycles[RES_L1_SHADE + t] = (double)rq / cp.ports;
+		}
+		double per = (double)c->clk.period;
+		F->res_cycles[RES_SDRAM] =
+		    (double)(b->sdram.busy_ticks + b->func_sdram_busy_ticks - a->sdram.busy_ticks -
+		             a->func_sdram_busy_ticks) /
+		    per;
+		F->res_cycles[RES_HOSTBUS] =
+		    (double)(b->hostbus.busy_ticks + b->func_hostbus_busy_ticks -
+		             a->hostbus.busy_ticks - a->func_hostbus_busy_ticks) /
+		    per;
+	}
+	F->bound_by = 0;
+	for (int r = 1; r < RES_N; r++)
+		if (F->res_cycles[r] > F->res_cycles[F->bound_by])
+			F->bound_by = r;
+}
+
 int chip_run(chip *c, diag *d)
 {
 	double t0 = now_ms();
+	chip_fidelity *F = &c->fid;
 	for (int f = 0; f < c->cfg.frame.frames; f++) {
 		fb_clear(&c->fb);
 		rgc_reset(&c->g);
 		c->tiles_given = 0;
-		uint64_t start = eng_now(c->e);
-		for (int s = 0; s < c->tpr; s++)
-			for (int r = 0; r < c->nrtp; r++)
-				if (c->rtp[r].t[s].state == THR_IDLE)
-					on_free(&c->rtp[r].t[s]);
-		eng_run(c->e, ENG_FOREVER);
-		uint64_t end = eng_now(c->e);
-		c->frame_cycles[f] = eng_ticks_to_cycles(c->clk, end - start);
+		if (F->mode == CFG_FIDELITY_FUNCTIONAL)
+			func_range(c, c->g.ntiles);
+		else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact)
+			sampled_frame(c, f);
+		else /* cycle, and sampled at rate 1: the same event sequence */
+			F->est[f] = (double)eng_ticks_to_cycles(c->clk, run_region(c, c->g.ntiles));
 		for (int r = 0; r < c->nrtp; r++) {
 			for (int i = 0; i < c->tpr; i++)
 				thr_flush(&c->rtp[r].t[i]);
@@ -384,6 +653,14 @@ int chip_run(chip *c, diag *d)
 		c->frame_port[f] = c->mem.n;
 		if (c->frame_mem)
 			hier_get_stats(&c->mem, &c->frame_mem[f]);
+		resource_bound(c, f);
+		if (F->mode == CFG_FIDELITY_FUNCTIONAL) {
+			/* no timing: the frame's cycles are the bound */
+			F->est[f] = F->res_cycles[F->bound_by];
+			c->frame_cycles[f] = (uint64_t)ceil(F->est[f]);
+		} else {
+			c->frame_cycles[f] = (uint64_t)llround(F->est[f]);
+		}
 		c->frames_done = f + 1;
 	}
 	c->events = eng_events(c->e);

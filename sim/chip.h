@@ -38,6 +38,45 @@ typedef struct chip_check {
 	double ref_ms;    /* host time of the reference render */
 } chip_check;
 
+/* Resources the busiest-resource bound looks at (chip_fidelity). */
+enum chip_res {
+	RES_RGS,
+	RES_TRAV,
+	RES_LIST,
+	RES_ISECT, /* unit issue cycles / (count x rtps) */
+	RES_L1_SHADE,
+	RES_L1_KD,
+	RES_L1_LIST,
+	RES_L1_TRI, /* L1 requests / ports */
+	RES_SDRAM,  /* SDRAM data-bus time */
+	RES_HOSTBUS,
+	RES_N
+};
+
+/* What the fidelity modes add (docs/fidelity.md). */
+typedef struct chip_fidelity {
+	int mode; /* enum cfg_fidelity */
+	/* sampled: per frame nunits units of unit_tiles tiles, each after
+	 * warmup_tiles detailed tiles; exact when every tile is detailed */
+	int unit_tiles, warmup_tiles, nunits, exact;
+	int *unit_s;               /* first tile (hand-out index) of each unit */
+	uint64_t *mark_s, *mark_e; /* ticks: unit's first tile taken, first tile after it wanted */
+	double *work_s, *work_e;   /* chip_work of each unit kind at those marks (n x kinds) */
+	uint64_t *drain_t;         /* ticks from a unit's end mark to its region's end */
+	double *drain_w;           /* chip_work (n x kinds) done in that drain */
+	int us_next, ue_next;      /* next unit whose start / end mark is due */
+	int region_end;            /* tiles at or after it are not handed out (this region) */
+	uint64_t detailed_tiles, functional_tiles, detailed_cycles; /* all frames */
+	double *est, *half; /* per frame: cycles (estimate or measured), 95% half-width */
+	double *unit_rate;  /* last frame: cycles per unit of work (chip_work) of each unit */
+	double frame_work;  /* last frame: chip_work of the work kind done in it */
+	int work_kind;      /* last frame: the unit kind whose work the estimate scales */
+	/* busiest-resource bound, last frame: cycles each resource needs */
+	double res_cycles[RES_N];
+	int bound_by; /* enum chip_res */
+	uint64_t prev_busy[UNIT_NKINDS];
+} chip_fidelity;
+
 typedef struct chip {
 	saar_config cfg;
 	const world *w;
@@ -69,6 +108,7 @@ typedef struct chip {
 	/* optional progress callback: called every 64 tiles handed out */
 	void (*progress)(void *ctx, int frame, int tiles_done, int tiles);
 	void *progress_ctx;
+	chip_fidelity fid;
 } chip;
 
 /* cfg must already be validated; w stays owned by the caller and must
@@ -91,6 +131,14 @@ uint64_t chip_cycles(const chip *c);
 /* Sum of a per-RTP counter "rtp<i>.<suffix>" over all RTPs. */
 uint64_t chip_rtp_sum(const chip *c, const char *suffix);
 
+/* Name of an enum chip_res ("trav", "l1_kd", "sdram", "hostbus", ...). */
+const char *chip_res_name(int res);
+/* The chip's work so far of unit kind k: issue cycles per instance (busy /
+ * count), summed over RTPs. Functional and detailed tiles count it alike,
+ * so it is known for the whole frame. */
+double chip_work(const chip *c, int k);
+/* 97.5% quantile of Student's t with df degrees of freedom. */
+double chip_t975(int df);
 const char *chip_unit_name(int kind);   /* "rgs", "trav", "list", "isect" */
 const char *chip_state_name(int state); /* "idle", "running", "waiting_memory", "waiting_unit" */
 

@@ -28,7 +28,7 @@ static const char *const memif_policy_names[] = {"fifo", "round_robin", NULL};
 static const char *const addr_hash_names[] = {"xor_fold", "none", NULL};
 static const char *const sdram_mapping_names[] = {"row:bank:col", "bank:row:col", NULL};
 static const char *const hostbus_preset_names[] = {"pci", "pci66", "agp", NULL};
-static const char *const fidelity_names[] = {"cycle", NULL};
+static const char *const fidelity_names[] = {"cycle", "sampled", "functional", NULL};
 
 #define FIELD(f) .off = offsetof(saar_config, f), .size = sizeof(((saar_config *)0)->f)
 #define PUB      .published = true, .source = "seed 002 "
@@ -86,8 +86,21 @@ static const char *const fidelity_names[] = {"cycle", NULL};
 static const cfg_key keys[] = {
     {KEY("name", CFG_STR, name, 0, 0, 0, ""), .sdef = "saarcor-std",
      .source = "a label, not hardware", .desc = "name of this configuration, copied into reports"},
-    {ENUM("fidelity", fidelity, fidelity_names), .source = "the only mode so far",
-     .desc = "simulation detail: cycle = cycle-level timing of every unit"},
+    {ENUM("fidelity", fidelity, fidelity_names), .source = "a run setting (docs/fidelity.md)",
+     .desc = "simulation detail: cycle = cycle-level timing of every unit; sampled = "
+             "systematic sample of tiles cycle by cycle, the rest functional, cycles with a 95% "
+             "interval; functional = no timing, fps as a bound"},
+    {FLT("sampling.rate", sampling.rate, 0.1, 0.0001, 1, ""),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: share of the tiles in measured units (1 = every tile, "
+             "identical to cycle)"},
+    {INT("sampling.unit_tiles", sampling.unit_tiles, 0, 0, 1000000, "tiles"),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: consecutive tiles per measured unit; 0 = rtps x threads_per_rtp"},
+    {INT("sampling.warmup_tiles", sampling.warmup_tiles, -1, -1, 1000000, "tiles"),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: tiles simulated cycle by cycle, unmeasured, before each unit; "
+             "-1 = rtps x threads_per_rtp"},
     {FLT("chip.clock_mhz", chip.clock_mhz, 533, 1, 10000, "MHz"), PUB "§4.7",
      .desc = "core clock; rounded to a whole-picosecond period (sim/engine.h)"},
     {INT("chip.rtps", chip.rtps, 4, 1, 1024, ""), PUB "§4.7",

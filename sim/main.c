@@ -38,6 +38,10 @@ static void usage(FILE *f)
 	        "  --report FILE.json    write the JSON report (docs/report.md)\n"
 	        "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
 	        "  --trace-mem FILE.gz   record every memory request (traces/memtrace.h)\n"
+	        "  --fidelity MODE       cycle | sampled | functional (docs/fidelity.md)\n"
+	        "  --sample-rate R       sampled: share of tiles measured (sampling.rate)\n"
+	        "  --unit-tiles N        sampled: tiles per measured unit (sampling.unit_tiles)\n"
+	        "  --warmup-tiles N      sampled: detailed warm-up tiles (sampling.warmup_tiles)\n"
 	        "  --no-check            skip the comparison with kernel-ref\n"
 	        "  --list-config         print every config key and exit\n"
 	        "  --config-doc          print docs/config.md and exit\n");
@@ -63,6 +67,19 @@ static void show_progress(void *ctx, int frame, int done, int total)
 		return;
 	fprintf(stderr, "\rsaarsim: frame %d: %d/%d tiles", frame + 1, done, total);
 	p->shown = 1;
+}
+
+/* The config key a fidelity flag sets, NULL if a is not one. */
+static const char *fid_flag(const char *a)
+{
+	static const char *const f[][2] = {{"--fidelity", "fidelity"},
+	                                   {"--sample-rate", "sampling.rate"},
+	                                   {"--unit-tiles", "sampling.unit_tiles"},
+	                                   {"--warmup-tiles", "sampling.warmup_tiles"}};
+	for (size_t i = 0; i < sizeof f / sizeof *f; i++)
+		if (!strcmp(a, f[i][0]))
+			return f[i][1];
+	return NULL;
 }
 
 int main(int argc, char **argv)
@@ -99,7 +116,7 @@ int main(int argc, char **argv)
 		const char *v = argv[i + 1];
 		if (!strcmp(a, "--config"))
 			config = v;
-		else if (!strcmp(a, "--set"))
+		else if (!strcmp(a, "--set") || fid_flag(a))
 			; /* applied below, in order, once the config file is read */
 		else if (!strcmp(a, "--size"))
 			size = v;
@@ -146,6 +163,12 @@ int main(int argc, char **argv)
 		}
 		if (!strcmp(a, "--set") && cfg_set(&cfg, argv[i + 1], &d))
 			return cli_bad("saarsim", d.msg);
+		if (fid_flag(a)) { /* shorthands of --set for the fidelity keys */
+			char kv[256];
+			snprintf(kv, sizeof kv, "%s=%s", fid_flag(a), argv[i + 1]);
+			if (cfg_set(&cfg, kv, &d))
+				return cli_bad("saarsim", d.msg);
+		}
 		i += 2;
 	}
 	if (size && cli_parse_size(size, &cfg.frame.width, &cfg.frame.height, &d))

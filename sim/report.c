@@ -128,6 +128,107 @@ static void memfig_steady(const chip *c, memfig *m)
 	memfig_span(c, c->frames_done > 1 ? 1 : 0, c->frames_done, m);
 }
 
+/* ---- fidelity (docs/fidelity.md) ---- */
+
+typedef struct fidfig {
+	const char *mode;
+	double cycles, half;        /* mean cycles per frame over the steady span; 95% half-width */
+	double fps, fps_lo, fps_hi; /* fps_hi < 0: unbounded */
+	double fps_bound;           /* busiest-resource bound (last frame) */
+	const char *bound_by;
+} fidfig;
+
+static void fidfig_get(const chip *c, fidfig *x)
+{
+	const chip_fidelity *F = &c->fid;
+	int f0 = c->frames_done > 1 ? 1 : 0, n = c->frames_done - f0;
+	double s = 0, h2 = 0;
+	for (int f = f0; f < c->frames_done; f++) {
+		s += F->est[f];
+		h2 += F->half[f] * F->half[f];
+	}
+	double hz = c->cfg.chip.clock_mhz * 1e6;
+	x->mode = cfg_enum_name(&c->cfg, "fidelity");
+	x->cycles = ratio(s, n);
+	x->half = n ? sqrt(h2) / n : 0;
+	x->fps = ratio(hz, x->cycles);
+	x->fps_lo = ratio(hz, x->cycles + x->half);
+	x->fps_hi = x->cycles > x->half ? hz / (x->cycles - x->half) : -1;
+	x->fps_bound = ratio(hz, F->res_cycles[F->bound_by]);
+	x->bound_by = chip_res_name(F->bound_by);
+}
+
+static void fidelity_text(FILE *f, const chip *c)
+{
+	const chip_fidelity *F = &c->fid;
+	fidfig x;
+	fidfig_get(c, &x);
+	if (F->mode == CFG_FIDELITY_FUNCTIONAL)
+		fprintf(f,
+		        "  fidelity functional: no timing; fps <= %.2f (a bound: the busiest "
+		        "resource is %s, %.0f cycles/frame)\n",
+		        x.fps_bound, x.bound_by, F->res_cycles[F->bound_by]);
+	else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact)
+		fprintf(f,
+		        "  fidelity sampled: %d units x %d tiles (+%d warm-up) per frame; cycles "
+		        "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
+		        "functional\n",
+		        F->nunits, F->unit_tiles, F->warmup_tiles, x.cycles, x.half, x.fps,
+		        x.fps_lo, x.fps_hi, (unsigned long long)F->detailed_tiles,
+		        (unsigned long long)F->functional_tiles);
+	else if (F->mode == CFG_FIDELITY_SAMPLED)
+		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
+}
+
+static void fidelity_json(jsonw *j, const chip *c)
+{
+	const chip_fidelity *F = &c->fid;
+	fidfig x;
+	fidfig_get(c, &x);
+	jsonw_key(j, "fidelity");
+	jsonw_obj_begin(j);
+	jsonw_kstr(j, "mode", x.mode);
+	jsonw_kbool(j, "timed", F->mode != CFG_FIDELITY_FUNCTIONAL);
+	jsonw_kbool(j, "estimated", F->mode == CFG_FIDELITY_SAMPLED && !F->exact);
+	jsonw_knum(j, "cycles_per_frame", x.cycles);
+	jsonw_key(j, "cycles_ci95");
+	jsonw_arr_begin(j);
+	jsonw_num(j, x.cycles - x.half);
+	jsonw_num(j, x.cycles + x.half);
+	jsonw_arr_end(j);
+	jsonw_knum(j, "fps", x.fps);
+	jsonw_key(j, "fps_ci95");
+	jsonw_arr_begin(j);
+	jsonw_num(j, x.fps_lo);
+	if (x.fps_hi < 0)
+		jsonw_null(j);
+	else
+		jsonw_num(j, x.fps_hi);
+	jsonw_arr_end(j);
+	if (F->mode == CFG_FIDELITY_SAMPLED) {
+		jsonw_kint(j, "units_per_frame", F->nunits);
+		jsonw_kint(j, "unit_tiles", F->unit_tiles);
+		jsonw_kint(j, "warmup_tiles", F->warmup_tiles);
+		jsonw_knum(j, "sample_rate", c->cfg.sampling.rate);
+		jsonw_key(j, "unit_cycles_per_tile");
+		jsonw_arr_begin(j);
+		for (int u = 0; u < F->nunits; u++)
+			jsonw_num(j, F->unit_rate[u]);
+		jsonw_arr_end(j);
+	}
+	jsonw_kuint(j, "detailed_tiles", F->detailed_tiles);
+	jsonw_kuint(j, "functional_tiles", F->functional_tiles);
+	jsonw_kuint(j, "detailed_cycles", F->detailed_cycles);
+	jsonw_knum(j, "fps_bound", x.fps_bound);
+	jsonw_kstr(j, "bound_by", x.bound_by);
+	jsonw_key(j, "resource_cycles");
+	jsonw_obj_begin(j);
+	for (int r = 0; r < RES_N; r++)
+		jsonw_knum(j, chip_res_name(r), F->res_cycles[r]);
+	jsonw_obj_end(j);
+	jsonw_obj_end(j);
+}
+
 /* Cycles each unit type's reads waited for memory (issue -> data, summed
  * over reads; overlapping reads of one packet all count). The fixed model
  * answers every read after memory.latency cycles. */
@@ -206,8 +307,9 @@ void report_text(FILE *f, const report_info *ri)
 		fprintf(f, "  chip: %d RTPs x %d threads at %g MHz; memory fixed, %d cycles\n",
 		        g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz,
 		        g->memory.latency);
-	fprintf(f, "  cycles per frame %.0f = %.2f fps\n", ratio((double)cyc, c->frames_done),
-	        fps(c));
+	fprintf(f, "  cycles per frame %.0f = %.2f fps%s\n", ratio((double)cyc, c->frames_done),
+	        fps(c), c->fid.mode == CFG_FIDELITY_FUNCTIONAL ? " (bound)" : "");
+	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++) {
 		snprintf(sfx, sizeof sfx, "%s.busy_cycles", chip_unit_name(k));
@@ -320,6 +422,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_knum(j, "clock_mhz", g->chip.clock_mhz);
 	jsonw_knum(j, "fps", fps(c));
 	kv(j, "events", c->events);
+	fidelity_json(j, c);
 
 	jsonw_key(j, "units");
 	jsonw_obj_begin(j);
@@ -551,8 +654,8 @@ static const char csv_header[] =
     "memory.l1.tri.size_kb,memory.sdram.mb,memory.vma.enabled,memory.hostbus.preset,"
     "fps,util_rgs,util_trav,util_list,util_isect,hit_shade,hit_kd,hit_list,hit_tri,"
     "hit_tag_cache,hit_l2,sdram_mb_per_frame,pci_mb_per_frame,meta_share,"
-    "sdram_row_hit_rate,sdram_utilisation,pci_utilisation,identical_8bit,host_sim_s,"
-    "host_wall_s\n";
+    "sdram_row_hit_rate,sdram_utilisation,pci_utilisation,fidelity,fps_ci_lo,fps_ci_hi,"
+    "fps_bound,bound_by,identical_8bit,host_sim_s,host_wall_s\n";
 
 int report_csv(const char *path, const report_info *ri, diag *d)
 {
@@ -621,6 +724,13 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	csv_num(f, m.row_hit_rate);
 	csv_num(f, m.sdram_util);
 	csv_num(f, m.pci_util);
+	fidfig x;
+	fidfig_get(c, &x);
+	csv_str(f, x.mode, 0);
+	csv_num(f, x.fps_lo);
+	csv_num(f, x.fps_hi);
+	csv_num(f, x.fps_bound);
+	csv_str(f, x.bound_by, 0);
 	if (ri->check && ri->check->done)
 		fprintf(f, "%d,", ri->check->cmp.identical ? 1 : 0);
 	else

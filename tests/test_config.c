@@ -250,7 +250,7 @@ Test(config, set_errors)
 	                 "--set: chip.trav.latency: must be in [1, 10000], got 0");
 	expect_set_error("chip.trav=4", "--set: 'chip.trav' is a section; set one of its keys "
 	                                "(chip.trav.*)");
-	expect_set_error("fidelity=fast", "--set: fidelity: expected one of cycle; got 'fast'");
+	expect_set_error("fidelity=fast", "--set: fidelity: expected one of cycle, sampled, functional; got 'fast'");
 }
 
 Test(config, validate_cross_keys)

@@ -1,10 +1,14 @@
 /*
- * test_memtrace.c: memory traces round-trip; truncated, corrupt and foreign
- * files are rejected with a clear message, never a crash; saarsim-replay
- * runs a trace and fails with one line and exit 2 on bad input.
+ * test_memtrace.c: memory traces round-trip (v2, written; v1, still read);
+ * truncated, corrupt and foreign files are rejected with a clear message,
+ * never a crash, also when the gzip layer is intact and only the records are
+ * bad; saarsim-replay runs a trace and fails with one line and exit 2 on bad
+ * input.
  */
 #include <string.h>
+#include <zlib.h>
 
+#include "cache.h"
 #include "memtrace.h"
 #include "testutil.h"
 
@@ -125,6 +129,251 @@ Test(memtrace, truncated_and_corrupt)
 	snprintf(q, sizeof q, "%s/missing.gz", dir);
 	cr_assert_eq(read_all(q, &d), -1);
 	cr_assert(strstr(d.msg, "cannot open"), "%s", d.msg);
+}
+
+/* Edge values: every type and flag, cycle steps 0..6, large and backward
+ * jumps, addresses near 0 and UINT64_MAX, bytes 0, 4, 8, 36 and the extremes. */
+static mtr_rec edge_rec(uint64_t i)
+{
+	static const uint64_t addrs[] = {0,          1,    0x1000, UINT64_MAX, UINT64_MAX - 7,
+	                                 1ull << 63, 12345};
+	static const uint32_t bytes[] = {8, 36, 4, 0, 1, UINT32_MAX, 128, 12};
+	uint64_t cyc = i % 11 == 10 ? UINT64_MAX - i : i % 13 == 5 ? i / 2 : i * 3 + i % 7;
+	mtr_rec r = {cyc, addrs[i % 7] + (i % 3 ? i * 40 : 0), bytes[i % 8], (uint8_t)(i % 4),
+	             (uint8_t)(i / 4 % 2)};
+	return r;
+}
+
+Test(memtrace, round_trip_edges_and_blocks)
+{
+	char dir[64], p[128];
+	diag d;
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/e.gz", dir);
+	const uint64_t n = 3 * MTR_BLOCK_RECS + 17;
+	mtr_writer *w = malloc(sizeof *w);
+	cr_assert_eq(mtr_open_write(w, p, &d), 0, "%s", d.msg);
+	for (uint64_t i = 0; i < n; i++) {
+		mtr_rec r = edge_rec(i);
+		cr_assert_eq(mtr_write(w, &r, &d), 0, "%s", d.msg);
+	}
+	mtr_rec bad = {0, 0, 8, 4, 0};
+	cr_assert_eq(mtr_write(w, &bad, &d), -1, "type 4 accepted");
+	cr_assert_eq(mtr_close_write(w, &d), 0, "%s", d.msg);
+	free(w);
+	/* mtr_read for a while, then the rest through mtr_read_block */
+	mtr_reader *r = malloc(sizeof *r);
+	cr_assert_eq(mtr_open_read(r, p, &d), 0, "%s", d.msg);
+	uint64_t i = 0;
+	mtr_rec x;
+	for (; i < 1000; i++) {
+		cr_assert_eq(mtr_read(r, &x, &d), 1, "%s", d.msg);
+		mtr_rec e = edge_rec(i);
+		cr_assert(x.cycle == e.cycle && x.addr == e.addr && x.bytes == e.bytes &&
+		              x.type == e.type && x.write == e.write,
+		          "record %llu differs", (unsigned long long)i);
+	}
+	const mtr_rec *blk;
+	int k;
+	while ((k = mtr_read_block(r, &blk, &d)) > 0)
+		for (int j = 0; j < k; j++, i++) {
+			mtr_rec e = edge_rec(i);
+			cr_assert(blk[j].cycle == e.cycle && blk[j].addr == e.addr &&
+			              blk[j].bytes == e.bytes && blk[j].type == e.type &&
+			              blk[j].write == e.write,
+			          "record %llu differs", (unsigned long long)i);
+		}
+	cr_assert_eq(k, 0, "%s", d.msg);
+	cr_assert_eq(i, n);
+	cr_assert_eq(mtr_read(r, &x, &d), 0, "reads past the end");
+	mtr_close_read(r);
+	free(r);
+}
+
+/* A gzip file with exactly these uncompressed bytes (valid CRC). */
+static void gz_bytes(const char *path, const unsigned char *b, size_t n)
+{
+	gzFile g = gzopen(path, "wb1");
+	cr_assert(g);
+	if (n)
+		cr_assert_eq(gzwrite(g, b, (unsigned)n), (int)n);
+	cr_assert_eq(gzclose(g), Z_OK);
+}
+
+static size_t gunzip(const char *path, unsigned char **buf)
+{
+	gzFile g = gzopen(path, "rb");
+	cr_assert(g);
+	size_t cap = 1 << 16, n = 0;
+	*buf = malloc(cap);
+	int got;
+	while ((got = gzread(g, *buf + n, (unsigned)(cap - n))) > 0) {
+		n += (size_t)got;
+		if (n == cap)
+			*buf = realloc(*buf, cap *= 2);
+	}
+	cr_assert_eq(got, 0);
+	gzclose(g);
+	return n;
+}
+
+static void le32(unsigned char *p, uint32_t v)
+{
+	for (int i = 0; i < 4; i++)
+		p[i] = (unsigned char)(v >> (8 * i));
+}
+
+Test(memtrace, v2_bad_records_under_a_good_crc)
+{
+	char dir[64], p[128], q[128];
+	diag d;
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/t.gz", dir);
+	snprintf(q, sizeof q, "%s/bad.gz", dir);
+	write_trace(p, 5000); /* 2 blocks: 4096 + 904 records */
+	unsigned char *b, *c;
+	size_t n = gunzip(p, &b);
+	c = malloc(n + 64);
+	uint32_t n1 = b[36] | b[37] << 8 | b[38] << 16 | (uint32_t)b[39] << 24; /* block 1 bytes */
+	size_t blk2 = 32 + 8 + n1, endb = n - 16;
+	struct {
+		const char *what, *msg;
+		size_t at;
+		uint32_t val;
+	} cases[] = {
+	    {"too many records", "bad block header", 32, MTR_BLOCK_RECS + 1},
+	    {"payload too long", "bad block header", 36, MTR_BLOCK_RECS * MTR_REC_MAX + 1},
+	    {"payload one short", "bad record", 36, 0},
+	    {"payload too short", "bad record", 36, 4096 * 2},
+	    {"records beyond the payload", "bad record", blk2, 905},
+	    {"end count", "counts", endb + 8, 4999},
+	    {"end block size", "bad block header", endb + 4, 9},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+		memcpy(c, b, n);
+		uint32_t v = cases[i].val;
+		if (!strcmp(cases[i].what, "payload one short"))
+			v = n1 - 1;
+		le32(c + cases[i].at, v);
+		gz_bytes(q, c, n);
+		cr_assert_eq(read_all(q, &d), -1, "%s accepted", cases[i].what);
+		cr_assert(strstr(d.msg, cases[i].msg) && strstr(d.msg, q), "%s: %s", cases[i].what,
+		          d.msg);
+	}
+	/* a varint longer than 10 bytes */
+	memcpy(c, b, n);
+	memset(c + 32 + 8 + 1, 0xFF, 12);
+	gz_bytes(q, c, n);
+	cr_assert_eq(read_all(q, &d), -1);
+	cr_assert(strstr(d.msg, "bad record"), "%s", d.msg);
+	/* data after the end block; the end block missing; cut mid-block */
+	memcpy(c, b, n);
+	c[n] = 0;
+	gz_bytes(q, c, n + 1);
+	cr_assert_eq(read_all(q, &d), -1);
+	cr_assert(strstr(d.msg, "after the end"), "%s", d.msg);
+	gz_bytes(q, b, endb);
+	cr_assert_eq(read_all(q, &d), -1);
+	cr_assert(strstr(d.msg, "truncated"), "%s", d.msg);
+	for (size_t cut = 33; cut < n; cut += 997) {
+		gz_bytes(q, b, cut);
+		cr_assert_eq(read_all(q, &d), -1, "cut at %zu accepted", cut);
+		cr_assert(strstr(d.msg, "truncated"), "cut at %zu: %s", cut, d.msg);
+	}
+	/* random damage under a valid CRC: an error or some records, never a
+	 * crash or a read out of bounds (run under make SANITIZE=1 test too) */
+	uint32_t seed = 12345;
+	for (int it = 0; it < 300; it++) {
+		memcpy(c, b, n);
+		for (int k = 0; k < 1 + it % 4; k++) {
+			seed = seed * 1664525u + 1013904223u;
+			size_t at = 32 + (seed >> 8) % (n - 32);
+			seed = seed * 1664525u + 1013904223u;
+			c[at] ^= (unsigned char)(1 + (seed >> 24) % 255);
+		}
+		gz_bytes(q, c, n);
+		long long got = read_all(q, &d);
+		cr_assert(got == -1 || got == 5000, "damage %d read %lld records", it, got);
+	}
+	free(b);
+	free(c);
+}
+
+Test(memtrace, reads_version_1)
+{
+	char dir[64], p[128];
+	diag d;
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/v1.gz", dir);
+	const uint64_t n = 10000;
+	size_t len = 32 + (n + 1) * 24;
+	unsigned char *b = calloc(1, len);
+	memcpy(b, "SAARMTRC", 8);
+	le32(b + 8, 1);
+	le32(b + 12, 24);
+	le32(b + 16, MTR_FIELDS);
+	for (uint64_t i = 0; i <= n; i++) {
+		unsigned char *q = b + 32 + i * 24;
+		mtr_rec r = {i / 3, 0x1000 + 8 * (i % 5000), (uint32_t)(8 + (i % 2) * 28),
+		             (uint8_t)(i % 4), (uint8_t)(i % 97 == 0)};
+		if (i == n)
+			r = (mtr_rec){UINT64_MAX, n, 0, 0xFF, 0};
+		le32(q, (uint32_t)r.cycle);
+		le32(q + 4, (uint32_t)(r.cycle >> 32));
+		le32(q + 8, (uint32_t)r.addr);
+		le32(q + 12, (uint32_t)(r.addr >> 32));
+		le32(q + 16, r.bytes);
+		q[20] = r.type;
+		q[21] = r.write;
+	}
+	gz_bytes(p, b, len);
+	cr_assert_eq(read_chk(p, &d, 1), (long long)n, "%s", d.msg);
+	gz_bytes(p, b, len - 24); /* no end record */
+	cr_assert_eq(read_all(p, &d), -1);
+	cr_assert(strstr(d.msg, "truncated"), "%s", d.msg);
+	b[32 + 24 * 77 + 20] = 9; /* a bad type */
+	gz_bytes(p, b, len);
+	cr_assert_eq(read_all(p, &d), -1);
+	cr_assert(strstr(d.msg, "bad record 77"), "%s", d.msg);
+	le32(b + 8, 3);
+	gz_bytes(p, b, len);
+	cr_assert_eq(read_all(p, &d), -1);
+	cr_assert(strstr(d.msg, "version 3"), "%s", d.msg);
+	free(b);
+}
+
+/* The replay's inline hit path changes exactly what cache_lookup does:
+ * two caches fed the same lines, one through cache_try_hit first, end with
+ * equal tags, stamps and counters (power-of-two and other set counts, both
+ * hashes). */
+Test(memtrace, replay_hit_path_equals_lookup)
+{
+	cache_params ps[] = {{2048 * 32, 4, 8, 4, 1, 1, CACHE_HASH_NONE},
+	                     {711 * 4 * 36, 4, 36, 4, 1, 1, CACHE_HASH_NONE},
+	                     {64 * 2 * 16, 2, 16, 4, 1, 1, CACHE_HASH_XOR}};
+	for (size_t k = 0; k < sizeof ps / sizeof ps[0]; k++) {
+		cache a, b;
+		diag d;
+		cr_assert_eq(cache_init(&a, &ps[k], "a", &d), 0, "%s", d.msg);
+		cr_assert_eq(cache_init(&b, &ps[k], "b", &d), 0, "%s", d.msg);
+		uint32_t seed = 7;
+		for (int i = 0; i < 200000; i++) {
+			seed = seed * 1664525u + 1013904223u;
+			uint64_t line = (seed >> 8) % (i % 3 ? 3000 : 300000);
+			if (cache_lookup(&a, line, 8, NULL, NULL) != CACHE_HIT)
+				cache_fill(&a, line, NULL);
+			if (!cache_try_hit(&b, line, 8) &&
+			    cache_lookup(&b, line, 8, NULL, NULL) != CACHE_HIT)
+				cache_fill(&b, line, NULL);
+		}
+		size_t n = (size_t)a.nsets * a.p.ways;
+		cr_assert(!memcmp(a.tag, b.tag, n * sizeof *a.tag));
+		cr_assert(!memcmp(a.use, b.use, n * sizeof *a.use));
+		cr_assert(!memcmp(&a.s, &b.s, sizeof a.s));
+		cr_assert(a.s.hits > 0 && a.s.misses > 0);
+		cache_free(&a);
+		cache_free(&b);
+	}
 }
 
 Test(memtrace, replay_tool)

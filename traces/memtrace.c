@@ -1,8 +1,15 @@
 /*
  * memtrace.c: trace writer and reader (format in memtrace.h).
  *
- * Both sides batch records through a 64 KB buffer so gzwrite/gzread run a
- * few times per thousand records; fields are (de)serialized byte by byte in
+ * The writer encodes records into one block buffer and hands each full
+ * block to gzwrite in one call. The reader pulls up to 256 KB of inflated
+ * data per gzread call (gzip's CRC is checked once, at the end of the
+ * stream) and decodes a whole block at a time into an array of records, so
+ * the per-record cost is a few byte loads; mtr_read_block hands that array
+ * out as is. Decoding needs no per-byte bounds checks: a block's payload is
+ * in the buffer before it is decoded, MTR_SLACK zeroed bytes follow the
+ * data, no record is longer than MTR_REC_MAX, and a record ending past the
+ * payload is an error. Fixed-size fields are (de)serialized byte by byte in
  * little-endian order, independent of the host.
  */
 #include "memtrace.h"
@@ -31,14 +38,22 @@ static uint64_t get64(const unsigned char *p)
 	return (uint64_t)get32(p) | (uint64_t)get32(p + 4) << 32;
 }
 
-static void enc(unsigned char *p, const mtr_rec *r)
+static uint64_t zigzag(uint64_t delta)
 {
-	put64(p, r->cycle);
-	put64(p + 8, r->addr);
-	put32(p + 16, r->bytes);
-	p[20] = r->type;
-	p[21] = r->write;
-	p[22] = p[23] = 0;
+	return delta << 1 ^ (uint64_t) - (delta >> 63);
+}
+static uint64_t unzigzag(uint64_t z)
+{
+	return z >> 1 ^ (uint64_t) - (z & 1);
+}
+static unsigned char *put_var(unsigned char *p, uint64_t v)
+{
+	while (v >= 0x80) {
+		*p++ = (unsigned char)(v | 0x80);
+		v >>= 7;
+	}
+	*p++ = (unsigned char)v;
+	return p;
 }
 
 /* ---- writer ---- */
@@ -47,48 +62,71 @@ int mtr_open_write(mtr_writer *w, const char *path, diag *d)
 {
 	memset(w, 0, sizeof *w);
 	snprintf(w->path, sizeof w->path, "%s", path);
-	gzFile gz = gzopen(path, "wb6");
+	gzFile gz = gzopen(path, MTR_GZ_MODE);
 	if (!gz)
 		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno ? errno : EIO));
 	w->gz = gz;
+	gzbuffer(gz, 1u << 17);
 	unsigned char h[MTR_HEADER_SIZE] = {0};
 	memcpy(h, MTR_MAGIC, 8);
 	put32(h + 8, MTR_VERSION);
-	put32(h + 12, MTR_RECORD_SIZE);
+	put32(h + 12, 0);
 	put32(h + 16, MTR_FIELDS);
-	memcpy(w->buf, h, sizeof h);
-	w->used = sizeof h;
+	if (gzwrite(gz, h, sizeof h) != (int)sizeof h) {
+		gzclose(gz);
+		w->gz = NULL;
+		return diag_set(d, path, 0, 0, "write error");
+	}
 	return 0;
 }
 
+/* Writes the open block (header + payload) in one gzwrite. */
 static int flush_w(mtr_writer *w, diag *d)
 {
-	if (w->used && gzwrite(w->gz, w->buf, w->used) != (int)w->used)
+	if (!w->nrec)
+		return 0;
+	put32(w->buf, w->nrec);
+	put32(w->buf + 4, w->used);
+	unsigned len = MTR_BLOCK_HDR + w->used;
+	w->nrec = w->used = 0;
+	if (gzwrite(w->gz, w->buf, len) != (int)len)
 		return diag_set(d, w->path, 0, 0, "write error");
-	w->used = 0;
 	return 0;
 }
 
 int mtr_write(mtr_writer *w, const mtr_rec *r, diag *d)
 {
-	if (w->used + MTR_RECORD_SIZE > MTR_BUF && flush_w(w, d))
-		return -1;
-	enc(w->buf + w->used, r);
-	w->used += MTR_RECORD_SIZE;
+	if (r->type >= 4 || r->write > 1)
+		return diag_set(d, w->path, 0, 0, "cannot record type %u, write flag %u", r->type,
+		                r->write);
+	unsigned char *p0 = w->buf + MTR_BLOCK_HDR + w->used, *p = p0 + 1;
+	uint64_t dc = r->cycle - w->cycle;
+	unsigned cc = dc < 7 ? (unsigned)dc : 7;
+	if (cc == 7)
+		p = put_var(p, zigzag(dc));
+	p = put_var(p, zigzag(r->addr - w->addr[r->type]));
+	unsigned bc = r->bytes == 8 ? 0 : r->bytes == 36 ? 1 : r->bytes == 4 ? 2 : 3;
+	if (bc == 3)
+		p = put_var(p, r->bytes);
+	*p0 = (unsigned char)(r->type | r->write << 2 | cc << 3 | bc << 6);
+	w->cycle = r->cycle;
+	w->addr[r->type] = r->addr;
+	w->used += (uint32_t)(p - p0);
 	w->n++;
+	if (++w->nrec == MTR_BLOCK_RECS)
+		return flush_w(w, d);
 	return 0;
 }
 
 int mtr_close_write(mtr_writer *w, diag *d)
 {
-	mtr_rec end = {UINT64_MAX, w->n, 0, 0xFF, 0};
-	int rc = 0;
-	if (w->used + MTR_RECORD_SIZE > MTR_BUF)
-		rc = flush_w(w, d);
-	enc(w->buf + w->used, &end);
-	w->used += MTR_RECORD_SIZE;
-	if (!rc)
-		rc = flush_w(w, d);
+	int rc = flush_w(w, d);
+	unsigned char end[MTR_BLOCK_HDR + 8];
+	put32(end, 0);
+	put32(end + 4, 8);
+	put64(end + 8, w->n);
+	if (!rc && gzwrite(w->gz, end, sizeof end) != (int)sizeof end)
+		rc = diag_set(d, w->path, 0, 0, "write error");
 	if (gzclose(w->gz) != Z_OK && !rc)
 		rc = diag_set(d, w->path, 0, 0, "write error on close");
 	w->gz = NULL;
@@ -97,24 +135,34 @@ int mtr_close_write(mtr_writer *w, diag *d)
 
 /* ---- reader ---- */
 
-/* Refills the buffer keeping the unread tail; 0 ok (len may stay short at
- * end of data), -1 on a zlib error. */
-static int fill_r(mtr_reader *r, diag *d)
+/* Makes at least `need` unread bytes available if the stream has them,
+ * keeping the unread tail; 0 ok (len - pos may stay short at the end of the
+ * data), -1 on a zlib error. */
+static int fill_r(mtr_reader *r, uint32_t need, diag *d)
 {
 	uint32_t left = r->len - r->pos;
+	if (left >= need)
+		return 0;
 	memmove(r->buf, r->buf + r->pos, left);
 	r->pos = 0;
 	r->len = left;
-	int got = gzread(r->gz, r->buf + left, MTR_BUF - left);
-	int err = 0;
-	const char *m = gzerror(r->gz, &err);
-	/* zlib reports a stream cut short as Z_BUF_ERROR, possibly with data
-	 * (got > 0) and possibly only on a later call that returns 0 */
-	if (got < 0 || err != Z_OK) {
-		return diag_set(d, r->path, 0, 0, "%s trace (zlib: %s)",
-		                err == Z_BUF_ERROR ? "truncated" : "corrupt", m ? m : "error");
+	while (r->len < need) {
+		int got = gzread(r->gz, r->buf + r->len, MTR_RBUF - r->len);
+		int err = 0;
+		const char *m = gzerror(r->gz, &err);
+		/* zlib reports a stream cut short as Z_BUF_ERROR, possibly with
+		 * data (got > 0) and possibly only on a later call that returns 0 */
+		if (got < 0 || err != Z_OK)
+			return diag_set(d, r->path, 0, 0, "%s trace (zlib: %s)",
+			                err == Z_BUF_ERROR ? "truncated" : "corrupt",
+			                m ? m : "error");
+		if (got == 0)
+			break;
+		r->len += (uint32_t)got;
 	}
-	r->len += (uint32_t)got;
+	/* decoders may read up to MTR_SLACK bytes past the data: keep them
+	 * defined (and harmless) */
+	memset(r->buf + r->len, 0, MTR_SLACK);
 	return 0;
 }
 
@@ -127,20 +175,22 @@ int mtr_open_read(mtr_reader *r, const char *path, diag *d)
 		return diag_set(d, path, 0, 0, "cannot open: %s", strerror(errno ? errno : ENOENT));
 	gzbuffer(gz, 1u << 17);
 	r->gz = gz;
-	if (fill_r(r, d))
+	if (fill_r(r, MTR_HEADER_SIZE, d))
 		goto bad;
 	if (r->len < MTR_HEADER_SIZE || memcmp(r->buf, MTR_MAGIC, 8)) {
 		diag_set(d, path, 0, 0, "not a saarsim memory trace (bad magic)");
 		goto bad;
 	}
-	if (get32(r->buf + 8) != MTR_VERSION) {
-		diag_set(d, path, 0, 0, "unsupported trace version %u (this build reads %u)",
-		         get32(r->buf + 8), MTR_VERSION);
+	r->version = get32(r->buf + 8);
+	if (r->version != 1 && r->version != MTR_VERSION) {
+		diag_set(d, path, 0, 0, "unsupported trace version %u (this build reads 1 and %u)",
+		         r->version, MTR_VERSION);
 		goto bad;
 	}
-	if (get32(r->buf + 12) != MTR_RECORD_SIZE || get32(r->buf + 16) != MTR_FIELDS) {
-		diag_set(d, path, 0, 0, "unsupported record layout (size %u, fields 0x%x)",
-		         get32(r->buf + 12), get32(r->buf + 16));
+	uint32_t rs = get32(r->buf + 12);
+	if (rs != (r->version == 1 ? MTR_V1_RECORD : 0) || get32(r->buf + 16) != MTR_FIELDS) {
+		diag_set(d, path, 0, 0, "unsupported record layout (size %u, fields 0x%x)", rs,
+		         get32(r->buf + 16));
 		goto bad;
 	}
 	r->pos = MTR_HEADER_SIZE;
@@ -150,48 +200,177 @@ bad:
 	return -1;
 }
 
+static int truncated(mtr_reader *r, diag *d)
+{
+	return diag_set(d, r->path, 0, 0,
+	                "truncated trace: ends after %llu records without its end record",
+	                (unsigned long long)r->n);
+}
+
+/* After the end block or record: the count must match, nothing may follow,
+ * and reading to the end of the stream checks gzip's CRC. */
+static int finish(mtr_reader *r, uint64_t count, diag *d)
+{
+	if (count != r->n)
+		return diag_set(d, r->path, 0, 0,
+		                "corrupt trace: end record counts %llu records, read %llu",
+		                (unsigned long long)count, (unsigned long long)r->n);
+	if (r->pos != r->len)
+		return diag_set(d, r->path, 0, 0, "corrupt trace: data after the end record");
+	if (fill_r(r, 1, d))
+		return -1;
+	if (r->len != r->pos)
+		return diag_set(d, r->path, 0, 0, "corrupt trace: data after the end record");
+	r->ended = 1;
+	return 0;
+}
+
+/* Varint at p (at most 10 bytes; reading past a block's payload is caught
+ * by the caller, and the buffer's slack keeps it in bounds). */
+#define GETVAR(v, p)                                                                               \
+	do {                                                                                       \
+		uint64_t v_ = *p++;                                                                \
+		if (v_ >= 0x80) {                                                                  \
+			v_ &= 0x7F;                                                                \
+			for (unsigned s_ = 7;; s_ += 7) {                                          \
+				uint64_t b_ = *p++;                                                \
+				v_ |= (b_ & 0x7F) << s_;                                           \
+				if (b_ < 0x80)                                                     \
+					break;                                                     \
+				if (s_ == 63)                                                      \
+					goto bad;                                                  \
+			}                                                                          \
+		}                                                                                  \
+		v = v_;                                                                            \
+	} while (0)
+
+static int decode_v2(mtr_reader *r, diag *d)
+{
+	if (fill_r(r, MTR_BLOCK_HDR, d))
+		return -1;
+	if (r->len - r->pos < MTR_BLOCK_HDR)
+		return truncated(r, d);
+	const unsigned char *h = r->buf + r->pos;
+	uint32_t nrec = get32(h), nbytes = get32(h + 4);
+	if (nrec > MTR_BLOCK_RECS ||
+	    (nrec ? nbytes > nrec * MTR_REC_MAX || nbytes < nrec : nbytes != 8))
+		return diag_set(d, r->path, 0, 0,
+		                "corrupt trace: bad block header after %llu records (%u records, "
+		                "%u bytes)",
+		                (unsigned long long)r->n, nrec, nbytes);
+	if (fill_r(r, MTR_BLOCK_HDR + nbytes, d))
+		return -1;
+	if (r->len - r->pos < MTR_BLOCK_HDR + nbytes)
+		return truncated(r, d);
+	const unsigned char *p = r->buf + r->pos + MTR_BLOCK_HDR, *end = p + nbytes;
+	r->pos += MTR_BLOCK_HDR + nbytes;
+	if (!nrec) {
+		int rc = finish(r, get64(p), d);
+		return rc < 0 ? -1 : 0;
+	}
+	uint64_t cyc = r->cycle;
+	mtr_rec *o = r->rec;
+	for (uint32_t i = 0; i < nrec; i++, o++) {
+		unsigned tag = *p++;
+		unsigned t = tag & 3, cc = tag >> 3 & 7, bc = tag >> 6;
+		if (cc == 7) {
+			uint64_t z;
+			GETVAR(z, p);
+			cyc += unzigzag(z);
+		} else {
+			cyc += cc;
+		}
+		uint64_t za;
+		GETVAR(za, p);
+		uint64_t a = r->addr[t] + unzigzag(za);
+		r->addr[t] = a;
+		uint64_t nb = bc == 0 ? 8 : bc == 1 ? 36 : 4;
+		if (bc == 3) {
+			GETVAR(nb, p);
+			if (nb > UINT32_MAX)
+				goto bad;
+		}
+		if (p > end)
+			goto bad;
+		o->cycle = cyc;
+		o->addr = a;
+		o->bytes = (uint32_t)nb;
+		o->type = (uint8_t)t;
+		o->write = (uint8_t)(tag >> 2 & 1);
+	}
+	if (p != end)
+		goto bad;
+	r->cycle = cyc;
+	r->n += nrec;
+	return (int)nrec;
+bad:
+	return diag_set(d, r->path, 0, 0,
+	                "corrupt trace: bad record in the block after record %llu",
+	                (unsigned long long)r->n);
+}
+
+static int decode_v1(mtr_reader *r, diag *d)
+{
+	if (fill_r(r, MTR_BLOCK_RECS * MTR_V1_RECORD, d))
+		return -1;
+	uint32_t avail = (r->len - r->pos) / MTR_V1_RECORD, k = 0;
+	if (!avail)
+		return truncated(r, d);
+	if (avail > MTR_BLOCK_RECS)
+		avail = MTR_BLOCK_RECS;
+	for (; k < avail; k++) {
+		const unsigned char *p = r->buf + r->pos;
+		mtr_rec *o = &r->rec[k];
+		r->pos += MTR_V1_RECORD;
+		o->cycle = get64(p);
+		o->addr = get64(p + 8);
+		o->bytes = get32(p + 16);
+		o->type = p[20];
+		o->write = p[21];
+		if (o->type == 0xFF && o->cycle == UINT64_MAX) {
+			if (k) { /* deliver the records before it first */
+				r->pos -= MTR_V1_RECORD;
+				break;
+			}
+			return finish(r, o->addr, d);
+		}
+		if (o->type >= 4 || o->write > 1 || p[22] || p[23])
+			return diag_set(d, r->path, 0, 0,
+			                "corrupt trace: bad record %llu (type %u, write %u)",
+			                (unsigned long long)(r->n + k), o->type, o->write);
+	}
+	r->n += k;
+	return (int)k;
+}
+
+int mtr_read_block(mtr_reader *r, const mtr_rec **recs, diag *d)
+{
+	if (r->next < r->have) { /* what mtr_read left of the current block */
+		*recs = r->rec + r->next;
+		int k = (int)(r->have - r->next);
+		r->next = r->have;
+		return k;
+	}
+	if (r->ended || !r->gz)
+		return 0;
+	int k = r->version == 1 ? decode_v1(r, d) : decode_v2(r, d);
+	r->next = r->have = 0;
+	*recs = r->rec;
+	return k;
+}
+
 int mtr_read(mtr_reader *r, mtr_rec *out, diag *d)
 {
-	if (r->ended)
-		return 0;
-	if (r->len - r->pos < MTR_RECORD_SIZE) {
-		if (fill_r(r, d))
-			return -1;
-		if (r->len - r->pos < MTR_RECORD_SIZE)
-			return diag_set(
-			    d, r->path, 0, 0,
-			    "truncated trace: ends after %llu records without its end record",
-			    (unsigned long long)r->n);
+	if (r->next == r->have) {
+		if (r->ended || !r->gz)
+			return 0;
+		int k = r->version == 1 ? decode_v1(r, d) : decode_v2(r, d);
+		r->next = 0;
+		r->have = k > 0 ? (uint32_t)k : 0;
+		if (k <= 0)
+			return k;
 	}
-	const unsigned char *p = r->buf + r->pos;
-	r->pos += MTR_RECORD_SIZE;
-	out->cycle = get64(p);
-	out->addr = get64(p + 8);
-	out->bytes = get32(p + 16);
-	out->type = p[20];
-	out->write = p[21];
-	if (out->type == 0xFF && out->cycle == UINT64_MAX) {
-		if (out->addr != r->n)
-			return diag_set(d, r->path, 0, 0,
-			                "corrupt trace: end record counts %llu records, read %llu",
-			                (unsigned long long)out->addr, (unsigned long long)r->n);
-		/* nothing may follow, and reading to the end checks gzip's CRC */
-		if (r->pos != r->len || fill_r(r, d))
-			return r->pos != r->len
-			           ? diag_set(d, r->path, 0, 0,
-			                      "corrupt trace: data after the end record")
-			           : -1;
-		if (r->len)
-			return diag_set(d, r->path, 0, 0,
-			                "corrupt trace: data after the end record");
-		r->ended = 1;
-		return 0;
-	}
-	if (out->type >= 4 || out->write > 1 || p[22] || p[23])
-		return diag_set(d, r->path, 0, 0,
-		                "corrupt trace: bad record %llu (type %u, write %u)",
-		                (unsigned long long)r->n, out->type, out->write);
-	r->n++;
+	*out = r->rec[r->next++];
 	return 1;
 }
 

@@ -241,6 +241,10 @@ static void mem_done(eng *e, void *ctx, uint64_t arg)
 void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 {
 	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id};
+	if (t->env->func) { /* the data is there at once: nothing to wait for */
+		mem_access_func(t->env->mem, &r);
+		return;
+	}
 	t->pending++;
 	mem_access(t->env->mem, &r, mem_done, t, 0);
 }
@@ -248,7 +252,10 @@ void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 {
 	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id};
-	mem_access(t->env->mem, &r, NULL, NULL, 0);
+	if (t->env->func)
+		mem_access_func(t->env->mem, &r);
+	else
+		mem_access(t->env->mem, &r, NULL, NULL, 0);
 }
 
 void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
@@ -263,6 +270,15 @@ void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
 
 void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
 {
+	if (t->env->func) {
+		/* the op's counts as start() makes them, without its time */
+		thr_unit *u = &t->rtp->u[kind];
+		++*u->ops_n;
+		*u->busy += thr_unit_issue(u, rays);
+		*u->rays += (uint64_t)rays;
+		t->fnext = done;
+		return;
+	}
 	thr_set(t, THR_WAIT_UNIT);
 	thr_unit_request(&t->rtp->u[kind], t->id, t->age, rays, done, t, 0);
 }
@@ -273,6 +289,15 @@ void thr_release(thr_ctx *t)
 	t->p = NULL;
 	thr_set(t, THR_IDLE);
 	t->env->on_free(t);
+}
+
+void thr_run_func(thr_ctx *t)
+{
+	while (t->fnext) {
+		eng_handler h = t->fnext;
+		t->fnext = NULL;
+		h(t->env->e, t, 0);
+	}
 }
 
 uint64_t thr_rays(const packet *p)

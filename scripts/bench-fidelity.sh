@@ -1,0 +1,219 @@
+#!/bin/sh
+# bench-fidelity.sh: run time against error of the fidelity modes (issue 6).
+#
+#   sh scripts/bench-fidelity.sh BUILD_DIR
+#
+# For every shared view, the standard and the VMA config, and 1, 16 and 64
+# threads per RTP: one `cycle` run (the truth), one `functional` run and
+# `sampled` runs at each sample rate; host time (report host.sim_s) and the
+# error of fps, every cache hit rate, SDRAM and PCI MB/frame against cycle,
+# and whether the true fps fell inside the sampled run's 95% interval.
+# Writes docs/FIDELITY.md (between BEGIN/END markers, like bench.sh) and
+# docs/fidelity.png (host time against fps error; gnuplot, skipped with a
+# note when absent). The targets are computed from the Conference
+# 1024x768 standard-config points, never typed.
+#
+# Knobs (environment): BENCH_SIZE (other views, default 256x192),
+# BENCH_VIEWS (default: every view of views.yaml), BENCH_THREADS
+# (default "1 16 64"), BENCH_RATES (default "0.02 0.05 0.1 0.2"),
+# BENCH_CONF_SIZE (default 1024x768), BENCH_QUICK=1 (views conference and
+# cornell, threads 16, rates 0.05 0.1).
+set -eu
+B=${1:-build}
+SIM="$B/saarsim"
+SC=${SAAR_SCENES:-../shared/scenes}
+[ -d "$SC" ] || SC=/work/shared/scenes
+VIEWS_FILE="$SC/views.yaml"
+OUT=docs/FIDELITY.md
+PLOT=docs/fidelity.png
+T0=$(date +%s)
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+
+SIZE=${BENCH_SIZE:-256x192}
+CONF_SIZE=${BENCH_CONF_SIZE:-1024x768}
+THREADS=${BENCH_THREADS:-"1 16 64"}
+RATES=${BENCH_RATES:-"0.02 0.05 0.1 0.2"}
+if [ "${BENCH_QUICK:-0}" = 1 ]; then
+	VIEWS=${BENCH_VIEWS:-"conference cornell"}
+	THREADS=${BENCH_THREADS:-16}
+	RATES=${BENCH_RATES:-"0.05 0.1"}
+else
+	VIEWS=${BENCH_VIEWS:-$(awk '/^  [a-z0-9_]+:$/ {sub(":", "", $1); print $1}' "$VIEWS_FILE")}
+fi
+
+# one run: prints "key value" lines from the JSON report
+run() { # name args...
+	n=$1
+	shift
+	"$SIM" "$@" --no-check --report "$TMP/$n.json" >/dev/null 2>"$TMP/$n.err" || {
+		echo "bench-fidelity: run failed: $*" >&2
+		cat "$TMP/$n.err" >&2
+		return 1
+	}
+	python3 - "$TMP/$n.json" <<'EOF'
+import json, sys
+r = json.load(open(sys.argv[1]))
+f = r["fidelity"]; ss = r["steady_state"]
+print("sim_s", r["host"]["sim_s"])
+print("fps", ss["fps"])
+lo, hi = f["fps_ci95"]
+print("fps_lo", lo); print("fps_hi", hi if hi is not None else 1e30)
+print("fps_bound", f["fps_bound"]); print("bound_by", f["bound_by"])
+h = ss["hit_rate"]
+for t in ("shade", "kd", "list", "tri", "tag_cache", "l2"):
+    v = h.get(t) if isinstance(h, dict) else None
+    print("hit_" + t.replace("tag_cache", "tag"), v if v is not None else -1)
+print("sdram_mb", ss["sdram_mb"])
+print("pci_mb", ss["pci_mb"])
+EOF
+}
+
+ROWS="$TMP/rows.tsv"
+: >"$ROWS"
+for view in $VIEWS; do
+	size=$SIZE
+	[ "$view" = conference ] && size=$CONF_SIZE
+	for cfg in std vma; do
+		cf=configs/saarcor-$cfg.yaml
+		for tpr in $THREADS; do
+			# shellcheck disable=SC2086
+			set -- --views "$VIEWS_FILE" --view "$view" --config "$cf" --size "$size" \
+				--set chip.threads_per_rtp="$tpr"
+			run truth "$@" >"$TMP/truth.kv" || continue
+			for mode in functional $RATES; do
+				if [ "$mode" = functional ]; then
+					run pt "$@" --fidelity functional >"$TMP/pt.kv" || continue
+				else
+					run pt "$@" --fidelity sampled --sample-rate "$mode" >"$TMP/pt.kv" || continue
+				fi
+				python3 - "$TMP/truth.kv" "$TMP/pt.kv" "$view" "$cfg" "$tpr" "$mode" "$size" >>"$ROWS" <<'EOF'
+import sys
+def kv(p):
+    d = {}
+    for l in open(p):
+        k, v = l.split()
+        try: d[k] = float(v)
+        except ValueError: d[k] = v
+    return d
+t, s = kv(sys.argv[1]), kv(sys.argv[2])
+view, cfg, tpr, mode, size = sys.argv[3:8]
+err = lambda k: (s[k] - t[k]) / t[k] * 100 if t[k] else 0.0
+hits = []
+for k in ("hit_shade", "hit_kd", "hit_list", "hit_tri", "hit_tag", "hit_l2"):
+    hits.append("%.2f" % ((s[k] - t[k]) * 100) if t[k] >= 0 else "-")
+inside = int(s["fps_lo"] <= t["fps"] <= s["fps_hi"]) if mode != "functional" else -1
+print("\t".join(map(str, [view, cfg, tpr, mode, size, "%.3f" % t["sim_s"], "%.3f" % s["sim_s"],
+      "%.1f" % (t["sim_s"] / s["sim_s"] if s["sim_s"] else 0), "%.2f" % t["fps"], "%.2f" % s["fps"],
+      "%.2f" % err("fps"), "%.2f" % s["fps_lo"], "%.2f" % min(s["fps_hi"], 1e9), inside] + hits +
+      ["%.2f" % err("sdram_mb") if t["sdram_mb"] else "-", "%.2f" % err("pci_mb") if t["pci_mb"] else "-"])))
+EOF
+			done
+		done
+	done
+done
+
+# skipping as speed: the same scene without lights / mirrors against with
+SKIP="$TMP/skip.txt"
+: >"$SKIP"
+for variant in "default:" "no lights:--no-lights" "no secondary:--set shading.max_depth=0" \
+	"neither:--no-lights --set shading.max_depth=0"; do
+	name=${variant%%:*}
+	flags=${variant#*:}
+	# shellcheck disable=SC2086
+	"$SIM" --scene spd:balls:3 --size 512x512 --no-check $flags --report "$TMP/sk.json" \
+		>/dev/null 2>&1 || { echo "| $name | (run failed) |" >>"$SKIP"; continue; }
+	python3 - "$TMP/sk.json" "$name" >>"$SKIP" <<'EOF'
+import json, sys
+r = json.load(open(sys.argv[1])); c = r["counters"]
+g = lambda k: c.get(k, 0)
+print("| %s | %d | %d | %d | %d | %d | %d | %.3f |" % (sys.argv[2], g("rays.primary"), g("rays.shadow"),
+      g("rays.reflection") + g("rays.refraction"), g("skip.shadow_no_light"), g("skip.no_secondary"),
+      r["cycles"], r["host"]["sim_s"]))
+EOF
+done
+
+# the plot
+if command -v gnuplot >/dev/null 2>&1; then
+	awk -F'\t' '$4 != "functional" {e=$11<0?-$11:$11; print $7, e+0.001}' "$ROWS" >"$TMP/s.dat"
+	awk -F'\t' '$4 == "functional" {e=$11<0?-$11:$11; print $7, e+0.001}' "$ROWS" >"$TMP/f.dat"
+	awk -F'\t' '$4 == "functional" {print $6}' "$ROWS" | sort -u | awk '{print $1, 0.001}' >"$TMP/c.dat"
+	gnuplot <<EOF || echo "bench-fidelity: gnuplot failed" >&2
+set terminal pngcairo size 900,600
+set output "$PLOT"
+set logscale xy
+set xlabel "host seconds (chip_run)"
+set ylabel "|fps error| % (+0.001)"
+set title "saarsim fidelity modes: host time against fps error (vs cycle)"
+plot "$TMP/s.dat" using 1:2 title "sampled" with points pt 7, \
+     "$TMP/f.dat" using 1:2 title "functional (a bound)" with points pt 5, \
+     "$TMP/c.dat" using 1:2 title "cycle (truth)" with points pt 9
+EOF
+fi
+
+# targets from the Conference 1024x768 std points
+TGT=$(awk -F'\t' -v cs="$CONF_SIZE" '
+	$1 == "conference" && $5 == cs && $4 != "functional" {
+		n++; e = $11 < 0 ? -$11 : $11; if ($14 == 1) cov++
+		if (e <= 1 && $8 >= 10) ok++
+		if (e < best || best == "") { best = e; bsp = $8 }
+	}
+	END {
+		if (!n) { print "no Conference " cs " points were run"; exit }
+		printf "Conference %s, sampled: %d of %d points within 1%% fps error at >= 10x less host time; best error %.2f%% (at %.1fx); interval covered the true fps on %d of %d points (%.0f%%). Target (<= 1%% at >= 10x, coverage >= 95%%): %s.\n",
+			cs, ok, n, best, bsp, cov, n, 100 * cov / n, (ok > 0 && cov / n >= 0.95) ? "met" : "NOT met"
+	}' "$ROWS")
+COV=$(awk -F'\t' '$14 >= 0 {n++; c += $14} END {if (n) printf "%d of %d sampled points (%.0f%%)", c, n, 100*c/n; else print "no sampled points"}' "$ROWS")
+
+T1=$(date +%s)
+SEC="$TMP/section.md"
+{
+	echo "<!-- BEGIN fidelity -->"
+	echo "## Fidelity modes: host time against error"
+	echo
+	echo "Generated by \`make bench-fidelity\` (scripts/bench-fidelity.sh); do not edit by hand."
+	echo
+	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (the run took $((T1 - T0)) s)"
+	echo "- Machine: $(nproc) CPUs (nproc); load average $(cut -d' ' -f1-3 /proc/loadavg) at the end"
+	echo "- Commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet 2>/dev/null || echo ' (plus uncommitted changes)')"
+	echo "- Views: $VIEWS; Conference at $CONF_SIZE, the others at $SIZE; threads per RTP: $THREADS; sample rates: $RATES (units and warm-up: the defaults, rtps x threads_per_rtp tiles each)"
+	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point. Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
+	echo
+	echo "### Targets"
+	echo
+	echo "- $TGT"
+	echo "- Coverage over all sampled points: $COV."
+	echo
+	echo "### Every point"
+	echo
+	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % |"
+	echo "|---|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+	awk -F'\t' 'BEGIN {OFS=" | "} {if ($14 == 1) $14 = "yes"; else if ($14 == 0) $14 = "NO"; else $14 = "(bound)"; $1 = $1; print "| " $0 " |"}' "$ROWS"
+	echo
+	echo "### Skipping as speed"
+	echo
+	echo "SPD balls (level 3), 512x512, cycle mode: what the scene does not need is not simulated."
+	echo
+	echo "| variant | primary rays | shadow rays | secondary rays | skip.shadow_no_light | skip.no_secondary | cycles | sim s |"
+	echo "|---|---:|---:|---:|---:|---:|---:|---:|"
+	cat "$SKIP"
+	[ -f "$PLOT" ] && echo && echo "![host time against fps error](fidelity.png)"
+	echo "<!-- END fidelity -->"
+} >"$SEC"
+
+if [ -f "$OUT" ] && grep -q '<!-- BEGIN fidelity -->' "$OUT"; then
+	awk -v sec="$SEC" '
+		/<!-- BEGIN fidelity -->/ {while ((getline l < sec) > 0) print l; skip = 1; next}
+		/<!-- END fidelity -->/ {skip = 0; next}
+		!skip' "$OUT" >"$TMP/out.md"
+	cp "$TMP/out.md" "$OUT"
+else
+	{
+		echo "# saarsim fidelity benchmark"
+		echo
+		echo "Measured, never typed: the section below is written by \`make bench-fidelity\` between its BEGIN/END markers (docs/fidelity.md explains the modes)."
+		echo
+		cat "$SEC"
+	} >"$OUT"
+fi
+echo "bench-fidelity: wrote $OUT ($((T1 - T0)) s)"
