@@ -13,20 +13,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Both pooled records start with their free-list link (see pool_take). */
 struct vma_req {
+	vma_req *next;
 	eng_handler done;
 	void *ctx;
 	uint64_t arg;
 	uint32_t pending;
-	vma_req *next;
 };
 
 struct vma_piece {
+	vma_piece *next;
 	vma_req *req;
 	uint64_t addr, line, since;
 	uint32_t bytes;
 	uint8_t type;
-	vma_piece *next;
 };
 
 /* ---- free lists ---- */
@@ -37,58 +38,70 @@ typedef struct vchunk {
 
 typedef struct vpool {
 	vchunk *chunks;
-	vma_piece *fp;
-	vma_req *fr;
+	struct vlink *fp, *fr; /* free pieces, free requests */
 } vpool;
 
 #define VCHUNK 256
 
-static vma_piece *piece_alloc(vma *v)
+/* A pooled record's first member: its link in the free list. */
+typedef struct vlink {
+	struct vlink *next;
+} vlink;
+
+/* Takes a record of `size` bytes from the free list *head, growing the
+ * pool by a chunk of VCHUNK records when it is empty (no malloc per
+ * request). NULL when out of memory. */
+static void *pool_take(vpool *P, vlink **head, size_t size)
 {
-	vpool *P = v->pool;
-	if (!P->fp) {
-		vchunk *c = malloc(sizeof(vchunk) + VCHUNK * sizeof(vma_piece));
+	if (!*head) {
+		vchunk *c = malloc(sizeof(vchunk) + VCHUNK * size);
 		if (!c)
 			return NULL;
 		c->next = P->chunks;
 		P->chunks = c;
-		vma_piece *a = (vma_piece *)(c + 1);
+		char *a = (char *)(c + 1);
 		for (int i = 0; i < VCHUNK; i++) {
-			a[i].next = P->fp;
-			P->fp = &a[i];
+			vlink *l = (vlink *)(a + (size_t)i * size);
+			l->next = *head;
+			*head = l;
 		}
 	}
-	vma_piece *p = P->fp;
-	P->fp = p->next;
-	p->next = NULL;
-	return p;
+	vlink *l = *head;
+	*head = l->next;
+	l->next = NULL;
+	return l;
 }
 
-static void piece_release(vma *v, vma_piece *p)
+static vma_piece *piece_alloc(vma *v)
 {
 	vpool *P = v->pool;
-	p->next = P->fp;
-	P->fp = p;
+	return pool_take(P, &P->fp, sizeof(vma_piece));
 }
 
 static vma_req *req_alloc(vma *v)
 {
 	vpool *P = v->pool;
-	if (!P->fr) {
-		vchunk *c = malloc(sizeof(vchunk) + VCHUNK * sizeof(vma_req));
-		if (!c)
-			return NULL;
-		c->next = P->chunks;
-		P->chunks = c;
-		vma_req *a = (vma_req *)(c + 1);
-		for (int i = 0; i < VCHUNK; i++) {
-			a[i].next = P->fr;
-			P->fr = &a[i];
-		}
-	}
-	vma_req *r = P->fr;
-	P->fr = r->next;
-	return r;
+	return pool_take(P, &P->fr, sizeof(vma_req));
+}
+
+/* Returns a record to its free list. */
+static void pool_give(vlink **head, void *rec)
+{
+	vlink *l = rec;
+	l->next = *head;
+	*head = l;
+}
+
+static void piece_release(vma *v, vma_piece *p)
+{
+	vpool *P = v->pool;
+	pool_give(&P->fp, p);
+}
+
+static void req_release(vma *v, vma_req *r)
+{
+	vpool *P = v->pool;
+	pool_give(&P->fr, r);
 }
 
 /* ---- setup ---- */
@@ -169,8 +182,7 @@ static void piece_finish(vma *v, vma_piece *p)
 		eng_handler done = r->done;
 		void *ctx = r->ctx;
 		uint64_t arg = r->arg;
-		r->next = ((vpool *)v->pool)->fr;
-		((vpool *)v->pool)->fr = r;
+		req_release(v, r);
 		if (done)
 			done(v->e, ctx, arg);
 	}
@@ -329,7 +341,7 @@ int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_ha
 	vma_req *r = req_alloc(v);
 	if (!r)
 		return -1;
-	*r = (vma_req){done, ctx, arg, 1, NULL};
+	*r = (vma_req){NULL, done, ctx, arg, 1};
 	v->s.reads++;
 	v->s.read_bytes += bytes;
 	uint64_t end = addr + (bytes ? bytes : 1);
@@ -340,14 +352,13 @@ int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_ha
 		vma_piece *p = piece_alloc(v);
 		if (!p)
 			return -1;
-		*p = (vma_piece){r, a, line, 0, n, (uint8_t)type, NULL};
+		*p = (vma_piece){NULL, r, a, line, 0, n, (uint8_t)type};
 		r->pending++;
 		meta_phase(v, p, t);
 		a += n;
 	}
 	if (--r->pending == 0) { /* cannot happen: every piece ends in an event */
-		r->next = ((vpool *)v->pool)->fr;
-		((vpool *)v->pool)->fr = r;
+		req_release(v, r);
 		if (done)
 			eng_schedule(v->e, t, done, ctx, arg);
 	}
