@@ -111,6 +111,7 @@ run: all
 
 # Tests find the binaries and the shared scenes through the environment.
 test: all $(B)/saarsim-tests
+	LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
 	SAAR_BIN=$(CURDIR)/$(B) SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) \
 	  ./$(B)/saarsim-tests --jobs 2
 
