@@ -339,11 +339,22 @@ SECTION=$TMP/section
 		echo
 	fi
 	if [ "$EMBREE" = ok ]; then
+		# The like-for-like comparison is tracing only on both sides (Embree
+		# traces; rtref's frame time also generates rays and shades), timed
+		# in one process by the harness: that decides the target. The
+		# whole-frame ratio of the table above is reported beside it.
+		awk '
+		$3 > 0 { n++; r = $4 / $3; if (r >= 1 / 3) ok++; if (n == 1 || r < lo) lo = r; if (n == 1 || r > hi) hi = r }
+		END {
+			printf "Target (issue 2): single-thread primary rays >= 1/3 of Embree 3'"'"'s 16-wide packets"
+			printf " on the same view, tracing only on both sides (traversal/Embree below, %.2f to %.2f): ", lo, hi
+			printf "%s on %d of %d views.\n", (ok == n ? "met" : "NOT met"), ok, n
+		}' "$ECHK"
 		awk '
 		$12 ~ /^[0-9.]+$/ && $12 + 0 > 0 { n++; if ($4 / $12 >= 1 / 3) ok++ }
 		END {
-			printf "Target (issue 2): single-thread primary rays >= 1/3 of Embree 3'"'"'s 16-wide packets"
-			printf " on the same view (ours/Embree >= 0.33): met on %d of %d views.\n", ok, n
+			printf "With ray generation and shading included on our side only (ours/Embree above),"
+			printf " the ratio is >= 1/3 on %d of %d views.\n", ok, n
 		}' "$ROWS"
 		echo
 		echo "### Embree cross-check"
