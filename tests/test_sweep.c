@@ -30,8 +30,7 @@ static void env_prefix(char *buf, size_t n)
 	const char *b = tu_bin_dir();
 	if (b[0] == '/')
 		snprintf(bin, sizeof bin, "%s", b);
-	else if (!getcwd(bin, sizeof bin - 200) ||
-	         strlen(bin) + strlen(b) + 2 >= sizeof bin)
+	else if (!getcwd(bin, sizeof bin - 200) || strlen(bin) + strlen(b) + 2 >= sizeof bin)
 		cr_assert_fail("getcwd");
 	else
 		snprintf(bin + strlen(bin), sizeof bin - strlen(bin), "/%s", b);
@@ -96,8 +95,9 @@ static void run_tiny_sweep(const char *dir, const char *extra, int want_rc)
 {
 	char env[4200], cmd[16384];
 	env_prefix(env, sizeof env);
-	snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep --out %s " SWEEP_ARGS " -j 2 %s 2>%s/stderr.txt",
-	         env, root(), dir, extra, dir);
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s " SWEEP_ARGS " -j 2 %s 2>%s/stderr.txt", env,
+	         root(), dir, extra, dir);
 	cr_assert_eq(tu_run(cmd), want_rc, "%s", cmd);
 }
 
@@ -135,7 +135,8 @@ Test(sweep, tiny_grid_csv_png_and_resume, .timeout = 120)
 	cr_assert_eq(count_in(path, " start "), 2, "a finished sweep reran points");
 
 	/* an interruption lost point 2 (and left a temporary file): only it runs */
-	snprintf(cmd, sizeof cmd, "rm %s/points/0002.csv && touch %s/points/.0002.x.1.csv", dir, dir);
+	snprintf(cmd, sizeof cmd, "rm %s/points/0002.csv && touch %s/points/.0002.x.1.csv", dir,
+	         dir);
 	cr_assert_eq(tu_run(cmd), 0);
 	run_tiny_sweep(dir, "", 0);
 	cr_assert_eq(count_in(path, "0001 start"), 1, "point 1 was rerun");
@@ -146,9 +147,10 @@ Test(sweep, tiny_grid_csv_png_and_resume, .timeout = 120)
 	/* a different grid in the same folder is refused */
 	char env[4200];
 	env_prefix(env, sizeof env);
-	snprintf(cmd, sizeof cmd,
-	         "%s sh %s/scripts/sweep --out %s --scene spd:tetra:2 --set chip.rtps=1,2 2>/dev/null",
-	         env, root(), dir);
+	snprintf(
+	    cmd, sizeof cmd,
+	    "%s sh %s/scripts/sweep --out %s --scene spd:tetra:2 --set chip.rtps=1,2 2>/dev/null",
+	    env, root(), dir);
 	cr_assert_eq(tu_run(cmd), 2);
 }
 
@@ -159,16 +161,18 @@ Test(sweep, interrupted_run_loses_nothing, .timeout = 120)
 	char dir[256], env[4200], cmd[16384], path[512];
 	tu_tmpdir(dir, sizeof dir);
 	env_prefix(env, sizeof env);
-	snprintf(cmd, sizeof cmd,
-	         "cd %s && (%s setsid sh %s/scripts/sweep --out %s --scene spd:tetra:3 --size 64x64 "
-	         "--set chip.threads_per_rtp=1,2,3,4,5,6 -j 1 >/dev/null 2>&1 & echo $! > pid; "
-	         "sleep 0.6; kill -TERM -- -$(cat pid) 2>/dev/null; wait) ; true",
-	         dir, env, root(), dir);
+	snprintf(
+	    cmd, sizeof cmd,
+	    "cd %s && (%s setsid sh %s/scripts/sweep --out %s --scene spd:tetra:3 --size 64x64 "
+	    "--set chip.threads_per_rtp=1,2,3,4,5,6 -j 1 >/dev/null 2>&1 & echo $! > pid; "
+	    "sleep 0.6; kill -TERM -- -$(cat pid) 2>/dev/null; wait) ; true",
+	    dir, env, root(), dir);
 	tu_run(cmd);
 	/* every ID.csv present is complete: header + one row */
 	snprintf(cmd, sizeof cmd,
 	         "for f in %s/points/*.csv; do [ -e \"$f\" ] || continue; "
-	         "[ \"$(wc -l < \"$f\")\" = 2 ] || exit 1; done", dir);
+	         "[ \"$(wc -l < \"$f\")\" = 2 ] || exit 1; done",
+	         dir);
 	cr_assert_eq(tu_run(cmd), 0, "a partial point CSV");
 	snprintf(cmd, sizeof cmd, "ls %s/points/*.csv 2>/dev/null | wc -l > %s/before", dir, dir);
 	tu_run(cmd);
@@ -194,7 +198,8 @@ Test(sweep, slurm_script_array_size)
 	env_prefix(env, sizeof env);
 	snprintf(cmd, sizeof cmd,
 	         "%s sh %s/scripts/sweep --out %s --scene spd:tetra:1,spd:balls:1 --size 16x16 "
-	         "--set chip.threads_per_rtp=4,8,16 --set memory.l1.kd.size_kb=16,64 --slurm 2>/dev/null",
+	         "--set chip.threads_per_rtp=4,8,16 --set memory.l1.kd.size_kb=16,64 --slurm "
+	         "2>/dev/null",
 	         env, root(), dir);
 	cr_assert_eq(tu_run(cmd), 0);
 	snprintf(path, sizeof path, "%s/sweep.slurm", dir);
@@ -206,9 +211,31 @@ Test(sweep, slurm_script_array_size)
 	snprintf(path, sizeof path, "%s/results.csv", dir);
 	cr_assert(!exists(path));
 	/* an array task runs its point */
-	snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep --run-point %s 5 && test -s %s/points/0005.csv",
-	         env, root(), dir, dir);
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --run-point %s 5 && test -s %s/points/0005.csv", env,
+	         root(), dir, dir);
 	cr_assert_eq(tu_run(cmd), 0);
+}
+
+/* The ssh back end through GNU parallel, with the login ":" (this machine):
+ * the same point list and per-point command as the other back ends. */
+Test(sweep, sshloginfile_backend, .timeout = 120)
+{
+	char dir[256], env[4200], cmd[16384], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	snprintf(path, sizeof path, "%s/logins", dir);
+	FILE *f = fopen(path, "w");
+	cr_assert(f);
+	fputs(":\n", f);
+	fclose(f);
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/out --scene spd:tetra:1 --size 16x16 "
+	         "--set chip.threads_per_rtp=2,4 --sshloginfile %s >/dev/null 2>&1",
+	         env, root(), dir, path);
+	cr_assert_eq(tu_run(cmd), 0);
+	snprintf(path, sizeof path, "%s/out/results.csv", dir);
+	cr_assert_eq(count_lines(path), 3, "a header and two points");
 }
 
 Test(sweep, bad_input_exit_2)
@@ -229,8 +256,8 @@ Test(sweep, bad_input_exit_2)
 	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
 		char args[512];
 		snprintf(args, sizeof args, bad[i], dir);
-		snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep %s 2>%s/err >/dev/null", env, root(),
-		         args, dir);
+		snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep %s 2>%s/err >/dev/null", env,
+		         root(), args, dir);
 		cr_expect_eq(tu_run(cmd), 2, "%s", args);
 		char path[512];
 		snprintf(path, sizeof path, "%s/err", dir);
@@ -250,21 +277,28 @@ Test(validate, tiny_end_to_end, .timeout = 150)
 	tu_tmpdir(dir, sizeof dir);
 	env_prefix(env, sizeof env);
 	snprintf(doc, sizeof doc, "%s/doc/VALIDATION.md", dir);
-	snprintf(cmd, sizeof cmd,
-	         "%s VALIDATE_SIZE=64x48 VALIDATE_VIEWS=cornell VALIDATE_JOBS=2 VALIDATE_OUT=%s/out "
-	         "VALIDATE_DOC=%s SAAR_SCENES='%s' sh %s/scripts/validate.sh '%s' 2>%s/stderr.txt",
-	         env, dir, doc, tu_scenes_dir(), root(), tu_bin_dir(), dir);
+	snprintf(
+	    cmd, sizeof cmd,
+	    "%s VALIDATE_SIZE=64x48 VALIDATE_VIEWS=cornell VALIDATE_JOBS=2 VALIDATE_OUT=%s/out "
+	    "VALIDATE_DOC=%s SAAR_SCENES='%s' sh %s/scripts/validate.sh '%s' 2>%s/stderr.txt",
+	    env, dir, doc, tu_scenes_dir(), root(), tu_bin_dir(), dir);
 	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
 	cr_assert(exists(doc));
 	snprintf(png, sizeof png, "%s/doc/validation-threads.png", dir);
 	cr_assert(exists(png));
 	const char *sections[] = {
-	    "## 1. Unit utilisation at 16 threads",  "## 2. Gain from 16 to 32 threads",
-	    "## 3. VMA overhead",                    "## 4. Share of SDRAM accesses",
-	    "## 5. The Conference row of Table 5",   "## 6. Traversal : intersection",
-	    "## Where we disagree",                  "## Known model differences",
-	    "| cornell |",                           "Mean busiest-unit utilisation",
-	    "Mean overhead: **",                     "Mean meta-data share: **",
+	    "## 1. Unit utilisation at 16 threads",
+	    "## 2. Gain from 16 to 32 threads",
+	    "## 3. VMA overhead",
+	    "## 4. Share of SDRAM accesses",
+	    "## 5. The Conference row of Table 5",
+	    "## 6. Traversal : intersection",
+	    "## Where we disagree",
+	    "## Known model differences",
+	    "| cornell |",
+	    "Mean busiest-unit utilisation",
+	    "Mean overhead: **",
+	    "Mean meta-data share: **",
 	};
 	for (size_t i = 0; i < sizeof sections / sizeof *sections; i++)
 		cr_expect_gt(count_in(doc, sections[i]), 0, "missing: %s", sections[i]);
@@ -279,7 +313,8 @@ Test(validate, skips_without_scenes)
 	tu_tmpdir(dir, sizeof dir);
 	snprintf(doc, sizeof doc, "%s/VALIDATION.md", dir);
 	snprintf(cmd, sizeof cmd,
-	         "SAAR_SCENES=%s/none VALIDATE_DOC=%s VALIDATE_OUT=%s/out sh %s/scripts/validate.sh '%s' "
+	         "SAAR_SCENES=%s/none VALIDATE_DOC=%s VALIDATE_OUT=%s/out sh "
+	         "%s/scripts/validate.sh '%s' "
 	         "2>%s/err",
 	         dir, doc, dir, root(), tu_bin_dir(), dir);
 	cr_assert_eq(tu_run(cmd), 0);
