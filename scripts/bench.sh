@@ -471,10 +471,13 @@ VROWS=$TMP/vrows
 for view in $ALL_VIEWS; do
 	say "saarsim: $view $SIM_SIZE"
 	run_sim "$TMP/v.json" --views "$VIEWS" --view "$view" --size "$SIM_SIZE" --no-check
-	printf '%s %s %s %s %s %s %s\n' "$view" "$(jget "$TMP/v.json" cycles)" \
+	# kernel-ref, single thread, the same frame (same size and depth), for the ratio
+	"$RTREF" --views "$VIEWS" --view "$view" --size "$SIM_SIZE" --threads 1 \
+	    --stats "$TMP/vr.json" >/dev/null 2>"$TMP/err" || { cat "$TMP/err" >&2; die "rtref failed on $view"; }
+	printf '%s %s %s %s %s %s %s %s\n' "$view" "$(jget "$TMP/v.json" cycles)" \
 	    "$(jget "$TMP/v.json" fps)" "$(jget "$TMP/v.json" sim_s)" \
 	    "$(jget "$TMP/v.json" sim_cycles_per_s)" "$WALL" \
-	    "$(jget "$TMP/v.json" sdram_mb_per_frame)" >>"$VROWS"
+	    "$(jget "$TMP/v.json" sdram_mb_per_frame)" "$(jget "$TMP/vr.json" render_ms)" >>"$VROWS"
 done
 S_ELAPSED=$(($(date +%s) - S_START))
 S_LOAD_AT_END=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)
@@ -525,9 +528,12 @@ SECTION=$TMP/section_saarsim
 	echo
 	echo "### Every view at $SIM_SIZE (one run each, \`--no-check\`)"
 	echo
-	echo "| view | cycles/frame | fps at 533 MHz | SDRAM MB/frame | sim s/frame | simulated cycles per host s | process s |"
-	echo "|---|---:|---:|---:|---:|---:|---:|"
-	awk '{ printf "| %s | %d | %.1f | %.2f | %.3f | %.3g | %.2f |\n", $1, $2, $3, $7, $4, $5, $6 }' "$VROWS"
+	echo "*kernel-ref s*: rtref, one host thread, the same frame in the same run; *ratio*: saarsim simulation time / kernel-ref time."
+	echo
+	echo "| view | cycles/frame | fps at 533 MHz | SDRAM MB/frame | sim s/frame | simulated cycles per host s | process s | kernel-ref s | ratio |"
+	echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+	awk '{ printf "| %s | %d | %.1f | %.2f | %.3f | %.3g | %.2f | %.3f | %.1f |\n", $1, $2, $3, $7, $4, $5, $6,
+	       $8 / 1000, ($8 > 0 ? $4 / ($8 / 1000) : 0) }' "$VROWS"
 	echo "<!-- END saarsim -->"
 } >"$SECTION"
 write_section saarsim "$SECTION"
