@@ -342,6 +342,21 @@ static void grid_world(world *w, int n, const kd_params *kp)
 	build(w, kp);
 }
 
+/* The end of a ray-list case: traces the m rays (packets and single
+ * rays), counts misses as leaks and path mismatches, frees everything. */
+static void finish_rays(stress_result *r, world *w, vec3 *o, vec3 *d, size_t m, double t0)
+{
+	tracer *t = aligned_alloc(64, (sizeof(tracer) + 63) & ~(size_t)63);
+	r->measured = ST_LEAK | ST_MISMATCH;
+	r->leaked = trace_rays(w, o, d, m, t, &r->mismatch, NULL);
+	r->rays = m;
+	free(t);
+	free(o);
+	free(d);
+	world_free(w);
+	r->ms = now_ms() - t0;
+}
+
 stress_result stress_vertices_edges(int n)
 {
 	stress_result r = {{0}, 0, 0, 0, 0, 0, 0, 0, 0};
@@ -374,14 +389,7 @@ stress_result stress_vertices_edges(int n)
 		d[m] = v3_sub(fc, o[m]);
 		m++;
 	}
-	tracer *t = aligned_alloc(64, (sizeof(tracer) + 63) & ~(size_t)63);
-	r.leaked = trace_rays(&w, o, d, m, t, &r.mismatch, NULL);
-	r.rays = m;
-	free(t);
-	free(o);
-	free(d);
-	world_free(&w);
-	r.ms = now_ms() - t0;
+	finish_rays(&r, &w, o, d, m, t0);
 	return r;
 }
 
@@ -410,14 +418,7 @@ stress_result stress_flat_axis_parallel(int n)
 				d[m++] = v3(dx, dy, 1.0f);
 			}
 		}
-	tracer *t = aligned_alloc(64, (sizeof(tracer) + 63) & ~(size_t)63);
-	r.leaked = trace_rays(&w, o, d, m, t, &r.mismatch, NULL);
-	r.rays = m;
-	free(t);
-	free(o);
-	free(d);
-	world_free(&w);
-	r.ms = now_ms() - t0;
+	finish_rays(&r, &w, o, d, m, t0);
 	return r;
 }
 

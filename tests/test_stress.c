@@ -9,6 +9,7 @@
 static void zero(stress_result r)
 {
 	cr_assert_gt(r.rays, 0, "%s: no rays traced", r.name);
+	cr_assert_neq(r.measured, 0, "%s: the case must say which counts it measures", r.name);
 	cr_assert_eq(r.leaked, 0, "%s: %llu of %llu rays leaked", r.name,
 	             (unsigned long long)r.leaked, (unsigned long long)r.rays);
 	cr_assert_eq(r.acne, 0, "%s: %llu self-intersections", r.name, (unsigned long long)r.acne);
