@@ -495,7 +495,9 @@ int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, ui
 	if (sdram_init(&h->sd, &sp, d))
 		goto fail;
 	if (memif_init(&h->mi, e, &h->sd,
-	               M->memif.policy == CFG_MEMIF_ROUND_ROBIN ? MEMIF_ROUND_ROBIN : MEMIF_FIFO)) {
+	               M->memif.policy == CFG_MEMIF_ROUND_ROBIN ? MEMIF_ROUND_ROBIN
+	               : M->memif.policy == CFG_MEMIF_FRFCFS    ? MEMIF_FRFCFS
+	                                                        : MEMIF_FIFO)) {
 		diag_set(d, "config", 0, 0, "out of memory");
 		goto fail;
 	}

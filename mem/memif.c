@@ -16,6 +16,8 @@ int memif_policy_parse(const char *s)
 		return MEMIF_FIFO;
 	if (!strcmp(s, "round_robin"))
 		return MEMIF_ROUND_ROBIN;
+	if (!strcmp(s, "frfcfs"))
+		return MEMIF_FRFCFS;
 	return -1;
 }
 
@@ -94,6 +96,70 @@ static int pick(memif *m, uint64_t now, uint64_t *next_ready)
 	return best;
 }
 
+/* When the data of a request could start if issued at `now`: the bank's
+ * open row decides between CAS only, ACTIVATE + CAS and PRECHARGE +
+ * ACTIVATE + CAS (the same rules as sdram.c's segment(), bus aside). */
+static uint64_t data_start(const memif *m, uint64_t now, uint64_t addr)
+{
+	const sdram *sd = m->sd;
+	uint32_t b, col;
+	uint64_t row;
+	sdram_decode(sd, addr, &b, &row, &col);
+	const sdram_bank *k = &sd->bank[b];
+	uint64_t c = now > k->col_ok ? now : k->col_ok;
+	if (k->open_row == row)
+		return c + sd->t.cl;
+	if (k->open_row == SDRAM_NO_ROW)
+		return c + sd->t.trcd + sd->t.cl;
+	uint64_t pre = c > k->pre_ok ? c : k->pre_ok;
+	return pre + sd->t.trp + sd->t.trcd + sd->t.cl;
+}
+
+/* FR-FCFS: over the first MEMIF_FRFCFS_WINDOW ready requests of every
+ * queue, the one whose data can start soonest (oldest on ties). Returns the
+ * requester (-1 if none is ready) and its offset from the queue head. */
+static int pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready, uint32_t *pos)
+{
+	int best = -1;
+	uint64_t best_start = UINT64_MAX, best_seq = UINT64_MAX;
+	*next_ready = UINT64_MAX;
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		const memif_queue *q = &m->q[r];
+		uint32_t w = q->n < MEMIF_FRFCFS_WINDOW ? q->n : MEMIF_FRFCFS_WINDOW;
+		for (uint32_t i = 0; i < w; i++) {
+			const memif_item *it = &q->q[(q->head + i) % q->cap];
+			if (it->ready > now) {
+				if (it->ready < *next_ready)
+					*next_ready = it->ready;
+				continue;
+			}
+			uint64_t st = data_start(m, now, it->addr);
+			if (st < best_start || (st == best_start && it->seq < best_seq)) {
+				best = r;
+				*pos = i;
+				best_start = st;
+				best_seq = it->seq;
+			}
+		}
+	}
+	return best;
+}
+
+/* Takes the item `pos` places after the head out of q, keeping the order
+ * of the others (the ones before it move up one slot). */
+static memif_item take(memif_queue *q, uint32_t pos)
+{
+	uint32_t at = (q->head + pos) % q->cap;
+	memif_item it = q->q[at];
+	for (uint32_t i = pos; i > 0; i--) {
+		uint32_t to = (q->head + i) % q->cap, from = (q->head + i - 1) % q->cap;
+		q->q[to] = q->q[from];
+	}
+	q->head = (q->head + 1) % q->cap;
+	q->n--;
+	return it;
+}
+
 static void dispatch(eng *e, void *ctx, uint64_t arg)
 {
 	(void)arg;
@@ -112,16 +178,15 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 				arm(m, m->sd->bus_free - m->lead);
 			return;
 		}
-		int r = pick(m, now, &next_ready);
+		uint32_t pos = 0;
+		int r = m->policy == MEMIF_FRFCFS ? pick_frfcfs(m, now, &next_ready, &pos)
+		                                  : pick(m, now, &next_ready);
 		if (r < 0) {
 			if (next_ready != UINT64_MAX)
 				arm(m, next_ready);
 			return;
 		}
-		memif_queue *q = &m->q[r];
-		memif_item it = q->q[q->head];
-		q->head = (q->head + 1) % q->cap;
-		q->n--;
+		memif_item it = take(&m->q[r], pos);
 		m->last = r;
 		m->s.queue_ticks[r] += now - it.ready;
 		uint64_t done = sdram_access(m->sd, now, it.addr, it.bytes, it.write, NULL);

@@ -34,7 +34,12 @@ enum memif_requester {
 	MEMIF_NREQ
 };
 
-enum memif_policy { MEMIF_FIFO, MEMIF_ROUND_ROBIN };
+/* fifo: oldest first; round_robin: by requester; frfcfs: first ready,
+ * first come (the request whose data can start soonest given its bank's
+ * open row and timing, ties to the oldest), over a window of
+ * MEMIF_FRFCFS_WINDOW requests per requester queue. */
+enum memif_policy { MEMIF_FIFO, MEMIF_ROUND_ROBIN, MEMIF_FRFCFS };
+#define MEMIF_FRFCFS_WINDOW 16
 
 typedef struct memif_item {
 	uint64_t seq, ready, addr;
@@ -71,7 +76,7 @@ typedef struct memif {
 
 int memif_init(memif *m, eng *e, sdram *sd, int policy);
 void memif_free(memif *m);
-int memif_policy_parse(const char *s); /* "fifo" | "round_robin", -1 unknown */
+int memif_policy_parse(const char *s); /* "fifo" | "round_robin" | "frfcfs", -1 unknown */
 /* Queues a request that becomes eligible at tick t (>= eng_now). done is
  * called (if not NULL) through the engine when its data is complete.
  * Returns -1 only when out of memory. */

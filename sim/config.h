@@ -26,7 +26,7 @@
 typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
 typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
 typedef enum { CFG_MEM_FIXED, CFG_MEM_HIERARCHY } cfg_mem_model;
-typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN } cfg_memif_policy;
+typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN, CFG_MEMIF_FRFCFS } cfg_memif_policy;
 typedef enum { CFG_HASH_XOR_FOLD, CFG_HASH_NONE } cfg_addr_hash;
 typedef enum { CFG_SDRAM_ROW_BANK_COL, CFG_SDRAM_BANK_ROW_COL } cfg_sdram_mapping;
 typedef enum { CFG_HBUS_PCI, CFG_HBUS_PCI66, CFG_HBUS_AGP } cfg_hostbus_preset;
@@ -107,10 +107,11 @@ typedef struct saar_config {
 		} hostbus;
 	} memory;
 	cfg_fidelity fidelity;
-	struct { /* fidelity sampled (docs/fidelity.md) */
+	struct {                  /* fidelity sampled (docs/fidelity.md) */
 		double rate;      /* share of tiles in measured units; 1 = every tile (= cycle) */
 		int unit_tiles;   /* tiles per measured unit; 0 = the chip's thread count */
-		int warmup_tiles; /* detailed tiles before each unit; -1 = the chip's thread count */
+		int warmup_tiles; /* detailed tiles before each unit; -1 = the chip's thread count
+		                   */
 	} sampling;
 } saar_config;
 

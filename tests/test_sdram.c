@@ -3,6 +3,8 @@
  * hit, idle bank, row conflict with tRAS), data-bus serialization, address
  * mapping bit by bit; host-bus transfer time and contention; memif order.
  */
+#include <string.h>
+
 #include "hostbus.h"
 #include "memif.h"
 #include "sdram.h"
@@ -167,4 +169,38 @@ Test(memif, fifo_and_round_robin)
 		memif_free(&m);
 		eng_destroy(e);
 	}
+}
+
+/* FR-FCFS: a younger request to an idle bank goes ahead of an older one
+ * stuck behind a row conflict; fifo keeps the submission order. */
+Test(memif, frfcfs_serves_a_ready_bank_first)
+{
+	uint64_t conflict_done[2], other_done[2];
+	const int pols[2] = {MEMIF_FIFO, MEMIF_FRFCFS};
+	for (int k = 0; k < 2; k++) {
+		eng *e = eng_create(16);
+		sdram s;
+		diag d;
+		sdram_params p = std_params();
+		cr_assert_eq(sdram_init(&s, &p, &d), 0);
+		memif m;
+		cr_assert_eq(memif_init(&m, e, &s, pols[k]), 0);
+		memset(done_at, 0, sizeof done_at);
+		/* row:bank:col: bank = bits 13-14, row = bits 15+ */
+		uint64_t b0r1 = (1ull << 15) | (0ull << 13), b0r2 = (2ull << 15) | (0ull << 13);
+		uint64_t b1r1 = (1ull << 15) | (1ull << 13);
+		memif_submit(&m, 0, MEMIF_KD, b0r1, 8, 0, note, NULL, 0); /* opens bank 0, row 1 */
+		memif_submit(&m, 0, MEMIF_KD, b0r2, 8, 0, note, NULL, 1); /* conflict in bank 0 */
+		memif_submit(&m, 0, MEMIF_SHADE, b1r1, 8, 0, note, NULL, 2); /* idle bank 1 */
+		eng_run(e, ENG_FOREVER);
+		conflict_done[k] = done_at[1];
+		other_done[k] = done_at[2];
+		cr_assert_eq(s.s.read_bytes, 24);
+		memif_free(&m);
+		eng_destroy(e);
+	}
+	cr_assert_gt(other_done[0], conflict_done[0], "fifo: bank 1 waits for the conflict");
+	cr_assert_lt(other_done[1], conflict_done[1], "frfcfs: bank 1 goes first");
+	cr_assert_lt(other_done[1], other_done[0], "frfcfs serves bank 1 sooner than fifo");
+	cr_assert_eq(memif_policy_parse("frfcfs"), MEMIF_FRFCFS);
 }
