@@ -194,29 +194,49 @@ int camera_validate(const camera *c, const char *what, diag *d)
 	return p ? diag_set(d, what, 0, 0, "%s", p) : 0;
 }
 
-static int parse_camera(yfile *y, yaml_node_t *cn, const char *vname, camera *cam)
+/* Collects the values of a mapping's keys, which must all be among the n
+ * names in keys (each at most once): vals[i] is the value node of keys[i],
+ * or NULL. `where` names the mapping in messages ("view 'x'"). */
+static int map_fields(yfile *y, yaml_node_t *map, const char *const *keys, int n,
+                      yaml_node_t **vals, const char *where)
 {
-	static const char *const keys[] = {"eye", "lookat", "up", "fov"};
-	yaml_node_t *kn[4] = {0}, *vn[4] = {0};
-	if (cn->type != YAML_MAPPING_NODE)
-		return node_err(y, cn, "camera of view '%s' must be a mapping", vname);
-	for (yaml_node_pair_t *p = cn->data.mapping.pairs.start; p < cn->data.mapping.pairs.top;
+	yaml_node_t *seen[8] = {0};
+	for (int i = 0; i < n; i++)
+		vals[i] = NULL;
+	for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < map->data.mapping.pairs.top;
 	     p++) {
 		yaml_node_t *k = node(y, p->key);
 		const char *s = scalar(k);
 		int i = 0;
-		while (i < 4 && !(s && strcmp(s, keys[i]) == 0))
+		while (i < n && !(s && strcmp(s, keys[i]) == 0))
 			i++;
-		if (i == 4)
-			return node_err(y, k,
-			                "unknown key '%s' in camera of view '%s' (expected eye, "
-			                "lookat, up, fov)",
-			                s ? s : "?", vname);
-		if (kn[i])
+		if (i == n) {
+			char expected[256] = "";
+			for (int j = 0; j < n; j++)
+				snprintf(expected + strlen(expected),
+				         sizeof expected - strlen(expected), "%s%s", j ? ", " : "",
+				         keys[j]);
+			return node_err(y, k, "unknown key '%s' in %s (expected %s)", s ? s : "?",
+			                where, expected);
+		}
+		if (seen[i])
 			return node_err(y, k, "duplicate key '%s'", s);
-		kn[i] = k;
-		vn[i] = node(y, p->value);
+		seen[i] = k;
+		vals[i] = node(y, p->value);
 	}
+	return 0;
+}
+
+static int parse_camera(yfile *y, yaml_node_t *cn, const char *vname, camera *cam)
+{
+	static const char *const keys[] = {"eye", "lookat", "up", "fov"};
+	yaml_node_t *vn[4];
+	if (cn->type != YAML_MAPPING_NODE)
+		return node_err(y, cn, "camera of view '%s' must be a mapping", vname);
+	char where[VIEW_NAME_MAX + 32];
+	snprintf(where, sizeof where, "camera of view '%s'", vname);
+	if (map_fields(y, cn, keys, 4, vn, where))
+		return -1;
 	for (int i = 0; i < 4; i++)
 		if (!vn[i])
 			return node_err(y, cn, "camera of view '%s' has no '%s'", vname, keys[i]);
@@ -270,33 +290,17 @@ static int parse_view(yfile *y, yaml_node_t *vn, const char *name, view *v)
 {
 	if (vn->type != YAML_MAPPING_NODE)
 		return node_err(y, vn, "view '%s' must be a mapping", name);
-	yaml_node_t *cam = NULL, *seen[4] = {0};
 	static const char *const keys[] = {"scene", "camera", "lights", "note"};
-	for (yaml_node_pair_t *p = vn->data.mapping.pairs.start; p < vn->data.mapping.pairs.top;
-	     p++) {
-		yaml_node_t *k = node(y, p->key), *val = node(y, p->value);
-		const char *s = scalar(k);
-		int i = 0;
-		while (i < 4 && !(s && strcmp(s, keys[i]) == 0))
-			i++;
-		if (i == 4)
-			return node_err(y, k,
-			                "unknown key '%s' in view '%s' (expected scene, camera, "
-			                "lights, note)",
-			                s ? s : "?", name);
-		if (seen[i])
-			return node_err(y, k, "duplicate key '%s'", s);
-		seen[i] = k;
-		int rc = 0;
-		if (i == 0)
-			rc = resolve_scene(y, val, v);
-		else if (i == 1)
-			cam = val;
-		else if (i == 2)
-			rc = parse_lights(y, val, v);
-		if (rc)
-			return rc;
-	}
+	yaml_node_t *val[4];
+	char where[VIEW_NAME_MAX + 16];
+	snprintf(where, sizeof where, "view '%s'", name);
+	if (map_fields(y, vn, keys, 4, val, where))
+		return -1;
+	if (val[0] && resolve_scene(y, val[0], v))
+		return -1;
+	if (val[2] && parse_lights(y, val[2], v))
+		return -1;
+	yaml_node_t *cam = val[1];
 	if (!cam)
 		return node_err(y, vn, "view '%s' has no camera", name);
 	return parse_camera(y, cam, name, &v->cam);

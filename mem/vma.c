@@ -214,6 +214,17 @@ static void stall_push(vma_piece **head, vma_piece **tail, vma_piece *p, uint64_
 	*tail = p;
 }
 
+/* Takes the oldest stalled piece and charges its wait to stall_ticks. */
+static vma_piece *stall_pop(vma *v, vma_piece **head, vma_piece **tail, uint64_t now)
+{
+	vma_piece *p = *head;
+	*head = p->next;
+	if (!*head)
+		*tail = NULL;
+	v->s.stall_ticks += now - p->since;
+	return p;
+}
+
 static void tag_filled(eng *e, void *ctx, uint64_t set)
 {
 	vma *v = ctx;
@@ -228,14 +239,8 @@ static void tag_filled(eng *e, void *ctx, uint64_t set)
 		data_phase(v, w, now);
 		w = n;
 	}
-	while (v->tag_stall && cache_mshr_free(&v->tag)) {
-		vma_piece *p = v->tag_stall;
-		v->tag_stall = p->next;
-		if (!v->tag_stall)
-			v->tag_stall_tail = NULL;
-		v->s.stall_ticks += now - p->since;
-		meta_phase(v, p, now);
-	}
+	while (v->tag_stall && cache_mshr_free(&v->tag))
+		meta_phase(v, stall_pop(v, &v->tag_stall, &v->tag_stall_tail, now), now);
 }
 
 static void meta_phase(vma *v, vma_piece *p, uint64_t t)
@@ -297,14 +302,8 @@ static void dma_done(eng *e, void *ctx, uint64_t line)
 		piece_finish(v, w);
 		w = n;
 	}
-	while (v->l2_stall && cache_mshr_free(&v->l2)) {
-		vma_piece *p = v->l2_stall;
-		v->l2_stall = p->next;
-		if (!v->l2_stall)
-			v->l2_stall_tail = NULL;
-		v->s.stall_ticks += now - p->since;
-		data_phase(v, p, now);
-	}
+	while (v->l2_stall && cache_mshr_free(&v->l2))
+		data_phase(v, stall_pop(v, &v->l2_stall, &v->l2_stall_tail, now), now);
 }
 
 static void data_phase(vma *v, vma_piece *p, uint64_t t)

@@ -380,6 +380,42 @@ static void kv(jsonw *j, const char *k, uint64_t v)
 	jsonw_kuint(j, k, v);
 }
 
+/* A JSON object whose fields are registry counters: {report key, counter}. */
+typedef struct kv_map {
+	const char *key, *counter;
+} kv_map;
+
+static void kv_object(jsonw *j, const chip *c, const char *name, const kv_map *m, size_t n)
+{
+	jsonw_key(j, name);
+	jsonw_obj_begin(j);
+	for (size_t i = 0; i < n; i++)
+		kv(j, m[i].key, get(c, m[i].counter));
+	jsonw_obj_end(j);
+}
+
+static const kv_map skipped_map[] = {
+    {"box_miss_packets", "skip.box_miss_packets"},
+    {"box_miss_rays", "skip.box_miss_rays"},
+    {"shadow_rays_no_lights", "skip.shadow_no_light"},
+    {"shadow_rays_light_behind", "skip.shadow_light_behind"},
+    {"packets_without_secondary", "skip.no_secondary"},
+    {"rays_cut_by_depth", "skip.depth_cut"},
+    {"untextured_hits", "skip.untextured_hits"},
+};
+
+static const kv_map shading_map[] = {
+    {"hits", "shade.hits"},
+    {"misses", "shade.misses"},
+    {"texel_reads", "shade.texel_reads"},
+    {"shadow_rays_occluded", "shade.shadow_occluded"},
+    {"shadow_rays_lit", "shade.shadow_lit"},
+    {"reads_logged", "rgs.shade_reads"},
+    {"requests", "rgs.shade_requests"},
+    {"spawned_packets", "rgs.spawned_packets"},
+    {"max_queue", "rgs.max_queue"},
+};
+
 int report_json(const char *path, const report_info *ri, diag *d)
 {
 	const chip *c = ri->c;
@@ -494,29 +530,8 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	kv(j, "stack_refills", get(c, "trav.stack_refills"));
 	jsonw_obj_end(j);
 
-	jsonw_key(j, "skipped");
-	jsonw_obj_begin(j);
-	kv(j, "box_miss_packets", get(c, "skip.box_miss_packets"));
-	kv(j, "box_miss_rays", get(c, "skip.box_miss_rays"));
-	kv(j, "shadow_rays_no_lights", get(c, "skip.shadow_no_light"));
-	kv(j, "shadow_rays_light_behind", get(c, "skip.shadow_light_behind"));
-	kv(j, "packets_without_secondary", get(c, "skip.no_secondary"));
-	kv(j, "rays_cut_by_depth", get(c, "skip.depth_cut"));
-	kv(j, "untextured_hits", get(c, "skip.untextured_hits"));
-	jsonw_obj_end(j);
-
-	jsonw_key(j, "shading");
-	jsonw_obj_begin(j);
-	kv(j, "hits", get(c, "shade.hits"));
-	kv(j, "misses", get(c, "shade.misses"));
-	kv(j, "texel_reads", get(c, "shade.texel_reads"));
-	kv(j, "shadow_rays_occluded", get(c, "shade.shadow_occluded"));
-	kv(j, "shadow_rays_lit", get(c, "shade.shadow_lit"));
-	kv(j, "reads_logged", get(c, "rgs.shade_reads"));
-	kv(j, "requests", get(c, "rgs.shade_requests"));
-	kv(j, "spawned_packets", get(c, "rgs.spawned_packets"));
-	kv(j, "max_queue", get(c, "rgs.max_queue"));
-	jsonw_obj_end(j);
+	kv_object(j, c, "skipped", skipped_map, sizeof skipped_map / sizeof *skipped_map);
+	kv_object(j, c, "shading", shading_map, sizeof shading_map / sizeof *shading_map);
 
 	jsonw_key(j, "memory");
 	jsonw_obj_begin(j);
