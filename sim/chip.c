@@ -78,7 +78,7 @@ static const char *const shade_names[11] = {"shade.hits",
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
-	if (c->env.func) /* func_tile drains the queue itself */
+	if (c->env.func) /* func_range hands out the work itself */
 		return;
 	packet *p = rgs_dequeue(t->rtp);
 	if (p) {
@@ -91,15 +91,13 @@ static void on_free(thr_ctx *t)
 	int next = c->g.next;
 	if (next >= F->region_end) {
 		if (F->ue_next < F->us_next) {
-			for (int k = 0; k < UNIT_NKINDS; k++)
-				F->work_e[F->ue_next * UNIT_NKINDS + k] = chip_work(c, k);
+			chip_demand(c, &F->dem_e[F->ue_next * RES_N]);
 			F->mark_e[F->ue_next++] = eng_now(c->e);
 		}
 		return;
 	}
 	if (F->us_next < F->nunits && F->unit_s[F->us_next] == next) {
-		for (int k = 0; k < UNIT_NKINDS; k++)
-			F->work_s[F->us_next * UNIT_NKINDS + k] = chip_work(c, k);
+		chip_demand(c, &F->dem_s[F->us_next * RES_N]);
 		F->mark_s[F->us_next++] = eng_now(c->e);
 	}
 	int tx, ty;
@@ -180,20 +178,26 @@ static int fid_init(chip *c)
 	/* a unit shorter than one tile per thread is over before any thread
 	 * has finished anything: its window would be empty */
 	F->unit_tiles = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;
-	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : threads;
+	/* a warm-up of one tile per thread starts the unit from a burst (every
+	 * thread took a tile at once, queues empty): on Conference the units
+	 * then measured the chip 15-30% fast; four per thread is within a few
+	 * percent (docs/fidelity.md) */
+	F->warmup_tiles =
+	    cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : 4 * threads;
 	size_t nf = (size_t)cfg->frame.frames;
 	F->est = calloc(nf, sizeof *F->est);
 	F->half = calloc(nf, sizeof *F->half);
-	if (!F->est || !F->half)
+	F->floor = calloc(nf, sizeof *F->floor);
+	if (!F->est || !F->half || !F->floor)
 		return -1;
 	if (F->mode != CFG_FIDELITY_SAMPLED)
 		return 0;
-	/* n units of U tiles, at least 2 for an interval; when the units and
+	/* n units of U tiles, at least sampling.min_units; when the units and
 	 * their warm-ups would cover the frame anyway, simulate all of it */
 	int U = F->unit_tiles, W = F->warmup_tiles;
 	long n = lround((double)N * cfg->sampling.rate / U);
-	if (n < 2)
-		n = 2;
+	if (n < cfg->sampling.min_units)
+		n = cfg->sampling.min_units;
 	if (cfg->sampling.rate >= 1.0 || n * (long)(U + W) >= N) {
 		F->exact = 1;
 		return 0;
@@ -203,19 +207,18 @@ static int fid_init(chip *c)
 	F->mark_s = calloc((size_t)n, sizeof *F->mark_s);
 	F->mark_e = calloc((size_t)n, sizeof *F->mark_e);
 	F->unit_rate = calloc((size_t)n, sizeof *F->unit_rate);
-	F->work_s = calloc((size_t)n * UNIT_NKINDS, sizeof *F->work_s);
-	F->work_e = calloc((size_t)n * UNIT_NKINDS, sizeof *F->work_e);
 	F->drain_t = calloc((size_t)n, sizeof *F->drain_t);
-	F->drain_w = calloc((size_t)n * UNIT_NKINDS, sizeof *F->drain_w);
-	if (!F->drain_t || !F->drain_w)
+	double **dem[4] = {&F->dem_r0, &F->dem_s, &F->dem_e, &F->dem_r1};
+	for (int i = 0; i < 4; i++)
+		if (!(*dem[i] = calloc((size_t)n * RES_N, sizeof(double))))
+			return -1;
+	if (!F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->drain_t)
 		return -1;
-	if (!F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->work_s || !F->work_e)
-		return -1;
-	/* systematic: one unit per period P, centred in it, its warm-up just
-	 * before; P > U + W, so regions never touch */
+	/* systematic: one warm-up and unit per period P, at sampling.offset
+	 * of the room left in it; P > U + W, so regions never touch */
 	double P = (double)N / (double)n;
 	for (int j = 0; j < n; j++)
-		F->unit_s[j] = (int)((double)j * P + (P - U) * 0.5);
+		F->unit_s[j] = (int)((double)j * P + W + (P - U - W) * cfg->sampling.offset);
 	return 0;
 }
 
@@ -402,11 +405,13 @@ void chip_destroy(chip *c)
 	free(c->fid.mark_e);
 	free(c->fid.est);
 	free(c->fid.half);
+	free(c->fid.floor);
 	free(c->fid.unit_rate);
-	free(c->fid.work_s);
-	free(c->fid.work_e);
 	free(c->fid.drain_t);
-	free(c->fid.drain_w);
+	free(c->fid.dem_r0);
+	free(c->fid.dem_s);
+	free(c->fid.dem_e);
+	free(c->fid.dem_r1);
 	if (c->trace) {
 		diag d;
 		chip_trace_close(c, &d);
@@ -456,35 +461,87 @@ static uint64_t run_region(chip *c, int end)
 	return eng_now(c->e) - t0;
 }
 
-/* Functional processing of tiles from the RGC's position up to `end`: each
- * tile's packet and every packet it spawns, one after the other, on thread
- * slot 0 of RTP (tile mod rtps), with the same unit code in functional mode
- * (thr_env.func). The engine is idle (no request in flight), so memory goes
- * through the hierarchy's functional path with no MSHR busy. */
+/* The demand of the stretch between two chip_demand snapshots: the core
+ * cycles of its busiest resource. */
+static double max_delta(const double *a, const double *b)
+{
+	double m = 0;
+	for (int r = 0; r < RES_N; r++)
+		if (b[r] - a[r] > m)
+			m = b[r] - a[r];
+	return m;
+}
+
+/* Gives a free thread its next packet in functional processing: a
+ * secondary packet of its RTP first (as on_free does), else the next tile
+ * below `end`. Returns 0 when there is nothing to give. */
+static int func_give(chip *c, thr_ctx *t, int end, int *given)
+{
+	packet *p = rgs_dequeue(t->rtp);
+	if (p) {
+		rgs_secondary(t, p);
+		return 1;
+	}
+	int tx, ty;
+	if (c->g.next >= end || !rgc_next(&c->g, &tx, &ty))
+		return 0;
+	c->tiles_given++;
+	c->fid.functional_tiles++;
+	++*given;
+	if (c->progress && c->tiles_given % 64 == 0)
+		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
+	if (rgs_primary(t, tx, ty)) {
+		c->oom = 1;
+		return 0;
+	}
+	return 1;
+}
+
+/* Functional processing of tiles from the RGC's position up to `end`, with
+ * the same unit code in functional mode (thr_env.func) and every thread
+ * slot in use, as the detailed chip has them: each slot holds a packet, and
+ * the slots take one step each in turn (a step: one unit operation and the
+ * memory reads before the next), so the caches see the packets' accesses
+ * interleaved as a busy chip makes them, not one packet after another (one
+ * at a time, the L1s and SDRAM saw 6-25% fewer misses than the cycle
+ * model at 16-64 threads). A slot that finishes takes a secondary packet of
+ * its RTP, else the next tile. The engine is idle throughout (no request
+ * in flight), so memory goes through the hierarchy's functional path with
+ * no MSHR busy; the range ends with every slot free. */
 static void func_range(chip *c, int end)
 {
+	chip_fidelity *F = &c->fid;
+	/* sampled: the demand of each chunk of unit_tiles tiles (the units'
+	 * size) adds to the frame's; the chunk's busiest resource is its demand */
+	int chunked = F->mode == CFG_FIDELITY_SAMPLED, given = 0;
+	double d0[RES_N], d1[RES_N];
+	if (chunked)
+		chip_demand(c, d0);
 	c->env.func = 1;
-	int tx, ty;
-	while (c->g.next < end && !c->oom) {
-		thr_ctx *t = &c->rtp[c->g.next % c->nrtp].t[0];
-		if (!rgc_next(&c->g, &tx, &ty))
-			break;
-		c->tiles_given++;
-		c->fid.functional_tiles++;
-		if (c->progress && c->tiles_given % 64 == 0)
-			c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
-		if (rgs_primary(t, tx, ty)) {
-			c->oom = 1;
-			break;
-		}
-		thr_run_func(t);
-		packet *p;
-		while ((p = rgs_dequeue(t->rtp))) {
-			rgs_secondary(t, p);
-			thr_run_func(t);
-		}
+	for (int busy = 1; busy && !c->oom;) {
+		busy = 0;
+		for (int s = 0; s < c->tpr; s++)
+			for (int r = 0; r < c->nrtp; r++) {
+				thr_ctx *t = &c->rtp[r].t[s];
+				if (!t->p) {
+					if (chunked && given == F->unit_tiles) {
+						chip_demand(c, d1);
+						F->func_x += max_delta(d0, d1);
+						memcpy(d0, d1, sizeof d0);
+						given = 0;
+					}
+					if (!func_give(c, t, end, &given))
+						continue;
+				}
+				if (thr_step_func(t))
+					busy = 1;
+			}
 	}
 	c->env.func = 0;
+	if (chunked) {
+		chip_demand(c, d1);
+		F->func_x += max_delta(d0, d1);
+	}
 }
 
 double chip_t975(int df)
@@ -510,70 +567,78 @@ double chip_work(const chip *c, int k)
 	return w;
 }
 
+void chip_demand(const chip *c, double d[RES_N])
+{
+	memset(d, 0, RES_N * sizeof *d);
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		d[RES_RGS + k] = chip_work(c, k) / c->nrtp;
+	hier_stats h;
+	if (hier_get_stats(&c->mem, &h))
+		return;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		d[RES_L1_SHADE + t] =
+		    (double)(h.reads[t] - h.bypass_reads[t]) / hier_l1_params(&c->cfg, t).ports;
+	double per = (double)c->clk.period;
+	d[RES_SDRAM] = (double)(h.sdram.busy_ticks + h.func_sdram_busy_ticks) / per;
+	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
+}
+
 /* Sampled frame: functional stretches and detailed regions (warm-up, then
- * one measured unit). Cycles per tile vary tenfold across a frame, cycles
- * per unit of work (chip_work: issue cycles, the analogue of CPI) far less,
- * and the work of every tile is counted, detailed or functional; so the
- * estimate is the ratio estimator frame work x sum(cycles) / sum(work) over
- * the units' windows, with a 95% t-interval from the residuals (finite-
+ * one measured unit). Cycles per tile vary tenfold across a frame; cycles
+ * per unit of *demand* far less. A stretch's demand is the core cycles its
+ * busiest resource needs (chip_demand: unit issue cycles, L1 ports, SDRAM
+ * and host-bus time), taken per chunk of unit_tiles tiles so that a
+ * PCI-bound start and an intersection-bound middle each count what bounds
+ * them; it is known for every chunk, detailed or functional. The estimate
+ * is the ratio estimator frame demand x sum(cycles) / sum(demand) over the
+ * units' windows, with a 95% t-interval from the residuals (finite-
  * population corrected). docs/fidelity.md. */
 static void sampled_frame(chip *c, int f)
 {
 	chip_fidelity *F = &c->fid;
 	int N = c->g.ntiles, U = F->unit_tiles, n = F->nunits;
-	double w0[UNIT_NKINDS];
-	for (int k = 0; k < UNIT_NKINDS; k++)
-		w0[k] = chip_work(c, k);
 	F->us_next = F->ue_next = 0;
+	F->func_x = 0;
 	for (int j = 0; j < n; j++) {
 		int rs = F->unit_s[j] - F->warmup_tiles;
 		if (rs < c->g.next)
 			rs = c->g.next;
 		func_range(c, rs);
+		chip_demand(c, &F->dem_r0[j * RES_N]);
 		run_region(c, F->unit_s[j] + U);
+		chip_demand(c, &F->dem_r1[j * RES_N]);
 		/* the region drains as the frame's end does: kept to model it */
 		F->drain_t[j] = eng_now(c->e) - F->mark_e[j];
-		for (int k = 0; k < UNIT_NKINDS; k++)
-			F->drain_w[j * UNIT_NKINDS + k] =
-			    chip_work(c, k) - F->work_e[j * UNIT_NKINDS + k];
 	}
 	func_range(c, N);
 	F->region_end = N;
-	/* the work of the frame's busiest unit kind: the chip's pace follows it */
-	int K = 0;
-	double fw[UNIT_NKINDS];
-	for (int k = 0; k < UNIT_NKINDS; k++) {
-		fw[k] = chip_work(c, k) - w0[k];
-		if (fw[k] > fw[K])
-			K = k;
-	}
-	F->work_kind = K;
-	F->frame_work = fw[K];
-	double sc = 0, sw = 0, cyc[n > 0 ? n : 1], wk[n > 0 ? n : 1];
+	double X = F->func_x, sc = 0, sx = 0, cyc[n > 0 ? n : 1], xu[n > 0 ? n : 1];
+	double dt = 0, dx = 0;
 	for (int j = 0; j < n; j++) {
+		const double *r0 = &F->dem_r0[j * RES_N], *s = &F->dem_s[j * RES_N],
+		             *e = &F->dem_e[j * RES_N], *r1 = &F->dem_r1[j * RES_N];
 		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / (double)c->clk.period;
-		wk[j] = F->work_e[j * UNIT_NKINDS + K] - F->work_s[j * UNIT_NKINDS + K];
-		F->unit_rate[j] = wk[j] > 0 ? cyc[j] / wk[j] : 0;
+		xu[j] = max_delta(s, e);
+		double xd = max_delta(e, r1);
+		X += max_delta(r0, s) + xu[j] + xd;
+		F->unit_rate[j] = xu[j] > 0 ? cyc[j] / xu[j] : 0;
 		sc += cyc[j];
-		sw += wk[j];
+		sx += xu[j];
+		/* the frame ends with one drain (the last tiles finishing with
+		 * ever fewer threads busy): its mean time and demand over the
+		 * regions replace that much steady-state demand */
+		dt += (double)F->drain_t[j] / (double)c->clk.period / n;
+		dx += xd / n;
 	}
-	double R = sw > 0 ? sc / sw : 0, wbar = sw / n, s2 = 0;
+	double R = sx > 0 ? sc / sx : 0, xbar = sx / n, s2 = 0;
 	for (int j = 0; j < n; j++)
-		s2 += (cyc[j] - R * wk[j]) * (cyc[j] - R * wk[j]);
+		s2 += (cyc[j] - R * xu[j]) * (cyc[j] - R * xu[j]);
 	s2 = n > 1 ? s2 / (n - 1) : 0;
 	double fpc = 1.0 - (double)n * U / N;
-	/* the frame ends with one drain (the last tiles finishing with ever
-	 * fewer threads busy): its mean time and work over the regions replace
-	 * that much steady-state work */
-	double dt = 0, dw = 0;
-	for (int j = 0; j < n; j++) {
-		dt += (double)F->drain_t[j] / (double)c->clk.period / n;
-		dw += F->drain_w[j * UNIT_NKINDS + K] / n;
-	}
-	F->est[f] = R * (F->frame_work - dw) + dt;
+	F->frame_x = X;
+	F->est[f] = R * (X - dx) + dt;
 	F->half[f] =
-	    wbar > 0 ? chip_t975(n - 1) * F->frame_work * sqrt(s2 * (fpc > 0 ? fpc : 0) / n) / wbar
-	             : INFINITY;
+	    xbar > 0 ? chip_t975(n - 1) * X * sqrt(s2 * (fpc > 0 ? fpc : 0) / n) / xbar : INFINITY;
 }
 
 static const char *const res_names[RES_N] = {"rgs",   "trav",    "list",   "isect", "l1_shade",
@@ -588,38 +653,14 @@ const char *chip_res_name(int res)
  * needs at least for the frame's work (units: issue cycles per instance;
  * L1s: requests / ports; SDRAM and host bus: data-bus time); the frame
  * cannot be faster than the largest. Needs the frame's snapshot. */
-static void resource_bound(chip *c, int f)
+static void resource_bound(chip *c)
 {
 	chip_fidelity *F = &c->fid;
-	const cfg_unit *ucfg[UNIT_NKINDS] = {&c->cfg.chip.rgs, &c->cfg.chip.trav, &c->cfg.chip.list,
-	                                     &c->cfg.chip.isect};
-	memset(F->res_cycles, 0, sizeof F->res_cycles);
-	for (int k = 0; k < UNIT_NKINDS; k++) {
-		char sfx[32];
-		snprintf(sfx, sizeof sfx, "%s.busy_cycles", unit_names[k]);
-		uint64_t b = chip_rtp_sum(c, sfx);
-		F->res_cycles[RES_RGS + k] =
-		    (double)(b - F->prev_busy[k]) / ((double)ucfg[k]->count * c->nrtp);
-		F->prev_busy[k] = b;
-	}
-	if (c->frame_mem) {
-		static const hier_stats zero;
-		const hier_stats *a = f ? &c->frame_mem[f - 1] : &zero, *b = &c->frame_mem[f];
-		for (int t = 0; t < MEM_NTYPES; t++) {
-			cache_params cp = hier_l1_params(&c->cfg, t);
-			uint64_t rq =
-			    (b->reads[t] - b->bypass_reads[t]) - (a->reads[t] - a->bypass_reads[t]);
-			F->res_cycles[RES_L1_SHADE + t] = (double)rq / cp.ports;
-		}
-		double per = (double)c->clk.period;
-		F->res_cycles[RES_SDRAM] =
-		    (double)(b->sdram.busy_ticks + b->func_sdram_busy_ticks - a->sdram.busy_ticks -
-		             a->func_sdram_busy_ticks) /
-		    per;
-		F->res_cycles[RES_HOSTBUS] =
-		    (double)(b->hostbus.busy_ticks + b->func_hostbus_busy_ticks -
-		             a->hostbus.busy_ticks - a->func_hostbus_busy_ticks) /
-		    per;
+	double d[RES_N];
+	chip_demand(c, d);
+	for (int r = 0; r < RES_N; r++) {
+		F->res_cycles[r] = d[r] - F->prev_dem[r];
+		F->prev_dem[r] = d[r];
 	}
 	F->bound_by = 0;
 	for (int r = 1; r < RES_N; r++)
@@ -653,12 +694,16 @@ int chip_run(chip *c, diag *d)
 		c->frame_port[f] = c->mem.n;
 		if (c->frame_mem)
 			hier_get_stats(&c->mem, &c->frame_mem[f]);
-		resource_bound(c, f);
+		resource_bound(c);
+		F->floor[f] = F->res_cycles[F->bound_by];
 		if (F->mode == CFG_FIDELITY_FUNCTIONAL) {
 			/* no timing: the frame's cycles are the bound */
-			F->est[f] = F->res_cycles[F->bound_by];
+			F->est[f] = F->floor[f];
 			c->frame_cycles[f] = (uint64_t)ceil(F->est[f]);
 		} else {
+			/* an estimate below the bound is impossible */
+			if (F->est[f] < F->floor[f])
+				F->est[f] = F->floor[f];
 			c->frame_cycles[f] = (uint64_t)llround(F->est[f]);
 		}
 		c->frames_done = f + 1;

@@ -61,20 +61,22 @@ typedef struct chip_fidelity {
 	int unit_tiles, warmup_tiles, nunits, exact;
 	int *unit_s;               /* first tile (hand-out index) of each unit */
 	uint64_t *mark_s, *mark_e; /* ticks: unit's first tile taken, first tile after it wanted */
-	double *work_s, *work_e;   /* chip_work of each unit kind at those marks (n x kinds) */
-	uint64_t *drain_t;         /* ticks from a unit's end mark to its region's end */
-	double *drain_w;           /* chip_work (n x kinds) done in that drain */
-	int us_next, ue_next;      /* next unit whose start / end mark is due */
-	int region_end;            /* tiles at or after it are not handed out (this region) */
+	/* cumulative resource demand (chip_demand, RES_N each) at a unit's
+	 * region start, its two marks and its region end */
+	double *dem_r0, *dem_s, *dem_e, *dem_r1;
+	uint64_t *drain_t;    /* ticks from a unit's end mark to its region's end */
+	int us_next, ue_next; /* next unit whose start / end mark is due */
+	int region_end;       /* tiles at or after it are not handed out (this region) */
+	double func_x;        /* this frame: summed demand of the functional chunks */
 	uint64_t detailed_tiles, functional_tiles, detailed_cycles; /* all frames */
 	double *est, *half; /* per frame: cycles (estimate or measured), 95% half-width */
-	double *unit_rate;  /* last frame: cycles per unit of work (chip_work) of each unit */
-	double frame_work;  /* last frame: chip_work of the work kind done in it */
-	int work_kind;      /* last frame: the unit kind whose work the estimate scales */
+	double *floor;      /* per frame: the busiest-resource bound (cycles can't be lower) */
+	double *unit_rate;  /* last frame: cycles per unit of demand of each unit */
+	double frame_x;     /* last frame: the demand the estimate scales */
 	/* busiest-resource bound, last frame: cycles each resource needs */
 	double res_cycles[RES_N];
 	int bound_by; /* enum chip_res */
-	uint64_t prev_busy[UNIT_NKINDS];
+	double prev_dem[RES_N];
 } chip_fidelity;
 
 typedef struct chip {
@@ -137,6 +139,10 @@ const char *chip_res_name(int res);
  * count), summed over RTPs. Functional and detailed tiles count it alike,
  * so it is known for the whole frame. */
 double chip_work(const chip *c, int k);
+/* Cumulative demand of every resource (enum chip_res) in core cycles:
+ * unit issue cycles per instance, L1 requests per port, SDRAM and host-bus
+ * data-bus time (detailed and functional). */
+void chip_demand(const chip *c, double d[RES_N]);
 /* 97.5% quantile of Student's t with df degrees of freedom. */
 double chip_t975(int df);
 const char *chip_unit_name(int kind);   /* "rgs", "trav", "list", "isect" */

@@ -133,6 +133,7 @@ static void memfig_steady(const chip *c, memfig *m)
 typedef struct fidfig {
 	const char *mode;
 	double cycles, half;        /* mean cycles per frame over the steady span; 95% half-width */
+	double lo;                  /* the interval's low end: never below the bound */
 	double fps, fps_lo, fps_hi; /* fps_hi < 0: unbounded */
 	double fps_bound;           /* busiest-resource bound (last frame) */
 	const char *bound_by;
@@ -142,10 +143,11 @@ static void fidfig_get(const chip *c, fidfig *x)
 {
 	const chip_fidelity *F = &c->fid;
 	int f0 = c->frames_done > 1 ? 1 : 0, n = c->frames_done - f0;
-	double s = 0, h2 = 0;
+	double s = 0, h2 = 0, fl = 0;
 	for (int f = f0; f < c->frames_done; f++) {
 		s += F->est[f];
 		h2 += F->half[f] * F->half[f];
+		fl += F->floor[f];
 	}
 	double hz = c->cfg.chip.clock_mhz * 1e6;
 	x->mode = cfg_enum_name(&c->cfg, "fidelity");
@@ -153,7 +155,8 @@ static void fidfig_get(const chip *c, fidfig *x)
 	x->half = n ? sqrt(h2) / n : 0;
 	x->fps = ratio(hz, x->cycles);
 	x->fps_lo = ratio(hz, x->cycles + x->half);
-	x->fps_hi = x->cycles > x->half ? hz / (x->cycles - x->half) : -1;
+	x->lo = fmax(x->cycles - x->half, F->mode == CFG_FIDELITY_SAMPLED ? ratio(fl, n) : -1);
+	x->fps_hi = x->lo > 0 ? hz / x->lo : -1;
 	x->fps_bound = ratio(hz, F->res_cycles[F->bound_by]);
 	x->bound_by = chip_res_name(F->bound_by);
 }
@@ -193,7 +196,7 @@ static void fidelity_json(jsonw *j, const chip *c)
 	jsonw_knum(j, "cycles_per_frame", x.cycles);
 	jsonw_key(j, "cycles_ci95");
 	jsonw_arr_begin(j);
-	jsonw_num(j, x.cycles - x.half);
+	jsonw_num(j, x.lo);
 	jsonw_num(j, x.cycles + x.half);
 	jsonw_arr_end(j);
 	jsonw_knum(j, "fps", x.fps);
@@ -210,7 +213,7 @@ static void fidelity_json(jsonw *j, const chip *c)
 		jsonw_kint(j, "unit_tiles", F->unit_tiles);
 		jsonw_kint(j, "warmup_tiles", F->warmup_tiles);
 		jsonw_knum(j, "sample_rate", c->cfg.sampling.rate);
-		jsonw_key(j, "unit_cycles_per_tile");
+		jsonw_key(j, "unit_cycles_per_demand");
 		jsonw_arr_begin(j);
 		for (int u = 0; u < F->nunits; u++)
 			jsonw_num(j, F->unit_rate[u]);

@@ -2,10 +2,12 @@
  * test_fidelity.c: the fidelity modes (issue 6, docs/fidelity.md). Every
  * mode renders kernel-ref's image; sampled at rate 1 is cycle, event for
  * event; functional moves exactly cycle's memory-port and L1 traffic (hits
- * differ only where cycle merged misses in MSHRs) and does exactly its unit
- * operations, and its fps bound is never below the true fps; sampled
- * intervals shrink with more units and cover the true value on small
- * cases. Scenes: the embedded one, and SPD balls through the VMA.
+ * within cycle's merged misses + 3% of accesses, SDRAM bytes within 10%)
+ * and does exactly its unit operations, and its fps bound is never below
+ * the true fps; sampled intervals shrink with more units, cover the true
+ * value on replicas, never go below the bound, and follow the host bus on
+ * a PCI-bound frame. Scenes: the embedded one, and SPD balls through the
+ * VMA.
  */
 #include <math.h>
 #include <string.h>
@@ -62,6 +64,7 @@ Test(fidelity, every_mode_renders_the_reference_image)
 			c.sampling.rate = 0.2;
 			c.sampling.unit_tiles = 8;
 			c.sampling.warmup_tiles = 8;
+			c.sampling.min_units = 2; /* room for functional tiles at 64 threads */
 			chip *ch = run(&w, &c);
 			char what[64];
 			snprintf(what, sizeof what, "fidelity %s, %d threads",
@@ -136,12 +139,18 @@ static void assert_same_traffic(const world *w, saar_config *c, const char *what
 		cr_assert_eq(hx.reads[t], hy.reads[t]);
 		cr_assert_eq(hx.bypass_reads[t], hy.bypass_reads[t]);
 		cr_assert_eq(b->merges, 0, "%s: functional merged a miss", what);
-		double tol = (double)a->merges + 0.20 * (double)a->accesses;
+		/* functional keeps every thread slot busy and interleaves their
+		 * steps, so LRU victims are close to cycle's (one packet at a time,
+		 * kd hits of balls through the VMA were 13% of accesses off) */
+		double tol = (double)a->merges + 0.03 * (double)a->accesses;
 		cr_assert_leq(fabs((double)a->hits - (double)b->hits), tol,
 		              "%s: L1 %s hits %llu vs %llu (merges %llu)", what, mem_type_name(t),
 		              (unsigned long long)a->hits, (unsigned long long)b->hits,
 		              (unsigned long long)a->merges);
 	}
+	double sx = (double)(hx.sdram.read_bytes + hx.sdram.write_bytes),
+	       sy = (double)(hy.sdram.read_bytes + hy.sdram.write_bytes);
+	cr_assert_leq(fabs(sx - sy), 0.1 * sx, "%s: SDRAM bytes %g vs %g", what, sx, sy);
 	/* the same unit operations, so the same issue cycles */
 	static const char *const sfx[] = {"rgs.ops", "trav.busy_cycles", "isect.busy_cycles",
 	                                  "list.rays"};
@@ -189,6 +198,7 @@ static double half_width(const world *w, double rate, double *est, double *truth
 	c.sampling.rate = rate;
 	c.sampling.unit_tiles = 64;
 	c.sampling.warmup_tiles = 64;
+	c.sampling.min_units = 2;
 	chip *ch = run(w, &c);
 	cr_assert(!ch->fid.exact);
 	double h = ch->fid.half[0];
@@ -216,36 +226,35 @@ Test(fidelity, intervals_shrink_with_more_samples)
 	world_free(&w);
 }
 
-/* On the uniform parts of a frame the interval covers the true value: a
- * frame of the embedded scene cut to its lower half (floor and walls). */
+/* Replicas at five sampling offsets of one frame (the embedded scene,
+ * 4 threads per RTP, ten units each): the interval covers the true cycles
+ * on at least four, and every estimate is within 10%. */
 Test(fidelity, interval_covers_small_cases)
 {
 	world w;
 	load_embedded(&w);
-	int covered = 0, cases = 0;
-	for (int tpr = 4; tpr <= 16; tpr *= 4) {
-		saar_config c;
-		cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
-		c.chip.threads_per_rtp = tpr;
-		chip *x = run(&w, &c);
-		double truth = (double)x->frame_cycles[0];
-		chip_destroy(x);
-		c.fidelity = CFG_FIDELITY_SAMPLED;
-		c.sampling.rate = 0.3;
-		c.sampling.unit_tiles = 16;
-		c.sampling.warmup_tiles = 16;
+	saar_config c;
+	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
+	c.chip.threads_per_rtp = 4;
+	chip *x = run(&w, &c);
+	double truth = (double)x->frame_cycles[0];
+	chip_destroy(x);
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.15; /* default units and warm-ups */
+	int covered = 0;
+	for (int k = 0; k < 5; k++) {
+		c.sampling.offset = 0.1 + 0.2 * k;
 		chip *y = run(&w, &c);
+		cr_assert(!y->fid.exact);
 		double est = y->fid.est[0], h = y->fid.half[0];
-		cr_log_info("tpr %d: true %.0f, estimate %.0f +- %.0f", tpr, truth, est, h);
+		cr_log_info("offset %.1f: true %.0f, estimate %.0f +- %.0f (%d units)",
+		            c.sampling.offset, truth, est, h, y->fid.nunits);
 		covered += fabs(est - truth) <= h;
-		cases++;
-		/* not tight (docs/fidelity.md: the estimator misses latency-bound
-		 * stretches): within twice the interval or 50% */
-		cr_assert_leq(fabs(est - truth), fmax(2 * h, 0.5 * truth), "tpr %d: %g vs %g +- %g",
-		              tpr, est, truth, h);
+		cr_assert_leq(fabs(est - truth), 0.1 * truth, "offset %.1f: %g vs %g +- %g",
+		              c.sampling.offset, est, truth, h);
 		chip_destroy(y);
 	}
-	cr_log_info("covered %d of %d", covered, cases);
+	cr_assert_geq(covered, 4, "interval covered the truth on %d of 5 replicas", covered);
 	world_free(&w);
 }
 
@@ -269,4 +278,67 @@ Test(fidelity, config_and_cli)
 	         "--size 64x64 | grep -q 'fidelity sampled: '",
 	         tu_bin_dir());
 	cr_assert_eq(tu_run(cmd), 0, "sampled summary line missing");
+}
+
+/* The estimate never claims a frame faster than its busiest-resource
+ * bound, and the bound never exceeds the truth. */
+Test(fidelity, estimate_respects_the_bound)
+{
+	world w;
+	load_embedded(&w);
+	for (int tpr = 1; tpr <= 16; tpr *= 4) {
+		saar_config c;
+		cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
+		c.chip.threads_per_rtp = tpr;
+		chip *x = run(&w, &c);
+		double truth = (double)x->frame_cycles[0];
+		cr_assert_leq(x->fid.floor[0], truth, "tpr %d: bound %g above the truth %g", tpr,
+		              x->fid.floor[0], truth);
+		chip_destroy(x);
+		c.fidelity = CFG_FIDELITY_SAMPLED;
+		c.sampling.rate = 0.05;
+		c.sampling.min_units = 2;
+		c.sampling.unit_tiles = 8;
+		c.sampling.warmup_tiles = 8;
+		chip *y = run(&w, &c);
+		cr_assert(!y->fid.exact);
+		cr_assert_geq(y->fid.est[0], y->fid.floor[0], "tpr %d: estimate %g below bound %g",
+		              tpr, y->fid.est[0], y->fid.floor[0]);
+		chip_destroy(y);
+	}
+	world_free(&w);
+}
+
+/* A frame bound by the host bus (a scene through a tiny VMA): the demand
+ * the estimate scales includes PCI time, so the estimate follows the bus.
+ * (Scaling the busiest unit kind's work alone was 5x off on such frames.) */
+Test(fidelity, pci_bound_frame_follows_the_bus)
+{
+	world w;
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = "spd:balls:2";
+	diag d;
+	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	saar_config c;
+	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
+	c.memory.vma.enabled = true;
+	c.memory.sdram.mb = 1;
+	chip *x = run(&w, &c);
+	double truth = (double)x->frame_cycles[0];
+	cr_assert_eq(x->fid.bound_by, RES_HOSTBUS, "bound by %s, not the host bus",
+	             chip_res_name(x->fid.bound_by));
+	chip_destroy(x);
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.1;
+	c.sampling.min_units = 2;
+	c.sampling.unit_tiles = 64;
+	c.sampling.warmup_tiles = 128;
+	chip *y = run(&w, &c);
+	cr_assert(!y->fid.exact);
+	double est = y->fid.est[0], h = y->fid.half[0];
+	cr_log_info("PCI-bound: true %.0f, estimate %.0f +- %.0f", truth, est, h);
+	cr_assert_lt(fabs(est - truth), 0.1 * truth, "estimate %g vs true %g", est, truth);
+	chip_destroy(y);
+	world_free(&w);
 }

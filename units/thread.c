@@ -291,13 +291,14 @@ void thr_release(thr_ctx *t)
 	t->env->on_free(t);
 }
 
-void thr_run_func(thr_ctx *t)
+int thr_step_func(thr_ctx *t)
 {
-	while (t->fnext) {
-		eng_handler h = t->fnext;
-		t->fnext = NULL;
-		h(t->env->e, t, 0);
-	}
+	eng_handler h = t->fnext;
+	if (!h)
+		return 0;
+	t->fnext = NULL;
+	h(t->env->e, t, 0);
+	return 1;
 }
 
 uint64_t thr_rays(const packet *p)

@@ -119,7 +119,7 @@ typedef struct thr_env {
 	/* functional (fidelity functional, or the unsampled stretches of
 	 * sampled; docs/fidelity.md): memory goes through mem_access_func, a
 	 * unit op is counted but takes no time and its done handler becomes the
-	 * thread's fnext, which thr_run_func calls */
+	 * thread's fnext, which thr_step_func calls */
 	int func;
 	pkt_precision prec; /* datapath formats (chip.fp); full = the SIMD path */
 	uint64_t spill_base;
@@ -193,9 +193,11 @@ void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t));
 void thr_use(thr_ctx *t, int kind, int rays, eng_handler done);
 /* The packet is done: back to the pool; the thread is free for new work. */
 void thr_release(thr_ctx *t);
-/* Functional: runs the thread's steps until its packet is done (a
- * trampoline, so a packet's thousands of steps never nest on the C stack). */
-void thr_run_func(thr_ctx *t);
+/* Functional: runs the thread's next step (up to its next unit op); 0 if
+ * it has none (its packet is done). The caller interleaves threads' steps
+ * (sim/chip.c func_range), so a packet's thousands of steps never nest on
+ * the C stack. */
+int thr_step_func(thr_ctx *t);
 /* The valid rays of a packet. */
 uint64_t thr_rays(const packet *p);
 /* thr_unit.on_start for units used by threads: the thread runs. */
