@@ -181,6 +181,17 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 	return (uint32_t)(base + (size_t)w);
 }
 
+int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
+{
+	if (cache_probe(c, line, NULL) || cache_mshr_find(c, line) >= 0)
+		return cache_lookup(c, line, bytes, NULL, NULL) != CACHE_MSHR_FULL;
+	c->s.accesses++;
+	c->s.misses++;
+	c->s.bytes += bytes;
+	cache_fill(c, line, NULL);
+	return 0;
+}
+
 uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes)
 {
 	uint64_t first = addr / c->p.line_bytes;
@@ -191,10 +202,8 @@ uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes)
 		uint64_t lo = l * c->p.line_bytes, hi = lo + c->p.line_bytes;
 		uint64_t a = addr > lo ? addr : lo, b = addr + bytes < hi ? addr + bytes : hi;
 		uint32_t nb = b > a ? (uint32_t)(b - a) : 0;
-		if (cache_lookup(c, l, nb, NULL, NULL) != CACHE_HIT) {
+		if (!cache_lookup_func(c, l, nb))
 			missed++;
-			cache_fill(c, l, NULL);
-		}
 	}
 	return missed;
 }

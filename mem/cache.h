@@ -123,6 +123,11 @@ static inline int cache_try_hit(cache *c, uint64_t line, uint32_t bytes)
 	return 0;
 }
 
+/* Functional lookup of one line (no time): a hit, or a line already in
+ * flight in an MSHR (counted as a merged miss; its fill is on its way), is 1;
+ * otherwise the miss is counted and the line filled at once without an
+ * MSHR, and the result is 0. Safe while timed misses are in flight. */
+int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes);
 /* Functional access with an immediate fill (no time): what replay and the
  * reference tests use. Touches every line of [addr, addr+bytes); returns the
  * number of lines that missed (0 = hit). Never returns MSHR_FULL. */

@@ -370,10 +370,8 @@ static void hier_access_func(void *impl, const mem_req *r)
 	for (uint64_t line = first; line <= last; line++) {
 		uint64_t lo = line * lb, hi = lo + lb;
 		uint64_t a = r->addr > lo ? r->addr : lo, b = end < hi ? end : hi;
-		if (cache_lookup(c, line, (uint32_t)(b - a), NULL, NULL) == CACHE_HIT)
-			continue;
-		cache_fill(c, line, NULL);
-		func_lower(h, type, lo, lb, 0);
+		if (!cache_lookup_func(c, line, (uint32_t)(b - a)))
+			func_lower(h, type, lo, lb, 0);
 	}
 }
 

@@ -421,11 +421,10 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write)
 			v->s.meta_reads++;
 			v->s.meta_bytes += v->meta_set_bytes;
 		}
-		if (cache_lookup(&v->l2, line, n, NULL, NULL) == CACHE_HIT) {
+		if (cache_lookup_func(&v->l2, line, n)) {
 			v->s.data_reads++;
 			v->s.data_bytes += n;
 		} else {
-			cache_fill(&v->l2, line, NULL);
 			v->s.host_fetches++;
 			v->s.host_fetch_bytes += v->p.line;
 			v->s.data_writes++;

@@ -94,6 +94,11 @@ static void on_free(thr_ctx *t)
 			chip_demand(c, &F->dem_e[F->ue_next * RES_N]);
 			F->mark_e[F->ue_next++] = eng_now(c->e);
 		}
+		/* a region inside the frame ends here: what is in flight goes on
+		 * functionally (each thread's next step, as its pending memory
+		 * and unit events fire) instead of draining cycle by cycle */
+		if (F->region_end < c->g.ntiles)
+			c->env.func = 1;
 		return;
 	}
 	if (F->us_next < F->nunits && F->unit_s[F->us_next] == next) {
@@ -178,12 +183,9 @@ static int fid_init(chip *c)
 	/* a unit shorter than one tile per thread is over before any thread
 	 * has finished anything: its window would be empty */
 	F->unit_tiles = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;
-	/* a warm-up of one tile per thread starts the unit from a burst (every
-	 * thread took a tile at once, queues empty): on Conference the units
-	 * then measured the chip 15-30% fast; four per thread is within a few
-	 * percent (docs/fidelity.md) */
-	F->warmup_tiles =
-	    cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : 4 * threads;
+	/* a region takes over a full chip (packets in flight, caches warm):
+	 * the warm-up refills the memory and unit queues (docs/fidelity.md) */
+	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : threads;
 	size_t nf = (size_t)cfg->frame.frames;
 	F->est = calloc(nf, sizeof *F->est);
 	F->half = calloc(nf, sizeof *F->half);
@@ -192,12 +194,15 @@ static int fid_init(chip *c)
 		return -1;
 	if (F->mode != CFG_FIDELITY_SAMPLED)
 		return 0;
-	/* n units of U tiles, at least sampling.min_units; when the units and
-	 * their warm-ups would cover the frame anyway, simulate all of it */
+	/* n units of U tiles, at least sampling.min_units and 3 (the head,
+	 * the tail and one between); when the regions would cover the frame
+	 * anyway, simulate all of it */
 	int U = F->unit_tiles, W = F->warmup_tiles;
 	long n = lround((double)N * cfg->sampling.rate / U);
 	if (n < cfg->sampling.min_units)
 		n = cfg->sampling.min_units;
+	if (n < 3)
+		n = 3;
 	if (cfg->sampling.rate >= 1.0 || n * (long)(U + W) >= N) {
 		F->exact = 1;
 		return 0;
@@ -207,18 +212,22 @@ static int fid_init(chip *c)
 	F->mark_s = calloc((size_t)n, sizeof *F->mark_s);
 	F->mark_e = calloc((size_t)n, sizeof *F->mark_e);
 	F->unit_rate = calloc((size_t)n, sizeof *F->unit_rate);
-	F->drain_t = calloc((size_t)n, sizeof *F->drain_t);
+	F->mark_r0 = calloc((size_t)n, sizeof *F->mark_r0);
 	double **dem[4] = {&F->dem_r0, &F->dem_s, &F->dem_e, &F->dem_r1};
 	for (int i = 0; i < 4; i++)
 		if (!(*dem[i] = calloc((size_t)n * RES_N, sizeof(double))))
 			return -1;
-	if (!F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->drain_t)
+	if (!F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->mark_r0)
 		return -1;
-	/* systematic: one warm-up and unit per period P, at sampling.offset
-	 * of the room left in it; P > U + W, so regions never touch */
-	double P = (double)N / (double)n;
-	for (int j = 0; j < n; j++)
-		F->unit_s[j] = (int)((double)j * P + W + (P - U - W) * cfg->sampling.offset);
+	/* the head region is the frame's start, the tail its end; the others
+	 * systematic between them, one per period P at sampling.offset of the
+	 * room left in it (P >= U + W: regions never overlap) */
+	int RW = U + W, m = (int)n - 2;
+	double P = (double)(N - 2 * RW) / m;
+	F->unit_s[0] = W;
+	F->unit_s[n - 1] = N - U;
+	for (int k = 0; k < m; k++)
+		F->unit_s[k + 1] = RW + (int)((double)k * P + (P - RW) * cfg->sampling.offset) + W;
 	return 0;
 }
 
@@ -407,7 +416,7 @@ void chip_destroy(chip *c)
 	free(c->fid.half);
 	free(c->fid.floor);
 	free(c->fid.unit_rate);
-	free(c->fid.drain_t);
+	free(c->fid.mark_r0);
 	free(c->fid.dem_r0);
 	free(c->fid.dem_s);
 	free(c->fid.dem_e);
@@ -451,11 +460,19 @@ static uint64_t run_region(chip *c, int end)
 	uint64_t t0 = eng_now(c->e);
 	int first = c->g.next;
 	c->fid.region_end = end;
+	c->env.func = 0;
+	/* packets a functional stretch left in flight go on cycle by cycle
+	 * from where they stopped: the region starts with a full chip, not
+	 * with every thread taking a tile at once */
+	for (int s = 0; s < c->tpr; s++)
+		for (int r = 0; r < c->nrtp; r++)
+			thr_func_to_timed(&c->rtp[r].t[s]);
 	for (int s = 0; s < c->tpr; s++)
 		for (int r = 0; r < c->nrtp; r++)
 			if (c->rtp[r].t[s].state == THR_IDLE)
 				on_free(&c->rtp[r].t[s]);
 	eng_run(c->e, ENG_FOREVER);
+	c->env.func = 0;
 	c->fid.detailed_tiles += (uint64_t)(end - first);
 	c->fid.detailed_cycles += eng_ticks_to_cycles(c->clk, eng_now(c->e) - t0);
 	return eng_now(c->e) - t0;
@@ -507,8 +524,9 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
  * model at 16-64 threads). A slot that finishes takes a secondary packet of
  * its RTP, else the next tile. The engine is idle throughout (no request
  * in flight), so memory goes through the hierarchy's functional path with
- * no MSHR busy; the range ends with every slot free. */
-static void func_range(chip *c, int end)
+ * no MSHR busy. With drain, the range ends with every slot free; without,
+ * as soon as its last tile is handed out, packets still in flight. */
+static void func_range(chip *c, int end, int drain)
 {
 	chip_fidelity *F = &c->fid;
 	/* sampled: the demand of each chunk of unit_tiles tiles (the units'
@@ -519,6 +537,10 @@ static void func_range(chip *c, int end)
 		chip_demand(c, d0);
 	c->env.func = 1;
 	for (int busy = 1; busy && !c->oom;) {
+		/* before a region: stop once the tiles are handed out and leave
+		 * the packets in flight for the region to take over */
+		if (!drain && c->g.next >= end)
+			break;
 		busy = 0;
 		for (int s = 0; s < c->tpr; s++)
 			for (int r = 0; r < c->nrtp; r++) {
@@ -583,62 +605,73 @@ void chip_demand(const chip *c, double d[RES_N])
 	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
 }
 
-/* Sampled frame: functional stretches and detailed regions (warm-up, then
- * one measured unit). Cycles per tile vary tenfold across a frame; cycles
- * per unit of *demand* far less. A stretch's demand is the core cycles its
- * busiest resource needs (chip_demand: unit issue cycles, L1 ports, SDRAM
- * and host-bus time), taken per chunk of unit_tiles tiles so that a
- * PCI-bound start and an intersection-bound middle each count what bounds
- * them; it is known for every chunk, detailed or functional. The estimate
- * is the ratio estimator frame demand x sum(cycles) / sum(demand) over the
- * units' windows, with a 95% t-interval from the residuals (finite-
- * population corrected). docs/fidelity.md. */
+/* Sampled frame: detailed regions (warm-up, then one measured unit) with
+ * functional stretches between them; a region takes over the packets the
+ * stretch before it left in flight, and hands its own to the stretch after
+ * it. The first region is the frame's start and the last its end (a chip
+ * starting empty, and the final drain), both measured, not estimated.
+ * Everything between is estimated: cycles per tile vary tenfold across a
+ * frame, cycles per unit of *demand* far less. A stretch's demand is the
+ * core cycles its busiest resource needs (chip_demand: unit issue cycles,
+ * L1 ports, SDRAM and host-bus time), taken per chunk of unit_tiles tiles
+ * so that a PCI-bound start and an intersection-bound middle each count
+ * what bounds them; it is known for every chunk, detailed or functional.
+ * The middle's cycles are the ratio estimator demand x sum(cycles) /
+ * sum(demand) over the units' windows (all but the first region's), with
+ * a 95% t-interval from the residuals (finite-population corrected).
+ * docs/fidelity.md. */
 static void sampled_frame(chip *c, int f)
 {
 	chip_fidelity *F = &c->fid;
 	int N = c->g.ntiles, U = F->unit_tiles, n = F->nunits;
+	uint64_t t0 = eng_now(c->e);
 	F->us_next = F->ue_next = 0;
 	F->func_x = 0;
 	for (int j = 0; j < n; j++) {
 		int rs = F->unit_s[j] - F->warmup_tiles;
 		if (rs < c->g.next)
 			rs = c->g.next;
-		func_range(c, rs);
+		if (c->g.next < rs)
+			func_range(c, rs, 0);
 		chip_demand(c, &F->dem_r0[j * RES_N]);
-		run_region(c, F->unit_s[j] + U);
+		F->mark_r0[j] = eng_now(c->e);
+		run_region(c, j == n - 1 ? N : F->unit_s[j] + U);
 		chip_demand(c, &F->dem_r1[j * RES_N]);
-		/* the region drains as the frame's end does: kept to model it */
-		F->drain_t[j] = eng_now(c->e) - F->mark_e[j];
 	}
-	func_range(c, N);
 	F->region_end = N;
-	double X = F->func_x, sc = 0, sx = 0, cyc[n > 0 ? n : 1], xu[n > 0 ? n : 1];
-	double dt = 0, dx = 0;
+	uint64_t t1 = eng_now(c->e);
+	double per = (double)c->clk.period, X = F->func_x, Xh = 0, Xt = 0;
+	double sc = 0, sx = 0, cyc[n > 0 ? n : 1], xu[n > 0 ? n : 1];
 	for (int j = 0; j < n; j++) {
 		const double *r0 = &F->dem_r0[j * RES_N], *s = &F->dem_s[j * RES_N],
 		             *e = &F->dem_e[j * RES_N], *r1 = &F->dem_r1[j * RES_N];
-		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / (double)c->clk.period;
+		double xw = max_delta(r0, s), xd = max_delta(e, r1);
+		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / per;
 		xu[j] = max_delta(s, e);
-		double xd = max_delta(e, r1);
-		X += max_delta(r0, s) + xu[j] + xd;
+		X += xw + xu[j] + xd;
 		F->unit_rate[j] = xu[j] > 0 ? cyc[j] / xu[j] : 0;
-		sc += cyc[j];
-		sx += xu[j];
-		/* the frame ends with one drain (the last tiles finishing with
-		 * ever fewer threads busy): its mean time and demand over the
-		 * regions replace that much steady-state demand */
-		dt += (double)F->drain_t[j] / (double)c->clk.period / n;
-		dx += xd / n;
+		if (j == 0)
+			Xh = xw + xu[j];
+		if (j == n - 1)
+			Xt = xw + xu[j] + xd;
+		if (j > 0) {
+			sc += cyc[j];
+			sx += xu[j];
+		}
 	}
-	double R = sx > 0 ? sc / sx : 0, xbar = sx / n, s2 = 0;
-	for (int j = 0; j < n; j++)
+	/* measured: the head up to its unit's end mark, the tail from its
+	 * region's start to the frame's end */
+	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[n - 1]) / per;
+	int m = n - 1;
+	double R = sx > 0 ? sc / sx : 0, xbar = sx / m, s2 = 0, Xm = X - Xh - Xt;
+	for (int j = 1; j < n; j++)
 		s2 += (cyc[j] - R * xu[j]) * (cyc[j] - R * xu[j]);
-	s2 = n > 1 ? s2 / (n - 1) : 0;
-	double fpc = 1.0 - (double)n * U / N;
+	s2 = m > 1 ? s2 / (m - 1) : 0;
+	double fpc = 1.0 - (double)m * U / N;
 	F->frame_x = X;
-	F->est[f] = R * (X - dx) + dt;
+	F->est[f] = ch + R * (Xm > 0 ? Xm : 0) + ct;
 	F->half[f] =
-	    xbar > 0 ? chip_t975(n - 1) * X * sqrt(s2 * (fpc > 0 ? fpc : 0) / n) / xbar : INFINITY;
+	    xbar > 0 ? chip_t975(m - 1) * Xm * sqrt(s2 * (fpc > 0 ? fpc : 0) / m) / xbar : INFINITY;
 }
 
 static const char *const res_names[RES_N] = {"rgs",   "trav",    "list",   "isect", "l1_shade",
@@ -677,7 +710,7 @@ int chip_run(chip *c, diag *d)
 		rgc_reset(&c->g);
 		c->tiles_given = 0;
 		if (F->mode == CFG_FIDELITY_FUNCTIONAL)
-			func_range(c, c->g.ntiles);
+			func_range(c, c->g.ntiles, 1);
 		else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact)
 			sampled_frame(c, f);
 		else /* cycle, and sampled at rate 1: the same event sequence */

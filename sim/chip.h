@@ -64,7 +64,7 @@ typedef struct chip_fidelity {
 	/* cumulative resource demand (chip_demand, RES_N each) at a unit's
 	 * region start, its two marks and its region end */
 	double *dem_r0, *dem_s, *dem_e, *dem_r1;
-	uint64_t *drain_t;    /* ticks from a unit's end mark to its region's end */
+	uint64_t *mark_r0;    /* ticks: each region's start */
 	int us_next, ue_next; /* next unit whose start / end mark is due */
 	int region_end;       /* tiles at or after it are not handed out (this region) */
 	double func_x;        /* this frame: summed demand of the functional chunks */

@@ -100,14 +100,16 @@ static const cfg_key keys[] = {
     {INT("sampling.warmup_tiles", sampling.warmup_tiles, -1, -1, 1000000, "tiles"),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: tiles simulated cycle by cycle, unmeasured, before each unit; "
-             "-1 = 4 x rtps x threads_per_rtp (each thread finishes a few tiles first: "
-             "shorter warm-ups measured the chip up to 30% fast, docs/fidelity.md)"},
-    {INT("sampling.min_units", sampling.min_units, 8, 2, 1000000, "units"),
+             "-1 = rtps x threads_per_rtp (the region takes over packets in flight with warm "
+             "caches; the warm-up refills the memory and unit queues)"},
+    {INT("sampling.min_units", sampling.min_units, 8, 3, 1000000, "units"),
      .source = "a run setting (docs/fidelity.md)",
-     .desc = "fidelity sampled: fewest measured units per frame, whatever the rate; when they "
-             "and their warm-ups would cover the frame, every tile is simulated (cycle). Two "
-             "or three units that all land in similar parts of a frame give a narrow interval "
-             "around a wrong value"},
+     .desc =
+         "fidelity sampled: fewest measured units per frame (at least 3: the frame's start, its "
+         "end and one between), whatever the rate; when they "
+         "and their warm-ups would cover the frame, every tile is simulated (cycle). Two "
+         "or three units that all land in similar parts of a frame give a narrow interval "
+         "around a wrong value"},
     {FLT("sampling.offset", sampling.offset, 0.5, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: where in its period each warm-up and unit sit (0 = at the "

@@ -110,7 +110,7 @@ typedef struct saar_config {
 	struct {                  /* fidelity sampled (docs/fidelity.md) */
 		double rate;      /* share of tiles in measured units; 1 = every tile (= cycle) */
 		int unit_tiles;   /* tiles per measured unit; 0 = the chip's thread count */
-		int warmup_tiles; /* detailed tiles before each unit; -1 = 4 x the thread count */
+		int warmup_tiles; /* detailed tiles before each unit; -1 = the thread count */
 		int min_units;    /* fewest units per frame (more than the rate asks if needed) */
 		double offset;    /* where in its period each region starts, 0..1 */
 	} sampling;

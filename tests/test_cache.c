@@ -2,7 +2,7 @@
  * test_cache.c: mem/cache against a brute-force LRU reference, access for
  * access, on random traces and on a synthetic kd-tree walk (8-byte nodes,
  * depth-first layout, coherent rays), with power-of-two and 36-byte lines;
- * MSHR merging and refusal.
+ * MSHR merging and refusal; functional lookups beside timed misses.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -206,6 +206,39 @@ Test(cache, mshr_merge_and_full)
 	cr_assert_eq(cache_lookup(&c, 11, 16, NULL, NULL), CACHE_MISS_NEW);
 	cr_assert_eq(c.s.merges, 2);
 	cr_assert_eq(c.s.hits + c.s.misses, c.s.accesses);
+	cache_free(&c);
+}
+
+/* Functional lookups while timed misses are in flight (a sampled region
+ * handing its packets to a functional stretch): a line in an MSHR is on
+ * its way (a merge, no fill), a missing one is filled at once without
+ * taking an MSHR, even when every MSHR is busy; the timed fill that
+ * arrives later finds its MSHR and its line. */
+Test(cache, functional_lookup_beside_timed_misses)
+{
+	cache c;
+	diag d;
+	cache_params p = {1024, 2, 16, 2, 1, 1, CACHE_HASH_NONE};
+	cr_assert_eq(cache_init(&c, &p, "t", &d), 0);
+	int m1 = -1, m2 = -1;
+	cr_assert_eq(cache_lookup(&c, 5, 16, &m1, NULL), CACHE_MISS_NEW);
+	cr_assert_eq(cache_lookup(&c, 9, 16, &m2, NULL), CACHE_MISS_NEW);
+	cr_assert_eq(cache_lookup_func(&c, 5, 16), 1, "in flight: on its way");
+	cr_assert_eq(cache_mshr_find(&c, 5), m1, "the MSHR stays with the timed miss");
+	cr_assert_not(cache_probe(&c, 5, NULL), "no fill before the timed one");
+	cr_assert_eq(cache_lookup_func(&c, 11, 16), 0, "absent: a miss");
+	cr_assert(cache_probe(&c, 11, NULL), "filled at once");
+	cr_assert_eq(cache_mshr_find(&c, 11), -1, "without an MSHR");
+	cr_assert_eq(cache_lookup_func(&c, 11, 16), 1);
+	cache_fill(&c, 5, NULL);
+	cr_assert_eq(cache_mshr_find(&c, 5), -1);
+	cr_assert(cache_probe(&c, 5, NULL));
+	/* 2 timed misses, 2 functional misses (one merged), 1 functional hit */
+	cr_assert_eq(c.s.accesses, 5);
+	cr_assert_eq(c.s.misses, 4);
+	cr_assert_eq(c.s.merges, 1);
+	cr_assert_eq(c.s.hits, 1);
+	cr_assert_eq(c.s.mshr_full, 0);
 	cache_free(&c);
 }
 

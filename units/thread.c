@@ -277,6 +277,8 @@ void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
 		*u->busy += thr_unit_issue(u, rays);
 		*u->rays += (uint64_t)rays;
 		t->fnext = done;
+		t->fkind = kind;
+		t->frays = rays;
 		return;
 	}
 	thr_set(t, THR_WAIT_UNIT);
@@ -289,6 +291,20 @@ void thr_release(thr_ctx *t)
 	t->p = NULL;
 	thr_set(t, THR_IDLE);
 	t->env->on_free(t);
+}
+
+void thr_func_to_timed(thr_ctx *t)
+{
+	eng_handler done = t->fnext;
+	if (!done)
+		return;
+	t->fnext = NULL;
+	thr_unit *u = &t->rtp->u[t->fkind];
+	--*u->ops_n;
+	*u->busy -= thr_unit_issue(u, t->frays);
+	*u->rays -= (uint64_t)t->frays;
+	thr_set(t, THR_WAIT_UNIT);
+	thr_unit_request(u, t->id, t->age, t->frays, done, t, 0);
 }
 
 int thr_step_func(thr_ctx *t)

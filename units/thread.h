@@ -166,6 +166,7 @@ typedef struct thr_ctx {
 	packet *kids; /* shade_packet's output */
 	int nkids, made;
 	eng_handler fnext; /* functional: the next step (see thr_env.func) */
+	int fkind, frays;  /* functional: the unit op fnext completes */
 } thr_ctx;
 
 typedef struct thr_rtp {
@@ -198,6 +199,11 @@ void thr_release(thr_ctx *t);
  * (sim/chip.c func_range), so a packet's thousands of steps never nest on
  * the C stack. */
 int thr_step_func(thr_ctx *t);
+/* A thread stopped in functional mode before its next unit op (fnext set)
+ * requests that op from its unit for real: the op's functional counts are
+ * taken back and the unit will count it when it issues. How a sampled
+ * region takes over packets in flight without a cold start. */
+void thr_func_to_timed(thr_ctx *t);
 /* The valid rays of a packet. */
 uint64_t thr_rays(const packet *p);
 /* thr_unit.on_start for units used by threads: the thread runs. */
