@@ -16,6 +16,8 @@
 # Knobs (environment): BENCH_SIZE (other views, default 256x192),
 # BENCH_VIEWS (default: every view of views.yaml), BENCH_THREADS
 # (default "1 16 64"), BENCH_RATES (default "0.02 0.05 0.1 0.2"),
+# BENCH_CONF_OFFSETS (Conference replicas at these sampling.offset values
+# besides the default 0.5; default "0.15 0.85"; a point "0.1@0.15"),
 # BENCH_CONF_SIZE (default 1024x768), BENCH_QUICK=1 (views conference and
 # cornell, threads 16, rates 0.05 0.1).
 set -eu
@@ -34,6 +36,7 @@ SIZE=${BENCH_SIZE:-256x192}
 CONF_SIZE=${BENCH_CONF_SIZE:-1024x768}
 THREADS=${BENCH_THREADS:-"1 16 64"}
 RATES=${BENCH_RATES:-"0.02 0.05 0.1 0.2"}
+CONF_OFFSETS=${BENCH_CONF_OFFSETS:-"0.15 0.85"}
 if [ "${BENCH_QUICK:-0}" = 1 ]; then
 	VIEWS=${BENCH_VIEWS:-"conference cornell"}
 	THREADS=${BENCH_THREADS:-16}
@@ -82,11 +85,19 @@ for view in $VIEWS; do
 			set -- --views "$VIEWS_FILE" --view "$view" --config "$cf" --size "$size" \
 				--set chip.threads_per_rtp="$tpr"
 			run truth "$@" >"$TMP/truth.kv" || continue
-			for mode in functional $RATES; do
+			# Conference: replicas at other sampling offsets too
+			points=functional
+			for r in $RATES; do
+				points="$points $r"
+				[ "$view" = conference ] && for o in $CONF_OFFSETS; do points="$points $r@$o"; done
+			done
+			for mode in $points; do
 				if [ "$mode" = functional ]; then
 					run pt "$@" --fidelity functional >"$TMP/pt.kv" || continue
 				else
-					run pt "$@" --fidelity sampled --sample-rate "$mode" >"$TMP/pt.kv" || continue
+					run pt "$@" --fidelity sampled --sample-rate "${mode%@*}" \
+						--set sampling.offset="$(echo "$mode@0.5" | cut -d@ -f2)" \
+						>"$TMP/pt.kv" || continue
 				fi
 				python3 - "$TMP/truth.kv" "$TMP/pt.kv" "$view" "$cfg" "$tpr" "$mode" "$size" >>"$ROWS" <<'EOF'
 import sys
@@ -197,7 +208,7 @@ SEC="$TMP/section.md"
 	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (the run took $((T1 - T0)) s)"
 	echo "- Machine: $(nproc) CPUs (nproc); load average $(cut -d' ' -f1-3 /proc/loadavg) at the end"
 	echo "- Commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet 2>/dev/null || echo ' (plus uncommitted changes)')"
-	echo "- Views: $(echo $VIEWS); Conference at $CONF_SIZE, the others at $SIZE; threads per RTP: $THREADS; sample rates: $RATES (the defaults: units of rtps x threads_per_rtp tiles, a warm-up as long before each, at least 8 units; a point marked \"all detailed\" had no room for them and ran as cycle)"
+	echo "- Views: $(echo $VIEWS); Conference at $CONF_SIZE, the others at $SIZE; threads per RTP: $THREADS; sample rates: $RATES, on Conference also at sampling offsets $CONF_OFFSETS (rate@offset; the default offset is 0.5) (the defaults: units of rtps x threads_per_rtp tiles, a warm-up as long before each, at least 8 units; a point marked \"all detailed\" had no room for them and ran as cycle)"
 	echo "- $FLOOR"
 	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point. Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
 	echo
