@@ -207,7 +207,7 @@ SEC="$TMP/section.md"
 	echo
 	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (the run took $((T1 - T0)) s)"
 	echo "- Machine: $(nproc) CPUs (nproc); load average $(cut -d' ' -f1-3 /proc/loadavg) at the end"
-	echo "- Commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet 2>/dev/null || echo ' (plus uncommitted changes)')"
+	echo "- Commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet -- . ':!docs/FIDELITY.md' ':!docs/fidelity.png' 2>/dev/null || echo ' (plus uncommitted changes)')"
 	echo "- Views: $(echo $VIEWS); Conference at $CONF_SIZE, the others at $SIZE; threads per RTP: $THREADS; sample rates: $RATES, on Conference also at sampling offsets $CONF_OFFSETS (rate@offset; the default offset is 0.5) (the defaults: units of rtps x threads_per_rtp tiles, a warm-up as long before each, at least 8 units; a point marked \"all detailed\" had no room for them and ran as cycle)"
 	echo "- $FLOOR"
 	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point. Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
