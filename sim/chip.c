@@ -101,7 +101,7 @@ static void on_free(thr_ctx *t)
 			c->env.func = 1;
 		return;
 	}
-	if (F->us_next < F->nunits && F->unit_s[F->us_next] == next) {
+	if (F->us_next < F->unit_cap && F->unit_s[F->us_next] == next) {
 		chip_demand(c, &F->dem_s[F->us_next * RES_N]);
 		F->mark_s[F->us_next++] = eng_now(c->e);
 	}
@@ -208,26 +208,34 @@ static int fid_init(chip *c)
 		return 0;
 	}
 	F->nunits = (int)n;
-	F->unit_s = calloc((size_t)n, sizeof *F->unit_s);
-	F->mark_s = calloc((size_t)n, sizeof *F->mark_s);
-	F->mark_e = calloc((size_t)n, sizeof *F->mark_e);
-	F->unit_rate = calloc((size_t)n, sizeof *F->unit_rate);
-	F->mark_r0 = calloc((size_t)n, sizeof *F->mark_r0);
-	double **dem[4] = {&F->dem_r0, &F->dem_s, &F->dem_e, &F->dem_r1};
-	for (int i = 0; i < 4; i++)
-		if (!(*dem[i] = calloc((size_t)n * RES_N, sizeof(double))))
+	/* planned units, and as many extra ones at most (sampling.hard_share) */
+	size_t cap = (size_t)(cfg->sampling.hard_share > 0 ? 2 * n : n);
+	F->unit_cap = (int)cap;
+	F->base_s = calloc((size_t)n, sizeof *F->base_s);
+	F->unit_s = calloc(cap, sizeof *F->unit_s);
+	F->mark_s = calloc(cap, sizeof *F->mark_s);
+	F->mark_e = calloc(cap, sizeof *F->mark_e);
+	F->unit_rate = calloc(cap, sizeof *F->unit_rate);
+	F->unit_hard = calloc(cap, sizeof *F->unit_hard);
+	F->mark_r0 = calloc(cap, sizeof *F->mark_r0);
+	double **dem[2] = {&F->dem_s, &F->dem_e};
+	for (int i = 0; i < 2; i++)
+		if (!(*dem[i] = calloc(cap * RES_N, sizeof(double))))
 			return -1;
-	if (!F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->mark_r0)
+	if (!F->base_s || !F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate ||
+	    !F->unit_hard || !F->mark_r0)
 		return -1;
 	/* the head region is the frame's start, the tail its end; the others
 	 * systematic between them, one per period P at sampling.offset of the
 	 * room left in it (P >= U + W: regions never overlap) */
 	int RW = U + W, m = (int)n - 2;
 	double P = (double)(N - 2 * RW) / m;
-	F->unit_s[0] = W;
-	F->unit_s[n - 1] = N - U;
+	F->base_s[0] = W;
+	F->base_s[n - 1] = N - U;
 	for (int k = 0; k < m; k++)
-		F->unit_s[k + 1] = RW + (int)((double)k * P + (P - RW) * cfg->sampling.offset) + W;
+		F->base_s[k + 1] = RW + (int)((double)k * P + (P - RW) * cfg->sampling.offset) + W;
+	/* an extra region at most every quarter period */
+	F->gap = (int)(P / 4) > U ? (int)(P / 4) : U;
 	return 0;
 }
 
@@ -410,6 +418,8 @@ void chip_destroy(chip *c)
 	free(c->frame_port);
 	free(c->frame_mem);
 	free(c->fid.unit_s);
+	free(c->fid.base_s);
+	free(c->fid.unit_hard);
 	free(c->fid.mark_s);
 	free(c->fid.mark_e);
 	free(c->fid.est);
@@ -417,10 +427,8 @@ void chip_destroy(chip *c)
 	free(c->fid.floor);
 	free(c->fid.unit_rate);
 	free(c->fid.mark_r0);
-	free(c->fid.dem_r0);
 	free(c->fid.dem_s);
 	free(c->fid.dem_e);
-	free(c->fid.dem_r1);
 	if (c->trace) {
 		diag d;
 		chip_trace_close(c, &d);
@@ -478,15 +486,35 @@ static uint64_t run_region(chip *c, int end)
 	return eng_now(c->e) - t0;
 }
 
-/* The demand of the stretch between two chip_demand snapshots: the core
- * cycles of its busiest resource. */
-static double max_delta(const double *a, const double *b)
+/* The demand of a stretch between two chip_demand snapshots (the core
+ * cycles of its busiest resource) and whether it is memory bound: its
+ * SDRAM or host-bus time above sampling.hard_share of its busiest compute
+ * resource (units, L1 ports). */
+static double piece(const chip *c, const double *a, const double *b, int *hard)
 {
-	double m = 0;
-	for (int r = 0; r < RES_N; r++)
-		if (b[r] - a[r] > m)
-			m = b[r] - a[r];
-	return m;
+	double comp = 0, mem = 0;
+	for (int r = 0; r < RES_N; r++) {
+		double d = b[r] - a[r];
+		if (r == RES_SDRAM || r == RES_HOSTBUS)
+			mem = d > mem ? d : mem;
+		else
+			comp = d > comp ? d : comp;
+	}
+	double hs = c->cfg.sampling.hard_share;
+	*hard = hs > 0 && mem > hs * comp;
+	return comp > mem ? comp : mem;
+}
+
+/* Adds a chunk (or region piece) of demand x to its stratum (memory bound
+ * or not, by its own demand) when it belongs to the estimated middle of the
+ * frame; returns the stratum. */
+static int account(chip_fidelity *F, double x, int hard, int middle)
+{
+	if (middle) {
+		F->xs[hard] += x;
+		F->nchunks[hard] += x > 0;
+	}
+	return hard;
 }
 
 /* Gives a free thread its next packet in functional processing: a
@@ -526,12 +554,16 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
  * in flight), so memory goes through the hierarchy's functional path with
  * no MSHR busy. With drain, the range ends with every slot free; without,
  * as soon as its last tile is handed out, packets still in flight. */
-static void func_range(chip *c, int end, int drain)
+static int func_range(chip *c, int end, int drain)
 {
 	chip_fidelity *F = &c->fid;
 	/* sampled: the demand of each chunk of unit_tiles tiles (the units'
-	 * size) adds to the frame's; the chunk's busiest resource is its demand */
-	int chunked = F->mode == CFG_FIDELITY_SAMPLED, given = 0;
+	 * size) adds to its stratum's; the chunk's busiest resource is its
+	 * demand. A memory-bound chunk stops the stretch early for an extra
+	 * region, when one is left, the last region ended at least `gap`
+	 * tiles ago, and there is room before the next planned one. */
+	int chunked = F->mode == CFG_FIDELITY_SAMPLED, given = 0, extra = 0;
+	int room = F->warmup_tiles + F->unit_tiles;
 	double d0[RES_N], d1[RES_N];
 	if (chunked)
 		chip_demand(c, d0);
@@ -547,10 +579,18 @@ static void func_range(chip *c, int end, int drain)
 				thr_ctx *t = &c->rtp[r].t[s];
 				if (!t->p) {
 					if (chunked && given == F->unit_tiles) {
+						int hard;
 						chip_demand(c, d1);
-						F->func_x += max_delta(d0, d1);
+						double x = piece(c, d0, d1, &hard);
+						account(F, x, hard, 1);
 						memcpy(d0, d1, sizeof d0);
 						given = 0;
+						if (hard && !drain && F->extra_left > 0 &&
+						    c->g.next - F->last_end >= F->gap &&
+						    end - c->g.next >= room) {
+							end = c->g.next;
+							extra = 1;
+						}
 					}
 					if (!func_give(c, t, end, &given))
 						continue;
@@ -561,9 +601,13 @@ static void func_range(chip *c, int end, int drain)
 	}
 	c->env.func = 0;
 	if (chunked) {
+		int hard;
 		chip_demand(c, d1);
-		F->func_x += max_delta(d0, d1);
+		double x = piece(c, d0, d1, &hard);
+		if (x > 0)
+			account(F, x, hard, 1);
 	}
+	return extra;
 }
 
 double chip_t975(int df)
@@ -605,6 +649,38 @@ void chip_demand(const chip *c, double d[RES_N])
 	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
 }
 
+/* One stratum's ratio estimate over units [lo, hi) of stratum h (or of
+ * both, h < 0): R, and the variance of R x X for the stratum's demand X
+ * (finite-population corrected over its chunks). */
+typedef struct strat {
+	int n;
+	double R, var;
+} strat;
+
+static strat stratum(const chip_fidelity *F, const double *cyc, const double *xu, int lo, int hi,
+                     int h, double X, int chunks)
+{
+	strat s = {0, 0, 0};
+	double sc = 0, sx = 0;
+	for (int j = lo; j < hi; j++)
+		if (h < 0 || F->unit_hard[j] == h) {
+			sc += cyc[j];
+			sx += xu[j];
+			s.n++;
+		}
+	if (!s.n || sx <= 0)
+		return s;
+	s.R = sc / sx;
+	double s2 = 0, xbar = sx / s.n;
+	for (int j = lo; j < hi; j++)
+		if (h < 0 || F->unit_hard[j] == h)
+			s2 += (cyc[j] - s.R * xu[j]) * (cyc[j] - s.R * xu[j]);
+	s2 = s.n > 1 ? s2 / (s.n - 1) : INFINITY;
+	double fpc = chunks > s.n ? 1.0 - (double)s.n / chunks : 0;
+	s.var = X * X * fpc * s2 / s.n / (xbar * xbar);
+	return s;
+}
+
 /* Sampled frame: detailed regions (warm-up, then one measured unit) with
  * functional stretches between them; a region takes over the packets the
  * stretch before it left in flight, and hands its own to the stretch after
@@ -616,62 +692,85 @@ void chip_demand(const chip *c, double d[RES_N])
  * L1 ports, SDRAM and host-bus time), taken per chunk of unit_tiles tiles
  * so that a PCI-bound start and an intersection-bound middle each count
  * what bounds them; it is known for every chunk, detailed or functional.
- * The middle's cycles are the ratio estimator demand x sum(cycles) /
- * sum(demand) over the units' windows (all but the first region's), with
- * a 95% t-interval from the residuals (finite-population corrected).
- * docs/fidelity.md. */
+ * Chunks and units are memory bound or not (piece); the middle's cycles are
+ * per stratum the ratio estimator demand x sum(cycles) / sum(demand) over
+ * the units' windows (all but the first region's), with a 95% interval
+ * from the residuals (finite-population corrected, Satterthwaite's degrees
+ * of freedom) widened by sampling.bias_bound. A memory-bound functional
+ * chunk brings an extra region (func_range). docs/fidelity.md. */
 static void sampled_frame(chip *c, int f)
 {
 	chip_fidelity *F = &c->fid;
-	int N = c->g.ntiles, U = F->unit_tiles, n = F->nunits;
+	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits;
 	uint64_t t0 = eng_now(c->e);
 	F->us_next = F->ue_next = 0;
-	F->func_x = 0;
-	for (int j = 0; j < n; j++) {
-		int rs = F->unit_s[j] - F->warmup_tiles;
+	F->xs[0] = F->xs[1] = 0;
+	F->nchunks[0] = F->nchunks[1] = 0;
+	F->extra_left = F->unit_cap - n;
+	F->last_end = 0;
+	double per = (double)c->clk.period, cyc[F->unit_cap], xu[F->unit_cap];
+	int j = 0;
+	for (int b = 0; b < n; j++) {
+		int rs = F->base_s[b] - W;
 		if (rs < c->g.next)
 			rs = c->g.next;
-		if (c->g.next < rs)
-			func_range(c, rs, 0);
-		chip_demand(c, &F->dem_r0[j * RES_N]);
+		/* the stretch before the next planned region may stop early at a
+		 * memory-bound chunk: an extra region starts there */
+		int extra = c->g.next < rs && func_range(c, rs, 0);
+		if (extra) {
+			F->extra_left--;
+			F->unit_s[j] = c->g.next + W;
+		} else {
+			F->unit_s[j] = F->base_s[b++];
+		}
+		double r0[RES_N], r1[RES_N];
+		chip_demand(c, r0);
 		F->mark_r0[j] = eng_now(c->e);
-		run_region(c, j == n - 1 ? N : F->unit_s[j] + U);
-		chip_demand(c, &F->dem_r1[j * RES_N]);
+		int tail = b == n && !extra;
+		run_region(c, tail ? N : F->unit_s[j] + U);
+		F->last_end = c->g.next;
+		chip_demand(c, r1);
+		/* the region's pieces in order: warm-up, unit, what finished after
+		 * the unit; the head's first two and the tail are measured */
+		const double *ds = &F->dem_s[j * RES_N], *de = &F->dem_e[j * RES_N];
+		int hw, hu, hd;
+		double xw = piece(c, r0, ds, &hw), xd = piece(c, de, r1, &hd);
+		xu[j] = piece(c, ds, de, &hu);
+		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / per;
+		F->unit_rate[j] = xu[j] > 0 ? cyc[j] / xu[j] : 0;
+		account(F, xw, hw, j > 0 && !tail);
+		F->unit_hard[j] = account(F, xu[j], hu, j > 0 && !tail);
+		if (xd > 0)
+			account(F, xd, hd, !tail);
 	}
+	int nr = F->nreg = j;
 	F->region_end = N;
 	uint64_t t1 = eng_now(c->e);
-	double per = (double)c->clk.period, X = F->func_x, Xh = 0, Xt = 0;
-	double sc = 0, sx = 0, cyc[n > 0 ? n : 1], xu[n > 0 ? n : 1];
-	for (int j = 0; j < n; j++) {
-		const double *r0 = &F->dem_r0[j * RES_N], *s = &F->dem_s[j * RES_N],
-		             *e = &F->dem_e[j * RES_N], *r1 = &F->dem_r1[j * RES_N];
-		double xw = max_delta(r0, s), xd = max_delta(e, r1);
-		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / per;
-		xu[j] = max_delta(s, e);
-		X += xw + xu[j] + xd;
-		F->unit_rate[j] = xu[j] > 0 ? cyc[j] / xu[j] : 0;
-		if (j == 0)
-			Xh = xw + xu[j];
-		if (j == n - 1)
-			Xt = xw + xu[j] + xd;
-		if (j > 0) {
-			sc += cyc[j];
-			sx += xu[j];
-		}
+	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[nr - 1]) / per;
+	/* the units after the head; two strata when each has at least two
+	 * units, else one (Satterthwaite's degrees of freedom for two) */
+	strat e = stratum(F, cyc, xu, 1, nr, 0, F->xs[0], F->nchunks[0]);
+	strat h = stratum(F, cyc, xu, 1, nr, 1, F->xs[1], F->nchunks[1]);
+	double est, var, df;
+	if (e.n >= 2 && h.n >= 2) {
+		est = e.R * F->xs[0] + h.R * F->xs[1];
+		var = e.var + h.var;
+		double d = e.var * e.var / (e.n - 1) + h.var * h.var / (h.n - 1);
+		df = d > 0 ? var * var / d : e.n + h.n - 2;
+	} else {
+		double X = F->xs[0] + F->xs[1];
+		strat a = stratum(F, cyc, xu, 1, nr, -1, X, F->nchunks[0] + F->nchunks[1]);
+		est = a.R * X;
+		var = a.var;
+		df = a.n - 1;
 	}
-	/* measured: the head up to its unit's end mark, the tail from its
-	 * region's start to the frame's end */
-	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[n - 1]) / per;
-	int m = n - 1;
-	double R = sx > 0 ? sc / sx : 0, xbar = sx / m, s2 = 0, Xm = X - Xh - Xt;
-	for (int j = 1; j < n; j++)
-		s2 += (cyc[j] - R * xu[j]) * (cyc[j] - R * xu[j]);
-	s2 = m > 1 ? s2 / (m - 1) : 0;
-	double fpc = 1.0 - (double)m * U / N;
-	F->frame_x = X;
-	F->est[f] = ch + R * (Xm > 0 ? Xm : 0) + ct;
-	F->half[f] =
-	    xbar > 0 ? chip_t975(m - 1) * Xm * sqrt(s2 * (fpc > 0 ? fpc : 0) / m) / xbar : INFINITY;
+	F->frame_x = F->xs[0] + F->xs[1];
+	F->est[f] = ch + est + ct;
+	/* plus a bound on the units' systematic error (sampling.bias_bound),
+	 * which no spread between units shows */
+	F->half[f] = isfinite(var)
+	                 ? chip_t975((int)df) * sqrt(var) + c->cfg.sampling.bias_bound * est
+	                 : INFINITY;
 }
 
 static const char *const res_names[RES_N] = {"rgs",   "trav",    "list",   "isect", "l1_shade",

@@ -59,19 +59,25 @@ typedef struct chip_fidelity {
 	/* sampled: per frame nunits units of unit_tiles tiles, each after
 	 * warmup_tiles detailed tiles; exact when every tile is detailed */
 	int unit_tiles, warmup_tiles, nunits, exact;
-	int *unit_s;               /* first tile (hand-out index) of each unit */
+	int *base_s;               /* planned units' first tiles (nunits) */
+	int unit_cap, nreg;        /* room for units (planned + extra); run in the last frame */
+	int *unit_s;               /* first tile (hand-out index) of each unit run */
+	int gap, extra_left;       /* extra regions: tiles at least between, how many more */
+	int last_end;              /* the last region's end tile */
+	double xs[2];              /* this frame: the middle's demand, per stratum (easy, hard) */
+	int nchunks[2];            /* and its chunks */
 	uint64_t *mark_s, *mark_e; /* ticks: unit's first tile taken, first tile after it wanted */
-	/* cumulative resource demand (chip_demand, RES_N each) at a unit's
-	 * region start, its two marks and its region end */
-	double *dem_r0, *dem_s, *dem_e, *dem_r1;
+	/* cumulative resource demand (chip_demand, RES_N each) at each unit's
+	 * two marks */
+	double *dem_s, *dem_e;
 	uint64_t *mark_r0;    /* ticks: each region's start */
 	int us_next, ue_next; /* next unit whose start / end mark is due */
 	int region_end;       /* tiles at or after it are not handed out (this region) */
-	double func_x;        /* this frame: summed demand of the functional chunks */
 	uint64_t detailed_tiles, functional_tiles, detailed_cycles; /* all frames */
 	double *est, *half; /* per frame: cycles (estimate or measured), 95% half-width */
 	double *floor;      /* per frame: the busiest-resource bound (cycles can't be lower) */
 	double *unit_rate;  /* last frame: cycles per unit of demand of each unit */
+	int *unit_hard;     /* last frame: each unit's stratum (account) */
 	double frame_x;     /* last frame: the demand the estimate scales */
 	/* busiest-resource bound, last frame: cycles each resource needs */
 	double res_cycles[RES_N];

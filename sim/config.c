@@ -114,6 +114,19 @@ static const cfg_key keys[] = {
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: where in its period each warm-up and unit sit (0 = at the "
              "start, 1 = at the end); runs at different offsets are independent replicas"},
+    {FLT("sampling.hard_share", sampling.hard_share, 0.6, 0, 100, ""),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: a chunk whose memory demand (SDRAM or host-bus time) exceeds "
+             "this share of its compute demand (units, L1 ports) is memory bound: such chunks "
+             "form their own stratum of the estimate, and one seen in a functional stretch "
+             "brings an extra region soon after (at most as many extra as planned); 0 = one "
+             "stratum, no extra regions"},
+    {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
+     .source = "measured (docs/fidelity.md)",
+     .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "
+             "half-width for the units' systematic error, which no spread between units "
+             "shows (measured: unit windows ran 1-3% faster than a full cycle run at the same "
+             "places)"},
     {FLT("chip.clock_mhz", chip.clock_mhz, 533, 1, 10000, "MHz"), PUB "§4.7",
      .desc = "core clock; rounded to a whole-picosecond period (sim/engine.h)"},
     {INT("chip.rtps", chip.rtps, 4, 1, 1024, ""), PUB "§4.7",

@@ -107,12 +107,14 @@ typedef struct saar_config {
 		} hostbus;
 	} memory;
 	cfg_fidelity fidelity;
-	struct {                  /* fidelity sampled (docs/fidelity.md) */
-		double rate;      /* share of tiles in measured units; 1 = every tile (= cycle) */
-		int unit_tiles;   /* tiles per measured unit; 0 = the chip's thread count */
-		int warmup_tiles; /* detailed tiles before each unit; -1 = the thread count */
-		int min_units;    /* fewest units per frame (more than the rate asks if needed) */
-		double offset;    /* where in its period each region starts, 0..1 */
+	struct {                   /* fidelity sampled (docs/fidelity.md) */
+		double rate;       /* share of tiles in measured units; 1 = every tile (= cycle) */
+		int unit_tiles;    /* tiles per measured unit; 0 = the chip's thread count */
+		int warmup_tiles;  /* detailed tiles before each unit; -1 = the thread count */
+		int min_units;     /* fewest units per frame (more than the rate asks if needed) */
+		double offset;     /* where in its period each region starts, 0..1 */
+		double hard_share; /* memory share above which a chunk is memory bound; 0 = off */
+		double bias_bound; /* share of the estimate added to the interval for window bias */
 	} sampling;
 } saar_config;
 

@@ -139,6 +139,15 @@ typedef struct fidfig {
 	const char *bound_by;
 } fidfig;
 
+/* Units of the last frame in the memory-bound stratum. */
+static int hard_units(const chip_fidelity *F)
+{
+	int n = 0;
+	for (int u = 0; u < F->nreg; u++)
+		n += F->unit_hard[u];
+	return n;
+}
+
 static void fidfig_get(const chip *c, fidfig *x)
 {
 	const chip_fidelity *F = &c->fid;
@@ -172,13 +181,15 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "resource is %s, %.0f cycles/frame)\n",
 		        x.fps_bound, x.bound_by, F->res_cycles[F->bound_by]);
 	else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact)
-		fprintf(f,
-		        "  fidelity sampled: %d units x %d tiles (+%d warm-up) per frame; cycles "
-		        "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
-		        "functional\n",
-		        F->nunits, F->unit_tiles, F->warmup_tiles, x.cycles, x.half, x.fps,
-		        x.fps_lo, x.fps_hi, (unsigned long long)F->detailed_tiles,
-		        (unsigned long long)F->functional_tiles);
+		fprintf(
+		    f,
+		    "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up) in "
+		    "the last frame; cycles "
+		    "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
+		    "functional\n",
+		    F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles, x.cycles, x.half, x.fps,
+		    x.fps_lo, x.fps_hi, (unsigned long long)F->detailed_tiles,
+		    (unsigned long long)F->functional_tiles);
 	else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
 }
@@ -209,13 +220,15 @@ static void fidelity_json(jsonw *j, const chip *c)
 		jsonw_num(j, x.fps_hi);
 	jsonw_arr_end(j);
 	if (F->mode == CFG_FIDELITY_SAMPLED) {
-		jsonw_kint(j, "units_per_frame", F->nunits);
+		jsonw_kint(j, "units_per_frame", F->nreg);
+		jsonw_kint(j, "planned_units", F->nunits);
+		jsonw_kint(j, "memory_bound_units", hard_units(F));
 		jsonw_kint(j, "unit_tiles", F->unit_tiles);
 		jsonw_kint(j, "warmup_tiles", F->warmup_tiles);
 		jsonw_knum(j, "sample_rate", c->cfg.sampling.rate);
 		jsonw_key(j, "unit_cycles_per_demand");
 		jsonw_arr_begin(j);
-		for (int u = 0; u < F->nunits; u++)
+		for (int u = 0; u < F->nreg; u++)
 			jsonw_num(j, F->unit_rate[u]);
 		jsonw_arr_end(j);
 	}

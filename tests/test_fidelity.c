@@ -6,7 +6,9 @@
  * and does exactly its unit operations, and its fps bound is never below
  * the true fps; sampled intervals shrink with more units, cover the true
  * value on replicas, never go below the bound, and follow the host bus on
- * a PCI-bound frame. Scenes: the embedded one, and SPD balls through the
+ * a PCI-bound frame; regions take over packets in flight with every
+ * operation counted once; memory-bound chunks get their own stratum and
+ * extra units. Scenes: the embedded one, and SPD balls through the
  * VMA.
  */
 #include <math.h>
@@ -278,13 +280,43 @@ Test(fidelity, interval_covers_small_cases)
 		cr_assert(!y->fid.exact);
 		double est = y->fid.est[0], h = y->fid.half[0];
 		cr_log_info("offset %.1f: true %.0f, estimate %.0f +- %.0f (%d units)",
-		            c.sampling.offset, truth, est, h, y->fid.nunits);
+		            c.sampling.offset, truth, est, h, y->fid.nreg);
 		covered += fabs(est - truth) <= h;
 		cr_assert_leq(fabs(est - truth), 0.15 * truth, "offset %.1f: %g vs %g +- %g",
 		              c.sampling.offset, est, truth, h);
 		chip_destroy(y);
 	}
 	cr_assert_geq(covered, 4, "interval covered the truth on %d of 5 replicas", covered);
+	world_free(&w);
+}
+
+/* Memory-bound chunks form their own stratum and bring extra regions; with
+ * sampling.hard_share 0 there is one stratum and only the planned units. */
+Test(fidelity, memory_bound_chunks_get_extra_units)
+{
+	world w;
+	load_embedded(&w);
+	saar_config c;
+	cfg_mode(&c, 256, CFG_FIDELITY_SAMPLED);
+	c.chip.threads_per_rtp = 4;
+	c.sampling.rate = 0.1;
+	chip *y = run(&w, &c);
+	int hard = 0;
+	for (int u = 0; u < y->fid.nreg; u++)
+		hard += y->fid.unit_hard[u];
+	cr_log_info("%d planned units, %d run, %d memory bound", y->fid.nunits, y->fid.nreg, hard);
+	cr_assert_gt(y->fid.nreg, y->fid.nunits, "no extra region");
+	cr_assert_leq(y->fid.nreg, 2 * y->fid.nunits);
+	cr_assert_gt(hard, 0, "no memory-bound unit");
+	cr_assert_gt(y->fid.xs[1], 0, "no memory-bound demand");
+	chip_destroy(y);
+	c.sampling.hard_share = 0;
+	y = run(&w, &c);
+	cr_assert_eq(y->fid.nreg, y->fid.nunits);
+	cr_assert_eq(y->fid.xs[1], 0);
+	for (int u = 0; u < y->fid.nreg; u++)
+		cr_assert_eq(y->fid.unit_hard[u], 0);
+	chip_destroy(y);
 	world_free(&w);
 }
 
