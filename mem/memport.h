@@ -65,9 +65,9 @@ typedef struct memport {
 int mem_init_fixed(memport *p, eng *e, eng_clock clk, int latency);
 void mem_free(memport *p);
 
-/* Issues one request. done may be NULL only for writes. */
-static inline void mem_access(memport *p, const mem_req *r, eng_handler done, void *ctx,
-                              uint64_t arg)
+/* Counts one request and shows it to the trace tap: what every access,
+ * timed or functional, does first. */
+static inline void mem_count(memport *p, const mem_req *r)
 {
 	if (r->write) {
 		p->n.writes[r->type]++;
@@ -78,6 +78,13 @@ static inline void mem_access(memport *p, const mem_req *r, eng_handler done, vo
 	}
 	if (p->tap)
 		p->tap(p->tap_ctx, r);
+}
+
+/* Issues one request. done may be NULL only for writes. */
+static inline void mem_access(memport *p, const mem_req *r, eng_handler done, void *ctx,
+                              uint64_t arg)
+{
+	mem_count(p, r);
 	p->model->access(p->impl, r, done, ctx, arg);
 }
 
@@ -85,15 +92,7 @@ static inline void mem_access(memport *p, const mem_req *r, eng_handler done, vo
  * once): counted like mem_access, then the model's access_func. */
 static inline void mem_access_func(memport *p, const mem_req *r)
 {
-	if (r->write) {
-		p->n.writes[r->type]++;
-		p->n.write_bytes[r->type] += r->bytes;
-	} else {
-		p->n.reads[r->type]++;
-		p->n.read_bytes[r->type] += r->bytes;
-	}
-	if (p->tap)
-		p->tap(p->tap_ctx, r);
+	mem_count(p, r);
 	if (p->model->access_func)
 		p->model->access_func(p->impl, r);
 }

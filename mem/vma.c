@@ -225,14 +225,23 @@ static vma_piece *stall_pop(vma *v, vma_piece **head, vma_piece **tail, uint64_t
 	return p;
 }
 
+/* The pieces waiting for line of cache c (wait: its per-MSHR lists),
+ * taken off the MSHR before the fill frees it. */
+static vma_piece *take_waiting(cache *c, vma_piece **wait, uint64_t line)
+{
+	int m = cache_mshr_find(c, line);
+	if (m < 0)
+		return NULL;
+	vma_piece *w = wait[m];
+	wait[m] = NULL;
+	return w;
+}
+
 static void tag_filled(eng *e, void *ctx, uint64_t set)
 {
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
-	int m = cache_mshr_find(&v->tag, set);
-	vma_piece *w = m >= 0 ? v->tag_wait[m] : NULL;
-	if (m >= 0)
-		v->tag_wait[m] = NULL;
+	vma_piece *w = take_waiting(&v->tag, v->tag_wait, set);
 	cache_fill(&v->tag, set, NULL);
 	while (w) {
 		vma_piece *n = w->next;
@@ -280,10 +289,7 @@ static void dma_done(eng *e, void *ctx, uint64_t line)
 {
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
-	int m = cache_mshr_find(&v->l2, line);
-	vma_piece *w = m >= 0 ? v->l2_wait[m] : NULL;
-	if (m >= 0)
-		v->l2_wait[m] = NULL;
+	vma_piece *w = take_waiting(&v->l2, v->l2_wait, line);
 	uint32_t slot = cache_fill(&v->l2, line, NULL);
 	uint32_t set = cache_set_of(&v->l2, line);
 	/* posted: the fetched line into its slot, its record into the meta-data

@@ -75,6 +75,35 @@ static const char *const shade_names[11] = {"shade.hits",
                                             "shade.shadow_occluded",
                                             "shade.shadow_lit"};
 
+/* Issue cycles of unit kind k so far, per instance, summed over RTPs. */
+static double chip_work(const chip *c, int k)
+{
+	double w = 0;
+	for (int r = 0; r < c->nrtp; r++)
+		w += (double)*c->rtp[r].u[k].busy / c->rtp[r].u[k].count;
+	return w;
+}
+
+/* Cumulative demand of every resource (enum chip_res) in core cycles:
+ * unit issue cycles per instance, L1 requests per port, SDRAM and host-bus
+ * data-bus time (detailed and functional). Functional and detailed tiles
+ * count it alike, so it is known for the whole frame. */
+static void chip_demand(const chip *c, double d[RES_N])
+{
+	memset(d, 0, RES_N * sizeof *d);
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		d[RES_RGS + k] = chip_work(c, k) / c->nrtp;
+	hier_stats h;
+	if (hier_get_stats(&c->mem, &h))
+		return;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		d[RES_L1_SHADE + t] =
+		    (double)(h.reads[t] - h.bypass_reads[t]) / hier_l1_params(&c->cfg, t).ports;
+	double per = (double)c->clk.period;
+	d[RES_SDRAM] = (double)(h.sdram.busy_ticks + h.func_sdram_busy_ticks) / per;
+	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
+}
+
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
@@ -625,30 +654,6 @@ double chip_t975(int df)
 	return z + (z3 + z) / (4.0 * df) + (5 * z3 * z * z + 16 * z3 + 3 * z) / (96.0 * df * df);
 }
 
-double chip_work(const chip *c, int k)
-{
-	double w = 0;
-	for (int r = 0; r < c->nrtp; r++)
-		w += (double)*c->rtp[r].u[k].busy / c->rtp[r].u[k].count;
-	return w;
-}
-
-void chip_demand(const chip *c, double d[RES_N])
-{
-	memset(d, 0, RES_N * sizeof *d);
-	for (int k = 0; k < UNIT_NKINDS; k++)
-		d[RES_RGS + k] = chip_work(c, k) / c->nrtp;
-	hier_stats h;
-	if (hier_get_stats(&c->mem, &h))
-		return;
-	for (int t = 0; t < MEM_NTYPES; t++)
-		d[RES_L1_SHADE + t] =
-		    (double)(h.reads[t] - h.bypass_reads[t]) / hier_l1_params(&c->cfg, t).ports;
-	double per = (double)c->clk.period;
-	d[RES_SDRAM] = (double)(h.sdram.busy_ticks + h.func_sdram_busy_ticks) / per;
-	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
-}
-
 /* One stratum's ratio estimate over units [lo, hi) of stratum h (or of
  * both, h < 0): R, and the variance of R x X for the stratum's demand X
  * (finite-population corrected over its chunks). */
@@ -764,7 +769,6 @@ static void sampled_frame(chip *c, int f)
 		var = a.var;
 		df = a.n - 1;
 	}
-	F->frame_x = F->xs[0] + F->xs[1];
 	F->est[f] = ch + est + ct;
 	/* plus a bound on the units' systematic error (sampling.bias_bound),
 	 * which no spread between units shows */

@@ -78,7 +78,6 @@ typedef struct chip_fidelity {
 	double *floor;      /* per frame: the busiest-resource bound (cycles can't be lower) */
 	double *unit_rate;  /* last frame: cycles per unit of demand of each unit */
 	int *unit_hard;     /* last frame: each unit's stratum (account) */
-	double frame_x;     /* last frame: the demand the estimate scales */
 	/* busiest-resource bound, last frame: cycles each resource needs */
 	double res_cycles[RES_N];
 	int bound_by; /* enum chip_res */
@@ -141,14 +140,6 @@ uint64_t chip_rtp_sum(const chip *c, const char *suffix);
 
 /* Name of an enum chip_res ("trav", "l1_kd", "sdram", "hostbus", ...). */
 const char *chip_res_name(int res);
-/* The chip's work so far of unit kind k: issue cycles per instance (busy /
- * count), summed over RTPs. Functional and detailed tiles count it alike,
- * so it is known for the whole frame. */
-double chip_work(const chip *c, int k);
-/* Cumulative demand of every resource (enum chip_res) in core cycles:
- * unit issue cycles per instance, L1 requests per port, SDRAM and host-bus
- * data-bus time (detailed and functional). */
-void chip_demand(const chip *c, double d[RES_N]);
 /* 97.5% quantile of Student's t with df degrees of freedom. */
 double chip_t975(int df);
 const char *chip_unit_name(int kind);   /* "rgs", "trav", "list", "isect" */

@@ -7,12 +7,10 @@
  */
 #include <string.h>
 
-#include "chip.h"
+#include "chiptest.h"
 #include "memport.h"
-#include "testutil.h"
 #include "thread.h"
 #include "view.h"
-#include "world.h"
 
 /* ---- unit timing ---- */
 
@@ -93,16 +91,6 @@ Test(chip, fixed_memory_answers_after_latency_and_counts)
 
 /* ---- whole frames ---- */
 
-static void load(world *w, const char *views, const char *vname)
-{
-	world_opts o;
-	world_opts_default(&o);
-	o.views = views;
-	o.view = vname;
-	diag d;
-	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
-}
-
 static void small_cfg(saar_config *c, int size)
 {
 	cfg_defaults(c);
@@ -125,15 +113,6 @@ static uint8_t *reference(const world *w, const saar_config *c, render_stats *st
 	fb_to_rgb8(&fb, rgb, NULL);
 	fb_free(&fb);
 	return rgb;
-}
-
-static chip *run(const world *w, const saar_config *c)
-{
-	diag d;
-	chip *ch = chip_create(c, w, &d);
-	cr_assert(ch, "%s", d.msg);
-	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
-	return ch;
 }
 
 static void assert_same_image(const chip *ch, const uint8_t *ref, const char *what)
@@ -160,7 +139,7 @@ static void image_matrix(const world *w, const char *what)
 		for (int b = 0; b < 2; b++) {
 			c.chip.threads_per_rtp = threads[a];
 			c.chip.rtps = rtps[b];
-			chip *ch = run(w, &c);
+			chip *ch = tu_run_chip(w, &c);
 			char lbl[256];
 			snprintf(lbl, sizeof lbl, "%s, %d threads x %d RTPs", what, threads[a],
 			         rtps[b]);
@@ -185,7 +164,7 @@ static void image_matrix(const world *w, const char *what)
 Test(chip, image_identical_embedded_any_threads_and_rtps)
 {
 	world w;
-	load(&w, NULL, NULL);
+	tu_load_world(&w, NULL, NULL, NULL);
 	image_matrix(&w, "embedded");
 	world_free(&w);
 }
@@ -195,7 +174,7 @@ static void view_test(const char *name)
 	char views[1024];
 	SCENE_OR_SKIP(views, "views.yaml");
 	world w;
-	load(&w, views, name);
+	tu_load_world(&w, NULL, views, name);
 	image_matrix(&w, name);
 	world_free(&w);
 }
@@ -238,14 +217,14 @@ Test(chip_views, every_view_has_a_test)
 Test(chip, stack_overflow_spills_and_keeps_the_image)
 {
 	world w;
-	load(&w, NULL, NULL);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	small_cfg(&c, 64);
 	c.chip.stack_depth = 2; /* below the tree depth: cfg_validate would refuse it */
 	c.chip.rtps = c.chip.threads_per_rtp = 1; /* nothing hides the refill latency */
 	render_stats st;
 	uint8_t *ref = reference(&w, &c, &st);
-	chip *ch = run(&w, &c);
+	chip *ch = tu_run_chip(&w, &c);
 	assert_same_image(ch, ref, "stack depth 2");
 	uint64_t ov = stats_get(&ch->st, "trav.stack_overflows");
 	cr_assert_gt(ov, 0, "no overflow with a 2-entry stack");
@@ -254,7 +233,7 @@ Test(chip, stack_overflow_spills_and_keeps_the_image)
 	cr_assert_eq(stats_get(&ch->st, "mem.kd.write_bytes"), ov * THR_STACK_ENTRY_BYTES);
 	/* a deep stack never spills, and refills cost time a single thread cannot hide */
 	c.chip.stack_depth = 64;
-	chip *deep = run(&w, &c);
+	chip *deep = tu_run_chip(&w, &c);
 	cr_assert_eq(stats_get(&deep->st, "trav.stack_overflows"), 0);
 	cr_assert_gt(chip_cycles(ch), chip_cycles(deep));
 	chip_destroy(deep);
@@ -266,13 +245,13 @@ Test(chip, stack_overflow_spills_and_keeps_the_image)
 Test(chip, deterministic_cycles_and_counters)
 {
 	world w;
-	load(&w, NULL, NULL);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	small_cfg(&c, 96);
 	c.chip.thread_sched = CFG_SCHED_OLDEST_FIRST;
 	c.chip.tile_order = CFG_TILES_MORTON;
 	c.frame.frames = 2;
-	chip *a = run(&w, &c), *b = run(&w, &c);
+	chip *a = tu_run_chip(&w, &c), *b = tu_run_chip(&w, &c);
 	cr_assert_eq(a->frame_cycles[0], b->frame_cycles[0]);
 	cr_assert_eq(a->frame_cycles[1], b->frame_cycles[1]);
 	cr_assert_eq(a->st.n, b->st.n);
@@ -286,11 +265,11 @@ Test(chip, deterministic_cycles_and_counters)
 Test(chip, units_and_threads_account_for_all_time)
 {
 	world w;
-	load(&w, NULL, NULL);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	small_cfg(&c, 64);
 	c.chip.masked_packets = false;
-	chip *ch = run(&w, &c);
+	chip *ch = tu_run_chip(&w, &c);
 	uint64_t cyc = chip_cycles(ch), tot = 0;
 	const char *st[] = {"threads.idle_ps", "threads.running_ps", "threads.waiting_memory_ps",
 	                    "threads.waiting_unit_ps"};

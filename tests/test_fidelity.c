@@ -14,36 +14,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "chip.h"
+#include "chiptest.h"
 #include "hier.h"
-#include "testutil.h"
-#include "world.h"
-
-static void load_embedded(world *w)
-{
-	world_opts o;
-	world_opts_default(&o);
-	diag d;
-	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
-}
-
-static chip *run(const world *w, const saar_config *c)
-{
-	diag d;
-	chip *ch = chip_create(c, w, &d);
-	cr_assert(ch, "%s", d.msg);
-	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
-	return ch;
-}
-
-static void assert_identical(chip *ch, const char *what)
-{
-	chip_check k;
-	diag d;
-	cr_assert_eq(chip_check_frame(ch, &k, &d), 0, "%s", d.msg);
-	cr_assert(k.cmp.identical, "%s: %llu pixels differ from kernel-ref", what,
-	          (unsigned long long)k.cmp.differing_pixels);
-}
 
 static void cfg_mode(saar_config *c, int size, int mode)
 {
@@ -55,7 +27,7 @@ static void cfg_mode(saar_config *c, int size, int mode)
 Test(fidelity, every_mode_renders_the_reference_image)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	static const int modes[] = {CFG_FIDELITY_CYCLE, CFG_FIDELITY_FUNCTIONAL,
 	                            CFG_FIDELITY_SAMPLED};
 	for (int m = 0; m < 3; m++)
@@ -67,11 +39,11 @@ Test(fidelity, every_mode_renders_the_reference_image)
 			c.sampling.unit_tiles = 8;
 			c.sampling.warmup_tiles = 8;
 			c.sampling.min_units = 3; /* room for functional tiles at 64 threads */
-			chip *ch = run(&w, &c);
+			chip *ch = tu_run_chip(&w, &c);
 			char what[64];
 			snprintf(what, sizeof what, "fidelity %s, %d threads",
 			         cfg_enum_name(&c, "fidelity"), tpr);
-			assert_identical(ch, what);
+			tu_assert_identical(ch, what);
 			if (modes[m] == CFG_FIDELITY_SAMPLED) {
 				cr_assert_gt(ch->fid.functional_tiles, 0, "%s: nothing functional",
 				             what);
@@ -89,18 +61,18 @@ Test(fidelity, every_mode_renders_the_reference_image)
 Test(fidelity, sampled_counts_every_operation_once)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
 	c.chip.threads_per_rtp = 16;
-	chip *x = run(&w, &c);
+	chip *x = tu_run_chip(&w, &c);
 	c.fidelity = CFG_FIDELITY_SAMPLED;
 	c.sampling.rate = 0.1;
 	c.sampling.min_units = 3;
-	chip *y = run(&w, &c);
+	chip *y = tu_run_chip(&w, &c);
 	cr_assert(!y->fid.exact);
 	cr_assert_gt(y->fid.functional_tiles, 0);
-	assert_identical(y, "sampled, 16 threads");
+	tu_assert_identical(y, "sampled, 16 threads");
 	static const char *const sfx[] = {"rgs.ops",   "trav.ops",          "list.ops",
 	                                  "isect.ops", "isect.busy_cycles", "trav.rays"};
 	for (int k = 0; k < 6; k++)
@@ -117,14 +89,14 @@ Test(fidelity, sampled_counts_every_operation_once)
 Test(fidelity, sampled_at_rate_one_is_cycle)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config a, b;
 	cfg_mode(&a, 128, CFG_FIDELITY_CYCLE);
 	a.frame.frames = 2;
 	b = a;
 	b.fidelity = CFG_FIDELITY_SAMPLED;
 	b.sampling.rate = 1.0;
-	chip *x = run(&w, &a), *y = run(&w, &b);
+	chip *x = tu_run_chip(&w, &a), *y = tu_run_chip(&w, &b);
 	cr_assert(y->fid.exact);
 	for (int f = 0; f < 2; f++)
 		cr_assert_eq(
@@ -153,10 +125,10 @@ Test(fidelity, sampled_at_rate_one_is_cycle)
 static void assert_same_traffic(const world *w, saar_config *c, const char *what)
 {
 	c->fidelity = CFG_FIDELITY_CYCLE;
-	chip *x = run(w, c);
+	chip *x = tu_run_chip(w, c);
 	c->fidelity = CFG_FIDELITY_FUNCTIONAL;
-	chip *y = run(w, c);
-	assert_identical(y, what);
+	chip *y = tu_run_chip(w, c);
+	tu_assert_identical(y, what);
 	cr_assert_eq(memcmp(&x->mem.n, &y->mem.n, sizeof x->mem.n), 0,
 	             "%s: memory-port counts differ", what);
 	hier_stats hx, hy;
@@ -202,7 +174,7 @@ static void assert_same_traffic(const world *w, saar_config *c, const char *what
 Test(fidelity, functional_traffic_equals_cycle)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	cfg_mode(&c, 128, CFG_FIDELITY_CYCLE);
 	assert_same_traffic(&w, &c, "embedded 128, std");
@@ -211,11 +183,7 @@ Test(fidelity, functional_traffic_equals_cycle)
 	assert_same_traffic(&w, &c, "embedded 128, 64 threads, stack 4");
 	world_free(&w);
 
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = "spd:balls:2";
-	diag d;
-	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	tu_load_world(&w, "spd:balls:2", NULL, NULL);
 	cfg_mode(&c, 96, CFG_FIDELITY_CYCLE);
 	c.memory.vma.enabled = true;
 	c.memory.sdram.mb = 1;
@@ -230,14 +198,14 @@ static double half_width(const world *w, double rate, double *est, double *truth
 	c.chip.threads_per_rtp = 4; /* units of 16 tiles: 6 or 26 of them */
 	c.sampling.rate = rate;
 	c.sampling.min_units = 3;
-	chip *ch = run(w, &c);
+	chip *ch = tu_run_chip(w, &c);
 	cr_assert(!ch->fid.exact);
 	double h = ch->fid.half[0];
 	*est = ch->fid.est[0];
 	chip_destroy(ch);
 	if (truth) {
 		c.fidelity = CFG_FIDELITY_CYCLE;
-		ch = run(w, &c);
+		ch = tu_run_chip(w, &c);
 		*truth = (double)ch->frame_cycles[0];
 		chip_destroy(ch);
 	}
@@ -247,7 +215,7 @@ static double half_width(const world *w, double rate, double *est, double *truth
 Test(fidelity, intervals_shrink_with_more_samples)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	double e1, e4, truth;
 	double h1 = half_width(&w, 0.1, &e1, NULL), h4 = half_width(&w, 0.4, &e4, &truth);
 	cr_assert_lt(h4, h1, "half-width at rate 0.4 (%g) not below rate 0.1 (%g)", h4, h1);
@@ -264,11 +232,11 @@ Test(fidelity, intervals_shrink_with_more_samples)
 Test(fidelity, interval_covers_small_cases)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
 	c.chip.threads_per_rtp = 4;
-	chip *x = run(&w, &c);
+	chip *x = tu_run_chip(&w, &c);
 	double truth = (double)x->frame_cycles[0];
 	chip_destroy(x);
 	c.fidelity = CFG_FIDELITY_SAMPLED;
@@ -276,7 +244,7 @@ Test(fidelity, interval_covers_small_cases)
 	int covered = 0;
 	for (int k = 0; k < 5; k++) {
 		c.sampling.offset = 0.1 + 0.2 * k;
-		chip *y = run(&w, &c);
+		chip *y = tu_run_chip(&w, &c);
 		cr_assert(!y->fid.exact);
 		double est = y->fid.est[0], h = y->fid.half[0];
 		cr_log_info("offset %.1f: true %.0f, estimate %.0f +- %.0f (%d units)",
@@ -295,12 +263,12 @@ Test(fidelity, interval_covers_small_cases)
 Test(fidelity, memory_bound_chunks_get_extra_units)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	cfg_mode(&c, 256, CFG_FIDELITY_SAMPLED);
 	c.chip.threads_per_rtp = 4;
 	c.sampling.rate = 0.1;
-	chip *y = run(&w, &c);
+	chip *y = tu_run_chip(&w, &c);
 	int hard = 0;
 	for (int u = 0; u < y->fid.nreg; u++)
 		hard += y->fid.unit_hard[u];
@@ -311,7 +279,7 @@ Test(fidelity, memory_bound_chunks_get_extra_units)
 	cr_assert_gt(y->fid.xs[1], 0, "no memory-bound demand");
 	chip_destroy(y);
 	c.sampling.hard_share = 0;
-	y = run(&w, &c);
+	y = tu_run_chip(&w, &c);
 	cr_assert_eq(y->fid.nreg, y->fid.nunits);
 	cr_assert_eq(y->fid.xs[1], 0);
 	for (int u = 0; u < y->fid.nreg; u++)
@@ -347,12 +315,12 @@ Test(fidelity, config_and_cli)
 Test(fidelity, estimate_respects_the_bound)
 {
 	world w;
-	load_embedded(&w);
+	tu_load_world(&w, NULL, NULL, NULL);
 	for (int tpr = 1; tpr <= 16; tpr *= 4) {
 		saar_config c;
 		cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
 		c.chip.threads_per_rtp = tpr;
-		chip *x = run(&w, &c);
+		chip *x = tu_run_chip(&w, &c);
 		double truth = (double)x->frame_cycles[0];
 		cr_assert_leq(x->fid.floor[0], truth, "tpr %d: bound %g above the truth %g", tpr,
 		              x->fid.floor[0], truth);
@@ -362,7 +330,7 @@ Test(fidelity, estimate_respects_the_bound)
 		c.sampling.min_units = 3;
 		c.sampling.unit_tiles = 8;
 		c.sampling.warmup_tiles = 8;
-		chip *y = run(&w, &c);
+		chip *y = tu_run_chip(&w, &c);
 		cr_assert(!y->fid.exact);
 		cr_assert_geq(y->fid.est[0], y->fid.floor[0], "tpr %d: estimate %g below bound %g",
 		              tpr, y->fid.est[0], y->fid.floor[0]);
@@ -377,16 +345,12 @@ Test(fidelity, estimate_respects_the_bound)
 Test(fidelity, pci_bound_frame_follows_the_bus)
 {
 	world w;
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = "spd:balls:2";
-	diag d;
-	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	tu_load_world(&w, "spd:balls:2", NULL, NULL);
 	saar_config c;
 	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
 	c.memory.vma.enabled = true;
 	c.memory.sdram.mb = 1;
-	chip *x = run(&w, &c);
+	chip *x = tu_run_chip(&w, &c);
 	double truth = (double)x->frame_cycles[0];
 	cr_assert_eq(x->fid.bound_by, RES_HOSTBUS, "bound by %s, not the host bus",
 	             chip_res_name(x->fid.bound_by));
@@ -396,7 +360,7 @@ Test(fidelity, pci_bound_frame_follows_the_bus)
 	c.sampling.min_units = 3;
 	c.sampling.unit_tiles = 64;
 	c.sampling.warmup_tiles = 128;
-	chip *y = run(&w, &c);
+	chip *y = tu_run_chip(&w, &c);
 	cr_assert(!y->fid.exact);
 	double est = y->fid.est[0], h = y->fid.half[0];
 	cr_log_info("PCI-bound: true %.0f, estimate %.0f +- %.0f", truth, est, h);

@@ -10,21 +10,8 @@
  */
 #include <string.h>
 
-#include "chip.h"
+#include "chiptest.h"
 #include "hier.h"
-#include "testutil.h"
-#include "world.h"
-
-static void load_scene(world *w, const char *path, const char *views, const char *vname)
-{
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = path;
-	o.views = views;
-	o.view = vname;
-	diag d;
-	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
-}
 
 static void cfg_small(saar_config *c, int size)
 {
@@ -37,24 +24,6 @@ static void cfg_vma(saar_config *c, int size, int mb)
 	cfg_small(c, size);
 	c->memory.vma.enabled = true;
 	c->memory.sdram.mb = mb;
-}
-
-static chip *run(const world *w, const saar_config *c)
-{
-	diag d;
-	chip *ch = chip_create(c, w, &d);
-	cr_assert(ch, "%s", d.msg);
-	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
-	return ch;
-}
-
-static void assert_identical(chip *ch, const char *what)
-{
-	chip_check k;
-	diag d;
-	cr_assert_eq(chip_check_frame(ch, &k, &d), 0, "%s", d.msg);
-	cr_assert(k.cmp.identical, "%s: %llu pixels differ from kernel-ref", what,
-	          (unsigned long long)k.cmp.differing_pixels);
 }
 
 static hier_stats stats_of(const chip *ch)
@@ -113,13 +82,13 @@ TestSuite(memsys_chip, .timeout = 600);
 Test(memsys_chip, default_is_hierarchy_and_identical_embedded)
 {
 	world w;
-	load_scene(&w, NULL, NULL, NULL);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	cfg_small(&c, 128);
 	cr_assert_eq(c.memory.model, CFG_MEM_HIERARCHY);
-	chip *ch = run(&w, &c);
+	chip *ch = tu_run_chip(&w, &c);
 	cr_assert(hier_is(&ch->mem));
-	assert_identical(ch, "embedded, hierarchy");
+	tu_assert_identical(ch, "embedded, hierarchy");
 	hier_stats s = stats_of(ch);
 	cr_assert_gt(s.sdram.read_bytes, 0);
 	cr_assert_eq(s.vma_enabled, 0);
@@ -133,11 +102,11 @@ Test(memsys_chip, conference_128_identical_with_hierarchy)
 	char views[1024];
 	SCENE_OR_SKIP(views, "views.yaml");
 	world w;
-	load_scene(&w, NULL, views, "conference");
+	tu_load_world(&w, NULL, views, "conference");
 	saar_config c;
 	cfg_small(&c, 128);
-	chip *ch = run(&w, &c);
-	assert_identical(ch, "conference, hierarchy");
+	chip *ch = tu_run_chip(&w, &c);
+	tu_assert_identical(ch, "conference, hierarchy");
 	assert_consistent(ch);
 	chip_destroy(ch);
 	world_free(&w);
@@ -146,7 +115,7 @@ Test(memsys_chip, conference_128_identical_with_hierarchy)
 Test(memsys_chip, image_larger_than_board_needs_vma)
 {
 	world w;
-	load_scene(&w, "spd:balls:2", NULL, NULL);
+	tu_load_world(&w, "spd:balls:2", NULL, NULL);
 	cr_assert_gt(w.m.size, 1u << 20, "the scene must not fit a 1 MB board");
 	saar_config c;
 	cfg_small(&c, 32);
@@ -162,11 +131,11 @@ Test(memsys_chip, image_larger_than_board_needs_vma)
 Test(memsys_chip, vma_renders_identical_image_with_pci_traffic)
 {
 	world w;
-	load_scene(&w, "spd:balls:2", NULL, NULL);
+	tu_load_world(&w, "spd:balls:2", NULL, NULL);
 	saar_config c;
 	cfg_vma(&c, 64, 1);
-	chip *ch = run(&w, &c);
-	assert_identical(ch, "balls through the VMA");
+	chip *ch = tu_run_chip(&w, &c);
+	tu_assert_identical(ch, "balls through the VMA");
 	hier_stats s = stats_of(ch);
 	cr_assert_gt(s.hostbus.bytes, 0, "no PCI traffic");
 	cr_assert_gt(s.vma.host_fetches, 0);
@@ -179,17 +148,17 @@ Test(memsys_chip, vma_renders_identical_image_with_pci_traffic)
 Test(memsys_chip, no_tag_cache_raises_meta_data_accesses)
 {
 	world w;
-	load_scene(&w, "spd:balls:2", NULL, NULL);
+	tu_load_world(&w, "spd:balls:2", NULL, NULL);
 	saar_config c;
 	cfg_vma(&c, 32, 1);
-	chip *with = run(&w, &c);
+	chip *with = tu_run_chip(&w, &c);
 	c.memory.vma.tag_cache_enabled = false;
-	chip *without = run(&w, &c);
+	chip *without = tu_run_chip(&w, &c);
 	hier_stats a = stats_of(with), b = stats_of(without);
 	cr_assert_gt(meta_accesses(&b), meta_accesses(&a), "meta %llu without vs %llu with",
 	             (unsigned long long)meta_accesses(&b), (unsigned long long)meta_accesses(&a));
 	cr_assert_eq(b.tag_cache.hits, 0);
-	assert_identical(without, "no tag cache");
+	tu_assert_identical(without, "no tag cache");
 	assert_consistent(without);
 	chip_destroy(with);
 	chip_destroy(without);
@@ -199,11 +168,11 @@ Test(memsys_chip, no_tag_cache_raises_meta_data_accesses)
 Test(memsys_chip, warm_second_frame_moves_nothing_over_pci)
 {
 	world w;
-	load_scene(&w, NULL, NULL, NULL);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	cfg_vma(&c, 64, 64); /* 64 MB board, 0.4 MB scene */
 	c.frame.frames = 2;
-	chip *ch = run(&w, &c);
+	chip *ch = tu_run_chip(&w, &c);
 	cr_assert_eq(ch->frames_done, 2);
 	const hier_stats *f1 = &ch->frame_mem[0], *f2 = &ch->frame_mem[1];
 	cr_assert_gt(f1->hostbus.bytes, 0, "the first frame fetches the scene");
@@ -212,7 +181,7 @@ Test(memsys_chip, warm_second_frame_moves_nothing_over_pci)
 	/* warm caches: frame 2 misses less and finishes sooner */
 	cr_assert_lt(f2->l1[MEM_KD].misses - f1->l1[MEM_KD].misses, f1->l1[MEM_KD].misses);
 	cr_assert_lt(ch->frame_cycles[1], ch->frame_cycles[0]);
-	assert_identical(ch, "second frame");
+	tu_assert_identical(ch, "second frame");
 	assert_consistent(ch);
 	chip_destroy(ch);
 	world_free(&w);
@@ -221,14 +190,14 @@ Test(memsys_chip, warm_second_frame_moves_nothing_over_pci)
 Test(memsys_chip, fixed_model_still_available)
 {
 	world w;
-	load_scene(&w, NULL, NULL, NULL);
+	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	cfg_small(&c, 64);
 	c.memory.model = CFG_MEM_FIXED;
-	chip *ch = run(&w, &c);
+	chip *ch = tu_run_chip(&w, &c);
 	cr_assert_not(hier_is(&ch->mem));
 	cr_assert_null(ch->frame_mem);
-	assert_identical(ch, "fixed model");
+	tu_assert_identical(ch, "fixed model");
 	chip_destroy(ch);
 	world_free(&w);
 }

@@ -1,0 +1,46 @@
+/*
+ * chiptest.h: set-up shared by the tests that run the chip model: load a
+ * world, build and run a chip, compare its frame with kernel-ref's. Every
+ * failure is a test assertion carrying the library's message.
+ */
+#ifndef SAAR_TESTS_CHIPTEST_H
+#define SAAR_TESTS_CHIPTEST_H
+
+#include "chip.h"
+#include "testutil.h"
+#include "world.h"
+
+/* Loads the scene at path (NULL: the view's, else the embedded room) with view vname of
+ * the views file (NULL: the default view). */
+static inline void tu_load_world(world *w, const char *path, const char *views, const char *vname)
+{
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = path;
+	o.views = views;
+	o.view = vname;
+	diag d;
+	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+}
+
+/* Builds a chip for c and runs every frame; the caller destroys it. */
+static inline chip *tu_run_chip(const world *w, const saar_config *c)
+{
+	diag d;
+	chip *ch = chip_create(c, w, &d);
+	cr_assert(ch, "%s", d.msg);
+	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
+	return ch;
+}
+
+/* The chip's frame is kernel-ref's, pixel for pixel. */
+static inline void tu_assert_identical(chip *ch, const char *what)
+{
+	chip_check k;
+	diag d;
+	cr_assert_eq(chip_check_frame(ch, &k, &d), 0, "%s", d.msg);
+	cr_assert(k.cmp.identical, "%s: %llu pixels differ from kernel-ref", what,
+	          (unsigned long long)k.cmp.differing_pixels);
+}
+
+#endif
