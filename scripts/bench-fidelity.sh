@@ -220,6 +220,38 @@ SEC="$TMP/section.md"
 	echo "- $TGT"
 	echo "- Coverage over all sampled points: $COV."
 	echo
+	echo "### Conference $CONF_SIZE by config"
+	echo
+	echo "Sampled: every estimated point (all rates and offsets). Functional: its traffic against cycle's (L1 hit rates in points, SDRAM MB in %)."
+	echo
+	echo "| config | threads | sampled points | rms fps err % | max fps err % | interval covered | speed-up (min-median-max) | functional: max L1 hit pp | functional: SDRAM MB err % |"
+	echo "|---|---:|---:|---:|---:|---:|---|---:|---:|"
+	python3 - "$ROWS" "$CONF_SIZE" <<'EOF'
+import sys, statistics
+rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
+conf = [r for r in rows if r[0] == "conference" and r[4] == sys.argv[2]]
+for cfg in ("std", "vma"):
+    for t in sorted({int(r[2]) for r in conf if r[1] == cfg}):
+        sel = [r for r in conf if r[1] == cfg and int(r[2]) == t]
+        est = [r for r in sel if int(r[13]) >= 0]
+        fn = [r for r in sel if r[3] == "functional"]
+        if est:
+            e = [abs(float(r[10])) for r in est]
+            sp = sorted(float(r[7]) for r in est)
+            cov = sum(int(r[13]) for r in est)
+            s = "| %s | %d | %d | %.2f | %.2f | %d of %d | %.1f-%.1f-%.1f |" % (
+                cfg, t, len(est), (sum(x * x for x in e) / len(e)) ** 0.5, max(e), cov, len(est),
+                sp[0], statistics.median(sp), sp[-1])
+        else:
+            s = "| %s | %d | 0 | - | - | - | - |" % (cfg, t)
+        if fn:
+            hp = [abs(float(x)) for x in fn[0][14:18]]
+            s += " %.2f | %s |" % (max(hp), fn[0][20])
+        else:
+            s += " - | - |"
+        print(s)
+EOF
+	echo
 	echo "### Every point"
 	echo
 	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % |"

@@ -577,8 +577,8 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
  * the slots take one step each in turn (a step: one unit operation and the
  * memory reads before the next), so the caches see the packets' accesses
  * interleaved as a busy chip makes them, not one packet after another (one
- * at a time, the L1s and SDRAM saw 6-25% fewer misses than the cycle
- * model at 16-64 threads). A slot that finishes takes a secondary packet of
+ * at a time, the L1s and SDRAM saw far fewer misses than the cycle model
+ * at 16-64 threads: docs/fidelity.md). A slot that finishes takes a secondary packet of
  * its RTP, else the next tile. The engine is idle throughout (no request
  * in flight), so memory goes through the hierarchy's functional path with
  * no MSHR busy. With drain, the range ends with every slot free; without,

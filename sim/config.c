@@ -122,11 +122,11 @@ static const cfg_key keys[] = {
              "brings an extra region soon after (at most as many extra as planned); 0 = one "
              "stratum, no extra regions"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
-     .source = "measured (docs/fidelity.md)",
+     .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "
              "half-width for the units' systematic error, which no spread between units "
-             "shows (measured: unit windows ran 1-3% faster than a full cycle run at the same "
-             "places)"},
+             "shows (unit windows ran slightly faster than a full cycle run at the same "
+             "places, docs/fidelity.md)"},
     {FLT("chip.clock_mhz", chip.clock_mhz, 533, 1, 10000, "MHz"), PUB "§4.7",
      .desc = "core clock; rounded to a whole-picosecond period (sim/engine.h)"},
     {INT("chip.rtps", chip.rtps, 4, 1, 1024, ""), PUB "§4.7",
