@@ -8,13 +8,18 @@
 #   make SANITIZE=1 test   the same under ASan/UBSan (build-san/)
 #
 # One static library (libsaar.a) holds kernel-ref and the chip model; the
-# programs and the test binary link against it.
+# programs and the test binary link against it. OpenImageIO lives in a
+# plugin, libsaar-oiio.so, opened on the first image read or write
+# (kernel-ref/image_plugin.h says why).
 
 .DEFAULT_GOAL := all
 PREFIX   ?= /usr/local
 CC       ?= cc
 CXX      ?= c++
-PKGS     := assimp OpenImageIO yaml-0.1 zlib
+PKGS     := assimp yaml-0.1 zlib
+# OpenImageIO is linked only into the image plugin, libsaar-oiio.so, which
+# the programs open on their first image read or write (kernel-ref/image_plugin.h).
+IMGPKGS  := OpenImageIO
 TESTPKGS := criterion
 
 ifeq ($(SANITIZE),1)
@@ -37,13 +42,13 @@ XCFLAGS  := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) $(ARCH) 
             $(WARN) $(SANFLAGS) -MMD -MP -I. -Ikernel-ref -Isim -Iunits -Imem -Itraces $(CFLAGS)
 XCXXFLAGS := -std=c++17 $(OPT) $(ARCH) -ffp-contract=off -Wall -Wextra -Werror $(SANFLAGS) -MMD -MP \
             -I. -Ikernel-ref $(CXXFLAGS)
-LDLIBS   := -pthread -lm
+LDLIBS   := -pthread -lm -ldl
 
 # Dependency check runs once per build dir; pkg-config must exist to ask.
 DEPSTAMP := $(B)/.deps-ok
 $(DEPSTAMP):
 	@mkdir -p $(B)
-	@if command -v pkg-config >/dev/null 2>&1 && pkg-config --exists $(PKGS) $(TESTPKGS) \
+	@if command -v pkg-config >/dev/null 2>&1 && pkg-config --exists $(PKGS) $(IMGPKGS) $(TESTPKGS) \
 	    && command -v gnuplot >/dev/null 2>&1 && command -v parallel >/dev/null 2>&1; then :; else \
 	  echo "make: some dependencies are missing; running scripts/install-deps.sh"; \
 	  sh scripts/install-deps.sh || { echo "make: error: could not install dependencies (see above)" >&2; exit 1; }; \
@@ -58,18 +63,20 @@ $(shell mkdir -p $(B); [ "$$(cat $(FLAGSTAMP) 2>/dev/null)" = "$(FLAGS_NOW)" ] |
 
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS) 2>/dev/null)
+IMG_CFLAGS = $(shell pkg-config --cflags $(IMGPKGS) 2>/dev/null)
+IMG_LIBS   = $(shell pkg-config --libs $(IMGPKGS) 2>/dev/null)
 TEST_LIBS  = $(shell pkg-config --libs $(TESTPKGS) 2>/dev/null)
 
 MAINS    := kernel-ref/rtref.c kernel-ref/stress_main.c sim/main.c traces/replay.c
 LIB_C    := $(filter-out $(MAINS),$(wildcard kernel-ref/*.c sim/*.c units/*.c mem/*.c traces/*.c))
-LIB_CXX  := $(wildcard kernel-ref/*.cpp)
-LIB_OBJ  := $(LIB_C:%.c=$(B)/%.o) $(LIB_CXX:%.cpp=$(B)/%.o)
+LIB_OBJ  := $(LIB_C:%.c=$(B)/%.o)
+PLUGIN   := $(B)/libsaar-oiio.so
 TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
 .PHONY: all run test bench bench-fidelity stress validate install clean deps
-all: $(PROGS)
+all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
 
@@ -79,23 +86,25 @@ $(B)/%.o: %.c $(FLAGSTAMP) | $(DEPSTAMP)
 
 $(B)/%.o: %.cpp $(FLAGSTAMP) | $(DEPSTAMP)
 	@mkdir -p $(dir $@)
-	$(CXX) $(XCXXFLAGS) $(PKG_CFLAGS) -c $< -o $@
+	$(CXX) $(XCXXFLAGS) -fPIC $(IMG_CFLAGS) -c $< -o $@
+
+$(PLUGIN): $(B)/kernel-ref/image_oiio.o
+	$(CXX) $(SANFLAGS) -shared -o $@ $^ $(IMG_LIBS)
 
 $(B)/libsaar.a: $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-# The library has C++ objects (the OIIO shim), so link with the C++ driver.
 $(B)/rtref: $(B)/kernel-ref/rtref.o $(B)/libsaar.a
-	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+	$(CC) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
 $(B)/saarsim-stress: $(B)/kernel-ref/stress_main.o $(B)/libsaar.a
-	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+	$(CC) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
 $(B)/saarsim: $(B)/sim/main.o $(B)/libsaar.a
-	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+	$(CC) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
 $(B)/saarsim-replay: $(B)/traces/replay.o $(B)/libsaar.a
-	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
+	$(CC) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(LDLIBS)
 $(B)/saarsim-tests: $(TEST_OBJ) $(B)/libsaar.a
-	$(CXX) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(TEST_LIBS) $(LDLIBS)
+	$(CC) $(SANFLAGS) -o $@ $^ $(PKG_LIBS) $(TEST_LIBS) $(LDLIBS)
 
 # The main job: the embedded default scene and config, report on stdout,
 # frame written to out/frame.png (saarsim once the chip model is built,
@@ -110,7 +119,7 @@ run: all
 	$(RUN_CMD)
 
 # Tests find the binaries and the shared scenes through the environment.
-test: all $(B)/saarsim-tests
+test: all $(B)/saarsim-tests $(PLUGIN)
 	LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
 	SAAR_BIN=$(CURDIR)/$(B) SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) \
 	  ./$(B)/saarsim-tests --jobs 2
@@ -135,6 +144,8 @@ stress: all
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin
 	install -m 755 $(PROGS) $(DESTDIR)$(PREFIX)/bin/
+	install -d $(DESTDIR)$(PREFIX)/lib/saarsim
+	install -m 644 $(PLUGIN) $(DESTDIR)$(PREFIX)/lib/saarsim/
 
 clean:
 	rm -rf build build-san

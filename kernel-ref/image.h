@@ -1,6 +1,6 @@
 /*
- * image.h: image files through OpenImageIO (image_oiio.cpp is the only C++
- * file in saarsim: a small extern "C" shim).
+ * image.h: image files through OpenImageIO, which image.c loads as a plugin
+ * on first use (image_plugin.h says why; image_oiio.cpp is the plugin).
  *
  * Writes go to a temporary file beside the target and are renamed into
  * place, so a failed or interrupted write never leaves a partial file that
@@ -21,6 +21,11 @@ extern "C" {
  * follows the extension (.png, .exr, .ppm, .tif, ...); float formats such as
  * EXR get the float buffer `rgbf` (w*h*3, linear) when it is non-NULL. */
 int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, diag *d);
+
+/* 0 if an image can be written to path's format (the plugin loads and has
+ * a writer for the extension), else -1 with d set: lets a program refuse
+ * --out before it spends the run. */
+int img_can_write(const char *path, diag *d);
 
 /* Reads any OIIO-readable image as RGBA8 (row 0 at the top). *rgba is
  * malloc'd; the caller frees it. */

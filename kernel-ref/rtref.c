@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "image.h"
 #include "jsonw.h"
 #include "render.h"
 #include "world.h"
@@ -195,6 +196,9 @@ int main(int argc, char **argv)
 			return cli_bad("rtref", d.msg);
 	if (fp_arg[0] || fp_arg[1] || fp_arg[2])
 		ro.prec = &prec;
+	/* an unwritable --out format fails now, not after the run */
+	if (out && img_can_write(out, &d))
+		return cli_bad("rtref", d.msg);
 	world w;
 	if (world_load(&w, &wo, &d))
 		return cli_bad("rtref", d.msg);

@@ -186,15 +186,15 @@ if printf '#include <embree3/rtcore.h>\n' | $CC -E -x c - >/dev/null 2>&1; then
 		ECFLAGS=
 		ELIBS=-lembree3
 	fi
-	PKG_LIBS=$(pkg-config --libs assimp OpenImageIO yaml-0.1 zlib)
+	PKG_LIBS=$(pkg-config --libs assimp yaml-0.1 zlib)
 	say "Embree 3 found; building $B/embree_bench"
-	# The harness is C11; the library holds a C++ object, so link with $CXX.
+	# The harness is C11; Embree is C++ inside, so link with $CXX.
 	# shellcheck disable=SC2086
 	if $CC -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -O2 -Wall -Wextra \
 		-I. -Ikernel-ref $ECFLAGS -c scripts/embree_bench.c -o "$B/embree_bench.o" \
 		>"$TMP/embree_build.log" 2>&1 &&
 		$CXX -o "$B/embree_bench" "$B/embree_bench.o" "$B/libsaar.a" $PKG_LIBS $ELIBS \
-			-lpthread -lm >>"$TMP/embree_build.log" 2>&1; then
+			-lpthread -lm -ldl >>"$TMP/embree_build.log" 2>&1; then
 		EMBREE=ok
 	else
 		cat "$TMP/embree_build.log" >&2

@@ -23,6 +23,7 @@
 
 #include "chip.h"
 #include "config.h"
+#include "image.h"
 #include "report.h"
 #include "world.h"
 
@@ -199,6 +200,9 @@ int main(int argc, char **argv)
 	wo.kd.leaf_size = cfg.kdtree.leaf_size;
 	wo.kd.empty_bonus = (float)cfg.kdtree.empty_bonus;
 
+	/* an unwritable --out format fails now, not after the run */
+	if (out && img_can_write(out, &d))
+		return cli_bad("saarsim", d.msg);
 	double t0 = now_ms();
 	world w;
 	if (world_load(&w, &wo, &d))

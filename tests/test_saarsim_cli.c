@@ -63,6 +63,26 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	cr_assert_str_eq(a, b, "reports differ outside \"host\"");
 }
 
+/* A run that writes no image never opens the image plugin; one that would
+ * write one checks --out before it simulates (exit 2, nothing written). */
+Test(saarsim_cli, image_plugin_only_when_writing_images)
+{
+	char args[1024];
+	setenv("SAAR_IMAGE_PLUGIN", "/nonexistent/libsaar-oiio.so", 1);
+	snprintf(args, sizeof args, "--size 64x48 --set chip.rtps=2 --report %s/a.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	snprintf(args, sizeof args, "--size 64x48 --out %s/f.png --report %s/b.json", dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("libsaar-oiio.so");
+	cr_assert_not(exists("f.png") || exists("b.json"));
+	cr_assert_eq(strlen(slurp("out")), 0, "ran before refusing: %s", slurp("out"));
+	unsetenv("SAAR_IMAGE_PLUGIN");
+	snprintf(args, sizeof args, "--size 64x48 --out %s/f.xyz --report %s/b.json", dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("f.xyz");
+	cr_assert_not(exists("f.xyz") || exists("b.json"));
+}
+
 Test(saarsim_cli, bad_config_key_names_file_line_col)
 {
 	char p[512], args[2048];

@@ -386,6 +386,50 @@ Test(image, write_read_formats)
 	cr_assert(strstr(d.msg, "/nonexistent.png"), "%s", d.msg);
 }
 
+/* 1 if a shared library whose name contains `name` is mapped into this
+ * process. */
+static int mapped(const char *name)
+{
+	FILE *f = fopen("/proc/self/maps", "r");
+	cr_assert(f);
+	char line[1024];
+	int found = 0;
+	while (!found && fgets(line, sizeof line, f))
+		found = strstr(line, name) != NULL;
+	fclose(f);
+	return found;
+}
+
+/* OpenImageIO costs 0.3 s of binding at every start, so nothing links it:
+ * the plugin is opened on the first image call (kernel-ref/image_plugin.h).
+ * Each Criterion test is a fresh process, so nothing has loaded it yet. */
+Test(image, openimageio_loads_on_first_use_only)
+{
+	cr_assert_not(mapped("libOpenImageIO"), "OpenImageIO mapped before any image call");
+	cr_assert_not(mapped("libsaar-oiio"));
+	diag d = {{0}};
+	cr_assert_eq(img_can_write("/tmp/x.png", &d), 0, "%s", d.msg);
+	cr_assert(mapped("libsaar-oiio") && mapped("libOpenImageIO"));
+	cr_assert_eq(img_can_write("/tmp/x.unknownext", &d), -1);
+	cr_assert(strstr(d.msg, "/tmp/x.unknownext") && strstr(d.msg, "writer"), "%s", d.msg);
+}
+
+Test(image, missing_plugin_is_one_clear_error)
+{
+	setenv("SAAR_IMAGE_PLUGIN", "/nonexistent/libsaar-oiio.so", 1);
+	diag d = {{0}};
+	uint8_t px[12] = {0};
+	cr_assert_eq(img_write("/tmp/never.png", 2, 2, px, NULL, &d), -1);
+	cr_assert(strstr(d.msg, "/tmp/never.png") && strstr(d.msg, "libsaar-oiio.so") &&
+	              strstr(d.msg, "/nonexistent/"),
+	          "%s", d.msg);
+	cr_assert_eq(access("/tmp/never.png", F_OK), -1);
+	int w, h;
+	uint8_t *rgba;
+	cr_assert_eq(img_read_rgba8("/tmp/never.png", &w, &h, &rgba, &d), -1);
+	cr_assert(rgba == NULL && strstr(d.msg, "libsaar-oiio.so"), "%s", d.msg);
+}
+
 Test(default_scene, room_and_spheres)
 {
 	scene s;

@@ -1,0 +1,154 @@
+/*
+ * image.c: image.h on the OpenImageIO plugin (image_plugin.h).
+ *
+ * Owns what is the same for every format: argument checks, the 8-bit
+ * conversion of a float-only buffer, the temporary file and its rename, and
+ * diagnostics. The plugin is found beside the running program (the build
+ * folder), else in ../lib/saarsim/ from it (make install), else where
+ * SAAR_IMAGE_PLUGIN points, and opened on the first image read or write.
+ */
+#include "image.h"
+
+#include <dlfcn.h>
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "image_plugin.h"
+
+/* Opens the plugin. RTLD_NODELETE keeps it mapped after dlclose, so the next
+ * call's dlopen is a lookup, not a second 0.3 s load, and no handle has to
+ * live in a global. Returns the handle and fills *p, or NULL with d set. */
+static void *plugin_open(const img_plugin **p, const char *file, diag *d)
+{
+	char exe[PATH_MAX], path[2][PATH_MAX + 64], why[512] = "";
+	int n = 0;
+	const char *env = getenv("SAAR_IMAGE_PLUGIN");
+	if (env && *env)
+		snprintf(path[n++], sizeof path[0], "%s", env);
+	else {
+		ssize_t len = readlink("/proc/self/exe", exe, sizeof exe - 1);
+		if (len > 0) {
+			exe[len] = '\0';
+			char *slash = strrchr(exe, '/');
+			if (slash)
+				*slash = '\0';
+			snprintf(path[n++], sizeof path[0], "%s/%s", exe, IMG_PLUGIN_FILE);
+			snprintf(path[n++], sizeof path[0], "%s/../lib/saarsim/%s", exe,
+			         IMG_PLUGIN_FILE);
+		}
+	}
+	for (int i = 0; i < n; i++) {
+		void *h = dlopen(path[i], RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+		if (!h) {
+			if (!why[0] || access(path[i], F_OK) == 0)
+				snprintf(why, sizeof why, "%s", dlerror());
+			continue;
+		}
+		const img_plugin *(*entry)(void);
+		*(void **)&entry = dlsym(h, IMG_PLUGIN_ENTRY);
+		*p = entry ? entry() : NULL;
+		if (*p && (*p)->abi == IMG_PLUGIN_ABI)
+			return h;
+		snprintf(why, sizeof why, "%.400s: not a saarsim image plugin of ABI %d", path[i],
+		         IMG_PLUGIN_ABI);
+		dlclose(h);
+	}
+	if (!n)
+		snprintf(why, sizeof why, "cannot find the running program's folder");
+	diag_set(d, file, 0, 0, "image support (%s) not found: %s", IMG_PLUGIN_FILE, why);
+	return NULL;
+}
+
+static const char *ext_of(const char *path, char *buf, size_t cap)
+{
+	const char *slash = strrchr(path, '/');
+	const char *dot = strrchr(slash ? slash : path, '.');
+	size_t i = 0;
+	for (const char *s = dot ? dot + 1 : ""; *s && i + 1 < cap; s++)
+		buf[i++] = (char)(*s >= 'A' && *s <= 'Z' ? *s - 'A' + 'a' : *s);
+	buf[i] = '\0';
+	return buf;
+}
+
+int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, diag *d)
+{
+	if (w <= 0 || h <= 0 || (!rgb8 && !rgbf))
+		return diag_set(d, path, 0, 0, "cannot write a %dx%d image without pixels", w, h);
+	const img_plugin *p;
+	void *lib = plugin_open(&p, path, d);
+	if (!lib)
+		return -1;
+	char ext[32], err[512] = "", tmp[PATH_MAX + 96];
+	ext_of(path, ext, sizeof ext);
+	int rc = -1;
+	uint8_t *conv = NULL;
+	if (snprintf(tmp, sizeof tmp, "%s.tmp%ld.%s", path, (long)getpid(), ext) >=
+	    (int)sizeof tmp) {
+		diag_set(d, path, 0, 0, "cannot write image: path too long");
+		goto out;
+	}
+	if (!rgb8) {
+		/* only a float buffer, but the format may be 8-bit: clamp and
+		 * quantise here */
+		size_t n = (size_t)w * (size_t)h * 3;
+		if (!(conv = malloc(n))) {
+			diag_set(d, path, 0, 0, "cannot write image: out of memory");
+			goto out;
+		}
+		for (size_t i = 0; i < n; i++) {
+			float v = rgbf[i];
+			v = v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f;
+			conv[i] = (uint8_t)(v * 255.0f + 0.5f);
+		}
+		rgb8 = conv;
+	}
+	if (p->write_rgb(tmp, ext, w, h, rgb8, rgbf, err, sizeof err) != 0) {
+		remove(tmp);
+		diag_set(d, path, 0, 0, "cannot write image: %s", err);
+		goto out;
+	}
+	if (rename(tmp, path) != 0) {
+		int e = errno;
+		remove(tmp);
+		diag_set(d, path, 0, 0, "cannot write image: rename: %s", strerror(e));
+		goto out;
+	}
+	rc = 0;
+out:
+	free(conv);
+	dlclose(lib);
+	return rc;
+}
+
+int img_can_write(const char *path, diag *d)
+{
+	const img_plugin *p;
+	void *lib = plugin_open(&p, path, d);
+	if (!lib)
+		return -1;
+	char err[512] = "";
+	int rc = p->can_write(path, err, sizeof err);
+	if (rc != 0)
+		diag_set(d, path, 0, 0, "cannot write image: %s", err);
+	dlclose(lib);
+	return rc ? -1 : 0;
+}
+
+int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d)
+{
+	*rgba = NULL;
+	const img_plugin *p;
+	void *lib = plugin_open(&p, path, d);
+	if (!lib)
+		return -1;
+	char err[512] = "";
+	int rc = p->read_rgba8(path, w, h, rgba, err, sizeof err);
+	if (rc != 0)
+		diag_set(d, path, 0, 0, "cannot read image: %s", err);
+	dlclose(lib);
+	return rc ? -1 : 0;
+}
