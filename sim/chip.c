@@ -245,6 +245,11 @@ static int fid_init(chip *c)
 	F->mark_s = calloc(cap, sizeof *F->mark_s);
 	F->mark_e = calloc(cap, sizeof *F->mark_e);
 	F->unit_rate = calloc(cap, sizeof *F->unit_rate);
+	F->unit_pc = calloc(cap, sizeof *F->unit_pc);
+	/* pieces per frame: a chunk per U tiles, one short chunk per stretch,
+	 * three per region (warm-up, unit, after it) */
+	F->pc_cap = N / U + 4 * (int)cap + 8;
+	F->pc = calloc((size_t)F->pc_cap, sizeof *F->pc);
 	F->unit_hard = calloc(cap, sizeof *F->unit_hard);
 	F->mark_r0 = calloc(cap, sizeof *F->mark_r0);
 	double **dem[2] = {&F->dem_s, &F->dem_e};
@@ -252,7 +257,7 @@ static int fid_init(chip *c)
 		if (!(*dem[i] = calloc(cap * RES_N, sizeof(double))))
 			return -1;
 	if (!F->base_s || !F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate ||
-	    !F->unit_hard || !F->mark_r0)
+	    !F->unit_hard || !F->mark_r0 || !F->unit_pc || !F->pc)
 		return -1;
 	/* the head region is the frame's start, the tail its end; the others
 	 * systematic between them, one per period P at sampling.offset of the
@@ -455,6 +460,8 @@ void chip_destroy(chip *c)
 	free(c->fid.half);
 	free(c->fid.floor);
 	free(c->fid.unit_rate);
+	free(c->fid.unit_pc);
+	free(c->fid.pc);
 	free(c->fid.mark_r0);
 	free(c->fid.dem_s);
 	free(c->fid.dem_e);
@@ -515,35 +522,50 @@ static uint64_t run_region(chip *c, int end)
 	return eng_now(c->e) - t0;
 }
 
-/* The demand of a stretch between two chip_demand snapshots (the core
- * cycles of its busiest resource) and whether it is memory bound: its
- * SDRAM or host-bus time above sampling.hard_share of its busiest compute
- * resource (units, L1 ports). */
-static double piece(const chip *c, const double *a, const double *b, int *hard)
+/* The demand of a stretch between two chip_demand snapshots, and whether
+ * it is memory bound: its SDRAM or host-bus time above
+ * sampling.hard_share of its busiest compute resource. */
+static chip_piece piece(const chip *c, const double *a, const double *b)
 {
-	double comp = 0, mem = 0;
+	chip_piece p = {0, 0, 0, 0};
 	for (int r = 0; r < RES_N; r++) {
 		double d = b[r] - a[r];
-		if (r == RES_SDRAM || r == RES_HOSTBUS)
-			mem = d > mem ? d : mem;
-		else
-			comp = d > comp ? d : comp;
+		if (r == RES_SDRAM)
+			p.sdram = d;
+		else if (r == RES_HOSTBUS)
+			p.hbus = d;
+		else if (d > p.comp)
+			p.comp = d;
 	}
-	double hs = c->cfg.sampling.hard_share;
-	*hard = hs > 0 && mem > hs * comp;
-	return comp > mem ? comp : mem;
+	double hs = c->cfg.sampling.hard_share, mem = p.sdram > p.hbus ? p.sdram : p.hbus;
+	p.hard = hs > 0 && mem > hs * p.comp;
+	return p;
 }
 
-/* Adds a chunk (or region piece) of demand x to its stratum (memory bound
- * or not, by its own demand) when it belongs to the estimated middle of the
- * frame; returns the stratum. */
-static int account(chip_fidelity *F, double x, int hard, int middle)
+/* A piece's demand with SDRAM time scaled by k: the cycles its busiest
+ * resource needs when the SDRAM delivers 1/k of its data-bus peak (row
+ * misses, refresh, turnarounds). k = 1 is the plain busiest resource. */
+static double demand_k(const chip_piece *p, double k)
 {
-	if (middle) {
-		F->xs[hard] += x;
-		F->nchunks[hard] += x > 0;
+	double x = p->comp > p->hbus ? p->comp : p->hbus;
+	return k * p->sdram > x ? k * p->sdram : x;
+}
+
+/* Keeps a piece of the estimated middle of the frame (chunk or region
+ * piece) for the estimator; returns its stratum. */
+static int account(chip_fidelity *F, chip_piece p, int middle)
+{
+	if (middle && demand_k(&p, 1) > 0) {
+		if (F->npc < F->pc_cap)
+			F->pc[F->npc++] = p;
+		else { /* cannot happen (pc_cap counts every piece); keep the sum */
+			chip_piece *q = &F->pc[F->pc_cap - 1];
+			q->comp += p.comp;
+			q->sdram += p.sdram;
+			q->hbus += p.hbus;
+		}
 	}
-	return hard;
+	return p.hard;
 }
 
 /* Gives a free thread its next packet in functional processing: a
@@ -608,10 +630,8 @@ static int func_range(chip *c, int end, int drain)
 				thr_ctx *t = &c->rtp[r].t[s];
 				if (!t->p) {
 					if (chunked && given == F->unit_tiles) {
-						int hard;
 						chip_demand(c, d1);
-						double x = piece(c, d0, d1, &hard);
-						account(F, x, hard, 1);
+						int hard = account(F, piece(c, d0, d1), 1);
 						memcpy(d0, d1, sizeof d0);
 						given = 0;
 						if (hard && !drain && F->extra_left > 0 &&
@@ -630,11 +650,8 @@ static int func_range(chip *c, int end, int drain)
 	}
 	c->env.func = 0;
 	if (chunked) {
-		int hard;
 		chip_demand(c, d1);
-		double x = piece(c, d0, d1, &hard);
-		if (x > 0)
-			account(F, x, hard, 1);
+		account(F, piece(c, d0, d1), 1);
 	}
 	return extra;
 }
@@ -655,17 +672,18 @@ double chip_t975(int df)
 }
 
 /* One stratum's ratio estimate over units [lo, hi) of stratum h (or of
- * both, h < 0): R, and the variance of R x X for the stratum's demand X
- * (finite-population corrected over its chunks). */
+ * both, h < 0): R; ss, the residuals' sum of squares; and g, such that the
+ * variance of R x X for the stratum's demand X is g x s^2 for a residual
+ * variance s^2 (finite-population corrected over its chunks). */
 typedef struct strat {
 	int n;
-	double R, var;
+	double R, ss, g;
 } strat;
 
 static strat stratum(const chip_fidelity *F, const double *cyc, const double *xu, int lo, int hi,
                      int h, double X, int chunks)
 {
-	strat s = {0, 0, 0};
+	strat s = {0, 0, 0, 0};
 	double sc = 0, sx = 0;
 	for (int j = lo; j < hi; j++)
 		if (h < 0 || F->unit_hard[j] == h) {
@@ -676,14 +694,44 @@ static strat stratum(const chip_fidelity *F, const double *cyc, const double *xu
 	if (!s.n || sx <= 0)
 		return s;
 	s.R = sc / sx;
-	double s2 = 0, xbar = sx / s.n;
+	double xbar = sx / s.n;
 	for (int j = lo; j < hi; j++)
 		if (h < 0 || F->unit_hard[j] == h)
-			s2 += (cyc[j] - s.R * xu[j]) * (cyc[j] - s.R * xu[j]);
-	s2 = s.n > 1 ? s2 / (s.n - 1) : INFINITY;
+			s.ss += (cyc[j] - s.R * xu[j]) * (cyc[j] - s.R * xu[j]);
 	double fpc = chunks > s.n ? 1.0 - (double)s.n / chunks : 0;
-	s.var = X * X * fpc * s2 / s.n / (xbar * xbar);
+	s.g = X * X * fpc / s.n / (xbar * xbar);
 	return s;
+}
+
+/* The SDRAM factor k of demand_k for n units (demand, cycles). Where a
+ * unit's SDRAM time nears its compute time, its cycles follow k x SDRAM
+ * time, k about 1.5 for the standard SDRAM's row misses; with k = 1 those
+ * units sat 1.4-1.6x above the rest and dominated the spread. k is the
+ * value in [1, 4] (steps of 0.02) under which one ratio fits all units
+ * best (least squares of cycles - R x demand, R their ratio); the smallest
+ * such k, so 1 when no unit tells them apart. Fitting k to the strata's
+ * own ratios instead would favour a k that shrinks the memory-bound
+ * stratum's estimate (and so its variance). docs/fidelity.md. */
+double chip_fit_sdram_factor(const chip_piece *u, const double *cyc, int n)
+{
+	double kbest = 1, sbest = INFINITY;
+	for (int step = 0; step <= 150; step++) {
+		double k = 1.0 + 0.02 * step, sc = 0, sx = 0, ss = 0;
+		for (int j = 0; j < n; j++) {
+			sc += cyc[j];
+			sx += demand_k(&u[j], k);
+		}
+		double R = sx > 0 ? sc / sx : 0;
+		for (int j = 0; j < n; j++) {
+			double d = cyc[j] - R * demand_k(&u[j], k);
+			ss += d * d;
+		}
+		if (step == 0 || ss < sbest * (1 - 1e-6)) {
+			sbest = ss;
+			kbest = k;
+		}
+	}
+	return kbest;
 }
 
 /* Sampled frame: detailed regions (warm-up, then one measured unit) with
@@ -694,14 +742,15 @@ static strat stratum(const chip_fidelity *F, const double *cyc, const double *xu
  * Everything between is estimated: cycles per tile vary tenfold across a
  * frame, cycles per unit of *demand* far less. A stretch's demand is the
  * core cycles its busiest resource needs (chip_demand: unit issue cycles,
- * L1 ports, SDRAM and host-bus time), taken per chunk of unit_tiles tiles
- * so that a PCI-bound start and an intersection-bound middle each count
- * what bounds them; it is known for every chunk, detailed or functional.
- * Chunks and units are memory bound or not (piece); the middle's cycles are
- * per stratum the ratio estimator demand x sum(cycles) / sum(demand) over
- * the units' windows (all but the first region's), with a 95% interval
- * from the residuals (finite-population corrected, Satterthwaite's degrees
- * of freedom) widened by sampling.bias_bound. A memory-bound functional
+ * L1 ports, SDRAM time x the fitted SDRAM factor, host-bus time), taken
+ * per chunk of unit_tiles tiles so that a PCI-bound start and an
+ * intersection-bound middle each count what bounds them; it is known for
+ * every chunk, detailed or functional. Chunks and units are memory bound
+ * or not (piece); the middle's cycles are per stratum the ratio estimator
+ * demand x sum(cycles) / sum(demand) over the units' windows (all but the
+ * first region's), with a 95% interval from the residuals (finite-
+ * population corrected, variance pooled over the strata) widened by
+ * sampling.bias_bound. A memory-bound functional
  * chunk brings an extra region (func_range). docs/fidelity.md. */
 static void sampled_frame(chip *c, int f)
 {
@@ -709,8 +758,7 @@ static void sampled_frame(chip *c, int f)
 	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits;
 	uint64_t t0 = eng_now(c->e);
 	F->us_next = F->ue_next = 0;
-	F->xs[0] = F->xs[1] = 0;
-	F->nchunks[0] = F->nchunks[1] = 0;
+	F->npc = 0;
 	F->extra_left = F->unit_cap - n;
 	F->last_end = 0;
 	double per = (double)c->clk.period, cyc[F->unit_cap], xu[F->unit_cap];
@@ -738,37 +786,49 @@ static void sampled_frame(chip *c, int f)
 		/* the region's pieces in order: warm-up, unit, what finished after
 		 * the unit; the head's first two and the tail are measured */
 		const double *ds = &F->dem_s[j * RES_N], *de = &F->dem_e[j * RES_N];
-		int hw, hu, hd;
-		double xw = piece(c, r0, ds, &hw), xd = piece(c, de, r1, &hd);
-		xu[j] = piece(c, ds, de, &hu);
+		F->unit_pc[j] = piece(c, ds, de);
 		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / per;
-		F->unit_rate[j] = xu[j] > 0 ? cyc[j] / xu[j] : 0;
-		account(F, xw, hw, j > 0 && !tail);
-		F->unit_hard[j] = account(F, xu[j], hu, j > 0 && !tail);
-		if (xd > 0)
-			account(F, xd, hd, !tail);
+		account(F, piece(c, r0, ds), j > 0 && !tail);
+		F->unit_hard[j] = account(F, F->unit_pc[j], j > 0 && !tail);
+		account(F, piece(c, de, r1), !tail);
 	}
 	int nr = F->nreg = j;
 	F->region_end = N;
 	uint64_t t1 = eng_now(c->e);
 	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[nr - 1]) / per;
+	double kfix = c->cfg.sampling.sdram_factor;
+	double kbest = kfix > 0 ? kfix : chip_fit_sdram_factor(F->unit_pc + 1, cyc + 1, nr - 1);
+	double X[2] = {0, 0};
+	int nc[2] = {0, 0};
+	for (int i = 0; i < F->npc; i++) {
+		X[F->pc[i].hard] += demand_k(&F->pc[i], kbest);
+		nc[F->pc[i].hard]++;
+	}
+	for (int u = 0; u < nr; u++) {
+		xu[u] = demand_k(&F->unit_pc[u], kbest);
+		F->unit_rate[u] = xu[u] > 0 ? cyc[u] / xu[u] : 0;
+	}
+	F->sdram_factor = kbest;
 	/* the units after the head; two strata when each has at least two
-	 * units, else one (Satterthwaite's degrees of freedom for two) */
-	strat e = stratum(F, cyc, xu, 1, nr, 0, F->xs[0], F->nchunks[0]);
-	strat h = stratum(F, cyc, xu, 1, nr, 1, F->xs[1], F->nchunks[1]);
+	 * units, else one. The residual variance is pooled over the strata:
+	 * once the demand carries the SDRAM factor both hold cycles near one
+	 * ratio, and a memory-bound stratum of two or three units would
+	 * otherwise leave the interval one or two degrees of freedom */
+	strat e = stratum(F, cyc, xu, 1, nr, 0, X[0], nc[0]);
+	strat h = stratum(F, cyc, xu, 1, nr, 1, X[1], nc[1]);
 	double est, var, df;
 	if (e.n >= 2 && h.n >= 2) {
-		est = e.R * F->xs[0] + h.R * F->xs[1];
-		var = e.var + h.var;
-		double d = e.var * e.var / (e.n - 1) + h.var * h.var / (h.n - 1);
-		df = d > 0 ? var * var / d : e.n + h.n - 2;
+		est = e.R * X[0] + h.R * X[1];
+		df = e.n + h.n - 2;
+		var = (e.g + h.g) * (e.ss + h.ss) / df;
 	} else {
-		double X = F->xs[0] + F->xs[1];
-		strat a = stratum(F, cyc, xu, 1, nr, -1, X, F->nchunks[0] + F->nchunks[1]);
-		est = a.R * X;
-		var = a.var;
+		strat a = stratum(F, cyc, xu, 1, nr, -1, X[0] + X[1], nc[0] + nc[1]);
+		est = a.R * (X[0] + X[1]);
 		df = a.n - 1;
+		var = a.n > 1 ? a.g * a.ss / df : INFINITY;
 	}
+	if (kfix <= 0 && kbest > 1) /* the fit costs a degree of freedom */
+		df -= 1;
 	F->est[f] = ch + est + ct;
 	/* plus a bound on the units' systematic error (sampling.bias_bound),
 	 * which no spread between units shows */

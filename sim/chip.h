@@ -54,18 +54,30 @@ enum chip_res {
 };
 
 /* What the fidelity modes add (docs/fidelity.md). */
+/* The demand of a stretch of tiles in core cycles (sim/chip.c piece): its
+ * busiest compute resource (unit issue cycles per instance, L1 requests per
+ * port), SDRAM data-bus time and host-bus time; hard: memory bound
+ * (sampling.hard_share), its stratum. */
+typedef struct chip_piece {
+	double comp, sdram, hbus;
+	int hard;
+} chip_piece;
+
 typedef struct chip_fidelity {
 	int mode; /* enum cfg_fidelity */
 	/* sampled: per frame nunits units of unit_tiles tiles, each after
 	 * warmup_tiles detailed tiles; exact when every tile is detailed */
 	int unit_tiles, warmup_tiles, nunits, exact;
-	int *base_s;               /* planned units' first tiles (nunits) */
-	int unit_cap, nreg;        /* room for units (planned + extra); run in the last frame */
-	int *unit_s;               /* first tile (hand-out index) of each unit run */
-	int gap, extra_left;       /* extra regions: tiles at least between, how many more */
-	int last_end;              /* the last region's end tile */
-	double xs[2];              /* this frame: the middle's demand, per stratum (easy, hard) */
-	int nchunks[2];            /* and its chunks */
+	int *base_s;         /* planned units' first tiles (nunits) */
+	int unit_cap, nreg;  /* room for units (planned + extra); run in the last frame */
+	int *unit_s;         /* first tile (hand-out index) of each unit run */
+	int gap, extra_left; /* extra regions: tiles at least between, how many more */
+	int last_end;        /* the last region's end tile */
+	/* this frame: the middle's pieces (chunks and region pieces) and the
+	 * units' own, as demand triples (chip_piece) */
+	chip_piece *pc, *unit_pc;
+	int npc, pc_cap;
+	double sdram_factor;       /* last frame: the fitted SDRAM factor (docs/fidelity.md) */
 	uint64_t *mark_s, *mark_e; /* ticks: unit's first tile taken, first tile after it wanted */
 	/* cumulative resource demand (chip_demand, RES_N each) at each unit's
 	 * two marks */
@@ -141,6 +153,9 @@ uint64_t chip_rtp_sum(const chip *c, const char *suffix);
 /* Name of an enum chip_res ("trav", "l1_kd", "sdram", "hostbus", ...). */
 const char *chip_res_name(int res);
 /* 97.5% quantile of Student's t with df degrees of freedom. */
+/* sampled: the SDRAM factor fitted to n units' demands and cycles
+ * (docs/fidelity.md "The SDRAM factor"). */
+double chip_fit_sdram_factor(const chip_piece *u, const double *cyc, int n);
 double chip_t975(int df);
 const char *chip_unit_name(int kind);   /* "rgs", "trav", "list", "isect" */
 const char *chip_state_name(int state); /* "idle", "running", "waiting_memory", "waiting_unit" */

@@ -121,6 +121,12 @@ static const cfg_key keys[] = {
              "form their own stratum of the estimate, and one seen in a functional stretch "
              "brings an extra region soon after (at most as many extra as planned); 0 = one "
              "stratum, no extra regions"},
+    {FLT("sampling.sdram_factor", sampling.sdram_factor, 0, 0, 10, ""),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: the factor k on SDRAM data-bus time in each chunk's demand, "
+             "max(compute, k x SDRAM, host bus), for the SDRAM's row misses and turnarounds; "
+             "0 = fitted to the frame's units (the k in [1, 4] under which one ratio fits them "
+             "best), > 0 = this k"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

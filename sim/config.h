@@ -115,6 +115,7 @@ typedef struct saar_config {
 		double offset;     /* where in its period each region starts, 0..1 */
 		double hard_share; /* memory share above which a chunk is memory bound; 0 = off */
 		double bias_bound; /* share of the estimate added to the interval for window bias */
+		double sdram_factor; /* k on SDRAM time in the demand; 0 = fitted per frame */
 	} sampling;
 } saar_config;
 

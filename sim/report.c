@@ -181,15 +181,15 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "resource is %s, %.0f cycles/frame)\n",
 		        x.fps_bound, x.bound_by, F->res_cycles[F->bound_by]);
 	else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact)
-		fprintf(
-		    f,
-		    "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up) in "
-		    "the last frame; cycles "
-		    "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
-		    "functional\n",
-		    F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles, x.cycles, x.half, x.fps,
-		    x.fps_lo, x.fps_hi, (unsigned long long)F->detailed_tiles,
-		    (unsigned long long)F->functional_tiles);
+		fprintf(f,
+		        "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up), "
+		        "SDRAM factor %.2f in the last frame; cycles "
+		        "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
+		        "functional\n",
+		        F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles, F->sdram_factor,
+		        x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
+		        (unsigned long long)F->detailed_tiles,
+		        (unsigned long long)F->functional_tiles);
 	else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
 }
@@ -226,6 +226,11 @@ static void fidelity_json(jsonw *j, const chip *c)
 		jsonw_kint(j, "unit_tiles", F->unit_tiles);
 		jsonw_kint(j, "warmup_tiles", F->warmup_tiles);
 		jsonw_knum(j, "sample_rate", c->cfg.sampling.rate);
+		jsonw_key(j, "sdram_factor");
+		if (F->exact)
+			jsonw_null(j);
+		else
+			jsonw_num(j, F->sdram_factor);
 		jsonw_key(j, "unit_cycles_per_demand");
 		jsonw_arr_begin(j);
 		for (int u = 0; u < F->nreg; u++)

@@ -8,8 +8,10 @@
  * value on replicas, never go below the bound, and follow the host bus on
  * a PCI-bound frame; regions take over packets in flight with every
  * operation counted once; memory-bound chunks get their own stratum and
- * extra units. Scenes: the embedded one, and SPD balls through the
- * VMA.
+ * extra units; the SDRAM factor is fitted to the units' law and, on
+ * Conference, narrows the interval and the error. Scenes: the embedded
+ * one, SPD balls through the VMA, and Conference when the shared scenes
+ * are there.
  */
 #include <math.h>
 #include <string.h>
@@ -258,6 +260,15 @@ Test(fidelity, interval_covers_small_cases)
 	world_free(&w);
 }
 
+/* The middle's pieces (chunks, region pieces) of stratum `hard`. */
+static int pieces(const chip_fidelity *F, int hard)
+{
+	int n = 0;
+	for (int i = 0; i < F->npc; i++)
+		n += F->pc[i].hard == hard;
+	return n;
+}
+
 /* Memory-bound chunks form their own stratum and bring extra regions; with
  * sampling.hard_share 0 there is one stratum and only the planned units. */
 Test(fidelity, memory_bound_chunks_get_extra_units)
@@ -276,12 +287,13 @@ Test(fidelity, memory_bound_chunks_get_extra_units)
 	cr_assert_gt(y->fid.nreg, y->fid.nunits, "no extra region");
 	cr_assert_leq(y->fid.nreg, 2 * y->fid.nunits);
 	cr_assert_gt(hard, 0, "no memory-bound unit");
-	cr_assert_gt(y->fid.xs[1], 0, "no memory-bound demand");
+	cr_assert_gt(pieces(&y->fid, 1), 0, "no memory-bound chunk");
 	chip_destroy(y);
 	c.sampling.hard_share = 0;
 	y = tu_run_chip(&w, &c);
 	cr_assert_eq(y->fid.nreg, y->fid.nunits);
-	cr_assert_eq(y->fid.xs[1], 0);
+	cr_assert_eq(pieces(&y->fid, 1), 0);
+	cr_assert_gt(pieces(&y->fid, 0), 0);
 	for (int u = 0; u < y->fid.nreg; u++)
 		cr_assert_eq(y->fid.unit_hard[u], 0);
 	chip_destroy(y);
@@ -366,5 +378,79 @@ Test(fidelity, pci_bound_frame_follows_the_bus)
 	cr_log_info("PCI-bound: true %.0f, estimate %.0f +- %.0f", truth, est, h);
 	cr_assert_lt(fabs(est - truth), 0.1 * truth, "estimate %g vs true %g", est, truth);
 	chip_destroy(y);
+	world_free(&w);
+}
+
+/* The SDRAM factor fit on units made to a known law: cycles =
+ * max(compute, k x SDRAM) with +-1% noise give back k; units whose cycles
+ * follow compute alone give 1, however much SDRAM they use; host-bus time
+ * is never scaled. */
+Test(fidelity, sdram_factor_fits_the_units_law)
+{
+	enum { N = 24 };
+	chip_piece u[N];
+	double cyc[N];
+	for (int law = 0; law < 3; law++) {
+		double k = law == 0 ? 1.5 : law == 1 ? 2.3 : 1.0;
+		for (int j = 0; j < N; j++) {
+			double noise = 1.0 + 0.01 * ((j * 7) % 5 - 2) / 2.0;
+			/* laws 0 and 1: SDRAM time up to 1.5x compute; law 2 (compute
+			 * alone): up to 0.9x, cycles ignoring it */
+			u[j] = (chip_piece){1000.0, 100.0 + (law < 2 ? 60.0 : 35.0) * j, 0, 0};
+			double x = u[j].comp > k * u[j].sdram ? u[j].comp : k * u[j].sdram;
+			cyc[j] = (law < 2 ? x : u[j].comp) * noise;
+		}
+		double got = chip_fit_sdram_factor(u, cyc, N);
+		cr_assert(fabs(got - k) <= 0.04, "law k = %.2f: fitted %.2f", k, got);
+	}
+	for (int j = 0; j < N; j++) { /* PCI-bound units: the host bus sets the pace */
+		u[j] = (chip_piece){500.0, 200.0 + 10.0 * j, 800.0 + 100.0 * j, 1};
+		cyc[j] = 1.1 * u[j].hbus;
+	}
+	cr_assert_float_eq(chip_fit_sdram_factor(u, cyc, N), 1.0, 1e-9);
+}
+
+/* On Conference (standard config, 16 threads) a sizeable share of the
+ * frame is near its SDRAM bound: the fitted factor is well above 1, and
+ * the estimate is closer to cycle's, with a narrower interval, than with
+ * the factor held at 1 (sampling.sdram_factor), at each of three offsets. */
+Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
+{
+	char views[1024];
+	SCENE_OR_SKIP(views, "views.yaml");
+	world w;
+	tu_load_world(&w, NULL, views, "conference");
+	saar_config c;
+	cfg_mode(&c, 0, CFG_FIDELITY_CYCLE);
+	c.frame.width = 1024;
+	c.frame.height = 768;
+	chip *x = tu_run_chip(&w, &c);
+	double truth = (double)x->frame_cycles[0];
+	chip_destroy(x);
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.1;
+	double err[2] = {0, 0}, half[2] = {0, 0};
+	for (int o = 0; o < 3; o++) {
+		c.sampling.offset = 0.25 + 0.25 * o;
+		for (int fixed = 0; fixed < 2; fixed++) {
+			c.sampling.sdram_factor = fixed;
+			chip *y = tu_run_chip(&w, &c);
+			double e = y->fid.est[0], h = y->fid.half[0];
+			cr_log_info("offset %.2f, k %s %.2f: %+.2f%% +- %.2f%%", c.sampling.offset,
+			            fixed ? "held at" : "fitted", y->fid.sdram_factor,
+			            100 * (e - truth) / truth, 100 * h / truth);
+			if (!fixed)
+				cr_assert(y->fid.sdram_factor > 1.2 && y->fid.sdram_factor < 2.0,
+				          "k %.2f", y->fid.sdram_factor);
+			cr_assert_leq(fabs(e - truth), h, "offset %.2f: outside the interval",
+			              c.sampling.offset);
+			err[fixed] += fabs(e - truth);
+			half[fixed] += h;
+			chip_destroy(y);
+		}
+	}
+	cr_assert_lt(err[0], err[1], "fitted k: summed error %g, k = 1: %g", err[0], err[1]);
+	cr_assert_lt(half[0], half[1], "fitted k: summed half-width %g, k = 1: %g", half[0],
+	             half[1]);
 	world_free(&w);
 }
