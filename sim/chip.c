@@ -527,7 +527,8 @@ static uint64_t run_region(chip *c, int end)
  * sampling.hard_share of its busiest compute resource. */
 static chip_piece piece(const chip *c, const double *a, const double *b)
 {
-	chip_piece p = {0, 0, 0, 0};
+	chip_piece p;
+	memset(&p, 0, sizeof p);
 	for (int r = 0; r < RES_N; r++) {
 		double d = b[r] - a[r];
 		if (r == RES_SDRAM)
@@ -536,7 +537,11 @@ static chip_piece piece(const chip *c, const double *a, const double *b)
 			p.hbus = d;
 		else if (d > p.comp)
 			p.comp = d;
+		if (r <= RES_ISECT)
+			p.lin[r - RES_RGS] = d;
 	}
+	p.lin[4] = p.sdram;
+	p.lin[5] = p.hbus;
 	double hs = c->cfg.sampling.hard_share, mem = p.sdram > p.hbus ? p.sdram : p.hbus;
 	p.hard = hs > 0 && mem > hs * p.comp;
 	return p;
@@ -551,6 +556,16 @@ static double demand_k(const chip_piece *p, double k)
 	return k * p->sdram > x ? k * p->sdram : x;
 }
 
+double chip_piece_demand(const chip_piece *p, const chip_model *m)
+{
+	if (!m->linear)
+		return demand_k(p, m->k);
+	double x = 0;
+	for (int i = 0; i < CHIP_LIN; i++)
+		x += m->beta[i] * p->lin[i];
+	return x;
+}
+
 /* Keeps a piece of the estimated middle of the frame (chunk or region
  * piece) for the estimator; returns its stratum. */
 static int account(chip_fidelity *F, chip_piece p, int middle)
@@ -563,6 +578,8 @@ static int account(chip_fidelity *F, chip_piece p, int middle)
 			q->comp += p.comp;
 			q->sdram += p.sdram;
 			q->hbus += p.hbus;
+			for (int i = 0; i < CHIP_LIN; i++)
+				q->lin[i] += p.lin[i];
 		}
 	}
 	return p.hard;
@@ -703,6 +720,23 @@ static strat stratum(const chip_fidelity *F, const double *cyc, const double *xu
 	return s;
 }
 
+/* Residual sum of squares of one ratio fitted to n units' cycles against
+ * their demand under model m. */
+static double ratio_ss(const chip_piece *u, const double *cyc, int n, const chip_model *m)
+{
+	double sc = 0, sx = 0, ss = 0;
+	for (int j = 0; j < n; j++) {
+		sc += cyc[j];
+		sx += chip_piece_demand(&u[j], m);
+	}
+	double R = sx > 0 ? sc / sx : 0;
+	for (int j = 0; j < n; j++) {
+		double d = cyc[j] - R * chip_piece_demand(&u[j], m);
+		ss += d * d;
+	}
+	return ss;
+}
+
 /* The SDRAM factor k of demand_k for n units (demand, cycles). Where a
  * unit's SDRAM time nears its compute time, its cycles follow k x SDRAM
  * time, k about 1.5 for the standard SDRAM's row misses; with k = 1 those
@@ -716,22 +750,98 @@ double chip_fit_sdram_factor(const chip_piece *u, const double *cyc, int n)
 {
 	double kbest = 1, sbest = INFINITY;
 	for (int step = 0; step <= 150; step++) {
-		double k = 1.0 + 0.02 * step, sc = 0, sx = 0, ss = 0;
-		for (int j = 0; j < n; j++) {
-			sc += cyc[j];
-			sx += demand_k(&u[j], k);
-		}
-		double R = sx > 0 ? sc / sx : 0;
-		for (int j = 0; j < n; j++) {
-			double d = cyc[j] - R * demand_k(&u[j], k);
-			ss += d * d;
-		}
+		chip_model m = {0, 1.0 + 0.02 * step, {0}};
+		double ss = ratio_ss(u, cyc, n, &m);
 		if (step == 0 || ss < sbest * (1 - 1e-6)) {
 			sbest = ss;
-			kbest = k;
+			kbest = m.k;
 		}
 	}
 	return kbest;
+}
+
+/* Solves the m x m system A z = y in place (Gaussian elimination with
+ * partial pivoting); -1 when it is singular. */
+static int solve(double *A, double *y, int m)
+{
+	for (int c = 0; c < m; c++) {
+		int piv = c;
+		for (int r = c + 1; r < m; r++)
+			if (fabs(A[r * m + c]) > fabs(A[piv * m + c]))
+				piv = r;
+		if (fabs(A[piv * m + c]) < 1e-12 * (fabs(A[c * m + c]) + 1e-300) ||
+		    A[piv * m + c] == 0)
+			return -1;
+		for (int k = 0; k < m; k++) {
+			double t = A[c * m + k];
+			A[c * m + k] = A[piv * m + k];
+			A[piv * m + k] = t;
+		}
+		double t = y[c];
+		y[c] = y[piv];
+		y[piv] = t;
+		for (int r = c + 1; r < m; r++) {
+			double f = A[r * m + c] / A[c * m + c];
+			for (int k = c; k < m; k++)
+				A[r * m + k] -= f * A[c * m + k];
+			y[r] -= f * y[c];
+		}
+	}
+	for (int c = m - 1; c >= 0; c--) {
+		for (int k = c + 1; k < m; k++)
+			y[c] -= A[c * m + k] * y[k];
+		y[c] /= A[c * m + c];
+	}
+	return 0;
+}
+
+/* The linear model: cycles = sum(beta_i x lin_i) over the unit kinds'
+ * issue cycles, SDRAM and host-bus time, beta >= 0, least squares over the
+ * n units. With few threads a packet's operations and memory waits follow
+ * one another, so its cycles add up its resources' times rather than
+ * follow the busiest. Regressors that are zero in every unit are left
+ * out; a fit with a negative coefficient drops that regressor and fits
+ * again (an active set; six regressors at most). */
+int chip_fit_linear(const chip_piece *u, const double *cyc, int n, double beta[CHIP_LIN])
+{
+	int on[CHIP_LIN], m;
+	for (int i = 0; i < CHIP_LIN; i++) {
+		double ss = 0;
+		for (int j = 0; j < n; j++)
+			ss += u[j].lin[i] * u[j].lin[i];
+		on[i] = ss > 0;
+		beta[i] = 0;
+	}
+	for (;;) {
+		int idx[CHIP_LIN];
+		m = 0;
+		for (int i = 0; i < CHIP_LIN; i++)
+			if (on[i])
+				idx[m++] = i;
+		if (m == 0 || n < m)
+			return 0;
+		double A[CHIP_LIN * CHIP_LIN] = {0}, y[CHIP_LIN] = {0};
+		for (int j = 0; j < n; j++)
+			for (int a = 0; a < m; a++) {
+				y[a] += u[j].lin[idx[a]] * cyc[j];
+				for (int b = 0; b < m; b++)
+					A[a * m + b] += u[j].lin[idx[a]] * u[j].lin[idx[b]];
+			}
+		int worst = -1;
+		if (solve(A, y, m) == 0) {
+			for (int a = 0; a < m; a++)
+				if (y[a] < 0 && (worst < 0 || y[a] < y[worst]))
+					worst = a;
+		} else {
+			worst = m - 1; /* collinear: drop the last regressor */
+		}
+		if (worst < 0) {
+			for (int a = 0; a < m; a++)
+				beta[idx[a]] = y[a];
+			return m;
+		}
+		on[idx[worst]] = 0;
+	}
 }
 
 /* Sampled frame: detailed regions (warm-up, then one measured unit) with
@@ -796,19 +906,40 @@ static void sampled_frame(chip *c, int f)
 	F->region_end = N;
 	uint64_t t1 = eng_now(c->e);
 	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[nr - 1]) / per;
-	double kfix = c->cfg.sampling.sdram_factor;
-	double kbest = kfix > 0 ? kfix : chip_fit_sdram_factor(F->unit_pc + 1, cyc + 1, nr - 1);
+	/* the demand model (docs/fidelity.md "Demand models"): max, with the
+	 * SDRAM factor fitted or given, or linear, fitted when there are 30
+	 * units or more; auto takes the one whose units' residual variance
+	 * (per degree of freedom) is smaller. extra: parameters fitted
+	 * beyond the ratio, each a degree of freedom */
+	const saar_config *cfg = &c->cfg;
+	chip_model mm = {0, cfg->sampling.sdram_factor, {0}}, ml = {1, 1, {0}};
+	int fitk = mm.k <= 0, m1 = nr - 1, extra = 0;
+	if (fitk)
+		mm.k = chip_fit_sdram_factor(F->unit_pc + 1, cyc + 1, m1);
+	int plin = cfg->sampling.demand_model != CFG_DEMAND_MAX && m1 >= 30
+	               ? chip_fit_linear(F->unit_pc + 1, cyc + 1, m1, ml.beta)
+	               : 0;
+	chip_model *use = &mm;
+	extra = fitk && mm.k > 1;
+	if (plin) {
+		double smax = ratio_ss(F->unit_pc + 1, cyc + 1, m1, &mm) / (m1 - 1 - extra);
+		double slin = ratio_ss(F->unit_pc + 1, cyc + 1, m1, &ml) / (m1 - plin);
+		if (cfg->sampling.demand_model == CFG_DEMAND_LINEAR || slin < smax) {
+			use = &ml;
+			extra = plin - 1;
+		}
+	}
+	F->model = *use;
 	double X[2] = {0, 0};
 	int nc[2] = {0, 0};
 	for (int i = 0; i < F->npc; i++) {
-		X[F->pc[i].hard] += demand_k(&F->pc[i], kbest);
+		X[F->pc[i].hard] += chip_piece_demand(&F->pc[i], use);
 		nc[F->pc[i].hard]++;
 	}
 	for (int u = 0; u < nr; u++) {
-		xu[u] = demand_k(&F->unit_pc[u], kbest);
+		xu[u] = chip_piece_demand(&F->unit_pc[u], use);
 		F->unit_rate[u] = xu[u] > 0 ? cyc[u] / xu[u] : 0;
 	}
-	F->sdram_factor = kbest;
 	/* the units after the head; two strata when each has at least two
 	 * units, else one. The residual variance is pooled over the strata:
 	 * once the demand carries the SDRAM factor both hold cycles near one
@@ -827,8 +958,7 @@ static void sampled_frame(chip *c, int f)
 		df = a.n - 1;
 		var = a.n > 1 ? a.g * a.ss / df : INFINITY;
 	}
-	if (kfix <= 0 && kbest > 1) /* the fit costs a degree of freedom */
-		df -= 1;
+	df -= extra; /* the model's fitted parameters */
 	F->est[f] = ch + est + ct;
 	/* plus a bound on the units' systematic error (sampling.bias_bound),
 	 * which no spread between units shows */

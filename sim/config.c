@@ -20,6 +20,7 @@
 /* ======================== the schema ======================== */
 
 static const char *const thread_sched_names[] = {"round_robin", "oldest_first", NULL};
+static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
 /* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
 static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};
@@ -127,6 +128,13 @@ static const cfg_key keys[] = {
              "max(compute, k x SDRAM, host bus), for the SDRAM's row misses and turnarounds; "
              "0 = fitted to the frame's units (the k in [1, 4] under which one ratio fits them "
              "best), > 0 = this k"},
+    {ENUM("sampling.demand_model", sampling.demand_model, demand_model_names),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: how a chunk's cycles follow its resource demands: max = its "
+             "busiest resource with SDRAM time x sdram_factor (many threads: throughput bound), "
+             "linear = a non-negative sum of unit issue cycles, SDRAM and host-bus time fitted "
+             "to the units (few threads: latency bound; needs 30 units), auto = whichever fits "
+             "the frame's units better"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

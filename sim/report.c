@@ -170,6 +170,18 @@ static void fidfig_get(const chip *c, fidfig *x)
 	x->bound_by = chip_res_name(F->bound_by);
 }
 
+static const char *const lin_names[CHIP_LIN] = {"rgs", "trav", "list", "isect", "sdram", "hostbus"};
+
+/* "max, SDRAM factor 1.52" or "linear" (docs/fidelity.md "Demand models"). */
+static const char *model_str(const chip_fidelity *F, char *buf, size_t n)
+{
+	if (F->model.linear)
+		snprintf(buf, n, "linear");
+	else
+		snprintf(buf, n, "max, SDRAM factor %.2f", F->model.k);
+	return buf;
+}
+
 static void fidelity_text(FILE *f, const chip *c)
 {
 	const chip_fidelity *F = &c->fid;
@@ -180,17 +192,18 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "  fidelity functional: no timing; fps <= %.2f (a bound: the busiest "
 		        "resource is %s, %.0f cycles/frame)\n",
 		        x.fps_bound, x.bound_by, F->res_cycles[F->bound_by]);
-	else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact)
+	else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact) {
+		char ms[64];
 		fprintf(f,
 		        "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up), "
-		        "SDRAM factor %.2f in the last frame; cycles "
+		        "demand %s in the last frame; cycles "
 		        "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
 		        "functional\n",
-		        F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles, F->sdram_factor,
-		        x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
+		        F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles,
+		        model_str(F, ms, sizeof ms), x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
 		        (unsigned long long)F->detailed_tiles,
 		        (unsigned long long)F->functional_tiles);
-	else if (F->mode == CFG_FIDELITY_SAMPLED)
+	} else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
 }
 
@@ -226,11 +239,24 @@ static void fidelity_json(jsonw *j, const chip *c)
 		jsonw_kint(j, "unit_tiles", F->unit_tiles);
 		jsonw_kint(j, "warmup_tiles", F->warmup_tiles);
 		jsonw_knum(j, "sample_rate", c->cfg.sampling.rate);
+		jsonw_kstr(j, "demand_model",
+		           F->exact          ? "none"
+		           : F->model.linear ? "linear"
+		                             : "max");
 		jsonw_key(j, "sdram_factor");
-		if (F->exact)
+		if (F->exact || F->model.linear)
 			jsonw_null(j);
 		else
-			jsonw_num(j, F->sdram_factor);
+			jsonw_num(j, F->model.k);
+		jsonw_key(j, "demand_coefficients");
+		if (F->exact || !F->model.linear) {
+			jsonw_null(j);
+		} else {
+			jsonw_obj_begin(j);
+			for (int i = 0; i < CHIP_LIN; i++)
+				jsonw_knum(j, lin_names[i], F->model.beta[i]);
+			jsonw_obj_end(j);
+		}
 		jsonw_key(j, "unit_cycles_per_demand");
 		jsonw_arr_begin(j);
 		for (int u = 0; u < F->nreg; u++)

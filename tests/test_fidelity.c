@@ -227,6 +227,17 @@ Test(fidelity, intervals_shrink_with_more_samples)
 	world_free(&w);
 }
 
+/* c's true cycles of frame 0, from a cycle run; leaves c sampled. */
+static double truth_then_sampled(const world *w, saar_config *c)
+{
+	c->fidelity = CFG_FIDELITY_CYCLE;
+	chip *x = tu_run_chip(w, c);
+	double t = (double)x->frame_cycles[0];
+	chip_destroy(x);
+	c->fidelity = CFG_FIDELITY_SAMPLED;
+	return t;
+}
+
 /* Replicas at five sampling offsets of one frame (the embedded scene,
  * 4 threads per RTP, ten units each): the interval covers the true cycles
  * on at least four, and every estimate is within 15% (measured: -10% to
@@ -238,10 +249,7 @@ Test(fidelity, interval_covers_small_cases)
 	saar_config c;
 	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
 	c.chip.threads_per_rtp = 4;
-	chip *x = tu_run_chip(&w, &c);
-	double truth = (double)x->frame_cycles[0];
-	chip_destroy(x);
-	c.fidelity = CFG_FIDELITY_SAMPLED;
+	double truth = truth_then_sampled(&w, &c);
 	c.sampling.rate = 0.15; /* default units and warm-ups */
 	int covered = 0;
 	for (int k = 0; k < 5; k++) {
@@ -396,7 +404,8 @@ Test(fidelity, sdram_factor_fits_the_units_law)
 			double noise = 1.0 + 0.01 * ((j * 7) % 5 - 2) / 2.0;
 			/* laws 0 and 1: SDRAM time up to 1.5x compute; law 2 (compute
 			 * alone): up to 0.9x, cycles ignoring it */
-			u[j] = (chip_piece){1000.0, 100.0 + (law < 2 ? 60.0 : 35.0) * j, 0, 0};
+			u[j] = (chip_piece){.comp = 1000.0,
+			                    .sdram = 100.0 + (law < 2 ? 60.0 : 35.0) * j};
 			double x = u[j].comp > k * u[j].sdram ? u[j].comp : k * u[j].sdram;
 			cyc[j] = (law < 2 ? x : u[j].comp) * noise;
 		}
@@ -404,7 +413,8 @@ Test(fidelity, sdram_factor_fits_the_units_law)
 		cr_assert(fabs(got - k) <= 0.04, "law k = %.2f: fitted %.2f", k, got);
 	}
 	for (int j = 0; j < N; j++) { /* PCI-bound units: the host bus sets the pace */
-		u[j] = (chip_piece){500.0, 200.0 + 10.0 * j, 800.0 + 100.0 * j, 1};
+		u[j] = (chip_piece){
+		    .comp = 500.0, .sdram = 200.0 + 10.0 * j, .hbus = 800.0 + 100.0 * j};
 		cyc[j] = 1.1 * u[j].hbus;
 	}
 	cr_assert_float_eq(chip_fit_sdram_factor(u, cyc, N), 1.0, 1e-9);
@@ -424,11 +434,9 @@ Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
 	cfg_mode(&c, 0, CFG_FIDELITY_CYCLE);
 	c.frame.width = 1024;
 	c.frame.height = 768;
-	chip *x = tu_run_chip(&w, &c);
-	double truth = (double)x->frame_cycles[0];
-	chip_destroy(x);
-	c.fidelity = CFG_FIDELITY_SAMPLED;
+	double truth = truth_then_sampled(&w, &c);
 	c.sampling.rate = 0.1;
+	c.sampling.demand_model = CFG_DEMAND_MAX;
 	double err[2] = {0, 0}, half[2] = {0, 0};
 	for (int o = 0; o < 3; o++) {
 		c.sampling.offset = 0.25 + 0.25 * o;
@@ -437,11 +445,11 @@ Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
 			chip *y = tu_run_chip(&w, &c);
 			double e = y->fid.est[0], h = y->fid.half[0];
 			cr_log_info("offset %.2f, k %s %.2f: %+.2f%% +- %.2f%%", c.sampling.offset,
-			            fixed ? "held at" : "fitted", y->fid.sdram_factor,
+			            fixed ? "held at" : "fitted", y->fid.model.k,
 			            100 * (e - truth) / truth, 100 * h / truth);
 			if (!fixed)
-				cr_assert(y->fid.sdram_factor > 1.2 && y->fid.sdram_factor < 2.0,
-				          "k %.2f", y->fid.sdram_factor);
+				cr_assert(y->fid.model.k > 1.2 && y->fid.model.k < 2.0, "k %.2f",
+				          y->fid.model.k);
 			cr_assert_leq(fabs(e - truth), h, "offset %.2f: outside the interval",
 			              c.sampling.offset);
 			err[fixed] += fabs(e - truth);
@@ -452,5 +460,80 @@ Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
 	cr_assert_lt(err[0], err[1], "fitted k: summed error %g, k = 1: %g", err[0], err[1]);
 	cr_assert_lt(half[0], half[1], "fitted k: summed half-width %g, k = 1: %g", half[0],
 	             half[1]);
+	world_free(&w);
+}
+
+/* The linear model's fit on units made to a known law: cycles = sum(beta x
+ * lin) with +-1% noise give back beta; a regressor that is zero in every
+ * unit (the host bus without VMA) gets 0; a law that would need a negative
+ * coefficient gets none. */
+Test(fidelity, linear_demand_fits_the_units_law)
+{
+	enum { N = 40 };
+	chip_piece u[N];
+	double cyc[N], beta[CHIP_LIN];
+	const double law[CHIP_LIN] = {0.3, 3.5, 20.0, 2.0, 1.2, 0};
+	for (int j = 0; j < N; j++) {
+		memset(&u[j], 0, sizeof u[j]);
+		for (int i = 0; i < 5; i++) /* regressors that vary apart */
+			u[j].lin[i] = 100.0 + 50.0 * ((j * (2 * i + 3) + i) % 11);
+		double y = 0;
+		for (int i = 0; i < CHIP_LIN; i++)
+			y += law[i] * u[j].lin[i];
+		cyc[j] = y * (1.0 + 0.01 * ((j * 7) % 5 - 2) / 2.0);
+	}
+	cr_assert_eq(chip_fit_linear(u, cyc, N, beta), 5);
+	for (int i = 0; i < CHIP_LIN; i++)
+		cr_assert(fabs(beta[i] - law[i]) <= 0.05 * law[3], "beta[%d] %.3f, law %.3f", i,
+		          beta[i], law[i]);
+	chip_model m = {1, 1, {0}};
+	memcpy(m.beta, beta, sizeof beta);
+	cr_assert(fabs(chip_piece_demand(&u[0], &m) - cyc[0]) < 0.02 * cyc[0]);
+	/* cycles that fall as SDRAM time grows: its coefficient is dropped */
+	for (int j = 0; j < N; j++)
+		cyc[j] = 2.0 * u[j].lin[1] + 3.0 * u[j].lin[3] - 0.5 * u[j].lin[4];
+	int kept = chip_fit_linear(u, cyc, N, beta);
+	cr_assert(kept >= 1 && kept < 5, "kept %d", kept);
+	for (int i = 0; i < CHIP_LIN; i++)
+		cr_assert_geq(beta[i], 0, "beta[%d] = %g", i, beta[i]);
+	cr_assert_eq(beta[4], 0);
+}
+
+/* One thread per RTP: a packet's operations and memory waits follow one
+ * another, cycles add up rather than follow the busiest resource. With 30
+ * units or more, auto picks the linear model there, and on five replicas
+ * of the embedded frame its estimates are nearer cycle's than the max
+ * model's (sampling.demand_model = max), its interval covering the truth
+ * on at least four. */
+Test(fidelity, linear_demand_for_one_thread, .timeout = 300)
+{
+	world w;
+	tu_load_world(&w, NULL, NULL, NULL);
+	saar_config c;
+	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
+	c.chip.threads_per_rtp = 1;
+	double truth = truth_then_sampled(&w, &c);
+	c.sampling.rate = 0.15;
+	double err[2] = {0, 0};
+	int covered = 0;
+	for (int k = 0; k < 5; k++) {
+		c.sampling.offset = 0.1 + 0.2 * k;
+		for (int m = 0; m < 2; m++) {
+			c.sampling.demand_model = m ? CFG_DEMAND_MAX : CFG_DEMAND_AUTO;
+			chip *y = tu_run_chip(&w, &c);
+			double e = y->fid.est[0], h = y->fid.half[0];
+			cr_log_info("offset %.1f, %s: %+.2f%% +- %.2f%% (%d units)",
+			            c.sampling.offset, y->fid.model.linear ? "linear" : "max",
+			            100 * (e - truth) / truth, 100 * h / truth, y->fid.nreg);
+			cr_assert_eq(y->fid.model.linear, !m,
+			             "offset %.1f: auto did not pick linear", c.sampling.offset);
+			err[m] += fabs(e - truth);
+			if (!m)
+				covered += fabs(e - truth) <= h;
+			chip_destroy(y);
+		}
+	}
+	cr_assert_lt(err[0], err[1], "linear: summed error %g, max: %g", err[0], err[1]);
+	cr_assert_geq(covered, 4, "interval covered the truth on %d of 5 replicas", covered);
 	world_free(&w);
 }
