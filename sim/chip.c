@@ -844,6 +844,44 @@ int chip_fit_linear(const chip_piece *u, const double *cyc, int n, double beta[C
 	}
 }
 
+/* The linear model's parameter uncertainty carried to the estimate: the
+ * variance of sum(beta x X) over the middle's pieces, X their regressor
+ * totals, s^2 X' (D'D)^-1 X with D the units' regressors (those kept in
+ * the fit) and s^2 the fit's residual variance. The ratio on the fitted
+ * demand sees only the error along the fitted direction; the frame's mix
+ * of resources differs from the units' and the coefficients' errors
+ * reach it through the other directions too. */
+static double lin_param_var(const chip_fidelity *F, const chip_model *m, const double *cyc, int lo,
+                            int hi)
+{
+	int idx[CHIP_LIN], p = 0, n = hi - lo;
+	for (int i = 0; i < CHIP_LIN; i++)
+		if (m->beta[i] > 0)
+			idx[p++] = i;
+	if (p == 0 || n <= p)
+		return 0;
+	double A[CHIP_LIN * CHIP_LIN] = {0}, X[CHIP_LIN] = {0}, ss = 0;
+	for (int j = lo; j < hi; j++) {
+		const chip_piece *u = &F->unit_pc[j];
+		double d = cyc[j] - chip_piece_demand(u, m);
+		ss += d * d;
+		for (int a = 0; a < p; a++)
+			for (int b = 0; b < p; b++)
+				A[a * p + b] += u->lin[idx[a]] * u->lin[idx[b]];
+	}
+	for (int i = 0; i < F->npc; i++)
+		for (int a = 0; a < p; a++)
+			X[a] += F->pc[i].lin[idx[a]];
+	double z[CHIP_LIN];
+	memcpy(z, X, sizeof z);
+	if (solve(A, z, p)) /* z = (D'D)^-1 X */
+		return INFINITY;
+	double q = 0;
+	for (int a = 0; a < p; a++)
+		q += X[a] * z[a];
+	return ss / (n - p) * q;
+}
+
 /* Sampled frame: detailed regions (warm-up, then one measured unit) with
  * functional stretches between them; a region takes over the packets the
  * stretch before it left in flight, and hands its own to the stretch after
@@ -959,6 +997,8 @@ static void sampled_frame(chip *c, int f)
 		var = a.n > 1 ? a.g * a.ss / df : INFINITY;
 	}
 	df -= extra; /* the model's fitted parameters */
+	if (use->linear)
+		var += lin_param_var(F, use, cyc, 1, nr);
 	F->est[f] = ch + est + ct;
 	/* plus a bound on the units' systematic error (sampling.bias_bound),
 	 * which no spread between units shows */
