@@ -59,6 +59,7 @@ import json, sys
 r = json.load(open(sys.argv[1]))
 f = r["fidelity"]; ss = r["steady_state"]
 print("sim_s", r["host"]["sim_s"])
+print("wall_s", r["host"]["wall_s"])
 print("fps", ss["fps"])
 lo, hi = f["fps_ci95"]
 print("fps_lo", lo); print("fps_hi", hi if hi is not None else 1e30)
@@ -121,7 +122,8 @@ if mode != "functional" and not s["estimated"]:
 print("\t".join(map(str, [view, cfg, tpr, mode, size, "%.3f" % t["sim_s"], "%.3f" % s["sim_s"],
       "%.1f" % (t["sim_s"] / s["sim_s"] if s["sim_s"] else 0), "%.2f" % t["fps"], "%.2f" % s["fps"],
       "%.2f" % err("fps"), "%.2f" % s["fps_lo"], "%.2f" % min(s["fps_hi"], 1e9), inside] + hits +
-      ["%.2f" % err("sdram_mb") if t["sdram_mb"] else "-", "%.2f" % err("pci_mb") if t["pci_mb"] else "-"])))
+      ["%.2f" % err("sdram_mb") if t["sdram_mb"] else "-", "%.2f" % err("pci_mb") if t["pci_mb"] else "-",
+       "%.1f" % (t["wall_s"] / s["wall_s"] if s["wall_s"] else 0)])))
 EOF
 			done
 		done
@@ -213,7 +215,7 @@ SEC="$TMP/section.md"
 	echo "- Commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet -- . ':!docs/FIDELITY.md' ':!docs/fidelity.png' 2>/dev/null || echo ' (plus uncommitted changes)')"
 	echo "- Views: $(echo $VIEWS); Conference at $CONF_SIZE, the others at $SIZE; threads per RTP: $THREADS; sample rates: $RATES, on Conference also at sampling offsets $CONF_OFFSETS (rate@offset; the default offset is 0.5) (the defaults: units of rtps x threads_per_rtp tiles, a warm-up as long before each, at least 8 units; a point marked \"all detailed\" had no room for them and ran as cycle)"
 	echo "- $FLOOR"
-	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point. Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
+	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point; *whole-run speed-up*: the same with the scene load and kd-tree build included (host.wall_s), what each point of a sweep costs. Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
 	echo
 	echo "### Targets"
 	echo
@@ -224,8 +226,8 @@ SEC="$TMP/section.md"
 	echo
 	echo "Sampled: every estimated point (all rates and offsets). Functional: its traffic against cycle's (L1 hit rates in points, SDRAM MB in %)."
 	echo
-	echo "| config | threads | sampled points | rms fps err % | max fps err % | interval covered | speed-up (min-median-max) | functional: max L1 hit pp | functional: SDRAM MB err % |"
-	echo "|---|---:|---:|---:|---:|---:|---|---:|---:|"
+	echo "| config | threads | sampled points | rms fps err % | max fps err % | interval covered | speed-up (min-median-max) | whole-run speed-up (median) | functional: max L1 hit pp | functional: SDRAM MB err % |"
+	echo "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|"
 	python3 - "$ROWS" "$CONF_SIZE" <<'EOF'
 import sys, statistics
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
@@ -239,11 +241,11 @@ for cfg in ("std", "vma"):
             e = [abs(float(r[10])) for r in est]
             sp = sorted(float(r[7]) for r in est)
             cov = sum(int(r[13]) for r in est)
-            s = "| %s | %d | %d | %.2f | %.2f | %d of %d | %.1f-%.1f-%.1f |" % (
+            s = "| %s | %d | %d | %.2f | %.2f | %d of %d | %.1f-%.1f-%.1f | %.1f |" % (
                 cfg, t, len(est), (sum(x * x for x in e) / len(e)) ** 0.5, max(e), cov, len(est),
-                sp[0], statistics.median(sp), sp[-1])
+                sp[0], statistics.median(sp), sp[-1], statistics.median(float(r[22]) for r in est))
         else:
-            s = "| %s | %d | 0 | - | - | - | - |" % (cfg, t)
+            s = "| %s | %d | 0 | - | - | - | - | - |" % (cfg, t)
         if fn:
             hp = [abs(float(x)) for x in fn[0][14:18]]
             s += " %.2f | %s |" % (max(hp), fn[0][20])
@@ -254,8 +256,8 @@ EOF
 	echo
 	echo "### Every point"
 	echo
-	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % |"
-	echo "|---|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % | whole-run speed-up |"
+	echo "|---|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
 	awk -F'\t' 'BEGIN {OFS=" | "} {if ($14 == 1) $14 = "yes"; else if ($14 == 0) $14 = "NO"; else if ($14 == -2) $14 = "(exact)"; else $14 = "(bound)"; $1 = $1; print "| " $0 " |"}' "$ROWS"
 	echo
 	echo "### Skipping as speed"
