@@ -844,6 +844,52 @@ int chip_fit_linear(const chip_piece *u, const double *cyc, int n, double beta[C
 	}
 }
 
+/* The linear model's leave-one-out error over n units: PRESS = sum of
+ * (e_j / (1 - h_j))^2, e_j the fit's residual and h_j the unit's leverage
+ * (its share in fitting its own value), over the regressors kept; *ss gets
+ * the plain sum of e_j^2. INFINITY when a unit alone sets a coefficient
+ * (h_j = 1): on small frames a regressor nonzero in one or two units (the
+ * host bus, lists) made the fit look perfect and the interval a fraction
+ * of the error. */
+static double lin_press(const chip_piece *u, const double *cyc, int n, const chip_model *m,
+                        double *ss)
+{
+	int idx[CHIP_LIN], p = 0;
+	for (int i = 0; i < CHIP_LIN; i++)
+		if (m->beta[i] > 0)
+			idx[p++] = i;
+	*ss = INFINITY;
+	if (p == 0 || n <= p)
+		return INFINITY;
+	double A[CHIP_LIN * CHIP_LIN] = {0}, inv[CHIP_LIN * CHIP_LIN];
+	for (int j = 0; j < n; j++)
+		for (int a = 0; a < p; a++)
+			for (int b = 0; b < p; b++)
+				A[a * p + b] += u[j].lin[idx[a]] * u[j].lin[idx[b]];
+	for (int k = 0; k < p; k++) { /* (D'D)^-1, column by column */
+		double A2[CHIP_LIN * CHIP_LIN], z[CHIP_LIN] = {0};
+		memcpy(A2, A, sizeof A2);
+		z[k] = 1;
+		if (solve(A2, z, p))
+			return INFINITY;
+		for (int a = 0; a < p; a++)
+			inv[a * p + k] = z[a];
+	}
+	double press = 0;
+	*ss = 0;
+	for (int j = 0; j < n; j++) {
+		double h = 0, e = cyc[j] - chip_piece_demand(&u[j], m);
+		for (int a = 0; a < p; a++)
+			for (int b = 0; b < p; b++)
+				h += u[j].lin[idx[a]] * inv[a * p + b] * u[j].lin[idx[b]];
+		if (h > 1 - 1e-9)
+			return INFINITY;
+		*ss += e * e;
+		press += e * e / ((1 - h) * (1 - h));
+	}
+	return press;
+}
+
 /* The linear model's parameter uncertainty carried to the estimate: the
  * variance of sum(beta x X) over the middle's pieces, X their regressor
  * totals, s^2 X' (D'D)^-1 X with D the units' regressors (those kept in
@@ -946,9 +992,12 @@ static void sampled_frame(chip *c, int f)
 	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[nr - 1]) / per;
 	/* the demand model (docs/fidelity.md "Demand models"): max, with the
 	 * SDRAM factor fitted or given, or linear, fitted when there are 30
-	 * units or more; auto takes the one whose units' residual variance
-	 * (per degree of freedom) is smaller. extra: parameters fitted
-	 * beyond the ratio, each a degree of freedom */
+	 * units or more; auto takes the one whose units' error is smaller:
+	 * the max model's residual variance per degree of freedom against the
+	 * linear model's leave-one-out error (PRESS / n). extra: parameters
+	 * fitted beyond the ratio, each a degree of freedom; infl: how much
+	 * larger the linear model's leave-one-out error is than its residuals
+	 * say, by which its variance is widened */
 	const saar_config *cfg = &c->cfg;
 	chip_model mm = {0, cfg->sampling.sdram_factor, {0}}, ml = {1, 1, {0}};
 	int fitk = mm.k <= 0, m1 = nr - 1, extra = 0;
@@ -959,12 +1008,15 @@ static void sampled_frame(chip *c, int f)
 	               : 0;
 	chip_model *use = &mm;
 	extra = fitk && mm.k > 1;
+	double infl = 1;
 	if (plin) {
+		double ss, press = lin_press(F->unit_pc + 1, cyc + 1, m1, &ml, &ss);
 		double smax = ratio_ss(F->unit_pc + 1, cyc + 1, m1, &mm) / (m1 - 1 - extra);
-		double slin = ratio_ss(F->unit_pc + 1, cyc + 1, m1, &ml) / (m1 - plin);
-		if (cfg->sampling.demand_model == CFG_DEMAND_LINEAR || slin < smax) {
+		if (cfg->sampling.demand_model == CFG_DEMAND_LINEAR || press / m1 < smax) {
 			use = &ml;
 			extra = plin - 1;
+			infl = ss > 0 ? press / m1 / (ss / (m1 - plin)) : 1;
+			infl = infl > 1 ? infl : 1;
 		}
 	}
 	F->model = *use;
@@ -998,7 +1050,7 @@ static void sampled_frame(chip *c, int f)
 	}
 	df -= extra; /* the model's fitted parameters */
 	if (use->linear)
-		var += lin_param_var(F, use, cyc, 1, nr);
+		var = (var + lin_param_var(F, use, cyc, 1, nr)) * infl;
 	F->est[f] = ch + est + ct;
 	/* plus a bound on the units' systematic error (sampling.bias_bound),
 	 * which no spread between units shows */

@@ -133,8 +133,8 @@ static const cfg_key keys[] = {
      .desc = "fidelity sampled: how a chunk's cycles follow its resource demands: max = its "
              "busiest resource with SDRAM time x sdram_factor (many threads: throughput bound), "
              "linear = a non-negative sum of unit issue cycles, SDRAM and host-bus time fitted "
-             "to the units (few threads: latency bound; needs 30 units), auto = whichever fits "
-             "the frame's units better"},
+             "to the units (few threads: latency bound; needs 30 units), auto = linear when its "
+             "leave-one-out error over the units is below the max model's residual variance"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "
