@@ -420,20 +420,27 @@ Test(fidelity, sdram_factor_fits_the_units_law)
 	cr_assert_float_eq(chip_fit_sdram_factor(u, cyc, N), 1.0, 1e-9);
 }
 
+/* Loads a shared view (the test skips when the shared scenes are absent)
+ * and sets c to the defaults at width x height in cycle mode. */
+static void shared_view(world *w, saar_config *c, const char *vname, int width, int height)
+{
+	char views[1024];
+	SCENE_OR_SKIP(views, "views.yaml");
+	tu_load_world(w, NULL, views, vname);
+	cfg_mode(c, 0, CFG_FIDELITY_CYCLE);
+	c->frame.width = width;
+	c->frame.height = height;
+}
+
 /* On Conference (standard config, 16 threads) a sizeable share of the
  * frame is near its SDRAM bound: the fitted factor is well above 1, and
  * the estimate is closer to cycle's, with a narrower interval, than with
  * the factor held at 1 (sampling.sdram_factor), at each of three offsets. */
 Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
 {
-	char views[1024];
-	SCENE_OR_SKIP(views, "views.yaml");
 	world w;
-	tu_load_world(&w, NULL, views, "conference");
 	saar_config c;
-	cfg_mode(&c, 0, CFG_FIDELITY_CYCLE);
-	c.frame.width = 1024;
-	c.frame.height = 768;
+	shared_view(&w, &c, "conference", 1024, 768);
 	double truth = truth_then_sampled(&w, &c);
 	c.sampling.rate = 0.1;
 	c.sampling.demand_model = CFG_DEMAND_MAX;
@@ -546,14 +553,9 @@ Test(fidelity, linear_demand_for_one_thread, .timeout = 300)
  * of five cover. */
 Test(fidelity, small_frame_one_thread_intervals_cover, .timeout = 300)
 {
-	char views[1024];
-	SCENE_OR_SKIP(views, "views.yaml");
 	world w;
-	tu_load_world(&w, NULL, views, "robots");
 	saar_config c;
-	cfg_mode(&c, 0, CFG_FIDELITY_CYCLE);
-	c.frame.width = 256;
-	c.frame.height = 192;
+	shared_view(&w, &c, "robots", 256, 192);
 	c.chip.threads_per_rtp = 1;
 	double truth = truth_then_sampled(&w, &c);
 	c.sampling.rate = 0.2;
