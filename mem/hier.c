@@ -342,9 +342,10 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 }
 
 /* The functional twin of hier_access: the same L1 lookups, line by line,
- * with the fill applied at once. Called only while no timed request is in
- * flight (the chip drains its engine first), so no MSHR is busy and a miss
- * never merges or waits: hits and misses follow from the line order alone. */
+ * with the fill applied at once. Timed misses may still be in flight (a
+ * sampled region hands its packets to a functional stretch without
+ * draining): a line in an MSHR counts as on its way (cache_lookup_func),
+ * so nothing waits and hits and misses follow from the line order alone. */
 static void hier_access_func(void *impl, const mem_req *r)
 {
 	hier *h = impl;
@@ -492,10 +493,9 @@ int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, ui
 	                                                              : SDRAM_MAP_ROW_BANK_COL};
 	if (sdram_init(&h->sd, &sp, d))
 		goto fail;
-	if (memif_init(&h->mi, e, &h->sd,
-	               M->memif.policy == CFG_MEMIF_ROUND_ROBIN ? MEMIF_ROUND_ROBIN
-	               : M->memif.policy == CFG_MEMIF_FRFCFS    ? MEMIF_FRFCFS
-	                                                        : MEMIF_FIFO)) {
+	/* the config's policy names are memif's own */
+	int pol = memif_policy_parse(cfg_enum_name(cfg, "memory.memif.policy"));
+	if (memif_init(&h->mi, e, &h->sd, pol < 0 ? MEMIF_FIFO : pol)) {
 		diag_set(d, "config", 0, 0, "out of memory");
 		goto fail;
 	}

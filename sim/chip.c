@@ -104,6 +104,24 @@ static void chip_demand(const chip *c, double d[RES_N])
 	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
 }
 
+/* Gives thread t the RGC's next tile (its primary packet); 0 when the
+ * frame has none left or the packet pool is out of memory. Timed and
+ * functional processing both take tiles here. */
+static int take_tile(chip *c, thr_ctx *t)
+{
+	int tx, ty;
+	if (!rgc_next(&c->g, &tx, &ty))
+		return 0;
+	c->tiles_given++;
+	if (c->progress && c->tiles_given % 64 == 0)
+		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
+	if (rgs_primary(t, tx, ty)) {
+		c->oom = 1;
+		return 0;
+	}
+	return 1;
+}
+
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
@@ -134,14 +152,7 @@ static void on_free(thr_ctx *t)
 		chip_demand(c, &F->dem_s[F->us_next * RES_N]);
 		F->mark_s[F->us_next++] = eng_now(c->e);
 	}
-	int tx, ty;
-	if (!rgc_next(&c->g, &tx, &ty))
-		return;
-	c->tiles_given++;
-	if (c->progress && c->tiles_given % 64 == 0)
-		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
-	if (rgs_primary(t, tx, ty))
-		c->oom = 1;
+	take_tile(c, t);
 }
 
 /* posix_memalign takes any size, but the rounding keeps these blocks
@@ -250,14 +261,13 @@ static int fid_init(chip *c)
 	 * three per region (warm-up, unit, after it) */
 	F->pc_cap = N / U + 4 * (int)cap + 8;
 	F->pc = calloc((size_t)F->pc_cap, sizeof *F->pc);
-	F->unit_hard = calloc(cap, sizeof *F->unit_hard);
 	F->mark_r0 = calloc(cap, sizeof *F->mark_r0);
 	double **dem[2] = {&F->dem_s, &F->dem_e};
 	for (int i = 0; i < 2; i++)
 		if (!(*dem[i] = calloc(cap * RES_N, sizeof(double))))
 			return -1;
-	if (!F->base_s || !F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate ||
-	    !F->unit_hard || !F->mark_r0 || !F->unit_pc || !F->pc)
+	if (!F->base_s || !F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->mark_r0 ||
+	    !F->unit_pc || !F->pc)
 		return -1;
 	/* the head region is the frame's start, the tail its end; the others
 	 * systematic between them, one per period P at sampling.offset of the
@@ -453,7 +463,6 @@ void chip_destroy(chip *c)
 	free(c->frame_mem);
 	free(c->fid.unit_s);
 	free(c->fid.base_s);
-	free(c->fid.unit_hard);
 	free(c->fid.mark_s);
 	free(c->fid.mark_e);
 	free(c->fid.est);
@@ -522,12 +531,21 @@ static uint64_t run_region(chip *c, int end)
 	return eng_now(c->e) - t0;
 }
 
+/* The resource behind each regressor of the linear demand model. */
+static const int lin_res[SMP_LIN] = {RES_RGS,   RES_TRAV,  RES_LIST,
+                                     RES_ISECT, RES_SDRAM, RES_HOSTBUS};
+
+const char *chip_lin_name(int i)
+{
+	return i >= 0 && i < SMP_LIN ? chip_res_name(lin_res[i]) : "?";
+}
+
 /* The demand of a stretch between two chip_demand snapshots, and whether
  * it is memory bound: its SDRAM or host-bus time above
  * sampling.hard_share of its busiest compute resource. */
-static chip_piece piece(const chip *c, const double *a, const double *b)
+static smp_piece piece(const chip *c, const double *a, const double *b)
 {
-	chip_piece p;
+	smp_piece p;
 	memset(&p, 0, sizeof p);
 	for (int r = 0; r < RES_N; r++) {
 		double d = b[r] - a[r];
@@ -537,48 +555,27 @@ static chip_piece piece(const chip *c, const double *a, const double *b)
 			p.hbus = d;
 		else if (d > p.comp)
 			p.comp = d;
-		if (r <= RES_ISECT)
-			p.lin[r - RES_RGS] = d;
 	}
-	p.lin[4] = p.sdram;
-	p.lin[5] = p.hbus;
+	for (int i = 0; i < SMP_LIN; i++)
+		p.lin[i] = b[lin_res[i]] - a[lin_res[i]];
 	double hs = c->cfg.sampling.hard_share, mem = p.sdram > p.hbus ? p.sdram : p.hbus;
 	p.hard = hs > 0 && mem > hs * p.comp;
 	return p;
 }
 
-/* A piece's demand with SDRAM time scaled by k: the cycles its busiest
- * resource needs when the SDRAM delivers 1/k of its data-bus peak (row
- * misses, refresh, turnarounds). k = 1 is the plain busiest resource. */
-static double demand_k(const chip_piece *p, double k)
-{
-	double x = p->comp > p->hbus ? p->comp : p->hbus;
-	return k * p->sdram > x ? k * p->sdram : x;
-}
-
-double chip_piece_demand(const chip_piece *p, const chip_model *m)
-{
-	if (!m->linear)
-		return demand_k(p, m->k);
-	double x = 0;
-	for (int i = 0; i < CHIP_LIN; i++)
-		x += m->beta[i] * p->lin[i];
-	return x;
-}
-
 /* Keeps a piece of the estimated middle of the frame (chunk or region
  * piece) for the estimator; returns its stratum. */
-static int account(chip_fidelity *F, chip_piece p, int middle)
+static int account(chip_fidelity *F, smp_piece p, int middle)
 {
-	if (middle && demand_k(&p, 1) > 0) {
+	if (middle && smp_busiest(&p) > 0) {
 		if (F->npc < F->pc_cap)
 			F->pc[F->npc++] = p;
 		else { /* cannot happen (pc_cap counts every piece); keep the sum */
-			chip_piece *q = &F->pc[F->pc_cap - 1];
+			smp_piece *q = &F->pc[F->pc_cap - 1];
 			q->comp += p.comp;
 			q->sdram += p.sdram;
 			q->hbus += p.hbus;
-			for (int i = 0; i < CHIP_LIN; i++)
+			for (int i = 0; i < SMP_LIN; i++)
 				q->lin[i] += p.lin[i];
 		}
 	}
@@ -595,18 +592,10 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
 		rgs_secondary(t, p);
 		return 1;
 	}
-	int tx, ty;
-	if (c->g.next >= end || !rgc_next(&c->g, &tx, &ty))
+	if (c->g.next >= end || !take_tile(c, t))
 		return 0;
-	c->tiles_given++;
 	c->fid.functional_tiles++;
 	++*given;
-	if (c->progress && c->tiles_given % 64 == 0)
-		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
-	if (rgs_primary(t, tx, ty)) {
-		c->oom = 1;
-		return 0;
-	}
 	return 1;
 }
 
@@ -673,279 +662,17 @@ static int func_range(chip *c, int end, int drain)
 	return extra;
 }
 
-double chip_t975(int df)
-{
-	static const double t[31] = {0,     12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365,
-	                             2.306, 2.262,  2.228, 2.201, 2.179, 2.160, 2.145, 2.131,
-	                             2.120, 2.110,  2.101, 2.093, 2.086, 2.080, 2.074, 2.069,
-	                             2.064, 2.060,  2.056, 2.052, 2.048, 2.045, 2.042};
-	if (df < 1)
-		return INFINITY;
-	if (df <= 30)
-		return t[df];
-	/* Cornish-Fisher: within 1e-3 of the table beyond 30 */
-	double z = 1.959964, z3 = z * z * z;
-	return z + (z3 + z) / (4.0 * df) + (5 * z3 * z * z + 16 * z3 + 3 * z) / (96.0 * df * df);
-}
-
-/* One stratum's ratio estimate over units [lo, hi) of stratum h (or of
- * both, h < 0): R; ss, the residuals' sum of squares; and g, such that the
- * variance of R x X for the stratum's demand X is g x s^2 for a residual
- * variance s^2 (finite-population corrected over its chunks). */
-typedef struct strat {
-	int n;
-	double R, ss, g;
-} strat;
-
-static strat stratum(const chip_fidelity *F, const double *cyc, const double *xu, int lo, int hi,
-                     int h, double X, int chunks)
-{
-	strat s = {0, 0, 0, 0};
-	double sc = 0, sx = 0;
-	for (int j = lo; j < hi; j++)
-		if (h < 0 || F->unit_hard[j] == h) {
-			sc += cyc[j];
-			sx += xu[j];
-			s.n++;
-		}
-	if (!s.n || sx <= 0)
-		return s;
-	s.R = sc / sx;
-	double xbar = sx / s.n;
-	for (int j = lo; j < hi; j++)
-		if (h < 0 || F->unit_hard[j] == h)
-			s.ss += (cyc[j] - s.R * xu[j]) * (cyc[j] - s.R * xu[j]);
-	double fpc = chunks > s.n ? 1.0 - (double)s.n / chunks : 0;
-	s.g = X * X * fpc / s.n / (xbar * xbar);
-	return s;
-}
-
-/* Residual sum of squares of one ratio fitted to n units' cycles against
- * their demand under model m. */
-static double ratio_ss(const chip_piece *u, const double *cyc, int n, const chip_model *m)
-{
-	double sc = 0, sx = 0, ss = 0;
-	for (int j = 0; j < n; j++) {
-		sc += cyc[j];
-		sx += chip_piece_demand(&u[j], m);
-	}
-	double R = sx > 0 ? sc / sx : 0;
-	for (int j = 0; j < n; j++) {
-		double d = cyc[j] - R * chip_piece_demand(&u[j], m);
-		ss += d * d;
-	}
-	return ss;
-}
-
-/* The SDRAM factor k of demand_k for n units (demand, cycles). Where a
- * unit's SDRAM time nears its compute time, its cycles follow k x SDRAM
- * time, k about 1.5 for the standard SDRAM's row misses; with k = 1 those
- * units sat 1.4-1.6x above the rest and dominated the spread. k is the
- * value in [1, 4] (steps of 0.02) under which one ratio fits all units
- * best (least squares of cycles - R x demand, R their ratio); the smallest
- * such k, so 1 when no unit tells them apart. Fitting k to the strata's
- * own ratios instead would favour a k that shrinks the memory-bound
- * stratum's estimate (and so its variance). docs/fidelity.md. */
-double chip_fit_sdram_factor(const chip_piece *u, const double *cyc, int n)
-{
-	double kbest = 1, sbest = INFINITY;
-	for (int step = 0; step <= 150; step++) {
-		chip_model m = {0, 1.0 + 0.02 * step, {0}};
-		double ss = ratio_ss(u, cyc, n, &m);
-		if (step == 0 || ss < sbest * (1 - 1e-6)) {
-			sbest = ss;
-			kbest = m.k;
-		}
-	}
-	return kbest;
-}
-
-/* Solves the m x m system A z = y in place (Gaussian elimination with
- * partial pivoting); -1 when it is singular. */
-static int solve(double *A, double *y, int m)
-{
-	for (int c = 0; c < m; c++) {
-		int piv = c;
-		for (int r = c + 1; r < m; r++)
-			if (fabs(A[r * m + c]) > fabs(A[piv * m + c]))
-				piv = r;
-		if (fabs(A[piv * m + c]) < 1e-12 * (fabs(A[c * m + c]) + 1e-300) ||
-		    A[piv * m + c] == 0)
-			return -1;
-		for (int k = 0; k < m; k++) {
-			double t = A[c * m + k];
-			A[c * m + k] = A[piv * m + k];
-			A[piv * m + k] = t;
-		}
-		double t = y[c];
-		y[c] = y[piv];
-		y[piv] = t;
-		for (int r = c + 1; r < m; r++) {
-			double f = A[r * m + c] / A[c * m + c];
-			for (int k = c; k < m; k++)
-				A[r * m + k] -= f * A[c * m + k];
-			y[r] -= f * y[c];
-		}
-	}
-	for (int c = m - 1; c >= 0; c--) {
-		for (int k = c + 1; k < m; k++)
-			y[c] -= A[c * m + k] * y[k];
-		y[c] /= A[c * m + c];
-	}
-	return 0;
-}
-
-/* The linear model: cycles = sum(beta_i x lin_i) over the unit kinds'
- * issue cycles, SDRAM and host-bus time, beta >= 0, least squares over the
- * n units. With few threads a packet's operations and memory waits follow
- * one another, so its cycles add up its resources' times rather than
- * follow the busiest. Regressors that are zero in every unit are left
- * out; a fit with a negative coefficient drops that regressor and fits
- * again (an active set; six regressors at most). */
-int chip_fit_linear(const chip_piece *u, const double *cyc, int n, double beta[CHIP_LIN])
-{
-	int on[CHIP_LIN], m;
-	for (int i = 0; i < CHIP_LIN; i++) {
-		double ss = 0;
-		for (int j = 0; j < n; j++)
-			ss += u[j].lin[i] * u[j].lin[i];
-		on[i] = ss > 0;
-		beta[i] = 0;
-	}
-	for (;;) {
-		int idx[CHIP_LIN];
-		m = 0;
-		for (int i = 0; i < CHIP_LIN; i++)
-			if (on[i])
-				idx[m++] = i;
-		if (m == 0 || n < m)
-			return 0;
-		double A[CHIP_LIN * CHIP_LIN] = {0}, y[CHIP_LIN] = {0};
-		for (int j = 0; j < n; j++)
-			for (int a = 0; a < m; a++) {
-				y[a] += u[j].lin[idx[a]] * cyc[j];
-				for (int b = 0; b < m; b++)
-					A[a * m + b] += u[j].lin[idx[a]] * u[j].lin[idx[b]];
-			}
-		int worst = -1;
-		if (solve(A, y, m) == 0) {
-			for (int a = 0; a < m; a++)
-				if (y[a] < 0 && (worst < 0 || y[a] < y[worst]))
-					worst = a;
-		} else {
-			worst = m - 1; /* collinear: drop the last regressor */
-		}
-		if (worst < 0) {
-			for (int a = 0; a < m; a++)
-				beta[idx[a]] = y[a];
-			return m;
-		}
-		on[idx[worst]] = 0;
-	}
-}
-
-/* The linear model's leave-one-out error over n units: PRESS = sum of
- * (e_j / (1 - h_j))^2, e_j the fit's residual and h_j the unit's leverage
- * (its share in fitting its own value), over the regressors kept; *ss gets
- * the plain sum of e_j^2. INFINITY when a unit alone sets a coefficient
- * (h_j = 1): on small frames a regressor nonzero in one or two units (the
- * host bus, lists) made the fit look perfect and the interval a fraction
- * of the error. */
-static double lin_press(const chip_piece *u, const double *cyc, int n, const chip_model *m,
-                        double *ss)
-{
-	int idx[CHIP_LIN], p = 0;
-	for (int i = 0; i < CHIP_LIN; i++)
-		if (m->beta[i] > 0)
-			idx[p++] = i;
-	*ss = INFINITY;
-	if (p == 0 || n <= p)
-		return INFINITY;
-	double A[CHIP_LIN * CHIP_LIN] = {0}, inv[CHIP_LIN * CHIP_LIN];
-	for (int j = 0; j < n; j++)
-		for (int a = 0; a < p; a++)
-			for (int b = 0; b < p; b++)
-				A[a * p + b] += u[j].lin[idx[a]] * u[j].lin[idx[b]];
-	for (int k = 0; k < p; k++) { /* (D'D)^-1, column by column */
-		double A2[CHIP_LIN * CHIP_LIN], z[CHIP_LIN] = {0};
-		memcpy(A2, A, sizeof A2);
-		z[k] = 1;
-		if (solve(A2, z, p))
-			return INFINITY;
-		for (int a = 0; a < p; a++)
-			inv[a * p + k] = z[a];
-	}
-	double press = 0;
-	*ss = 0;
-	for (int j = 0; j < n; j++) {
-		double h = 0, e = cyc[j] - chip_piece_demand(&u[j], m);
-		for (int a = 0; a < p; a++)
-			for (int b = 0; b < p; b++)
-				h += u[j].lin[idx[a]] * inv[a * p + b] * u[j].lin[idx[b]];
-		if (h > 1 - 1e-9)
-			return INFINITY;
-		*ss += e * e;
-		press += e * e / ((1 - h) * (1 - h));
-	}
-	return press;
-}
-
-/* The linear model's parameter uncertainty carried to the estimate: the
- * variance of sum(beta x X) over the middle's pieces, X their regressor
- * totals, s^2 X' (D'D)^-1 X with D the units' regressors (those kept in
- * the fit) and s^2 the fit's residual variance. The ratio on the fitted
- * demand sees only the error along the fitted direction; the frame's mix
- * of resources differs from the units' and the coefficients' errors
- * reach it through the other directions too. */
-static double lin_param_var(const chip_fidelity *F, const chip_model *m, const double *cyc, int lo,
-                            int hi)
-{
-	int idx[CHIP_LIN], p = 0, n = hi - lo;
-	for (int i = 0; i < CHIP_LIN; i++)
-		if (m->beta[i] > 0)
-			idx[p++] = i;
-	if (p == 0 || n <= p)
-		return 0;
-	double A[CHIP_LIN * CHIP_LIN] = {0}, X[CHIP_LIN] = {0}, ss = 0;
-	for (int j = lo; j < hi; j++) {
-		const chip_piece *u = &F->unit_pc[j];
-		double d = cyc[j] - chip_piece_demand(u, m);
-		ss += d * d;
-		for (int a = 0; a < p; a++)
-			for (int b = 0; b < p; b++)
-				A[a * p + b] += u->lin[idx[a]] * u->lin[idx[b]];
-	}
-	for (int i = 0; i < F->npc; i++)
-		for (int a = 0; a < p; a++)
-			X[a] += F->pc[i].lin[idx[a]];
-	double z[CHIP_LIN];
-	memcpy(z, X, sizeof z);
-	if (solve(A, z, p)) /* z = (D'D)^-1 X */
-		return INFINITY;
-	double q = 0;
-	for (int a = 0; a < p; a++)
-		q += X[a] * z[a];
-	return ss / (n - p) * q;
-}
-
 /* Sampled frame: detailed regions (warm-up, then one measured unit) with
  * functional stretches between them; a region takes over the packets the
  * stretch before it left in flight, and hands its own to the stretch after
  * it. The first region is the frame's start and the last its end (a chip
  * starting empty, and the final drain), both measured, not estimated.
- * Everything between is estimated: cycles per tile vary tenfold across a
- * frame, cycles per unit of *demand* far less. A stretch's demand is the
- * core cycles its busiest resource needs (chip_demand: unit issue cycles,
- * L1 ports, SDRAM time x the fitted SDRAM factor, host-bus time), taken
- * per chunk of unit_tiles tiles so that a PCI-bound start and an
- * intersection-bound middle each count what bounds them; it is known for
- * every chunk, detailed or functional. Chunks and units are memory bound
- * or not (piece); the middle's cycles are per stratum the ratio estimator
- * demand x sum(cycles) / sum(demand) over the units' windows (all but the
- * first region's), with a 95% interval from the residuals (finite-
- * population corrected, variance pooled over the strata) widened by
- * sampling.bias_bound. A memory-bound functional
- * chunk brings an extra region (func_range). docs/fidelity.md. */
+ * Everything between is estimated (sampling.c) from the units' cycles and
+ * the resource demands of every piece of it, taken per chunk of
+ * unit_tiles tiles (func_range) and per region piece (warm-up, unit, what
+ * finished after the unit), detailed or functional alike. The interval
+ * adds sampling.bias_bound. A memory-bound functional chunk brings an
+ * extra region (func_range). docs/fidelity.md. */
 static void sampled_frame(chip *c, int f)
 {
 	chip_fidelity *F = &c->fid;
@@ -955,7 +682,7 @@ static void sampled_frame(chip *c, int f)
 	F->npc = 0;
 	F->extra_left = F->unit_cap - n;
 	F->last_end = 0;
-	double per = (double)c->clk.period, cyc[F->unit_cap], xu[F->unit_cap];
+	double per = (double)c->clk.period, cyc[F->unit_cap];
 	int j = 0;
 	for (int b = 0; b < n; j++) {
 		int rs = F->base_s[b] - W;
@@ -983,79 +710,27 @@ static void sampled_frame(chip *c, int f)
 		F->unit_pc[j] = piece(c, ds, de);
 		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / per;
 		account(F, piece(c, r0, ds), j > 0 && !tail);
-		F->unit_hard[j] = account(F, F->unit_pc[j], j > 0 && !tail);
+		account(F, F->unit_pc[j], j > 0 && !tail);
 		account(F, piece(c, de, r1), !tail);
 	}
 	int nr = F->nreg = j;
 	F->region_end = N;
 	uint64_t t1 = eng_now(c->e);
 	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[nr - 1]) / per;
-	/* the demand model (docs/fidelity.md "Demand models"): max, with the
-	 * SDRAM factor fitted or given, or linear, fitted when there are 30
-	 * units or more; auto takes the one whose units' error is smaller:
-	 * the max model's residual variance per degree of freedom against the
-	 * linear model's leave-one-out error (PRESS / n). extra: parameters
-	 * fitted beyond the ratio, each a degree of freedom; infl: how much
-	 * larger the linear model's leave-one-out error is than its residuals
-	 * say, by which its variance is widened */
-	const saar_config *cfg = &c->cfg;
-	chip_model mm = {0, cfg->sampling.sdram_factor, {0}}, ml = {1, 1, {0}};
-	int fitk = mm.k <= 0, m1 = nr - 1, extra = 0;
-	if (fitk)
-		mm.k = chip_fit_sdram_factor(F->unit_pc + 1, cyc + 1, m1);
-	int plin = cfg->sampling.demand_model != CFG_DEMAND_MAX && m1 >= 30
-	               ? chip_fit_linear(F->unit_pc + 1, cyc + 1, m1, ml.beta)
-	               : 0;
-	chip_model *use = &mm;
-	extra = fitk && mm.k > 1;
-	double infl = 1;
-	if (plin) {
-		double ss, press = lin_press(F->unit_pc + 1, cyc + 1, m1, &ml, &ss);
-		double smax = ratio_ss(F->unit_pc + 1, cyc + 1, m1, &mm) / (m1 - 1 - extra);
-		if (cfg->sampling.demand_model == CFG_DEMAND_LINEAR || press / m1 < smax) {
-			use = &ml;
-			extra = plin - 1;
-			infl = ss > 0 ? press / m1 / (ss / (m1 - plin)) : 1;
-			infl = infl > 1 ? infl : 1;
-		}
-	}
-	F->model = *use;
-	double X[2] = {0, 0};
-	int nc[2] = {0, 0};
-	for (int i = 0; i < F->npc; i++) {
-		X[F->pc[i].hard] += chip_piece_demand(&F->pc[i], use);
-		nc[F->pc[i].hard]++;
-	}
+	smp_est r;
+	smp_estimate(F->unit_pc + 1, cyc + 1, nr - 1, F->pc, F->npc, c->cfg.sampling.sdram_factor,
+	             c->cfg.sampling.demand_model, &r);
+	F->model = r.model;
 	for (int u = 0; u < nr; u++) {
-		xu[u] = chip_piece_demand(&F->unit_pc[u], use);
-		F->unit_rate[u] = xu[u] > 0 ? cyc[u] / xu[u] : 0;
+		double x = smp_demand(&F->unit_pc[u], &r.model);
+		F->unit_rate[u] = x > 0 ? cyc[u] / x : 0;
 	}
-	/* the units after the head; two strata when each has at least two
-	 * units, else one. The residual variance is pooled over the strata:
-	 * once the demand carries the SDRAM factor both hold cycles near one
-	 * ratio, and a memory-bound stratum of two or three units would
-	 * otherwise leave the interval one or two degrees of freedom */
-	strat e = stratum(F, cyc, xu, 1, nr, 0, X[0], nc[0]);
-	strat h = stratum(F, cyc, xu, 1, nr, 1, X[1], nc[1]);
-	double est, var, df;
-	if (e.n >= 2 && h.n >= 2) {
-		est = e.R * X[0] + h.R * X[1];
-		df = e.n + h.n - 2;
-		var = (e.g + h.g) * (e.ss + h.ss) / df;
-	} else {
-		strat a = stratum(F, cyc, xu, 1, nr, -1, X[0] + X[1], nc[0] + nc[1]);
-		est = a.R * (X[0] + X[1]);
-		df = a.n - 1;
-		var = a.n > 1 ? a.g * a.ss / df : INFINITY;
-	}
-	df -= extra; /* the model's fitted parameters */
-	if (use->linear)
-		var = (var + lin_param_var(F, use, cyc, 1, nr)) * infl;
+	double est = r.est, var = r.var, df = r.df;
 	F->est[f] = ch + est + ct;
 	/* plus a bound on the units' systematic error (sampling.bias_bound),
 	 * which no spread between units shows */
 	F->half[f] = isfinite(var)
-	                 ? chip_t975((int)df) * sqrt(var) + c->cfg.sampling.bias_bound * est
+	                 ? smp_t975((int)df) * sqrt(var) + c->cfg.sampling.bias_bound * est
 	                 : INFINITY;
 }
 

@@ -27,6 +27,7 @@
 #include "memtrace.h"
 #include "render.h"
 #include "rgc.h"
+#include "sampling.h"
 #include "stats.h"
 #include "thread.h"
 #include "world.h"
@@ -54,26 +55,6 @@ enum chip_res {
 };
 
 /* What the fidelity modes add (docs/fidelity.md). */
-/* The demand of a stretch of tiles in core cycles (sim/chip.c piece): its
- * busiest compute resource (unit issue cycles per instance, L1 requests per
- * port), SDRAM data-bus time and host-bus time, and the linear model's
- * regressors (CHIP_LIN: the four unit kinds' issue cycles, SDRAM, host
- * bus); hard: memory bound (sampling.hard_share), its stratum. */
-enum { CHIP_LIN = 6 };
-typedef struct chip_piece {
-	double comp, sdram, hbus;
-	double lin[CHIP_LIN];
-	int hard;
-} chip_piece;
-
-/* How a piece's demand is computed from its resources (docs/fidelity.md
- * "Demand models"): max(comp, k x sdram, hbus), or sum(beta x lin). */
-typedef struct chip_model {
-	int linear;
-	double k;
-	double beta[CHIP_LIN];
-} chip_model;
-
 typedef struct chip_fidelity {
 	int mode; /* enum cfg_fidelity */
 	/* sampled: per frame nunits units of unit_tiles tiles, each after
@@ -85,10 +66,10 @@ typedef struct chip_fidelity {
 	int gap, extra_left; /* extra regions: tiles at least between, how many more */
 	int last_end;        /* the last region's end tile */
 	/* this frame: the middle's pieces (chunks and region pieces) and the
-	 * units' own, as demand triples (chip_piece) */
-	chip_piece *pc, *unit_pc;
+	 * units' own (sampling.h; a unit's stratum is its piece's .hard) */
+	smp_piece *pc, *unit_pc;
 	int npc, pc_cap;
-	chip_model model;          /* last frame: the demand model used (docs/fidelity.md) */
+	smp_model model;           /* last frame: the demand model used (docs/fidelity.md) */
 	uint64_t *mark_s, *mark_e; /* ticks: unit's first tile taken, first tile after it wanted */
 	/* cumulative resource demand (chip_demand, RES_N each) at each unit's
 	 * two marks */
@@ -100,7 +81,6 @@ typedef struct chip_fidelity {
 	double *est, *half; /* per frame: cycles (estimate or measured), 95% half-width */
 	double *floor;      /* per frame: the busiest-resource bound (cycles can't be lower) */
 	double *unit_rate;  /* last frame: cycles per unit of demand of each unit */
-	int *unit_hard;     /* last frame: each unit's stratum (account) */
 	/* busiest-resource bound, last frame: cycles each resource needs */
 	double res_cycles[RES_N];
 	int bound_by; /* enum chip_res */
@@ -163,15 +143,9 @@ uint64_t chip_rtp_sum(const chip *c, const char *suffix);
 
 /* Name of an enum chip_res ("trav", "l1_kd", "sdram", "hostbus", ...). */
 const char *chip_res_name(int res);
-/* 97.5% quantile of Student's t with df degrees of freedom. */
-double chip_t975(int df);
-/* sampled, docs/fidelity.md "Demand models": a piece's demand under a
- * model; the SDRAM factor fitted to n units' demands and cycles; and the
- * linear model's non-negative least-squares fit (beta; returns the number
- * of regressors kept, 0 when none fits). */
-double chip_piece_demand(const chip_piece *p, const chip_model *m);
-double chip_fit_sdram_factor(const chip_piece *u, const double *cyc, int n);
-int chip_fit_linear(const chip_piece *u, const double *cyc, int n, double beta[CHIP_LIN]);
+/* Name of the linear demand model's regressor i (sampling.h SMP_LIN): the
+ * chip resource it is ("rgs", ..., "sdram", "hostbus"). */
+const char *chip_lin_name(int i);
 const char *chip_unit_name(int kind);   /* "rgs", "trav", "list", "isect" */
 const char *chip_state_name(int state); /* "idle", "running", "waiting_memory", "waiting_unit" */
 

@@ -144,7 +144,7 @@ static int hard_units(const chip_fidelity *F)
 {
 	int n = 0;
 	for (int u = 0; u < F->nreg; u++)
-		n += F->unit_hard[u];
+		n += F->unit_pc[u].hard;
 	return n;
 }
 
@@ -170,15 +170,20 @@ static void fidfig_get(const chip *c, fidfig *x)
 	x->bound_by = chip_res_name(F->bound_by);
 }
 
-static const char *const lin_names[CHIP_LIN] = {"rgs", "trav", "list", "isect", "sdram", "hostbus"};
+/* The demand model of the last frame (docs/fidelity.md "Demand models"):
+ * "max" or "linear", "none" when every tile was detailed. */
+static const char *model_name(const chip_fidelity *F)
+{
+	return F->exact ? "none" : F->model.linear ? "linear" : "max";
+}
 
-/* "max, SDRAM factor 1.52" or "linear" (docs/fidelity.md "Demand models"). */
+/* "max, SDRAM factor 1.52" or "linear", for the text line. */
 static const char *model_str(const chip_fidelity *F, char *buf, size_t n)
 {
 	if (F->model.linear)
-		snprintf(buf, n, "linear");
+		snprintf(buf, n, "%s", model_name(F));
 	else
-		snprintf(buf, n, "max, SDRAM factor %.2f", F->model.k);
+		snprintf(buf, n, "%s, SDRAM factor %.2f", model_name(F), F->model.k);
 	return buf;
 }
 
@@ -239,10 +244,7 @@ static void fidelity_json(jsonw *j, const chip *c)
 		jsonw_kint(j, "unit_tiles", F->unit_tiles);
 		jsonw_kint(j, "warmup_tiles", F->warmup_tiles);
 		jsonw_knum(j, "sample_rate", c->cfg.sampling.rate);
-		jsonw_kstr(j, "demand_model",
-		           F->exact          ? "none"
-		           : F->model.linear ? "linear"
-		                             : "max");
+		jsonw_kstr(j, "demand_model", model_name(F));
 		jsonw_key(j, "sdram_factor");
 		if (F->exact || F->model.linear)
 			jsonw_null(j);
@@ -253,8 +255,8 @@ static void fidelity_json(jsonw *j, const chip *c)
 			jsonw_null(j);
 		} else {
 			jsonw_obj_begin(j);
-			for (int i = 0; i < CHIP_LIN; i++)
-				jsonw_knum(j, lin_names[i], F->model.beta[i]);
+			for (int i = 0; i < SMP_LIN; i++)
+				jsonw_knum(j, chip_lin_name(i), F->model.beta[i]);
 			jsonw_obj_end(j);
 		}
 		jsonw_key(j, "unit_cycles_per_demand");

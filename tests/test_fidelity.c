@@ -290,7 +290,7 @@ Test(fidelity, memory_bound_chunks_get_extra_units)
 	chip *y = tu_run_chip(&w, &c);
 	int hard = 0;
 	for (int u = 0; u < y->fid.nreg; u++)
-		hard += y->fid.unit_hard[u];
+		hard += y->fid.unit_pc[u].hard;
 	cr_log_info("%d planned units, %d run, %d memory bound", y->fid.nunits, y->fid.nreg, hard);
 	cr_assert_gt(y->fid.nreg, y->fid.nunits, "no extra region");
 	cr_assert_leq(y->fid.nreg, 2 * y->fid.nunits);
@@ -303,7 +303,7 @@ Test(fidelity, memory_bound_chunks_get_extra_units)
 	cr_assert_eq(pieces(&y->fid, 1), 0);
 	cr_assert_gt(pieces(&y->fid, 0), 0);
 	for (int u = 0; u < y->fid.nreg; u++)
-		cr_assert_eq(y->fid.unit_hard[u], 0);
+		cr_assert_eq(y->fid.unit_pc[u].hard, 0);
 	chip_destroy(y);
 	world_free(&w);
 }
@@ -396,7 +396,7 @@ Test(fidelity, pci_bound_frame_follows_the_bus)
 Test(fidelity, sdram_factor_fits_the_units_law)
 {
 	enum { N = 24 };
-	chip_piece u[N];
+	smp_piece u[N];
 	double cyc[N];
 	for (int law = 0; law < 3; law++) {
 		double k = law == 0 ? 1.5 : law == 1 ? 2.3 : 1.0;
@@ -404,20 +404,20 @@ Test(fidelity, sdram_factor_fits_the_units_law)
 			double noise = 1.0 + 0.01 * ((j * 7) % 5 - 2) / 2.0;
 			/* laws 0 and 1: SDRAM time up to 1.5x compute; law 2 (compute
 			 * alone): up to 0.9x, cycles ignoring it */
-			u[j] = (chip_piece){.comp = 1000.0,
-			                    .sdram = 100.0 + (law < 2 ? 60.0 : 35.0) * j};
+			u[j] = (smp_piece){.comp = 1000.0,
+			                   .sdram = 100.0 + (law < 2 ? 60.0 : 35.0) * j};
 			double x = u[j].comp > k * u[j].sdram ? u[j].comp : k * u[j].sdram;
 			cyc[j] = (law < 2 ? x : u[j].comp) * noise;
 		}
-		double got = chip_fit_sdram_factor(u, cyc, N);
+		double got = smp_fit_sdram_factor(u, cyc, N);
 		cr_assert(fabs(got - k) <= 0.04, "law k = %.2f: fitted %.2f", k, got);
 	}
 	for (int j = 0; j < N; j++) { /* PCI-bound units: the host bus sets the pace */
-		u[j] = (chip_piece){
+		u[j] = (smp_piece){
 		    .comp = 500.0, .sdram = 200.0 + 10.0 * j, .hbus = 800.0 + 100.0 * j};
 		cyc[j] = 1.1 * u[j].hbus;
 	}
-	cr_assert_float_eq(chip_fit_sdram_factor(u, cyc, N), 1.0, 1e-9);
+	cr_assert_float_eq(smp_fit_sdram_factor(u, cyc, N), 1.0, 1e-9);
 }
 
 /* Loads a shared view (the test skips when the shared scenes are absent)
@@ -477,31 +477,31 @@ Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
 Test(fidelity, linear_demand_fits_the_units_law)
 {
 	enum { N = 40 };
-	chip_piece u[N];
-	double cyc[N], beta[CHIP_LIN];
-	const double law[CHIP_LIN] = {0.3, 3.5, 20.0, 2.0, 1.2, 0};
+	smp_piece u[N];
+	double cyc[N], beta[SMP_LIN];
+	const double law[SMP_LIN] = {0.3, 3.5, 20.0, 2.0, 1.2, 0};
 	for (int j = 0; j < N; j++) {
 		memset(&u[j], 0, sizeof u[j]);
 		for (int i = 0; i < 5; i++) /* regressors that vary apart */
 			u[j].lin[i] = 100.0 + 50.0 * ((j * (2 * i + 3) + i) % 11);
 		double y = 0;
-		for (int i = 0; i < CHIP_LIN; i++)
+		for (int i = 0; i < SMP_LIN; i++)
 			y += law[i] * u[j].lin[i];
 		cyc[j] = y * (1.0 + 0.01 * ((j * 7) % 5 - 2) / 2.0);
 	}
-	cr_assert_eq(chip_fit_linear(u, cyc, N, beta), 5);
-	for (int i = 0; i < CHIP_LIN; i++)
+	cr_assert_eq(smp_fit_linear(u, cyc, N, beta), 5);
+	for (int i = 0; i < SMP_LIN; i++)
 		cr_assert(fabs(beta[i] - law[i]) <= 0.05 * law[3], "beta[%d] %.3f, law %.3f", i,
 		          beta[i], law[i]);
-	chip_model m = {1, 1, {0}};
+	smp_model m = {1, 1, {0}};
 	memcpy(m.beta, beta, sizeof beta);
-	cr_assert(fabs(chip_piece_demand(&u[0], &m) - cyc[0]) < 0.02 * cyc[0]);
+	cr_assert(fabs(smp_demand(&u[0], &m) - cyc[0]) < 0.02 * cyc[0]);
 	/* cycles that fall as SDRAM time grows: its coefficient is dropped */
 	for (int j = 0; j < N; j++)
 		cyc[j] = 2.0 * u[j].lin[1] + 3.0 * u[j].lin[3] - 0.5 * u[j].lin[4];
-	int kept = chip_fit_linear(u, cyc, N, beta);
+	int kept = smp_fit_linear(u, cyc, N, beta);
 	cr_assert(kept >= 1 && kept < 5, "kept %d", kept);
-	for (int i = 0; i < CHIP_LIN; i++)
+	for (int i = 0; i < SMP_LIN; i++)
 		cr_assert_geq(beta[i], 0, "beta[%d] = %g", i, beta[i]);
 	cr_assert_eq(beta[4], 0);
 }
