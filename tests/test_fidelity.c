@@ -238,6 +238,27 @@ static double truth_then_sampled(const world *w, saar_config *c)
 	return t;
 }
 
+/* One sampled run of c (at its sampling.offset) against the true cycles:
+ * the estimate's error and interval half-width, whether it covers, and
+ * the demand model it used; logged, the chip gone. */
+typedef struct replica {
+	double err, half, k;
+	int covered, exact, linear, nreg;
+} replica;
+
+static replica run_replica(const world *w, const saar_config *c, double truth)
+{
+	chip *y = tu_run_chip(w, c);
+	replica r = {y->fid.est[0] - truth, y->fid.half[0],      y->fid.model.k, 0,
+	             y->fid.exact,          y->fid.model.linear, y->fid.nreg};
+	r.covered = fabs(r.err) <= r.half;
+	cr_log_info("offset %.2f: %+.2f%% +- %.2f%% (%d units, demand %s, k %.2f)",
+	            c->sampling.offset, 100 * r.err / truth, 100 * r.half / truth, r.nreg,
+	            r.linear ? "linear" : "max", r.k);
+	chip_destroy(y);
+	return r;
+}
+
 /* Replicas at five sampling offsets of one frame (the embedded scene,
  * 4 threads per RTP, ten units each): the interval covers the true cycles
  * on at least four, and every estimate is within 15% (measured: -10% to
@@ -254,15 +275,11 @@ Test(fidelity, interval_covers_small_cases)
 	int covered = 0;
 	for (int k = 0; k < 5; k++) {
 		c.sampling.offset = 0.1 + 0.2 * k;
-		chip *y = tu_run_chip(&w, &c);
-		cr_assert(!y->fid.exact);
-		double est = y->fid.est[0], h = y->fid.half[0];
-		cr_log_info("offset %.1f: true %.0f, estimate %.0f +- %.0f (%d units)",
-		            c.sampling.offset, truth, est, h, y->fid.nreg);
-		covered += fabs(est - truth) <= h;
-		cr_assert_leq(fabs(est - truth), 0.15 * truth, "offset %.1f: %g vs %g +- %g",
-		              c.sampling.offset, est, truth, h);
-		chip_destroy(y);
+		replica r = run_replica(&w, &c, truth);
+		cr_assert(!r.exact);
+		covered += r.covered;
+		cr_assert_leq(fabs(r.err), 0.15 * truth, "offset %.1f: %g off the truth %g +- %g",
+		              c.sampling.offset, r.err, truth, r.half);
 	}
 	cr_assert_geq(covered, 4, "interval covered the truth on %d of 5 replicas", covered);
 	world_free(&w);
@@ -449,19 +466,13 @@ Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
 		c.sampling.offset = 0.25 + 0.25 * o;
 		for (int fixed = 0; fixed < 2; fixed++) {
 			c.sampling.sdram_factor = fixed;
-			chip *y = tu_run_chip(&w, &c);
-			double e = y->fid.est[0], h = y->fid.half[0];
-			cr_log_info("offset %.2f, k %s %.2f: %+.2f%% +- %.2f%%", c.sampling.offset,
-			            fixed ? "held at" : "fitted", y->fid.model.k,
-			            100 * (e - truth) / truth, 100 * h / truth);
+			replica r = run_replica(&w, &c, truth);
 			if (!fixed)
-				cr_assert(y->fid.model.k > 1.2 && y->fid.model.k < 2.0, "k %.2f",
-				          y->fid.model.k);
-			cr_assert_leq(fabs(e - truth), h, "offset %.2f: outside the interval",
-			              c.sampling.offset);
-			err[fixed] += fabs(e - truth);
-			half[fixed] += h;
-			chip_destroy(y);
+				cr_assert(r.k > 1.2 && r.k < 2.0, "k %.2f", r.k);
+			cr_assert(r.covered, "offset %.2f: outside the interval",
+			          c.sampling.offset);
+			err[fixed] += fabs(r.err);
+			half[fixed] += r.half;
 		}
 	}
 	cr_assert_lt(err[0], err[1], "fitted k: summed error %g, k = 1: %g", err[0], err[1]);
@@ -527,17 +538,12 @@ Test(fidelity, linear_demand_for_one_thread, .timeout = 300)
 		c.sampling.offset = 0.1 + 0.2 * k;
 		for (int m = 0; m < 2; m++) {
 			c.sampling.demand_model = m ? CFG_DEMAND_MAX : CFG_DEMAND_AUTO;
-			chip *y = tu_run_chip(&w, &c);
-			double e = y->fid.est[0], h = y->fid.half[0];
-			cr_log_info("offset %.1f, %s: %+.2f%% +- %.2f%% (%d units)",
-			            c.sampling.offset, y->fid.model.linear ? "linear" : "max",
-			            100 * (e - truth) / truth, 100 * h / truth, y->fid.nreg);
-			cr_assert_eq(y->fid.model.linear, !m,
-			             "offset %.1f: auto did not pick linear", c.sampling.offset);
-			err[m] += fabs(e - truth);
+			replica r = run_replica(&w, &c, truth);
+			cr_assert_eq(r.linear, !m, "offset %.1f: auto did not pick linear",
+			             c.sampling.offset);
+			err[m] += fabs(r.err);
 			if (!m)
-				covered += fabs(e - truth) <= h;
-			chip_destroy(y);
+				covered += r.covered;
 		}
 	}
 	cr_assert_lt(err[0], err[1], "linear: summed error %g, max: %g", err[0], err[1]);
@@ -562,13 +568,7 @@ Test(fidelity, small_frame_one_thread_intervals_cover, .timeout = 300)
 	int covered = 0;
 	for (int k = 0; k < 5; k++) {
 		c.sampling.offset = 0.1 + 0.2 * k;
-		chip *y = tu_run_chip(&w, &c);
-		double e = y->fid.est[0], h = y->fid.half[0];
-		cr_log_info("offset %.1f, %s: %+.2f%% +- %.2f%% (%d units)", c.sampling.offset,
-		            y->fid.model.linear ? "linear" : "max", 100 * (e - truth) / truth,
-		            100 * h / truth, y->fid.nreg);
-		covered += fabs(e - truth) <= h;
-		chip_destroy(y);
+		covered += run_replica(&w, &c, truth).covered;
 	}
 	cr_assert_geq(covered, 4, "interval covered the truth on %d of 5 replicas", covered);
 	world_free(&w);

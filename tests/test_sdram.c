@@ -142,32 +142,49 @@ static void note(eng *e, void *ctx, uint64_t arg)
 	done_at[arg] = eng_now(e);
 }
 
+/* An engine, the standard SDRAM and a memory interface of one policy. */
+typedef struct memif_rig {
+	eng *e;
+	sdram s;
+	memif m;
+} memif_rig;
+
+static void rig_init(memif_rig *g, int policy)
+{
+	g->e = eng_create(16);
+	diag d;
+	sdram_params p = std_params();
+	cr_assert_eq(sdram_init(&g->s, &p, &d), 0, "%s", d.msg);
+	cr_assert_eq(memif_init(&g->m, g->e, &g->s, policy), 0);
+}
+
+static void rig_free(memif_rig *g)
+{
+	memif_free(&g->m);
+	eng_destroy(g->e);
+}
+
 Test(memif, fifo_and_round_robin)
 {
 	for (int pol = 0; pol < 2; pol++) {
-		eng *e = eng_create(16);
-		sdram s;
-		diag d;
-		sdram_params p = std_params();
-		cr_assert_eq(sdram_init(&s, &p, &d), 0);
-		memif m;
-		cr_assert_eq(memif_init(&m, e, &s, pol), 0);
+		memif_rig g;
+		rig_init(&g, pol);
+		memif *m = &g.m;
 		/* three kd requests, then one shade request, all at tick 0 */
 		for (int i = 0; i < 3; i++)
-			memif_submit(&m, 0, MEMIF_KD, 128 * (uint64_t)i, 128, 0, note, NULL,
+			memif_submit(m, 0, MEMIF_KD, 128 * (uint64_t)i, 128, 0, note, NULL,
 			             (uint64_t)i);
-		memif_submit(&m, 0, MEMIF_SHADE, 4096, 128, 0, note, NULL, 3);
-		eng_run(e, ENG_FOREVER);
+		memif_submit(m, 0, MEMIF_SHADE, 4096, 128, 0, note, NULL, 3);
+		eng_run(g.e, ENG_FOREVER);
 		if (pol == MEMIF_FIFO) /* submission order */
 			cr_assert(done_at[0] < done_at[1] && done_at[1] < done_at[2] &&
 			          done_at[2] < done_at[3]);
 		else /* shade gets its turn before the kd queue drains */
 			cr_assert(done_at[3] < done_at[2], "rr: shade %llu kd2 %llu",
 			          (unsigned long long)done_at[3], (unsigned long long)done_at[2]);
-		cr_assert_eq(m.s.bytes[MEMIF_KD], 384);
-		cr_assert_eq(s.s.read_bytes, 512);
-		memif_free(&m);
-		eng_destroy(e);
+		cr_assert_eq(m->s.bytes[MEMIF_KD], 384);
+		cr_assert_eq(g.s.s.read_bytes, 512);
+		rig_free(&g);
 	}
 }
 
@@ -178,26 +195,21 @@ Test(memif, frfcfs_serves_a_ready_bank_first)
 	uint64_t conflict_done[2], other_done[2];
 	const int pols[2] = {MEMIF_FIFO, MEMIF_FRFCFS};
 	for (int k = 0; k < 2; k++) {
-		eng *e = eng_create(16);
-		sdram s;
-		diag d;
-		sdram_params p = std_params();
-		cr_assert_eq(sdram_init(&s, &p, &d), 0);
-		memif m;
-		cr_assert_eq(memif_init(&m, e, &s, pols[k]), 0);
+		memif_rig g;
+		rig_init(&g, pols[k]);
+		memif *m = &g.m;
 		memset(done_at, 0, sizeof done_at);
 		/* row:bank:col: bank = bits 13-14, row = bits 15+ */
 		uint64_t b0r1 = (1ull << 15) | (0ull << 13), b0r2 = (2ull << 15) | (0ull << 13);
 		uint64_t b1r1 = (1ull << 15) | (1ull << 13);
-		memif_submit(&m, 0, MEMIF_KD, b0r1, 8, 0, note, NULL, 0); /* opens bank 0, row 1 */
-		memif_submit(&m, 0, MEMIF_KD, b0r2, 8, 0, note, NULL, 1); /* conflict in bank 0 */
-		memif_submit(&m, 0, MEMIF_SHADE, b1r1, 8, 0, note, NULL, 2); /* idle bank 1 */
-		eng_run(e, ENG_FOREVER);
+		memif_submit(m, 0, MEMIF_KD, b0r1, 8, 0, note, NULL, 0); /* opens bank 0, row 1 */
+		memif_submit(m, 0, MEMIF_KD, b0r2, 8, 0, note, NULL, 1); /* conflict in bank 0 */
+		memif_submit(m, 0, MEMIF_SHADE, b1r1, 8, 0, note, NULL, 2); /* idle bank 1 */
+		eng_run(g.e, ENG_FOREVER);
 		conflict_done[k] = done_at[1];
 		other_done[k] = done_at[2];
-		cr_assert_eq(s.s.read_bytes, 24);
-		memif_free(&m);
-		eng_destroy(e);
+		cr_assert_eq(g.s.s.read_bytes, 24);
+		rig_free(&g);
 	}
 	cr_assert_gt(other_done[0], conflict_done[0], "fifo: bank 1 waits for the conflict");
 	cr_assert_lt(other_done[1], conflict_done[1], "frfcfs: bank 1 goes first");
