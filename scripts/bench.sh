@@ -18,8 +18,10 @@
 # the same run (target: sim/ref <= 20), the memory hierarchy against the
 # fixed-latency model on that frame (target: <= 2x), trace replay speed on
 # a trace recorded from a real frame (target: >= 20 M requests per host
-# second), and every view at BENCH_SIM_SIZE (256x256): host seconds per
-# frame and simulated cycles per host second. Target lines are computed.
+# second), the memory interface policies on that frame (cycles, fps, SDRAM
+# bus and memory waits under fifo, round_robin and frfcfs), and every view
+# at BENCH_SIM_SIZE (256x256): host seconds per frame and simulated cycles
+# per host second. Target lines are computed.
 #
 # Writes the tables into docs/PERFORMANCE.md between the markers
 # <!-- BEGIN name --> and <!-- END name --> (name = rtref, saarsim; other
@@ -465,6 +467,17 @@ while [ "$r" -le "$RUNS" ]; do
 done
 rp_n=$(sed -n 's/^trace .*: \([0-9]*\) requests.*/\1/p' "$TMP/rp.txt")
 RP="$rp_view $rp_n $rp_best $(wc -c <"$TMP/t.gz")"
+# (vi) the memory interface policies on one frame: what frfcfs, the
+# default, buys over fifo and round_robin (docs/memory.md cites this table)
+MROWS=$TMP/mrows
+: >"$MROWS"
+for pol in fifo round_robin frfcfs; do
+	say "saarsim: $rp_view 512x384, memif policy $pol"
+	run_sim "$TMP/mp.json" --views "$VIEWS" --view "$rp_view" --size 512x384 --no-check \
+	    --set memory.memif.policy="$pol"
+	printf '%s %s %s %s %s\n' "$pol" "$(jget "$TMP/mp.json" cycles)" "$(jget "$TMP/mp.json" fps)" \
+	    "$(jget "$TMP/mp.json" sdram_utilisation)" "$(jget "$TMP/mp.json" waiting_memory)" >>"$MROWS"
+done
 # (v) every view at SIM_SIZE
 VROWS=$TMP/vrows
 : >"$VROWS"
@@ -525,6 +538,14 @@ SECTION=$TMP/section_saarsim
 	echo "- Trace replay (\`saarsim-replay\`, functional, default config): $2 requests recorded from" \
 	    "$1 512x384 ($4 bytes, trace format v2); best $3 million requests per host second;" \
 	    "target >= 20: $(verdict "$3" '>=' 20)."
+	echo
+	echo "### Memory interface policies ($rp_view 512x384, one run each, \`--no-check\`)"
+	echo
+	echo "\`memory.memif.policy\` (docs/memory.md); *SDRAM bus busy*: data-bus utilisation; *waiting for memory*: share of thread time."
+	echo
+	echo "| policy | cycles/frame | fps at 533 MHz | SDRAM bus busy | threads waiting for memory |"
+	echo "|---|---:|---:|---:|---:|"
+	awk '{ printf "| %s | %d | %.1f | %.1f%% | %.1f%% |\n", $1, $2, $3, 100 * $4, 100 * $5 }' "$MROWS"
 	echo
 	echo "### Every view at $SIM_SIZE (one run each, \`--no-check\`)"
 	echo
