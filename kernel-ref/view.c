@@ -200,7 +200,8 @@ int camera_validate(const camera *c, const char *what, diag *d)
 static int map_fields(yfile *y, yaml_node_t *map, const char *const *keys, int n,
                       yaml_node_t **vals, const char *where)
 {
-	yaml_node_t *seen[8] = {0};
+	yaml_node_t *seen[n > 0 ? n : 1];
+	memset(seen, 0, sizeof seen);
 	for (int i = 0; i < n; i++)
 		vals[i] = NULL;
 	for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < map->data.mapping.pairs.top;
