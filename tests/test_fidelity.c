@@ -26,6 +26,15 @@ static void cfg_mode(saar_config *c, int size, int mode)
 	c->fidelity = mode;
 }
 
+/* The embedded scene at 256x256 with threads_per_rtp threads per RTP, in
+ * fidelity mode `mode`. */
+static void embedded(world *w, saar_config *c, int mode, int threads_per_rtp)
+{
+	tu_load_world(w, NULL, NULL, NULL);
+	cfg_mode(c, 256, mode);
+	c->chip.threads_per_rtp = threads_per_rtp;
+}
+
 Test(fidelity, every_mode_renders_the_reference_image)
 {
 	world w;
@@ -63,10 +72,8 @@ Test(fidelity, every_mode_renders_the_reference_image)
 Test(fidelity, sampled_counts_every_operation_once)
 {
 	world w;
-	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
-	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
-	c.chip.threads_per_rtp = 16;
+	embedded(&w, &c, CFG_FIDELITY_CYCLE, 16);
 	chip *x = tu_run_chip(&w, &c);
 	c.fidelity = CFG_FIDELITY_SAMPLED;
 	c.sampling.rate = 0.1;
@@ -266,10 +273,8 @@ static replica run_replica(const world *w, const saar_config *c, double truth)
 Test(fidelity, interval_covers_small_cases)
 {
 	world w;
-	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
-	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
-	c.chip.threads_per_rtp = 4;
+	embedded(&w, &c, CFG_FIDELITY_CYCLE, 4);
 	double truth = truth_then_sampled(&w, &c);
 	c.sampling.rate = 0.15; /* default units and warm-ups */
 	int covered = 0;
@@ -299,10 +304,8 @@ static int pieces(const chip_fidelity *F, int hard)
 Test(fidelity, memory_bound_chunks_get_extra_units)
 {
 	world w;
-	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
-	cfg_mode(&c, 256, CFG_FIDELITY_SAMPLED);
-	c.chip.threads_per_rtp = 4;
+	embedded(&w, &c, CFG_FIDELITY_SAMPLED, 4);
 	c.sampling.rate = 0.1;
 	chip *y = tu_run_chip(&w, &c);
 	int hard = 0;
@@ -526,10 +529,8 @@ Test(fidelity, linear_demand_fits_the_units_law)
 Test(fidelity, linear_demand_for_one_thread, .timeout = 300)
 {
 	world w;
-	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
-	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
-	c.chip.threads_per_rtp = 1;
+	embedded(&w, &c, CFG_FIDELITY_CYCLE, 1);
 	double truth = truth_then_sampled(&w, &c);
 	c.sampling.rate = 0.15;
 	double err[2] = {0, 0};
