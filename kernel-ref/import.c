@@ -40,7 +40,9 @@ typedef struct memcache {
 		size_t len;
 	} e[CACHE_MAX];
 	int n;
-	char err[512]; /* first I/O error, reported instead of Assimp's */
+	char err[512];    /* first I/O error, reported instead of Assimp's */
+	scene_file_fn fn; /* told of every file opened (scene_load_files) */
+	void *fn_ctx;
 } memcache;
 
 /* An open aiFile: either a stdio stream or a view of the cache. */
@@ -227,6 +229,8 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 			c->n++;
 		}
 	}
+	if (c->fn)
+		c->fn(c->fn_ctx, rp);
 	struct aiFile *af = calloc(1, sizeof *af);
 	ofile *o = calloc(1, sizeof *o);
 	if (!af || !o) {
@@ -531,6 +535,11 @@ static int convert_scene(scene *s, const struct aiScene *as, const char *dir, co
 
 int scene_load(scene *s, const char *path, diag *d)
 {
+	return scene_load_files(s, path, NULL, NULL, d);
+}
+
+int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d)
+{
 	scene_init(s, path);
 	char virt[PATH_MAX_LEN], rp[PATH_MAX_LEN];
 	snprintf(virt, sizeof virt, "%s", path);
@@ -546,6 +555,10 @@ int scene_load(scene *s, const char *path, diag *d)
 
 	memcache cache;
 	memset(&cache, 0, sizeof cache);
+	cache.fn = fn;
+	cache.fn_ctx = ctx;
+	if (fn)
+		fn(ctx, rp);
 	int obj = ends_with(virt, ".obj"), ply = ends_with(virt, ".ply");
 	if (obj || ply) {
 		if (read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err,

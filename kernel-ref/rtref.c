@@ -109,6 +109,7 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_knum(j, "load_ms", w->load_ms);
 	jsonw_knum(j, "build_ms", w->kd_ms);
 	jsonw_knum(j, "image_ms", w->image_ms);
+	jsonw_kstr(j, "world_cache", world_cache_name(w->cache));
 	jsonw_knum(j, "render_ms", st->render_ms);
 	jsonw_knum(j, "mrays_per_s", st->render_ms > 0 ? (double)total / (st->render_ms * 1e3) : 0);
 	/* tracing only (traversal + intersection, no ray generation or shading),
@@ -232,15 +233,18 @@ int main(int argc, char **argv)
 	uint64_t total = 0;
 	for (int t = 0; t < PKT_NTYPES; t++)
 		total += st.rays[t];
+	char kd[96];
+	if (w.cache == WORLD_CACHE_HIT)
+		snprintf(kd, sizeof kd, "kd-tree %u nodes from the world cache", w.kd.nnodes);
+	else
+		snprintf(kd, sizeof kd, "kd-tree %u nodes built in %.1f ms", w.kd.nnodes, w.kd_ms);
 	printf("rtref: %s, view %s, %dx%d, %d thread%s: %llu rays (%llu primary, %llu shadow, %llu "
-	       "reflection, %llu refraction) in %.1f ms = %.2f Mrays/s; kd-tree %u nodes built in "
-	       "%.1f "
-	       "ms%s%s\n",
+	       "reflection, %llu refraction) in %.1f ms = %.2f Mrays/s; %s%s%s\n",
 	       w.scene_label, w.v.name, ro.width, ro.height, ro.threads, ro.threads == 1 ? "" : "s",
 	       (unsigned long long)total, (unsigned long long)st.rays[PKT_PRIMARY],
 	       (unsigned long long)st.rays[PKT_SHADOW], (unsigned long long)st.rays[PKT_REFLECT],
 	       (unsigned long long)st.rays[PKT_REFRACT], st.render_ms,
-	       st.render_ms > 0 ? (double)total / (st.render_ms * 1e3) : 0.0, w.kd.nnodes, w.kd_ms,
+	       st.render_ms > 0 ? (double)total / (st.render_ms * 1e3) : 0.0, kd,
 	       out ? "; wrote " : "", out ? out : "");
 done:
 	fb_free(&fb);

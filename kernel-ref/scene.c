@@ -129,7 +129,7 @@ void scene_free(scene *s)
 	free(s->uv);
 	free(s->mat);
 	free(s->mats);
-	for (uint32_t i = 0; i < s->ntexs; i++)
+	for (uint32_t i = 0; s->texs && i < s->ntexs; i++)
 		free(s->texs[i].rgba);
 	free(s->texs);
 	memset(s, 0, sizeof *s);

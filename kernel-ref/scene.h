@@ -66,6 +66,13 @@ typedef struct scene {
  * triangles. */
 int scene_load(scene *s, const char *path, diag *d);
 
+/* scene_load, and calls fn(ctx, path) for the scene file and every other
+ * file the import opens through Assimp (an MTL, a glTF buffer): what a
+ * cache of the built scene must watch (worldcache.c). Textures are not
+ * passed; their paths are in s->texs. fn may see a path more than once. */
+typedef void (*scene_file_fn)(void *ctx, const char *path);
+int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d);
+
 /* The embedded default scene: a Cornell-like room with a diffuse box, a
  * mirror sphere and a glass sphere (tessellated), needing no files. Its
  * standard view is view_default(). */

@@ -4,8 +4,10 @@
 #include "world.h"
 
 #include "spd.h"
+#include "worldcache.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,7 +21,9 @@ const char world_usage[] =
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
     "  --no-lights           no lights: no shadow rays\n"
-    "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n";
+    "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n"
+    "  --world-cache DIR     keep built worlds (scene, kd-tree, memory image) in DIR and\n"
+    "                        reuse them while the program and scene files are unchanged\n";
 
 void world_opts_default(world_opts *o)
 {
@@ -74,12 +78,20 @@ static int parse_num(const char *flag, const char *s, double lo, double hi, doub
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 {
 	const char *a = argv[*i];
-	static const char *const with_value[] = {
-	    "--scene",         "--views",        "--view",
-	    "--eye",           "--lookat",       "--up",
-	    "--fov",           "--light",        "--kd-cost-trav",
-	    "--kd-cost-isect", "--kd-max-depth", "--kd-leaf-size",
-	    "--kd-empty-bonus"};
+	static const char *const with_value[] = {"--scene",
+	                                         "--views",
+	                                         "--view",
+	                                         "--eye",
+	                                         "--lookat",
+	                                         "--up",
+	                                         "--fov",
+	                                         "--light",
+	                                         "--kd-cost-trav",
+	                                         "--kd-cost-isect",
+	                                         "--kd-max-depth",
+	                                         "--kd-leaf-size",
+	                                         "--kd-empty-bonus",
+	                                         "--world-cache"};
 	int takes = 0;
 	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
 		takes |= strcmp(a, with_value[k]) == 0;
@@ -102,6 +114,8 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->views = v;
 	else if (!strcmp(a, "--view"))
 		o->view = v;
+	else if (!strcmp(a, "--world-cache"))
+		o->cache_dir = v;
 	else if (!strcmp(a, "--eye")) {
 		o->have_eye = 1;
 		return parse_vec(a, v, &o->cam.eye, d) ? -1 : 1;
@@ -147,6 +161,29 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	return 1;
 }
 
+const char *world_cache_name(int status)
+{
+	static const char *const names[] = {"off", "hit", "stored", "not stored"};
+	return status >= 0 && status < 4 ? names[status] : "?";
+}
+
+/* Imports or generates the scene at path (NULL: the embedded one); a
+ * procedural scene's own view goes to *sv. Files read go to f. */
+static int load_scene(world *w, const char *path, view *sv, wc_files *f, diag *d)
+{
+	if (path && strncmp(path, SPD_PREFIX, strlen(SPD_PREFIX)) == 0)
+		return spd_generate(&w->s, sv, path, d);
+	if (path) {
+		if (scene_load_files(&w->s, path, f ? wc_files_add : NULL, f, d))
+			return -1;
+		for (uint32_t i = 0; f && i < w->s.ntexs; i++)
+			wc_files_add(f, w->s.texs[i].path);
+		return 0;
+	}
+	scene_default(&w->s);
+	return 0;
+}
+
 int world_load(world *w, const world_opts *o, diag *d)
 {
 	memset(w, 0, sizeof *w);
@@ -162,22 +199,47 @@ int world_load(world *w, const world_opts *o, diag *d)
 		view_default(&w->v);
 	}
 	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
-	if (path && strncmp(path, SPD_PREFIX, strlen(SPD_PREFIX)) == 0) {
-		/* procedural: its standard view unless a views file gave one */
-		view sv;
-		if (spd_generate(&w->s, &sv, path, d))
+	int spd = path && strncmp(path, SPD_PREFIX, strlen(SPD_PREFIX)) == 0;
+	wc_files files = {0};
+	char cfile[PATH_MAX], *ckey = NULL;
+	view sv;
+	memset(&sv, 0, sizeof sv);
+	/* the parts of a world the cache keeps: figures of the scene and the
+	 * kd-tree (their arrays are not stored), the memory image's header
+	 * and the procedural view; the image bytes are the tail */
+	wc_part parts[] = {
+	    {&w->s, sizeof w->s}, {&w->kd, sizeof w->kd}, {&w->m, sizeof w->m}, {&sv, sizeof sv}};
+	if (o->cache_dir) {
+		if (wc_prepare(o->cache_dir, w->cache_prog, sizeof w->cache_prog, d))
 			return -1;
-		if (!o->views)
-			w->v = sv;
-		snprintf(w->scene_label, sizeof w->scene_label, "%s", path);
-	} else if (path) {
-		if (scene_load(&w->s, path, d))
-			return -1;
-		snprintf(w->scene_label, sizeof w->scene_label, "%s", path);
-	} else {
-		scene_default(&w->s);
-		snprintf(w->scene_label, sizeof w->scene_label, "%s", w->s.name);
+		if (!(ckey = wc_world_key(w->cache_prog, path, &o->kd)) ||
+		    wc_file(cfile, sizeof cfile, o->cache_dir, "world", ckey)) {
+			free(ckey);
+			return diag_set(d, o->cache_dir, 0, 0,
+			                "--world-cache: folder name too long");
+		}
+		w->cache_dir = o->cache_dir;
+		void *bytes;
+		size_t n;
+		if (wc_get(cfile, ckey, parts, 4, &bytes, &n)) {
+			if (n == w->m.size) {
+				w->m.bytes = bytes;
+				w->cache = WORLD_CACHE_HIT;
+			} else {
+				free(bytes);
+				memset(&w->s, 0, sizeof w->s);
+				memset(&w->kd, 0, sizeof w->kd);
+				memset(&w->m, 0, sizeof w->m);
+			}
+		}
 	}
+	if (!w->cache && load_scene(w, path, &sv, o->cache_dir ? &files : NULL, d))
+		goto fail;
+	/* a procedural scene brings its standard view unless a views file
+	 * gave one */
+	if (spd && !o->views)
+		w->v = sv;
+	snprintf(w->scene_label, sizeof w->scene_label, "%s", path ? path : w->s.name);
 	w->load_ms = now_ms() - t0;
 	/* flags override the view */
 	if (o->have_eye)
@@ -201,16 +263,49 @@ int world_load(world *w, const world_opts *o, diag *d)
 	view_place_default_light(&w->v, &w->s);
 	if (o->no_lights)
 		w->v.nlights = 0;
-	t0 = now_ms();
-	if (kd_build(&w->kd, &w->s, &o->kd, d))
-		goto fail;
-	w->kd_ms = now_ms() - t0;
-	t0 = now_ms();
-	if (mimg_build(&w->m, &w->s, &w->kd, d))
-		goto fail;
-	w->image_ms = now_ms() - t0;
+	if (w->cache != WORLD_CACHE_HIT) {
+		t0 = now_ms();
+		if (kd_build(&w->kd, &w->s, &o->kd, d))
+			goto fail;
+		w->kd_ms = now_ms() - t0;
+		t0 = now_ms();
+		if (mimg_build(&w->m, &w->s, &w->kd, d))
+			goto fail;
+		w->image_ms = now_ms() - t0;
+		if (o->cache_dir) {
+			/* stored without the arrays: copies with them zeroed */
+			scene s0 = w->s;
+			s0.v = s0.n = NULL;
+			s0.uv = NULL;
+			s0.mat = NULL;
+			s0.mats = NULL;
+			s0.texs = NULL;
+			kdtree k0 = w->kd;
+			k0.nodes = NULL;
+			k0.list = NULL;
+			mimg m0 = w->m;
+			m0.bytes = NULL;
+			wc_part put[] = {
+			    {&s0, sizeof s0}, {&k0, sizeof k0}, {&m0, sizeof m0}, {&sv, sizeof sv}};
+			/* a cache that cannot be written costs the next run time,
+			 * not this run its result: say so and go on */
+			diag wd;
+			w->cache = WORLD_CACHE_STORED;
+			if (wc_put(cfile, ckey, &files, put, 4, w->m.bytes, (size_t)w->m.size,
+			           &wd)) {
+				fprintf(stderr, "warning: %s\n", wd.msg);
+				w->cache = WORLD_CACHE_UNSTORED;
+			}
+		}
+	}
+	if (o->cache_dir)
+		w->image_crc = wc_crc(w->m.bytes, w->m.size);
+	wc_files_free(&files);
+	free(ckey);
 	return 0;
 fail:
+	wc_files_free(&files);
+	free(ckey);
 	world_free(w);
 	return -1;
 }

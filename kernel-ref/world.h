@@ -24,7 +24,12 @@ typedef struct world_opts {
 	light lights[VIEW_MAX_LIGHTS];
 	int no_lights; /* --no-lights */
 	kd_params kd;
+	const char *cache_dir; /* --world-cache DIR, or NULL (worldcache.h) */
 } world_opts;
+
+/* What the world cache did for this world (host.world_cache). */
+enum { WORLD_CACHE_OFF, WORLD_CACHE_HIT, WORLD_CACHE_STORED, WORLD_CACHE_UNSTORED };
+const char *world_cache_name(int status);
 
 typedef struct world {
 	scene s;
@@ -33,6 +38,13 @@ typedef struct world {
 	mimg m;
 	char scene_label[1024]; /* what the reports call the scene */
 	double load_ms, kd_ms, image_ms;
+	/* WORLD_CACHE_*. On a hit, s and kd hold their figures only (counts,
+	 * bounds; the arrays are NULL: nothing after the build reads them)
+	 * and m is whole. */
+	int cache;
+	const char *cache_dir; /* o->cache_dir, for the reference frame's entry */
+	char cache_prog[64];   /* this program's identity in cache keys */
+	uint32_t image_crc;    /* CRC-32 of m.bytes, with a cache */
 } world;
 
 void world_opts_default(world_opts *o);
@@ -42,7 +54,7 @@ void world_opts_default(world_opts *o);
  * diag on a bad value. Flags: --scene P, --views F, --view N, --eye x,y,z,
  * --lookat x,y,z, --up x,y,z, --fov deg, --light x,y,z (repeatable),
  * --no-lights, --kd-cost-trav f, --kd-cost-isect f, --kd-max-depth n,
- * --kd-leaf-size n, --kd-empty-bonus f. */
+ * --kd-leaf-size n, --kd-empty-bonus f, --world-cache DIR. */
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
 
 /* Usage lines for those flags. */

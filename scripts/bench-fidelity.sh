@@ -49,7 +49,7 @@ fi
 run() { # name args...
 	n=$1
 	shift
-	"$SIM" "$@" --no-check --report "$TMP/$n.json" >/dev/null 2>"$TMP/$n.err" || {
+	"$SIM" "$@" --no-check --world-cache "$TMP/wc" --report "$TMP/$n.json" >/dev/null 2>"$TMP/$n.err" || {
 		echo "bench-fidelity: run failed: $*" >&2
 		cat "$TMP/$n.err" >&2
 		return 1
@@ -79,6 +79,10 @@ ROWS="$TMP/rows.tsv"
 for view in $VIEWS; do
 	size=$SIZE
 	[ "$view" = conference ] && size=$CONF_SIZE
+	# every point reads the world from the cache, as a sweep's points do:
+	# built and stored here, once per view (not timed)
+	run warm --views "$VIEWS_FILE" --view "$view" --size 16x16 --fidelity functional \
+		>/dev/null || continue
 	for cfg in std vma; do
 		cf=configs/saarcor-$cfg.yaml
 		for tpr in $THREADS; do
@@ -215,7 +219,7 @@ SEC="$TMP/section.md"
 	echo "- Commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet -- . ':!docs/FIDELITY.md' ':!docs/fidelity.png' 2>/dev/null || echo ' (plus uncommitted changes)')"
 	echo "- Views: $(echo $VIEWS); Conference at $CONF_SIZE, the others at $SIZE; threads per RTP: $THREADS; sample rates: $RATES, on Conference also at sampling offsets $CONF_OFFSETS (rate@offset; the default offset is 0.5) (the defaults: units of rtps x threads_per_rtp tiles, a warm-up as long before each, at least 8 units; a point marked \"all detailed\" had no room for them and ran as cycle)"
 	echo "- $FLOOR"
-	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point; *whole-run speed-up*: the same with the scene load and kd-tree build included (host.wall_s), what each point of a sweep costs. Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
+	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point; *whole-run speed-up*: the same for the whole process (host.wall_s), what each point of a sweep costs: the world (scene, kd-tree, memory image) comes from a world cache built once per view beforehand, as in \`scripts/sweep\` (without one, add the load of PERFORMANCE.md's world cache table to both sides). Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
 	echo
 	echo "### Targets"
 	echo

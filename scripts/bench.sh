@@ -478,6 +478,21 @@ for pol in fifo round_robin frfcfs; do
 	printf '%s %s %s %s %s\n' "$pol" "$(jget "$TMP/mp.json" cycles)" "$(jget "$TMP/mp.json" fps)" \
 	    "$(jget "$TMP/mp.json" sdram_utilisation)" "$(jget "$TMP/mp.json" waiting_memory)" >>"$MROWS"
 done
+# (vii) the world cache (--world-cache): what a sweep point costs on one
+# view without it, when it stores, and on a hit (docs/kernel-ref.md cites
+# this table); sampled at the default rate, whose simulation is shortest
+WROWS=$TMP/wrows
+: >"$WROWS"
+rm -rf "$TMP/wcache"
+for how in none store hit; do
+	say "saarsim: $rp_view 1024x768 sampled, world cache: $how"
+	if [ "$how" = none ]; then wc=; else wc="--world-cache $TMP/wcache"; fi
+	# shellcheck disable=SC2086
+	run_sim "$TMP/wc.json" --views "$VIEWS" --view "$rp_view" --size 1024x768 --fidelity sampled $wc
+	printf '%s %s %s %s %s %s\n' "$how" "$(jget "$TMP/wc.json" world_cache | tr -d '"' | tr ' ' _)" \
+	    "$(jget "$TMP/wc.json" load_s)" "$(jget "$TMP/wc.json" sim_s)" \
+	    "$(jget "$TMP/wc.json" check_s)" "$(jget "$TMP/wc.json" wall_s)" >>"$WROWS"
+done
 # (v) every view at SIM_SIZE
 VROWS=$TMP/vrows
 : >"$VROWS"
@@ -546,6 +561,14 @@ SECTION=$TMP/section_saarsim
 	echo "| policy | cycles/frame | fps at 533 MHz | SDRAM bus busy | threads waiting for memory |"
 	echo "|---|---:|---:|---:|---:|"
 	awk '{ printf "| %s | %d | %.1f | %.1f%% | %.1f%% |\n", $1, $2, $3, 100 * $4, 100 * $5 }' "$MROWS"
+	echo
+	echo "### World cache ($rp_view 1024x768, sampled, one run each)"
+	echo
+	echo "\`--world-cache DIR\` (docs/kernel-ref.md): the same run without a cache, storing into an empty one, and reading it back. *load*: scene import, kd-tree and memory image (\`host.load_s\`); *check*: kernel-ref's reference frame and the comparison (\`host.check_s\`); *whole run*: \`host.wall_s\`."
+	echo
+	echo "| cache | host.world_cache | load s | sim s | check s | whole run s |"
+	echo "|---|---|---:|---:|---:|---:|"
+	awk '{ gsub(/_/, " ", $2); printf "| %s | %s | %.3f | %.3f | %.3f | %.3f |\n", $1, $2, $3, $4, $5, $6 }' "$WROWS"
 	echo
 	echo "### Every view at $SIM_SIZE (one run each, \`--no-check\`)"
 	echo

@@ -15,6 +15,7 @@
  */
 #include "chip.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,6 +23,7 @@
 #include <time.h>
 
 #include "rgs.h"
+#include "worldcache.h"
 
 static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
@@ -826,32 +828,70 @@ uint64_t chip_rtp_sum(const chip *c, const char *suffix)
 	return s;
 }
 
+/* kernel-ref's frame of the same view, from the world cache when it holds
+ * one for this memory image, camera, lights and options (worldcache.h),
+ * else rendered single-threaded (and stored there). rgb: n bytes. */
+static int reference_frame(chip *c, const render_opts *ro, uint8_t *rgb, size_t n, chip_check *out,
+                           diag *d)
+{
+	const world *w = c->w;
+	char file[PATH_MAX], *key = NULL;
+	if (w->cache_dir && (key = wc_frame_key(w->cache_prog, &w->m, w->image_crc, &w->v, ro)) &&
+	    wc_file(file, sizeof file, w->cache_dir, "frame", key)) {
+		free(key);
+		key = NULL;
+	}
+	wc_part parts[] = {{&out->ref, sizeof out->ref}};
+	void *t = NULL;
+	size_t nt = 0;
+	if (key && wc_get(file, key, parts, 1, &t, &nt)) {
+		if (nt == n) {
+			memcpy(rgb, t, n);
+			free(t);
+			free(key);
+			out->cached = 1;
+			return 0;
+		}
+		free(t);
+	}
+	framebuf ref;
+	if (fb_init(&ref, ro->width, ro->height)) {
+		free(key);
+		return diag_set(d, "saarsim", 0, 0, "out of memory for the reference frame");
+	}
+	int rc = render_frame(&w->m, &w->v, ro, &ref, &out->ref, d);
+	if (!rc) {
+		fb_to_rgb8(&ref, rgb, NULL);
+		diag wd;
+		if (key && wc_put(file, key, NULL, parts, 1, rgb, n, &wd))
+			fprintf(stderr, "warning: %s\n", wd.msg);
+	}
+	fb_free(&ref);
+	free(key);
+	return rc;
+}
+
 int chip_check_frame(chip *c, chip_check *out, diag *d)
 {
 	memset(out, 0, sizeof *out);
+	double t0 = now_ms();
 	render_opts ro;
 	render_opts_default(&ro);
 	ro.width = c->cfg.frame.width;
 	ro.height = c->cfg.frame.height;
 	ro.max_depth = c->cfg.shading.max_depth;
 	ro.threads = 1;
-	framebuf ref;
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
-	if (!a || !b || fb_init(&ref, ro.width, ro.height)) {
-		free(a);
-		free(b);
-		return diag_set(d, "saarsim", 0, 0, "out of memory for the reference frame");
-	}
-	int rc = render_frame(&c->w->m, &c->w->v, &ro, &ref, &out->ref, d);
+	int rc = a && b ? reference_frame(c, &ro, b, n, out, d)
+	                : diag_set(d, "saarsim", 0, 0, "out of memory for the reference frame");
 	if (!rc) {
 		fb_to_rgb8(&c->fb, a, NULL);
-		fb_to_rgb8(&ref, b, NULL);
 		out->cmp = img_compare(a, b, ro.width, ro.height);
 		out->ref_ms = out->ref.render_ms;
+		out->check_ms = now_ms() - t0;
 		out->done = 1;
 	}
-	fb_free(&ref);
 	free(a);
 	free(b);
 	return rc;

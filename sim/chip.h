@@ -36,7 +36,10 @@ typedef struct chip_check {
 	int done;
 	img_cmp cmp;
 	render_stats ref; /* kernel-ref's counts for the same frame */
-	double ref_ms;    /* host time of the reference render */
+	double ref_ms;    /* host time of the reference render (when it was
+	                   * rendered: a cached frame keeps its own) */
+	double check_ms;  /* host time of the whole check */
+	int cached;       /* the reference frame came from the world cache */
 } chip_check;
 
 /* Resources the busiest-resource bound looks at (chip_fidelity). */

@@ -117,3 +117,22 @@ Test(rtref_cli, unwritable_output_leaves_nothing)
 	cr_assert_eq(rtref(args), 2);
 	one_line_naming("f.png");
 }
+
+Test(rtref_cli, world_cache_gives_the_same_frame)
+{
+	char args[1024], cmd[1024];
+	snprintf(args, sizeof args, "--scene spd:tetra:2 --size 48x32 --out %s/a.ppm", dir);
+	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+	for (int i = 0; i < 2; i++) {
+		snprintf(args, sizeof args,
+		         "--scene spd:tetra:2 --size 48x32 --world-cache %s/c --out %s/b%d.ppm",
+		         dir, dir, i);
+		cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+		char *out = slurp("out");
+		cr_assert(i ? strstr(out, "nodes from the world cache") != NULL
+		            : strstr(out, "nodes built in") != NULL,
+		          "%s", out);
+		snprintf(cmd, sizeof cmd, "cmp -s %s/a.ppm %s/b%d.ppm", dir, dir, i);
+		cr_assert_eq(tu_run(cmd), 0, "run %d: the frames differ", i);
+	}
+}

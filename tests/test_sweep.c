@@ -143,6 +143,9 @@ Test(sweep, tiny_grid_csv_png_and_resume, .timeout = 120)
 	cr_assert_eq(count_in(path, "0002 start"), 2, "point 2 was not rerun");
 	snprintf(path, sizeof path, "%s/results.csv", dir);
 	cr_assert_eq(count_lines(path), 3);
+	/* the points share DIR/world-cache: the rerun found the world there */
+	snprintf(path, sizeof path, "%s/points/0002.json", dir);
+	cr_assert_eq(count_in(path, "\"world_cache\": \"hit\""), 1, "the rerun built its world");
 
 	/* a different grid in the same folder is refused */
 	char env[4200];

@@ -1,0 +1,391 @@
+/*
+ * worldcache.c: the world cache (worldcache.h, --world-cache DIR).
+ *
+ * Owns: storing a built world (the memory image, plus the scene, kd-tree
+ * and view figures that reports and the default light need) and
+ * kernel-ref's reference frame of it, one file each, and reading them
+ * back. On the 70k-triangle scenes the import and kd-tree build take
+ * 0.4-0.5 s and the reference render 0.1-0.2 s: more than a sampled
+ * simulation of the frame, paid again at every point of a sweep.
+ *
+ * A file is used only when it is certainly what a build would give now:
+ * - its key names this program's own bytes (CRC-32 and size of
+ *   /proc/self/exe), so a rebuilt program never reads an older file and
+ *   the raw structs stored have the writer's layout;
+ * - a world's key names the scene source by its real path and every kd
+ *   parameter exactly (hex floats); a frame's key names the memory image
+ *   by its CRC-32, the camera, lights and render options;
+ * - a world's file lists every file the import read (the scene, an MTL,
+ *   each texture) with size and modification time; any change refuses it;
+ * - a CRC-32 over the whole contents refuses a damaged or truncated file.
+ * A refused file is a miss: the object is built as without a cache and
+ * the file replaced. Files are written under a temporary name and renamed,
+ * so concurrent sweep points never read half a file; two points missing
+ * at once both build, and the last rename wins (both wrote the same bytes).
+ *
+ * File layout: "SAARWC1\n", then, all covered by the trailing CRC-32: the
+ * key (u32 length + bytes), the recorded files (u32 count; each u32
+ * length, bytes, i64 size, i64 mtime seconds, i64 mtime nanoseconds), the
+ * fixed parts, the tail, and the CRC (u32).
+ */
+#define _GNU_SOURCE /* asprintf */
+#include "worldcache.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#define WC_MAGIC     "SAARWC1\n"
+#define WC_MAGIC_LEN 8
+
+/* ---- the files a scene came from ---- */
+
+void wc_files_add(void *ctx, const char *path)
+{
+	wc_files *f = ctx;
+	char *rp = realpath(path, NULL);
+	if (!rp) {
+		f->lost = 1; /* opened a moment ago; cannot watch it, so do not store */
+		return;
+	}
+	for (int i = 0; i < f->n; i++)
+		if (!strcmp(f->path[i], rp)) {
+			free(rp);
+			return;
+		}
+	if (f->n == f->cap) {
+		int cap = f->cap ? 2 * f->cap : 8;
+		char **p = realloc(f->path, (size_t)cap * sizeof *p);
+		if (!p) {
+			free(rp);
+			f->lost = 1;
+			return;
+		}
+		f->path = p;
+		f->cap = cap;
+	}
+	f->path[f->n++] = rp;
+}
+
+void wc_files_free(wc_files *f)
+{
+	for (int i = 0; i < f->n; i++)
+		free(f->path[i]);
+	free(f->path);
+	memset(f, 0, sizeof *f);
+}
+
+/* ---- names ---- */
+
+/* CRC-32 and size of this program's own file: a rebuilt program is a
+ * different program, whatever its version string says. */
+static int exe_identity(unsigned long *crc, long long *size)
+{
+	FILE *fp = fopen("/proc/self/exe", "rb");
+	if (!fp)
+		return -1;
+	unsigned char buf[1 << 16];
+	uLong c = crc32(0L, Z_NULL, 0);
+	long long n = 0;
+	size_t r;
+	while ((r = fread(buf, 1, sizeof buf, fp)) > 0) {
+		c = crc32(c, buf, (uInt)r);
+		n += (long long)r;
+	}
+	int bad = ferror(fp);
+	fclose(fp);
+	*crc = c;
+	*size = n;
+	return bad ? -1 : 0;
+}
+
+int wc_prepare(const char *dir, char *prog, size_t nprog, diag *d)
+{
+	if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+		return diag_set(d, dir, 0, 0, "--world-cache: cannot create the folder: %s",
+		                strerror(errno));
+	struct stat st;
+	if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
+		return diag_set(d, dir, 0, 0, "--world-cache: not a folder");
+	if (access(dir, W_OK | X_OK) != 0)
+		return diag_set(d, dir, 0, 0, "--world-cache: cannot write to the folder: %s",
+		                strerror(errno));
+	unsigned long crc;
+	long long size;
+	if (exe_identity(&crc, &size))
+		return diag_set(d, "/proc/self/exe", 0, 0,
+		                "--world-cache: cannot read the program's own file");
+	snprintf(prog, nprog, "program %08lx %lld", crc, size);
+	return 0;
+}
+
+/* crc continued over n bytes (zlib takes at most 4 GiB per call) */
+static uLong crc_more(uLong c, const void *p, uint64_t n)
+{
+	for (uint64_t at = 0; at < n; at += 1u << 30) {
+		uint64_t k = n - at < (1u << 30) ? n - at : (1u << 30);
+		c = crc32(c, (const Bytef *)p + at, (uInt)k);
+	}
+	return c;
+}
+
+uint32_t wc_crc(const void *p, uint64_t n)
+{
+	return (uint32_t)crc_more(crc32(0L, Z_NULL, 0), p, n);
+}
+
+/* FNV-1a, 64 bits: the file name of a key (the key itself is compared). */
+static uint64_t fnv1a(const char *s)
+{
+	uint64_t h = 14695981039346656037ull;
+	for (; *s; s++)
+		h = (h ^ (unsigned char)*s) * 1099511628211ull;
+	return h;
+}
+
+int wc_file(char *out, size_t n, const char *dir, const char *kind, const char *key)
+{
+	int k = snprintf(out, n, "%s/%s-%016llx.bin", dir, kind, (unsigned long long)fnv1a(key));
+	return k < 0 || (size_t)k >= n ? -1 : 0;
+}
+
+char *wc_world_key(const char *prog, const char *source, const kd_params *kd)
+{
+	/* a file by its real path: the same scene named from another folder
+	 * is the same entry */
+	char *rp = source && strncmp(source, "spd:", 4) ? realpath(source, NULL) : NULL;
+	char *key;
+	int n = asprintf(
+	    &key, "saarsim world 1\n%s\nsource %s\nkd %a %a %d %d %a\nstructs %zu %zu %zu %zu\n",
+	    prog,
+	    rp       ? rp
+	    : source ? source
+	             : "(embedded)",
+	    (double)kd->cost_trav, (double)kd->cost_isect, kd->max_depth, kd->leaf_size,
+	    (double)kd->empty_bonus, sizeof(scene), sizeof(kdtree), sizeof(mimg), sizeof(view));
+	free(rp);
+	return n < 0 ? NULL : key;
+}
+
+char *wc_frame_key(const char *prog, const mimg *m, uint32_t image_crc, const view *v,
+                   const render_opts *o)
+{
+	if (o->prec)
+		return NULL;
+	char *key, *lights = NULL;
+	size_t nl = 0;
+	FILE *f = open_memstream(&lights, &nl);
+	if (!f)
+		return NULL;
+	for (int i = 0; i < v->nlights; i++) {
+		const light *l = &v->lights[i];
+		fprintf(f, " (%a %a %a; %a %a %a)", (double)l->pos.x, (double)l->pos.y,
+		        (double)l->pos.z, (double)l->color.x, (double)l->color.y,
+		        (double)l->color.z);
+	}
+	if (fclose(f) != 0) {
+		free(lights);
+		return NULL;
+	}
+	const camera *c = &v->cam;
+	int n =
+	    asprintf(&key,
+	             "saarsim frame 1\n%s\nimage %08x %llu\ncamera %a %a %a %a %a %a %a %a %a "
+	             "%a\nlights %d%s\nframe %d %d depth %d shadows %d single %d background "
+	             "%a %a %a\nstructs %zu\n",
+	             prog, (unsigned)image_crc, (unsigned long long)m->size, (double)c->eye.x,
+	             (double)c->eye.y, (double)c->eye.z, (double)c->lookat.x, (double)c->lookat.y,
+	             (double)c->lookat.z, (double)c->up.x, (double)c->up.y, (double)c->up.z,
+	             (double)c->fov_deg, v->nlights, lights, o->width, o->height, o->max_depth,
+	             o->shadows, o->single_ray, (double)o->background.x, (double)o->background.y,
+	             (double)o->background.z, sizeof(render_stats));
+	free(lights);
+	return n < 0 ? NULL : key;
+}
+
+/* ---- reading ---- */
+
+typedef struct rd {
+	FILE *fp;
+	uLong crc;
+	int bad;
+} rd;
+
+static void get(rd *r, void *p, size_t n)
+{
+	if (r->bad || fread(p, 1, n, r->fp) != n) {
+		r->bad = 1;
+		return;
+	}
+	r->crc = crc_more(r->crc, p, n);
+}
+
+static uint32_t get_u32(rd *r)
+{
+	uint32_t v = 0;
+	get(r, &v, sizeof v);
+	return v;
+}
+
+/* The recorded files, each still of the recorded size and time. */
+static int files_unchanged(rd *r)
+{
+	uint32_t n = get_u32(r);
+	for (uint32_t i = 0; i < n && !r->bad; i++) {
+		uint32_t len = get_u32(r);
+		char path[PATH_MAX];
+		if (len == 0 || len >= sizeof path)
+			return 0;
+		get(r, path, len);
+		path[len] = '\0';
+		int64_t want[3];
+		get(r, want, sizeof want);
+		struct stat st;
+		if (r->bad || stat(path, &st) != 0 || (int64_t)st.st_size != want[0] ||
+		    (int64_t)st.st_mtim.tv_sec != want[1] || (int64_t)st.st_mtim.tv_nsec != want[2])
+			return 0;
+	}
+	return !r->bad;
+}
+
+int wc_get(const char *file, const char *key, const wc_part *parts, int nparts, void **tail,
+           size_t *ntail)
+{
+	if (tail) {
+		*tail = NULL;
+		*ntail = 0;
+	}
+	rd r = {fopen(file, "rb"), crc32(0L, Z_NULL, 0), 0};
+	if (!r.fp)
+		return 0;
+	char magic[WC_MAGIC_LEN];
+	int hit = 0;
+	void *t = NULL;
+	size_t klen = strlen(key);
+	char *k = malloc(klen + 1);
+	if (!k || fread(magic, 1, sizeof magic, r.fp) != sizeof magic ||
+	    memcmp(magic, WC_MAGIC, sizeof magic) || get_u32(&r) != klen)
+		goto out;
+	get(&r, k, klen);
+	if (r.bad || memcmp(k, key, klen) || !files_unchanged(&r))
+		goto out;
+	for (int i = 0; i < nparts; i++)
+		get(&r, parts[i].p, parts[i].n);
+	/* the tail is what is left before the CRC */
+	struct stat st;
+	long at = ftell(r.fp);
+	if (r.bad || at < 0 || fstat(fileno(r.fp), &st) != 0 ||
+	    (uint64_t)st.st_size < (uint64_t)at + sizeof(uint32_t))
+		goto out;
+	size_t n = (size_t)((uint64_t)st.st_size - (uint64_t)at - sizeof(uint32_t));
+	if ((n > 0) != (tail != NULL) || (n && !(t = malloc(n))))
+		goto out;
+	if (n)
+		get(&r, t, n);
+	uint32_t stored;
+	if (r.bad || fread(&stored, 1, sizeof stored, r.fp) != sizeof stored ||
+	    stored != (uint32_t)r.crc)
+		goto out;
+	hit = 1;
+	if (tail) {
+		*tail = t;
+		*ntail = n;
+	}
+out:
+	fclose(r.fp);
+	free(k);
+	if (!hit) {
+		free(t);
+		for (int i = 0; i < nparts; i++)
+			memset(parts[i].p, 0, parts[i].n);
+	}
+	return hit;
+}
+
+/* ---- writing ---- */
+
+typedef struct wr {
+	FILE *fp;
+	uLong crc;
+	int bad;
+} wr;
+
+static void put(wr *w, const void *p, size_t n)
+{
+	if (w->bad || fwrite(p, 1, n, w->fp) != n) {
+		w->bad = 1;
+		return;
+	}
+	w->crc = crc_more(w->crc, p, n);
+}
+
+static void put_u32(wr *w, uint32_t v)
+{
+	put(w, &v, sizeof v);
+}
+
+int wc_put(const char *file, const char *key, const wc_files *f, const wc_part *parts, int nparts,
+           const void *tail, size_t ntail, diag *d)
+{
+	if (f && f->lost)
+		return diag_set(d, file, 0, 0, "world cache: a source file could not be recorded");
+	char tmp[PATH_MAX + 16];
+	snprintf(tmp, sizeof tmp, "%s.XXXXXX", file);
+	int fd = mkstemp(tmp);
+	if (fd < 0)
+		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(errno));
+	/* readable like any file the user writes (mkstemp makes it 0600) */
+	mode_t um = umask(0);
+	umask(um);
+	int err = fchmod(fd, 0666 & ~um) != 0 ? errno : 0;
+	wr w = {fdopen(fd, "wb"), crc32(0L, Z_NULL, 0), 0};
+	if (!w.fp) {
+		err = errno;
+		close(fd);
+		unlink(tmp);
+		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(err));
+	}
+	if (fwrite(WC_MAGIC, 1, WC_MAGIC_LEN, w.fp) != WC_MAGIC_LEN)
+		w.bad = 1;
+	put_u32(&w, (uint32_t)strlen(key));
+	put(&w, key, strlen(key));
+	put_u32(&w, f ? (uint32_t)f->n : 0);
+	for (int i = 0; f && i < f->n; i++) {
+		struct stat st;
+		if (stat(f->path[i], &st) != 0) {
+			w.bad = 1;
+			break;
+		}
+		int64_t v[3] = {st.st_size, st.st_mtim.tv_sec, st.st_mtim.tv_nsec};
+		put_u32(&w, (uint32_t)strlen(f->path[i]));
+		put(&w, f->path[i], strlen(f->path[i]));
+		put(&w, v, sizeof v);
+	}
+	for (int i = 0; i < nparts; i++)
+		put(&w, parts[i].p, parts[i].n);
+	if (ntail)
+		put(&w, tail, ntail);
+	uint32_t crc = (uint32_t)w.crc;
+	if (fwrite(&crc, 1, sizeof crc, w.fp) != sizeof crc)
+		w.bad = 1;
+	if (w.bad && !err)
+		err = EIO;
+	if (fflush(w.fp) != 0 && !err)
+		err = errno;
+	if (fclose(w.fp) != 0 && !err)
+		err = errno;
+	if (!err && rename(tmp, file) != 0)
+		err = errno;
+	if (err) {
+		unlink(tmp);
+		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(err));
+	}
+	return 0;
+}

@@ -1,0 +1,73 @@
+/*
+ * worldcache.h: the world cache (--world-cache DIR). Built worlds (scene
+ * figures, kd-tree figures, memory image) and kernel-ref's reference
+ * frames kept on disk, so the next run on the same scene skips the import,
+ * the kd-tree build and the reference render. worldcache.c says when a
+ * file is trusted.
+ */
+#ifndef SAAR_KREF_WORLDCACHE_H
+#define SAAR_KREF_WORLDCACHE_H
+
+#include "diag.h"
+#include "kdtree.h"
+#include "memimage.h"
+#include "render.h"
+#include "view.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* The files a scene was built from, collected while it loads. */
+typedef struct wc_files {
+	char **path;
+	int n, cap;
+	int lost; /* a file could not be recorded: the entry is then not stored */
+} wc_files;
+
+/* The scene_file_fn for scene_load_files: adds the real path of `path`
+ * to the wc_files at ctx, once. */
+void wc_files_add(void *ctx, const char *path);
+void wc_files_free(wc_files *f);
+
+/* Makes DIR (its last component) if missing and checks it can be
+ * written; fills prog (>= 48 bytes) with this program's identity, the
+ * CRC-32 and size of its own file. Fails with diag naming DIR. */
+int wc_prepare(const char *dir, char *prog, size_t nprog, diag *d);
+
+/* A stored object: fixed-size parts read into caller's memory, then a
+ * tail of any length (NULL/0: none). */
+typedef struct wc_part {
+	void *p;
+	size_t n;
+} wc_part;
+
+/* DIR/KIND-HASH.bin, the file of key (-1 when the name does not fit). */
+int wc_file(char *out, size_t n, const char *dir, const char *kind, const char *key);
+
+/* Reads file: 1 on a hit (the stored key equals key, every recorded file
+ * is unchanged, the CRC matches), the parts filled and the tail malloc'd
+ * into *tail / *ntail; 0 on a miss, parts zeroed. */
+int wc_get(const char *file, const char *key, const wc_part *parts, int nparts, void **tail,
+           size_t *ntail);
+
+/* Stores key, the files f (may be NULL), parts and tail atomically (a
+ * temporary file, then rename). -1 with diag when it could not. */
+int wc_put(const char *file, const char *key, const wc_files *f, const wc_part *parts, int nparts,
+           const void *tail, size_t ntail, diag *d);
+
+/* The key of a world: program, scene source (a file by its real path;
+ * "spd:..." and NULL, the embedded scene, by name) and kd parameters.
+ * malloc'd; NULL when out of memory. */
+char *wc_world_key(const char *prog, const char *source, const kd_params *kd);
+
+/* The key of kernel-ref's frame of memory image m (its CRC-32 image_crc)
+ * seen by view v with options o: everything render_frame depends on (not
+ * the host thread count: the frame is the same). NULL (no caching) for
+ * reduced precision or out of memory. */
+char *wc_frame_key(const char *prog, const mimg *m, uint32_t image_crc, const view *v,
+                   const render_opts *o);
+
+/* CRC-32 of n bytes (any n). */
+uint32_t wc_crc(const void *p, uint64_t n);
+
+#endif

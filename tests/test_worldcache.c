@@ -1,0 +1,292 @@
+/*
+ * test_worldcache.c: the world cache (--world-cache DIR, worldcache.h).
+ * A cached world is the built one (same memory image, figures and default
+ * light); a changed MTL or texture, other kd parameters, a damaged or
+ * truncated file all miss and rebuild; a folder that cannot hold the cache
+ * is bad input (exit 2, one line); saarsim's second run takes the world
+ * and kernel-ref's frame from the cache and reports the same results.
+ */
+#include <dirent.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "image.h"
+#include "testutil.h"
+#include "world.h"
+
+/* A textured quad: OBJ + MTL + a 2x2 PNG, in dir. */
+static void write_scene(const char *dir, const char *kd, char *obj, size_t n)
+{
+	char p[512], text[512];
+	uint8_t px[2 * 2 * 3] = {255, 0, 0, 0, 0, 255, 0, 0, 255, 255, 0, 0};
+	diag d;
+	snprintf(p, sizeof p, "%s/checker.png", dir);
+	cr_assert_eq(img_write(p, 2, 2, px, NULL, &d), 0, "%s", d.msg);
+	snprintf(text, sizeof text, "newmtl tex\nKd %s\nmap_Kd checker.png\n", kd);
+	tu_write(p, sizeof p, dir, "quad.mtl", text);
+	tu_write(obj, n, dir, "quad.obj",
+	         "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+	         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl tex\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
+}
+
+/* Sets dir/name's modification time `ahead` seconds from now, so a
+ * rewrite within the same clock tick still counts as a change. */
+static void touch_ahead(const char *dir, const char *name, int ahead)
+{
+	char p[512];
+	snprintf(p, sizeof p, "%s/%s", dir, name);
+	struct timespec ts[2];
+	clock_gettime(CLOCK_REALTIME, &ts[0]);
+	ts[0].tv_sec += ahead;
+	ts[1] = ts[0];
+	cr_assert_eq(utimensat(AT_FDCWD, p, ts, 0), 0, "cannot touch %s", p);
+}
+
+static int load(world *w, const char *obj, const char *cache, float empty_bonus)
+{
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = obj;
+	o.cache_dir = cache;
+	if (empty_bonus >= 0)
+		o.kd.empty_bonus = empty_bonus;
+	diag d;
+	int rc = world_load(w, &o, &d);
+	cr_assert_eq(rc, 0, "%s", d.msg);
+	return w->cache;
+}
+
+/* The cached world w equals the built world b in everything used after
+ * the build. */
+static void same_world(const world *w, const world *b)
+{
+	cr_assert_eq(w->m.size, b->m.size);
+	cr_assert_eq(memcmp(w->m.bytes, b->m.bytes, (size_t)b->m.size), 0, "memory images differ");
+	cr_assert_eq(memcmp(w->m.base, b->m.base, sizeof b->m.base), 0);
+	cr_assert_eq(w->m.ntris, b->m.ntris);
+	cr_assert_eq(w->s.ntris, b->s.ntris);
+	cr_assert_eq(w->kd.nnodes, b->kd.nnodes);
+	cr_assert_eq(w->kd.nleaves, b->kd.nleaves);
+	cr_assert_eq(w->kd.depth, b->kd.depth);
+	cr_assert_eq(memcmp(&w->s.bounds, &b->s.bounds, sizeof b->s.bounds), 0);
+	cr_assert_eq(memcmp(&w->v.lights[0], &b->v.lights[0], sizeof b->v.lights[0]), 0,
+	             "the default light is placed the same");
+	cr_assert_str_eq(w->scene_label, b->scene_label);
+}
+
+/* The one world-*.bin in dir, into out; returns how many there are. */
+static int world_files(const char *dir, char *out, size_t n)
+{
+	DIR *dp = opendir(dir);
+	cr_assert(dp);
+	int k = 0;
+	struct dirent *e;
+	while ((e = readdir(dp)))
+		if (!strncmp(e->d_name, "world-", 6)) {
+			snprintf(out, n, "%s/%s", dir, e->d_name);
+			k++;
+		}
+	closedir(dp);
+	return k;
+}
+
+Test(worldcache, hit_is_the_built_world)
+{
+	char dir[256], cache[300], obj[512];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cache, sizeof cache, "%s/cache", dir);
+	write_scene(dir, "1 1 1", obj, sizeof obj);
+	world b, w1, w2;
+	cr_assert_eq(load(&b, obj, NULL, -1), WORLD_CACHE_OFF);
+	cr_assert_eq(load(&w1, obj, cache, -1), WORLD_CACHE_STORED, "first run builds and stores");
+	cr_assert_eq(load(&w2, obj, cache, -1), WORLD_CACHE_HIT);
+	same_world(&w1, &b);
+	same_world(&w2, &b);
+	cr_assert_null(w2.kd.nodes, "a hit keeps figures only");
+	cr_assert_eq(w2.image_crc, w1.image_crc);
+	world_free(&b);
+	world_free(&w1);
+	world_free(&w2);
+}
+
+Test(worldcache, changed_source_files_miss)
+{
+	char dir[256], cache[300], obj[512], p[512];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cache, sizeof cache, "%s/cache", dir);
+	write_scene(dir, "1 1 1", obj, sizeof obj);
+	world w;
+	load(&w, obj, cache, -1);
+	uint32_t white = w.image_crc;
+	world_free(&w);
+	/* the MTL changes: a new diffuse colour, so a new memory image */
+	tu_write(p, sizeof p, dir, "quad.mtl", "newmtl tex\nKd 0.5 0.25 1\nmap_Kd checker.png\n");
+	touch_ahead(dir, "quad.mtl", 5);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a changed MTL is a miss");
+	cr_assert_neq(w.image_crc, white);
+	world b;
+	load(&b, obj, NULL, -1);
+	same_world(&w, &b);
+	world_free(&b);
+	world_free(&w);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
+	world_free(&w);
+	/* the texture changes */
+	uint8_t px[2 * 2 * 3] = {0};
+	diag d;
+	snprintf(p, sizeof p, "%s/checker.png", dir);
+	cr_assert_eq(img_write(p, 2, 2, px, NULL, &d), 0, "%s", d.msg);
+	touch_ahead(dir, "checker.png", 10);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a changed texture is a miss");
+	world_free(&w);
+}
+
+Test(worldcache, kd_parameters_have_their_own_entry)
+{
+	char dir[256], cache[300], obj[512], f[600];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cache, sizeof cache, "%s/cache", dir);
+	write_scene(dir, "1 1 1", obj, sizeof obj);
+	world w;
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED);
+	world_free(&w);
+	cr_assert_eq(load(&w, obj, cache, 0.5f), WORLD_CACHE_STORED);
+	world_free(&w);
+	cr_assert_eq(world_files(cache, f, sizeof f), 2);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
+	world_free(&w);
+	cr_assert_eq(load(&w, obj, cache, 0.5f), WORLD_CACHE_HIT);
+	world_free(&w);
+}
+
+Test(worldcache, damaged_or_truncated_file_misses)
+{
+	char dir[256], cache[300], obj[512], f[600];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cache, sizeof cache, "%s/cache", dir);
+	write_scene(dir, "1 1 1", obj, sizeof obj);
+	world b, w;
+	load(&b, obj, cache, -1);
+	cr_assert_eq(world_files(cache, f, sizeof f), 1);
+	struct stat st;
+	cr_assert_eq(stat(f, &st), 0);
+	/* one bit flipped in the memory image */
+	FILE *fp = fopen(f, "r+b");
+	cr_assert(fp);
+	fseek(fp, st.st_size - 64, SEEK_SET);
+	int c = fgetc(fp);
+	fseek(fp, st.st_size - 64, SEEK_SET);
+	fputc(c ^ 1, fp);
+	fclose(fp);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a damaged file is a miss");
+	same_world(&w, &b);
+	world_free(&w);
+	cr_assert_eq(truncate(f, st.st_size - 9), 0);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a truncated file is a miss");
+	same_world(&w, &b);
+	world_free(&w);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
+	world_free(&w);
+	world_free(&b);
+}
+
+Test(worldcache, procedural_scene_keeps_its_view)
+{
+	char dir[256];
+	tu_tmpdir(dir, sizeof dir);
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = "spd:tetra:3";
+	o.cache_dir = dir;
+	world a, b;
+	diag d;
+	cr_assert_eq(world_load(&a, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(world_load(&b, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(a.cache, WORLD_CACHE_STORED);
+	cr_assert_eq(b.cache, WORLD_CACHE_HIT);
+	cr_assert_eq(memcmp(&a.v.cam, &b.v.cam, sizeof a.v.cam), 0, "the scene's standard view");
+	same_world(&b, &a);
+	world_free(&a);
+	world_free(&b);
+}
+
+/* ---- through saarsim ---- */
+
+static char cdir[256];
+
+static void setup(void)
+{
+	tu_tmpdir(cdir, sizeof cdir);
+}
+
+TestSuite(worldcache_cli, .init = setup);
+
+Test(worldcache_cli, folder_that_cannot_hold_the_cache_is_bad_input)
+{
+	char p[512], args[1024];
+	tu_write(p, sizeof p, cdir, "plain", "not a folder\n");
+	snprintf(args, sizeof args, "--size 16x16 --world-cache %s --out %s/f.png", p, cdir);
+	cr_assert_eq(tu_prog(cdir, "saarsim", args), 2);
+	tu_one_line(cdir, "saarsim", p);
+	cr_assert_not(tu_exists(cdir, "f.png"));
+	snprintf(args, sizeof args, "--size 16x16 --world-cache %s/no/such/dir", cdir);
+	cr_assert_eq(tu_prog(cdir, "saarsim", args), 2);
+	tu_one_line(cdir, "saarsim", "cannot create");
+}
+
+/* The report's results: its text from "fps" up to "check", and from
+ * "counters" up to "host" (not the config, the same by construction, the
+ * check, whose "reference" differs, or host times). */
+static char *results(const char *json)
+{
+	const char *a = strstr(json, "\"fps\""), *b = strstr(json, "\"check\"");
+	const char *c = strstr(json, "\"counters\""), *e = strstr(json, "\"host\"");
+	cr_assert(a && b && c && e && a < b && b < c && c < e);
+	size_t n1 = (size_t)(b - a), n2 = (size_t)(e - c);
+	char *r = malloc(n1 + n2 + 1);
+	memcpy(r, a, n1);
+	memcpy(r + n1, c, n2);
+	r[n1 + n2] = 0;
+	return r;
+}
+
+Test(worldcache_cli, second_run_takes_world_and_frame_from_the_cache)
+{
+	char args[1024];
+	const char *run = "--scene spd:balls:2 --size 48x32 --set chip.rtps=2 --fidelity sampled "
+	                  "--sample-rate 0.2";
+	snprintf(args, sizeof args, "%s --out %s/a.ppm --report %s/a.json", run, cdir, cdir);
+	cr_assert_eq(tu_prog(cdir, "saarsim", args), 0, "%s", tu_slurp(cdir, "err"));
+	snprintf(args, sizeof args, "%s --world-cache %s/c --report %s/b.json", run, cdir, cdir);
+	cr_assert_eq(tu_prog(cdir, "saarsim", args), 0, "%s", tu_slurp(cdir, "err"));
+	cr_assert(strstr(tu_slurp(cdir, "out"), "world cache: stored"), "%s",
+	          tu_slurp(cdir, "out"));
+	snprintf(args, sizeof args, "%s --world-cache %s/c --out %s/c.ppm --report %s/c.json", run,
+	         cdir, cdir, cdir);
+	cr_assert_eq(tu_prog(cdir, "saarsim", args), 0, "%s", tu_slurp(cdir, "err"));
+	char *out = tu_slurp(cdir, "out");
+	cr_assert(strstr(out, "world cache: hit") && strstr(out, "its frame from the world cache"),
+	          "%s", out);
+	char *a = results(tu_slurp(cdir, "a.json")), *c = results(tu_slurp(cdir, "c.json"));
+	cr_assert(strstr(tu_slurp(cdir, "a.json"), "\"reference\": \"rendered\""));
+	char *cj = tu_slurp(cdir, "c.json");
+	cr_assert(strstr(cj, "\"reference\": \"cached\"") &&
+	          strstr(cj, "\"identical_8bit\": true"));
+	cr_assert(strstr(cj, "\"world_cache\": \"hit\""));
+	cr_assert_str_eq(a, c, "results differ with the cache");
+	free(a);
+	free(c);
+	char cmd[1024];
+	snprintf(cmd, sizeof cmd, "cmp -s %s/a.ppm %s/c.ppm", cdir, cdir);
+	cr_assert_eq(tu_run(cmd), 0, "the frames differ");
+	/* another size: the world hits, the frame is rendered */
+	snprintf(args, sizeof args,
+	         "--scene spd:balls:2 --size 40x32 --set chip.rtps=2 --world-cache %s/c "
+	         "--report %s/d.json",
+	         cdir, cdir);
+	cr_assert_eq(tu_prog(cdir, "saarsim", args), 0, "%s", tu_slurp(cdir, "err"));
+	char *dj = tu_slurp(cdir, "d.json");
+	cr_assert(strstr(dj, "\"world_cache\": \"hit\"") &&
+	          strstr(dj, "\"reference\": \"rendered\""));
+}
