@@ -186,15 +186,18 @@ int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
 	uint32_t set = cache_set_of(c, line);
 	int w = find_way(c, set, line);
 	c->s.accesses++;
+	c->s.func_accesses++;
 	c->s.bytes += bytes;
 	if (w >= 0) {
 		c->use[(size_t)set * c->p.ways + (size_t)w] = ++c->stamp;
 		c->s.hits++;
+		c->s.func_hits++;
 		return 1;
 	}
 	c->s.misses++;
 	if (cache_mshr_find(c, line) >= 0) {
 		c->s.merges++;
+		c->s.func_merges++;
 		return 1;
 	}
 	cache_fill(c, line, NULL);

@@ -55,6 +55,11 @@ typedef enum cache_result {
 typedef struct cache_stats {
 	uint64_t accesses, hits, misses, merges, mshr_full;
 	uint64_t bytes, fills, fill_bytes, evictions;
+	/* of accesses, hits and merges: those made by functional lookups
+	 * (cache_lookup_func), where a line arrives at once, so an access a
+	 * timed cache would merge into a fill in flight is a hit here
+	 * (sampled mode's hit-rate estimate separates the two: report.c) */
+	uint64_t func_accesses, func_hits, func_merges;
 } cache_stats;
 
 typedef struct cache {

@@ -8,6 +8,7 @@
  * figures are computed the same way and always add up.
  */
 #include "report.h"
+#include "sampling.h"
 
 #include <errno.h>
 #include <math.h>
@@ -43,25 +44,22 @@ static double fps(const chip *c)
 
 #define MB (1024.0 * 1024.0) /* MB = 2^20 bytes, as memory.sdram.mb */
 
-/* Hit-rate slots: the four L1s, then the VMA's tag cache and L2. */
-enum { HR_TAG = MEM_NTYPES, HR_L2, HR_N };
 static const char *const hr_names[HR_N] = {"shade", "kd", "list", "tri", "tag_cache", "l2"};
 
-typedef struct memfig {
-	int first, last;     /* frames first..last (1-based, inclusive) */
-	double cycles, fps;  /* mean core cycles per frame, fps at the clock */
-	double sdram_mb;     /* per frame; fixed model: bytes through the memory port */
-	double pci_mb;       /* per frame; 0 without VMA */
-	double hit[HR_N];    /* hits / accesses over the span; -1: no such cache or no access */
-	double meta_share;   /* meta-data share of SDRAM accesses */
-	double row_hit_rate; /* SDRAM row hits / (hits + empty + conflicts) */
-	double sdram_util;   /* SDRAM data bus busy / elapsed time */
-	double pci_util;     /* host bus busy / elapsed time */
-} memfig;
-
-static double rate(uint64_t hits, uint64_t acc)
+/* A cache's hit rate between snapshots a and b; with est (a sampled
+ * frame) its functional hits are split as a timed cache would count them
+ * (smp_timed_hits; *share: the merge share used). -1 without accesses. */
+static double span_hit_rate(const cache_stats *a, const cache_stats *b, int est, double *share)
 {
-	return acc ? (double)hits / (double)acc : -1.0;
+	double h = (double)(b->hits - a->hits), r = 0;
+	if (est)
+		h = smp_timed_hits(h, (double)(b->merges - a->merges),
+		                   (double)(b->func_hits - a->func_hits),
+		                   (double)(b->func_merges - a->func_merges), &r);
+	if (share)
+		*share = r;
+	uint64_t acc = b->accesses - a->accesses;
+	return acc ? h / (double)acc : -1.0;
 }
 
 /* Frames f0..f1-1 (0-based). */
@@ -95,13 +93,20 @@ static void memfig_span(const chip *c, int f0, int f1, memfig *m)
 	    b->sdram.read_bytes + b->sdram.write_bytes - a->sdram.read_bytes - a->sdram.write_bytes;
 	m->sdram_mb = (double)sd / MB / n;
 	m->pci_mb = (double)(b->hostbus.bytes - a->hostbus.bytes) / MB / n;
+	int est = c->fid.mode == CFG_FIDELITY_SAMPLED && !c->fid.exact;
 	for (int t = 0; t < MEM_NTYPES; t++)
-		m->hit[t] =
-		    rate(b->l1[t].hits - a->l1[t].hits, b->l1[t].accesses - a->l1[t].accesses);
+		m->hit[t] = span_hit_rate(&a->l1[t], &b->l1[t], est, NULL);
 	if (b->vma_enabled) {
-		m->hit[HR_TAG] = rate(b->tag_cache.hits - a->tag_cache.hits,
-		                      b->tag_cache.accesses - a->tag_cache.accesses);
-		m->hit[HR_L2] = rate(b->l2.hits - a->l2.hits, b->l2.accesses - a->l2.accesses);
+		double share;
+		m->hit[HR_TAG] = span_hit_rate(&a->tag_cache, &b->tag_cache, est, NULL);
+		m->hit[HR_L2] = span_hit_rate(&a->l2, &b->l2, est, &share);
+		/* an on-board cache hit reads SDRAM; the accesses a timed chip
+		 * merges into a PCI fetch in flight do not (sampled) */
+		double acc = (double)(b->l2.accesses - a->l2.accesses);
+		double fh = (double)(b->l2.func_hits - a->l2.func_hits);
+		if (est && acc > 0)
+			m->sdram_mb -=
+			    fh * share * (double)(b->l2.bytes - a->l2.bytes) / acc / MB / n;
 	}
 	uint64_t meta = 0, all = 0;
 	for (int r = 0; r < MEMIF_NREQ; r++) {
@@ -121,9 +126,8 @@ static void memfig_span(const chip *c, int f0, int f1, memfig *m)
 	m->pci_util = ratio((double)(b->hostbus.busy_ticks - a->hostbus.busy_ticks), ticks);
 }
 
-/* The steady state: the mean of frames 2..N when there are several (the
- * first frame warms the caches and the VMA), else frame 1. */
-static void memfig_steady(const chip *c, memfig *m)
+/* frames 2..N, or frame 1 alone (report.h) */
+void report_steady_state(const chip *c, memfig *m)
 {
 	memfig_span(c, c->frames_done > 1 ? 1 : 0, c->frames_done, m);
 }
@@ -396,7 +400,7 @@ void report_text(FILE *f, const report_info *ri)
 			fputc('\n', f);
 		}
 	}
-	memfig_steady(c, &m);
+	report_steady_state(c, &m);
 	fprintf(f, "  %s: %.2f fps, SDRAM %.2f MB/frame, PCI %.2f MB/frame\n",
 	        c->frames_done > 1 ? "steady state (mean of frames 2..N)" : "frame", m.fps,
 	        m.sdram_mb, m.pci_mb);
@@ -628,7 +632,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 
 	/* the published SaarCOR table's columns (seed 002 Table 5), steady state */
 	memfig m;
-	memfig_steady(c, &m);
+	report_steady_state(c, &m);
 	jsonw_key(j, "table");
 	jsonw_obj_begin(j);
 	jsonw_knum(j, "fps", m.fps);
@@ -771,7 +775,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	free(old);
 
 	memfig m;
-	memfig_steady(c, &m);
+	report_steady_state(c, &m);
 	csv_str(f, g->name, 0);
 	csv_str(f, ri->w->scene_label, 0);
 	csv_str(f, ri->w->v.name, 0);

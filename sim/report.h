@@ -21,6 +21,27 @@ typedef struct report_info {
 	double wall_ms;          /* whole run so far */
 } report_info;
 
+/* Memory figures over a span of frames (the report's steady_state and
+ * per_frame fields; docs/report.md). In a sampled frame the hit rates
+ * and SDRAM MB are estimates (docs/fidelity.md "Sampled"). */
+enum { HR_TAG = MEM_NTYPES, HR_L2, HR_N }; /* hit-rate slots: the four L1s, tag cache, L2 */
+
+typedef struct memfig {
+	int first, last;     /* frames first..last (1-based, inclusive) */
+	double cycles, fps;  /* mean core cycles per frame, fps at the clock */
+	double sdram_mb;     /* per frame; fixed model: bytes through the memory port */
+	double pci_mb;       /* per frame; 0 without VMA */
+	double hit[HR_N];    /* hits / accesses over the span; -1: no such cache or no access */
+	double meta_share;   /* meta-data share of SDRAM accesses */
+	double row_hit_rate; /* SDRAM row hits / (hits + empty + conflicts) */
+	double sdram_util;   /* SDRAM data bus busy / elapsed time */
+	double pci_util;     /* host bus busy / elapsed time */
+} memfig;
+
+/* The steady state: the mean of frames 2..N when there are several (the
+ * first frame warms the caches and the VMA), else frame 1. */
+void report_steady_state(const chip *c, memfig *m);
+
 void report_text(FILE *f, const report_info *ri);
 /* Writes the JSON report atomically (tmp + rename). */
 int report_json(const char *path, const report_info *ri, diag *d);

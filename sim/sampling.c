@@ -354,3 +354,12 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 	if (use->linear)
 		r->var = (r->var + lin_param_var(u, cyc, n, pc, npc, use)) * infl;
 }
+
+double smp_timed_hits(double hits, double merges, double fhits, double fmerges, double *share)
+{
+	double dh = hits - fhits, dm = merges - fmerges;
+	double r = dh + dm > 0 ? dm / (dh + dm) : 0.0;
+	if (share)
+		*share = r;
+	return dh + fhits * (1.0 - r);
+}

@@ -9,7 +9,8 @@
  * a PCI-bound frame; regions take over packets in flight with every
  * operation counted once; memory-bound chunks get their own stratum and
  * extra units; the SDRAM factor is fitted to the units' law and, on
- * Conference, narrows the interval and the error. Scenes: the embedded
+ * Conference, narrows the interval and the error; sampled hit rates and
+ * SDRAM MB count merges as cycle does. Scenes: the embedded
  * one, SPD balls through the VMA, and Conference when the shared scenes
  * are there.
  */
@@ -18,6 +19,7 @@
 
 #include "chiptest.h"
 #include "hier.h"
+#include "report.h"
 
 static void cfg_mode(saar_config *c, int size, int mode)
 {
@@ -572,5 +574,51 @@ Test(fidelity, small_frame_one_thread_intervals_cover, .timeout = 300)
 		covered += run_replica(&w, &c, truth).covered;
 	}
 	cr_assert_geq(covered, 4, "interval covered the truth on %d of 5 replicas", covered);
+	world_free(&w);
+}
+
+/* Sampled hit rates: a functional hit may be an access the timed chip
+ * merges into a fill in flight (a miss there); the estimate splits those
+ * off by the detailed regions' merge share (smp_timed_hits). Through the
+ * VMA, where PCI fetches are long and merges many, the tag cache's and
+ * on-board cache's estimates must land near cycle's and much nearer than
+ * the counts taken as they are; so must SDRAM MB (a merged access reads
+ * no SDRAM). */
+Test(fidelity, sampled_hit_rates_count_merges_as_cycle_does)
+{
+	world w;
+	tu_load_world(&w, "spd:balls:2", NULL, NULL);
+	saar_config c;
+	cfg_mode(&c, 192, CFG_FIDELITY_CYCLE);
+	c.memory.vma.enabled = true;
+	c.memory.sdram.mb = 1;
+	c.chip.threads_per_rtp = 4;
+	chip *x = tu_run_chip(&w, &c);
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.2;
+	chip *y = tu_run_chip(&w, &c);
+	cr_assert(!y->fid.exact);
+	memfig mx, my;
+	report_steady_state(x, &mx);
+	report_steady_state(y, &my);
+	hier_stats hy;
+	hier_get_stats(&y->mem, &hy);
+	const cache_stats *raw[2] = {&hy.tag_cache, &hy.l2};
+	for (int k = 0; k < 2; k++) {
+		double truth = mx.hit[HR_TAG + k], est = my.hit[HR_TAG + k];
+		double counted = (double)raw[k]->hits / (double)raw[k]->accesses;
+		cr_log_info("%s: cycle %.4f sampled %.4f counted %.4f", k ? "l2" : "tag", truth,
+		            est, counted);
+		cr_assert_lt(fabs(est - truth), 0.03, "%s: %.4f vs cycle %.4f", k ? "l2" : "tag",
+		             est, truth);
+		cr_assert_lt(fabs(est - truth), 0.5 * fabs(counted - truth));
+	}
+	double sd_counted =
+	    (double)(hy.sdram.read_bytes + hy.sdram.write_bytes) / (1024.0 * 1024.0);
+	cr_log_info("sdram: cycle %.4f sampled %.4f counted %.4f", mx.sdram_mb, my.sdram_mb,
+	            sd_counted);
+	cr_assert_lt(fabs(my.sdram_mb - mx.sdram_mb), fabs(sd_counted - mx.sdram_mb));
+	chip_destroy(x);
+	chip_destroy(y);
 	world_free(&w);
 }
