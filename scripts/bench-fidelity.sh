@@ -228,10 +228,10 @@ SEC="$TMP/section.md"
 	echo
 	echo "### Conference $CONF_SIZE by config"
 	echo
-	echo "Sampled: every estimated point (all rates and offsets). Functional: its traffic against cycle's (L1 hit rates in points, SDRAM MB in %)."
+	echo "Sampled: every estimated point (all rates and offsets); its hit rates (every cache, VMA's tag cache and on-board cache included) in points and SDRAM MB in % against cycle's. Functional: its traffic against cycle's (L1 hit rates in points, SDRAM MB in %)."
 	echo
-	echo "| config | threads | sampled points | rms fps err % | max fps err % | interval covered | speed-up (min-median-max) | whole-run speed-up (median) | functional: max L1 hit pp | functional: SDRAM MB err % |"
-	echo "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|"
+	echo "| config | threads | sampled points | rms fps err % | max fps err % | interval covered | speed-up (min-median-max) | whole-run speed-up (median) | sampled: max hit pp | sampled: rms SDRAM MB err % | functional: max L1 hit pp | functional: SDRAM MB err % |"
+	echo "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"
 	python3 - "$ROWS" "$CONF_SIZE" <<'EOF'
 import sys, statistics
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
@@ -245,11 +245,14 @@ for cfg in ("std", "vma"):
             e = [abs(float(r[10])) for r in est]
             sp = sorted(float(r[7]) for r in est)
             cov = sum(int(r[13]) for r in est)
-            s = "| %s | %d | %d | %.2f | %.2f | %d of %d | %.1f-%.1f-%.1f | %.1f |" % (
+            hp = [abs(float(x)) for r in est for x in r[14:20] if x != "-"]
+            sd = [float(r[20]) for r in est if r[20] != "-"]
+            s = "| %s | %d | %d | %.2f | %.2f | %d of %d | %.1f-%.1f-%.1f | %.1f | %.2f | %s |" % (
                 cfg, t, len(est), (sum(x * x for x in e) / len(e)) ** 0.5, max(e), cov, len(est),
-                sp[0], statistics.median(sp), sp[-1], statistics.median(float(r[22]) for r in est))
+                sp[0], statistics.median(sp), sp[-1], statistics.median(float(r[22]) for r in est),
+                max(hp), "%.2f" % (sum(x * x for x in sd) / len(sd)) ** 0.5 if sd else "-")
         else:
-            s = "| %s | %d | 0 | - | - | - | - | - |" % (cfg, t)
+            s = "| %s | %d | 0 | - | - | - | - | - | - | - |" % (cfg, t)
         if fn:
             hp = [abs(float(x)) for x in fn[0][14:18]]
             s += " %.2f | %s |" % (max(hp), fn[0][20])
