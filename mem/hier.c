@@ -71,6 +71,11 @@ struct hier {
 	memif_stats fmi;
 	hbus_stats fhb;
 	uint64_t freqs;
+	/* of fsd.busy_ticks: the expected part a timed chip would not spend,
+	 * on-board-cache hits it would merge into a PCI fetch in flight (each
+	 * such read's ticks times the share of merges among the timed
+	 * accesses that found their line present or arriving, so far) */
+	double fmerge_ticks;
 };
 
 /* ---- free lists ---- */
@@ -326,8 +331,20 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 	uint64_t dr = b->data_reads - a.data_reads, dw = b->data_writes - a.data_writes - fetches;
 	uint64_t db = b->data_bytes - a.data_bytes - fill_bytes;
 	func_sdram_n(h, MEMIF_FILL, fetches, fill_bytes, 1);
-	if (dr + dw)
+	if (dr + dw) {
+		uint64_t t0 = h->fsd.busy_ticks;
 		func_sdram_n(h, type, dr + dw, db, dw > 0);
+		if (!write && dr) {
+			/* the reads are on-board-cache hits; a timed chip merges a
+			 * share of them into fetches still on their way */
+			const cache_stats *l2 = &h->v.l2.s;
+			double th = (double)(l2->hits - l2->func_hits);
+			double tm = (double)(l2->merges - l2->func_merges);
+			if (th + tm > 0)
+				h->fmerge_ticks +=
+				    (double)(h->fsd.busy_ticks - t0) * tm / (th + tm);
+		}
+	}
 	for (uint64_t i = 0; i < fetches; i++) {
 		h->fhb.transfers++;
 		h->fhb.bytes += h->v.p.line;
@@ -556,6 +573,7 @@ int hier_get_stats(const memport *p, hier_stats *s)
 	s->sdram.beats += h->fsd.beats;
 	s->func_requests = h->freqs;
 	s->func_sdram_busy_ticks = h->fsd.busy_ticks;
+	s->func_sdram_merge_ticks = h->fmerge_ticks;
 	s->func_hostbus_busy_ticks = h->fhb.busy_ticks;
 	s->sdram_peak_bytes_per_s = sdram_peak_bw(&h->sd);
 	if (h->use_vma) {

@@ -57,6 +57,9 @@ typedef struct hier_stats {
 	 * would occupy (no row or queueing overheads) is kept apart here */
 	uint64_t func_requests;
 	uint64_t func_sdram_busy_ticks, func_hostbus_busy_ticks;
+	/* of func_sdram_busy_ticks, the expected part a timed chip would not
+	 * spend: on-board-cache hits it would merge into PCI fetches in flight */
+	double func_sdram_merge_ticks;
 } hier_stats;
 
 /* Builds the hierarchy from cfg->memory and installs it in p (as

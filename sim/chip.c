@@ -102,7 +102,9 @@ static void chip_demand(const chip *c, double d[RES_N])
 		d[RES_L1_SHADE + t] =
 		    (double)(h.reads[t] - h.bypass_reads[t]) / hier_l1_params(&c->cfg, t).ports;
 	double per = (double)c->clk.period;
-	d[RES_SDRAM] = (double)(h.sdram.busy_ticks + h.func_sdram_busy_ticks) / per;
+	d[RES_SDRAM] =
+	    ((double)(h.sdram.busy_ticks + h.func_sdram_busy_ticks) - h.func_sdram_merge_ticks) /
+	    per;
 	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
 }
 

@@ -178,6 +178,7 @@ static void assert_same_traffic(const world *w, saar_config *c, const char *what
 	              (unsigned long long)y->frame_cycles[0],
 	              (unsigned long long)x->frame_cycles[0]);
 	cr_assert_eq(y->fid.detailed_tiles, 0);
+	cr_assert_eq(hy.func_sdram_merge_ticks, 0, "%s: no timed access, no merge share", what);
 	chip_destroy(x);
 	chip_destroy(y);
 }
@@ -618,6 +619,13 @@ Test(fidelity, sampled_hit_rates_count_merges_as_cycle_does)
 	cr_log_info("sdram: cycle %.4f sampled %.4f counted %.4f", mx.sdram_mb, my.sdram_mb,
 	            sd_counted);
 	cr_assert_lt(fabs(my.sdram_mb - mx.sdram_mb), fabs(sd_counted - mx.sdram_mb));
+	/* the same for the SDRAM demand the estimate works from: the data-bus
+	 * time of the functional reads so split off is not counted */
+	double per = (double)y->clk.period, sx = x->fid.res_cycles[RES_SDRAM],
+	       sy = y->fid.res_cycles[RES_SDRAM], merged = hy.func_sdram_merge_ticks / per;
+	cr_log_info("sdram demand: cycle %.0f sampled %.0f (%.0f merged)", sx, sy, merged);
+	cr_assert_gt(merged, 0);
+	cr_assert_lt(fabs(sy - sx), fabs(sy + merged - sx));
 	chip_destroy(x);
 	chip_destroy(y);
 	world_free(&w);
