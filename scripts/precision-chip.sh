@@ -32,7 +32,7 @@ rows="$work/rows.tsv"
 for t in $targets; do
 	for m in 23 20 16 14 12 10 8; do
 		set -- --size "$SIZE" --set chip.fp.trav.mant="$m" --set chip.fp.isect.mant="$m" \
-			--report "$work/r.json"
+			--report "$work/r.json" --world-cache "$work/wc"
 		[ "$t" = embedded ] || set -- "$@" --views "$SCENES/views.yaml" --view "$t"
 		"$B/saarsim" "$@" >/dev/null
 		fps=$(num fps "$work/r.json")
