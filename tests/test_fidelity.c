@@ -37,6 +37,16 @@ static void embedded(world *w, saar_config *c, int mode, int threads_per_rtp)
 	c->chip.threads_per_rtp = threads_per_rtp;
 }
 
+/* SPD balls at size x size through a VMA with 1 MB on board (the image
+ * does not fit: every line comes over PCI once), in cycle mode. */
+static void balls_vma(world *w, saar_config *c, int size)
+{
+	tu_load_world(w, "spd:balls:2", NULL, NULL);
+	cfg_mode(c, size, CFG_FIDELITY_CYCLE);
+	c->memory.vma.enabled = true;
+	c->memory.sdram.mb = 1;
+}
+
 Test(fidelity, every_mode_renders_the_reference_image)
 {
 	world w;
@@ -195,10 +205,7 @@ Test(fidelity, functional_traffic_equals_cycle)
 	assert_same_traffic(&w, &c, "embedded 128, 64 threads, stack 4");
 	world_free(&w);
 
-	tu_load_world(&w, "spd:balls:2", NULL, NULL);
-	cfg_mode(&c, 96, CFG_FIDELITY_CYCLE);
-	c.memory.vma.enabled = true;
-	c.memory.sdram.mb = 1;
+	balls_vma(&w, &c, 96);
 	assert_same_traffic(&w, &c, "balls through the VMA");
 	world_free(&w);
 }
@@ -388,11 +395,8 @@ Test(fidelity, estimate_respects_the_bound)
 Test(fidelity, pci_bound_frame_follows_the_bus)
 {
 	world w;
-	tu_load_world(&w, "spd:balls:2", NULL, NULL);
 	saar_config c;
-	cfg_mode(&c, 256, CFG_FIDELITY_CYCLE);
-	c.memory.vma.enabled = true;
-	c.memory.sdram.mb = 1;
+	balls_vma(&w, &c, 256);
 	chip *x = tu_run_chip(&w, &c);
 	double truth = (double)x->frame_cycles[0];
 	cr_assert_eq(x->fid.bound_by, RES_HOSTBUS, "bound by %s, not the host bus",
@@ -588,11 +592,8 @@ Test(fidelity, small_frame_one_thread_intervals_cover, .timeout = 300)
 Test(fidelity, sampled_hit_rates_count_merges_as_cycle_does)
 {
 	world w;
-	tu_load_world(&w, "spd:balls:2", NULL, NULL);
 	saar_config c;
-	cfg_mode(&c, 192, CFG_FIDELITY_CYCLE);
-	c.memory.vma.enabled = true;
-	c.memory.sdram.mb = 1;
+	balls_vma(&w, &c, 192);
 	c.chip.threads_per_rtp = 4;
 	chip *x = tu_run_chip(&w, &c);
 	c.fidelity = CFG_FIDELITY_SAMPLED;

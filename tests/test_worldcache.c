@@ -43,6 +43,15 @@ static void touch_ahead(const char *dir, const char *name, int ahead)
 	cr_assert_eq(utimensat(AT_FDCWD, p, ts, 0), 0, "cannot touch %s", p);
 }
 
+/* A fresh folder dir holding the textured quad (path in obj) and the
+ * name of a cache folder in it (not made yet). */
+static void fresh_scene(char *dir, size_t ndir, char *cache, size_t ncache, char *obj, size_t nobj)
+{
+	tu_tmpdir(dir, ndir);
+	snprintf(cache, ncache, "%s/cache", dir);
+	write_scene(dir, "1 1 1", obj, nobj);
+}
+
 static int load(world *w, const char *obj, const char *cache, float empty_bonus)
 {
 	world_opts o;
@@ -94,9 +103,7 @@ static int world_files(const char *dir, char *out, size_t n)
 Test(worldcache, hit_is_the_built_world)
 {
 	char dir[256], cache[300], obj[512];
-	tu_tmpdir(dir, sizeof dir);
-	snprintf(cache, sizeof cache, "%s/cache", dir);
-	write_scene(dir, "1 1 1", obj, sizeof obj);
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
 	world b, w1, w2;
 	cr_assert_eq(load(&b, obj, NULL, -1), WORLD_CACHE_OFF);
 	cr_assert_eq(load(&w1, obj, cache, -1), WORLD_CACHE_STORED, "first run builds and stores");
@@ -113,9 +120,7 @@ Test(worldcache, hit_is_the_built_world)
 Test(worldcache, changed_source_files_miss)
 {
 	char dir[256], cache[300], obj[512], p[512];
-	tu_tmpdir(dir, sizeof dir);
-	snprintf(cache, sizeof cache, "%s/cache", dir);
-	write_scene(dir, "1 1 1", obj, sizeof obj);
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
 	world w;
 	load(&w, obj, cache, -1);
 	uint32_t white = w.image_crc;
@@ -145,9 +150,7 @@ Test(worldcache, changed_source_files_miss)
 Test(worldcache, kd_parameters_have_their_own_entry)
 {
 	char dir[256], cache[300], obj[512], f[600];
-	tu_tmpdir(dir, sizeof dir);
-	snprintf(cache, sizeof cache, "%s/cache", dir);
-	write_scene(dir, "1 1 1", obj, sizeof obj);
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
 	world w;
 	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED);
 	world_free(&w);
@@ -163,9 +166,7 @@ Test(worldcache, kd_parameters_have_their_own_entry)
 Test(worldcache, damaged_or_truncated_file_misses)
 {
 	char dir[256], cache[300], obj[512], f[600];
-	tu_tmpdir(dir, sizeof dir);
-	snprintf(cache, sizeof cache, "%s/cache", dir);
-	write_scene(dir, "1 1 1", obj, sizeof obj);
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
 	world b, w;
 	load(&b, obj, cache, -1);
 	cr_assert_eq(world_files(cache, f, sizeof f), 1);
