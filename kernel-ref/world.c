@@ -298,8 +298,6 @@ int world_load(world *w, const world_opts *o, diag *d)
 			}
 		}
 	}
-	if (o->cache_dir)
-		w->image_crc = wc_crc(w->m.bytes, w->m.size);
 	wc_files_free(&files);
 	free(ckey);
 	return 0;

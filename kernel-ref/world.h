@@ -44,7 +44,6 @@ typedef struct world {
 	int cache;
 	const char *cache_dir; /* o->cache_dir, for the reference frame's entry */
 	char cache_prog[64];   /* this program's identity in cache keys */
-	uint32_t image_crc;    /* CRC-32 of m.bytes, with a cache */
 } world;
 
 void world_opts_default(world_opts *o);

@@ -838,7 +838,7 @@ static int reference_frame(chip *c, const render_opts *ro, uint8_t *rgb, size_t 
 {
 	const world *w = c->w;
 	char file[PATH_MAX], *key = NULL;
-	if (w->cache_dir && (key = wc_frame_key(w->cache_prog, &w->m, w->image_crc, &w->v, ro)) &&
+	if (w->cache_dir && (key = wc_frame_key(w->cache_prog, &w->m, &w->v, ro)) &&
 	    wc_file(file, sizeof file, w->cache_dir, "frame", key)) {
 		free(key);
 		key = NULL;
