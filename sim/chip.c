@@ -228,12 +228,8 @@ static int fid_init(chip *c)
 	 * has finished anything: its window would be empty */
 	F->unit_tiles = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;
 	/* a region takes over a full chip (packets in flight, caches warm):
-	 * the warm-up refills the memory and unit queues; with few threads one
-	 * tile each is too short for that (docs/fidelity.md, the VMA at one
-	 * thread), hence at least 16 tiles */
-	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles
-	                  : threads > 16                  ? threads
-	                                                  : 16;
+	 * the warm-up refills the memory and unit queues (docs/fidelity.md) */
+	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : threads;
 	size_t nf = (size_t)cfg->frame.frames;
 	F->est = calloc(nf, sizeof *F->est);
 	F->half = calloc(nf, sizeof *F->half);
