@@ -308,6 +308,47 @@ fail:
 	return -1;
 }
 
+int world_reference_rgb8(const world *w, const render_opts *o, uint8_t *rgb, render_stats *st,
+                         int *cached, diag *d)
+{
+	size_t n = (size_t)o->width * (size_t)o->height * 3;
+	char file[PATH_MAX], *key = NULL;
+	*cached = 0;
+	if (w->cache_dir && (key = wc_frame_key(w->cache_prog, &w->m, &w->v, o)) &&
+	    wc_file(file, sizeof file, w->cache_dir, "frame", key)) {
+		free(key);
+		key = NULL;
+	}
+	wc_part parts[] = {{st, sizeof *st}};
+	void *t = NULL;
+	size_t nt = 0;
+	if (key && wc_get(file, key, parts, 1, &t, &nt)) {
+		if (nt == n) {
+			memcpy(rgb, t, n);
+			free(t);
+			free(key);
+			*cached = 1;
+			return 0;
+		}
+		free(t);
+	}
+	framebuf ref;
+	if (fb_init(&ref, o->width, o->height)) {
+		free(key);
+		return diag_set(d, "kernel-ref", 0, 0, "out of memory for the reference frame");
+	}
+	int rc = render_frame(&w->m, &w->v, o, &ref, st, d);
+	if (!rc) {
+		fb_to_rgb8(&ref, rgb, NULL);
+		diag wd;
+		if (key && wc_put(file, key, NULL, parts, 1, rgb, n, &wd))
+			fprintf(stderr, "warning: %s\n", wd.msg);
+	}
+	fb_free(&ref);
+	free(key);
+	return rc;
+}
+
 void world_free(world *w)
 {
 	mimg_free(&w->m);

@@ -1,8 +1,9 @@
 /*
  * world.h: everything a frame needs before tracing starts, built the same
  * way for rtref and saarsim: the scene (file, embedded default), the view
- * (views file, flags or the default), the kd-tree and the memory image.
- * Also parses the command-line flags that pick them, so both programs
+ * (views file, flags or the default), the kd-tree and the memory image,
+ * through the world cache when one is given (worldcache.h), and kernel-ref's
+ * reference frame of it for checks. Also parses the command-line flags that pick them, so both programs
  * accept exactly the same scene/view/camera flags.
  */
 #ifndef SAAR_KREF_WORLD_H
@@ -11,6 +12,7 @@
 #include "diag.h"
 #include "kdtree.h"
 #include "memimage.h"
+#include "render.h"
 #include "scene.h"
 #include "view.h"
 
@@ -68,6 +70,13 @@ int cli_parse_size(const char *s, int *w, int *h, diag *d);
 int cli_bad(const char *prog, const char *msg);
 
 int world_load(world *w, const world_opts *o, diag *d);
+
+/* kernel-ref's frame of w's view with options o as 8-bit sRGB (width x
+ * height x 3 bytes into rgb) and its counts into st: from the world cache
+ * when w has one and it holds this frame (*cached = 1), else rendered
+ * (and stored there; a failed store is a warning). */
+int world_reference_rgb8(const world *w, const render_opts *o, uint8_t *rgb, render_stats *st,
+                         int *cached, diag *d);
 void world_free(world *w);
 
 #endif

@@ -58,7 +58,7 @@ typedef struct cache_stats {
 	/* of accesses, hits and merges: those made by functional lookups
 	 * (cache_lookup_func), where a line arrives at once, so an access a
 	 * timed cache would merge into a fill in flight is a hit here
-	 * (sampled mode's hit-rate estimate separates the two: report.c) */
+	 * (cache_timed_hits separates the two) */
 	uint64_t func_accesses, func_hits, func_merges;
 } cache_stats;
 
@@ -137,5 +137,17 @@ int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes);
  * reference tests use. Touches every line of [addr, addr+bytes); returns the
  * number of lines that missed (0 = hit). Never returns MSHR_FULL. */
 uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes);
+
+/* Between counter snapshots from (NULL: the start) and to: the share of
+ * merges among the timed lookups that found their line present or
+ * arriving (hits + merges, functional ones left out); 0 without any. A
+ * functional lookup finds its line at once, so a timed cache would have
+ * merged about this share of its hits into fills still in flight. */
+double cache_timed_merge_share(const cache_stats *from, const cache_stats *to);
+
+/* The hits between the snapshots as a timed cache would count them: the
+ * timed lookups' own, and the functional hits less that share (*share,
+ * may be NULL, gets it). sampled mode's hit rates (sim/report.c). */
+double cache_timed_hits(const cache_stats *from, const cache_stats *to, double *share);
 
 #endif

@@ -337,12 +337,8 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 		if (!write && dr) {
 			/* the reads are on-board-cache hits; a timed chip merges a
 			 * share of them into fetches still on their way */
-			const cache_stats *l2 = &h->v.l2.s;
-			double th = (double)(l2->hits - l2->func_hits);
-			double tm = (double)(l2->merges - l2->func_merges);
-			if (th + tm > 0)
-				h->fmerge_ticks +=
-				    (double)(h->fsd.busy_ticks - t0) * tm / (th + tm);
+			h->fmerge_ticks += (double)(h->fsd.busy_ticks - t0) *
+			                   cache_timed_merge_share(NULL, &h->v.l2.s);
 		}
 	}
 	for (uint64_t i = 0; i < fetches; i++) {

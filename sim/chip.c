@@ -15,7 +15,6 @@
  */
 #include "chip.h"
 
-#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,7 +22,6 @@
 #include <time.h>
 
 #include "rgs.h"
-#include "worldcache.h"
 
 static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
@@ -261,6 +259,7 @@ static int fid_init(chip *c)
 	F->mark_e = calloc(cap, sizeof *F->mark_e);
 	F->unit_rate = calloc(cap, sizeof *F->unit_rate);
 	F->unit_pc = calloc(cap, sizeof *F->unit_pc);
+	F->unit_cyc = calloc(cap, sizeof *F->unit_cyc);
 	/* pieces per frame: a chunk per U tiles, one short chunk per stretch,
 	 * three per region (warm-up, unit, after it) */
 	F->pc_cap = N / U + 4 * (int)cap + 8;
@@ -271,7 +270,7 @@ static int fid_init(chip *c)
 		if (!(*dem[i] = calloc(cap * RES_N, sizeof(double))))
 			return -1;
 	if (!F->base_s || !F->unit_s || !F->mark_s || !F->mark_e || !F->unit_rate || !F->mark_r0 ||
-	    !F->unit_pc || !F->pc)
+	    !F->unit_pc || !F->unit_cyc || !F->pc)
 		return -1;
 	/* the head region is the frame's start, the tail its end; the others
 	 * systematic between them, one per period P at sampling.offset of the
@@ -474,6 +473,7 @@ void chip_destroy(chip *c)
 	free(c->fid.floor);
 	free(c->fid.unit_rate);
 	free(c->fid.unit_pc);
+	free(c->fid.unit_cyc);
 	free(c->fid.pc);
 	free(c->fid.mark_r0);
 	free(c->fid.dem_s);
@@ -611,9 +611,10 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
  * interleaved as a busy chip makes them, not one packet after another (one
  * at a time, the L1s and SDRAM saw far fewer misses than the cycle model
  * at 16-64 threads: docs/fidelity.md). A slot that finishes takes a secondary packet of
- * its RTP, else the next tile. The engine is idle throughout (no request
- * in flight), so memory goes through the hierarchy's functional path with
- * no MSHR busy. With drain, the range ends with every slot free; without,
+ * its RTP, else the next tile. Memory goes through the hierarchy's
+ * functional path: the data is there at once, and a line a region left in
+ * flight counts as on its way (hier.c). With drain, the range ends with
+ * every slot free; without,
  * as soon as its last tile is handed out, packets still in flight. */
 static int func_range(chip *c, int end, int drain)
 {
@@ -686,7 +687,7 @@ static void sampled_frame(chip *c, int f)
 	F->npc = 0;
 	F->extra_left = F->unit_cap - n;
 	F->last_end = 0;
-	double per = (double)c->clk.period, cyc[F->unit_cap];
+	double per = (double)c->clk.period, *cyc = F->unit_cyc;
 	int j = 0;
 	for (int b = 0; b < n; j++) {
 		int rs = F->base_s[b] - W;
@@ -830,49 +831,6 @@ uint64_t chip_rtp_sum(const chip *c, const char *suffix)
 	return s;
 }
 
-/* kernel-ref's frame of the same view, from the world cache when it holds
- * one for this memory image, camera, lights and options (worldcache.h),
- * else rendered single-threaded (and stored there). rgb: n bytes. */
-static int reference_frame(chip *c, const render_opts *ro, uint8_t *rgb, size_t n, chip_check *out,
-                           diag *d)
-{
-	const world *w = c->w;
-	char file[PATH_MAX], *key = NULL;
-	if (w->cache_dir && (key = wc_frame_key(w->cache_prog, &w->m, &w->v, ro)) &&
-	    wc_file(file, sizeof file, w->cache_dir, "frame", key)) {
-		free(key);
-		key = NULL;
-	}
-	wc_part parts[] = {{&out->ref, sizeof out->ref}};
-	void *t = NULL;
-	size_t nt = 0;
-	if (key && wc_get(file, key, parts, 1, &t, &nt)) {
-		if (nt == n) {
-			memcpy(rgb, t, n);
-			free(t);
-			free(key);
-			out->cached = 1;
-			return 0;
-		}
-		free(t);
-	}
-	framebuf ref;
-	if (fb_init(&ref, ro->width, ro->height)) {
-		free(key);
-		return diag_set(d, "saarsim", 0, 0, "out of memory for the reference frame");
-	}
-	int rc = render_frame(&w->m, &w->v, ro, &ref, &out->ref, d);
-	if (!rc) {
-		fb_to_rgb8(&ref, rgb, NULL);
-		diag wd;
-		if (key && wc_put(file, key, NULL, parts, 1, rgb, n, &wd))
-			fprintf(stderr, "warning: %s\n", wd.msg);
-	}
-	fb_free(&ref);
-	free(key);
-	return rc;
-}
-
 int chip_check_frame(chip *c, chip_check *out, diag *d)
 {
 	memset(out, 0, sizeof *out);
@@ -885,7 +843,7 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	ro.threads = 1;
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
-	int rc = a && b ? reference_frame(c, &ro, b, n, out, d)
+	int rc = a && b ? world_reference_rgb8(c->w, &ro, b, &out->ref, &out->cached, d)
 	                : diag_set(d, "saarsim", 0, 0, "out of memory for the reference frame");
 	if (!rc) {
 		fb_to_rgb8(&c->fb, a, NULL);

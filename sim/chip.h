@@ -71,6 +71,7 @@ typedef struct chip_fidelity {
 	/* this frame: the middle's pieces (chunks and region pieces) and the
 	 * units' own (sampling.h; a unit's stratum is its piece's .hard) */
 	smp_piece *pc, *unit_pc;
+	double *unit_cyc; /* the units' cycles (unit_cap) */
 	int npc, pc_cap;
 	smp_model model;           /* last frame: the demand model used (docs/fidelity.md) */
 	uint64_t *mark_s, *mark_e; /* ticks: unit's first tile taken, first tile after it wanted */

@@ -8,7 +8,6 @@
  * figures are computed the same way and always add up.
  */
 #include "report.h"
-#include "sampling.h"
 
 #include <errno.h>
 #include <math.h>
@@ -47,15 +46,13 @@ static double fps(const chip *c)
 static const char *const hr_names[HR_N] = {"shade", "kd", "list", "tri", "tag_cache", "l2"};
 
 /* A cache's hit rate between snapshots a and b; with est (a sampled
- * frame) its functional hits are split as a timed cache would count them
- * (smp_timed_hits; *share: the merge share used). -1 without accesses. */
+ * frame) its hits as a timed cache would count them (cache_timed_hits;
+ * *share: the merge share used). -1 without accesses. */
 static double span_hit_rate(const cache_stats *a, const cache_stats *b, int est, double *share)
 {
 	double h = (double)(b->hits - a->hits), r = 0;
 	if (est)
-		h = smp_timed_hits(h, (double)(b->merges - a->merges),
-		                   (double)(b->func_hits - a->func_hits),
-		                   (double)(b->func_merges - a->func_merges), &r);
+		h = cache_timed_hits(a, b, &r);
 	if (share)
 		*share = r;
 	uint64_t acc = b->accesses - a->accesses;

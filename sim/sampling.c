@@ -49,23 +49,24 @@ double smp_t975(int df)
 }
 
 /* One stratum's ratio estimate over units [lo, hi) of stratum h (or of
- * both, h < 0): R; ss, the residuals' sum of squares; and g, such that the
- * variance of R x X for the stratum's demand X is g x s^2 for a residual
- * variance s^2 (finite-population corrected over its chunks). */
+ * both, h < 0), their demand under model m: R; ss, the residuals' sum of
+ * squares; and g, such that the variance of R x X for the stratum's demand
+ * X is g x s^2 for a residual variance s^2 (finite-population corrected
+ * over its chunks). */
 typedef struct strat {
 	int n;
 	double R, ss, g;
 } strat;
 
-static strat stratum(const smp_piece *u, const double *cyc, const double *xu, int lo, int hi, int h,
-                     double X, int chunks)
+static strat stratum(const smp_piece *u, const double *cyc, const smp_model *m, int lo, int hi,
+                     int h, double X, int chunks)
 {
 	strat s = {0, 0, 0, 0};
 	double sc = 0, sx = 0;
 	for (int j = lo; j < hi; j++)
 		if (h < 0 || u[j].hard == h) {
 			sc += cyc[j];
-			sx += xu[j];
+			sx += smp_demand(&u[j], m);
 			s.n++;
 		}
 	if (!s.n || sx <= 0)
@@ -73,8 +74,10 @@ static strat stratum(const smp_piece *u, const double *cyc, const double *xu, in
 	s.R = sc / sx;
 	double xbar = sx / s.n;
 	for (int j = lo; j < hi; j++)
-		if (h < 0 || u[j].hard == h)
-			s.ss += (cyc[j] - s.R * xu[j]) * (cyc[j] - s.R * xu[j]);
+		if (h < 0 || u[j].hard == h) {
+			double e = cyc[j] - s.R * smp_demand(&u[j], m);
+			s.ss += e * e;
+		}
 	double fpc = chunks > s.n ? 1.0 - (double)s.n / chunks : 0;
 	s.g = X * X * fpc / s.n / (xbar * xbar);
 	return s;
@@ -225,8 +228,9 @@ static int lin_normal(const smp_piece *u, int n, const smp_model *m, int idx[SMP
 /* The linear model's leave-one-out error over n units: PRESS = sum of
  * (e_j / (1 - h_j))^2, e_j the fit's residual and h_j the unit's leverage
  * (its share in fitting its own value), over the regressors kept; *ss gets
- * the plain sum of e_j^2. INFINITY when a unit alone sets a coefficient
- * (h_j = 1): on small frames a regressor nonzero in one or two units (the
+ * the plain sum of e_j^2 (whenever the model has fewer parameters than
+ * units). INFINITY when a unit alone sets a coefficient (h_j = 1): on
+ * small frames a regressor nonzero in one or two units (the
  * host bus, lists) made the fit look perfect and the interval a fraction
  * of the error. */
 static double lin_press(const smp_piece *u, const double *cyc, int n, const smp_model *m,
@@ -238,6 +242,11 @@ static double lin_press(const smp_piece *u, const double *cyc, int n, const smp_
 	*ss = INFINITY;
 	if (p == 0 || n <= p)
 		return INFINITY;
+	*ss = 0;
+	for (int j = 0; j < n; j++) {
+		double e = cyc[j] - smp_demand(&u[j], m);
+		*ss += e * e;
+	}
 	for (int k = 0; k < p; k++) { /* (D'D)^-1, column by column */
 		double A2[SMP_LIN * SMP_LIN], z[SMP_LIN] = {0};
 		memcpy(A2, A, sizeof A2);
@@ -248,7 +257,6 @@ static double lin_press(const smp_piece *u, const double *cyc, int n, const smp_
 			inv[a * p + k] = z[a];
 	}
 	double press = 0;
-	*ss = 0;
 	for (int j = 0; j < n; j++) {
 		double h = 0, e = cyc[j] - smp_demand(&u[j], m);
 		for (int a = 0; a < p; a++)
@@ -256,7 +264,6 @@ static double lin_press(const smp_piece *u, const double *cyc, int n, const smp_
 				h += u[j].lin[idx[a]] * inv[a * p + b] * u[j].lin[idx[b]];
 		if (h > 1 - 1e-9)
 			return INFINITY;
-		*ss += e * e;
 		press += e * e / ((1 - h) * (1 - h));
 	}
 	return press;
@@ -265,22 +272,19 @@ static double lin_press(const smp_piece *u, const double *cyc, int n, const smp_
 /* The linear model's parameter uncertainty carried to the estimate: the
  * variance of sum(beta x X) over the middle's npc pieces, X their regressor
  * totals, s^2 X' (D'D)^-1 X with D the n units' regressors (those kept in
- * the fit) and s^2 the fit's residual variance. The ratio on the fitted
+ * the fit) and s^2 = ss / (n - p) the fit's residual variance (ss: its
+ * residual sum of squares, from lin_press). The ratio on the fitted
  * demand sees only the error along the fitted direction; the frame's mix
  * of resources differs from the units' and the coefficients' errors
  * reach it through the other directions too. */
-static double lin_param_var(const smp_piece *u, const double *cyc, int n, const smp_piece *pc,
-                            int npc, const smp_model *m)
+static double lin_param_var(const smp_piece *u, int n, const smp_piece *pc, int npc,
+                            const smp_model *m, double ss)
 {
 	int idx[SMP_LIN];
-	double A[SMP_LIN * SMP_LIN], X[SMP_LIN] = {0}, ss = 0;
+	double A[SMP_LIN * SMP_LIN], X[SMP_LIN] = {0};
 	int p = lin_normal(u, n, m, idx, A);
 	if (p == 0 || n <= p)
 		return 0;
-	for (int j = 0; j < n; j++) {
-		double d = cyc[j] - smp_demand(&u[j], m);
-		ss += d * d;
-	}
 	for (int i = 0; i < npc; i++)
 		for (int a = 0; a < p; a++)
 			X[a] += pc[i].lin[idx[a]];
@@ -313,9 +317,10 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 	    demand_model != CFG_DEMAND_MAX && n >= 30 ? smp_fit_linear(u, cyc, n, ml.beta) : 0;
 	const smp_model *use = &mm;
 	extra = fitk && mm.k > 1;
-	double infl = 1;
+	double infl = 1, lss = 0;
 	if (plin) {
 		double ss, press = lin_press(u, cyc, n, &ml, &ss);
+		lss = ss;
 		double smax = ratio_ss(u, cyc, n, &mm) / (n - 1 - extra);
 		if (demand_model == CFG_DEMAND_LINEAR || press / n < smax) {
 			use = &ml;
@@ -325,41 +330,30 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 		}
 	}
 	r->model = *use;
-	double X[2] = {0, 0}, xu[n > 0 ? n : 1];
+	double X[2] = {0, 0};
 	int nc[2] = {0, 0};
 	for (int i = 0; i < npc; i++) {
 		X[pc[i].hard] += smp_demand(&pc[i], use);
 		nc[pc[i].hard]++;
 	}
-	for (int j = 0; j < n; j++)
-		xu[j] = smp_demand(&u[j], use);
 	/* two strata when each has at least two units, else one. The
 	 * residual variance is pooled over the strata: once the demand model
 	 * fits, both hold cycles near one ratio, and a memory-bound stratum of
 	 * two or three units would otherwise leave the interval one or two
 	 * degrees of freedom */
-	strat e = stratum(u, cyc, xu, 0, n, 0, X[0], nc[0]);
-	strat h = stratum(u, cyc, xu, 0, n, 1, X[1], nc[1]);
+	strat e = stratum(u, cyc, use, 0, n, 0, X[0], nc[0]);
+	strat h = stratum(u, cyc, use, 0, n, 1, X[1], nc[1]);
 	if (e.n >= 2 && h.n >= 2) {
 		r->est = e.R * X[0] + h.R * X[1];
 		r->df = e.n + h.n - 2;
 		r->var = (e.g + h.g) * (e.ss + h.ss) / r->df;
 	} else {
-		strat a = stratum(u, cyc, xu, 0, n, -1, X[0] + X[1], nc[0] + nc[1]);
+		strat a = stratum(u, cyc, use, 0, n, -1, X[0] + X[1], nc[0] + nc[1]);
 		r->est = a.R * (X[0] + X[1]);
 		r->df = a.n - 1;
 		r->var = a.n > 1 ? a.g * a.ss / r->df : INFINITY;
 	}
 	r->df -= extra; /* the model's fitted parameters */
 	if (use->linear)
-		r->var = (r->var + lin_param_var(u, cyc, n, pc, npc, use)) * infl;
-}
-
-double smp_timed_hits(double hits, double merges, double fhits, double fmerges, double *share)
-{
-	double dh = hits - fhits, dm = merges - fmerges;
-	double r = dh + dm > 0 ? dm / (dh + dm) : 0.0;
-	if (share)
-		*share = r;
-	return dh + fhits * (1.0 - r);
+		r->var = (r->var + lin_param_var(u, n, pc, npc, use, lss)) * infl;
 }

@@ -4,8 +4,7 @@
  * between functional stretches and records, for every stretch of tiles,
  * its resource demands (smp_piece) and, for every measured unit, its
  * cycles; this file turns them into the cycles of the frame's middle with
- * a variance, and corrects the hits counted functionally (smp_timed_hits).
- * No time and no chip state here: numbers in, numbers out.
+ * a variance. No time and no chip state here: numbers in, numbers out.
  */
 #ifndef SAAR_SIM_SAMPLING_H
 #define SAAR_SIM_SAMPLING_H
@@ -57,14 +56,5 @@ double smp_t975(int df);
  * (0 = fitted). */
 void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
                   double sdram_factor, int demand_model, smp_est *r);
-
-/* A cache's hits as a timed cache would count them, over a span with
- * `hits` and `merges` in all (detailed and functional) of which fhits and
- * fmerges were functional. A functional lookup finds a line at once, so
- * some of its hits are accesses a timed cache merges into a fill still in
- * flight (a miss there); they are split off by the share of merges among
- * the detailed accesses that found their line present or arriving, *share
- * (0 without detailed ones). docs/fidelity.md "Sampled". */
-double smp_timed_hits(double hits, double merges, double fhits, double fmerges, double *share);
 
 #endif

@@ -584,7 +584,7 @@ Test(fidelity, small_frame_one_thread_intervals_cover, .timeout = 300)
 
 /* Sampled hit rates: a functional hit may be an access the timed chip
  * merges into a fill in flight (a miss there); the estimate splits those
- * off by the detailed regions' merge share (smp_timed_hits). Through the
+ * off by the detailed regions' merge share (cache_timed_hits). Through the
  * VMA, where PCI fetches are long and merges many, the tag cache's and
  * on-board cache's estimates must land near cycle's and much nearer than
  * the counts taken as they are; so must SDRAM MB (a merged access reads
