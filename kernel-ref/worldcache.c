@@ -4,9 +4,10 @@
  * Owns: storing a built world (the memory image, plus the scene, kd-tree
  * and view figures that reports and the default light need) and
  * kernel-ref's reference frame of it, one file each, and reading them
- * back. On the 70k-triangle scenes the import and kd-tree build take
- * 0.4-0.5 s and the reference render 0.1-0.2 s: more than a sampled
- * simulation of the frame, paid again at every point of a sweep.
+ * back. On the 70k-triangle scenes the import, the kd-tree build and the
+ * reference render take longer than a sampled simulation of the frame
+ * (PERFORMANCE.md's world cache table), and a sweep paid them at every
+ * point.
  *
  * A file is used only when it is certainly what a build would give now:
  * - its key names this program's own bytes (CRC-32 and size of

@@ -165,24 +165,24 @@ print("| %s | %d | %d | %d | %d | %d | %d | %.3f | %.3f | %.3f | %s |" % (name, 
 EOF
 done
 
-# replicas on a small, sparse frame at one thread per RTP, where the
-# sampled estimate is weakest: ten sampling offsets per rate
-REP="$TMP/rep.txt"
-: >"$REP"
-REP_VIEW=${BENCH_REP_VIEW:-robots}
-if grep -q "^  $REP_VIEW:" "$VIEWS_FILE"; then
-	for cfg in std vma; do
-		set -- --views "$VIEWS_FILE" --view "$REP_VIEW" --config configs/saarcor-$cfg.yaml \
-			--size "$SIZE" --set chip.threads_per_rtp=1 --no-check --world-cache "$TMP/wc"
-		"$SIM" "$@" --report "$TMP/rt_truth.json" >/dev/null 2>&1 || continue
-		for r in 0.05 0.1 0.2; do
-			for o in 0.05 0.15 0.25 0.35 0.45 0.55 0.65 0.75 0.85 0.95; do
-				"$SIM" "$@" --fidelity sampled --sample-rate "$r" --set sampling.offset="$o" \
-					--report "$TMP/rp_$o.json" >/dev/null 2>&1 || rm -f "$TMP/rp_$o.json"
-			done
-			python3 - "$TMP" "$cfg" "$r" >>"$REP" <<'EOF'
+# replicas: ten sampling offsets per rate of one run; one table row per
+# rate with the estimate's error against cycle and how often the interval
+# covered it. replicas OUT LABEL RATES ARGS...: the cycle truth and the
+# sampled runs get ARGS; the row starts with LABEL (table cells).
+replicas() {
+	rout=$1 label=$2 rates=$3
+	shift 3
+	"$SIM" "$@" --no-check --world-cache "$TMP/wc" --report "$TMP/rt_truth.json" \
+		>/dev/null 2>&1 || return 0
+	for r in $rates; do
+		for o in 0.05 0.15 0.25 0.35 0.45 0.55 0.65 0.75 0.85 0.95; do
+			"$SIM" "$@" --no-check --world-cache "$TMP/wc" --fidelity sampled --sample-rate "$r" \
+				--set sampling.offset="$o" --report "$TMP/rp_$o.json" >/dev/null 2>&1 ||
+				rm -f "$TMP/rp_$o.json"
+		done
+		python3 - "$TMP" "$label" "$r" >>"$rout" <<'EOF'
 import glob, json, sys
-d, cfg, r = sys.argv[1:4]
+d, label, r = sys.argv[1:4]
 t = json.load(open(d + "/rt_truth.json"))["fidelity"]["fps"]
 e, cov, n = [], 0, 0
 for f in sorted(glob.glob(d + "/rp_*.json")):
@@ -193,10 +193,35 @@ for f in sorted(glob.glob(d + "/rp_*.json")):
     cov += lo <= t <= hi
     n += 1
 if n:
-    print("| %s | %s | %d | %.2f | %+.2f | %.2f | %d of %d |" % (cfg, r, n, (sum(x * x for x in e) / n) ** 0.5,
+    print("| %s | %s | %d | %.2f | %+.2f | %.2f | %d of %d |" % (label, r, n, (sum(x * x for x in e) / n) ** 0.5,
           sum(e) / n, max(abs(x) for x in e), cov, n))
 EOF
-			rm -f "$TMP"/rp_*.json
+		rm -f "$TMP"/rp_*.json
+	done
+}
+
+# a small, sparse frame at one thread per RTP, where the sampled estimate
+# is weakest
+REP="$TMP/rep.txt"
+: >"$REP"
+REP_VIEW=${BENCH_REP_VIEW:-robots}
+if grep -q "^  $REP_VIEW:" "$VIEWS_FILE"; then
+	for cfg in std vma; do
+		replicas "$REP" "$cfg" "0.05 0.1 0.2" --views "$VIEWS_FILE" --view "$REP_VIEW" \
+			--config configs/saarcor-$cfg.yaml --size "$SIZE" --set chip.threads_per_rtp=1
+	done
+fi
+# the warm-up length at one thread per RTP on Conference (the default is
+# one tile per thread: 4)
+WUP="$TMP/wup.txt"
+: >"$WUP"
+# shellcheck disable=SC2086
+if printf '%s\n' $VIEWS | grep -qx conference; then
+	for cfg in std vma; do
+		for w in 4 16 32; do
+			replicas "$WUP" "$cfg | $w" "0.05 0.1" --views "$VIEWS_FILE" --view conference \
+				--config configs/saarcor-$cfg.yaml --size "$CONF_SIZE" \
+				--set chip.threads_per_rtp=1 --warmup-tiles "$w"
 		done
 	done
 fi
@@ -331,6 +356,16 @@ EOF
 		echo "| config | rate | replicas | rms fps err % | mean fps err % | max fps err % | interval covered |"
 		echo "|---|---:|---:|---:|---:|---:|---:|"
 		cat "$REP"
+		echo
+	fi
+	if [ -s "$WUP" ]; then
+		echo "### Warm-up length at one thread per RTP"
+		echo
+		echo "Conference at $CONF_SIZE, one thread per RTP (units of 4 tiles; the default warm-up is as long), with warm-ups of 4, 16 and 32 tiles, ten sampling offsets per rate: the estimate's error against cycle and how often the interval covered it (docs/fidelity.md, \"Warm-up under the VMA\")."
+		echo
+		echo "| config | warm-up tiles | rate | replicas | rms fps err % | mean fps err % | max fps err % | interval covered |"
+		echo "|---|---:|---:|---:|---:|---:|---:|---:|"
+		cat "$WUP"
 		echo
 	fi
 	echo "### Skipping as speed"
