@@ -71,6 +71,7 @@ for t in ("shade", "kd", "list", "tri", "tag_cache", "l2"):
     print("hit_" + t.replace("tag_cache", "tag"), v if v is not None else -1)
 print("sdram_mb", ss["sdram_mb"])
 print("pci_mb", ss["pci_mb"])
+print("replayed", int(r["host"].get("packet_record") == "replayed"))
 EOF
 }
 
@@ -82,6 +83,10 @@ for view in $VIEWS; do
 	# every point reads the world from the cache, as a sweep's points do:
 	# built and stored here, once per view (not timed)
 	run warm --views "$VIEWS_FILE" --view "$view" --size 16x16 --fidelity functional \
+		>/dev/null || continue
+	# and the frame's packet record (docs/fidelity.md), which a sweep's
+	# first functional or sampled point stores for the others
+	run warm --views "$VIEWS_FILE" --view "$view" --size "$size" --fidelity functional \
 		>/dev/null || continue
 	for cfg in std vma; do
 		cf=configs/saarcor-$cfg.yaml
@@ -127,7 +132,7 @@ print("\t".join(map(str, [view, cfg, tpr, mode, size, "%.3f" % t["sim_s"], "%.3f
       "%.1f" % (t["sim_s"] / s["sim_s"] if s["sim_s"] else 0), "%.2f" % t["fps"], "%.2f" % s["fps"],
       "%.2f" % err("fps"), "%.2f" % s["fps_lo"], "%.2f" % min(s["fps_hi"], 1e9), inside] + hits +
       ["%.2f" % err("sdram_mb") if t["sdram_mb"] else "-", "%.2f" % err("pci_mb") if t["pci_mb"] else "-",
-       "%.1f" % (t["wall_s"] / s["wall_s"] if s["wall_s"] else 0)])))
+       "%.1f" % (t["wall_s"] / s["wall_s"] if s["wall_s"] else 0), int(s["replayed"])])))
 EOF
 			done
 		done
@@ -261,27 +266,31 @@ TGT=$(awk -F'\t' -v cs="$CONF_SIZE" '
 	}' "$ROWS")
 COV=$(awk -F'\t' '$14 >= 0 {n++; c += $14} END {if (n) printf "%d of %d estimated sampled points (%.0f%%)", c, n, 100*c/n; else print "no estimated sampled points"}' "$ROWS")
 
-# the floor of every mode that delivers the whole image: kernel-ref tracing
-# the Conference frame on every host core, against cycle's host time there
+# what bounds the speed-up on Conference (std, 16 threads per RTP): cycle's
+# host time against functional mode with the packet record (the memory
+# system's own work) and without it (the math too), and kernel-ref alone
 FLOOR="Floor: no Conference point to compare with."
 CYC=$(awk -F'\t' -v cs="$CONF_SIZE" '$1 == "conference" && $5 == cs && $2 == "std" {c = $6; if ($3 == 16) {print $6; done = 1; exit}} END {if (!done && c != "") print c}' "$ROWS")
 FUNC=$(awk -F'\t' -v cs="$CONF_SIZE" '$1 == "conference" && $5 == cs && $2 == "std" && $3 == 16 && $4 == "functional" {print $7; exit}' "$ROWS")
 if [ -n "$CYC" ] && "$B/rtref" --views "$VIEWS_FILE" --view conference --size "$CONF_SIZE" \
 	--threads "$(nproc)" --stats "$TMP/rt.json" >/dev/null 2>&1 &&
 	"$B/rtref" --views "$VIEWS_FILE" --view conference --size "$CONF_SIZE" \
-		--threads 1 --stats "$TMP/rt1.json" >/dev/null 2>&1; then
-	FLOOR=$(python3 - "$TMP/rt.json" "$CYC" "$(nproc)" "$TMP/rt1.json" "${FUNC:-0}" <<'EOF'
+		--threads 1 --stats "$TMP/rt1.json" >/dev/null 2>&1 &&
+	"$SIM" --views "$VIEWS_FILE" --view conference --size "$CONF_SIZE" --fidelity functional \
+		--no-check --report "$TMP/fn_math.json" >/dev/null 2>&1; then
+	FLOOR=$(python3 - "$TMP/rt.json" "$CYC" "$(nproc)" "$TMP/rt1.json" "${FUNC:-0}" "$TMP/fn_math.json" <<'EOF'
 import json, sys
-r = json.load(open(sys.argv[1])); ms = r["render_ms"]; cyc = float(sys.argv[2])
-ms1 = json.load(open(sys.argv[4]))["render_ms"]; fn = float(sys.argv[5])
-s = ("Floor: every mode delivers the whole image, so every mode traces every ray. kernel-ref alone "
-     "renders the Conference frame in %.3f s on %s host threads; cycle takes %.3f s (standard config, 16 threads per RTP), "
-     "so no mode that delivers the image can be more than %.1fx faster than cycle on this machine "
-     "(10x would need %.3f s)." % (ms / 1e3, sys.argv[3], cyc, cyc / (ms / 1e3), cyc / 10))
-s += (" saarsim runs on one host thread: there kernel-ref takes %.3f s (%.1fx below cycle)" % (ms1 / 1e3, cyc / (ms1 / 1e3)))
+r = json.load(open(sys.argv[1])); ms = r["render_ms"] / 1e3; cyc = float(sys.argv[2])
+ms1 = json.load(open(sys.argv[4]))["render_ms"] / 1e3; fn = float(sys.argv[5])
+fm = json.load(open(sys.argv[6]))["host"]["sim_s"]
+s = "Floor: cycle takes %.3f s on Conference (standard config, 16 threads per RTP; 10x would need %.3f s). " % (cyc, cyc / 10)
+s += ("Functional mode, which sampled mode runs between its detailed regions, takes %.3f s with the math (%.1fx below cycle)"
+      % (fm, cyc / fm))
 if fn > 0:
-    s += (", and functional mode, the same math with the caches warmed, %.3f s (%.1fx): sampled mode processes most tiles "
-          "that way, so it stays below that" % (fn, cyc / fn))
+    s += (" and %.3f s replaying the packet record (%.1fx): the memory system's own work, every request through the caches; "
+          "that plus the detailed regions bounds sampled mode's speed-up" % (fn, cyc / fn))
+s += (". kernel-ref alone renders the frame in %.3f s on one host thread (%.1fx below cycle) and %.3f s on %s"
+      % (ms1, cyc / ms1, ms, sys.argv[3]))
 print(s + ".")
 EOF
 )
@@ -300,7 +309,7 @@ SEC="$TMP/section.md"
 	echo "- Commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet -- . ':!docs/FIDELITY.md' ':!docs/fidelity.png' 2>/dev/null || echo ' (plus uncommitted changes)')"
 	echo "- Views: $(echo $VIEWS); Conference at $CONF_SIZE, the others at $SIZE; threads per RTP: $THREADS; sample rates: $RATES, on Conference also at sampling offsets $CONF_OFFSETS (rate@offset; the default offset is 0.5) (the defaults: units of rtps x threads_per_rtp tiles, a warm-up as long before each, at least 8 units; a point marked \"all detailed\" had no room for them and ran as cycle)"
 	echo "- $FLOOR"
-	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point; *whole-run speed-up*: the same for the whole process (host.wall_s), what each point of a sweep costs: the world (scene, kd-tree, memory image) comes from a world cache built once per view beforehand, as in \`scripts/sweep\` (without one, add the load of PERFORMANCE.md's world cache table to both sides). Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
+	echo "- Host time: \`chip_run\` (report host.sim_s), one run per point; *whole-run speed-up*: the same for the whole process (host.wall_s), what each point of a sweep costs: the world (scene, kd-tree, memory image) and, for functional and sampled points, the frame's packet record (docs/fidelity.md; the *record* column says the point replayed it) come from a world cache built once per view beforehand, as in \`scripts/sweep\` (without one, add the load of PERFORMANCE.md's world cache table to both sides, and the math to the mode: the floor line). Errors: (mode - cycle) / cycle in %; hit rates: difference in percentage points."
 	echo
 	echo "### Targets"
 	echo
@@ -344,9 +353,9 @@ EOF
 	echo
 	echo "### Every point"
 	echo
-	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % | whole-run speed-up |"
-	echo "|---|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-	awk -F'\t' 'BEGIN {OFS=" | "} {if ($14 == 1) $14 = "yes"; else if ($14 == 0) $14 = "NO"; else if ($14 == -2) $14 = "(exact)"; else $14 = "(bound)"; $1 = $1; print "| " $0 " |"}' "$ROWS"
+	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % | whole-run speed-up | record |"
+	echo "|---|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+	awk -F'\t' 'BEGIN {OFS=" | "} {if ($14 == 1) $14 = "yes"; else if ($14 == 0) $14 = "NO"; else if ($14 == -2) $14 = "(exact)"; else $14 = "(bound)"; $24 = $24 == 1 ? "replayed" : "-"; $1 = $1; print "| " $0 " |"}' "$ROWS"
 	echo
 	if [ -s "$REP" ]; then
 		echo "### Replicas on a small, sparse frame"

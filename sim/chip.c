@@ -13,6 +13,7 @@
  * thread slot a tile (slot by slot, RTP by RTP, so consecutive tiles go to different RTPs); from
  * then on everything happens in event handlers, and the frame ends when the event queue runs dry.
  */
+#define _GNU_SOURCE /* asprintf */
 #include "chip.h"
 
 #include <math.h>
@@ -21,7 +22,9 @@
 #include <string.h>
 #include <time.h>
 
+#include "replay.h"
 #include "rgs.h"
+#include "worldcache.h"
 
 static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
@@ -117,6 +120,16 @@ static int take_tile(chip *c, thr_ctx *t)
 	c->tiles_given++;
 	if (c->progress && c->tiles_given % 64 == 0)
 		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
+	thr_env *v = &c->env;
+	int tile = ty * c->g.tiles_x + tx;
+	/* functional processing replays the tile's packets when it can */
+	if (v->func && v->rec_in && v->rec_in->tile_pk[tile] >= 0) {
+		c->replayed[tile] = 1;
+		c->fid.replayed_tiles++;
+		thr_replay_begin(t, v->rec_in->tile_pk[tile]);
+		return 1;
+	}
+	t->rec = v->rec_out ? pr_new(v->rec_out, tile) : -1;
 	if (rgs_primary(t, tx, ty)) {
 		c->oom = 1;
 		return 0;
@@ -129,9 +142,15 @@ static void on_free(thr_ctx *t)
 	chip *c = t->env->owner;
 	if (c->env.func) /* func_range hands out the work itself */
 		return;
-	packet *p = rgs_dequeue(t->rtp);
-	if (p) {
-		rgs_secondary(t, p);
+	thr_qitem it;
+	if (rgs_dequeue(t->rtp, &it)) {
+		/* regions rebuild replayed packets before they start */
+		if (!it.p) {
+			c->lost = 1;
+			return;
+		}
+		t->rec = it.rec;
+		rgs_secondary(t, it.p);
 		return;
 	}
 	/* sampled: the marks that time a measured unit are the moments its
@@ -327,7 +346,8 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 		return NULL;
 	}
 	if (thr_env_init(&c->env) || fb_init(&c->fb, cfg->frame.width, cfg->frame.height) ||
-	    rgc_init(&c->g, cfg->frame.width, cfg->frame.height, cfg->chip.tile_order))
+	    rgc_init(&c->g, cfg->frame.width, cfg->frame.height, cfg->chip.tile_order) ||
+	    !(c->replayed = calloc((size_t)c->g.ntiles, 1)))
 		goto oom;
 
 	thr_env *v = &c->env;
@@ -421,6 +441,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 			t->env = v;
 			t->id = i;
 			t->gid = r * c->tpr + i;
+			t->rec = -1;
 			t->state = THR_IDLE;
 			t->nkids = nkids;
 			t->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
@@ -429,7 +450,15 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 				goto oom;
 		}
 	}
-	if (c->oom || fid_init(c))
+	/* a thread outside the RTPs' slots, for rebuilding replayed packets */
+	thr_ctx *sc = c->scratch = alloc64(sizeof(thr_ctx));
+	if (!sc)
+		goto oom;
+	memset(sc, 0, sizeof *sc);
+	*sc = (thr_ctx){.rtp = &c->rtp[0], .env = v, .state = THR_IDLE, .nkids = nkids, .rec = -1};
+	sc->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
+	sc->kids = alloc64((size_t)nkids * sizeof(packet));
+	if (c->oom || !sc->stack || !sc->kids || fid_init(c))
 		goto oom;
 	return c;
 oom:
@@ -455,8 +484,16 @@ void chip_destroy(chip *c)
 		free(rp->q);
 	}
 	free(c->rtp);
+	if (c->scratch) {
+		free(c->scratch->stack);
+		free(c->scratch->kids);
+		free(c->scratch);
+	}
 	rgc_free(&c->g);
 	fb_free(&c->fb);
+	pr_free(&c->rec);
+	free(c->rec_key);
+	free(c->replayed);
 	mem_free(&c->mem);
 	thr_env_free(&c->env);
 	if (c->e)
@@ -520,7 +557,17 @@ static uint64_t run_region(chip *c, int end)
 	c->env.func = 0;
 	/* packets a functional stretch left in flight go on cycle by cycle
 	 * from where they stopped: the region starts with a full chip, not
-	 * with every thread taking a tile at once */
+	 * with every thread taking a tile at once; replayed ones first get
+	 * their rays and state back */
+	if (c->env.rec_in) {
+		for (int r = 0; r < c->nrtp; r++) {
+			for (int s = 0; s < c->tpr; s++)
+				if (thr_replay_rebuild(&c->rtp[r].t[s], c->scratch))
+					c->oom = 1;
+			if (thr_replay_rebuild_queue(&c->rtp[r], c->scratch))
+				c->oom = 1;
+		}
+	}
 	for (int s = 0; s < c->tpr; s++)
 		for (int r = 0; r < c->nrtp; r++)
 			thr_func_to_timed(&c->rtp[r].t[s]);
@@ -591,9 +638,14 @@ static int account(chip_fidelity *F, smp_piece p, int middle)
  * below `end`. Returns 0 when there is nothing to give. */
 static int func_give(chip *c, thr_ctx *t, int end, int *given)
 {
-	packet *p = rgs_dequeue(t->rtp);
-	if (p) {
-		rgs_secondary(t, p);
+	thr_qitem it;
+	if (rgs_dequeue(t->rtp, &it)) {
+		if (it.p) {
+			t->rec = it.rec;
+			rgs_secondary(t, it.p);
+		} else {
+			thr_replay_begin(t, it.rec);
+		}
 		return 1;
 	}
 	if (c->g.next >= end || !take_tile(c, t))
@@ -611,11 +663,12 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
  * interleaved as a busy chip makes them, not one packet after another (one
  * at a time, the L1s and SDRAM saw far fewer misses than the cycle model
  * at 16-64 threads: docs/fidelity.md). A slot that finishes takes a secondary packet of
- * its RTP, else the next tile. Memory goes through the hierarchy's
- * functional path: the data is there at once, and a line a region left in
- * flight counts as on its way (hier.c). With drain, the range ends with
- * every slot free; without,
- * as soon as its last tile is handed out, packets still in flight. */
+ * its RTP, else the next tile. With a packet record, packets replay their
+ * streams instead of running their math (units/replay.h). Memory goes
+ * through the hierarchy's functional path: the data is there at once, and
+ * a line a region left in flight counts as on its way (hier.c). With
+ * drain, the range ends with every slot free; without, as soon as its last
+ * tile is handed out, packets still in flight. */
 static int func_range(chip *c, int end, int drain)
 {
 	chip_fidelity *F = &c->fid;
@@ -639,7 +692,7 @@ static int func_range(chip *c, int end, int drain)
 		for (int s = 0; s < c->tpr; s++)
 			for (int r = 0; r < c->nrtp; r++) {
 				thr_ctx *t = &c->rtp[r].t[s];
-				if (!t->p) {
+				if (!t->p && !t->rp) {
 					if (chunked && given == F->unit_tiles) {
 						chip_demand(c, d1);
 						int hard = account(F, piece(c, d0, d1), 1);
@@ -655,7 +708,7 @@ static int func_range(chip *c, int end, int drain)
 					if (!func_give(c, t, end, &given))
 						continue;
 				}
-				if (thr_step_func(t))
+				if (t->rp ? thr_replay_step(t) : thr_step_func(t))
 					busy = 1;
 			}
 	}
@@ -747,6 +800,105 @@ const char *chip_res_name(int res)
 	return res >= 0 && res < RES_N ? res_names[res] : "?";
 }
 
+const char *chip_rec_name(int state)
+{
+	static const char *const n[] = {"off", "replayed", "stored", "not stored"};
+	return state >= 0 && state <= REC_UNSTORED ? n[state] : "?";
+}
+
+/* The packet record's key: kernel-ref's frame key for this view and size
+ * (the memory image by its CRC, camera, lights, shading depth) and what
+ * else changes a packet's work on the chip: the datapath formats and the
+ * stack depth (spills). Thread counts, units and memory do not. */
+static char *rec_key(const chip *c)
+{
+	const saar_config *g = &c->cfg;
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = g->frame.width;
+	ro.height = g->frame.height;
+	ro.max_depth = g->shading.max_depth;
+	char *fk = wc_frame_key(c->w->cache_prog, &c->w->m, &c->w->v, &ro), *key;
+	if (!fk)
+		return NULL;
+	int n =
+	    asprintf(&key,
+	             "saarsim packet record 1\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
+	             "counters %d shade %zu\n",
+	             fk, g->chip.fp.trav.exp, g->chip.fp.trav.mant, g->chip.fp.isect.exp,
+	             g->chip.fp.isect.mant, g->chip.fp.shade.exp, g->chip.fp.shade.mant,
+	             g->chip.fp.round, g->chip.stack_depth, (int)C_NCOUNTERS, sizeof(shade_counts));
+	free(fk);
+	return n < 0 ? NULL : key;
+}
+
+/* Functional and sampled runs with a world cache: replay the stored
+ * record of this frame, else record the first frame (rec_store). */
+static void rec_open(chip *c)
+{
+	const world *w = c->w;
+	chip_fidelity *F = &c->fid;
+	if (!w->cache_dir || F->mode == CFG_FIDELITY_CYCLE ||
+	    (F->mode == CFG_FIDELITY_SAMPLED && F->exact))
+		return;
+	double t0 = now_ms();
+	c->rec_key = rec_key(c);
+	if (!c->rec_key ||
+	    wc_file(c->rec_file, sizeof c->rec_file, w->cache_dir, "packets", c->rec_key)) {
+		free(c->rec_key);
+		c->rec_key = NULL;
+		return;
+	}
+	void *tail;
+	size_t n;
+	int W = c->cfg.frame.width, H = c->cfg.frame.height;
+	if (wc_get(c->rec_file, c->rec_key, NULL, 0, &tail, &n) == 1 &&
+	    !pr_load(&c->rec, tail, n, W, H, c->g.ntiles)) {
+		c->env.rec_in = &c->rec;
+		c->rec_state = REC_REPLAYED;
+	} else if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
+		c->env.rec_out = &c->rec;
+		c->rec_state = REC_UNSTORED;
+	}
+	c->rec_ms += now_ms() - t0;
+}
+
+/* After the recorded frame: stores the record (a failure is a warning),
+ * and the frames after it replay it. */
+static void rec_store(chip *c)
+{
+	if (!c->env.rec_out)
+		return;
+	double t0 = now_ms();
+	c->env.rec_out = NULL;
+	void *b;
+	size_t n;
+	int rc = pr_serialize(&c->rec, &c->fb, &b, &n);
+	pr_free(&c->rec);
+	if (rc)
+		return;
+	diag d;
+	if (wc_put(c->rec_file, c->rec_key, NULL, NULL, 0, b, n, &d))
+		fprintf(stderr, "warning: %s\n", d.msg);
+	else
+		c->rec_state = REC_STORED;
+	if (!pr_load(&c->rec, b, n, c->cfg.frame.width, c->cfg.frame.height, c->g.ntiles))
+		c->env.rec_in = &c->rec;
+	c->rec_ms += now_ms() - t0;
+}
+
+/* Replayed tiles take the recorded frame's pixels (whatever rebuilt
+ * packets drew into them is part of those). */
+static void rec_pixels(chip *c)
+{
+	for (int i = 0; i < c->g.ntiles; i++)
+		if (c->replayed[i]) {
+			c->replayed[i] = 0;
+			pr_put_tile(&c->rec, &c->fb, i % c->g.tiles_x, i / c->g.tiles_x, TILE_W,
+			            TILE_H);
+		}
+}
+
 /* The busiest-resource bound of frame f: the core cycles each resource
  * needs at least for the frame's work (units: issue cycles per instance;
  * L1s: requests / ports; SDRAM and host bus: data-bus time); the frame
@@ -770,6 +922,7 @@ int chip_run(chip *c, diag *d)
 {
 	double t0 = now_ms();
 	chip_fidelity *F = &c->fid;
+	rec_open(c);
 	for (int f = 0; f < c->cfg.frame.frames; f++) {
 		fb_clear(&c->fb);
 		rgc_reset(&c->g);
@@ -783,10 +936,13 @@ int chip_run(chip *c, diag *d)
 		for (int r = 0; r < c->nrtp; r++) {
 			for (int i = 0; i < c->tpr; i++)
 				thr_flush(&c->rtp[r].t[i]);
-			if (c->rtp[r].nidle != c->tpr || c->rtp[r].qn)
+			if (c->rtp[r].nidle != c->tpr || c->rtp[r].qn || c->lost)
 				return diag_set(d, "saarsim", 0, 0,
 				                "internal error: frame ended with busy threads");
 		}
+		if (c->env.rec_in)
+			rec_pixels(c);
+		rec_store(c);
 		if (c->oom)
 			return diag_set(d, "saarsim", 0, 0, "out of memory during the frame");
 		c->frame_port[f] = c->mem.n;

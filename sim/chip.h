@@ -78,9 +78,10 @@ typedef struct chip_fidelity {
 	/* cumulative resource demand (chip_demand, RES_N each) at each unit's
 	 * two marks */
 	double *dem_s, *dem_e;
-	uint64_t *mark_r0;    /* ticks: each region's start */
-	int us_next, ue_next; /* next unit whose start / end mark is due */
-	int region_end;       /* tiles at or after it are not handed out (this region) */
+	uint64_t *mark_r0;       /* ticks: each region's start */
+	int us_next, ue_next;    /* next unit whose start / end mark is due */
+	int region_end;          /* tiles at or after it are not handed out (this region) */
+	uint64_t replayed_tiles; /* all frames: tiles whose packets were replayed */
 	uint64_t detailed_tiles, functional_tiles, detailed_cycles; /* all frames */
 	double *est, *half; /* per frame: cycles (estimate or measured), 95% half-width */
 	double *floor;      /* per frame: the busiest-resource bound (cycles can't be lower) */
@@ -117,13 +118,26 @@ typedef struct chip {
 	double sim_ms;   /* host time in chip_run */
 	int tiles_given; /* in the current frame */
 	int oom;
+	int lost;         /* a replayed packet reached a region unrebuilt: an internal error */
 	uint64_t *sh[11]; /* shade_counts mirrored into the registry */
 	uint64_t *memc[MEM_NTYPES][4];
 	/* optional progress callback: called every 64 tiles handed out */
 	void (*progress)(void *ctx, int frame, int tiles_done, int tiles);
 	void *progress_ctx;
 	chip_fidelity fid;
+	/* the packet record (traces/pktrec.h): fidelity functional and
+	 * sampled with a world cache replay it, or record it in their first
+	 * frame (rec_state: enum chip_rec) */
+	pktrec rec;
+	int rec_state;
+	uint8_t *replayed; /* per tile, this frame: its packets were replayed */
+	thr_ctx *scratch;  /* rebuilds replayed packets' parents (units/replay.h) */
+	char *rec_key, rec_file[1200];
+	double rec_ms; /* host time loading or storing the record */
 } chip;
+
+enum chip_rec { REC_OFF, REC_REPLAYED, REC_STORED, REC_UNSTORED };
+const char *chip_rec_name(int state);
 
 /* cfg must already be validated; w stays owned by the caller and must
  * outlive the chip. Fails (diag) on an unsupported config or out of memory. */

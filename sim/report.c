@@ -204,11 +204,12 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up), "
 		        "demand %s in the last frame; cycles "
 		        "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
-		        "functional\n",
+		        "functional (%llu replayed)\n",
 		        F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles,
 		        model_str(F, ms, sizeof ms), x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
 		        (unsigned long long)F->detailed_tiles,
-		        (unsigned long long)F->functional_tiles);
+		        (unsigned long long)F->functional_tiles,
+		        (unsigned long long)F->replayed_tiles);
 	} else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
 }
@@ -268,6 +269,7 @@ static void fidelity_json(jsonw *j, const chip *c)
 	}
 	jsonw_kuint(j, "detailed_tiles", F->detailed_tiles);
 	jsonw_kuint(j, "functional_tiles", F->functional_tiles);
+	jsonw_kuint(j, "replayed_tiles", F->replayed_tiles);
 	jsonw_kuint(j, "detailed_cycles", F->detailed_cycles);
 	jsonw_knum(j, "fps_bound", x.fps_bound);
 	jsonw_kstr(j, "bound_by", x.bound_by);
@@ -426,6 +428,9 @@ void report_text(FILE *f, const report_info *ri)
 	        ratio((double)cyc, c->sim_ms / 1e3), ri->load_ms / 1e3);
 	if (ri->w->cache != WORLD_CACHE_OFF)
 		fprintf(f, " (world cache: %s)", world_cache_name(ri->w->cache));
+	if (c->rec_state != REC_OFF)
+		fprintf(f, "; packet record %s (%.3f s of the simulating)",
+		        chip_rec_name(c->rec_state), c->rec_ms / 1e3);
 	fputc('\n', f);
 }
 
@@ -684,6 +689,8 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_knum(j, "check_s", ri->check && ri->check->done ? ri->check->check_ms / 1e3 : 0.0);
 	jsonw_knum(j, "wall_s", ri->wall_ms / 1e3);
 	jsonw_kstr(j, "world_cache", world_cache_name(ri->w->cache));
+	jsonw_kstr(j, "packet_record", chip_rec_name(c->rec_state));
+	jsonw_knum(j, "packet_record_s", c->rec_ms / 1e3);
 	jsonw_knum(j, "sim_cycles_per_s", ratio((double)cyc, c->sim_ms / 1e3));
 	jsonw_knum(j, "sim_to_ref_ratio",
 	           ri->check && ri->check->done ? ratio(c->sim_ms, ri->check->ref_ms) : 0.0);

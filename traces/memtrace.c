@@ -13,6 +13,7 @@
  * little-endian order, independent of the host.
  */
 #include "memtrace.h"
+#include "pktrec.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -38,14 +39,6 @@ static uint64_t get64(const unsigned char *p)
 	return (uint64_t)get32(p) | (uint64_t)get32(p + 4) << 32;
 }
 
-static uint64_t zigzag(uint64_t delta)
-{
-	return delta << 1 ^ (uint64_t) - (delta >> 63);
-}
-static uint64_t unzigzag(uint64_t z)
-{
-	return z >> 1 ^ (uint64_t) - (z & 1);
-}
 static unsigned char *put_var(unsigned char *p, uint64_t v)
 {
 	while (v >= 0x80) {
@@ -103,8 +96,8 @@ int mtr_write(mtr_writer *w, const mtr_rec *r, diag *d)
 	uint64_t dc = r->cycle - w->cycle;
 	unsigned cc = dc < 7 ? (unsigned)dc : 7;
 	if (cc == 7)
-		p = put_var(p, zigzag(dc));
-	p = put_var(p, zigzag(r->addr - w->addr[r->type]));
+		p = put_var(p, pr_zigzag(dc));
+	p = put_var(p, pr_zigzag(r->addr - w->addr[r->type]));
 	unsigned bc = r->bytes == 8 ? 0 : r->bytes == 36 ? 1 : r->bytes == 4 ? 2 : 3;
 	if (bc == 3)
 		p = put_var(p, r->bytes);
@@ -276,13 +269,13 @@ static int decode_v2(mtr_reader *r, diag *d)
 		if (cc == 7) {
 			uint64_t z;
 			GETVAR(z, p);
-			cyc += unzigzag(z);
+			cyc += pr_unzigzag(z);
 		} else {
 			cyc += cc;
 		}
 		uint64_t za;
 		GETVAR(za, p);
-		uint64_t a = r->addr[t] + unzigzag(za);
+		uint64_t a = r->addr[t] + pr_unzigzag(za);
 		r->addr[t] = a;
 		uint64_t nb = bc == 0 ? 8 : bc == 1 ? 36 : 4;
 		if (bc == 3) {

@@ -13,8 +13,8 @@ static void done(eng *e, void *ctx, uint64_t arg)
 	thr_env *v = t->env;
 	packet *p = t->p;
 	uint32_t ta = mimg_lists(v->m)[t->r.leaf_first + t->k];
-	++*v->c[C_TRI_TESTS];
-	*v->c[C_RAY_TRI_TESTS] += (uint64_t)thr_pop(t->mask);
+	thr_count(t, C_TRI_TESTS, 1);
+	thr_count(t, C_RAY_TRI_TESTS, (uint64_t)thr_pop(t->mask));
 	pkt_isect_tri(&t->ts, p, v->m, t->mask, ta);
 	if (t->ts.shadow)
 		for (uint64_t b = t->mask; b; b &= b - 1) {

@@ -24,13 +24,13 @@ static void fetched(thr_ctx *t)
 void list_leaf(thr_ctx *t)
 {
 	thr_env *v = t->env;
-	++*v->c[C_LEAF_VISITS];
+	thr_count(t, C_LEAF_VISITS, 1);
 	if (t->r.leaf_count == 0) {
-		++*v->c[C_EMPTY_LEAVES];
+		thr_count(t, C_EMPTY_LEAVES, 1);
 		tu_step(t);
 		return;
 	}
-	*v->c[C_LIST_ENTRIES] += t->r.leaf_count;
+	thr_count(t, C_LIST_ENTRIES, t->r.leaf_count);
 	thr_read(t, MEM_LIST, mimg_list_addr(v->m, t->r.leaf_first),
 	         t->r.leaf_count * MIMG_LIST_BYTES);
 	thr_wait_mem(t, fetched);

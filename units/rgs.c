@@ -12,9 +12,14 @@ static void enter(thr_ctx *t, packet *p)
 {
 	thr_env *v = t->env;
 	t->p = p;
+	if (v->silent) /* units/replay.c rebuilding a replayed packet */
+		return;
 	t->age = v->next_age++;
 	++*v->c[C_PKT_PRIMARY + p->type];
 	*v->c[C_RAYS_PRIMARY + p->type] += thr_rays(p);
+	memset(t->raddr, 0, sizeof t->raddr);
+	memset(t->rbytes, 0, sizeof t->rbytes);
+	thr_rec(t, PR_ENTER, 2, (uint64_t)p->type, thr_rays(p));
 }
 
 static void gen_done(eng *e, void *ctx, uint64_t arg)
@@ -48,11 +53,11 @@ static void shadow_done(eng *e, void *ctx, uint64_t arg)
 	thr_release(ctx);
 }
 
-static int enqueue(thr_rtp *r, packet *p)
+int rgs_enqueue(thr_rtp *r, thr_qitem it)
 {
 	if (r->qn == r->qcap) {
 		int cap = r->qcap ? 2 * r->qcap : 64;
-		packet **q = malloc((size_t)cap * sizeof *q);
+		thr_qitem *q = malloc((size_t)cap * sizeof *q);
 		if (!q)
 			return -1;
 		for (int i = 0; i < r->qn; i++)
@@ -62,21 +67,21 @@ static int enqueue(thr_rtp *r, packet *p)
 		r->qhead = 0;
 		r->qcap = cap;
 	}
-	r->q[(r->qhead + r->qn++) % r->qcap] = p;
+	r->q[(r->qhead + r->qn++) % r->qcap] = it;
 	thr_env *v = r->env;
 	if ((uint64_t)r->qn > *v->c[C_MAX_QUEUE])
 		*v->c[C_MAX_QUEUE] = (uint64_t)r->qn;
 	return 0;
 }
 
-packet *rgs_dequeue(thr_rtp *r)
+int rgs_dequeue(thr_rtp *r, thr_qitem *it)
 {
 	if (r->qn == 0)
-		return NULL;
-	packet *p = r->q[r->qhead];
+		return 0;
+	*it = r->q[r->qhead];
 	r->qhead = (r->qhead + 1) % r->qcap;
 	r->qn--;
-	return p;
+	return 1;
 }
 
 void rgs_dispatch(thr_rtp *r)
@@ -93,12 +98,18 @@ static void shade_done(eng *e, void *ctx, uint64_t arg)
 	thr_ctx *t = ctx;
 	thr_env *v = t->env;
 	thr_rtp *r = t->rtp;
+	thr_rec(t, PR_SPAWN, 1, (uint64_t)t->made, 0);
 	for (int k = 0; k < t->made; k++) {
 		packet *p = thr_pkt_alloc(v);
+		int32_t id = v->rec_out ? pr_new_kid(v->rec_out, t->rec, k) : -1;
+		if (v->rec_out)
+			pr_put_u(v->rec_out, t->rec, (uint64_t)(id < 0 ? 0 : id));
 		/* out of memory: the packet is lost and the image check says so */
-		if (!p || enqueue(r, p)) {
+		if (!p || rgs_enqueue(r, (thr_qitem){p, id})) {
 			if (p)
 				thr_pkt_free(v, p);
+			if (v->rec_out)
+				v->rec_out->failed = 1;
 			continue;
 		}
 		memcpy(p, &t->kids[k], sizeof *p);
@@ -125,7 +136,7 @@ static void issue_reads(thr_ctx *t)
 		memset(v->hgen, 0, THR_HASH_SLOTS * sizeof *v->hgen);
 		v->gen = 1;
 	}
-	*v->c[C_SHADE_READS] += log->n;
+	thr_count(t, C_SHADE_READS, log->n);
 	for (uint32_t i = 0; i < log->n; i++) {
 		const shade_read *rd = &log->e[i];
 		uint64_t key = rd->addr << 8 | (rd->bytes & 0xff);
@@ -142,22 +153,36 @@ static void issue_reads(thr_ctx *t)
 			continue;
 		v->hgen[h] = v->gen;
 		v->hkey[h] = key;
-		++*v->c[C_SHADE_REQUESTS];
+		thr_count(t, C_SHADE_REQUESTS, 1);
 		thr_read(t, MEM_SHADE, rd->addr, rd->bytes);
 	}
+}
+
+/* Records what shading added to the shade counts since `before`. */
+static void rec_shade(thr_ctx *t, const shade_counts *before)
+{
+	const uint64_t *a = (const uint64_t *)before, *b = (const uint64_t *)&t->env->sh;
+	for (size_t i = 0; i < sizeof(shade_counts) / sizeof(uint64_t); i++)
+		if (b[i] != a[i])
+			thr_rec(t, PR_SHADE, 2, (uint64_t)i, b[i] - a[i]);
 }
 
 void rgs_finish(thr_ctx *t)
 {
 	thr_env *v = t->env;
 	packet *p = t->p;
+	shade_counts before = v->sh;
 	if (p->type == PKT_SHADOW) {
 		shade_shadow_done(&v->sc, p, &v->sh);
+		if (v->rec_out)
+			rec_shade(t, &before);
 		thr_use(t, UNIT_RGS, (int)thr_rays(p), shadow_done);
 		return;
 	}
 	v->log.n = 0;
 	t->made = shade_packet_fp(&v->sc, &v->prec.shade, p, t->kids, t->nkids, &v->log, &v->sh);
+	if (v->rec_out)
+		rec_shade(t, &before);
 	issue_reads(t);
 	thr_wait_mem(t, shade_fetched);
 }

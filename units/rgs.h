@@ -30,8 +30,10 @@ int rgs_primary(thr_ctx *t, int tx, int ty);
 void rgs_secondary(thr_ctx *t, packet *p);
 /* Traversal is over: shade (or finish the shadow packet), then free t. */
 void rgs_finish(thr_ctx *t);
-/* Queued secondary packets of t's RTP, and taking the oldest one. */
-packet *rgs_dequeue(thr_rtp *r);
+/* RTP r's FIFO of secondary packets: queues one (-1 when out of memory),
+ * takes the oldest (0 when empty). */
+int rgs_enqueue(thr_rtp *r, thr_qitem it);
+int rgs_dequeue(thr_rtp *r, thr_qitem *it);
 /* Gives queued packets to idle threads of RTP r. */
 void rgs_dispatch(thr_rtp *r);
 

@@ -238,9 +238,39 @@ static void mem_done(eng *e, void *ctx, uint64_t arg)
 	}
 }
 
+/* Records a request: stack spills by entry index, since their address
+ * belongs to the thread slot (units/traversal.c spill_addr), other
+ * requests as they are. */
+static void rec_req(thr_ctx *t, int write, int type, uint64_t addr, uint32_t bytes)
+{
+	const thr_env *v = t->env;
+	if (addr >= v->spill_base) {
+		uint64_t slot = (uint64_t)t->gid * PKT_STACK_MAX;
+		uint64_t idx = (addr - v->spill_base) / THR_SPILL_STRIDE - slot;
+		thr_rec(t, write ? PR_SPILL_W : PR_SPILL_R, 1, idx, 0);
+		return;
+	}
+	if (write) {
+		thr_rec(t, PR_WRITE + type, 2, addr, bytes);
+		return;
+	}
+	uint64_t z = pr_zigzag(addr - t->raddr[type]);
+	t->raddr[type] = addr;
+	if (bytes == t->rbytes[type]) {
+		thr_rec(t, PR_READ_SAME + type, 1, z, 0);
+		return;
+	}
+	t->rbytes[type] = bytes;
+	thr_rec(t, PR_READ + type, 2, z, bytes);
+}
+
 void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 {
 	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id};
+	if (t->env->silent)
+		return;
+	if (t->env->rec_out)
+		rec_req(t, 0, type, addr, bytes);
 	if (t->env->func) { /* the data is there at once: nothing to wait for */
 		mem_access_func(t->env->mem, &r);
 		return;
@@ -252,6 +282,10 @@ void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 {
 	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id};
+	if (t->env->silent)
+		return;
+	if (t->env->rec_out)
+		rec_req(t, 1, type, addr, bytes);
 	if (t->env->func)
 		mem_access_func(t->env->mem, &r);
 	else
@@ -270,12 +304,15 @@ void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
 
 void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
 {
+	thr_rec(t, PR_USE + kind, 1, (uint64_t)rays, 0);
 	if (t->env->func) {
 		/* the op's counts as start() makes them, without its time */
 		thr_unit *u = &t->rtp->u[kind];
-		++*u->ops_n;
-		*u->busy += thr_unit_issue(u, rays);
-		*u->rays += (uint64_t)rays;
+		if (!t->env->silent) {
+			++*u->ops_n;
+			*u->busy += thr_unit_issue(u, rays);
+			*u->rays += (uint64_t)rays;
+		}
 		t->fnext = done;
 		t->fkind = kind;
 		t->frays = rays;
@@ -287,6 +324,8 @@ void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
 
 void thr_release(thr_ctx *t)
 {
+	thr_rec(t, PR_END, 0, 0, 0);
+	t->rec = -1;
 	thr_pkt_free(t->env, t->p);
 	t->p = NULL;
 	thr_set(t, THR_IDLE);

@@ -32,6 +32,7 @@
 #include "engine.h"
 #include "memport.h"
 #include "packet.h"
+#include "pktrec.h"
 #include "shade.h"
 
 enum thr_state { THR_IDLE, THR_RUN, THR_WAIT_MEM, THR_WAIT_UNIT, THR_NSTATES };
@@ -104,6 +105,7 @@ enum thr_counter {
 	C_MAX_QUEUE,
 	C_NCOUNTERS
 };
+_Static_assert(C_NCOUNTERS <= 32, "packet records (pktrec.h) hold 32 counters");
 
 struct thr_ctx;
 struct thr_rtp;
@@ -138,6 +140,13 @@ typedef struct thr_env {
 	shade_log log;
 	uint64_t *hkey;
 	uint32_t *hgen, gen;
+	/* the packet record (traces/pktrec.h): streams being recorded, or the
+	 * one threads replay (units/replay.h); at most one is set */
+	pktrec *rec_out;
+	const pktrec *rec_in;
+	/* rebuilding a replayed packet's state (units/replay.c): no memory
+	 * requests, no counts, no ages */
+	int silent;
 } thr_env;
 
 int thr_env_init(thr_env *v);
@@ -165,9 +174,22 @@ typedef struct thr_ctx {
 	void (*cont)(struct thr_ctx *t);
 	packet *kids; /* shade_packet's output */
 	int nkids, made;
-	eng_handler fnext; /* functional: the next step (see thr_env.func) */
-	int fkind, frays;  /* functional: the unit op fnext completes */
+	eng_handler fnext;       /* functional: the next step (see thr_env.func) */
+	int fkind, frays;        /* functional: the unit op fnext completes */
+	int32_t rec;             /* the packet's stream in the record (recorded or replayed), -1 */
+	const uint8_t *rp, *rpe; /* replay: the rest of the packet's stream (p is NULL) */
+	uint32_t rsteps;         /* replay: unit ops replayed so far */
+	/* recording and replay: the packet's last read address and size per
+	 * memory type (reads are recorded as differences; pktrec.h) */
+	uint64_t raddr[MEM_NTYPES];
+	uint32_t rbytes[MEM_NTYPES];
 } thr_ctx;
+
+/* A queued secondary packet: the packet, or (p NULL) a replayed stream. */
+typedef struct thr_qitem {
+	packet *p;
+	int32_t rec;
+} thr_qitem;
 
 typedef struct thr_rtp {
 	thr_env *env;
@@ -176,7 +198,7 @@ typedef struct thr_rtp {
 	thr_ctx *t;
 	int nt, nidle;
 	/* secondary packets waiting for a thread slot (FIFO ring) */
-	packet **q;
+	thr_qitem *q;
 	int qhead, qn, qcap;
 	uint64_t *occ[THR_NSTATES]; /* ticks spent in each state, summed over threads */
 } thr_rtp;
@@ -212,6 +234,25 @@ void thr_on_start(void *ctx, uint64_t arg);
 static inline int thr_pop(uint64_t m)
 {
 	return __builtin_popcountll(m);
+}
+
+/* Records op into the thread's packet stream while a record is made. */
+static inline void thr_rec(thr_ctx *t, int op, int n, uint64_t a, uint64_t b)
+{
+	if (t->env->rec_out)
+		pr_put(t->env->rec_out, t->rec, op, n, a, b);
+}
+
+/* Adds n to counter id (enum thr_counter) for the thread's packet. */
+static inline void thr_count(thr_ctx *t, int id, uint64_t n)
+{
+	if (t->env->silent)
+		return;
+	*t->env->c[id] += n;
+	if (n == 1)
+		thr_rec(t, PR_COUNT1 + id, 0, 0, 0);
+	else if (n)
+		thr_rec(t, PR_COUNT + id, 1, n, 0);
 }
 
 #endif

@@ -11,9 +11,9 @@ void tu_begin(thr_ctx *t)
 	thr_env *v = t->env;
 	uint64_t enter = pkt_trav_begin_fp(&t->ts, t->p, v->m, t->stack, PKT_STACK_MAX, &v->prec);
 	t->sp = 0;
-	*v->c[C_BOX_MISS_RAYS] += (uint64_t)thr_pop(t->p->valid & ~enter);
+	thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
 	if (!enter) {
-		++*v->c[C_BOX_MISS_PACKETS];
+		thr_count(t, C_BOX_MISS_PACKETS, 1);
 		rgs_finish(t);
 		return;
 	}
@@ -58,7 +58,7 @@ void tu_step(thr_ctx *t)
 	for (int k = 0; k < r->popped; k++) {
 		int idx = sp0 - 1 - k;
 		if (idx >= v->stack_depth) {
-			++*v->c[C_STACK_REFILLS];
+			thr_count(t, C_STACK_REFILLS, 1);
 			thr_read(t, MEM_KD, spill_addr(t, idx), THR_STACK_ENTRY_BYTES);
 		}
 	}
@@ -67,11 +67,15 @@ void tu_step(thr_ctx *t)
 		thr_wait_mem(t, rgs_finish);
 		return;
 	}
-	++*v->c[C_NODE_STEPS];
-	if ((uint64_t)r->sp > *v->c[C_MAX_SP])
+	thr_count(t, C_NODE_STEPS, 1);
+	/* a record keeps the depths that raised the maximum: replaying them
+	 * all gives the same maximum */
+	if ((uint64_t)r->sp > *v->c[C_MAX_SP] && !v->silent) {
 		*v->c[C_MAX_SP] = (uint64_t)r->sp;
+		thr_rec(t, PR_MAXSP, 1, (uint64_t)r->sp, 0);
+	}
 	if (r->pushed && r->sp - 1 >= v->stack_depth) {
-		++*v->c[C_STACK_OVERFLOWS];
+		thr_count(t, C_STACK_OVERFLOWS, 1);
 		thr_write(t, MEM_KD, spill_addr(t, r->sp - 1), THR_STACK_ENTRY_BYTES);
 	}
 	/* the node address comes from the refilled entry: read it after */

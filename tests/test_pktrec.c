@@ -1,0 +1,224 @@
+/*
+ * test_pktrec.c: the packet record (traces/pktrec.h, units/replay.h). A
+ * functional or sampled run with a world cache records its frame; the
+ * next run with the cache replays it and must be the run without a
+ * record, figure for figure: every counter, the memory and cache counts,
+ * the estimate and its interval, the frame. Replays into other thread
+ * counts and memory systems than the recording's, through the VMA, and
+ * over several frames; a damaged or foreign record is recorded again,
+ * never replayed.
+ */
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "chiptest.h"
+#include "replay.h"
+
+/* Loads the scene (NULL: the embedded room) with a world cache in dir
+ * (NULL: none). */
+static void load(world *w, const char *path, const char *dir)
+{
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = path;
+	o.cache_dir = dir;
+	diag d;
+	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+}
+
+static void same_cache(const cache_stats *a, const cache_stats *b, const char *what)
+{
+	cr_assert_eq(memcmp(a, b, sizeof *a), 0,
+	             "%s: accesses %llu/%llu hits %llu/%llu merges %llu/%llu", what,
+	             (unsigned long long)a->accesses, (unsigned long long)b->accesses,
+	             (unsigned long long)a->hits, (unsigned long long)b->hits,
+	             (unsigned long long)a->merges, (unsigned long long)b->merges);
+}
+
+/* Everything a report prints from the run, equal in a and b. */
+static void same_run(chip *a, chip *b, const char *what)
+{
+	cr_assert_eq(a->frames_done, b->frames_done);
+	for (int f = 0; f < a->frames_done; f++) {
+		cr_assert_eq(a->frame_cycles[f], b->frame_cycles[f],
+		             "%s: frame %d cycles %llu vs %llu", what, f,
+		             (unsigned long long)a->frame_cycles[f],
+		             (unsigned long long)b->frame_cycles[f]);
+		cr_assert(a->fid.half[f] == b->fid.half[f], "%s: interval", what);
+		cr_assert_eq(memcmp(&a->frame_port[f], &b->frame_port[f], sizeof(mem_counts)), 0,
+		             "%s: memory-port counts", what);
+	}
+	cr_assert_eq(a->st.n, b->st.n);
+	for (size_t i = 0; i < a->st.n; i++)
+		cr_assert_eq(*a->st.e[i].value, *b->st.e[i].value, "%s: %s %llu vs %llu", what,
+		             a->st.e[i].name, (unsigned long long)*a->st.e[i].value,
+		             (unsigned long long)*b->st.e[i].value);
+	hier_stats x, y;
+	if (!hier_get_stats(&a->mem, &x)) {
+		cr_assert_eq(hier_get_stats(&b->mem, &y), 0);
+		for (int t = 0; t < MEM_NTYPES; t++)
+			same_cache(&x.l1[t], &y.l1[t], what);
+		same_cache(&x.tag_cache, &y.tag_cache, what);
+		same_cache(&x.l2, &y.l2, what);
+		cr_assert_eq(memcmp(&x.sdram, &y.sdram, sizeof x.sdram), 0, "%s: SDRAM", what);
+		cr_assert_eq(memcmp(&x.hostbus, &y.hostbus, sizeof x.hostbus), 0, "%s: host bus",
+		             what);
+		cr_assert_eq(x.func_sdram_busy_ticks, y.func_sdram_busy_ticks, "%s", what);
+		cr_assert(x.func_sdram_merge_ticks == y.func_sdram_merge_ticks, "%s", what);
+	}
+	size_t n = (size_t)a->fb.w * (size_t)a->fb.h * 3;
+	cr_assert_eq(memcmp(a->fb.acc, b->fb.acc, n * sizeof *a->fb.acc), 0, "%s: frames differ",
+	             what);
+}
+
+/* Runs c on w_plain (no cache) and twice on w_cached: the first run
+ * records (unless a record is there), the second replays; both equal the
+ * plain run. Returns the replaying run's replayed tiles. */
+static uint64_t record_then_replay(const world *plain, const world *cached, const saar_config *c,
+                                   const char *what)
+{
+	chip *ref = tu_run_chip(plain, c);
+	cr_assert_eq(ref->rec_state, REC_OFF);
+	chip *rec = tu_run_chip(cached, c);
+	cr_assert_neq(rec->rec_state, REC_OFF, "%s: no record", what);
+	same_run(ref, rec, what);
+	chip *rep = tu_run_chip(cached, c);
+	cr_assert_eq(rep->rec_state, REC_REPLAYED, "%s: %s", what, chip_rec_name(rep->rec_state));
+	same_run(ref, rep, what);
+	uint64_t n = rep->fid.replayed_tiles;
+	cr_assert_gt(n, 0, "%s: nothing replayed", what);
+	tu_assert_identical(rep, what);
+	chip_destroy(ref);
+	chip_destroy(rec);
+	chip_destroy(rep);
+	return n;
+}
+
+Test(pktrec, replay_equals_the_math)
+{
+	char dir[64];
+	tu_tmpdir(dir, sizeof dir);
+	world plain, cached;
+	load(&plain, NULL, NULL);
+	load(&cached, NULL, dir);
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 128;
+	c.fidelity = CFG_FIDELITY_FUNCTIONAL;
+	c.chip.threads_per_rtp = 4;
+	uint64_t n = record_then_replay(&plain, &cached, &c, "functional");
+	cr_assert_eq(n, 256, "functional replays every tile, not %llu", (unsigned long long)n);
+	/* sampled: recorded at 4 threads per RTP, replayed at 4 and at 1;
+	 * regions rebuild the replayed packets they take over */
+	c.frame.width = c.frame.height = 256;
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.1;
+	record_then_replay(&plain, &cached, &c, "sampled, 4 threads per RTP");
+	c.chip.threads_per_rtp = 1;
+	chip *ref = tu_run_chip(&plain, &c);
+	chip *rep = tu_run_chip(&cached, &c);
+	cr_assert_eq(rep->rec_state, REC_REPLAYED);
+	cr_assert(!ref->fid.exact && rep->fid.replayed_tiles > 0, "nothing sampled");
+	same_run(ref, rep, "sampled, 1 thread per RTP");
+	tu_assert_identical(rep, "sampled, 1 thread per RTP");
+	chip_destroy(ref);
+	chip_destroy(rep);
+	world_free(&plain);
+	world_free(&cached);
+}
+
+Test(pktrec, replay_through_the_vma_and_frames)
+{
+	/* balls through a VMA with 1 MB on board: host-bus fetches, tag cache */
+	char dir[64];
+	tu_tmpdir(dir, sizeof dir);
+	world plain, cached;
+	load(&plain, "spd:balls:2", NULL);
+	load(&cached, "spd:balls:2", dir);
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 128;
+	c.memory.vma.enabled = true;
+	c.memory.sdram.mb = 1;
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.2;
+	c.chip.threads_per_rtp = 2;
+	record_then_replay(&plain, &cached, &c, "sampled through the VMA");
+	/* two frames: the recording run replays its own record in frame 2 */
+	char dir2[64];
+	tu_tmpdir(dir2, sizeof dir2);
+	world cached2;
+	load(&cached2, "spd:balls:2", dir2);
+	c.frame.frames = 2;
+	chip *ref = tu_run_chip(&plain, &c);
+	chip *rec = tu_run_chip(&cached2, &c);
+	cr_assert_eq(rec->rec_state, REC_STORED);
+	cr_assert_gt(rec->fid.replayed_tiles, 0, "frame 2 replays frame 1's record");
+	same_run(ref, rec, "two frames");
+	chip_destroy(ref);
+	chip_destroy(rec);
+	world_free(&plain);
+	world_free(&cached);
+	world_free(&cached2);
+}
+
+/* The one packets-*.bin file in dir. */
+static void record_file(const char *dir, char *out, size_t n)
+{
+	char cmd[256];
+	snprintf(cmd, sizeof cmd, "ls %s/packets-*.bin", dir);
+	FILE *p = popen(cmd, "r");
+	cr_assert(p);
+	cr_assert(fgets(out, (int)n, p), "no record in %s", dir);
+	pclose(p);
+	out[strcspn(out, "\n")] = 0;
+}
+
+Test(pktrec, damaged_or_foreign_records_are_not_replayed)
+{
+	char dir[64], file[512];
+	tu_tmpdir(dir, sizeof dir);
+	world plain, cached;
+	load(&plain, NULL, NULL);
+	load(&cached, NULL, dir);
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 64;
+	c.fidelity = CFG_FIDELITY_FUNCTIONAL;
+	chip *ref = tu_run_chip(&plain, &c);
+	chip_destroy(tu_run_chip(&cached, &c));
+	record_file(dir, file, sizeof file);
+	/* a flipped byte in the middle: the CRC fails, the run records anew */
+	FILE *f = fopen(file, "r+b");
+	cr_assert(f);
+	fseek(f, 0, SEEK_END);
+	long size = ftell(f);
+	fseek(f, size / 2, SEEK_SET);
+	int ch = fgetc(f);
+	fseek(f, size / 2, SEEK_SET);
+	fputc(ch ^ 0x5a, f);
+	fclose(f);
+	chip *again = tu_run_chip(&cached, &c);
+	cr_assert_eq(again->rec_state, REC_STORED, "damaged: %s", chip_rec_name(again->rec_state));
+	same_run(ref, again, "after a damaged record");
+	chip_destroy(again);
+	/* truncated */
+	cr_assert_eq(truncate(file, size / 3), 0);
+	again = tu_run_chip(&cached, &c);
+	cr_assert_eq(again->rec_state, REC_STORED, "truncated");
+	chip_destroy(again);
+	/* another datapath (a different key): its own record */
+	c.chip.fp.isect.mant = 16;
+	chip *fp = tu_run_chip(&cached, &c);
+	cr_assert_eq(fp->rec_state, REC_STORED, "another datapath replayed a foreign record");
+	chip_destroy(fp);
+	/* cycle mode neither records nor replays */
+	c.fidelity = CFG_FIDELITY_CYCLE;
+	chip *cy = tu_run_chip(&cached, &c);
+	cr_assert_eq(cy->rec_state, REC_OFF);
+	chip_destroy(cy);
+	chip_destroy(ref);
+	world_free(&plain);
+	world_free(&cached);
+}

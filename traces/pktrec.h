@@ -1,0 +1,125 @@
+/*
+ * pktrec.h: the packet record. What every packet of one frame did besides
+ * its math, recorded once per scene, view and datapath: its memory
+ * requests, unit operations, counter updates and the packets it spawned,
+ * as one byte stream per packet, with the frame it drew. Replaying a
+ * stream (units/thread.c, thr_replay_*) does to the memory model, the
+ * units' counts and the counters exactly what running the packet does,
+ * without tracing a ray, so functional and sampled modes warm the caches
+ * far faster on every point of a sweep after the first. None of it
+ * depends on the memory system, the units or the thread counts; what
+ * does (datapath formats, stack depth, spill addresses) is in the key or
+ * recomputed at replay. Kept in the world cache (worldcache.h);
+ * docs/fidelity.md, "The packet record".
+ *
+ * A stream is a sequence of ops: one op byte, then its arguments as
+ * LEB128 varints (7 bits per byte, low group first).
+ */
+#ifndef SAAR_TRACES_PKTREC_H
+#define SAAR_TRACES_PKTREC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "framebuf.h"
+
+enum pr_op {
+	PR_READ = 0,      /* + memory type (0-3): address delta, bytes */
+	PR_READ_SAME = 4, /* + memory type: address delta; bytes as the type's last read */
+	PR_WRITE = 8,     /* + memory type: address, bytes */
+	PR_USE = 12,      /* + unit kind (0-3): rays; ends a functional step */
+	PR_SPILL_R = 16,  /* stack entry index: the read of a spilled entry */
+	PR_SPILL_W,       /* stack entry index: a spill */
+	PR_MAXSP,         /* stack depth reached (trav.max_stack_depth) */
+	PR_SHADE,         /* shade_counts field, amount */
+	PR_ENTER,         /* packet type, rays: the packet enters a thread */
+	PR_SPAWN,         /* n, then n packet ids: children queued */
+	PR_END,           /* the packet is done */
+	PR_COUNT1 = 32,   /* + counter (enum thr_counter, < 32): counter += 1 */
+	PR_COUNT = 64,    /* + counter: amount; counter += amount */
+	PR_NOPS = 96
+};
+/* A read's address is the zigzag-mapped difference to the packet's
+ * previous read of the same memory type (0 before its first). */
+
+typedef struct pr_chunk pr_chunk;
+
+typedef struct pktrec {
+	int w, h, ntiles;
+	int32_t *tile_pk; /* per tile (row-major): its primary packet's id, -1 */
+	/* per packet: where it came from: -1 - tile for a primary packet,
+	 * else its parent's id, and which of the parent's children it is */
+	int32_t *from;
+	uint8_t *kid;
+	uint32_t npk;
+	/* recording: per packet, its chunks' chain */
+	pr_chunk *ch;
+	uint32_t nch, capch, cappk;
+	uint32_t *first, *last;
+	int failed; /* out of memory: nothing is stored */
+	/* loaded: one block (the stored tail) holding everything below */
+	void *block;
+	const uint64_t *off; /* npk + 1 stream offsets into blob */
+	const uint8_t *blob;
+	const uint32_t *acc32; /* the frame's accumulators, 32 or 64 bits */
+	const uint64_t *acc64;
+} pktrec;
+
+/* An empty record for a w x h frame of ntiles tiles. -1 when out of
+ * memory. */
+int pr_init(pktrec *r, int w, int h, int ntiles);
+void pr_free(pktrec *r);
+/* A new packet stream: tile's primary packet, or child k of packet parent;
+ * -1 when out of memory (r->failed is set and recording stops). */
+int32_t pr_new(pktrec *r, int tile);
+int32_t pr_new_kid(pktrec *r, int32_t parent, int k);
+/* Appends op and its n (0-2) arguments to packet id's stream. */
+void pr_put(pktrec *r, int32_t id, int op, int n, uint64_t a, uint64_t b);
+/* Appends one bare varint (the ids after PR_SPAWN). */
+void pr_put_u(pktrec *r, int32_t id, uint64_t v);
+
+/* The stored form: the streams and fb's accumulators, one malloc'd block.
+ * -1 when out of memory or the record failed. */
+int pr_serialize(const pktrec *r, const framebuf *fb, void **out, size_t *n);
+/* Takes a stored block (ownership passes to r, also on failure) for a w x
+ * h frame of ntiles tiles; -1 when it does not hold one (damaged, other
+ * frame). */
+int pr_load(pktrec *r, void *block, size_t n, int w, int h, int ntiles);
+
+/* Stream of packet id and its end; tile t's primary packet id, -1. */
+static inline const uint8_t *pr_stream(const pktrec *r, uint32_t id, const uint8_t **end)
+{
+	*end = r->blob + r->off[id + 1];
+	return r->blob + r->off[id];
+}
+
+/* Sets fb's pixels of tile (tx, ty) (tiles of tw x th pixels) to the
+ * recorded frame's. */
+void pr_put_tile(const pktrec *r, framebuf *fb, int tx, int ty, int tw, int th);
+
+/* LEB128 decoding; stops at end (a damaged stream reads zeros). */
+static inline uint64_t pr_get(const uint8_t **p, const uint8_t *end)
+{
+	if (*p < end && **p < 0x80)
+		return *(*p)++;
+	uint64_t v = 0;
+	for (int s = 0; *p < end && s < 64; s += 7) {
+		uint8_t b = *(*p)++;
+		v |= (uint64_t)(b & 0x7f) << s;
+		if (!(b & 0x80))
+			break;
+	}
+	return v;
+}
+
+static inline uint64_t pr_zigzag(uint64_t d)
+{
+	return d << 1 ^ (uint64_t) - (int64_t)(d >> 63);
+}
+
+static inline uint64_t pr_unzigzag(uint64_t z)
+{
+	return z >> 1 ^ (uint64_t) - (int64_t)(z & 1);
+}
+
+#endif
