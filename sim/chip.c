@@ -708,8 +708,18 @@ static int func_range(chip *c, int end, int drain)
 					if (!func_give(c, t, end, &given))
 						continue;
 				}
-				if (t->rp ? thr_replay_step(t) : thr_step_func(t))
+				if (t->rp) {
+					/* the next slot's stream is elsewhere in the
+					 * record: start fetching it now */
+					const thr_ctx *u = r + 1 < c->nrtp  ? &c->rtp[r + 1].t[s]
+					                   : s + 1 < c->tpr ? &c->rtp[0].t[s + 1]
+					                                    : NULL;
+					if (u && u->rp)
+						__builtin_prefetch(u->rp);
+					busy |= thr_replay_step(t);
+				} else if (thr_step_func(t)) {
 					busy = 1;
+				}
 			}
 	}
 	c->env.func = 0;
