@@ -207,8 +207,11 @@ int world_load(world *w, const world_opts *o, diag *d)
 	/* the parts of a world the cache keeps: figures of the scene and the
 	 * kd-tree (their arrays are not stored), the memory image's header
 	 * and the procedural view; the image bytes are the tail */
-	wc_part parts[] = {
-	    {&w->s, sizeof w->s}, {&w->kd, sizeof w->kd}, {&w->m, sizeof w->m}, {&sv, sizeof sv}};
+	wc_part parts[] = {{&w->s, sizeof w->s},
+	                   {&w->kd, sizeof w->kd},
+	                   {&w->m, sizeof w->m},
+	                   {&sv, sizeof sv},
+	                   {&w->image_crc, sizeof w->image_crc}};
 	if (o->cache_dir) {
 		if (wc_prepare(o->cache_dir, w->cache_prog, sizeof w->cache_prog, d))
 			return -1;
@@ -221,7 +224,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 		w->cache_dir = o->cache_dir;
 		void *bytes;
 		size_t n;
-		if (wc_get(cfile, ckey, parts, 4, &bytes, &n)) {
+		if (wc_get(cfile, ckey, parts, 5, &bytes, &n)) {
 			if (n == w->m.size) {
 				w->m.bytes = bytes;
 				w->cache = WORLD_CACHE_HIT;
@@ -285,13 +288,17 @@ int world_load(world *w, const world_opts *o, diag *d)
 			k0.list = NULL;
 			mimg m0 = w->m;
 			m0.bytes = NULL;
-			wc_part put[] = {
-			    {&s0, sizeof s0}, {&k0, sizeof k0}, {&m0, sizeof m0}, {&sv, sizeof sv}};
+			w->image_crc = wc_crc(w->m.bytes, w->m.size);
+			wc_part put[] = {{&s0, sizeof s0},
+			                 {&k0, sizeof k0},
+			                 {&m0, sizeof m0},
+			                 {&sv, sizeof sv},
+			                 {&w->image_crc, sizeof w->image_crc}};
 			/* a cache that cannot be written costs the next run time,
 			 * not this run its result: say so and go on */
 			diag wd;
 			w->cache = WORLD_CACHE_STORED;
-			if (wc_put(cfile, ckey, &files, put, 4, w->m.bytes, (size_t)w->m.size,
+			if (wc_put(cfile, ckey, &files, put, 5, w->m.bytes, (size_t)w->m.size,
 			           &wd)) {
 				fprintf(stderr, "warning: %s\n", wd.msg);
 				w->cache = WORLD_CACHE_UNSTORED;
@@ -314,7 +321,8 @@ int world_reference_rgb8(const world *w, const render_opts *o, uint8_t *rgb, ren
 	size_t n = (size_t)o->width * (size_t)o->height * 3;
 	char file[PATH_MAX], *key = NULL;
 	*cached = 0;
-	if (w->cache_dir && (key = wc_frame_key(w->cache_prog, &w->m, &w->v, o)) &&
+	if (w->cache_dir &&
+	    (key = wc_frame_key(w->cache_prog, w->image_crc, w->m.size, &w->v, o)) &&
 	    wc_file(file, sizeof file, w->cache_dir, "frame", key)) {
 		free(key);
 		key = NULL;

@@ -3,8 +3,8 @@
  * way for rtref and saarsim: the scene (file, embedded default), the view
  * (views file, flags or the default), the kd-tree and the memory image,
  * through the world cache when one is given (worldcache.h), and kernel-ref's
- * reference frame of it for checks. Also parses the command-line flags that pick them, so both programs
- * accept exactly the same scene/view/camera flags.
+ * reference frame of it for checks. Also parses the command-line flags that pick them, so both
+ * programs accept exactly the same scene/view/camera flags.
  */
 #ifndef SAAR_KREF_WORLD_H
 #define SAAR_KREF_WORLD_H
@@ -45,7 +45,9 @@ typedef struct world {
 	 * and m is whole. */
 	int cache;
 	const char *cache_dir; /* o->cache_dir, for the reference frame's entry */
-	char cache_prog[64];   /* this program's identity in cache keys */
+	uint32_t
+	    image_crc; /* with a cache: CRC-32 of m's bytes (frame keys name the image by it) */
+	char cache_prog[64]; /* this program's identity in cache keys */
 } world;
 
 void world_opts_default(world_opts *o);

@@ -175,7 +175,8 @@ char *wc_world_key(const char *prog, const char *source, const kd_params *kd)
 	return n < 0 ? NULL : key;
 }
 
-char *wc_frame_key(const char *prog, const mimg *m, const view *v, const render_opts *o)
+char *wc_frame_key(const char *prog, uint32_t image_crc, uint64_t image_size, const view *v,
+                   const render_opts *o)
 {
 	if (o->prec)
 		return NULL;
@@ -200,12 +201,12 @@ char *wc_frame_key(const char *prog, const mimg *m, const view *v, const render_
 	             "saarsim frame 1\n%s\nimage %08x %llu\ncamera %a %a %a %a %a %a %a %a %a "
 	             "%a\nlights %d%s\nframe %d %d depth %d shadows %d single %d background "
 	             "%a %a %a\nstructs %zu\n",
-	             prog, (unsigned)wc_crc(m->bytes, m->size), (unsigned long long)m->size,
-	             (double)c->eye.x, (double)c->eye.y, (double)c->eye.z, (double)c->lookat.x,
-	             (double)c->lookat.y, (double)c->lookat.z, (double)c->up.x, (double)c->up.y,
-	             (double)c->up.z, (double)c->fov_deg, v->nlights, lights, o->width, o->height,
-	             o->max_depth, o->shadows, o->single_ray, (double)o->background.x,
-	             (double)o->background.y, (double)o->background.z, sizeof(render_stats));
+	             prog, (unsigned)image_crc, (unsigned long long)image_size, (double)c->eye.x,
+	             (double)c->eye.y, (double)c->eye.z, (double)c->lookat.x, (double)c->lookat.y,
+	             (double)c->lookat.z, (double)c->up.x, (double)c->up.y, (double)c->up.z,
+	             (double)c->fov_deg, v->nlights, lights, o->width, o->height, o->max_depth,
+	             o->shadows, o->single_ray, (double)o->background.x, (double)o->background.y,
+	             (double)o->background.z, sizeof(render_stats));
 	free(lights);
 	return n < 0 ? NULL : key;
 }

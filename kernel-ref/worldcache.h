@@ -60,11 +60,13 @@ int wc_put(const char *file, const char *key, const wc_files *f, const wc_part *
  * malloc'd; NULL when out of memory. */
 char *wc_world_key(const char *prog, const char *source, const kd_params *kd);
 
-/* The key of kernel-ref's frame of memory image m (named by the CRC-32 of
- * its bytes) seen by view v with options o: everything render_frame depends on (not
- * the host thread count: the frame is the same). NULL (no caching) for
- * reduced precision or out of memory. */
-char *wc_frame_key(const char *prog, const mimg *m, const view *v, const render_opts *o);
+/* The key of kernel-ref's frame of a memory image (named by the CRC-32
+ * of its bytes, image_crc, and its size) seen by view v with options o:
+ * everything render_frame depends on (not the host thread count: the
+ * frame is the same). NULL (no caching) for reduced precision or out of
+ * memory. */
+char *wc_frame_key(const char *prog, uint32_t image_crc, uint64_t image_size, const view *v,
+                   const render_opts *o);
 
 /* CRC-32 of n bytes (any n). */
 uint32_t wc_crc(const void *p, uint64_t n);

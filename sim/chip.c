@@ -828,7 +828,8 @@ static char *rec_key(const chip *c)
 	ro.width = g->frame.width;
 	ro.height = g->frame.height;
 	ro.max_depth = g->shading.max_depth;
-	char *fk = wc_frame_key(c->w->cache_prog, &c->w->m, &c->w->v, &ro), *key;
+	char *fk = wc_frame_key(c->w->cache_prog, c->w->image_crc, c->w->m.size, &c->w->v, &ro),
+	     *key;
 	if (!fk)
 		return NULL;
 	int n =
