@@ -95,17 +95,24 @@ static uint64_t record_then_replay(const world *plain, const world *cached, cons
 	return n;
 }
 
+/* The embedded room without and with a world cache in a fresh folder dir,
+ * and a functional config of size x size. */
+static void embedded(world *plain, world *cached, char *dir, size_t ndir, saar_config *c, int size)
+{
+	tu_tmpdir(dir, ndir);
+	load(plain, NULL, NULL);
+	load(cached, NULL, dir);
+	cfg_defaults(c);
+	c->frame.width = c->frame.height = size;
+	c->fidelity = CFG_FIDELITY_FUNCTIONAL;
+}
+
 Test(pktrec, replay_equals_the_math)
 {
 	char dir[64];
-	tu_tmpdir(dir, sizeof dir);
 	world plain, cached;
-	load(&plain, NULL, NULL);
-	load(&cached, NULL, dir);
 	saar_config c;
-	cfg_defaults(&c);
-	c.frame.width = c.frame.height = 128;
-	c.fidelity = CFG_FIDELITY_FUNCTIONAL;
+	embedded(&plain, &cached, dir, sizeof dir, &c, 128);
 	c.chip.threads_per_rtp = 4;
 	uint64_t n = record_then_replay(&plain, &cached, &c, "functional");
 	cr_assert_eq(n, 256, "functional replays every tile, not %llu", (unsigned long long)n);
@@ -178,14 +185,9 @@ static void record_file(const char *dir, char *out, size_t n)
 Test(pktrec, damaged_or_foreign_records_are_not_replayed)
 {
 	char dir[64], file[512];
-	tu_tmpdir(dir, sizeof dir);
 	world plain, cached;
-	load(&plain, NULL, NULL);
-	load(&cached, NULL, dir);
 	saar_config c;
-	cfg_defaults(&c);
-	c.frame.width = c.frame.height = 64;
-	c.fidelity = CFG_FIDELITY_FUNCTIONAL;
+	embedded(&plain, &cached, dir, sizeof dir, &c, 64);
 	chip *ref = tu_run_chip(&plain, &c);
 	chip_destroy(tu_run_chip(&cached, &c));
 	record_file(dir, file, sizeof file);
