@@ -220,9 +220,9 @@ uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes)
 	return missed;
 }
 
-/* timed hits and merges between the snapshots, as doubles */
-static void timed_counts(const cache_stats *from, const cache_stats *to, double *th, double *tm,
-                         double *fh)
+/* Timed hits and merges between the snapshots, as doubles; returns the
+ * merges' share of them, and the functional hits in *fh. */
+static double timed_counts(const cache_stats *from, const cache_stats *to, double *th, double *fh)
 {
 	static const cache_stats zero;
 	if (!from)
@@ -230,21 +230,19 @@ static void timed_counts(const cache_stats *from, const cache_stats *to, double 
 	double h = (double)(to->hits - from->hits), m = (double)(to->merges - from->merges);
 	*fh = (double)(to->func_hits - from->func_hits);
 	*th = h - *fh;
-	*tm = m - (double)(to->func_merges - from->func_merges);
+	double tm = m - (double)(to->func_merges - from->func_merges);
+	return *th + tm > 0 ? tm / (*th + tm) : 0.0;
 }
 
 double cache_timed_merge_share(const cache_stats *from, const cache_stats *to)
 {
-	double th, tm, fh;
-	timed_counts(from, to, &th, &tm, &fh);
-	return th + tm > 0 ? tm / (th + tm) : 0.0;
+	double th, fh;
+	return timed_counts(from, to, &th, &fh);
 }
 
 double cache_timed_hits(const cache_stats *from, const cache_stats *to, double *share)
 {
-	double th, tm, fh;
-	timed_counts(from, to, &th, &tm, &fh);
-	double r = th + tm > 0 ? tm / (th + tm) : 0.0;
+	double th, fh, r = timed_counts(from, to, &th, &fh);
 	if (share)
 		*share = r;
 	return th + fh * (1.0 - r);

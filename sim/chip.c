@@ -305,6 +305,23 @@ static int fid_init(chip *c)
 	return 0;
 }
 
+/* An idle thread context of RTP rp: slot id, chip-wide gid, its own
+ * traversal stack and room for nkids children. -1 when out of memory (the
+ * caller frees what was allocated). */
+static int thread_init(thr_ctx *t, thr_rtp *rp, int id, int gid, int nkids)
+{
+	*t = (thr_ctx){.rtp = rp,
+	               .env = rp->env,
+	               .id = id,
+	               .gid = gid,
+	               .rec = -1,
+	               .state = THR_IDLE,
+	               .nkids = nkids};
+	t->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
+	t->kids = alloc64((size_t)nkids * sizeof(packet));
+	return t->stack && t->kids ? 0 : -1;
+}
+
 chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 {
 	if (cfg->chip.packet_w != TILE_W || cfg->chip.packet_h != TILE_H) {
@@ -435,30 +452,14 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 		memset(rp->t, 0, (size_t)c->tpr * sizeof(thr_ctx));
 		rp->nt = c->tpr;
 		rp->nidle = c->tpr;
-		for (int i = 0; i < c->tpr; i++) {
-			thr_ctx *t = &rp->t[i];
-			t->rtp = rp;
-			t->env = v;
-			t->id = i;
-			t->gid = r * c->tpr + i;
-			t->rec = -1;
-			t->state = THR_IDLE;
-			t->nkids = nkids;
-			t->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
-			t->kids = alloc64((size_t)nkids * sizeof(packet));
-			if (!t->stack || !t->kids)
+		for (int i = 0; i < c->tpr; i++)
+			if (thread_init(&rp->t[i], rp, i, r * c->tpr + i, nkids))
 				goto oom;
-		}
 	}
 	/* a thread outside the RTPs' slots, for rebuilding replayed packets */
-	thr_ctx *sc = c->scratch = alloc64(sizeof(thr_ctx));
-	if (!sc)
-		goto oom;
-	memset(sc, 0, sizeof *sc);
-	*sc = (thr_ctx){.rtp = &c->rtp[0], .env = v, .state = THR_IDLE, .nkids = nkids, .rec = -1};
-	sc->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
-	sc->kids = alloc64((size_t)nkids * sizeof(packet));
-	if (c->oom || !sc->stack || !sc->kids || fid_init(c))
+	c->scratch = alloc64(sizeof(thr_ctx));
+	if (!c->scratch || thread_init(c->scratch, &c->rtp[0], 0, 0, nkids) || c->oom ||
+	    fid_init(c))
 		goto oom;
 	return c;
 oom:

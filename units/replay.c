@@ -1,53 +1,24 @@
 /*
  * replay.c: a thread running a recorded packet stream (see replay.h).
- * Each op does what the unit code that recorded it did in functional
- * processing (thread.c thr_read / thr_write / thr_use / thr_release,
- * rgs.c enter / shade_done, the counters), in the same order, so the
- * caches, SDRAM, VMA and counters end up exactly as after the math.
+ * Each op calls what the unit code that recorded it called in functional
+ * processing (thread.c thr_read / thr_write / thr_use / thr_count, rgs.c
+ * rgs_enter_count / rgs_spawn), in the same order, so the caches, SDRAM,
+ * VMA and counters end up exactly as after the math.
  */
 #include "replay.h"
 
-#include <string.h>
-
 #include "rgs.h"
-#include "traversal.h"
 
-static void request(thr_ctx *t, int write, int type, uint64_t addr, uint64_t bytes)
-{
-	mem_req r = {addr, (uint32_t)bytes, (uint8_t)type, (uint8_t)write, (uint16_t)t->rtp->id};
-	mem_access_func(t->env->mem, &r);
-}
-
-static void spill(thr_ctx *t, int write, uint64_t idx)
-{
-	uint64_t a =
-	    t->env->spill_base + ((uint64_t)t->gid * PKT_STACK_MAX + idx) * THR_SPILL_STRIDE;
-	request(t, write, MEM_KD, a, THR_STACK_ENTRY_BYTES);
-}
-
-static void use(thr_ctx *t, int kind, uint64_t rays)
-{
-	thr_unit *u = &t->rtp->u[kind];
-	++*u->ops_n;
-	*u->busy += thr_unit_issue(u, (int)rays);
-	*u->rays += rays;
-}
-
+/* The children a packet's shading queued, in its stream as their ids. */
 static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 {
-	thr_env *v = t->env;
-	thr_rtp *r = t->rtp;
 	for (uint64_t k = 0; k < n; k++) {
 		uint64_t id = pr_get(p, end);
-		if (id >= v->rec_in->npk)
-			continue;
 		/* out of memory: the packet is lost and the image check says so */
-		if (rgs_enqueue(r, (thr_qitem){NULL, (int32_t)id}))
-			continue;
-		++*v->c[C_SPAWNED];
+		if (id < t->env->rec_in->npk)
+			rgs_spawn(t->rtp, (thr_qitem){NULL, (int32_t)id});
 	}
-	if (r->qn > 0)
-		*v->c[C_QUEUED] += (uint64_t)r->qn;
+	rgs_spawned(t->rtp);
 }
 
 static void finish(thr_ctx *t)
@@ -71,17 +42,18 @@ static void run(thr_ctx *t)
 			a = t->raddr[type] += pr_unzigzag(pr_get(&p, end));
 			if (op < PR_READ_SAME)
 				t->rbytes[type] = (uint32_t)pr_get(&p, end);
-			request(t, 0, type, a, t->rbytes[type]);
+			thr_read(t, type, a, t->rbytes[type]);
 			continue;
 		}
 		if (op < PR_USE) {
 			a = pr_get(&p, end);
 			b = pr_get(&p, end);
-			request(t, 1, op & 3, a, b);
+			thr_write(t, op & 3, a, (uint32_t)b);
 			continue;
 		}
 		if (op < PR_SPILL_R) {
-			use(t, op - PR_USE, pr_get(&p, end));
+			/* no completion: the stream says what comes next */
+			thr_use(t, op - PR_USE, (int)pr_get(&p, end), NULL);
 			t->rsteps++;
 			t->rp = p;
 			return;
@@ -90,18 +62,20 @@ static void run(thr_ctx *t)
 			int id = op & 31;
 			a = op < PR_COUNT ? 1 : pr_get(&p, end);
 			if (id < C_NCOUNTERS)
-				*v->c[id] += a;
+				thr_count(t, id, a);
 			continue;
 		}
 		switch (op) {
 		case PR_SPILL_R:
 		case PR_SPILL_W:
-			spill(t, op == PR_SPILL_W, pr_get(&p, end) % PKT_STACK_MAX);
+			a = thr_spill_addr(t, pr_get(&p, end) % PKT_STACK_MAX);
+			if (op == PR_SPILL_W)
+				thr_write(t, MEM_KD, a, THR_STACK_ENTRY_BYTES);
+			else
+				thr_read(t, MEM_KD, a, THR_STACK_ENTRY_BYTES);
 			break;
 		case PR_MAXSP:
-			a = pr_get(&p, end);
-			if (a > *v->c[C_MAX_SP])
-				*v->c[C_MAX_SP] = a;
+			thr_count_max(t, C_MAX_SP, pr_get(&p, end));
 			break;
 		case PR_SHADE:
 			a = pr_get(&p, end);
@@ -111,12 +85,7 @@ static void run(thr_ctx *t)
 			break;
 		case PR_ENTER:
 			a = pr_get(&p, end) % PKT_NTYPES;
-			b = pr_get(&p, end);
-			t->age = v->next_age++;
-			++*v->c[C_PKT_PRIMARY + a];
-			*v->c[C_RAYS_PRIMARY + a] += b;
-			memset(t->raddr, 0, sizeof t->raddr);
-			memset(t->rbytes, 0, sizeof t->rbytes);
+			rgs_enter_count(t, (int)a, pr_get(&p, end));
 			break;
 		case PR_SPAWN:
 			spawn(t, pr_get(&p, end), &p, end);

@@ -8,18 +8,23 @@
 
 #include "traversal.h"
 
-static void enter(thr_ctx *t, packet *p)
+void rgs_enter_count(thr_ctx *t, int type, uint64_t rays)
 {
 	thr_env *v = t->env;
-	t->p = p;
 	if (v->silent) /* units/replay.c rebuilding a replayed packet */
 		return;
 	t->age = v->next_age++;
-	++*v->c[C_PKT_PRIMARY + p->type];
-	*v->c[C_RAYS_PRIMARY + p->type] += thr_rays(p);
+	++*v->c[C_PKT_PRIMARY + type];
+	*v->c[C_RAYS_PRIMARY + type] += rays;
 	memset(t->raddr, 0, sizeof t->raddr);
 	memset(t->rbytes, 0, sizeof t->rbytes);
-	thr_rec(t, PR_ENTER, 2, (uint64_t)p->type, thr_rays(p));
+	thr_rec(t, PR_ENTER, 2, (uint64_t)type, rays);
+}
+
+static void enter(thr_ctx *t, packet *p)
+{
+	t->p = p;
+	rgs_enter_count(t, p->type, thr_rays(p));
 }
 
 static void gen_done(eng *e, void *ctx, uint64_t arg)
@@ -53,7 +58,7 @@ static void shadow_done(eng *e, void *ctx, uint64_t arg)
 	thr_release(ctx);
 }
 
-int rgs_enqueue(thr_rtp *r, thr_qitem it)
+int rgs_spawn(thr_rtp *r, thr_qitem it)
 {
 	if (r->qn == r->qcap) {
 		int cap = r->qcap ? 2 * r->qcap : 64;
@@ -69,9 +74,16 @@ int rgs_enqueue(thr_rtp *r, thr_qitem it)
 	}
 	r->q[(r->qhead + r->qn++) % r->qcap] = it;
 	thr_env *v = r->env;
+	++*v->c[C_SPAWNED];
 	if ((uint64_t)r->qn > *v->c[C_MAX_QUEUE])
 		*v->c[C_MAX_QUEUE] = (uint64_t)r->qn;
 	return 0;
+}
+
+void rgs_spawned(thr_rtp *r)
+{
+	if (r->qn > 0)
+		*r->env->c[C_QUEUED] += (uint64_t)r->qn;
 }
 
 int rgs_dequeue(thr_rtp *r, thr_qitem *it)
@@ -105,7 +117,7 @@ static void shade_done(eng *e, void *ctx, uint64_t arg)
 		if (v->rec_out)
 			pr_put_u(v->rec_out, t->rec, (uint64_t)(id < 0 ? 0 : id));
 		/* out of memory: the packet is lost and the image check says so */
-		if (!p || rgs_enqueue(r, (thr_qitem){p, id})) {
+		if (!p || rgs_spawn(r, (thr_qitem){p, id})) {
 			if (p)
 				thr_pkt_free(v, p);
 			if (v->rec_out)
@@ -113,10 +125,8 @@ static void shade_done(eng *e, void *ctx, uint64_t arg)
 			continue;
 		}
 		memcpy(p, &t->kids[k], sizeof *p);
-		++*v->c[C_SPAWNED];
 	}
-	if (r->qn > 0)
-		*v->c[C_QUEUED] += (uint64_t)r->qn;
+	rgs_spawned(r);
 	thr_release(t);
 	rgs_dispatch(r);
 }

@@ -30,10 +30,16 @@ int rgs_primary(thr_ctx *t, int tx, int ty);
 void rgs_secondary(thr_ctx *t, packet *p);
 /* Traversal is over: shade (or finish the shadow packet), then free t. */
 void rgs_finish(thr_ctx *t);
-/* RTP r's FIFO of secondary packets: queues one (-1 when out of memory),
- * takes the oldest (0 when empty). */
-int rgs_enqueue(thr_rtp *r, thr_qitem it);
+/* RTP r's FIFO of secondary packets: queues a child shading made,
+ * counted as spawned (-1 when out of memory); after a packet's children,
+ * rgs_spawned samples the queue length; rgs_dequeue takes the oldest (0
+ * when empty). */
+int rgs_spawn(thr_rtp *r, thr_qitem it);
+void rgs_spawned(thr_rtp *r);
 int rgs_dequeue(thr_rtp *r, thr_qitem *it);
+/* A packet of `type` with `rays` valid rays enters thread t: its age, the
+ * packet and ray counters (nothing while rebuilding, thr_env.silent). */
+void rgs_enter_count(thr_ctx *t, int type, uint64_t rays);
 /* Gives queued packets to idle threads of RTP r. */
 void rgs_dispatch(thr_rtp *r);
 

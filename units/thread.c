@@ -239,14 +239,12 @@ static void mem_done(eng *e, void *ctx, uint64_t arg)
 }
 
 /* Records a request: stack spills by entry index, since their address
- * belongs to the thread slot (units/traversal.c spill_addr), other
- * requests as they are. */
+ * belongs to the thread slot (thr_spill_addr), other requests as they
+ * are. */
 static void rec_req(thr_ctx *t, int write, int type, uint64_t addr, uint32_t bytes)
 {
-	const thr_env *v = t->env;
-	if (addr >= v->spill_base) {
-		uint64_t slot = (uint64_t)t->gid * PKT_STACK_MAX;
-		uint64_t idx = (addr - v->spill_base) / THR_SPILL_STRIDE - slot;
+	if (addr >= t->env->spill_base) {
+		uint64_t idx = (addr - thr_spill_addr(t, 0)) / THR_SPILL_STRIDE;
 		thr_rec(t, write ? PR_SPILL_W : PR_SPILL_R, 1, idx, 0);
 		return;
 	}

@@ -243,6 +243,23 @@ static inline void thr_rec(thr_ctx *t, int op, int n, uint64_t a, uint64_t b)
 		pr_put(t->env->rec_out, t->rec, op, n, a, b);
 }
 
+/* Raises counter id (a maximum: trav.max_stack_depth) to v. A record keeps
+ * the values that raised it: replaying them all gives the same maximum. */
+static inline void thr_count_max(thr_ctx *t, int id, uint64_t v)
+{
+	if (v <= *t->env->c[id] || t->env->silent)
+		return;
+	*t->env->c[id] = v;
+	thr_rec(t, PR_MAXSP, 1, v, 0);
+}
+
+/* Where traversal stack entry `index` of thread t spills: every thread slot
+ * has its own area after the memory image (chip.c). */
+static inline uint64_t thr_spill_addr(const thr_ctx *t, uint64_t index)
+{
+	return t->env->spill_base + ((uint64_t)t->gid * PKT_STACK_MAX + index) * THR_SPILL_STRIDE;
+}
+
 /* Adds n to counter id (enum thr_counter) for the thread's packet. */
 static inline void thr_count(thr_ctx *t, int id, uint64_t n)
 {

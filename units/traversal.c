@@ -42,12 +42,6 @@ static void fetch_node(thr_ctx *t)
 	thr_wait_mem(t, fetched);
 }
 
-static uint64_t spill_addr(const thr_ctx *t, int index)
-{
-	return t->env->spill_base +
-	       ((uint64_t)t->gid * PKT_STACK_MAX + (uint64_t)index) * THR_SPILL_STRIDE;
-}
-
 void tu_step(thr_ctx *t)
 {
 	thr_env *v = t->env;
@@ -59,7 +53,8 @@ void tu_step(thr_ctx *t)
 		int idx = sp0 - 1 - k;
 		if (idx >= v->stack_depth) {
 			thr_count(t, C_STACK_REFILLS, 1);
-			thr_read(t, MEM_KD, spill_addr(t, idx), THR_STACK_ENTRY_BYTES);
+			thr_read(t, MEM_KD, thr_spill_addr(t, (uint64_t)idx),
+			         THR_STACK_ENTRY_BYTES);
 		}
 	}
 	t->sp = r->sp;
@@ -68,15 +63,11 @@ void tu_step(thr_ctx *t)
 		return;
 	}
 	thr_count(t, C_NODE_STEPS, 1);
-	/* a record keeps the depths that raised the maximum: replaying them
-	 * all gives the same maximum */
-	if ((uint64_t)r->sp > *v->c[C_MAX_SP] && !v->silent) {
-		*v->c[C_MAX_SP] = (uint64_t)r->sp;
-		thr_rec(t, PR_MAXSP, 1, (uint64_t)r->sp, 0);
-	}
+	thr_count_max(t, C_MAX_SP, (uint64_t)r->sp);
 	if (r->pushed && r->sp - 1 >= v->stack_depth) {
 		thr_count(t, C_STACK_OVERFLOWS, 1);
-		thr_write(t, MEM_KD, spill_addr(t, r->sp - 1), THR_STACK_ENTRY_BYTES);
+		thr_write(t, MEM_KD, thr_spill_addr(t, (uint64_t)(r->sp - 1)),
+		          THR_STACK_ENTRY_BYTES);
 	}
 	/* the node address comes from the refilled entry: read it after */
 	thr_wait_mem(t, fetch_node);
