@@ -1,10 +1,10 @@
 /*
  * cache.c: the generic set-associative cache (see cache.h).
  *
- * Storage is two flat arrays of nsets*ways words (tags, LRU stamps) and one
- * of MSHR lines, allocated once in cache_init. LRU keeps a 64-bit use stamp
- * per way: the victim is the way with the smallest stamp (empty ways first),
- * which is exact LRU and needs no list manipulation; 2^64 accesses never wrap.
+ * Storage is one flat array of nsets*ways ways (tag and LRU stamp side by
+ * side, set by set) and one of MSHR lines, allocated once in cache_init.
+ * LRU keeps a 64-bit use stamp per way: the victim is the way with the smallest stamp (empty ways
+ * first), which is exact LRU and needs no list manipulation; 2^64 accesses never wrap.
  */
 #include "cache.h"
 
@@ -28,11 +28,16 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 	c->nsets = (uint32_t)(p->size_bytes / per_set);
 	while (c->hash_bits < 63 && (1ull << c->hash_bits) < c->nsets)
 		c->hash_bits++;
-	size_t n = (size_t)c->nsets * p->ways;
-	c->tag = malloc(n * sizeof *c->tag);
-	c->use = calloc(n, sizeof *c->use);
+	c->set_mask = !(c->nsets & (c->nsets - 1)) ? c->nsets - 1 : 0;
+	c->line_shift = -1;
+	for (int b = 0; b < 32; b++)
+		if (p->line_bytes == 1u << b)
+			c->line_shift = b;
+	/* whole 64-byte host lines: a 4-way set is exactly one */
+	size_t bytes = (size_t)c->nsets * p->ways * sizeof(cache_way);
+	c->way = aligned_alloc(64, (bytes + 63) / 64 * 64);
 	c->mshr_line = malloc(p->mshrs * sizeof *c->mshr_line);
-	if (!c->tag || !c->use || !c->mshr_line) {
+	if (!c->way || !c->mshr_line) {
 		cache_free(c);
 		return diag_set(d, "config", 0, 0, "%s: out of memory", what);
 	}
@@ -42,19 +47,17 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 
 void cache_free(cache *c)
 {
-	free(c->tag);
-	free(c->use);
+	free(c->way);
 	free(c->mshr_line);
-	c->tag = c->use = c->mshr_line = NULL;
+	c->way = NULL;
+	c->mshr_line = NULL;
 }
 
 void cache_flush(cache *c)
 {
 	size_t n = (size_t)c->nsets * c->p.ways;
-	for (size_t i = 0; i < n; i++) {
-		c->tag[i] = CACHE_INVALID;
-		c->use[i] = 0;
-	}
+	for (size_t i = 0; i < n; i++)
+		c->way[i] = (cache_way){CACHE_INVALID, 0};
 	for (uint32_t i = 0; i < c->p.mshrs; i++)
 		c->mshr_line[i] = CACHE_INVALID;
 	c->mshr_used = 0;
@@ -64,21 +67,21 @@ void cache_flush(cache *c)
  * strides that are multiples of nsets (regions 128-byte aligned, records of
  * equal size) spread over the sets instead of piling into one (seed 002 §4.2:
  * "address-hashing is used to reduce the probability of collisions"). */
-uint32_t cache_set_of(const cache *c, uint64_t line)
+uint32_t cache_set_fold(const cache *c, uint64_t line)
 {
 	uint64_t h = line;
 	if (c->p.hash == CACHE_HASH_XOR && c->hash_bits) {
 		for (uint64_t x = line >> c->hash_bits; x; x >>= c->hash_bits)
 			h ^= x;
 	}
-	return (uint32_t)(h % c->nsets);
+	return (uint32_t)(c->set_mask ? h & c->set_mask : h % c->nsets);
 }
 
 static int find_way(const cache *c, uint32_t set, uint64_t line)
 {
-	const uint64_t *t = c->tag + (size_t)set * c->p.ways;
+	const cache_way *s = c->way + (size_t)set * c->p.ways;
 	for (uint32_t w = 0; w < c->p.ways; w++)
-		if (t[w] == line)
+		if (s[w].tag == line)
 			return (int)w;
 	return -1;
 }
@@ -108,7 +111,7 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 	int w = find_way(c, set, line);
 	if (w >= 0) {
 		size_t i = (size_t)set * c->p.ways + (size_t)w;
-		c->use[i] = ++c->stamp;
+		c->way[i].use = ++c->stamp;
 		c->s.accesses++;
 		c->s.hits++;
 		c->s.bytes += bytes;
@@ -155,29 +158,30 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 		*victim = CACHE_INVALID;
 	uint32_t set = cache_set_of(c, line);
 	size_t base = (size_t)set * c->p.ways;
+	cache_way *s = c->way + base;
 	int w = find_way(c, set, line);
 	if (w < 0) {
 		/* empty way first, else the least recently used */
 		uint32_t best = 0;
 		for (uint32_t i = 0; i < c->p.ways; i++) {
-			if (c->tag[base + i] == CACHE_INVALID) {
+			if (s[i].tag == CACHE_INVALID) {
 				best = i;
 				break;
 			}
-			if (c->use[base + i] < c->use[base + best])
+			if (s[i].use < s[best].use)
 				best = i;
 		}
-		if (c->tag[base + best] != CACHE_INVALID) {
+		if (s[best].tag != CACHE_INVALID) {
 			c->s.evictions++;
 			if (victim)
-				*victim = c->tag[base + best];
+				*victim = s[best].tag;
 		}
-		c->tag[base + best] = line;
+		s[best].tag = line;
 		c->s.fills++;
 		c->s.fill_bytes += c->p.line_bytes;
 		w = (int)best;
 	}
-	c->use[base + (size_t)w] = ++c->stamp;
+	s[w].use = ++c->stamp;
 	return (uint32_t)(base + (size_t)w);
 }
 
@@ -189,7 +193,7 @@ int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
 	c->s.func_accesses++;
 	c->s.bytes += bytes;
 	if (w >= 0) {
-		c->use[(size_t)set * c->p.ways + (size_t)w] = ++c->stamp;
+		c->way[(size_t)set * c->p.ways + (size_t)w].use = ++c->stamp;
 		c->s.hits++;
 		c->s.func_hits++;
 		return 1;

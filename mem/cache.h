@@ -62,12 +62,20 @@ typedef struct cache_stats {
 	uint64_t func_accesses, func_hits, func_merges;
 } cache_stats;
 
+/* One way: its line and its LRU stamp side by side, so a 4-way set is one
+ * 64-byte host cache line (two arrays made every lookup touch two). */
+typedef struct cache_way {
+	uint64_t tag; /* line index; CACHE_INVALID when empty */
+	uint64_t use; /* LRU stamp (larger = more recent) */
+} cache_way;
+
 typedef struct cache {
 	cache_params p;
 	uint32_t nsets;
 	uint32_t hash_bits; /* for xor-fold: bits of nsets rounded up */
-	uint64_t *tag;      /* nsets*ways line indices; CACHE_INVALID when empty */
-	uint64_t *use;      /* nsets*ways LRU stamps (larger = more recent) */
+	uint64_t set_mask;  /* nsets - 1 when nsets is a power of two, else 0 */
+	int line_shift;     /* log2(line_bytes) when a power of two, else -1 */
+	cache_way *way;     /* nsets*ways, set by set, 64-byte aligned */
 	uint64_t stamp;
 	uint64_t *mshr_line; /* p.mshrs entries; CACHE_INVALID when free */
 	uint32_t mshr_used;
@@ -85,9 +93,16 @@ void cache_flush(cache *c);
 
 static inline uint64_t cache_line_of(const cache *c, uint64_t addr)
 {
-	return addr / c->p.line_bytes;
+	return c->line_shift >= 0 ? addr >> c->line_shift : addr / c->p.line_bytes;
 }
-uint32_t cache_set_of(const cache *c, uint64_t line);
+uint32_t cache_set_fold(const cache *c, uint64_t line);
+/* The set a line maps to (inline: every lookup starts here). */
+static inline uint32_t cache_set_of(const cache *c, uint64_t line)
+{
+	if (c->p.hash == CACHE_HASH_NONE && c->set_mask)
+		return (uint32_t)(line & c->set_mask);
+	return cache_set_fold(c, line);
+}
 
 /* One access to one line (an access spanning two lines is two lookups).
  * bytes is only counted. *mshr receives the MSHR index for MISS_NEW and
@@ -112,14 +127,11 @@ static inline int cache_mshr_free(const cache *c)
  * 0, and the caller goes on with cache_lookup (and cache_fill). */
 static inline int cache_try_hit(cache *c, uint64_t line, uint32_t bytes)
 {
-	uint32_t n = c->nsets, ways = c->p.ways;
-	uint32_t set = c->p.hash == CACHE_HASH_NONE && !(n & (n - 1)) ? (uint32_t)(line & (n - 1))
-	                                                              : cache_set_of(c, line);
-	size_t base = (size_t)set * ways;
-	const uint64_t *t = c->tag + base;
+	uint32_t ways = c->p.ways;
+	cache_way *s = c->way + (size_t)cache_set_of(c, line) * ways;
 	for (uint32_t w = 0; w < ways; w++)
-		if (t[w] == line) {
-			c->use[base + w] = ++c->stamp;
+		if (s[w].tag == line) {
+			s[w].use = ++c->stamp;
 			c->s.accesses++;
 			c->s.hits++;
 			c->s.bytes += bytes;

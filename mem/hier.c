@@ -380,7 +380,9 @@ static void hier_access_func(void *impl, const mem_req *r)
 	}
 	cache *c = &h->l1[type].c;
 	uint32_t lb = c->p.line_bytes;
-	uint64_t first = r->addr / lb, last = (r->addr + bytes - 1) / lb, end = r->addr + bytes;
+	uint64_t first = cache_line_of(c, r->addr), end = r->addr + bytes;
+	/* most reads fit one line: no second division (36-byte lines) */
+	uint64_t last = end <= (first + 1) * lb ? first : cache_line_of(c, end - 1);
 	for (uint64_t line = first; line <= last; line++) {
 		uint64_t lo = line * lb, hi = lo + lb;
 		uint64_t a = r->addr > lo ? r->addr : lo, b = end < hi ? end : hi;

@@ -670,6 +670,8 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
  * a line a region left in flight counts as on its way (hier.c). With
  * drain, the range ends with every slot free; without, as soon as its last
  * tile is handed out, packets still in flight. */
+#define PREFETCH_TURNS 4
+
 static int func_range(chip *c, int end, int drain)
 {
 	chip_fidelity *F = &c->fid;
@@ -710,13 +712,17 @@ static int func_range(chip *c, int end, int drain)
 						continue;
 				}
 				if (t->rp) {
-					/* the next slot's stream is elsewhere in the
-					 * record: start fetching it now */
-					const thr_ctx *u = r + 1 < c->nrtp  ? &c->rtp[r + 1].t[s]
-					                   : s + 1 < c->tpr ? &c->rtp[0].t[s + 1]
-					                                    : NULL;
-					if (u && u->rp)
-						__builtin_prefetch(u->rp);
+					/* the stream of the slot a few turns on is
+					 * elsewhere in the record: start fetching it
+					 * now (one turn ahead was too late to hide
+					 * the host's memory latency) */
+					int i = s * c->nrtp + r + PREFETCH_TURNS;
+					if (i < c->nrtp * c->tpr) {
+						const thr_ctx *u =
+						    &c->rtp[i % c->nrtp].t[i / c->nrtp];
+						if (u->rp)
+							__builtin_prefetch(u->rp);
+					}
 					busy |= thr_replay_step(t);
 				} else if (thr_step_func(t)) {
 					busy = 1;

@@ -25,6 +25,8 @@ int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int m
 	u->ops_n = &u->own[0];
 	u->busy = &u->own[1];
 	u->rays = &u->own[2];
+	for (int r = 0; r <= PKT_RAYS; r++)
+		u->issue[r] = (uint32_t)thr_unit_issue_div(u, r);
 	u->free_at = calloc((size_t)u->count, sizeof *u->free_at);
 	u->ops = calloc((size_t)max_waiters, sizeof *u->ops);
 	u->wait = calloc((size_t)max_waiters, sizeof *u->wait);
@@ -39,7 +41,7 @@ void thr_unit_free(thr_unit *u)
 	memset(u, 0, sizeof *u);
 }
 
-uint64_t thr_unit_issue(const thr_unit *u, int rays)
+uint64_t thr_unit_issue_div(const thr_unit *u, int rays)
 {
 	int r = u->masked ? PKT_RAYS : rays;
 	uint64_t c = ((uint64_t)r + (uint64_t)u->width - 1) / (uint64_t)u->width;

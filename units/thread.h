@@ -67,6 +67,10 @@ typedef struct thr_unit {
 	void (*on_start)(void *ctx, uint64_t arg);
 	uint64_t *ops_n, *busy, *rays; /* counters; point at own[] if unregistered */
 	uint64_t own[3];
+	/* issue cycles by active rays (thr_unit_issue), computed once: every
+	 * op, timed or functional, needs it, and a division per op showed in
+	 * functional runs' profiles */
+	uint32_t issue[PKT_RAYS + 1];
 } thr_unit;
 
 /* count/width/latency from cfg; masked: charge 64 rays per op; sched: enum
@@ -75,7 +79,11 @@ int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int m
                   int max_waiters);
 void thr_unit_free(thr_unit *u);
 /* Issue cycles of an op with `rays` active rays. */
-uint64_t thr_unit_issue(const thr_unit *u, int rays);
+uint64_t thr_unit_issue_div(const thr_unit *u, int rays);
+static inline uint64_t thr_unit_issue(const thr_unit *u, int rays)
+{
+	return rays >= 0 && rays <= PKT_RAYS ? u->issue[rays] : thr_unit_issue_div(u, rays);
+}
 /* Requests one op for requester id (at most one outstanding per id). done
  * runs at issue start + issue cycles + latency. */
 void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler done, void *ctx,
