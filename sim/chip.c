@@ -233,6 +233,9 @@ static uint64_t *reg(chip *c, const char *name, const char *unit, const char *de
 	return p;
 }
 
+/* Threads per RTP whose tiles the default warm-up holds at most. */
+#define WARMUP_TPR 16
+
 /* Sizes the sampling plan of one frame (the same for every frame). */
 static int fid_init(chip *c)
 {
@@ -245,8 +248,11 @@ static int fid_init(chip *c)
 	 * has finished anything: its window would be empty */
 	F->unit_tiles = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;
 	/* a region takes over a full chip (packets in flight, caches warm):
-	 * the warm-up refills the memory and unit queues (docs/fidelity.md) */
-	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : threads;
+	 * the warm-up refills the memory and unit queues (docs/fidelity.md).
+	 * One tile per thread, but at most WARMUP_TPR per RTP: at 64 threads
+	 * per RTP a 64-tile warm-up measured as well as a 256-tile one */
+	int warm = c->nrtp * (c->tpr < WARMUP_TPR ? c->tpr : WARMUP_TPR);
+	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : warm;
 	size_t nf = (size_t)cfg->frame.frames;
 	F->est = calloc(nf, sizeof *F->est);
 	F->half = calloc(nf, sizeof *F->half);

@@ -101,8 +101,8 @@ static const cfg_key keys[] = {
     {INT("sampling.warmup_tiles", sampling.warmup_tiles, -1, -1, 1000000, "tiles"),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: tiles simulated cycle by cycle, unmeasured, before each unit; "
-             "-1 = rtps x threads_per_rtp (the region takes over packets in flight with warm "
-             "caches; the warm-up refills the memory and unit queues)"},
+             "-1 = rtps x min(threads_per_rtp, 16) (the region takes over packets in flight "
+             "with warm caches; the warm-up refills the memory and unit queues)"},
     {INT("sampling.min_units", sampling.min_units, 8, 3, 1000000, "units"),
      .source = "a run setting (docs/fidelity.md)",
      .desc =
