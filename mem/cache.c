@@ -3,8 +3,9 @@
  *
  * Storage is one flat array of nsets*ways ways (tag and LRU stamp side by
  * side, set by set) and one of MSHR lines, allocated once in cache_init.
- * LRU keeps a 64-bit use stamp per way: the victim is the way with the smallest stamp (empty ways
- * first), which is exact LRU and needs no list manipulation; 2^64 accesses never wrap.
+ * LRU keeps a 64-bit use stamp per way: the victim is the way with the
+ * smallest stamp (empty ways first), which is exact LRU and needs no list
+ * manipulation; 2^64 accesses never wrap.
  */
 #include "cache.h"
 
@@ -66,7 +67,9 @@ void cache_flush(cache *c)
 /* XOR-fold: the line index folded onto itself in hash_bits-wide slices, so
  * strides that are multiples of nsets (regions 128-byte aligned, records of
  * equal size) spread over the sets instead of piling into one (seed 002 §4.2:
- * "address-hashing is used to reduce the probability of collisions"). */
+ * "address-hashing is used to reduce the probability of collisions").
+ * cache_set_of calls this only for hashed caches and set counts that are
+ * not a power of two. */
 uint32_t cache_set_fold(const cache *c, uint64_t line)
 {
 	uint64_t h = line;
@@ -210,8 +213,8 @@ int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
 
 uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes)
 {
-	uint64_t first = addr / c->p.line_bytes;
-	uint64_t last = (addr + (bytes ? bytes : 1) - 1) / c->p.line_bytes;
+	uint64_t first = cache_line_of(c, addr);
+	uint64_t last = cache_line_of(c, addr + (bytes ? bytes : 1) - 1);
 	uint32_t missed = 0;
 	for (uint64_t l = first; l <= last; l++) {
 		/* bytes of this access that fall into line l */

@@ -328,6 +328,12 @@ static int thread_init(thr_ctx *t, thr_rtp *rp, int id, int gid, int nkids)
 	return t->stack && t->kids ? 0 : -1;
 }
 
+static void thread_free(thr_ctx *t)
+{
+	free(t->stack);
+	free(t->kids);
+}
+
 chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 {
 	if (cfg->chip.packet_w != TILE_W || cfg->chip.packet_h != TILE_H) {
@@ -462,6 +468,12 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 			if (thread_init(&rp->t[i], rp, i, r * c->tpr + i, nkids))
 				goto oom;
 	}
+	c->turn = malloc((size_t)c->nrtp * (size_t)c->tpr * sizeof *c->turn);
+	if (!c->turn)
+		goto oom;
+	for (int s = 0; s < c->tpr; s++)
+		for (int r = 0; r < c->nrtp; r++)
+			c->turn[s * c->nrtp + r] = &c->rtp[r].t[s];
 	/* a thread outside the RTPs' slots, for rebuilding replayed packets */
 	c->scratch = alloc64(sizeof(thr_ctx));
 	if (!c->scratch || thread_init(c->scratch, &c->rtp[0], 0, 0, nkids) || c->oom ||
@@ -483,19 +495,16 @@ void chip_destroy(chip *c)
 		thr_rtp *rp = &c->rtp[r];
 		for (int k = 0; k < UNIT_NKINDS; k++)
 			thr_unit_free(&rp->u[k]);
-		for (int i = 0; rp->t && i < rp->nt; i++) {
-			free(rp->t[i].stack);
-			free(rp->t[i].kids);
-		}
+		for (int i = 0; rp->t && i < rp->nt; i++)
+			thread_free(&rp->t[i]);
 		free(rp->t);
 		free(rp->q);
 	}
 	free(c->rtp);
-	if (c->scratch) {
-		free(c->scratch->stack);
-		free(c->scratch->kids);
-		free(c->scratch);
-	}
+	free(c->turn);
+	if (c->scratch)
+		thread_free(c->scratch);
+	free(c->scratch);
 	rgc_free(&c->g);
 	fb_free(&c->fb);
 	pr_free(&c->rec);
@@ -662,6 +671,9 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
 	return 1;
 }
 
+/* Thread slots ahead whose packet streams func_range prefetches. */
+#define PREFETCH_TURNS 4
+
 /* Functional processing of tiles from the RGC's position up to `end`, with
  * the same unit code in functional mode (thr_env.func) and every thread
  * slot in use, as the detailed chip has them: each slot holds a packet, and
@@ -676,8 +688,6 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
  * a line a region left in flight counts as on its way (hier.c). With
  * drain, the range ends with every slot free; without, as soon as its last
  * tile is handed out, packets still in flight. */
-#define PREFETCH_TURNS 4
-
 static int func_range(chip *c, int end, int drain)
 {
 	chip_fidelity *F = &c->fid;
@@ -687,7 +697,7 @@ static int func_range(chip *c, int end, int drain)
 	 * region, when one is left, the last region ended at least `gap`
 	 * tiles ago, and there is room before the next planned one. */
 	int chunked = F->mode == CFG_FIDELITY_SAMPLED, given = 0, extra = 0;
-	int room = F->warmup_tiles + F->unit_tiles;
+	int room = F->warmup_tiles + F->unit_tiles, n = c->nrtp * c->tpr;
 	double d0[RES_N], d1[RES_N];
 	if (chunked)
 		chip_demand(c, d0);
@@ -698,42 +708,38 @@ static int func_range(chip *c, int end, int drain)
 		if (!drain && c->g.next >= end)
 			break;
 		busy = 0;
-		for (int s = 0; s < c->tpr; s++)
-			for (int r = 0; r < c->nrtp; r++) {
-				thr_ctx *t = &c->rtp[r].t[s];
-				if (!t->p && !t->rp) {
-					if (chunked && given == F->unit_tiles) {
-						chip_demand(c, d1);
-						int hard = account(F, piece(c, d0, d1), 1);
-						memcpy(d0, d1, sizeof d0);
-						given = 0;
-						if (hard && !drain && F->extra_left > 0 &&
-						    c->g.next - F->last_end >= F->gap &&
-						    end - c->g.next >= room) {
-							end = c->g.next;
-							extra = 1;
-						}
+		for (int i = 0; i < n; i++) {
+			thr_ctx *t = c->turn[i];
+			if (!t->p && !t->rp) {
+				if (chunked && given == F->unit_tiles) {
+					chip_demand(c, d1);
+					int hard = account(F, piece(c, d0, d1), 1);
+					memcpy(d0, d1, sizeof d0);
+					given = 0;
+					if (hard && !drain && F->extra_left > 0 &&
+					    c->g.next - F->last_end >= F->gap &&
+					    end - c->g.next >= room) {
+						end = c->g.next;
+						extra = 1;
 					}
-					if (!func_give(c, t, end, &given))
-						continue;
 				}
-				if (t->rp) {
-					/* the stream of the slot a few turns on is
-					 * elsewhere in the record: start fetching it
-					 * now (one turn ahead was too late to hide
-					 * the host's memory latency) */
-					int i = s * c->nrtp + r + PREFETCH_TURNS;
-					if (i < c->nrtp * c->tpr) {
-						const thr_ctx *u =
-						    &c->rtp[i % c->nrtp].t[i / c->nrtp];
-						if (u->rp)
-							__builtin_prefetch(u->rp);
-					}
-					busy |= thr_replay_step(t);
-				} else if (thr_step_func(t)) {
-					busy = 1;
-				}
+				if (!func_give(c, t, end, &given))
+					continue;
 			}
+			if (t->rp) {
+				/* the stream of the slot a few turns on is elsewhere
+				 * in the record: start fetching it now (one turn
+				 * ahead was too late to hide the host's memory
+				 * latency) */
+				int k = i + PREFETCH_TURNS < n ? i + PREFETCH_TURNS
+				                               : i + PREFETCH_TURNS - n;
+				if (k < n && c->turn[k]->rp)
+					__builtin_prefetch(c->turn[k]->rp);
+				busy |= thr_replay_step(t);
+			} else if (thr_step_func(t)) {
+				busy = 1;
+			}
+		}
 	}
 	c->env.func = 0;
 	if (chunked) {

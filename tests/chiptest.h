@@ -11,16 +11,24 @@
 #include "world.h"
 
 /* Loads the scene at path (NULL: the view's, else the embedded room) with view vname of
- * the views file (NULL: the default view). */
-static inline void tu_load_world(world *w, const char *path, const char *views, const char *vname)
+ * the views file (NULL: the default view), through a world cache in cache_dir (NULL:
+ * none). */
+static inline void tu_load_world_cached(world *w, const char *path, const char *views,
+                                        const char *vname, const char *cache_dir)
 {
 	world_opts o;
 	world_opts_default(&o);
 	o.scene = path;
 	o.views = views;
 	o.view = vname;
+	o.cache_dir = cache_dir;
 	diag d;
 	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+}
+
+static inline void tu_load_world(world *w, const char *path, const char *views, const char *vname)
+{
+	tu_load_world_cached(w, path, views, vname, NULL);
 }
 
 /* Builds a chip for c and runs every frame; the caller destroys it. */

@@ -445,6 +445,19 @@ Test(fidelity, sdram_factor_fits_the_units_law)
 		cyc[j] = 1.1 * u[j].hbus;
 	}
 	cr_assert_float_eq(smp_fit_sdram_factor(u, cyc, N), 1.0, 1e-9);
+	/* PCI-bound units beside SDRAM-bound ones under k = 1.5: a factor that
+	 * also scaled the host bus would fit neither group (alone, every unit
+	 * PCI-bound, one ratio absorbs any common scale) */
+	for (int j = 0; j < N; j++) {
+		int pci = j % 2;
+		u[j] = (smp_piece){.comp = 500.0,
+		                   .sdram = pci ? 100.0 : 400.0 + 20.0 * j,
+		                   .hbus = pci ? 900.0 + 50.0 * j : 0.0};
+		double x = pci ? u[j].hbus : 1.5 * u[j].sdram;
+		cyc[j] = x > u[j].comp ? x : u[j].comp;
+	}
+	double mixed = smp_fit_sdram_factor(u, cyc, N);
+	cr_assert(fabs(mixed - 1.5) <= 0.04, "PCI- and SDRAM-bound units: fitted %.2f", mixed);
 }
 
 /* Loads a shared view (the test skips when the shared scenes are absent)

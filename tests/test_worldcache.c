@@ -88,17 +88,7 @@ static void same_world(const world *w, const world *b)
 /* The one world-*.bin in dir, into out; returns how many there are. */
 static int world_files(const char *dir, char *out, size_t n)
 {
-	DIR *dp = opendir(dir);
-	cr_assert(dp);
-	int k = 0;
-	struct dirent *e;
-	while ((e = readdir(dp)))
-		if (!strncmp(e->d_name, "world-", 6)) {
-			snprintf(out, n, "%s/%s", dir, e->d_name);
-			k++;
-		}
-	closedir(dp);
-	return k;
+	return tu_find_files(dir, "world-", out, n);
 }
 
 Test(worldcache, hit_is_the_built_world)
@@ -173,13 +163,7 @@ Test(worldcache, damaged_or_truncated_file_misses)
 	struct stat st;
 	cr_assert_eq(stat(f, &st), 0);
 	/* one bit flipped in the memory image */
-	FILE *fp = fopen(f, "r+b");
-	cr_assert(fp);
-	fseek(fp, st.st_size - 64, SEEK_SET);
-	int c = fgetc(fp);
-	fseek(fp, st.st_size - 64, SEEK_SET);
-	fputc(c ^ 1, fp);
-	fclose(fp);
+	tu_flip_byte(f, (long)st.st_size - 64, 1);
 	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a damaged file is a miss");
 	same_world(&w, &b);
 	world_free(&w);

@@ -10,6 +10,7 @@
 #define SAAR_TESTS_TESTUTIL_H
 
 #include <criterion/criterion.h>
+#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,6 +54,36 @@ static inline void tu_write(char *out, size_t n, const char *dir, const char *na
 	FILE *f = fopen(out, "w");
 	cr_assert(f, "cannot write %s", out);
 	fputs(text, f);
+	fclose(f);
+}
+
+/* The files in dir whose names start with prefix (a world cache's
+ * "world-", "packets-"): how many there are, the last one's path in out. */
+static inline int tu_find_files(const char *dir, const char *prefix, char *out, size_t n)
+{
+	DIR *dp = opendir(dir);
+	cr_assert(dp, "cannot list %s", dir);
+	int k = 0;
+	struct dirent *e;
+	while ((e = readdir(dp)))
+		if (!strncmp(e->d_name, prefix, strlen(prefix))) {
+			snprintf(out, n, "%s/%s", dir, e->d_name);
+			k++;
+		}
+	closedir(dp);
+	return k;
+}
+
+/* Damages file path in place: the byte at offset off gets mask xor'ed in. */
+static inline void tu_flip_byte(const char *path, long off, int mask)
+{
+	FILE *f = fopen(path, "r+b");
+	cr_assert(f, "cannot open %s", path);
+	cr_assert_eq(fseek(f, off, SEEK_SET), 0);
+	int ch = fgetc(f);
+	cr_assert_neq(ch, EOF, "%s has no byte %ld", path, off);
+	cr_assert_eq(fseek(f, off, SEEK_SET), 0);
+	fputc(ch ^ mask, f);
 	fclose(f);
 }
 
