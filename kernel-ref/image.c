@@ -21,8 +21,10 @@
 
 /* Opens the plugin. RTLD_NODELETE keeps it mapped after dlclose, so the next
  * call's dlopen is a lookup, not a second 0.3 s load, and no handle has to
- * live in a global. Returns the handle and fills *p, or NULL with d set. */
-static void *plugin_open(const img_plugin **p, const char *file, diag *d)
+ * live in a global. Returns the handle and fills *p (and, when used is not
+ * NULL, the plugin file's path), or NULL with d set. */
+static void *plugin_open_at(const img_plugin **p, const char *file, char *used, size_t nused,
+                            diag *d)
 {
 	char exe[PATH_MAX], path[2][PATH_MAX + 64], why[512] = "";
 	int n = 0;
@@ -51,8 +53,11 @@ static void *plugin_open(const img_plugin **p, const char *file, diag *d)
 		const img_plugin *(*entry)(void);
 		*(void **)&entry = dlsym(h, IMG_PLUGIN_ENTRY);
 		*p = entry ? entry() : NULL;
-		if (*p && (*p)->abi == IMG_PLUGIN_ABI)
+		if (*p && (*p)->abi == IMG_PLUGIN_ABI) {
+			if (used)
+				snprintf(used, nused, "%s", path[i]);
 			return h;
+		}
 		snprintf(why, sizeof why, "%.400s: not a saarsim image plugin of ABI %d", path[i],
 		         IMG_PLUGIN_ABI);
 		dlclose(h);
@@ -61,6 +66,21 @@ static void *plugin_open(const img_plugin **p, const char *file, diag *d)
 		snprintf(why, sizeof why, "cannot find the running program's folder");
 	diag_set(d, file, 0, 0, "image support (%s) not found: %s", IMG_PLUGIN_FILE, why);
 	return NULL;
+}
+
+static void *plugin_open(const img_plugin **p, const char *file, diag *d)
+{
+	return plugin_open_at(p, file, NULL, 0, d);
+}
+
+int img_plugin_path(char *out, size_t n, diag *d)
+{
+	const img_plugin *p;
+	void *lib = plugin_open_at(&p, "image support", out, n, d);
+	if (!lib)
+		return -1;
+	dlclose(lib);
+	return 0;
 }
 
 static const char *ext_of(const char *path, char *buf, size_t cap)

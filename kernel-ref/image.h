@@ -27,6 +27,11 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
  * --out before it spends the run. */
 int img_can_write(const char *path, diag *d);
 
+/* The image plugin file that reads and writes images (out, n bytes); -1
+ * with d set when there is none. A world cache keys texture-decoding
+ * results on it, since rebuilding the plugin does not rebuild the program. */
+int img_plugin_path(char *out, size_t n, diag *d);
+
 /* Reads any OIIO-readable image as RGBA8 (row 0 at the top). *rgba is
  * malloc'd; the caller frees it. */
 int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d);

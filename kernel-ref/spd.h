@@ -23,6 +23,14 @@
 
 #define SPD_PREFIX "spd:"
 
+#include <string.h>
+
+/* Does path name a procedural scene ("spd:...") rather than a file? */
+static inline int spd_is(const char *path)
+{
+	return path && strncmp(path, SPD_PREFIX, strlen(SPD_PREFIX)) == 0;
+}
+
 /* Builds the scene named by spec ("spd:balls:3", "spd:tetra:6:..."), and its
  * standard view into v (may be NULL). -1 with diag on an unknown name or a
  * size out of range. */

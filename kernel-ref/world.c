@@ -3,6 +3,7 @@
  */
 #include "world.h"
 
+#include "image.h"
 #include "spd.h"
 #include "worldcache.h"
 
@@ -171,13 +172,19 @@ const char *world_cache_name(int status)
  * procedural scene's own view goes to *sv. Files read go to f. */
 static int load_scene(world *w, const char *path, view *sv, wc_files *f, diag *d)
 {
-	if (path && strncmp(path, SPD_PREFIX, strlen(SPD_PREFIX)) == 0)
+	if (spd_is(path))
 		return spd_generate(&w->s, sv, path, d);
 	if (path) {
 		if (scene_load_files(&w->s, path, f ? wc_files_add : NULL, f, d))
 			return -1;
 		for (uint32_t i = 0; f && i < w->s.ntexs; i++)
 			wc_files_add(f, w->s.texs[i].path);
+		/* the texels came through the image plugin, a file of its own:
+		 * a rebuilt plugin must not meet the texels of the old one */
+		char plug[PATH_MAX];
+		diag pd;
+		if (f && w->s.ntexs && !img_plugin_path(plug, sizeof plug, &pd))
+			wc_files_add(f, plug);
 		return 0;
 	}
 	scene_default(&w->s);
@@ -199,7 +206,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 		view_default(&w->v);
 	}
 	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
-	int spd = path && strncmp(path, SPD_PREFIX, strlen(SPD_PREFIX)) == 0;
+	int spd = spd_is(path);
 	wc_files files = {0};
 	char cfile[PATH_MAX], *ckey = NULL;
 	view sv;
@@ -215,8 +222,9 @@ int world_load(world *w, const world_opts *o, diag *d)
 	if (o->cache_dir) {
 		if (wc_prepare(o->cache_dir, w->cache_prog, sizeof w->cache_prog, d))
 			return -1;
-		if (!(ckey = wc_world_key(w->cache_prog, path, &o->kd)) ||
-		    wc_file(cfile, sizeof cfile, o->cache_dir, "world", ckey)) {
+		if (!(ckey = wc_world_key(w->cache_prog, path, &o->kd)))
+			return diag_set(d, o->cache_dir, 0, 0, "--world-cache: out of memory");
+		if (wc_file(cfile, sizeof cfile, o->cache_dir, "world", ckey)) {
 			free(ckey);
 			return diag_set(d, o->cache_dir, 0, 0,
 			                "--world-cache: folder name too long");

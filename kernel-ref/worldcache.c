@@ -32,6 +32,8 @@
 #define _GNU_SOURCE /* asprintf */
 #include "worldcache.h"
 
+#include "spd.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -161,7 +163,7 @@ char *wc_world_key(const char *prog, const char *source, const kd_params *kd)
 {
 	/* a file by its real path: the same scene named from another folder
 	 * is the same entry */
-	char *rp = source && strncmp(source, "spd:", 4) ? realpath(source, NULL) : NULL;
+	char *rp = source && !spd_is(source) ? realpath(source, NULL) : NULL;
 	char *key;
 	int n = asprintf(
 	    &key, "saarsim world 1\n%s\nsource %s\nkd %a %a %d %d %a\nstructs %zu %zu %zu %zu\n",

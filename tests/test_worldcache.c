@@ -8,10 +8,12 @@
  */
 #include <dirent.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <sys/stat.h>
 #include <time.h>
 
 #include "image.h"
+#include "image_plugin.h"
 #include "testutil.h"
 #include "world.h"
 #include "worldcache.h"
@@ -134,6 +136,28 @@ Test(worldcache, changed_source_files_miss)
 	cr_assert_eq(img_write(p, 2, 2, px, NULL, &d), 0, "%s", d.msg);
 	touch_ahead(dir, "checker.png", 10);
 	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a changed texture is a miss");
+	world_free(&w);
+}
+
+/* The texels come through the image plugin, a file apart from the
+ * program: a rebuilt plugin (here a copy whose time moves on) misses. */
+Test(worldcache, rebuilt_image_plugin_misses)
+{
+	char dir[256], cache[300], obj[512], plug[PATH_MAX], copy[600], cmd[PATH_MAX + 700];
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
+	diag d;
+	cr_assert_eq(img_plugin_path(plug, sizeof plug, &d), 0, "%s", d.msg);
+	snprintf(copy, sizeof copy, "%s/%s", dir, IMG_PLUGIN_FILE);
+	snprintf(cmd, sizeof cmd, "cp '%s' '%s'", plug, copy);
+	cr_assert_eq(tu_run(cmd), 0);
+	setenv("SAAR_IMAGE_PLUGIN", copy, 1);
+	world w;
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED);
+	world_free(&w);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
+	world_free(&w);
+	touch_ahead(dir, IMG_PLUGIN_FILE, 10);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a rebuilt plugin is a miss");
 	world_free(&w);
 }
 
