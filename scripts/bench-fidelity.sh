@@ -89,7 +89,11 @@ for view in $VIEWS; do
 	run warm --views "$VIEWS_FILE" --view "$view" --size "$size" --fidelity functional \
 		>/dev/null || continue
 	# shellcheck disable=SC2012 # the newest record is the one just stored
-	[ "$view" = conference ] && REC_BYTES=$(ls -t "$TMP"/wc/packets-*.bin | head -1 | xargs stat -c %s)
+	# (none stored, e.g. the world cache could not be written: the floor
+	# line says 0 rather than the benchmark stopping here)
+	if [ "$view" = conference ]; then
+		REC_BYTES=$(ls -t "$TMP"/wc/packets-*.bin 2>/dev/null | head -1 | xargs -r stat -c %s || true)
+	fi
 	for cfg in std vma; do
 		cf=configs/saarcor-$cfg.yaml
 		for tpr in $THREADS; do
@@ -174,12 +178,14 @@ done
 
 # replicas: ten sampling offsets per rate of one run; one table row per
 # rate with the estimate's error against cycle and how often the interval
-# covered it. replicas OUT LABEL RATES ARGS...: the cycle truth and the
-# sampled runs get ARGS; the row starts with LABEL (table cells).
+# covered it. replicas OUT LABEL RATES TRUTH ARGS...: the cycle truth and
+# the sampled runs get ARGS; the truth's report is TRUTH, run only when it
+# is not there yet (rows differing in sampling settings alone share it);
+# the row starts with LABEL (table cells).
 replicas() {
-	rout=$1 label=$2 rates=$3
-	shift 3
-	"$SIM" "$@" --no-check --world-cache "$TMP/wc" --report "$TMP/rt_truth.json" \
+	rout=$1 label=$2 rates=$3 truth=$4
+	shift 4
+	[ -s "$truth" ] || "$SIM" "$@" --no-check --world-cache "$TMP/wc" --report "$truth" \
 		>/dev/null 2>&1 || return 0
 	for r in $rates; do
 		for o in 0.05 0.15 0.25 0.35 0.45 0.55 0.65 0.75 0.85 0.95; do
@@ -187,10 +193,10 @@ replicas() {
 				--set sampling.offset="$o" --report "$TMP/rp_$o.json" >/dev/null 2>&1 ||
 				rm -f "$TMP/rp_$o.json"
 		done
-		python3 - "$TMP" "$label" "$r" >>"$rout" <<'EOF'
+		python3 - "$TMP" "$label" "$r" "$truth" >>"$rout" <<'EOF'
 import glob, json, sys
-d, label, r = sys.argv[1:4]
-t = json.load(open(d + "/rt_truth.json"))["fidelity"]["fps"]
+d, label, r, truth = sys.argv[1:5]
+t = json.load(open(truth))["fidelity"]["fps"]
 e, cov, n = [], 0, 0
 for f in sorted(glob.glob(d + "/rp_*.json")):
     s = json.load(open(f))["fidelity"]
@@ -214,7 +220,8 @@ REP="$TMP/rep.txt"
 REP_VIEW=${BENCH_REP_VIEW:-robots}
 if grep -q "^  $REP_VIEW:" "$VIEWS_FILE"; then
 	for cfg in std vma; do
-		replicas "$REP" "$cfg" "0.05 0.1 0.2" --views "$VIEWS_FILE" --view "$REP_VIEW" \
+		replicas "$REP" "$cfg" "0.05 0.1 0.2" "$TMP/rt_rep_$cfg.json" \
+			--views "$VIEWS_FILE" --view "$REP_VIEW" \
 			--config configs/saarcor-$cfg.yaml --size "$SIZE" --set chip.threads_per_rtp=1
 	done
 fi
@@ -226,7 +233,8 @@ WUP="$TMP/wup.txt"
 if printf '%s\n' $VIEWS | grep -qx conference; then
 	for cfg in std vma; do
 		for w in 4 16 32; do
-			replicas "$WUP" "$cfg | $w" "0.05 0.1" --views "$VIEWS_FILE" --view conference \
+			replicas "$WUP" "$cfg | $w" "0.05 0.1" "$TMP/rt_wup_$cfg.json" \
+				--views "$VIEWS_FILE" --view conference \
 				--config configs/saarcor-$cfg.yaml --size "$CONF_SIZE" \
 				--set chip.threads_per_rtp=1 --warmup-tiles "$w"
 		done
