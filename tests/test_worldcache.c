@@ -6,7 +6,6 @@
  * is bad input (exit 2, one line); saarsim's second run takes the world
  * and kernel-ref's frame from the cache and reports the same results.
  */
-#include <dirent.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <sys/stat.h>
