@@ -122,8 +122,9 @@ static int take_tile(chip *c, thr_ctx *t)
 		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
 	thr_env *v = &c->env;
 	int tile = ty * c->g.tiles_x + tx;
-	/* functional processing replays the tile's packets when it can */
-	if (v->func && v->rec_in && v->rec_in->tile_pk[tile] >= 0) {
+	/* with a packet record the tile's packets replay their streams, in
+	 * functional stretches and detailed regions alike */
+	if (v->rec_in && v->rec_in->tile_pk[tile] >= 0) {
 		c->replayed[tile] = 1;
 		c->fid.replayed_tiles++;
 		thr_replay_begin(t, v->rec_in->tile_pk[tile]);
@@ -144,9 +145,8 @@ static void on_free(thr_ctx *t)
 		return;
 	thr_qitem it;
 	if (rgs_dequeue(t->rtp, &it)) {
-		/* regions rebuild replayed packets before they start */
-		if (!it.p) {
-			c->lost = 1;
+		if (!it.p) { /* a replayed child */
+			thr_replay_begin(t, it.rec);
 			return;
 		}
 		t->rec = it.rec;
@@ -474,10 +474,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	for (int s = 0; s < c->tpr; s++)
 		for (int r = 0; r < c->nrtp; r++)
 			c->turn[s * c->nrtp + r] = &c->rtp[r].t[s];
-	/* a thread outside the RTPs' slots, for rebuilding replayed packets */
-	c->scratch = alloc64(sizeof(thr_ctx));
-	if (!c->scratch || thread_init(c->scratch, &c->rtp[0], 0, 0, nkids) || c->oom ||
-	    fid_init(c))
+	if (c->oom || fid_init(c))
 		goto oom;
 	return c;
 oom:
@@ -502,9 +499,6 @@ void chip_destroy(chip *c)
 	}
 	free(c->rtp);
 	free(c->turn);
-	if (c->scratch)
-		thread_free(c->scratch);
-	free(c->scratch);
 	rgc_free(&c->g);
 	fb_free(&c->fb);
 	pr_free(&c->rec);
@@ -572,18 +566,9 @@ static uint64_t run_region(chip *c, int end)
 	c->fid.region_end = end;
 	c->env.func = 0;
 	/* packets a functional stretch left in flight go on cycle by cycle
-	 * from where they stopped: the region starts with a full chip, not
-	 * with every thread taking a tile at once; replayed ones first get
-	 * their rays and state back */
-	if (c->env.rec_in) {
-		for (int r = 0; r < c->nrtp; r++) {
-			for (int s = 0; s < c->tpr; s++)
-				if (thr_replay_rebuild(&c->rtp[r].t[s], c->scratch))
-					c->oom = 1;
-			if (thr_replay_rebuild_queue(&c->rtp[r], c->scratch))
-				c->oom = 1;
-		}
-	}
+	 * from where they stopped (replayed ones too: units/replay.h): the
+	 * region starts with a full chip, not with every thread taking a tile
+	 * at once */
 	for (int s = 0; s < c->tpr; s++)
 		for (int r = 0; r < c->nrtp; r++)
 			thr_func_to_timed(&c->rtp[r].t[s]);
@@ -735,10 +720,8 @@ static int func_range(chip *c, int end, int drain)
 				                               : i + PREFETCH_TURNS - n;
 				if (k < n && c->turn[k]->rp)
 					__builtin_prefetch(c->turn[k]->rp);
-				busy |= thr_replay_step(t);
-			} else if (thr_step_func(t)) {
-				busy = 1;
 			}
+			busy |= thr_step_func(t);
 		}
 	}
 	c->env.func = 0;
@@ -917,8 +900,8 @@ static void rec_store(chip *c)
 	c->rec_ms += now_ms() - t0;
 }
 
-/* Replayed tiles take the recorded frame's pixels (whatever rebuilt
- * packets drew into them is part of those). */
+/* Replayed tiles take the recorded frame's pixels (a replayed packet
+ * draws nothing). */
 static void rec_pixels(chip *c)
 {
 	for (int i = 0; i < c->g.ntiles; i++)
@@ -966,7 +949,7 @@ int chip_run(chip *c, diag *d)
 		for (int r = 0; r < c->nrtp; r++) {
 			for (int i = 0; i < c->tpr; i++)
 				thr_flush(&c->rtp[r].t[i]);
-			if (c->rtp[r].nidle != c->tpr || c->rtp[r].qn || c->lost)
+			if (c->rtp[r].nidle != c->tpr || c->rtp[r].qn)
 				return diag_set(d, "saarsim", 0, 0,
 				                "internal error: frame ended with busy threads");
 		}

@@ -118,7 +118,6 @@ typedef struct chip {
 	double sim_ms;   /* host time in chip_run */
 	int tiles_given; /* in the current frame */
 	int oom;
-	int lost;         /* a replayed packet reached a region unrebuilt: an internal error */
 	uint64_t *sh[11]; /* shade_counts mirrored into the registry */
 	uint64_t *memc[MEM_NTYPES][4];
 	/* optional progress callback: called every 64 tiles handed out */
@@ -131,7 +130,6 @@ typedef struct chip {
 	pktrec rec;
 	int rec_state;
 	uint8_t *replayed; /* per tile, this frame: its packets were replayed */
-	thr_ctx *scratch;  /* rebuilds replayed packets' parents (units/replay.h) */
 	/* every thread slot in functional turn order: slot 0 of each RTP,
 	 * then slot 1, ... (func_range) */
 	thr_ctx **turn;

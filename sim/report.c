@@ -204,7 +204,7 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up), "
 		        "demand %s in the last frame; cycles "
 		        "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
-		        "functional (%llu replayed)\n",
+		        "functional; %llu replayed from the packet record\n",
 		        F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles,
 		        model_str(F, ms, sizeof ms), x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
 		        (unsigned long long)F->detailed_tiles,

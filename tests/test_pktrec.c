@@ -115,11 +115,15 @@ Test(pktrec, replay_equals_the_math)
 	cr_assert_eq(n, tiles, "functional replays every tile (%llu), not %llu",
 	             (unsigned long long)tiles, (unsigned long long)n);
 	/* sampled: recorded at 4 threads per RTP, replayed at 4 and at 1;
-	 * regions rebuild the replayed packets they take over */
+	 * the detailed regions replay too (timed), taking over the packets
+	 * the functional stretches left in flight */
 	c.frame.width = c.frame.height = 256;
 	c.fidelity = CFG_FIDELITY_SAMPLED;
 	c.sampling.rate = 0.1;
-	record_then_replay(&plain, &cached, &c, "sampled, 4 threads per RTP");
+	n = record_then_replay(&plain, &cached, &c, "sampled, 4 threads per RTP");
+	tiles = (uint64_t)(256 / c.chip.packet_w) * (uint64_t)(256 / c.chip.packet_h);
+	cr_assert_eq(n, tiles, "sampled replays every tile (%llu), detailed ones too, not %llu",
+	             (unsigned long long)tiles, (unsigned long long)n);
 	c.chip.threads_per_rtp = 1;
 	chip *ref = tu_run_chip(&plain, &c);
 	chip *rep = tu_run_chip(&cached, &c);
@@ -128,6 +132,30 @@ Test(pktrec, replay_equals_the_math)
 	same_run(ref, rep, "sampled, 1 thread per RTP");
 	tu_assert_identical(rep, "sampled, 1 thread per RTP");
 	chip_destroy(ref);
+	chip_destroy(rep);
+	world_free(&plain);
+	world_free(&cached);
+}
+
+Test(pktrec, timed_replay_waits_where_the_math_waits)
+{
+	/* a 2-entry stack: traversal spills and reads entries back, and waits
+	 * for them before it reads the next node or shades (PR_WAIT): a
+	 * detailed region replaying the stream must wait there too, or its
+	 * reads and cycles would differ from the math's */
+	char dir[64];
+	world plain, cached;
+	saar_config c;
+	embedded(&plain, &cached, dir, sizeof dir, &c, 128);
+	c.chip.threads_per_rtp = 2;
+	c.chip.stack_depth = 2;
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.3;
+	record_then_replay(&plain, &cached, &c, "sampled, 2-entry stack");
+	chip *rep = tu_run_chip(&cached, &c);
+	cr_assert_eq(rep->rec_state, REC_REPLAYED);
+	cr_assert_gt(stats_get(&rep->st, "trav.stack_refills"), 0, "no stack refills to wait for");
+	cr_assert_gt(rep->fid.detailed_tiles, 0, "no detailed region");
 	chip_destroy(rep);
 	world_free(&plain);
 	world_free(&cached);

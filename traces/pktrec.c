@@ -25,7 +25,7 @@ struct pr_chunk {
 	uint8_t b[PR_CHUNK];
 };
 
-enum { PR_MAGIC = 0x31524b50 }; /* "PKR1" */
+enum { PR_MAGIC = 0x32524b50 }; /* "PKR2": PKR1 had no PR_WAIT */
 
 typedef struct pr_head {
 	uint32_t magic, w, h, ntiles, npk, accbits;

@@ -35,8 +35,9 @@ enum pr_op {
 	PR_ENTER,         /* packet type, rays: the packet enters a thread */
 	PR_SPAWN,         /* n, then n packet ids: children queued */
 	PR_END,           /* the packet is done */
-	PR_COUNT1 = 32,   /* + counter (enum thr_counter, < 32): counter += 1 */
-	PR_COUNT = 64,    /* + counter: amount; counter += amount */
+	PR_WAIT,        /* wait for the reads so far before the next request (a use waits anyway) */
+	PR_COUNT1 = 32, /* + counter (enum thr_counter, < 32): counter += 1 */
+	PR_COUNT = 64,  /* + counter: amount; counter += amount */
 	PR_NOPS = 96
 };
 /* A read's address is the zigzag-mapped difference to the packet's

@@ -38,7 +38,7 @@ int rgs_spawn(thr_rtp *r, thr_qitem it);
 void rgs_spawned(thr_rtp *r);
 int rgs_dequeue(thr_rtp *r, thr_qitem *it);
 /* A packet of `type` with `rays` valid rays enters thread t: its age, the
- * packet and ray counters (nothing while rebuilding, thr_env.silent). */
+ * packet and ray counters (the math and a replayed stream alike). */
 void rgs_enter_count(thr_ctx *t, int type, uint64_t rays);
 /* Gives queued packets to idle threads of RTP r. */
 void rgs_dispatch(thr_rtp *r);

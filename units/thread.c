@@ -245,6 +245,13 @@ static void mem_done(eng *e, void *ctx, uint64_t arg)
  * are. */
 static void rec_req(thr_ctx *t, int write, int type, uint64_t addr, uint32_t bytes)
 {
+	/* a wait between requests (the node read after stack refills, the
+	 * shading reads after them): a timed replay must make it too */
+	if (t->rwait) {
+		thr_rec(t, PR_WAIT, 0, 0, 0);
+		t->rwait = 0;
+	}
+	t->rread |= !write;
 	if (addr >= t->env->spill_base) {
 		uint64_t idx = (addr - thr_spill_addr(t, 0)) / THR_SPILL_STRIDE;
 		thr_rec(t, write ? PR_SPILL_W : PR_SPILL_R, 1, idx, 0);
@@ -267,8 +274,6 @@ static void rec_req(thr_ctx *t, int write, int type, uint64_t addr, uint32_t byt
 void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 {
 	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id};
-	if (t->env->silent)
-		return;
 	if (t->env->rec_out)
 		rec_req(t, 0, type, addr, bytes);
 	if (t->env->func) { /* the data is there at once: nothing to wait for */
@@ -282,8 +287,6 @@ void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 {
 	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id};
-	if (t->env->silent)
-		return;
 	if (t->env->rec_out)
 		rec_req(t, 1, type, addr, bytes);
 	if (t->env->func)
@@ -294,6 +297,10 @@ void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 
 void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
 {
+	if (t->rread) { /* recording (rec_req) */
+		t->rwait = 1;
+		t->rread = 0;
+	}
 	if (t->pending == 0) {
 		cont(t);
 		return;
@@ -304,15 +311,15 @@ void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
 
 void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
 {
+	/* an op starts after every read so far: its wait is implied */
+	t->rread = t->rwait = 0;
 	thr_rec(t, PR_USE + kind, 1, (uint64_t)rays, 0);
 	if (t->env->func) {
 		/* the op's counts as start() makes them, without its time */
 		thr_unit *u = &t->rtp->u[kind];
-		if (!t->env->silent) {
-			++*u->ops_n;
-			*u->busy += thr_unit_issue(u, rays);
-			*u->rays += (uint64_t)rays;
-		}
+		++*u->ops_n;
+		*u->busy += thr_unit_issue(u, rays);
+		*u->rays += (uint64_t)rays;
 		t->fnext = done;
 		t->fkind = kind;
 		t->frays = rays;

@@ -152,9 +152,6 @@ typedef struct thr_env {
 	 * one threads replay (units/replay.h); at most one is set */
 	pktrec *rec_out;
 	const pktrec *rec_in;
-	/* rebuilding a replayed packet's state (units/replay.c): no memory
-	 * requests, no counts, no ages */
-	int silent;
 } thr_env;
 
 int thr_env_init(thr_env *v);
@@ -191,6 +188,9 @@ typedef struct thr_ctx {
 	 * memory type (reads are recorded as differences; pktrec.h) */
 	uint64_t raddr[MEM_NTYPES];
 	uint32_t rbytes[MEM_NTYPES];
+	/* recording: a read since the last wait or op; a wait after reads
+	 * not yet recorded (it goes in before the next request: PR_WAIT) */
+	uint8_t rread, rwait;
 } thr_ctx;
 
 /* A queued secondary packet: the packet, or (p NULL) a replayed stream. */
@@ -255,7 +255,7 @@ static inline void thr_rec(thr_ctx *t, int op, int n, uint64_t a, uint64_t b)
  * the values that raised it: replaying them all gives the same maximum. */
 static inline void thr_count_max(thr_ctx *t, int id, uint64_t v)
 {
-	if (v <= *t->env->c[id] || t->env->silent)
+	if (v <= *t->env->c[id])
 		return;
 	*t->env->c[id] = v;
 	thr_rec(t, PR_MAXSP, 1, v, 0);
@@ -271,8 +271,6 @@ static inline uint64_t thr_spill_addr(const thr_ctx *t, uint64_t index)
 /* Adds n to counter id (enum thr_counter) for the thread's packet. */
 static inline void thr_count(thr_ctx *t, int id, uint64_t n)
 {
-	if (t->env->silent)
-		return;
 	*t->env->c[id] += n;
 	if (n == 1)
 		thr_rec(t, PR_COUNT1 + id, 0, 0, 0);
