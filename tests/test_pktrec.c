@@ -102,6 +102,13 @@ static void embedded(world *plain, world *cached, char *dir, size_t ndir, saar_c
 	c->fidelity = CFG_FIDELITY_FUNCTIONAL;
 }
 
+/* The frame's tiles under config c. */
+static uint64_t tiles_of(const saar_config *c)
+{
+	return (uint64_t)(c->frame.width / c->chip.packet_w) *
+	       (uint64_t)(c->frame.height / c->chip.packet_h);
+}
+
 Test(pktrec, replay_equals_the_math)
 {
 	char dir[64];
@@ -110,10 +117,8 @@ Test(pktrec, replay_equals_the_math)
 	embedded(&plain, &cached, dir, sizeof dir, &c, 128);
 	c.chip.threads_per_rtp = 4;
 	uint64_t n = record_then_replay(&plain, &cached, &c, "functional");
-	uint64_t tiles = (uint64_t)(c.frame.width / c.chip.packet_w) *
-	                 (uint64_t)(c.frame.height / c.chip.packet_h);
-	cr_assert_eq(n, tiles, "functional replays every tile (%llu), not %llu",
-	             (unsigned long long)tiles, (unsigned long long)n);
+	cr_assert_eq(n, tiles_of(&c), "functional replays every tile (%llu), not %llu",
+	             (unsigned long long)tiles_of(&c), (unsigned long long)n);
 	/* sampled: recorded at 4 threads per RTP, replayed at 4 and at 1;
 	 * the detailed regions replay too (timed), taking over the packets
 	 * the functional stretches left in flight */
@@ -121,9 +126,9 @@ Test(pktrec, replay_equals_the_math)
 	c.fidelity = CFG_FIDELITY_SAMPLED;
 	c.sampling.rate = 0.1;
 	n = record_then_replay(&plain, &cached, &c, "sampled, 4 threads per RTP");
-	tiles = (uint64_t)(256 / c.chip.packet_w) * (uint64_t)(256 / c.chip.packet_h);
-	cr_assert_eq(n, tiles, "sampled replays every tile (%llu), detailed ones too, not %llu",
-	             (unsigned long long)tiles, (unsigned long long)n);
+	cr_assert_eq(n, tiles_of(&c),
+	             "sampled replays every tile (%llu), detailed ones too, not %llu",
+	             (unsigned long long)tiles_of(&c), (unsigned long long)n);
 	c.chip.threads_per_rtp = 1;
 	chip *ref = tu_run_chip(&plain, &c);
 	chip *rep = tu_run_chip(&cached, &c);
