@@ -715,11 +715,14 @@ static int func_range(chip *c, int end, int drain)
 				/* the stream of the slot a few turns on is elsewhere
 				 * in the record: start fetching it now (one turn
 				 * ahead was too late to hide the host's memory
-				 * latency) */
+				 * latency); a step takes about 13 bytes, so it often
+				 * runs into the next host line: fetch that too */
 				int k = i + PREFETCH_TURNS < n ? i + PREFETCH_TURNS
 				                               : i + PREFETCH_TURNS - n;
-				if (k < n && c->turn[k]->rp)
+				if (k < n && c->turn[k]->rp) {
 					__builtin_prefetch(c->turn[k]->rp);
+					__builtin_prefetch(c->turn[k]->rp + 32);
+				}
 			}
 			busy |= thr_step_func(t);
 		}
