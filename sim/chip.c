@@ -138,6 +138,18 @@ static int take_tile(chip *c, thr_ctx *t)
 	return 1;
 }
 
+/* Free thread t takes a queued secondary packet: the packet, or its
+ * stream in the packet record. */
+static void start_queued(thr_ctx *t, thr_qitem it)
+{
+	if (!it.p) {
+		thr_replay_begin(t, it.rec);
+		return;
+	}
+	t->rec = it.rec;
+	rgs_secondary(t, it.p);
+}
+
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
@@ -145,12 +157,7 @@ static void on_free(thr_ctx *t)
 		return;
 	thr_qitem it;
 	if (rgs_dequeue(t->rtp, &it)) {
-		if (!it.p) { /* a replayed child */
-			thr_replay_begin(t, it.rec);
-			return;
-		}
-		t->rec = it.rec;
-		rgs_secondary(t, it.p);
+		start_queued(t, it);
 		return;
 	}
 	/* sampled: the marks that time a measured unit are the moments its
@@ -641,12 +648,7 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
 {
 	thr_qitem it;
 	if (rgs_dequeue(t->rtp, &it)) {
-		if (it.p) {
-			t->rec = it.rec;
-			rgs_secondary(t, it.p);
-		} else {
-			thr_replay_begin(t, it.rec);
-		}
+		start_queued(t, it);
 		return 1;
 	}
 	if (c->g.next >= end || !take_tile(c, t))

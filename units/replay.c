@@ -22,30 +22,15 @@ static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 	rgs_spawned(t->rtp);
 }
 
-/* The packet is done. As thr_release: the slot is free (timed, it takes
- * its next work at once), and after a shading op that queued children the
- * RTP's idle slots get them (shade_done). */
-static void finish(thr_ctx *t, int spawned)
-{
-	t->rp = t->rpe = NULL;
-	t->rec = -1;
-	thr_set(t, THR_IDLE);
-	t->env->on_free(t);
-	if (spawned && !t->env->func)
-		rgs_dispatch(t->rtp);
-}
-
 static void resume(thr_ctx *t);
 
 /* The reads so far are still on their way (timed): the stream goes on
  * from p when they are in, as thr_wait_mem's continuation does. */
 static int wait_reads(thr_ctx *t, const uint8_t *p)
 {
-	if (t->pending == 0)
+	if (!thr_park_mem(t, resume))
 		return 0;
 	t->rp = p;
-	t->cont = resume;
-	thr_set(t, THR_WAIT_MEM);
 	return 1;
 }
 
@@ -84,7 +69,6 @@ static void run(thr_ctx *t)
 			if (wait_reads(t, at))
 				return;
 			thr_use(t, op - PR_USE, (int)pr_get(&p, end), op_done);
-			t->rsteps++;
 			t->rp = p;
 			return;
 		}
@@ -130,7 +114,11 @@ static void run(thr_ctx *t)
 			break;
 		}
 	}
-	finish(t, spawned);
+	/* as shade_done and shadow_done: the slot is free, and after a
+	 * shading op the RTP's idle slots get the children it queued */
+	thr_release(t);
+	if (spawned)
+		rgs_dispatch(t->rtp);
 }
 
 static void resume(thr_ctx *t)
@@ -151,7 +139,6 @@ void thr_replay_begin(thr_ctx *t, int32_t id)
 {
 	const pktrec *r = t->env->rec_in;
 	t->rec = id;
-	t->rsteps = 0;
 	t->rp = pr_stream(r, (uint32_t)id, &t->rpe);
 	run(t);
 }

@@ -96,6 +96,8 @@ int rgs_dequeue(thr_rtp *r, thr_qitem *it)
 
 void rgs_dispatch(thr_rtp *r)
 {
+	if (r->env->func) /* functional processing hands out work itself */
+		return;
 	for (int i = 0; i < r->nt && r->qn > 0 && r->nidle > 0; i++)
 		if (r->t[i].state == THR_IDLE)
 			r->env->on_free(&r->t[i]);

@@ -295,18 +295,23 @@ void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 		mem_access(t->env->mem, &r, NULL, NULL, 0);
 }
 
-void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
+int thr_park_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
 {
 	if (t->rread) { /* recording (rec_req) */
 		t->rwait = 1;
 		t->rread = 0;
 	}
-	if (t->pending == 0) {
-		cont(t);
-		return;
-	}
+	if (t->pending == 0)
+		return 0;
 	t->cont = cont;
 	thr_set(t, THR_WAIT_MEM);
+	return 1;
+}
+
+void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
+{
+	if (!thr_park_mem(t, cont))
+		cont(t);
 }
 
 void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
@@ -333,8 +338,10 @@ void thr_release(thr_ctx *t)
 {
 	thr_rec(t, PR_END, 0, 0, 0);
 	t->rec = -1;
-	thr_pkt_free(t->env, t->p);
+	if (t->p) /* a replayed packet has none */
+		thr_pkt_free(t->env, t->p);
 	t->p = NULL;
+	t->rp = t->rpe = NULL;
 	thr_set(t, THR_IDLE);
 	t->env->on_free(t);
 }

@@ -183,7 +183,6 @@ typedef struct thr_ctx {
 	int fkind, frays;        /* functional: the unit op fnext completes */
 	int32_t rec;             /* the packet's stream in the record (recorded or replayed), -1 */
 	const uint8_t *rp, *rpe; /* replay: the rest of the packet's stream (p is NULL) */
-	uint32_t rsteps;         /* replay: unit ops replayed so far */
 	/* recording and replay: the packet's last read address and size per
 	 * memory type (reads are recorded as differences; pktrec.h) */
 	uint64_t raddr[MEM_NTYPES];
@@ -220,9 +219,13 @@ void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes);
 void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes);
 /* Calls cont(t) once every read issued so far has arrived (at once if none). */
 void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t));
+/* As thr_wait_mem, but with no read outstanding it returns 0 instead of
+ * calling cont (the caller goes on itself); 1: cont runs when they are in. */
+int thr_park_mem(thr_ctx *t, void (*cont)(thr_ctx *t));
 /* Queues an op of the thread's `rays` rays at unit kind `kind`. */
 void thr_use(thr_ctx *t, int kind, int rays, eng_handler done);
-/* The packet is done: back to the pool; the thread is free for new work. */
+/* The packet is done (a replayed one: its stream): back to the pool; the
+ * thread is free for new work. */
 void thr_release(thr_ctx *t);
 /* Functional: runs the thread's next step (up to its next unit op); 0 if
  * it has none (its packet is done). The caller interleaves threads' steps
