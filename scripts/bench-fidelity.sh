@@ -72,11 +72,19 @@ for t in ("shade", "kd", "list", "tri", "tag_cache", "l2"):
 print("sdram_mb", ss["sdram_mb"])
 print("pci_mb", ss["pci_mb"])
 print("replayed", int(r["host"].get("packet_record") == "replayed"))
+# the sample floor (below): each unit's cycles per demand, and what a unit
+# and its warm-up take of the frame
+u = f.get("unit_cycles_per_demand") or []
+print("ucpd", ",".join("%.6g" % x for x in u) if u else "-")
+print("region_tiles", f.get("unit_tiles", 0) + f.get("warmup_tiles", 0))
+print("frame_tiles", f.get("detailed_tiles", 0) + f.get("functional_tiles", 0))
 EOF
 }
 
 ROWS="$TMP/rows.tsv"
 : >"$ROWS"
+UNITS="$TMP/units.txt" # per sampled Conference point: its units (the sample table)
+: >"$UNITS"
 for view in $VIEWS; do
 	size=$SIZE
 	[ "$view" = conference ] && size=$CONF_SIZE
@@ -115,6 +123,9 @@ for view in $VIEWS; do
 						--set sampling.offset="$(echo "$mode@0.5" | cut -d@ -f2)" \
 						>"$TMP/pt.kv" || continue
 				fi
+				[ "$view" = conference ] && [ "$mode" != functional ] &&
+					awk -v c="$cfg" -v t="$tpr" '{k[$1] = $2} END {if (k["ucpd"] != "-") print c, t, k["ucpd"], k["region_tiles"], k["frame_tiles"]}' \
+						"$TMP/pt.kv" >>"$UNITS"
 				python3 - "$TMP/truth.kv" "$TMP/pt.kv" "$view" "$cfg" "$tpr" "$mode" "$size" >>"$ROWS" <<'EOF'
 import sys
 def kv(p):
@@ -360,6 +371,30 @@ for cfg in ("std", "vma"):
         else:
             s += " - | - |"
         print(s)
+EOF
+	echo
+	echo "### Conference $CONF_SIZE: the sample a 1% error needs"
+	echo
+	echo "From the sampled points above: each unit's cycles per unit of demand (report \`unit_cycles_per_demand\`, the units after the first, relative to their run's mean) spread with standard deviation *s*. The ratio estimate's relative error is about s / sqrt(n) for n units, so 95% of estimates within 1% need n >= (1.96 s / 0.01)^2 units and an rms error of 1% about (s / 0.01)^2; *share*: those units with their warm-ups as a share of the frame's tiles, simulated in detail. (With the VMA the strata, and at one thread the linear model's fit, narrow this; it is the plain ratio's need.)"
+	echo
+	echo "| config | threads | units | s | n for 95% within 1% | share | n for 1% rms | share |"
+	echo "|---|---:|---:|---:|---:|---:|---:|---:|"
+	python3 - "$UNITS" <<'EOF'
+import sys, statistics
+by = {}
+for l in open(sys.argv[1]):
+    cfg, t, u, reg, frame = l.split()
+    v = [float(x) for x in u.split(",")][1:]
+    if len(v) < 2:
+        continue
+    m = statistics.mean(v)
+    d = by.setdefault((cfg, int(t)), [[], int(reg), int(frame)])
+    d[0] += [x / m for x in v]
+for (cfg, t), (r, reg, frame) in sorted(by.items()):
+    s = statistics.stdev(r)
+    n95, nrms = (1.96 * s / 0.01) ** 2, (s / 0.01) ** 2
+    share = lambda n: "%.0f%%" % min(100, 100 * n * reg / frame) if frame else "-"
+    print("| %s | %d | %d | %.3f | %.0f | %s | %.0f | %s |" % (cfg, t, len(r), s, n95, share(n95), nrms, share(nrms)))
 EOF
 	echo
 	echo "### Every point"
