@@ -2,11 +2,12 @@
  * image_plugin.h: the boundary between image.c (C) and the OpenImageIO
  * plugin, libsaar-oiio.so (image_oiio.cpp, the only C++ in saarsim).
  *
- * OpenImageIO drags some 260 shared libraries into a process; binding their
- * symbols took 0.3 s of every saarsim start, whether it wrote an image or
- * not. So the programs do not link OIIO: image.c opens the plugin with
- * dlopen on the first image read or write, and a run that writes no image
- * (a sweep point, --no-check without --out) never loads it.
+ * OpenImageIO drags hundreds of shared libraries into a process (ldd
+ * libsaar-oiio.so lists them); binding their symbols cost every saarsim
+ * start a noticeable part of a second, whether it wrote an image or not.
+ * So the programs do not link OIIO: image.c opens the plugin with dlopen
+ * on the first image read or write, and a run that writes no image (a
+ * sweep point, --no-check without --out) never loads it.
  *
  * The plugin knows nothing of diag or temporary files: it writes one file
  * under the name it is given and reads one, and on failure puts one line of

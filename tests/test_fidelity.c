@@ -560,11 +560,12 @@ Test(fidelity, linear_demand_for_one_thread, .timeout = 300)
 		for (int m = 0; m < 2; m++) {
 			c.sampling.demand_model = m ? CFG_DEMAND_MAX : CFG_DEMAND_AUTO;
 			replica r = run_replica(&w, &c, truth);
-			cr_assert_eq(r.linear, !m, "offset %.1f: auto did not pick linear",
-			             c.sampling.offset);
 			err[m] += fabs(r.err);
-			if (!m)
-				covered += r.covered;
+			if (m)
+				continue;
+			cr_assert(r.linear, "offset %.1f: auto did not pick linear",
+			          c.sampling.offset);
+			covered += r.covered;
 		}
 	}
 	cr_assert_lt(err[0], err[1], "linear: summed error %g, max: %g", err[0], err[1]);
