@@ -17,6 +17,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "atomicfile.h"
 #include "image_plugin.h"
 
 /* Opens the plugin. RTLD_NODELETE keeps it mapped after dlclose, so the next
@@ -102,13 +103,15 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
 	void *lib = plugin_open(&p, path, d);
 	if (!lib)
 		return -1;
-	char ext[32], err[512] = "", tmp[PATH_MAX + 96];
+	char ext[32], sfx[34], err[512] = "";
 	ext_of(path, ext, sizeof ext);
 	int rc = -1;
 	uint8_t *conv = NULL;
-	if (snprintf(tmp, sizeof tmp, "%s.tmp%ld.%s", path, (long)getpid(), ext) >=
-	    (int)sizeof tmp) {
-		diag_set(d, path, 0, 0, "cannot write image: path too long");
+	afile a;
+	/* the temporary keeps the extension: the plugin picks the format by it */
+	snprintf(sfx, sizeof sfx, ".%s", ext);
+	if (af_open(&a, path, sfx, 0)) {
+		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
 		goto out;
 	}
 	if (!rgb8) {
@@ -116,6 +119,7 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
 		 * quantise here */
 		size_t n = (size_t)w * (size_t)h * 3;
 		if (!(conv = malloc(n))) {
+			af_abort(&a);
 			diag_set(d, path, 0, 0, "cannot write image: out of memory");
 			goto out;
 		}
@@ -126,15 +130,13 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
 		}
 		rgb8 = conv;
 	}
-	if (p->write_rgb(tmp, ext, w, h, rgb8, rgbf, err, sizeof err) != 0) {
-		remove(tmp);
+	if (p->write_rgb(a.tmp, ext, w, h, rgb8, rgbf, err, sizeof err) != 0) {
+		af_abort(&a);
 		diag_set(d, path, 0, 0, "cannot write image: %s", err);
 		goto out;
 	}
-	if (rename(tmp, path) != 0) {
-		int e = errno;
-		remove(tmp);
-		diag_set(d, path, 0, 0, "cannot write image: rename: %s", strerror(e));
+	if (af_commit(&a)) {
+		diag_set(d, path, 0, 0, "cannot write image: rename: %s", strerror(errno));
 		goto out;
 	}
 	rc = 0;

@@ -23,33 +23,25 @@ int jsonw_open(jsonw *w, const char *path, diag *d)
 		jsonw_init_file(w, stdout);
 		return 0;
 	}
-	memset(w, 0, sizeof *w);
-	snprintf(w->path, sizeof w->path, "%s", path);
-	snprintf(w->tmp, sizeof w->tmp, "%s.tmp", path);
-	FILE *f = fopen(w->tmp, "w");
-	if (!f)
+	afile a;
+	if (af_open(&a, path, "", 1))
 		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
-	jsonw_init_file(w, f);
-	snprintf(w->path, sizeof w->path, "%s", path);
-	snprintf(w->tmp, sizeof w->tmp, "%s.tmp", path);
+	jsonw_init_file(w, a.f);
+	w->af = a;
 	return 0;
 }
 
 int jsonw_close(jsonw *w, diag *d)
 {
-	if (!w->path[0]) {
+	if (!w->af.path[0]) {
 		fputc('\n', w->f);
 		fflush(w->f);
 		return 0;
 	}
 	fputc('\n', w->f);
-	int bad = ferror(w->f);
-	if (fclose(w->f) != 0)
-		bad = 1;
-	if (bad || rename(w->tmp, w->path) != 0) {
-		unlink(w->tmp);
-		return diag_set(d, w->path, 0, 0, "write failed");
-	}
+	w->f = NULL;
+	if (af_commit(&w->af))
+		return diag_set(d, w->af.path, 0, 0, "write failed: %s", strerror(errno));
 	return 0;
 }
 

@@ -12,6 +12,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "atomicfile.h"
+
 #include "diag.h"
 
 #define JSONW_MAX_DEPTH 32
@@ -21,11 +23,11 @@ typedef struct jsonw {
 	int depth;
 	int first[JSONW_MAX_DEPTH]; /* no element written yet at this depth */
 	int after_key;
-	char path[1024], tmp[1040]; /* final path and temporary file */
+	afile af; /* the file (a temporary until jsonw_close); af.path "" for stdout */
 } jsonw;
 
-/* Opens path.tmp for writing; jsonw_close renames it to path (0) or removes
- * it and fills d (-1). A path of "-" writes to stdout. */
+/* Opens a temporary beside path (atomicfile.h); jsonw_close renames it to
+ * path (0) or removes it and fills d (-1). A path of "-" writes to stdout. */
 int jsonw_open(jsonw *w, const char *path, diag *d);
 int jsonw_close(jsonw *w, diag *d);
 /* Writes into an already open FILE (no rename). */

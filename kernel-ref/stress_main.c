@@ -14,6 +14,7 @@
  * skipped with a note when absent) and the embedded scene, and the plot
  * docs/precision.png through gnuplot when it is installed.
  */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +22,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "atomicfile.h"
 #include "render.h"
 #include "stress.h"
 #include "world.h"
@@ -397,19 +399,16 @@ int main(int argc, char **argv)
 		d1 = d2;
 		free(ptable);
 	}
-	char tmp[1100];
-	snprintf(tmp, sizeof tmp, "%s.tmp", out);
-	FILE *f = fopen(tmp, "w");
-	if (!f) {
-		fprintf(stderr, "saarsim-stress: %s: cannot write\n", tmp);
+	afile a;
+	if (af_open(&a, out, "", 1)) {
+		fprintf(stderr, "saarsim-stress: %s: cannot write: %s\n", out, strerror(errno));
 		free(d1);
 		return 2;
 	}
-	fputs(d1, f);
+	fputs(d1, a.f);
 	free(d1);
-	if (fclose(f) != 0 || rename(tmp, out) != 0) {
-		unlink(tmp);
-		fprintf(stderr, "saarsim-stress: %s: write failed\n", out);
+	if (af_commit(&a)) {
+		fprintf(stderr, "saarsim-stress: %s: write failed: %s\n", out, strerror(errno));
 		return 2;
 	}
 	return bad ? 1 : 0;

@@ -32,6 +32,7 @@
 #define _GNU_SOURCE /* asprintf */
 #include "worldcache.h"
 
+#include "atomicfile.h"
 #include "spd.h"
 
 #include <errno.h>
@@ -339,22 +340,10 @@ int wc_put(const char *file, const char *key, const wc_files *f, const wc_part *
 {
 	if (f && f->lost)
 		return diag_set(d, file, 0, 0, "world cache: a source file could not be recorded");
-	char tmp[PATH_MAX + 16];
-	snprintf(tmp, sizeof tmp, "%s.XXXXXX", file);
-	int fd = mkstemp(tmp);
-	if (fd < 0)
+	afile a;
+	if (af_open(&a, file, "", 1))
 		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(errno));
-	/* readable like any file the user writes (mkstemp makes it 0600) */
-	mode_t um = umask(0);
-	umask(um);
-	int err = fchmod(fd, 0666 & ~um) != 0 ? errno : 0;
-	wr w = {fdopen(fd, "wb"), crc32(0L, Z_NULL, 0), 0};
-	if (!w.fp) {
-		err = errno;
-		close(fd);
-		unlink(tmp);
-		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(err));
-	}
+	wr w = {a.f, crc32(0L, Z_NULL, 0), 0};
 	if (fwrite(WC_MAGIC, 1, WC_MAGIC_LEN, w.fp) != WC_MAGIC_LEN)
 		w.bad = 1;
 	put_u32(&w, (uint32_t)strlen(key));
@@ -378,17 +367,11 @@ int wc_put(const char *file, const char *key, const wc_files *f, const wc_part *
 	uint32_t crc = (uint32_t)w.crc;
 	if (fwrite(&crc, 1, sizeof crc, w.fp) != sizeof crc)
 		w.bad = 1;
-	if (w.bad && !err)
-		err = EIO;
-	if (fflush(w.fp) != 0 && !err)
-		err = errno;
-	if (fclose(w.fp) != 0 && !err)
-		err = errno;
-	if (!err && rename(tmp, file) != 0)
-		err = errno;
-	if (err) {
-		unlink(tmp);
-		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(err));
+	if (w.bad) {
+		af_abort(&a);
+		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(EIO));
 	}
+	if (af_commit(&a))
+		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(errno));
 	return 0;
 }

@@ -21,6 +21,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "atomicfile.h"
 #include "chip.h"
 #include "config.h"
 #include "image.h"
@@ -221,10 +222,17 @@ int main(int argc, char **argv)
 	int rc = 0;
 	chip_check chk;
 	memset(&chk, 0, sizeof chk);
-	char trace_tmp[1100] = "";
+	/* the trace is written under a temporary name (trace_tmp.tmp, ""
+	 * when none is open) and renamed once the run succeeded */
+	afile trace_tmp;
+	trace_tmp.tmp[0] = 0;
 	if (trace) {
-		snprintf(trace_tmp, sizeof trace_tmp, "%s.tmp", trace);
-		if (chip_trace_mem(c, trace_tmp, &d)) {
+		if (af_open(&trace_tmp, trace, "", 0)) {
+			diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
+			rc = cli_bad("saarsim", d.msg);
+			goto done;
+		}
+		if (chip_trace_mem(c, trace_tmp.tmp, &d)) {
 			rc = cli_bad("saarsim", d.msg);
 			goto done;
 		}
@@ -247,11 +255,12 @@ int main(int argc, char **argv)
 		rc = cli_bad("saarsim", d.msg);
 		goto done;
 	}
-	if (trace && rename(trace_tmp, trace) != 0) {
+	if (trace && af_commit(&trace_tmp)) {
+		trace_tmp.tmp[0] = 0;
 		diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
 		goto undo;
 	}
-	*trace_tmp = 0;
+	trace_tmp.tmp[0] = 0;
 	ri.wall_ms = now_ms() - t_start;
 	if (csv && report_csv(csv, &ri, &d)) {
 		if (trace)
@@ -268,8 +277,8 @@ undo:
 	rc = cli_bad("saarsim", d.msg);
 done:
 	chip_destroy(c);
-	if (*trace_tmp)
-		unlink(trace_tmp);
+	if (trace_tmp.tmp[0])
+		af_abort(&trace_tmp);
 	world_free(&w);
 	return rc;
 }

@@ -15,6 +15,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "atomicfile.h"
+
 static double ratio(double a, double b)
 {
 	return b > 0 ? a / b : 0.0;
@@ -762,13 +764,12 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	} else if (errno != ENOENT) {
 		return diag_set(d, path, 0, 0, "cannot read: %s", strerror(errno));
 	}
-	char tmp[1100];
-	snprintf(tmp, sizeof tmp, "%s.tmp", path);
-	FILE *f = fopen(tmp, "wb");
-	if (!f) {
+	afile a;
+	if (af_open(&a, path, "", 1)) {
 		free(old);
 		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
 	}
+	FILE *f = a.f;
 	if (nold) {
 		fwrite(old, 1, nold, f);
 		if (old[nold - 1] != '\n')
@@ -814,11 +815,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	else
 		fputc(',', f);
 	fprintf(f, "%.4f,%.4f\n", c->sim_ms / 1e3, ri->wall_ms / 1e3);
-	int bad = ferror(f);
-	if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
-		int e = errno ? errno : EIO;
-		unlink(tmp);
-		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(e));
-	}
+	if (af_commit(&a))
+		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
 	return 0;
 }

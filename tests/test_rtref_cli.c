@@ -30,7 +30,7 @@ Test(rtref_cli, good_run_writes_image_and_stats)
 	         dir, dir);
 	cr_assert_eq(rtref(args), 0);
 	cr_assert(exists("f.png") && exists("s.json"));
-	cr_assert_not(exists("f.png.tmp") || exists("s.json.tmp"));
+	cr_assert_eq(tu_temps(dir, "f.png") + tu_temps(dir, "s.json"), 0);
 	char p[512], buf[8192] = {0};
 	snprintf(p, sizeof p, "%s/s.json", dir);
 	FILE *f = fopen(p, "r");

@@ -36,7 +36,7 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	         "--size 64x48 --set chip.rtps=2 --out %s/f.png --report %s/a.json", dir, dir);
 	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
 	cr_assert(exists("f.png") && exists("a.json"));
-	cr_assert_not(exists("f.png.tmp") || exists("a.json.tmp"));
+	cr_assert_eq(tu_temps(dir, "f.png") + tu_temps(dir, "a.json"), 0);
 	char *out = slurp("out");
 	cr_assert(strstr(out, "identical"), "summary: %s", out);
 	snprintf(args, sizeof args, "--size 64x48 --set chip.rtps=2 --report %s/b.json", dir);
@@ -81,6 +81,25 @@ Test(saarsim_cli, image_plugin_only_when_writing_images)
 	cr_assert_eq(saarsim(args), 2);
 	one_line_naming("f.xyz");
 	cr_assert_not(exists("f.xyz") || exists("b.json"));
+}
+
+/* An output that cannot take the finished file's place (here a directory
+ * of its name: the rename fails after everything was written) fails the
+ * run with one line naming it, and leaves no temporary behind. */
+Test(saarsim_cli, failed_writes_leave_no_temporaries)
+{
+	const char *names[] = {"f.png", "r.json", "c.csv", "t.gz"};
+	for (int i = 0; i < 4; i++) {
+		char p[512], args[1024];
+		snprintf(p, sizeof p, "%s/%s", dir, names[i]);
+		cr_assert_eq(mkdir(p, 0755), 0);
+		const char *opt[] = {"--out", "--report", "--csv", "--trace-mem"};
+		snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 %s %s", opt[i], p);
+		cr_assert_eq(saarsim(args), 2, "%s", names[i]);
+		one_line_naming(names[i]);
+		cr_assert_eq(tu_temps(dir, names[i]), 0, "%s: a temporary is left", names[i]);
+		cr_assert_eq(rmdir(p), 0);
+	}
 }
 
 Test(saarsim_cli, bad_config_key_names_file_line_col)
@@ -209,7 +228,7 @@ Test(saarsim_cli, frames_report_fields_and_csv_rows)
 	snprintf(args, sizeof args, "--size 64x64 --set memory.l1.kd.size_kb=8 --csv %s/c.csv",
 	         dir);
 	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
-	cr_assert_not(exists("c.csv.tmp"));
+	cr_assert_eq(tu_temps(dir, "c.csv"), 0);
 	char *r = slurp("r.json");
 	const char *keys[] = {
 	    "\"table\"",           "\"sdram_mb_per_frame\"", "\"pci_mb_per_frame\"",
@@ -268,7 +287,7 @@ Test(saarsim_cli, trace_replays_to_the_same_l1_counts, .timeout = 300)
 	snprintf(args, sizeof args, "--size 64x64 --trace-mem %s/t.gz --report %s/r.json", dir,
 	         dir);
 	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
-	cr_assert(exists("t.gz") && !exists("t.gz.tmp"));
+	cr_assert(exists("t.gz") && !tu_temps(dir, "t.gz"));
 	char *r = slurp("r.json");
 	unsigned long long spill = JNUM(r, "spill_base");
 	snprintf(args, sizeof args, "--timing --image-bytes %llu --json %s/rt.json %s/t.gz", spill,

@@ -115,6 +115,21 @@ static inline int tu_exists(const char *dir, const char *name)
 	return stat(p, &sb) == 0;
 }
 
+/* Files in dir named name.<anything>: the temporaries an atomic write of
+ * name leaves if it fails to clean up (kernel-ref/atomicfile.h names them
+ * name.XXXXXX, plus an image's extension). */
+static inline int tu_temps(const char *dir, const char *name)
+{
+	DIR *dp = opendir(dir);
+	int n = 0;
+	size_t k = strlen(name);
+	for (struct dirent *e; dp && (e = readdir(dp));)
+		n += strncmp(e->d_name, name, k) == 0 && e->d_name[k] == '.';
+	if (dp)
+		closedir(dp);
+	return n;
+}
+
 /* dir/name's text (up to 1 MB) in one of two static buffers, so two files
  * can be held at once. */
 static inline char *tu_slurp(const char *dir, const char *name)

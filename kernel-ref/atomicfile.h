@@ -1,0 +1,33 @@
+/*
+ * atomicfile.h: output files that appear complete or not at all. A writer
+ * opens a temporary file beside the target (a unique name, so two runs
+ * writing the same path do not share it), writes it, and renames it over
+ * the target only when every write succeeded; on failure or abort the
+ * temporary is removed. Every file saarsim's programs write goes through
+ * here: images, JSON reports, CSV rows, world-cache files, the tables the
+ * stress tool splices into docs.
+ */
+#ifndef SAAR_KREF_ATOMICFILE_H
+#define SAAR_KREF_ATOMICFILE_H
+
+#include <limits.h>
+#include <stdio.h>
+
+typedef struct afile {
+	FILE *f; /* the temporary, open for writing; NULL when a library writes it by name */
+	char path[PATH_MAX], tmp[PATH_MAX + 32];
+} afile;
+
+/* Creates the temporary for path, named path.XXXXXX then suffix (an
+ * image's ".png", so a library can tell the format; "" for none), readable
+ * as any file the user creates (umask). With want_file, a->f is open on
+ * it ("wb"); without, it is closed and the caller writes a->tmp by name.
+ * -1 with errno set (ENAMETOOLONG for a path too long). */
+int af_open(afile *a, const char *path, const char *suffix, int want_file);
+/* Closes a->f (a write error there fails the commit too) and renames the
+ * temporary over path. -1 with errno set; the temporary is removed. */
+int af_commit(afile *a);
+/* Closes and removes the temporary. */
+void af_abort(afile *a);
+
+#endif
