@@ -13,6 +13,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "atomicfile.h"
@@ -745,6 +746,12 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	char *old = NULL;
 	size_t nold = 0;
 	FILE *in = fopen(path, "rb");
+	struct stat st;
+	if (in && (fstat(fileno(in), &st) != 0 || !S_ISREG(st.st_mode))) {
+		/* a directory opens too, and seeks to a huge size */
+		fclose(in);
+		return diag_set(d, path, 0, 0, "cannot append a row: not a regular file");
+	}
 	if (in) {
 		fseek(in, 0, SEEK_END);
 		long n = ftell(in);
