@@ -575,14 +575,13 @@ static uint64_t run_region(chip *c, int end)
 	/* packets a functional stretch left in flight go on cycle by cycle
 	 * from where they stopped (replayed ones too: units/replay.h): the
 	 * region starts with a full chip, not with every thread taking a tile
-	 * at once */
-	for (int s = 0; s < c->tpr; s++)
-		for (int r = 0; r < c->nrtp; r++)
-			thr_func_to_timed(&c->rtp[r].t[s]);
-	for (int s = 0; s < c->tpr; s++)
-		for (int r = 0; r < c->nrtp; r++)
-			if (c->rtp[r].t[s].state == THR_IDLE)
-				on_free(&c->rtp[r].t[s]);
+	 * at once; slot by slot, RTP by RTP (the turn order) */
+	int n = c->nrtp * c->tpr;
+	for (int i = 0; i < n; i++)
+		thr_func_to_timed(c->turn[i]);
+	for (int i = 0; i < n; i++)
+		if (c->turn[i]->state == THR_IDLE)
+			on_free(c->turn[i]);
 	eng_run(c->e, ENG_FOREVER);
 	c->env.func = 0;
 	c->fid.detailed_tiles += (uint64_t)(end - first);
@@ -717,8 +716,8 @@ static int func_range(chip *c, int end, int drain)
 				/* the stream of the slot a few turns on is elsewhere
 				 * in the record: start fetching it now (one turn
 				 * ahead was too late to hide the host's memory
-				 * latency); a step takes about 13 bytes, so it often
-				 * runs into the next host line: fetch that too */
+				 * latency); a step's bytes often run into the next
+				 * host line: fetch that too */
 				int k = i + PREFETCH_TURNS < n ? i + PREFETCH_TURNS
 				                               : i + PREFETCH_TURNS - n;
 				if (k < n && c->turn[k]->rp) {

@@ -131,7 +131,7 @@ typedef struct chip {
 	int rec_state;
 	uint8_t *replayed; /* per tile, this frame: its packets were replayed */
 	/* every thread slot in functional turn order: slot 0 of each RTP,
-	 * then slot 1, ... (func_range) */
+	 * then slot 1, ... (func_range, run_region) */
 	thr_ctx **turn;
 	char *rec_key, rec_file[1200];
 	double rec_ms; /* host time loading or storing the record */

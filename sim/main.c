@@ -222,8 +222,8 @@ int main(int argc, char **argv)
 	int rc = 0;
 	chip_check chk;
 	memset(&chk, 0, sizeof chk);
-	/* the trace is written under a temporary name (trace_tmp.tmp, ""
-	 * when none is open) and renamed once the run succeeded */
+	/* the trace is written under a temporary name, renamed once the run
+	 * succeeded (trace_tmp.tmp is "" while none is open) */
 	afile trace_tmp;
 	trace_tmp.tmp[0] = 0;
 	if (trace) {

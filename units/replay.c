@@ -22,13 +22,13 @@ static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 	rgs_spawned(t->rtp);
 }
 
-static void resume(thr_ctx *t);
+static void run(thr_ctx *t);
 
 /* The reads so far are still on their way (timed): the stream goes on
  * from p when they are in, as thr_wait_mem's continuation does. */
 static int wait_reads(thr_ctx *t, const uint8_t *p)
 {
-	if (!thr_park_mem(t, resume))
+	if (!thr_park_mem(t, run))
 		return 0;
 	t->rp = p;
 	return 1;
@@ -119,11 +119,6 @@ static void run(thr_ctx *t)
 	thr_release(t);
 	if (spawned)
 		rgs_dispatch(t->rtp);
-}
-
-static void resume(thr_ctx *t)
-{
-	run(t);
 }
 
 /* A unit op is done (timed), or functional processing takes the step
