@@ -191,6 +191,21 @@ static int load_scene(world *w, const char *path, view *sv, wc_files *f, diag *d
 	return 0;
 }
 
+/* The parts of a world the cache keeps, in their stored order: figures of
+ * the scene and the kd-tree (their arrays are not stored), the memory
+ * image's header, the procedural view and the image's CRC; the image
+ * bytes are the tail. */
+enum { WORLD_PARTS = 5 };
+static void world_parts(wc_part p[WORLD_PARTS], scene *s, kdtree *kd, mimg *m, view *sv,
+                        uint32_t *crc)
+{
+	p[0] = (wc_part){s, sizeof *s};
+	p[1] = (wc_part){kd, sizeof *kd};
+	p[2] = (wc_part){m, sizeof *m};
+	p[3] = (wc_part){sv, sizeof *sv};
+	p[4] = (wc_part){crc, sizeof *crc};
+}
+
 int world_load(world *w, const world_opts *o, diag *d)
 {
 	memset(w, 0, sizeof *w);
@@ -211,14 +226,8 @@ int world_load(world *w, const world_opts *o, diag *d)
 	char cfile[PATH_MAX], *ckey = NULL;
 	view sv;
 	memset(&sv, 0, sizeof sv);
-	/* the parts of a world the cache keeps: figures of the scene and the
-	 * kd-tree (their arrays are not stored), the memory image's header
-	 * and the procedural view; the image bytes are the tail */
-	wc_part parts[] = {{&w->s, sizeof w->s},
-	                   {&w->kd, sizeof w->kd},
-	                   {&w->m, sizeof w->m},
-	                   {&sv, sizeof sv},
-	                   {&w->image_crc, sizeof w->image_crc}};
+	wc_part parts[WORLD_PARTS];
+	world_parts(parts, &w->s, &w->kd, &w->m, &sv, &w->image_crc);
 	if (o->cache_dir) {
 		if (wc_prepare(o->cache_dir, w->cache_prog, sizeof w->cache_prog, d))
 			return -1;
@@ -232,7 +241,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 		w->cache_dir = o->cache_dir;
 		void *bytes;
 		size_t n;
-		if (wc_get(cfile, ckey, parts, 5, &bytes, &n)) {
+		if (wc_get(cfile, ckey, parts, WORLD_PARTS, &bytes, &n)) {
 			if (n == w->m.size) {
 				w->m.bytes = bytes;
 				w->cache = WORLD_CACHE_HIT;
@@ -297,17 +306,14 @@ int world_load(world *w, const world_opts *o, diag *d)
 			mimg m0 = w->m;
 			m0.bytes = NULL;
 			w->image_crc = wc_crc(w->m.bytes, w->m.size);
-			wc_part put[] = {{&s0, sizeof s0},
-			                 {&k0, sizeof k0},
-			                 {&m0, sizeof m0},
-			                 {&sv, sizeof sv},
-			                 {&w->image_crc, sizeof w->image_crc}};
+			wc_part put[WORLD_PARTS];
+			world_parts(put, &s0, &k0, &m0, &sv, &w->image_crc);
 			/* a cache that cannot be written costs the next run time,
 			 * not this run its result: say so and go on */
 			diag wd;
 			w->cache = WORLD_CACHE_STORED;
-			if (wc_put(cfile, ckey, &files, put, 5, w->m.bytes, (size_t)w->m.size,
-			           &wd)) {
+			if (wc_put(cfile, ckey, &files, put, WORLD_PARTS, w->m.bytes,
+			           (size_t)w->m.size, &wd)) {
 				fprintf(stderr, "warning: %s\n", wd.msg);
 				w->cache = WORLD_CACHE_UNSTORED;
 			}

@@ -214,15 +214,17 @@ char *wc_frame_key(const char *prog, uint32_t image_crc, uint64_t image_size, co
 	return n < 0 ? NULL : key;
 }
 
-/* ---- reading ---- */
-
-typedef struct rd {
+/* A cache file being read or written: the CRC so far over what passed,
+ * and whether anything failed (every later get or put is then a no-op). */
+typedef struct wcio {
 	FILE *fp;
 	uLong crc;
 	int bad;
-} rd;
+} wcio;
 
-static void get(rd *r, void *p, size_t n)
+/* ---- reading ---- */
+
+static void get(wcio *r, void *p, size_t n)
 {
 	if (r->bad || fread(p, 1, n, r->fp) != n) {
 		r->bad = 1;
@@ -231,7 +233,7 @@ static void get(rd *r, void *p, size_t n)
 	r->crc = crc_more(r->crc, p, n);
 }
 
-static uint32_t get_u32(rd *r)
+static uint32_t get_u32(wcio *r)
 {
 	uint32_t v = 0;
 	get(r, &v, sizeof v);
@@ -239,7 +241,7 @@ static uint32_t get_u32(rd *r)
 }
 
 /* The recorded files, each still of the recorded size and time. */
-static int files_unchanged(rd *r)
+static int files_unchanged(wcio *r)
 {
 	uint32_t n = get_u32(r);
 	for (uint32_t i = 0; i < n && !r->bad; i++) {
@@ -266,7 +268,7 @@ int wc_get(const char *file, const char *key, const wc_part *parts, int nparts, 
 		*tail = NULL;
 		*ntail = 0;
 	}
-	rd r = {fopen(file, "rb"), crc32(0L, Z_NULL, 0), 0};
+	wcio r = {fopen(file, "rb"), crc32(0L, Z_NULL, 0), 0};
 	if (!r.fp)
 		return 0;
 	char magic[WC_MAGIC_LEN];
@@ -315,13 +317,7 @@ out:
 
 /* ---- writing ---- */
 
-typedef struct wr {
-	FILE *fp;
-	uLong crc;
-	int bad;
-} wr;
-
-static void put(wr *w, const void *p, size_t n)
+static void put(wcio *w, const void *p, size_t n)
 {
 	if (w->bad || fwrite(p, 1, n, w->fp) != n) {
 		w->bad = 1;
@@ -330,7 +326,7 @@ static void put(wr *w, const void *p, size_t n)
 	w->crc = crc_more(w->crc, p, n);
 }
 
-static void put_u32(wr *w, uint32_t v)
+static void put_u32(wcio *w, uint32_t v)
 {
 	put(w, &v, sizeof v);
 }
@@ -343,7 +339,7 @@ int wc_put(const char *file, const char *key, const wc_files *f, const wc_part *
 	afile a;
 	if (af_open(&a, file, "", 1))
 		return diag_set(d, file, 0, 0, "world cache: cannot write: %s", strerror(errno));
-	wr w = {a.f, crc32(0L, Z_NULL, 0), 0};
+	wcio w = {a.f, crc32(0L, Z_NULL, 0), 0};
 	if (fwrite(WC_MAGIC, 1, WC_MAGIC_LEN, w.fp) != WC_MAGIC_LEN)
 		w.bad = 1;
 	put_u32(&w, (uint32_t)strlen(key));

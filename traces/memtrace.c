@@ -39,16 +39,6 @@ static uint64_t get64(const unsigned char *p)
 	return (uint64_t)get32(p) | (uint64_t)get32(p + 4) << 32;
 }
 
-static unsigned char *put_var(unsigned char *p, uint64_t v)
-{
-	while (v >= 0x80) {
-		*p++ = (unsigned char)(v | 0x80);
-		v >>= 7;
-	}
-	*p++ = (unsigned char)v;
-	return p;
-}
-
 /* ---- writer ---- */
 
 int mtr_open_write(mtr_writer *w, const char *path, diag *d)
@@ -96,11 +86,11 @@ int mtr_write(mtr_writer *w, const mtr_rec *r, diag *d)
 	uint64_t dc = r->cycle - w->cycle;
 	unsigned cc = dc < 7 ? (unsigned)dc : 7;
 	if (cc == 7)
-		p = put_var(p, pr_zigzag(dc));
-	p = put_var(p, pr_zigzag(r->addr - w->addr[r->type]));
+		p += pr_put_var(p, pr_zigzag(dc));
+	p += pr_put_var(p, pr_zigzag(r->addr - w->addr[r->type]));
 	unsigned bc = r->bytes == 8 ? 0 : r->bytes == 36 ? 1 : r->bytes == 4 ? 2 : 3;
 	if (bc == 3)
-		p = put_var(p, r->bytes);
+		p += pr_put_var(p, r->bytes);
 	*p0 = (unsigned char)(r->type | r->write << 2 | cc << 3 | bc << 6);
 	w->cycle = r->cycle;
 	w->addr[r->type] = r->addr;

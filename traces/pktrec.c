@@ -6,7 +6,7 @@
  *
  * Stored form (little-endian host order; the world cache's CRC and key
  * guard it, pr_load checks its shape):
- *   u32 magic "PKR1", w, h, ntiles, npk, acc bits (32/64), u64 blob bytes
+ *   u32 magic "PKR2", w, h, ntiles, npk, acc bits (32/64), u64 blob bytes
  *   i32 tile_pk[ntiles], padded to 8 bytes
  *   i32 from[npk], padded to 8 bytes; u8 kid[npk], padded to 8 bytes
  *   u64 off[npk + 1]
@@ -132,17 +132,6 @@ int32_t pr_new_kid(pktrec *r, int32_t parent, int k)
 	return new_packet(r, parent, k);
 }
 
-static int put_var(uint8_t *b, uint64_t v)
-{
-	int n = 0;
-	do {
-		uint8_t x = v & 0x7f;
-		v >>= 7;
-		b[n++] = (uint8_t)(x | (v ? 0x80 : 0));
-	} while (v);
-	return n;
-}
-
 static void append(pktrec *r, int32_t id, const uint8_t *b, int n)
 {
 	if (id < 0 || r->failed)
@@ -167,16 +156,16 @@ void pr_put(pktrec *r, int32_t id, int op, int n, uint64_t a, uint64_t b)
 	int k = 0;
 	buf[k++] = (uint8_t)op;
 	if (n > 0)
-		k += put_var(buf + k, a);
+		k += pr_put_var(buf + k, a);
 	if (n > 1)
-		k += put_var(buf + k, b);
+		k += pr_put_var(buf + k, b);
 	append(r, id, buf, k);
 }
 
 void pr_put_u(pktrec *r, int32_t id, uint64_t v)
 {
 	uint8_t buf[10];
-	append(r, id, buf, put_var(buf, v));
+	append(r, id, buf, pr_put_var(buf, v));
 }
 
 static size_t pad8(size_t n)

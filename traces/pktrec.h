@@ -98,6 +98,18 @@ static inline const uint8_t *pr_stream(const pktrec *r, uint32_t id, const uint8
  * recorded frame's. */
 void pr_put_tile(const pktrec *r, framebuf *fb, int tx, int ty, int tw, int th);
 
+/* LEB128 encoding of v into b (10 bytes at most); returns the bytes
+ * written. Packet records and memory traces (memtrace.c) share it. */
+static inline int pr_put_var(uint8_t *b, uint64_t v)
+{
+	int n = 0;
+	do {
+		uint8_t x = v & 0x7f;
+		v >>= 7;
+		b[n++] = (uint8_t)(x | (v ? 0x80 : 0));
+	} while (v);
+	return n;
+}
 /* LEB128 decoding; stops at end (a damaged stream reads zeros). */
 static inline uint64_t pr_get(const uint8_t **p, const uint8_t *end)
 {

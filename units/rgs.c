@@ -181,7 +181,10 @@ void rgs_finish(thr_ctx *t)
 {
 	thr_env *v = t->env;
 	packet *p = t->p;
-	shade_counts before = v->sh;
+	/* recording: what shading adds to the shade counts goes in the stream */
+	shade_counts before;
+	if (v->rec_out)
+		before = v->sh;
 	if (p->type == PKT_SHADOW) {
 		shade_shadow_done(&v->sc, p, &v->sh);
 		if (v->rec_out)
