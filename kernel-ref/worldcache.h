@@ -45,10 +45,24 @@ typedef struct wc_part {
 int wc_file(char *out, size_t n, const char *dir, const char *kind, const char *key);
 
 /* Reads file: 1 on a hit (the stored key equals key, every recorded file
- * is unchanged, the CRC matches), the parts filled and the tail malloc'd
+ * is unchanged, the checks match), the parts filled and the tail malloc'd
  * into *tail / *ntail; 0 on a miss, parts zeroed. */
 int wc_get(const char *file, const char *key, const wc_part *parts, int nparts, void **tail,
            size_t *ntail);
+
+/* A file mapped by wc_get_mapped; wc_unmap releases it (a zeroed one is
+ * nothing). */
+typedef struct wc_map {
+	void *base;
+	size_t len;
+} wc_map;
+void wc_unmap(wc_map *m);
+
+/* wc_get without copying the tail: on a hit *tail points into the file,
+ * mapped read-only (64-byte aligned), until wc_unmap(m). tail NULL: the
+ * object has no tail, and nothing stays mapped. */
+int wc_get_mapped(const char *file, const char *key, const wc_part *parts, int nparts,
+                  const void **tail, size_t *ntail, wc_map *m);
 
 /* Stores key, the files f (may be NULL), parts and tail atomically (a
  * temporary file, then rename). -1 with diag when it could not. */

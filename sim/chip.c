@@ -509,6 +509,7 @@ void chip_destroy(chip *c)
 	rgc_free(&c->g);
 	fb_free(&c->fb);
 	pr_free(&c->rec);
+	wc_unmap(&c->rec_map);
 	free(c->rec_key);
 	free(c->replayed);
 	mem_free(&c->mem);
@@ -866,14 +867,19 @@ static void rec_open(chip *c)
 		c->rec_key = NULL;
 		return;
 	}
-	void *tail;
+	const void *tail;
 	size_t n;
 	int W = c->cfg.frame.width, H = c->cfg.frame.height;
-	if (wc_get(c->rec_file, c->rec_key, NULL, 0, &tail, &n) == 1 &&
-	    !pr_load(&c->rec, tail, n, W, H, c->g.ntiles)) {
+	/* replayed where it lies in the file: no copy */
+	if (wc_get_mapped(c->rec_file, c->rec_key, NULL, 0, &tail, &n, &c->rec_map) == 1 &&
+	    !pr_load(&c->rec, tail, n, 0, W, H, c->g.ntiles)) {
 		c->env.rec_in = &c->rec;
 		c->rec_state = REC_REPLAYED;
-	} else if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
+		c->rec_ms += now_ms() - t0;
+		return;
+	}
+	wc_unmap(&c->rec_map);
+	if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
 		c->env.rec_out = &c->rec;
 		c->rec_state = REC_UNSTORED;
 	}
@@ -899,7 +905,7 @@ static void rec_store(chip *c)
 		fprintf(stderr, "warning: %s\n", d.msg);
 	else
 		c->rec_state = REC_STORED;
-	if (!pr_load(&c->rec, b, n, c->cfg.frame.width, c->cfg.frame.height, c->g.ntiles))
+	if (!pr_load(&c->rec, b, n, 1, c->cfg.frame.width, c->cfg.frame.height, c->g.ntiles))
 		c->env.rec_in = &c->rec;
 	c->rec_ms += now_ms() - t0;
 }

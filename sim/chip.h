@@ -31,6 +31,7 @@
 #include "stats.h"
 #include "thread.h"
 #include "world.h"
+#include "worldcache.h"
 
 typedef struct chip_check {
 	int done;
@@ -128,6 +129,7 @@ typedef struct chip {
 	 * sampled with a world cache replay it, or record it in their first
 	 * frame (rec_state: enum chip_rec) */
 	pktrec rec;
+	wc_map rec_map; /* the replayed record's file, mapped */
 	int rec_state;
 	uint8_t *replayed; /* per tile, this frame: its packets were replayed */
 	/* every thread slot in functional turn order: slot 0 of each RTP,

@@ -199,6 +199,49 @@ Test(worldcache, damaged_or_truncated_file_misses)
 	world_free(&b);
 }
 
+/* wc_get_mapped hands the tail where it lies in the file, 64-byte
+ * aligned (a packet record is used in place); a flipped byte in the
+ * head (here a part) or in the tail is a miss. */
+Test(worldcache, mapped_tail_is_aligned_and_checked)
+{
+	char dir[256], f[600];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(f, sizeof f, "%s/obj.bin", dir);
+	uint8_t part[13], tail[1000], got[13];
+	for (size_t i = 0; i < sizeof tail; i++)
+		tail[i] = (uint8_t)(i * 7 + 1);
+	memset(part, 0x42, sizeof part);
+	diag d;
+	wc_part pp = {part, sizeof part}, gp = {got, sizeof got};
+	cr_assert_eq(wc_put(f, "key", NULL, &pp, 1, tail, sizeof tail, &d), 0, "%s", d.msg);
+	const void *t;
+	size_t n;
+	wc_map m;
+	cr_assert_eq(wc_get_mapped(f, "key", &gp, 1, &t, &n, &m), 1);
+	cr_assert_eq(n, sizeof tail);
+	cr_assert_eq((uintptr_t)t % 64, 0, "the tail is 64-byte aligned");
+	cr_assert_eq(memcmp(t, tail, n), 0);
+	cr_assert_eq(memcmp(got, part, sizeof part), 0);
+	wc_unmap(&m);
+	cr_assert_null(m.base);
+	cr_assert_eq(wc_get_mapped(f, "other key", &gp, 1, &t, &n, &m), 0);
+	cr_assert_null(m.base, "a miss keeps nothing mapped");
+	struct stat st;
+	cr_assert_eq(stat(f, &st), 0);
+	/* magic, key length and key, file count, then the part */
+	long part_at = 8 + 4 + 3 + 4, tail_at = st.st_size - 16 - (long)sizeof tail;
+	cr_assert_eq(tail_at, 64);
+	tu_flip_byte(f, part_at + 4, 1);
+	cr_assert_eq(wc_get_mapped(f, "key", &gp, 1, &t, &n, &m), 0, "a damaged head");
+	for (size_t i = 0; i < sizeof got; i++)
+		cr_assert_eq(got[i], 0, "a miss zeroes the parts");
+	tu_flip_byte(f, part_at + 4, 1);
+	cr_assert_eq(wc_get_mapped(f, "key", &gp, 1, &t, &n, &m), 1, "flipped back");
+	wc_unmap(&m);
+	tu_flip_byte(f, tail_at + 500, 0x10);
+	cr_assert_eq(wc_get_mapped(f, "key", &gp, 1, &t, &n, &m), 0, "a damaged tail");
+}
+
 Test(worldcache, procedural_scene_keeps_its_view)
 {
 	char dir[256];

@@ -61,7 +61,8 @@ void pr_free(pktrec *r)
 	free(r->ch);
 	free(r->first);
 	free(r->last);
-	free(r->block);
+	if (r->own)
+		free((void *)r->block);
 	memset(r, 0, sizeof *r);
 }
 
@@ -224,10 +225,11 @@ int pr_serialize(const pktrec *r, const framebuf *fb, void **out, size_t *n)
 	return 0;
 }
 
-int pr_load(pktrec *r, void *block, size_t n, int w, int h, int ntiles)
+int pr_load(pktrec *r, const void *block, size_t n, int own, int w, int h, int ntiles)
 {
 	memset(r, 0, sizeof *r);
 	r->block = block;
+	r->own = own;
 	pr_head hd;
 	if (!block || n < sizeof hd)
 		goto bad;
@@ -245,7 +247,9 @@ int pr_load(pktrec *r, void *block, size_t n, int w, int h, int ntiles)
 	size_t o_acc = o_blob + pad8((size_t)hd.nblob);
 	if (o_acc + npx * (hd.accbits / 8) != n)
 		goto bad;
-	uint8_t *b = block;
+	/* never written through: a loaded record is read-only (it may be a
+	 * read-only mapping, wc_get_mapped) */
+	uint8_t *b = (uint8_t *)block;
 	r->w = w;
 	r->h = h;
 	r->ntiles = ntiles;
@@ -274,7 +278,8 @@ int pr_load(pktrec *r, void *block, size_t n, int w, int h, int ntiles)
 			goto bad;
 	return 0;
 bad:
-	free(block);
+	if (own)
+		free((void *)block);
 	memset(r, 0, sizeof *r);
 	return -1;
 }

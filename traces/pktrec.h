@@ -58,8 +58,10 @@ typedef struct pktrec {
 	uint32_t nch, capch, cappk;
 	uint32_t *first, *last;
 	int failed; /* out of memory: nothing is stored */
-	/* loaded: one block (the stored tail) holding everything below */
-	void *block;
+	/* loaded: one block (the stored tail) holding everything below,
+	 * freed by pr_free when own */
+	const void *block;
+	int own;
 	const uint64_t *off; /* npk + 1 stream offsets into blob */
 	const uint8_t *blob;
 	const uint32_t *acc32; /* the frame's accumulators, 32 or 64 bits */
@@ -82,10 +84,11 @@ void pr_put_u(pktrec *r, int32_t id, uint64_t v);
 /* The stored form: the streams and fb's accumulators, one malloc'd block.
  * -1 when out of memory or the record failed. */
 int pr_serialize(const pktrec *r, const framebuf *fb, void **out, size_t *n);
-/* Takes a stored block (ownership passes to r, also on failure) for a w x
- * h frame of ntiles tiles; -1 when it does not hold one (damaged, other
- * frame). */
-int pr_load(pktrec *r, void *block, size_t n, int w, int h, int ntiles);
+/* Takes a stored block for a w x h frame of ntiles tiles; -1 when it
+ * does not hold one (damaged, other frame). With own, the block is
+ * malloc'd and passes to r, also on failure; without, the caller keeps it
+ * (and its 8-byte alignment) until pr_free. */
+int pr_load(pktrec *r, const void *block, size_t n, int own, int w, int h, int ntiles);
 
 /* Stream of packet id and its end; tile t's primary packet id, -1. */
 static inline const uint8_t *pr_stream(const pktrec *r, uint32_t id, const uint8_t **end)
