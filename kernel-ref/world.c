@@ -342,17 +342,19 @@ int world_reference_rgb8(const world *w, const render_opts *o, uint8_t *rgb, ren
 		key = NULL;
 	}
 	wc_part parts[] = {{st, sizeof *st}};
-	void *t = NULL;
-	size_t nt = 0;
-	if (key && wc_get(file, key, parts, 1, &t, &nt)) {
-		if (nt == n) {
+	const void *t;
+	size_t nt;
+	wc_map map;
+	if (key && wc_get_mapped(file, key, parts, 1, &t, &nt, &map)) {
+		int hit = nt == n;
+		if (hit)
 			memcpy(rgb, t, n);
-			free(t);
+		wc_unmap(&map);
+		if (hit) {
 			free(key);
 			*cached = 1;
 			return 0;
 		}
-		free(t);
 	}
 	framebuf ref;
 	if (fb_init(&ref, o->width, o->height)) {

@@ -875,13 +875,12 @@ static void rec_open(chip *c)
 	    !pr_load(&c->rec, tail, n, 0, W, H, c->g.ntiles)) {
 		c->env.rec_in = &c->rec;
 		c->rec_state = REC_REPLAYED;
-		c->rec_ms += now_ms() - t0;
-		return;
-	}
-	wc_unmap(&c->rec_map);
-	if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
-		c->env.rec_out = &c->rec;
-		c->rec_state = REC_UNSTORED;
+	} else {
+		wc_unmap(&c->rec_map);
+		if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
+			c->env.rec_out = &c->rec;
+			c->rec_state = REC_UNSTORED;
+		}
 	}
 	c->rec_ms += now_ms() - t0;
 }
