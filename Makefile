@@ -125,7 +125,7 @@ test: all $(B)/saarsim-tests $(PLUGIN)
 	  ./$(B)/saarsim-tests --jobs 2
 
 bench: all
-	sh scripts/bench.sh $(B)
+	CC="$(CC)" sh scripts/bench.sh $(B)
 
 # Run time against error of the fidelity modes; writes docs/FIDELITY.md.
 bench-fidelity: all

@@ -166,7 +166,10 @@ fi
 CPU=$(sed -n 's/^model name[[:space:]]*:[[:space:]]*//p' /proc/cpuinfo 2>/dev/null | head -n 1)
 [ -n "$CPU" ] || CPU=$(uname -m)
 NPROC=$(nproc 2>/dev/null || getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?')
-COMPILER=$($CC --version 2>/dev/null | head -n 1 || echo "$CC")
+# the Makefile passes its CC; run by hand, the script uses cc like make
+CC=${CC:-cc}
+COMPILER=$($CC --version 2>/dev/null | head -n 1)
+[ -n "$COMPILER" ] || COMPILER=$CC
 DATE=$(date -u '+%Y-%m-%d %H:%M UTC')
 
 
@@ -174,7 +177,6 @@ if part rtref; then
 # ---- Embree harness (optional) ----
 EMBREE=absent
 EMBREE_NOTE="Embree 3 not installed (apt-get install libembree-dev); comparison skipped."
-CC=${CC:-cc}
 CXX=${CXX:-c++}
 if printf '#include <embree3/rtcore.h>\n' | $CC -E -x c - >/dev/null 2>&1; then
 	if pkg-config --exists embree3 2>/dev/null; then
