@@ -88,19 +88,15 @@ for t in ("shade", "kd", "list", "tri", "tag_cache", "l2"):
 print("sdram_mb", ss["sdram_mb"])
 print("pci_mb", ss["pci_mb"])
 print("replayed", int(r["host"].get("packet_record") == "replayed"))
-# the sample floor (below): each unit's cycles per demand, and what a unit
-# and its warm-up take of the frame
-u = f.get("unit_cycles_per_demand") or []
-print("ucpd", ",".join("%.6g" % x for x in u) if u else "-")
+# a unit and its warm-up (the census table below)
 print("region_tiles", f.get("unit_tiles", 0) + f.get("warmup_tiles", 0))
-print("frame_tiles", f.get("detailed_tiles", 0) + f.get("functional_tiles", 0))
 EOF
 }
 
 ROWS="$TMP/rows.tsv"
 : >"$ROWS"
-UNITS="$TMP/units.txt" # per sampled Conference point: its units (the sample table)
-: >"$UNITS"
+CENSUS="$TMP/census.txt" # per Conference config and thread count: its census (the sample table)
+: >"$CENSUS"
 for view in $VIEWS; do
 	size=$SIZE
 	[ "$view" = conference ] && size=$CONF_SIZE
@@ -126,7 +122,13 @@ for view in $VIEWS; do
 			set -- --views "$VIEWS_FILE" --view "$view" --config "$cf" --size "$size" \
 				--set chip.threads_per_rtp="$tpr"
 			reps=$REPS
-			run truth "$@" >"$TMP/truth.kv" || continue
+			# Conference's truth also writes its census (--census: each
+			# chunk's cycles and demand; the sample table below)
+			cen=
+			[ "$view" = conference ] && cen="--census $TMP/census_${cfg}_$tpr.csv"
+			# shellcheck disable=SC2086 # cen is two words or none
+			run truth "$@" $cen >"$TMP/truth.kv" || continue
+			censused=
 			# Conference: replicas at other sampling offsets too
 			points=functional
 			for r in $RATES; do
@@ -141,9 +143,12 @@ for view in $VIEWS; do
 						--set sampling.offset="$(echo "$mode@0.5" | cut -d@ -f2)" \
 						>"$TMP/pt.kv" || continue
 				fi
-				[ "$view" = conference ] && [ "$mode" != functional ] &&
-					awk -v c="$cfg" -v t="$tpr" '{k[$1] = $2} END {if (k["ucpd"] != "-") print c, t, k["ucpd"], k["region_tiles"], k["frame_tiles"]}' \
-						"$TMP/pt.kv" >>"$UNITS"
+				# the census's regions: a sampled point's unit and warm-up
+				if [ -n "$cen" ] && [ -z "$censused" ] && [ "$mode" != functional ] && [ "$tpr" -gt 1 ]; then
+					awk -v c="$cfg" -v t="$tpr" -v p="$TMP/census_${cfg}_$tpr.csv" \
+						'$1 == "region_tiles" {print c, t, $2, p}' "$TMP/pt.kv" >>"$CENSUS"
+					censused=1
+				fi
 				python3 - "$TMP/truth.kv" "$TMP/pt.kv" "$view" "$cfg" "$tpr" "$mode" "$size" >>"$ROWS" <<'EOF'
 import sys
 def kv(p):
@@ -331,6 +336,11 @@ if fn > 0:
           % (fn, cyc / fn, float(sys.argv[7]) / 2**20))
 s += (". kernel-ref alone renders the frame in %.3f s on one host thread (%.1fx below cycle) and %.3f s on %s"
       % (ms1, cyc / ms1, ms, sys.argv[3]))
+# a detailed region replays the record: about a cycle tile's cost less its math
+if cyc > ms1:
+    s += (". So even with free warming, 10x leaves about %.0f%% of the frame's tiles to simulate in detail "
+          "(a tenth of cycle's time over a detailed tile's cost, cycle's per tile less kernel-ref's math; "
+          "compare the census table's shares)" % (10 * cyc / (cyc - ms1)))
 print(s + ".")
 EOF
 )
@@ -391,30 +401,17 @@ for cfg in ("std", "vma"):
         print(s)
 EOF
 	echo
-	echo "### Conference $CONF_SIZE: the sample a 1% error needs"
-	echo
-	echo "From the sampled points above: each unit's cycles per unit of demand (report \`unit_cycles_per_demand\`, the units after the first, relative to their run's mean) spread with standard deviation *s*. The ratio estimate's relative error is about s / sqrt(n) for n units, so 95% of estimates within 1% need n >= (1.96 s / 0.01)^2 units and an rms error of 1% about (s / 0.01)^2; *share*: those units with their warm-ups as a share of the frame's tiles, simulated in detail. (With the VMA the strata, and at one thread the linear model's fit, narrow this; it is the plain ratio's need.)"
-	echo
-	echo "| config | threads | units | s | n for 95% within 1% | share | n for 1% rms | share |"
-	echo "|---|---:|---:|---:|---:|---:|---:|---:|"
-	python3 - "$UNITS" <<'EOF'
-import sys, statistics
-by = {}
-for l in open(sys.argv[1]):
-    cfg, t, u, reg, frame = l.split()
-    v = [float(x) for x in u.split(",")][1:]
-    if len(v) < 2:
-        continue
-    m = statistics.mean(v)
-    d = by.setdefault((cfg, int(t)), [[], int(reg), int(frame)])
-    d[0] += [x / m for x in v]
-for (cfg, t), (r, reg, frame) in sorted(by.items()):
-    s = statistics.stdev(r)
-    n95, nrms = (1.96 * s / 0.01) ** 2, (s / 0.01) ** 2
-    share = lambda n: "%.0f%%" % min(100, 100 * n * reg / frame) if frame else "-"
-    print("| %s | %d | %d | %.3f | %.0f | %s | %.0f | %s |" % (cfg, t, len(r), s, n95, share(n95), nrms, share(nrms)))
-EOF
-	echo
+	if [ -s "$CENSUS" ]; then
+		echo "### Conference $CONF_SIZE: the sample a 1% error needs"
+		echo
+		echo "From each truth run's census (\`--census\`: the cycles and resource demand of every chunk of one unit's tiles, docs/fidelity.md \"Census\"), the frame's middle (between the head and tail regions, which sampled mode measures whole) as if every chunk could be a unit and warming were exact and free: the demand model is the max model with the SDRAM factor fitted to all chunks; *memory bound*: the share of the middle's cycles in chunks whose SDRAM or host-bus time exceeds 0.6 of their busiest compute resource (the estimator's strata); *s*: the chunks' residual standard deviation around one ratio, relative to the mean chunk; *8 units*: the fps error of the plain ratio estimate from 8 systematically placed chunks, rms / max over 10 offsets. Then the units a 1% error of the frame needs, from the chunks' variance (the ratio estimator's, with the finite-population correction): *plain* with one ratio, *strata* with the two strata's own ratios and their units allocated in proportion to each stratum's size times its spread (the best two strata can do); in brackets the share of the frame's tiles those units with their warm-ups and the head and tail regions simulate in detail. One thread per RTP (units of 4 tiles, the linear model) is left out. scripts/census-need.py computes it."
+		echo
+		echo "| config | threads | chunks | memory bound | s | 8 units: rms / max fps err % | plain: 1% rms | plain: 95% within 1% | strata: 1% rms | strata: 95% within 1% |"
+		echo "|---|---:|---:|---:|---:|---|---:|---:|---:|---:|"
+		# shellcheck disable=SC2046 # one argument per word of the list
+		python3 scripts/census-need.py $(cat "$CENSUS")
+		echo
+	fi
 	echo "### Every point"
 	echo
 	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % | whole-run speed-up | record |"

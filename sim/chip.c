@@ -109,6 +109,33 @@ static void chip_demand(const chip *c, double d[RES_N])
 	d[RES_HOSTBUS] = (double)(h.hostbus.busy_ticks + h.func_hostbus_busy_ticks) / per;
 }
 
+/* A census mark at hand-out index tile of the current frame (the room
+ * for every mark is made by chip_census_on). */
+static void census_mark(chip *c, int tile)
+{
+	if (c->ncensus >= c->census_cap)
+		return;
+	chip_mark *m = &c->census[c->ncensus++];
+	m->frame = c->frames_done;
+	m->tile = tile;
+	m->ticks = eng_now(c->e);
+	chip_demand(c, m->dem);
+}
+
+int chip_census_on(chip *c, diag *d)
+{
+	if (c->fid.mode == CFG_FIDELITY_SAMPLED && !c->fid.exact)
+		return diag_set(d, "--census", 0, 0,
+		                "needs fidelity cycle or functional (a sampled frame's chunks mix "
+		                "timed and functional work)");
+	int per = (c->g.ntiles + c->fid.unit_tiles - 1) / c->fid.unit_tiles + 1;
+	c->census_cap = per * c->cfg.frame.frames;
+	c->census = calloc((size_t)c->census_cap, sizeof *c->census);
+	if (!c->census)
+		return diag_set(d, "--census", 0, 0, "out of memory");
+	return 0;
+}
+
 /* Gives thread t the RGC's next tile (its primary packet); 0 when the
  * frame has none left or the packet pool is out of memory. Timed and
  * functional processing both take tiles here. */
@@ -117,6 +144,8 @@ static int take_tile(chip *c, thr_ctx *t)
 	int tx, ty;
 	if (!rgc_next(&c->g, &tx, &ty))
 		return 0;
+	if (c->census && c->tiles_given % c->fid.unit_tiles == 0)
+		census_mark(c, c->tiles_given);
 	c->tiles_given++;
 	if (c->progress && c->tiles_given % 64 == 0)
 		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
@@ -512,6 +541,7 @@ void chip_destroy(chip *c)
 	wc_unmap(&c->rec_map);
 	free(c->rec_key);
 	free(c->replayed);
+	free(c->census);
 	mem_free(&c->mem);
 	thr_env_free(&c->env);
 	if (c->e)
@@ -962,6 +992,8 @@ int chip_run(chip *c, diag *d)
 				return diag_set(d, "saarsim", 0, 0,
 				                "internal error: frame ended with busy threads");
 		}
+		if (c->census)
+			census_mark(c, c->g.ntiles);
 		if (c->env.rec_in)
 			rec_pixels(c);
 		rec_store(c);

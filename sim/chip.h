@@ -58,6 +58,14 @@ enum chip_res {
 	RES_N
 };
 
+/* --census: the cumulative resource demand and engine time at a chunk
+ * boundary (the hand-out of a chunk's first tile, or a frame's end). */
+typedef struct chip_mark {
+	int frame, tile; /* tile: hand-out index; the frame's tile count at its end */
+	uint64_t ticks;
+	double dem[RES_N]; /* chip_demand */
+} chip_mark;
+
 /* What the fidelity modes add (docs/fidelity.md). */
 typedef struct chip_fidelity {
 	int mode; /* enum cfg_fidelity */
@@ -137,6 +145,10 @@ typedef struct chip {
 	thr_ctx **turn;
 	char *rec_key, rec_file[1200];
 	double rec_ms; /* host time loading or storing the record */
+	/* --census (chip_census_on): marks at every fid.unit_tiles tiles
+	 * handed out and at each frame's end; NULL: off */
+	chip_mark *census;
+	int ncensus, census_cap;
 } chip;
 
 enum chip_rec { REC_OFF, REC_REPLAYED, REC_STORED, REC_UNSTORED };
@@ -151,6 +163,12 @@ void chip_destroy(chip *c);
  * path + rename). */
 int chip_trace_mem(chip *c, const char *path, diag *d);
 int chip_trace_close(chip *c, diag *d);
+/* Keeps a census from now on: the resource demand (chip_demand's
+ * resources) and cycles of every chunk of fid.unit_tiles tiles in hand-out
+ * order, the units' size (docs/fidelity.md, "Census"). Cycle and
+ * functional modes only: a sampled frame's chunks mix timed and functional
+ * work. Fails (diag) in sampled mode or out of memory. */
+int chip_census_on(chip *c, diag *d);
 /* Simulates cfg.frame.frames frames (the frame buffer holds the last). */
 int chip_run(chip *c, diag *d);
 /* Renders the same frame with kernel-ref (render_frame, 1 host thread) and

@@ -3,7 +3,8 @@
  *
  *   saarsim [--config FILE] [scene/view flags] [--size WxH] [--frames N]
  *           [--out frame.png] [--report report.json] [--csv FILE]
- *           [--trace-mem FILE.gz] [--set key=value ...] [--no-check]
+ *           [--trace-mem FILE.gz] [--census FILE.csv] [--set key=value ...]
+ *           [--no-check]
  *           [--list-config] [--config-doc]
  *
  * Loads the config (built-in defaults = configs/saarcor-std.yaml, then the
@@ -40,6 +41,8 @@ static void usage(FILE *f)
 	        "  --report FILE.json    write the JSON report (docs/report.md)\n"
 	        "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
 	        "  --trace-mem FILE.gz   record every memory request (traces/memtrace.h)\n"
+	        "  --census FILE.csv     cycles and resource demand of every chunk of tiles\n"
+	        "                        (cycle and functional; docs/fidelity.md)\n"
 	        "  --fidelity MODE       cycle | sampled | functional (docs/fidelity.md)\n"
 	        "  --sample-rate R       sampled: share of tiles measured (sampling.rate)\n"
 	        "  --unit-tiles N        sampled: tiles per measured unit (sampling.unit_tiles)\n"
@@ -90,7 +93,7 @@ int main(int argc, char **argv)
 	world_opts wo;
 	world_opts_default(&wo);
 	const char *config = NULL, *out = NULL, *report = NULL, *size = NULL, *frames = NULL;
-	const char *csv = NULL, *trace = NULL;
+	const char *csv = NULL, *trace = NULL, *census = NULL;
 	int check = 1, list = 0, doc = 0;
 	diag d = {{0}};
 	for (int i = 1; i < argc;) {
@@ -132,6 +135,8 @@ int main(int argc, char **argv)
 			csv = v;
 		else if (!strcmp(a, "--trace-mem"))
 			trace = v;
+		else if (!strcmp(a, "--census"))
+			census = v;
 		else {
 			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", a);
 			return DIAG_EXIT;
@@ -237,6 +242,10 @@ int main(int argc, char **argv)
 			goto done;
 		}
 	}
+	if (census && chip_census_on(c, &d)) {
+		rc = cli_bad("saarsim", d.msg);
+		goto done;
+	}
 	if (chip_run(c, &d) || chip_trace_close(c, &d) ||
 	    (check && chip_check_frame(c, &chk, &d))) {
 		rc = cli_bad("saarsim", d.msg);
@@ -255,9 +264,19 @@ int main(int argc, char **argv)
 		rc = cli_bad("saarsim", d.msg);
 		goto done;
 	}
+	if (census && report_census(census, &ri, &d)) {
+		if (out)
+			unlink(out);
+		if (report)
+			unlink(report);
+		rc = cli_bad("saarsim", d.msg);
+		goto done;
+	}
 	if (trace && af_commit(&trace_tmp)) {
 		trace_tmp.tmp[0] = 0;
 		diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
+		if (census)
+			unlink(census);
 		goto undo;
 	}
 	trace_tmp.tmp[0] = 0;
@@ -265,6 +284,8 @@ int main(int argc, char **argv)
 	if (csv && report_csv(csv, &ri, &d)) {
 		if (trace)
 			unlink(trace);
+		if (census)
+			unlink(census);
 		goto undo;
 	}
 	report_text(stdout, &ri);

@@ -826,3 +826,32 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
 	return 0;
 }
+
+int report_census(const char *path, const report_info *ri, diag *d)
+{
+	const chip *c = ri->c;
+	afile a;
+	if (af_open(&a, path, "", 1))
+		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+	FILE *f = a.f;
+	fputs("frame,first_tile,tiles,cycles", f);
+	for (int r = 0; r < RES_N; r++)
+		fprintf(f, ",%s", chip_res_name(r));
+	fputc('\n', f);
+	int timed = c->fid.mode != CFG_FIDELITY_FUNCTIONAL;
+	double per = (double)c->clk.period;
+	for (int i = 0; i + 1 < c->ncensus; i++) {
+		const chip_mark *m0 = &c->census[i], *m1 = &c->census[i + 1];
+		if (m1->frame != m0->frame)
+			continue; /* the frame's end mark starts no chunk */
+		fprintf(f, "%d,%d,%d,", m0->frame + 1, m0->tile, m1->tile - m0->tile);
+		if (timed)
+			fprintf(f, "%.10g", (double)(m1->ticks - m0->ticks) / per);
+		for (int r = 0; r < RES_N; r++)
+			fprintf(f, ",%.10g", m1->dem[r] - m0->dem[r]);
+		fputc('\n', f);
+	}
+	if (af_commit(&a))
+		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+	return 0;
+}

@@ -49,5 +49,10 @@ int report_json(const char *path, const report_info *ri, diag *d);
  * the file is new or empty. Atomic: the old contents and the row go to
  * path.tmp, which is renamed over path. */
 int report_csv(const char *path, const report_info *ri, diag *d);
+/* Writes the census (chip_census_on) as CSV, atomically: one row per chunk
+ * of fid.unit_tiles tiles in hand-out order (the last of a frame runs to
+ * its end), with its core cycles (empty in functional mode, which has no
+ * time) and the core cycles each resource's work needs (docs/report.md). */
+int report_census(const char *path, const report_info *ri, diag *d);
 
 #endif

@@ -322,3 +322,94 @@ Test(saarsim_cli, trace_replays_to_the_same_l1_counts, .timeout = 300)
 		              l1[t], rep_hits, chip_hits);
 	}
 }
+
+/* The number after the keys found one after the other in json, as a double. */
+static double jdbl(const char *json, const char *const *keys, int n)
+{
+	const char *p = json;
+	for (int k = 0; k < n; k++) {
+		char q[128];
+		snprintf(q, sizeof q, "\"%s\"", keys[k]);
+		p = strstr(p, q);
+		cr_assert(p, "no key %s", q);
+		p += strlen(q);
+	}
+	cr_assert_eq(*p, ':');
+	return strtod(p + 1, NULL);
+}
+
+#define JDBL(json, ...)                                                                            \
+	jdbl(json, (const char *const[]){__VA_ARGS__},                                             \
+	     sizeof((const char *const[]){__VA_ARGS__}) / sizeof(const char *))
+
+/* --census over two frames: rows of the units' size (rtps x threads per
+ * RTP tiles) in hand-out order, each frame's covering its tiles; a frame's
+ * cycles add up to its cycles in the report and the last frame's demand,
+ * resource by resource, to the report's resource_cycles. Functional rows
+ * have the same demand and no cycles; sampled mode is refused.
+ * docs/fidelity.md, "Census". */
+Test(saarsim_cli, census_adds_up_to_the_report)
+{
+	static const char *const res[] = {"rgs",   "trav",    "list",   "isect", "l1_shade",
+	                                  "l1_kd", "l1_list", "l1_tri", "sdram", "hostbus"};
+	for (int mode = 0; mode < 2; mode++) {
+		char args[1024];
+		snprintf(args, sizeof args,
+		         "--size 128x96 --set chip.rtps=2 --frames 2 --fidelity %s --no-check "
+		         "--census %s/c.csv --report %s/r.json",
+		         mode ? "functional" : "cycle", dir, dir);
+		cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+		cr_assert_eq(tu_temps(dir, "c.csv"), 0);
+		char *r = slurp("r.json"), *csv = slurp("c.csv");
+		const char *head =
+		    "frame,first_tile,tiles,cycles,rgs,trav,list,isect,l1_shade,l1_kd,"
+		    "l1_list,l1_tri,sdram,hostbus\n";
+		cr_assert(!strncmp(csv, head, strlen(head)), "%s", csv);
+		int tiles[3] = {0}, next[3] = {0}, rows = 0;
+		double cyc[3] = {0}, dem[10] = {0};
+		for (char *p = strchr(csv, '\n') + 1; *p; p = strchr(p, '\n') + 1) {
+			int f = (int)strtol(p, &p, 10), first = (int)strtol(p + 1, &p, 10),
+			    n = (int)strtol(p + 1, &p, 10);
+			cr_assert(f == 1 || f == 2, "frame %d", f);
+			cr_assert_eq(first, next[f], "rows out of order");
+			cr_assert_eq(n, 32, "chunk of %d tiles", n);
+			next[f] += n;
+			tiles[f] += n;
+			rows++;
+			p++; /* the comma before cycles: empty in functional mode */
+			cr_assert_eq(*p == ',', mode == 1, "cycles field: %.20s", p);
+			if (!mode)
+				cyc[f] += strtod(p, &p);
+			for (int k = 0; k < 10; k++) {
+				double v = strtod(p + 1, &p);
+				cr_assert_geq(v, 0);
+				if (f == 2)
+					dem[k] += v;
+			}
+			cr_assert_eq(*p, '\n');
+		}
+		cr_assert_eq(tiles[1], 16 * 12);
+		cr_assert_eq(tiles[2], 16 * 12);
+		cr_assert_eq(rows, 12);
+		if (!mode) {
+			/* per_frame lists frame 1 then frame 2 */
+			double c1 = JDBL(r, "per_frame", "cycles"),
+			       c2 = JDBL(r, "per_frame", "cycles", "cycles");
+			cr_assert(fabs(cyc[1] - c1) <= 1 && fabs(cyc[2] - c2) <= 1,
+			          "census %.0f %.0f, report %.0f %.0f", cyc[1], cyc[2], c1, c2);
+		}
+		for (int k = 0; k < 10; k++) {
+			double want = JDBL(r, "resource_cycles", res[k]);
+			cr_assert(fabs(dem[k] - want) <= 1e-6 * (want + 1),
+			          "%s: census %.3f, report %.3f", res[k], dem[k], want);
+		}
+	}
+	char args[1024];
+	snprintf(args, sizeof args,
+	         "--size 256x192 --set chip.rtps=1 --set chip.threads_per_rtp=2 --fidelity sampled "
+	         "--sample-rate 0.1 --unit-tiles 8 --no-check --census %s/s.csv",
+	         dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--census");
+	cr_assert_not(exists("s.csv"));
+}

@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""census-need.py: the sample a 1% estimate of a frame needs, from a cycle
+run's census (saarsim --census; docs/fidelity.md "Census").
+
+    census-need.py CONFIG THREADS REGION_TILES CENSUS.csv [...]
+
+One Markdown table row per census (bench-fidelity.sh prints the header):
+the frame's middle, between the head and tail regions of REGION_TILES tiles
+(a unit and its warm-up) that sampled mode measures whole, as if every
+chunk could be a unit and warming were exact and free. Chunks follow the
+estimator's max demand model, max(busiest compute resource, k x SDRAM
+time, host-bus time), with k fitted as the estimator fits it (the
+smallest k in [1, 4], steps of 0.02, under which one ratio fits the chunks
+best by least squares), and its strata (SDRAM or host-bus time above 0.6
+of the busiest compute resource). The units needed come from the chunks'
+variance around the ratio (the ratio estimator's variance with the
+finite-population correction), for one ratio and for two strata with
+their own ratios and Neyman allocation.
+"""
+import math
+import sys
+
+def analyse(path, RW, hard_share=0.6):
+    rows = []
+    for l in open(path):
+        if l.startswith("frame"):
+            continue
+        v = l.strip().split(",")
+        if v[0] != "1":
+            continue
+        rows.append((int(v[1]), int(v[2]), float(v[3]), [float(x) for x in v[4:]]))
+    N = sum(r[1] for r in rows)
+    T = sum(r[2] for r in rows)
+    mid = [r for r in rows if r[0] >= RW and r[0] + r[1] <= N - RW]
+    c = [r[2] for r in mid]
+    M = sum(c)
+    comp = [max(r[3][:8]) for r in mid]
+    sdr = [r[3][8] for r in mid]
+    hb = [r[3][9] for r in mid]
+    def xs(k):
+        return [max(a, k * b, h) for a, b, h in zip(comp, sdr, hb)]
+    best = None
+    for i in range(151):
+        k = 1 + 0.02 * i
+        x = xs(k)
+        R = sum(ci * xi for ci, xi in zip(c, x)) / sum(xi * xi for xi in x)
+        e = sum((ci - R * xi) ** 2 for ci, xi in zip(c, x))
+        if best is None or e < best[0] * (1 - 1e-12):
+            best = (e, k)
+    k = best[1]
+    x = xs(k)
+    n = len(mid)
+    R = M / sum(x)
+    d = [ci - R * xi for ci, xi in zip(c, x)]
+    q = math.sqrt(sum(v * v for v in d) / (n - 1)) / (R * sum(x) / n)
+    hard = sum(ci for ci, a, b, h in zip(c, comp, sdr, hb) if max(b, h) > hard_share * a) / M
+    # two strata (memory bound or not, as the estimator's), each with its
+    # own ratio, units allocated in proportion to N_h S_h (Neyman): the
+    # best two strata can do
+    st = {}
+    for j in range(n):
+        h = max(sdr[j], hb[j]) > hard_share * comp[j]
+        st.setdefault(h, []).append(j)
+    NS, NS2 = 0.0, 0.0
+    for h, J in st.items():
+        if len(J) < 2:
+            continue
+        Rh = sum(c[j] for j in J) / sum(x[j] for j in J)
+        Sh = math.sqrt(sum((c[j] - Rh * x[j]) ** 2 for j in J) / (len(J) - 1))
+        NS += len(J) * Sh
+        NS2 += len(J) * Sh * Sh
+    def need_st(rel):
+        return NS * NS / ((rel * T) ** 2 + NS2)
+    def need(rel):
+        rm = rel * T / M
+        return 1 / ((rm / q) ** 2 + 1 / n)
+    share = lambda u: min(1.0, (u * RW + 2 * RW) / N)
+    def ideal(units):
+        errs = []
+        P = n / units
+        for o in range(10):
+            U = sorted(set(min(n - 1, int(j * P + (o + 0.5) / 10 * P)) for j in range(units)))
+            Rh = sum(c[j] for j in U) / sum(x[j] for j in U)
+            inU = set(U)
+            est = (T - M) + sum(c[j] for j in U) + Rh * sum(x[j] for j in range(n) if j not in inU)
+            errs.append((T / est - 1) * 100)
+        return math.sqrt(sum(e * e for e in errs) / len(errs)), max(abs(e) for e in errs)
+    return dict(n=n, k=k, hard=hard, q=q, nrms=need(0.01), n95=need(0.01 / 1.96), share=share,
+                srms=need_st(0.01), s95=need_st(0.01 / 1.96),
+                i8=ideal(8) if n >= 8 else None, i16=ideal(16) if n >= 16 else None)
+a = sys.argv[1:]
+if not a or len(a) % 4:
+    sys.exit("usage: census-need.py CONFIG THREADS REGION_TILES CENSUS.csv [...]")
+for i in range(0, len(a), 4):
+    cfg, tpr, RW, path = a[i], a[i + 1], int(a[i + 2]), a[i + 3]
+    r = analyse(path, RW)
+    fmt = lambda t: "%.2f / %.2f" % t if t else "-"
+    sh = lambda u: "%.0f%%" % (100 * r["share"](u))
+    print("| %s | %s | %d | %.0f%% | %.3f | %s | %.0f (%s) | %.0f (%s) | %.0f (%s) | %.0f (%s) |" % (
+        cfg, tpr, r["n"], 100 * r["hard"], r["q"], fmt(r["i8"]),
+        r["nrms"], sh(r["nrms"]), r["n95"], sh(r["n95"]), r["srms"], sh(r["srms"]), r["s95"], sh(r["s95"])))
