@@ -4,7 +4,7 @@ run's census (saarsim --census; docs/fidelity.md "Census").
 
     census-need.py CONFIG THREADS REGION_TILES CENSUS.csv [...]
 
-One Markdown table row per census (bench-fidelity.sh prints the header):
+A Markdown table, one row per census:
 the frame's middle, between the head and tail regions of REGION_TILES tiles
 (a unit and its warm-up) that sampled mode measures whole, as if every
 chunk could be a unit and warming were exact and free. Chunks follow the
@@ -91,6 +91,9 @@ def analyse(path, RW, hard_share=0.6):
 a = sys.argv[1:]
 if not a or len(a) % 4:
     sys.exit("usage: census-need.py CONFIG THREADS REGION_TILES CENSUS.csv [...]")
+print("| config | threads | chunks | memory bound | s | 8 units: rms / max fps err % "
+      "| plain: 1% rms | plain: 95% within 1% | strata: 1% rms | strata: 95% within 1% |")
+print("|---|---:|---:|---:|---:|---|---:|---:|---:|---:|")
 for i in range(0, len(a), 4):
     cfg, tpr, RW, path = a[i], a[i + 1], int(a[i + 2]), a[i + 3]
     r = analyse(path, RW)
