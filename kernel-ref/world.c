@@ -415,12 +415,6 @@ int cli_parse_size(const char *s, int *w, int *h, diag *d)
 
 int cli_bad(const char *prog, const char *msg)
 {
-	/* a message the program itself raised already names it (diag_set
-	 * with the program as the file): one prefix, not two */
-	size_t n = strlen(prog);
-	if (!strncmp(msg, prog, n) && !strncmp(msg + n, ": ", 2))
-		fprintf(stderr, "%s\n", msg);
-	else
-		fprintf(stderr, "%s: %s\n", prog, msg);
+	fprintf(stderr, "%s: %s\n", prog, msg);
 	return DIAG_EXIT;
 }

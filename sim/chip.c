@@ -235,7 +235,7 @@ int chip_trace_mem(chip *c, const char *path, diag *d)
 {
 	c->trace = malloc(sizeof *c->trace);
 	if (!c->trace)
-		return diag_set(d, "saarsim", 0, 0, "out of memory for the trace writer");
+		return diag_set(d, "chip", 0, 0, "out of memory for the trace writer");
 	if (mtr_open_write(c->trace, path, d)) {
 		free(c->trace);
 		c->trace = NULL;
@@ -405,7 +405,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	if (cfg->memory.model == CFG_MEM_HIERARCHY)
 		mrc = mem_init_hier(&c->mem, c->e, c->clk, cfg, c->spill_base, d);
 	else if ((mrc = mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency)))
-		diag_set(d, "saarsim", 0, 0, "out of memory");
+		diag_set(d, "chip", 0, 0, "out of memory");
 	if (mrc) {
 		chip_destroy(c);
 		return NULL;
@@ -429,7 +429,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	               cfg->chip.fp.round) ||
 	    fpfmt_init(&v->prec.shade, cfg->chip.fp.shade.exp, cfg->chip.fp.shade.mant,
 	               cfg->chip.fp.round)) {
-		diag_set(d, "saarsim", 0, 0, "chip.fp: unsupported floating-point format");
+		diag_set(d, "config", 0, 0, "chip.fp: unsupported floating-point format");
 		chip_destroy(c);
 		return NULL;
 	}
@@ -515,7 +515,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	return c;
 oom:
 	chip_destroy(c);
-	diag_set(d, "saarsim", 0, 0, "out of memory for %d RTPs x %d threads", cfg->chip.rtps,
+	diag_set(d, "chip", 0, 0, "out of memory for %d RTPs x %d threads", cfg->chip.rtps,
 	         cfg->chip.threads_per_rtp);
 	return NULL;
 }
@@ -989,7 +989,7 @@ int chip_run(chip *c, diag *d)
 			for (int i = 0; i < c->tpr; i++)
 				thr_flush(&c->rtp[r].t[i]);
 			if (c->rtp[r].nidle != c->tpr || c->rtp[r].qn)
-				return diag_set(d, "saarsim", 0, 0,
+				return diag_set(d, "chip", 0, 0,
 				                "internal error: frame ended with busy threads");
 		}
 		if (c->census)
@@ -998,7 +998,7 @@ int chip_run(chip *c, diag *d)
 			rec_pixels(c);
 		rec_store(c);
 		if (c->oom)
-			return diag_set(d, "saarsim", 0, 0, "out of memory during the frame");
+			return diag_set(d, "chip", 0, 0, "out of memory during the frame");
 		c->frame_port[f] = c->mem.n;
 		if (c->frame_mem)
 			hier_get_stats(&c->mem, &c->frame_mem[f]);
@@ -1054,7 +1054,7 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
 	int rc = a && b ? world_reference_rgb8(c->w, &ro, b, &out->ref, &out->cached, d)
-	                : diag_set(d, "saarsim", 0, 0, "out of memory for the reference frame");
+	                : diag_set(d, "chip", 0, 0, "out of memory for the reference frame");
 	if (!rc) {
 		fb_to_rgb8(&c->fb, a, NULL);
 		out->cmp = img_compare(a, b, ro.width, ro.height);

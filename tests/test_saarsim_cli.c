@@ -168,9 +168,9 @@ Test(saarsim_cli, config_doc_matches_docs)
 	cr_assert_eq(tu_run(cmd), 0, "docs/config.md is not `saarsim --config-doc`");
 }
 
-/* The unsigned number after the keys found one after the other in json
- * (each key searched from where the previous one was found). */
-static unsigned long long jnum(const char *json, const char *const *keys, int n)
+/* Where the value of the last of keys starts in json, each key searched
+ * from where the previous one was found. */
+static const char *jval(const char *json, const char *const *keys, int n)
 {
 	const char *p = json;
 	for (int k = 0; k < n; k++) {
@@ -181,12 +181,15 @@ static unsigned long long jnum(const char *json, const char *const *keys, int n)
 		p += strlen(q);
 	}
 	cr_assert_eq(*p, ':');
-	return strtoull(p + 1, NULL, 10);
+	return p + 1;
 }
 
-#define JNUM(json, ...)                                                                            \
-	jnum(json, (const char *const[]){__VA_ARGS__},                                             \
-	     sizeof((const char *const[]){__VA_ARGS__}) / sizeof(const char *))
+#define JKEYS(...)                                                                                 \
+	(const char *const[]){__VA_ARGS__},                                                        \
+	    sizeof((const char *const[]){__VA_ARGS__}) / sizeof(const char *)
+/* the value after the keys, as an unsigned number and as a double */
+#define JNUM(json, ...) strtoull(jval(json, JKEYS(__VA_ARGS__)), NULL, 10)
+#define JDBL(json, ...) strtod(jval(json, JKEYS(__VA_ARGS__)), NULL)
 
 Test(saarsim_cli, image_too_big_without_vma_suggests_vma_config)
 {
@@ -322,25 +325,6 @@ Test(saarsim_cli, trace_replays_to_the_same_l1_counts, .timeout = 300)
 		              l1[t], rep_hits, chip_hits);
 	}
 }
-
-/* The number after the keys found one after the other in json, as a double. */
-static double jdbl(const char *json, const char *const *keys, int n)
-{
-	const char *p = json;
-	for (int k = 0; k < n; k++) {
-		char q[128];
-		snprintf(q, sizeof q, "\"%s\"", keys[k]);
-		p = strstr(p, q);
-		cr_assert(p, "no key %s", q);
-		p += strlen(q);
-	}
-	cr_assert_eq(*p, ':');
-	return strtod(p + 1, NULL);
-}
-
-#define JDBL(json, ...)                                                                            \
-	jdbl(json, (const char *const[]){__VA_ARGS__},                                             \
-	     sizeof((const char *const[]){__VA_ARGS__}) / sizeof(const char *))
 
 /* --census over two frames: rows of the units' size (rtps x threads per
  * RTP tiles) in hand-out order, each frame's covering its tiles; a frame's
