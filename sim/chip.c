@@ -122,12 +122,19 @@ static void census_mark(chip *c, int tile)
 	chip_demand(c, m->dem);
 }
 
-int chip_census_on(chip *c, diag *d)
+int chip_census_check(const saar_config *cfg, diag *d)
 {
-	if (c->fid.mode == CFG_FIDELITY_SAMPLED && !c->fid.exact)
+	if (chip_estimates(cfg))
 		return diag_set(d, "--census", 0, 0,
 		                "needs fidelity cycle or functional (a sampled frame's chunks mix "
 		                "timed and functional work)");
+	return 0;
+}
+
+int chip_census_on(chip *c, diag *d)
+{
+	if (chip_census_check(&c->cfg, d))
+		return -1;
 	int per = (c->g.ntiles + c->fid.unit_tiles - 1) / c->fid.unit_tiles + 1;
 	c->census_cap = per * c->cfg.frame.frames;
 	c->census = calloc((size_t)c->census_cap, sizeof *c->census);
@@ -272,23 +279,53 @@ static uint64_t *reg(chip *c, const char *name, const char *unit, const char *de
 /* Threads per RTP whose tiles the default warm-up holds at most. */
 #define WARMUP_TPR 16
 
+/* The sampling plan's sizes from the config alone: tiles per unit and
+ * per warm-up, and the units per frame; 1 when the regions would cover
+ * the frame anyway (every tile simulated, as cycle). */
+static int fid_plan(const saar_config *cfg, int *unit, int *warmup, long *units)
+{
+	int nrtp = cfg->chip.rtps, tpr = cfg->chip.threads_per_rtp, threads = nrtp * tpr;
+	int N = ((cfg->frame.width + TILE_W - 1) / TILE_W) *
+	        ((cfg->frame.height + TILE_H - 1) / TILE_H);
+	/* a unit shorter than one tile per thread is over before any thread
+	 * has finished anything: its window would be empty */
+	int U = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;
+	/* a region takes over a full chip (packets in flight, caches warm):
+	 * the warm-up refills the memory and unit queues (docs/fidelity.md).
+	 * One tile per thread, but at most WARMUP_TPR per RTP: at 64 threads
+	 * per RTP a 64-tile warm-up measured as well as a 256-tile one */
+	int warm = nrtp * (tpr < WARMUP_TPR ? tpr : WARMUP_TPR);
+	int W = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : warm;
+	/* n units of U tiles, at least sampling.min_units and 3 (the head,
+	 * the tail and one between); when the regions would cover the frame
+	 * anyway, simulate all of it */
+	long n = lround((double)N * cfg->sampling.rate / U);
+	if (n < cfg->sampling.min_units)
+		n = cfg->sampling.min_units;
+	if (n < 3)
+		n = 3;
+	*unit = U;
+	*warmup = W;
+	*units = n;
+	return cfg->sampling.rate >= 1.0 || n * (long)(U + W) >= N;
+}
+
+int chip_estimates(const saar_config *cfg)
+{
+	int U, W;
+	long n;
+	return cfg->fidelity == CFG_FIDELITY_SAMPLED && !fid_plan(cfg, &U, &W, &n);
+}
+
 /* Sizes the sampling plan of one frame (the same for every frame). */
 static int fid_init(chip *c)
 {
 	chip_fidelity *F = &c->fid;
 	const saar_config *cfg = &c->cfg;
-	int threads = c->nrtp * c->tpr, N = c->g.ntiles;
 	F->mode = cfg->fidelity;
-	F->region_end = N;
-	/* a unit shorter than one tile per thread is over before any thread
-	 * has finished anything: its window would be empty */
-	F->unit_tiles = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;
-	/* a region takes over a full chip (packets in flight, caches warm):
-	 * the warm-up refills the memory and unit queues (docs/fidelity.md).
-	 * One tile per thread, but at most WARMUP_TPR per RTP: at 64 threads
-	 * per RTP a 64-tile warm-up measured as well as a 256-tile one */
-	int warm = c->nrtp * (c->tpr < WARMUP_TPR ? c->tpr : WARMUP_TPR);
-	F->warmup_tiles = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : warm;
+	F->region_end = c->g.ntiles;
+	long n;
+	int exact = fid_plan(cfg, &F->unit_tiles, &F->warmup_tiles, &n);
 	size_t nf = (size_t)cfg->frame.frames;
 	F->est = calloc(nf, sizeof *F->est);
 	F->half = calloc(nf, sizeof *F->half);
@@ -297,19 +334,11 @@ static int fid_init(chip *c)
 		return -1;
 	if (F->mode != CFG_FIDELITY_SAMPLED)
 		return 0;
-	/* n units of U tiles, at least sampling.min_units and 3 (the head,
-	 * the tail and one between); when the regions would cover the frame
-	 * anyway, simulate all of it */
-	int U = F->unit_tiles, W = F->warmup_tiles;
-	long n = lround((double)N * cfg->sampling.rate / U);
-	if (n < cfg->sampling.min_units)
-		n = cfg->sampling.min_units;
-	if (n < 3)
-		n = 3;
-	if (cfg->sampling.rate >= 1.0 || n * (long)(U + W) >= N) {
+	if (exact) {
 		F->exact = 1;
 		return 0;
 	}
+	int U = F->unit_tiles, W = F->warmup_tiles, N = c->g.ntiles;
 	F->nunits = (int)n;
 	/* planned units, and as many extra ones at most (sampling.hard_share) */
 	size_t cap = (size_t)(cfg->sampling.hard_share > 0 ? 2 * n : n);

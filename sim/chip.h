@@ -169,6 +169,13 @@ int chip_trace_close(chip *c, diag *d);
  * functional modes only: a sampled frame's chunks mix timed and functional
  * work. Fails (diag) in sampled mode or out of memory. */
 int chip_census_on(chip *c, diag *d);
+/* Does a run of cfg estimate its cycles (sampled with a plan that leaves
+ * tiles to functional processing, not every tile detailed)? From the
+ * config alone, as chip_create plans it. */
+int chip_estimates(const saar_config *cfg);
+/* The census's condition from the config alone (before the world loads):
+ * fails (diag) when the run would estimate its cycles. */
+int chip_census_check(const saar_config *cfg, diag *d);
 /* Simulates cfg.frame.frames frames (the frame buffer holds the last). */
 int chip_run(chip *c, diag *d);
 /* Renders the same frame with kernel-ref (render_frame, 1 host thread) and

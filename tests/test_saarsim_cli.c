@@ -396,4 +396,13 @@ Test(saarsim_cli, census_adds_up_to_the_report)
 	cr_assert_eq(saarsim(args), 2);
 	one_line_naming("--census");
 	cr_assert_not(exists("s.csv"));
+	/* refused from the config, before the scene loads: a scene that
+	 * does not exist is never opened */
+	snprintf(
+	    args, sizeof args,
+	    "--scene %s/none.obj --size 256x192 --set chip.rtps=1 --set chip.threads_per_rtp=2 "
+	    "--fidelity sampled --sample-rate 0.1 --unit-tiles 8 --no-check --census %s/s.csv",
+	    dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--census");
 }
