@@ -402,12 +402,14 @@ for cfg in ("std", "vma"):
 EOF
 	echo
 	if [ -s "$CENSUS" ]; then
+		# the estimator's strata as the config has them
+		HS=$("$SIM" --list-config | awk '$1 == "sampling.hard_share" {print $3}')
 		echo "### Conference $CONF_SIZE: the sample a 1% error needs"
 		echo
-		echo "From each truth run's census (\`--census\`: the cycles and resource demand of every chunk of one unit's tiles, docs/fidelity.md \"Census\"), the frame's middle (between the head and tail regions, which sampled mode measures whole) as if every chunk could be a unit and warming were exact and free: the demand model is the max model with the SDRAM factor fitted to all chunks; *memory bound*: the share of the middle's cycles in chunks whose SDRAM or host-bus time exceeds 0.6 of their busiest compute resource (the estimator's strata); *s*: the chunks' residual standard deviation around one ratio, relative to the mean chunk; *8 units*: the fps error of the plain ratio estimate from 8 systematically placed chunks, rms / max over 10 offsets. Then the units a 1% error of the frame needs, from the chunks' variance (the ratio estimator's, with the finite-population correction): *plain* with one ratio, *strata* with the two strata's own ratios and their units allocated in proportion to each stratum's size times its spread (the best two strata can do); in brackets the share of the frame's tiles those units with their warm-ups and the head and tail regions simulate in detail. One thread per RTP (units of 4 tiles, the linear model) is left out. scripts/census-need.py computes it."
+		echo "From each truth run's census (\`--census\`: the cycles and resource demand of every chunk of one unit's tiles, docs/fidelity.md \"Census\"), the frame's middle (between the head and tail regions, which sampled mode measures whole) as if every chunk could be a unit and warming were exact and free: the demand model is the max model with the SDRAM factor fitted to all chunks; *memory bound*: the share of the middle's cycles in chunks whose SDRAM or host-bus time exceeds $HS of their busiest compute resource (the estimator's strata, sampling.hard_share); *s*: the chunks' residual standard deviation around one ratio, relative to the mean chunk; *8 units*: the fps error of the plain ratio estimate from 8 systematically placed chunks, rms / max over 10 offsets. Then the units a 1% error of the frame needs, from the chunks' variance (the ratio estimator's, with the finite-population correction): *plain* with one ratio, *strata* with the two strata's own ratios and their units allocated in proportion to each stratum's size times its spread (the best two strata can do); in brackets the share of the frame's tiles those units with their warm-ups and the head and tail regions simulate in detail. One thread per RTP (units of 4 tiles, the linear model) is left out. scripts/census-need.py computes it."
 		echo
 		# shellcheck disable=SC2046 # one argument per word of the list
-		python3 scripts/census-need.py $(cat "$CENSUS")
+		python3 scripts/census-need.py --hard-share "$HS" $(cat "$CENSUS")
 		echo
 	fi
 	echo "### Every point"

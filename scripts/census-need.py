@@ -2,7 +2,7 @@
 """census-need.py: the sample a 1% estimate of a frame needs, from a cycle
 run's census (saarsim --census; docs/fidelity.md "Census").
 
-    census-need.py CONFIG THREADS REGION_TILES CENSUS.csv [...]
+    census-need.py [--hard-share X] CONFIG THREADS REGION_TILES CENSUS.csv [...]
 
 A Markdown table, one row per census:
 the frame's middle, between the head and tail regions of REGION_TILES tiles
@@ -11,8 +11,10 @@ chunk could be a unit and warming were exact and free. Chunks follow the
 estimator's max demand model, max(busiest compute resource, k x SDRAM
 time, host-bus time), with k fitted as the estimator fits it (the
 smallest k in [1, 4], steps of 0.02, under which one ratio fits the chunks
-best by least squares), and its strata (SDRAM or host-bus time above 0.6
-of the busiest compute resource). The units needed come from the chunks'
+best by least squares), and its strata (SDRAM or host-bus time above
+sampling.hard_share, X, of the busiest compute resource; default 0.6, the
+config's default, which bench-fidelity.sh passes from saarsim
+--list-config). The units needed come from the chunks'
 variance around the ratio (the ratio estimator's variance with the
 finite-population correction), for one ratio and for two strata with
 their own ratios and Neyman allocation.
@@ -89,14 +91,18 @@ def analyse(path, RW, hard_share=0.6):
                 srms=need_st(0.01), s95=need_st(0.01 / 1.96),
                 i8=ideal(8) if n >= 8 else None, i16=ideal(16) if n >= 16 else None)
 a = sys.argv[1:]
+hs = 0.6
+if a[:1] == ["--hard-share"] and len(a) > 1:
+    hs = float(a[1])
+    a = a[2:]
 if not a or len(a) % 4:
-    sys.exit("usage: census-need.py CONFIG THREADS REGION_TILES CENSUS.csv [...]")
+    sys.exit("usage: census-need.py [--hard-share X] CONFIG THREADS REGION_TILES CENSUS.csv [...]")
 print("| config | threads | chunks | memory bound | s | 8 units: rms / max fps err % "
       "| plain: 1% rms | plain: 95% within 1% | strata: 1% rms | strata: 95% within 1% |")
 print("|---|---:|---:|---:|---:|---|---:|---:|---:|---:|")
 for i in range(0, len(a), 4):
     cfg, tpr, RW, path = a[i], a[i + 1], int(a[i + 2]), a[i + 3]
-    r = analyse(path, RW)
+    r = analyse(path, RW, hs)
     fmt = lambda t: "%.2f / %.2f" % t if t else "-"
     sh = lambda u: "%.0f%%" % (100 * r["share"](u))
     print("| %s | %s | %d | %.0f%% | %.3f | %s | %.0f (%s) | %.0f (%s) | %.0f (%s) | %.0f (%s) |" % (
