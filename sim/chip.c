@@ -285,8 +285,7 @@ static uint64_t *reg(chip *c, const char *name, const char *unit, const char *de
 static int fid_plan(const saar_config *cfg, int *unit, int *warmup, long *units)
 {
 	int nrtp = cfg->chip.rtps, tpr = cfg->chip.threads_per_rtp, threads = nrtp * tpr;
-	int N = ((cfg->frame.width + TILE_W - 1) / TILE_W) *
-	        ((cfg->frame.height + TILE_H - 1) / TILE_H);
+	int N = rgc_tiles(cfg->frame.width, cfg->frame.height);
 	/* a unit shorter than one tile per thread is over before any thread
 	 * has finished anything: its window would be empty */
 	int U = cfg->sampling.unit_tiles > threads ? cfg->sampling.unit_tiles : threads;

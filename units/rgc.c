@@ -31,6 +31,11 @@ static int cmp_keyed(const void *a, const void *b)
 	return x->key < y->key ? -1 : x->key > y->key;
 }
 
+int rgc_tiles(int width, int height)
+{
+	return ((width + TILE_W - 1) / TILE_W) * ((height + TILE_H - 1) / TILE_H);
+}
+
 int rgc_init(rgc *g, int width, int height, int order)
 {
 	memset(g, 0, sizeof *g);

@@ -17,6 +17,9 @@ typedef struct rgc {
 	uint32_t *order; /* tile indices (ty * tiles_x + tx) in hand-out order */
 } rgc;
 
+/* Tiles of a width x height frame (partial tiles at the edges count):
+ * what rgc_init cuts, for callers that plan before there is an RGC. */
+int rgc_tiles(int width, int height);
 /* order: enum cfg_tile_order. -1 when out of memory. */
 int rgc_init(rgc *g, int width, int height, int order);
 void rgc_free(rgc *g);
