@@ -125,53 +125,61 @@ int main(int argc, char **argv)
 	static mtr_reader rd;
 	if (mtr_open_read(&rd, trace, &d))
 		return fail(&d);
+	/* from here every way out (goto out) frees what it holds */
+	int ret = DIAG_EXIT;
+	eng *e = NULL;
+	memport mp;
+	int have_mp = 0, nl1 = 0, have_vma = 0;
+	cache l1[MEM_NTYPES];
+	vma v;
 
 	hier_stats s;
 	memset(&s, 0, sizeof s);
 	uint64_t n = 0, cycles = 0;
 	if (timing) {
-		eng *e = eng_create(1024);
+		e = eng_create(1024);
 		eng_clock clk = eng_clock_mhz(cfg.chip.clock_mhz);
-		memport mp;
 		/* The trace carries no image size. Without --image-bytes: with the VMA
 		 * every address is image; without it, whatever fits on board is
 		 * (reads above it take the spill-area path past the L1s). */
 		uint64_t img = image_bytes;
 		if (img == UINT64_MAX && !cfg.memory.vma.enabled)
 			img = (uint64_t)cfg.memory.sdram.mb << 20;
-		if (!e || mem_init_hier(&mp, e, clk, &cfg, img, &d))
-			return fail(&d);
+		if (!e) {
+			diag_set(&d, trace, 0, 0, "out of memory");
+			goto out;
+		}
+		if (mem_init_hier(&mp, e, clk, &cfg, img, &d))
+			goto out;
+		have_mp = 1;
 		feeder f = {e, clk, &mp, &rd, {0}, 0, 0, 0, 0, &d};
 		int rc = mtr_read(&rd, &f.next, &d);
 		if (rc < 0)
-			return fail(&d);
+			goto out;
 		f.have = rc == 1;
 		if (f.have)
 			eng_schedule(e, eng_cycles_to_ticks(clk, f.next.cycle), feed, &f, 0);
 		eng_run(e, ENG_FOREVER);
 		if (f.err)
-			return fail(&d);
+			goto out;
 		n = f.issued;
 		cycles = eng_now(e) / clk.period;
 		hier_get_stats(&mp, &s);
-		mem_free(&mp);
-		eng_destroy(e);
 	} else {
-		cache l1[MEM_NTYPES];
-		for (int t = 0; t < MEM_NTYPES; t++) {
-			cache_params cp = hier_l1_params(&cfg, t);
+		for (; nl1 < MEM_NTYPES; nl1++) {
+			cache_params cp = hier_l1_params(&cfg, nl1);
 			char what[32];
-			snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
-			if (cache_init(&l1[t], &cp, what, &d))
-				return fail(&d);
+			snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(nl1));
+			if (cache_init(&l1[nl1], &cp, what, &d))
+				goto out;
 		}
-		static vma v;
 		int use_vma = cfg.memory.vma.enabled;
 		if (use_vma) {
 			vma_params vp = hier_vma_params(&cfg);
 			if (vma_init(&v, NULL, eng_clock_mhz(cfg.chip.clock_mhz), NULL, NULL,
 			             (uint64_t)cfg.memory.sdram.mb << 20, &vp, &d))
-				return fail(&d);
+				goto out;
+			have_vma = 1;
 		}
 		uint64_t sd_read = 0, sd_write = 0;
 		/* per type, hoisted: line size (and its log2 when a power of two);
@@ -241,11 +249,9 @@ int main(int argc, char **argv)
 			}
 		}
 		if (rc < 0)
-			return fail(&d);
-		for (int t = 0; t < MEM_NTYPES; t++) {
+			goto out;
+		for (int t = 0; t < MEM_NTYPES; t++)
 			s.l1[t] = l1[t].s;
-			cache_free(&l1[t]);
-		}
 		s.core_period = eng_clock_mhz(cfg.chip.clock_mhz).period;
 		if (use_vma) {
 			s.vma_enabled = 1;
@@ -260,13 +266,11 @@ int main(int argc, char **argv)
 			s.memif.bytes[MEMIF_META] = v.s.meta_bytes;
 			s.memif.reads[MEMIF_META] = v.s.meta_reads;
 			s.memif.writes[MEMIF_META] = v.s.meta_writes;
-			vma_free(&v);
 		}
 		s.sdram.read_bytes = sd_read;
 		s.sdram.write_bytes = sd_write;
 	}
 	double secs = now_s() - t0;
-	mtr_close_read(&rd);
 
 	printf("trace %s: %llu requests, last cycle %llu, %s replay\n", trace,
 	       (unsigned long long)n, (unsigned long long)cycles, timing ? "timed" : "functional");
@@ -309,10 +313,23 @@ int main(int argc, char **argv)
 	if (json) {
 		jsonw w;
 		if (jsonw_open(&w, json, &d))
-			return fail(&d);
+			goto out;
 		hier_write_json(&s, &w);
 		if (jsonw_close(&w, &d))
-			return fail(&d);
+			goto out;
 	}
-	return 0;
+	ret = 0;
+out:
+	if (ret)
+		fail(&d);
+	if (have_mp)
+		mem_free(&mp);
+	if (e)
+		eng_destroy(e);
+	while (nl1 > 0)
+		cache_free(&l1[--nl1]);
+	if (have_vma)
+		vma_free(&v);
+	mtr_close_read(&rd);
+	return ret;
 }
