@@ -4,7 +4,8 @@
  * Owns: the zlib-backed aiFileIO (so "x.obj.gz" loads as "x.obj" while the
  * .mtl beside it is still read from disk), the OBJ text pre-scan that gives
  * NaN/Inf and malformed numbers a line number, and the mapping of Assimp
- * materials and textures onto scene.h. The rules are documented in
+ * materials and textures onto scene.h, and the guard that turns Assimp
+ * crashing on a malformed file into an error. The rules are documented in
  * docs/views.md ("Scene files").
  */
 #include "image.h"
@@ -18,6 +19,9 @@
 #include <assimp/scene.h>
 #include <ctype.h>
 #include <errno.h>
+#include <fcntl.h>
+#include <setjmp.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -318,6 +322,88 @@ static int obj_scan(const char *text, const char *file, diag *d)
 	return 0;
 }
 
+/* Assimp 5.2 (Debian 12) crashes on some malformed files instead of
+ * failing: its binary PLY reader reads out of bounds on a corrupt face
+ * list, and an ai_assert in TriangulateProcess aborts on one that does not
+ * add up (found by fuzzing). A scene file is user input, so that must end
+ * as an error like any other, not as a crash: while Assimp runs, SIGSEGV,
+ * SIGBUS, SIGABRT, SIGFPE and SIGILL jump back here (on their own stack,
+ * in case the fault is a stack overflow), and Assimp's assert message is
+ * kept off stderr (fd 2 points at /dev/null meanwhile; it reports through
+ * aiGetErrorString otherwise). What Assimp held is lost then, and the
+ * caller is about to exit. A signal handler reaches only static storage,
+ * hence the jump buffer below, used only during one import (scene_load is
+ * not called from several threads). */
+static sigjmp_buf crash_jmp;
+static volatile sig_atomic_t crash_sig;
+
+static void on_crash(int sig)
+{
+	crash_sig = sig;
+	siglongjmp(crash_jmp, 1);
+}
+
+#define GUARD_NSIG  5
+#define GUARD_STACK (256 * 1024)
+
+static const struct aiScene *import_guarded(const char *virt, struct aiFileIO *io,
+                                            struct aiPropertyStore *props, int *sig)
+{
+	static const int sigs[GUARD_NSIG] = {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL};
+	struct sigaction sa, old[GUARD_NSIG];
+	stack_t alt = {0}, old_alt;
+	const struct aiScene *volatile as = NULL;
+	alt.ss_sp = malloc(GUARD_STACK);
+	alt.ss_size = GUARD_STACK;
+	int have_alt = alt.ss_sp && sigaltstack(&alt, &old_alt) == 0;
+	memset(&sa, 0, sizeof sa);
+	sa.sa_handler = on_crash;
+	sa.sa_flags = have_alt ? SA_ONSTACK : 0;
+	sigemptyset(&sa.sa_mask);
+	fflush(stderr);
+	int err_fd = dup(2), null_fd = open("/dev/null", O_WRONLY);
+	if (err_fd >= 0 && null_fd >= 0)
+		dup2(null_fd, 2);
+	if (null_fd >= 0)
+		close(null_fd);
+	crash_sig = 0;
+	for (int i = 0; i < GUARD_NSIG; i++)
+		sigaction(sigs[i], &sa, &old[i]);
+	/* savemask 1: the jump restores the mask the handler's signal was
+	 * blocked in */
+	if (sigsetjmp(crash_jmp, 1) == 0)
+		as = aiImportFileExWithProperties(virt,
+		                                  aiProcess_Triangulate | aiProcess_SortByPType |
+		                                      aiProcess_PreTransformVertices,
+		                                  io, props);
+	for (int i = 0; i < GUARD_NSIG; i++)
+		sigaction(sigs[i], &old[i], NULL);
+	if (err_fd >= 0) {
+		dup2(err_fd, 2);
+		close(err_fd);
+	}
+	if (have_alt)
+		sigaltstack(&old_alt, NULL);
+	free(alt.ss_sp);
+	*sig = crash_sig;
+	return crash_sig ? NULL : as;
+}
+
+/* Assimp's message as one printable line (its parse errors quote the bad
+ * bytes, newlines and all), at most n - 1 characters. */
+static const char *one_line(const char *msg, char *out, size_t n)
+{
+	size_t j = 0;
+	for (const char *p = msg; *p && j + 4 < n; p++)
+		out[j++] = (unsigned char)*p < 0x20 || (unsigned char)*p >= 0x7f ? '?' : *p;
+	if (msg[j] && j + 4 >= n) {
+		memcpy(out + j, "...", 3);
+		j += 3;
+	}
+	out[j] = '\0';
+	return out;
+}
+
 /* Assimp's messages sometimes carry "line N"; lift it into file:N. */
 static int msg_line(const char *msg)
 {
@@ -510,6 +596,14 @@ static int convert_scene(scene *s, const struct aiScene *as, const char *dir, co
 			vec2 uv[3];
 			for (int k = 0; k < 3; k++) {
 				unsigned vi = fa->mIndices[k];
+				/* Assimp passes a corrupt binary PLY's face indices on
+				 * unchecked (found by fuzzing) */
+				if (vi >= me->mNumVertices) {
+					free(remap);
+					return diag_set(d, file, 0, 0,
+					                "mesh %u face %u refers to vertex %u of %u",
+					                i, f, vi, me->mNumVertices);
+				}
 				p[k] = v3(me->mVertices[vi].x, me->mVertices[vi].y,
 				          me->mVertices[vi].z);
 				if (me->mNormals) {
@@ -583,13 +677,19 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	aiSetImportPropertyInteger(props, AI_CONFIG_PP_SBP_REMOVE,
 	                           aiPrimitiveType_POINT | aiPrimitiveType_LINE);
 	/* No GenNormals: files without normals get face normals in scene_finish. */
-	const struct aiScene *as = aiImportFileExWithProperties(
-	    virt, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices,
-	    &io, props);
+	int sig = 0;
+	const struct aiScene *as = import_guarded(virt, &io, props, &sig);
 	aiReleasePropertyStore(props);
 	int rc;
-	if (!as) {
-		const char *msg = cache.err[0] ? cache.err : aiGetErrorString();
+	char line[400];
+	if (sig) {
+		rc = diag_set(d, path, 0, 0,
+		              "cannot import scene: the importer (Assimp) crashed on it (%s); the "
+		              "file is malformed",
+		              strsignal(sig));
+	} else if (!as) {
+		const char *msg =
+		    one_line(cache.err[0] ? cache.err : aiGetErrorString(), line, sizeof line);
 		/* A file with vertices but no faces ends as Assimp's "No output
 		 * meshes"; say what that means for a ray tracer. */
 		if (strstr(msg, "No output meshes") || strstr(msg, "No meshes remaining"))

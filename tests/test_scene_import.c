@@ -7,6 +7,7 @@
 #include "testutil.h"
 
 #include <string.h>
+#include <unistd.h>
 #include <zlib.h>
 
 static const char *TRI_OBJ = "mtllib m.mtl\n"
@@ -252,6 +253,64 @@ Test(import, malformed_files)
 	tu_write(p, sizeof p, dir, "bad.obj.gz", "\x1f\x8b\x08\x00garbage");
 	load_fails(p, &d);
 	cr_assert(strstr(d.msg, "bad.obj.gz"), "message: %s", d.msg);
+}
+
+/* A binary PLY of the four corners of a unit square and nf faces whose
+ * bytes follow (each a uchar count and int indices). */
+static void write_ply_bin(char *out, size_t n, const char *dir, const char *name,
+                          const unsigned char *faces, size_t len, int nf)
+{
+	snprintf(out, n, "%s/%s", dir, name);
+	FILE *f = fopen(out, "wb");
+	cr_assert(f, "cannot write %s", out);
+	fprintf(f,
+	        "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float "
+	        "x\nproperty float y\nproperty float z\nelement face %d\nproperty list uchar "
+	        "int vertex_indices\nend_header\n",
+	        nf);
+	const float v[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+	fwrite(v, sizeof v, 1, f);
+	fwrite(faces, len, 1, f);
+	fclose(f);
+}
+
+/* Corrupt binary PLYs (found by fuzzing): Assimp 5.2 passes a face's
+ * out-of-range index on, reads past its data on a list count larger than
+ * the file, and aborts in an assert on an empty face. Each is an error
+ * naming the file, never a crash, and a load afterwards works with stderr
+ * where it was (import.c guards the import). */
+Test(import, corrupt_binary_ply)
+{
+	char dir[256], p[512], before[256] = "", after[256] = "";
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	cr_assert(readlink("/proc/self/fd/2", before, sizeof before - 1) > 0);
+	/* little-endian int32 indices */
+	const unsigned char idx[] = {3, 0, 0, 0, 0, 1, 0, 0, 0, 7, 0, 0, 0};
+	write_ply_bin(p, sizeof p, dir, "idx.ply", idx, sizeof idx, 1);
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "idx.ply"), "message: %s", d.msg);
+	const unsigned char cnt[] = {3,   0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0,
+	                             200, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0};
+	write_ply_bin(p, sizeof p, dir, "cnt.ply", cnt, sizeof cnt, 2);
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "cnt.ply"), "message: %s", d.msg);
+	cr_assert(!strchr(d.msg, '\n'), "one line: %s", d.msg);
+	const unsigned char empty[] = {3, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 0};
+	write_ply_bin(p, sizeof p, dir, "empty.ply", empty, sizeof empty, 2);
+	scene s;
+	if (scene_load(&s, p, &d) == 0) /* an importer that skips the face */
+		cr_assert_eq(s.ntris, 1);
+	else
+		cr_assert(strstr(d.msg, "empty.ply"), "message: %s", d.msg);
+	scene_free(&s);
+	cr_assert(readlink("/proc/self/fd/2", after, sizeof after - 1) > 0);
+	cr_assert_str_eq(after, before, "stderr restored");
+	const unsigned char ok[] = {3, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0};
+	write_ply_bin(p, sizeof p, dir, "ok.ply", ok, sizeof ok, 1);
+	cr_assert_eq(scene_load(&s, p, &d), 0, "%s", d.msg);
+	cr_assert_eq(s.ntris, 1);
+	scene_free(&s);
 }
 
 Test(import, nan_vertex_names_line)
