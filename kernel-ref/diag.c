@@ -24,5 +24,10 @@ int diag_set(diag *d, const char *file, int line, int col, const char *fmt, ...)
 	va_start(ap, fmt);
 	vsnprintf(d->msg + k, n - (size_t)k, fmt, ap);
 	va_end(ap);
+	/* one line whatever the arguments carry: libraries' messages quote the
+	 * bad bytes of a file, newlines and all (Assimp's parse errors) */
+	for (char *c = d->msg; *c; c++)
+		if ((unsigned char)*c < 0x20 || *c == 0x7f)
+			*c = '?';
 	return -1;
 }

@@ -18,7 +18,9 @@ typedef struct diag {
 } diag;
 
 /* Formats "file: message" (line <= 0) or "file:line:col: message" (col <= 0
- * prints "file:line: message"). Always returns -1 so callers can write
+ * prints "file:line: message"); control characters the arguments bring
+ * (a library's message quoting a file's bytes) become '?', so it stays one
+ * line. Always returns -1 so callers can write
  * `return diag_set(...)`. d may be NULL. */
 int diag_set(diag *d, const char *file, int line, int col, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));

@@ -389,21 +389,6 @@ static const struct aiScene *import_guarded(const char *virt, struct aiFileIO *i
 	return crash_sig ? NULL : as;
 }
 
-/* Assimp's message as one printable line (its parse errors quote the bad
- * bytes, newlines and all), at most n - 1 characters. */
-static const char *one_line(const char *msg, char *out, size_t n)
-{
-	size_t j = 0;
-	for (const char *p = msg; *p && j + 4 < n; p++)
-		out[j++] = (unsigned char)*p < 0x20 || (unsigned char)*p >= 0x7f ? '?' : *p;
-	if (msg[j] && j + 4 >= n) {
-		memcpy(out + j, "...", 3);
-		j += 3;
-	}
-	out[j] = '\0';
-	return out;
-}
-
 /* Assimp's messages sometimes carry "line N"; lift it into file:N. */
 static int msg_line(const char *msg)
 {
@@ -681,15 +666,13 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	const struct aiScene *as = import_guarded(virt, &io, props, &sig);
 	aiReleasePropertyStore(props);
 	int rc;
-	char line[400];
 	if (sig) {
 		rc = diag_set(d, path, 0, 0,
 		              "cannot import scene: the importer (Assimp) crashed on it (%s); the "
 		              "file is malformed",
 		              strsignal(sig));
 	} else if (!as) {
-		const char *msg =
-		    one_line(cache.err[0] ? cache.err : aiGetErrorString(), line, sizeof line);
+		const char *msg = cache.err[0] ? cache.err : aiGetErrorString();
 		/* A file with vertices but no faces ends as Assimp's "No output
 		 * meshes"; say what that means for a ray tracer. */
 		if (strstr(msg, "No output meshes") || strstr(msg, "No meshes remaining"))

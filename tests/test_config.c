@@ -250,7 +250,8 @@ Test(config, set_errors)
 	                 "--set: chip.trav.latency: must be in [1, 10000], got 0");
 	expect_set_error("chip.trav=4", "--set: 'chip.trav' is a section; set one of its keys "
 	                                "(chip.trav.*)");
-	expect_set_error("fidelity=fast", "--set: fidelity: expected one of cycle, sampled, functional; got 'fast'");
+	expect_set_error("fidelity=fast",
+	                 "--set: fidelity: expected one of cycle, sampled, functional; got 'fast'");
 }
 
 Test(config, validate_cross_keys)
@@ -350,4 +351,13 @@ Test(config, list_and_markdown_name_every_key)
 	cr_assert(strstr(m, "## Errors"));
 	free(l);
 	free(m);
+}
+
+/* Every bad-input error is one line: a library message that quotes a
+ * file's bytes (newline, tab, escape) comes out with them as '?'. */
+Test(config, diag_message_is_one_line)
+{
+	diag d = {{0}};
+	cr_assert_eq(diag_set(&d, "f.ply", 3, 0, "bad \"%s\"", "k\n0\t1\x1b"), -1);
+	cr_assert_str_eq(d.msg, "f.ply:3: bad \"k?0?1?\"");
 }
