@@ -209,6 +209,9 @@ int main(int argc, char **argv)
 	/* an unwritable --out format fails now, not after the run */
 	if (out && img_can_write(out, &d))
 		return cli_bad("saarsim", d.msg);
+	/* and rows for a CSV of other columns */
+	if (csv && report_csv_check(csv, &d))
+		return cli_bad("saarsim", d.msg);
 	/* so does a census the run cannot keep, before the world loads */
 	if (census && chip_census_check(&cfg, &d))
 		return cli_bad("saarsim", d.msg);

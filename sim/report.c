@@ -738,6 +738,32 @@ static const char csv_header[] =
     "sdram_row_hit_rate,sdram_utilisation,pci_utilisation,fidelity,fps_ci_lo,fps_ci_hi,"
     "fps_bound,bound_by,identical_8bit,host_sim_s,host_wall_s\n";
 
+/* Rows go under our header only: a file from another program, or from a
+ * saarsim with other columns, would get rows its header misnames. */
+static int csv_header_ok(const char *old, size_t nold)
+{
+	size_t nh = sizeof csv_header - 1;
+	return !nold || (nold >= nh && !memcmp(old, csv_header, nh));
+}
+
+static int csv_not_ours(const char *path, diag *d)
+{
+	return diag_set(d, path, 1, 1,
+	                "not a saarsim CSV with these columns (its first line is not the header "
+	                "docs/report.md lists); give a new file");
+}
+
+int report_csv_check(const char *path, diag *d)
+{
+	FILE *in = fopen(path, "rb");
+	if (!in)
+		return 0; /* new, or report_csv will say why it cannot be read */
+	char head[sizeof csv_header];
+	size_t n = fread(head, 1, sizeof head - 1, in);
+	fclose(in);
+	return csv_header_ok(head, n) ? 0 : csv_not_ours(path, d);
+}
+
 int report_csv(const char *path, const report_info *ri, diag *d)
 {
 	const chip *c = ri->c;
@@ -770,6 +796,10 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 		}
 	} else if (errno != ENOENT) {
 		return diag_set(d, path, 0, 0, "cannot read: %s", strerror(errno));
+	}
+	if (!csv_header_ok(old, nold)) {
+		free(old);
+		return csv_not_ours(path, d);
 	}
 	afile a;
 	if (af_open(&a, path, "", 1)) {

@@ -49,6 +49,9 @@ int report_json(const char *path, const report_info *ri, diag *d);
  * the file is new or empty. Atomic: the old contents and the row go to
  * path.tmp, which is renamed over path. */
 int report_csv(const char *path, const report_info *ri, diag *d);
+/* Before a run: fails when path exists, is not empty and does not start
+ * with our header line (a CSV of other columns), as report_csv would. */
+int report_csv_check(const char *path, diag *d);
 /* Writes the census (chip_census_on) as CSV, atomically: one row per chunk
  * of fid.unit_tiles tiles in hand-out order (the last of a frame runs to
  * its end), with its core cycles (empty in functional mode, which has no

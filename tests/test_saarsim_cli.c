@@ -102,6 +102,33 @@ Test(saarsim_cli, failed_writes_leave_no_temporaries)
 	}
 }
 
+/* Rows are appended under our header only: a CSV of other columns (another
+ * program's, or an older saarsim's) is refused before the run, untouched. */
+Test(saarsim_cli, csv_of_other_columns_is_refused)
+{
+	char p[512], args[2048];
+	const char *foreign = "config,scene,fps\nold,room,12.5\n";
+	tu_write(p, sizeof p, dir, "c.csv", foreign);
+	snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 --out %s/f.png --csv %s", dir,
+	         p);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("c.csv:1:1: not a saarsim CSV");
+	cr_assert_str_eq(slurp("c.csv"), foreign);
+	cr_assert_not(exists("f.png"));
+	/* our own header with no rows yet takes a row */
+	snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 --csv %s/h.csv", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *first = slurp("h.csv");
+	char *nl = strchr(first, '\n');
+	cr_assert(nl);
+	nl[1] = 0;
+	tu_write(p, sizeof p, dir, "h2.csv", first);
+	snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 --csv %s", p);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *two = slurp("h2.csv"), *row = strchr(two, '\n');
+	cr_assert(row && row[1] && !strncmp(two, first, strlen(first)), "%s", two);
+}
+
 Test(saarsim_cli, bad_config_key_names_file_line_col)
 {
 	char p[512], args[2048];
