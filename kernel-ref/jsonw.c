@@ -36,10 +36,20 @@ int jsonw_close(jsonw *w, diag *d)
 	if (!w->af.path[0]) {
 		fputc('\n', w->f);
 		fflush(w->f);
-		return 0;
+		return w->dup[0] ? diag_set(d, "-", 0, 0,
+		                            "key '%s' written twice into one object "
+		                            "(a bug: please report it)",
+		                            w->dup)
+		                 : 0;
 	}
 	fputc('\n', w->f);
 	w->f = NULL;
+	if (w->dup[0]) {
+		af_abort(&w->af);
+		return diag_set(d, w->af.path, 0, 0,
+		                "key '%s' written twice into one object (a bug: please report it)",
+		                w->dup);
+	}
 	if (af_commit(&w->af))
 		return diag_set(d, w->af.path, 0, 0, "write failed: %s", strerror(errno));
 	return 0;
@@ -73,11 +83,13 @@ static void open_(jsonw *w, char c)
 	if (w->depth + 1 < JSONW_MAX_DEPTH)
 		w->depth++;
 	w->first[w->depth] = 1;
+	w->mark[w->depth] = w->nkeys;
 }
 
 static void close_(jsonw *w, char c)
 {
 	int empty = w->first[w->depth];
+	w->nkeys = w->mark[w->depth];
 	if (w->depth > 0)
 		w->depth--;
 	if (!empty)
@@ -120,6 +132,14 @@ static void put_str(FILE *f, const char *s)
 
 void jsonw_key(jsonw *w, const char *k)
 {
+	uint64_t h = 1469598103934665603ull; /* FNV-1a */
+	for (const unsigned char *p = (const unsigned char *)k; *p; p++)
+		h = (h ^ *p) * 1099511628211ull;
+	for (int i = w->mark[w->depth]; i < w->nkeys; i++)
+		if (w->keys[i] == h && !w->dup[0])
+			snprintf(w->dup, sizeof w->dup, "%s", k);
+	if (w->nkeys < JSONW_MAX_KEYS) /* beyond: unchecked, never wrongly refused */
+		w->keys[w->nkeys++] = h;
 	pre(w);
 	put_str(w->f, k);
 	fputs(": ", w->f);

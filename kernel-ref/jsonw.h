@@ -17,6 +17,7 @@
 #include "diag.h"
 
 #define JSONW_MAX_DEPTH 32
+#define JSONW_MAX_KEYS  2048 /* keys of the open objects checked for repeats */
 
 typedef struct jsonw {
 	FILE *f;
@@ -24,10 +25,18 @@ typedef struct jsonw {
 	int first[JSONW_MAX_DEPTH]; /* no element written yet at this depth */
 	int after_key;
 	afile af; /* the file (a temporary until jsonw_close); af.path "" for stdout */
+	/* A key twice in one object is legal JSON that parsers read
+	 * differently (most keep the last value): the hashes of the open
+	 * objects' keys, keys[mark[d]..nkeys) those of the object at depth d,
+	 * catch it, and jsonw_close fails naming it. */
+	uint64_t keys[JSONW_MAX_KEYS];
+	int nkeys, mark[JSONW_MAX_DEPTH];
+	char dup[64]; /* the first repeated key, "" while none */
 } jsonw;
 
 /* Opens a temporary beside path (atomicfile.h); jsonw_close renames it to
- * path (0) or removes it and fills d (-1). A path of "-" writes to stdout. */
+ * path (0) or removes it and fills d (-1): also when a key was written
+ * twice into one object (a writer bug). A path of "-" writes to stdout. */
 int jsonw_open(jsonw *w, const char *path, diag *d);
 int jsonw_close(jsonw *w, diag *d);
 /* Writes into an already open FILE (no rename). */

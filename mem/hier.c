@@ -615,7 +615,7 @@ void hier_write_json(const hier_stats *s, jsonw *w)
 	double secs = (double)s->now_ticks * 1e-12;
 	jsonw_obj_begin(w);
 	jsonw_kstr(w, "model", "hierarchy");
-	jsonw_kbool(w, "vma", s->vma_enabled);
+	jsonw_kbool(w, "vma_enabled", s->vma_enabled);
 	jsonw_knum(w, "elapsed_s", secs);
 
 	jsonw_key(w, "l1");

@@ -4,8 +4,10 @@
  * JSON dump and the generated listings.
  */
 #include <string.h>
+#include <unistd.h>
 
 #include "config.h"
+#include "jsonw.h"
 #include "testutil.h"
 
 /* Loads text from a fresh temporary file; returns cfg_load's result and
@@ -360,4 +362,51 @@ Test(config, diag_message_is_one_line)
 	diag d = {{0}};
 	cr_assert_eq(diag_set(&d, "f.ply", 3, 0, "bad \"%s\"", "k\n0\t1\x1b"), -1);
 	cr_assert_str_eq(d.msg, "f.ply:3: bad \"k?0?1?\"");
+}
+
+/* A key twice in one object is a writer bug the report must not hide
+ * (parsers keep one of the values): jsonw_close fails naming it and leaves
+ * no file. The same key in sibling or nested objects is fine. */
+Test(config, json_writer_refuses_a_repeated_key)
+{
+	char dir[256], p[512];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/r.json", dir);
+	diag d = {{0}};
+	jsonw w;
+	cr_assert_eq(jsonw_open(&w, p, &d), 0);
+	jsonw_obj_begin(&w);
+	for (int i = 0; i < 2; i++) {
+		jsonw_key(&w, i ? "b" : "a");
+		jsonw_obj_begin(&w);
+		jsonw_kbool(&w, "vma", 1);
+		jsonw_key(&w, "vma");
+		jsonw_obj_begin(&w);
+		jsonw_kuint(&w, "vma", 3);
+		jsonw_obj_end(&w);
+		jsonw_obj_end(&w);
+	}
+	jsonw_obj_end(&w);
+	cr_assert_eq(jsonw_close(&w, &d), -1);
+	cr_assert(strstr(d.msg, "r.json: key 'vma' written twice"), "%s", d.msg);
+	cr_assert_not(tu_exists(dir, "r.json"));
+	cr_assert_eq(tu_temps(dir, "r.json"), 0);
+
+	cr_assert_eq(jsonw_open(&w, p, &d), 0);
+	jsonw_obj_begin(&w);
+	for (int i = 0; i < 2; i++) {
+		jsonw_key(&w, i ? "b" : "a");
+		jsonw_obj_begin(&w);
+		jsonw_kbool(&w, "vma_enabled", 1);
+		jsonw_key(&w, "vma");
+		jsonw_obj_begin(&w);
+		jsonw_kuint(&w, "vma", 3);
+		jsonw_obj_end(&w);
+		jsonw_obj_end(&w);
+	}
+	jsonw_obj_end(&w);
+	cr_assert_eq(jsonw_close(&w, &d), 0, "%s", d.msg);
+	cr_assert(tu_exists(dir, "r.json"));
+	unlink(p);
+	rmdir(dir);
 }
