@@ -147,7 +147,7 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 			return -1;
 		o->kd.cost_isect = (float)x;
 	} else if (!strcmp(a, "--kd-max-depth")) {
-		if (parse_num(a, v, 0, 60, &x, d))
+		if (parse_num(a, v, 0, 64, &x, d)) /* kdtree.max_depth: at most PKT_STACK_MAX */
 			return -1;
 		o->kd.max_depth = (int)x;
 	} else if (!strcmp(a, "--kd-leaf-size")) {

@@ -96,9 +96,10 @@ Test(rtref_cli, bad_view_file)
 Test(rtref_cli, absurd_sizes_and_threads)
 {
 	char args[1024];
-	const char *bad[] = {"--size 0x10", "--size 100000x10", "--size 10",     "--size axb",
-	                     "--threads 0", "--threads 99999",  "--threads two", "--depth -1",
-	                     "--fov 0",     "--eye 1,2",        "--bogus-flag 3"};
+	const char *bad[] = {"--size 0x10",   "--size 100000x10", "--size 10",
+	                     "--size axb",    "--threads 0",      "--threads 99999",
+	                     "--threads two", "--depth -1",       "--fov 0",
+	                     "--eye 1,2",     "--bogus-flag 3",   "--kd-max-depth 65"};
 	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
 		snprintf(args, sizeof args, "%s --out %s/f.png", bad[k], dir);
 		cr_assert_eq(rtref(args), 2, "'%s' should exit 2", bad[k]);
@@ -108,6 +109,10 @@ Test(rtref_cli, absurd_sizes_and_threads)
 		one_line_naming(flag);
 		cr_assert_not(exists("f.png"));
 	}
+	/* the deepest tree the config key allows (kdtree.max_depth, 64 =
+	 * the traversal stack) is accepted here too */
+	snprintf(args, sizeof args, "--kd-max-depth 64 --size 16x16 --out %s/f.png", dir);
+	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
 }
 
 Test(rtref_cli, unwritable_output_leaves_nothing)
