@@ -71,11 +71,14 @@ def analyse(path, RW, hard_share=0.6):
         Sh = math.sqrt(sum((c[j] - Rh * x[j]) ** 2 for j in J) / (len(J) - 1))
         NS += len(J) * Sh
         NS2 += len(J) * Sh * Sh
+    # a sample has at least one unit
     def need_st(rel):
-        return NS * NS / ((rel * T) ** 2 + NS2)
+        return max(1.0, NS * NS / ((rel * T) ** 2 + NS2))
     def need(rel):
+        if q == 0:  # every chunk on the ratio
+            return 1.0
         rm = rel * T / M
-        return 1 / ((rm / q) ** 2 + 1 / n)
+        return max(1.0, 1 / ((rm / q) ** 2 + 1 / n))
     share = lambda u: min(1.0, (u * RW + 2 * RW) / N)
     def ideal(units):
         errs = []

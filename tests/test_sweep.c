@@ -2,9 +2,9 @@
  * test_sweep.c: scripts/sweep, scripts/sweep-plot and scripts/validate.sh
  * end to end with the real saarsim (SAAR_BIN), on tiny grids: the CSV and
  * PNG of a 2-point sweep, resume after an interruption (only the missing
- * point runs), the Slurm array script, bad input, and the validation
- * document at a tiny size. The scripts are found beside the tests
- * (SAAR_ROOT, else the current folder: `make test` runs from the repo).
+ * point runs), the Slurm array script, bad input, the validation
+ * document at a tiny size, and scripts/census-need.py on known censuses. The scripts are found
+ * beside the tests (SAAR_ROOT, else the current folder: `make test` runs from the repo).
  */
 #include "testutil.h"
 
@@ -324,4 +324,58 @@ Test(validate, skips_without_scenes)
 	cr_assert(!exists(doc));
 	snprintf(cmd, sizeof cmd, "grep -q 'skipping the validation' %s/err", dir);
 	cr_assert_eq(tu_run(cmd), 0);
+}
+
+/* Writes a census (docs/report.md) of 42 chunks of 64 tiles: a head and a
+ * tail chunk of 2000 cycles (the regions sampled mode measures whole), and
+ * 40 compute-bound chunks of demand 1000 (isect) whose cycles alternate
+ * 2000 (1 + dev) and 2000 (1 - dev). */
+static void census_file(const char *path, double dev)
+{
+	FILE *f = fopen(path, "w");
+	cr_assert(f);
+	fputs("frame,first_tile,tiles,cycles,rgs,trav,list,isect,l1_shade,l1_kd,l1_list,l1_tri,"
+	      "sdram,hostbus\n",
+	      f);
+	for (int j = 0; j < 42; j++) {
+		double cyc = j == 0 || j == 41 ? 2000 : 2000 * (1 + (j % 2 ? dev : -dev));
+		fprintf(f, "1,%d,64,%.0f,100,400,50,1000,10,100,20,30,0,0\n", 64 * j, cyc);
+	}
+	fclose(f);
+}
+
+/* scripts/census-need.py (FIDELITY.md's table "the sample a 1% error
+ * needs") on censuses whose answer is worked out by hand: a +-5% spread
+ * around one ratio is s = 0.05 sqrt(40/39) = 0.051, and a 1% rms error of
+ * the frame (84000 cycles, 80000 of them in the middle) needs
+ * 1 / ((0.0105 / s)^2 + 1/40) = 14.7 units, 15 with their 64-tile
+ * warm-ups and the head and tail 40% of the tiles; no spread needs one
+ * unit (the script divided by zero there). */
+Test(sweep, census_need_from_a_known_spread)
+{
+	char dir[256], p[512], cmd[2048];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/c.csv", dir);
+	const double dev[2] = {0.05, 0};
+	const char *want[2] = {"| std | 16 | 40 | 0% | 0.051 | ",
+	                       "| std | 16 | 40 | 0% | 0.000 | "};
+	const char *need[2] = {"| 15 (40%) | ", "| 1 (7%) | "};
+	for (int k = 0; k < 2; k++) {
+		census_file(p, dev[k]);
+		snprintf(cmd, sizeof cmd,
+		         "python3 %s/scripts/census-need.py std 16 64 %s > %s/t.md", root(), p,
+		         dir);
+		cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+		char t[512];
+		snprintf(t, sizeof t, "%s/t.md", dir);
+		char *s = slurp(t);
+		cr_assert(s && strstr(s, want[k]), "dev %g: %s", dev[k], s);
+		/* plain and strata agree with one stratum */
+		const char *a = strstr(s, need[k]);
+		cr_assert(a && strstr(a + 1, need[k]), "dev %g: %s", dev[k], s);
+		free(s);
+		unlink(t);
+	}
+	unlink(p);
+	rmdir(dir);
 }
