@@ -538,6 +538,12 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	for (int s = 0; s < c->tpr; s++)
 		for (int r = 0; r < c->nrtp; r++)
 			c->turn[s * c->nrtp + r] = &c->rtp[r].t[s];
+	size_t nslots = (size_t)c->nrtp * (size_t)c->tpr;
+	c->live = malloc((nslots + 63) / 64 * sizeof *c->live);
+	c->park = malloc(nslots * sizeof *c->park);
+	c->park_n = malloc((size_t)c->nrtp * sizeof *c->park_n);
+	if (!c->live || !c->park || !c->park_n)
+		goto oom;
 	if (c->oom || fid_init(c))
 		goto oom;
 	return c;
@@ -563,6 +569,9 @@ void chip_destroy(chip *c)
 	}
 	free(c->rtp);
 	free(c->turn);
+	free(c->live);
+	free(c->park);
+	free(c->park_n);
 	rgc_free(&c->g);
 	fb_free(&c->fb);
 	pr_free(&c->rec);
@@ -719,6 +728,22 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
 /* Thread slots ahead whose packet streams func_range prefetches. */
 #define PREFETCH_TURNS 4
 
+/* The first live slot at turn index `from` or after it; n when none. Bits
+ * set ahead of the pass during it are seen (the words are read as it goes). */
+static int next_live(const uint64_t *live, int n, int from)
+{
+	if (from >= n)
+		return n;
+	int w = from >> 6, nw = (n + 63) >> 6;
+	uint64_t b = live[w] & (~0ull << (from & 63));
+	while (!b) {
+		if (++w >= nw)
+			return n;
+		b = live[w];
+	}
+	return (w << 6) + __builtin_ctzll(b);
+}
+
 /* Functional processing of tiles from the RGC's position up to `end`, with
  * the same unit code in functional mode (thr_env.func) and every thread
  * slot in use, as the detailed chip has them: each slot holds a packet, and
@@ -746,6 +771,11 @@ static int func_range(chip *c, int end, int drain)
 	double d0[RES_N], d1[RES_N];
 	if (chunked)
 		chip_demand(c, d0);
+	/* every slot on the passes; the drain parks idle ones (below) */
+	memset(c->live, 0xff, (size_t)(n + 63) / 64 * sizeof *c->live);
+	if (n % 64)
+		c->live[n / 64] = (1ull << (n % 64)) - 1;
+	memset(c->park_n, 0, (size_t)c->nrtp * sizeof *c->park_n);
 	c->env.func = 1;
 	for (int busy = 1; busy && !c->oom;) {
 		/* before a region: stop once the tiles are handed out and leave
@@ -753,8 +783,9 @@ static int func_range(chip *c, int end, int drain)
 		if (!drain && c->g.next >= end)
 			break;
 		busy = 0;
-		for (int i = 0; i < n; i++) {
+		for (int i = next_live(c->live, n, 0); i < n; i = next_live(c->live, n, i + 1)) {
 			thr_ctx *t = c->turn[i];
+			int r = i % c->nrtp; /* turn order: slot 0 of each RTP, ... */
 			if (!t->p && !t->rp) {
 				if (chunked && given == F->unit_tiles) {
 					chip_demand(c, d1);
@@ -768,8 +799,18 @@ static int func_range(chip *c, int end, int drain)
 						extra = 1;
 					}
 				}
-				if (!func_give(c, t, end, &given))
+				if (!func_give(c, t, end, &given)) {
+					/* no tile is left (`end` only comes closer) and
+					 * its RTP's queue is empty: until the RTP queues
+					 * a packet, every visit would do nothing, so the
+					 * drain's passes skip it (a 1024-thread drain
+					 * spent most of its time visiting idle slots) */
+					if (c->g.next >= end) {
+						c->live[i >> 6] &= ~(1ull << (i & 63));
+						c->park[r * c->tpr + c->park_n[r]++] = i;
+					}
 					continue;
+				}
 			}
 			if (t->rp) {
 				/* the stream of the slot a few turns on is elsewhere
@@ -785,6 +826,17 @@ static int func_range(chip *c, int end, int drain)
 				}
 			}
 			busy |= thr_step_func(t);
+			/* packets it queued (functional: only a step of its
+			 * RTP's slots queues) bring that RTP's parked slots
+			 * back: those ahead of i in this pass, the others in
+			 * the next, as when every slot was visited */
+			if (c->park_n[r] && t->rtp->qn > 0) {
+				for (int k = 0; k < c->park_n[r]; k++) {
+					int j = c->park[r * c->tpr + k];
+					c->live[j >> 6] |= 1ull << (j & 63);
+				}
+				c->park_n[r] = 0;
+			}
 		}
 	}
 	c->env.func = 0;

@@ -143,6 +143,12 @@ typedef struct chip {
 	/* every thread slot in functional turn order: slot 0 of each RTP,
 	 * then slot 1, ... (func_range, run_region) */
 	thr_ctx **turn;
+	/* func_range's passes visit the slots whose `live` bit is set. An idle
+	 * slot that found no tile left and an empty RTP queue is parked until
+	 * its RTP queues a packet: bit clear, its turn index in
+	 * park[r * tpr ..], park_n[r] of them for RTP r. */
+	uint64_t *live;
+	int *park, *park_n;
 	char *rec_key, rec_file[1200];
 	double rec_ms; /* host time loading or storing the record */
 	/* --census (chip_census_on): marks at every fid.unit_tiles tiles
