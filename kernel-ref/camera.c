@@ -27,7 +27,6 @@ void pkt_clear(packet *p, int type, int depth)
 int cam_primary_packet(const cam_frame *c, int tx, int ty, packet *p)
 {
 	pkt_clear(p, PKT_PRIMARY, 0);
-	p->tile = (uint16_t)(ty * ((c->width + TILE_W - 1) / TILE_W) + tx);
 	int nvalid = 0;
 	for (int j = 0; j < TILE_H; j++)
 		for (int i = 0; i < TILE_W; i++) {

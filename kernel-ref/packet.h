@@ -64,7 +64,6 @@ typedef struct packet {
 	uint64_t valid;                   /* rays present */
 	uint32_t n;                       /* number of rays (lanes 0..n-1 may be valid) */
 	uint8_t type, depth;
-	uint16_t tile; /* originating tile, for statistics */
 } __attribute__((aligned(32))) packet;
 
 /* Zeroes a packet and sets its type and depth (camera.c). */

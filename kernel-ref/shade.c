@@ -259,7 +259,6 @@ int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet
 		if (!out[l].valid)
 			continue;
 		out[l].n = PKT_RAYS;
-		out[l].tile = p->tile;
 		if (k != l)
 			out[k] = out[l];
 		k++;

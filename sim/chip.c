@@ -16,6 +16,7 @@
 #define _GNU_SOURCE /* asprintf */
 #include "chip.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -135,9 +136,14 @@ int chip_census_on(chip *c, diag *d)
 {
 	if (chip_census_check(&c->cfg, d))
 		return -1;
-	int per = (c->g.ntiles + c->fid.unit_tiles - 1) / c->fid.unit_tiles + 1;
-	c->census_cap = per * c->cfg.frame.frames;
-	c->census = calloc((size_t)c->census_cap, sizeof *c->census);
+	/* marks per frame times frames: up to about 4e6 x 1e6 by the config's
+	 * ranges, so counted in size_t and refused beyond an int */
+	size_t per = (size_t)(c->g.ntiles + c->fid.unit_tiles - 1) / (size_t)c->fid.unit_tiles + 1,
+	       cap = per * (size_t)c->cfg.frame.frames;
+	if (cap > INT_MAX)
+		return diag_set(d, "--census", 0, 0, "too many chunks (%zu) for one census", cap);
+	c->census_cap = (int)cap;
+	c->census = calloc(cap, sizeof *c->census);
 	if (!c->census)
 		return diag_set(d, "--census", 0, 0, "out of memory");
 	return 0;

@@ -423,6 +423,15 @@ Test(saarsim_cli, census_adds_up_to_the_report)
 	cr_assert_eq(saarsim(args), 2);
 	one_line_naming("--census");
 	cr_assert_not(exists("s.csv"));
+	/* a million frames of 12288 one-tile chunks: more marks than an int
+	 * counts (their product overflowed before), refused before the run */
+	snprintf(args, sizeof args,
+	         "--size 1024x768 --set chip.rtps=1 --set chip.threads_per_rtp=1 --frames 1000000 "
+	         "--no-check --census %s/s.csv",
+	         dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--census: too many chunks");
+	cr_assert_not(exists("s.csv"));
 	/* refused from the config, before the scene loads: a scene that
 	 * does not exist is never opened */
 	snprintf(

@@ -122,9 +122,16 @@ int main(int argc, char **argv)
 
 	/* the clock includes opening the trace (its first read) */
 	double t0 = now_s();
-	static mtr_reader rd;
-	if (mtr_open_read(&rd, trace, &d))
+	/* the reader holds a block buffer of hundreds of KB: on the heap */
+	mtr_reader *rdp = calloc(1, sizeof *rdp);
+	if (!rdp) {
+		diag_set(&d, trace, 0, 0, "out of memory");
 		return fail(&d);
+	}
+	if (mtr_open_read(rdp, trace, &d)) {
+		free(rdp);
+		return fail(&d);
+	}
 	/* from here every way out (goto out) frees what it holds */
 	int ret = DIAG_EXIT;
 	eng *e = NULL;
@@ -152,8 +159,8 @@ int main(int argc, char **argv)
 		if (mem_init_hier(&mp, e, clk, &cfg, img, &d))
 			goto out;
 		have_mp = 1;
-		feeder f = {e, clk, &mp, &rd, {0}, 0, 0, 0, 0, &d};
-		int rc = mtr_read(&rd, &f.next, &d);
+		feeder f = {e, clk, &mp, rdp, {0}, 0, 0, 0, 0, &d};
+		int rc = mtr_read(rdp, &f.next, &d);
 		if (rc < 0)
 			goto out;
 		f.have = rc == 1;
@@ -195,7 +202,7 @@ int main(int argc, char **argv)
 		}
 		const mtr_rec *blk;
 		int rc;
-		while ((rc = mtr_read_block(&rd, &blk, &d)) > 0) {
+		while ((rc = mtr_read_block(rdp, &blk, &d)) > 0) {
 			n += (uint64_t)rc;
 			cycles = blk[rc - 1].cycle;
 			for (const mtr_rec *r = blk, *rend = blk + rc; r < rend; r++) {
@@ -330,6 +337,7 @@ out:
 		cache_free(&l1[--nl1]);
 	if (have_vma)
 		vma_free(&v);
-	mtr_close_read(&rd);
+	mtr_close_read(rdp);
+	free(rdp);
 	return ret;
 }
