@@ -33,24 +33,19 @@ int jsonw_open(jsonw *w, const char *path, diag *d)
 
 int jsonw_close(jsonw *w, diag *d)
 {
-	if (!w->af.path[0]) {
-		fputc('\n', w->f);
-		fflush(w->f);
-		return w->dup[0] ? diag_set(d, "-", 0, 0,
-		                            "key '%s' written twice into one object "
-		                            "(a bug: please report it)",
-		                            w->dup)
-		                 : 0;
-	}
+	int to_file = w->af.path[0] != 0; /* else stdout, which stays open */
 	fputc('\n', w->f);
+	if (!to_file)
+		fflush(w->f);
 	w->f = NULL;
 	if (w->dup[0]) {
-		af_abort(&w->af);
-		return diag_set(d, w->af.path, 0, 0,
+		if (to_file)
+			af_abort(&w->af);
+		return diag_set(d, to_file ? w->af.path : "-", 0, 0,
 		                "key '%s' written twice into one object (a bug: please report it)",
 		                w->dup);
 	}
-	if (af_commit(&w->af))
+	if (to_file && af_commit(&w->af))
 		return diag_set(d, w->af.path, 0, 0, "write failed: %s", strerror(errno));
 	return 0;
 }

@@ -750,6 +750,23 @@ static int next_live(const uint64_t *live, int n, int from)
 	return (w << 6) + __builtin_ctzll(b);
 }
 
+/* Takes idle slot i (turn order) of RTP r off func_range's passes. */
+static void park_slot(chip *c, int i, int r)
+{
+	c->live[i >> 6] &= ~(1ull << (i & 63));
+	c->park[r * c->tpr + c->park_n[r]++] = i;
+}
+
+/* Puts RTP r's parked slots back on the passes. */
+static void unpark_rtp(chip *c, int r)
+{
+	for (int k = 0; k < c->park_n[r]; k++) {
+		int j = c->park[r * c->tpr + k];
+		c->live[j >> 6] |= 1ull << (j & 63);
+	}
+	c->park_n[r] = 0;
+}
+
 /* Functional processing of tiles from the RGC's position up to `end`, with
  * the same unit code in functional mode (thr_env.func) and every thread
  * slot in use, as the detailed chip has them: each slot holds a packet, and
@@ -791,7 +808,7 @@ static int func_range(chip *c, int end, int drain)
 		busy = 0;
 		for (int i = next_live(c->live, n, 0); i < n; i = next_live(c->live, n, i + 1)) {
 			thr_ctx *t = c->turn[i];
-			int r = i % c->nrtp; /* turn order: slot 0 of each RTP, ... */
+			int r = (int)(t->rtp - c->rtp);
 			if (!t->p && !t->rp) {
 				if (chunked && given == F->unit_tiles) {
 					chip_demand(c, d1);
@@ -811,10 +828,8 @@ static int func_range(chip *c, int end, int drain)
 					 * a packet, every visit would do nothing, so the
 					 * drain's passes skip it (a 1024-thread drain
 					 * spent most of its time visiting idle slots) */
-					if (c->g.next >= end) {
-						c->live[i >> 6] &= ~(1ull << (i & 63));
-						c->park[r * c->tpr + c->park_n[r]++] = i;
-					}
+					if (c->g.next >= end)
+						park_slot(c, i, r);
 					continue;
 				}
 			}
@@ -836,13 +851,8 @@ static int func_range(chip *c, int end, int drain)
 			 * RTP's slots queues) bring that RTP's parked slots
 			 * back: those ahead of i in this pass, the others in
 			 * the next, as when every slot was visited */
-			if (c->park_n[r] && t->rtp->qn > 0) {
-				for (int k = 0; k < c->park_n[r]; k++) {
-					int j = c->park[r * c->tpr + k];
-					c->live[j >> 6] |= 1ull << (j & 63);
-				}
-				c->park_n[r] = 0;
-			}
+			if (c->park_n[r] && t->rtp->qn > 0)
+				unpark_rtp(c, r);
 		}
 	}
 	c->env.func = 0;

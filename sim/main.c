@@ -259,48 +259,44 @@ int main(int argc, char **argv)
 	}
 	if (pr.shown)
 		fputc('\n', stderr);
-	if (out && fb_write(&c->fb, out, &d)) {
-		rc = cli_bad("saarsim", d.msg);
-		goto done;
+	/* the outputs in the order they are written; a failure removes those
+	 * already written, so a run leaves all of them or none (the CSV row,
+	 * appended last, is all or nothing itself) */
+	const char *written[4];
+	int nw = 0;
+	if (out) {
+		if (fb_write(&c->fb, out, &d))
+			goto fail;
+		written[nw++] = out;
 	}
 	report_info ri = {c, &w, check ? &chk : NULL, load_ms, now_ms() - t_start};
-	if (report && report_json(report, &ri, &d)) {
-		if (out)
-			unlink(out);
-		rc = cli_bad("saarsim", d.msg);
-		goto done;
+	if (report) {
+		if (report_json(report, &ri, &d))
+			goto fail;
+		written[nw++] = report;
 	}
-	if (census && report_census(census, &ri, &d)) {
-		if (out)
-			unlink(out);
-		if (report)
-			unlink(report);
-		rc = cli_bad("saarsim", d.msg);
-		goto done;
+	if (census) {
+		if (report_census(census, &ri, &d))
+			goto fail;
+		written[nw++] = census;
 	}
-	if (trace && af_commit(&trace_tmp)) {
-		trace_tmp.tmp[0] = 0;
-		diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
-		if (census)
-			unlink(census);
-		goto undo;
+	if (trace) {
+		int bad = af_commit(&trace_tmp);
+		trace_tmp.tmp[0] = 0; /* renamed, or removed by af_commit */
+		if (bad) {
+			diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
+			goto fail;
+		}
+		written[nw++] = trace;
 	}
-	trace_tmp.tmp[0] = 0;
 	ri.wall_ms = now_ms() - t_start;
-	if (csv && report_csv(csv, &ri, &d)) {
-		if (trace)
-			unlink(trace);
-		if (census)
-			unlink(census);
-		goto undo;
-	}
+	if (csv && report_csv(csv, &ri, &d))
+		goto fail;
 	report_text(stdout, &ri);
 	goto done;
-undo:
-	if (out)
-		unlink(out);
-	if (report)
-		unlink(report);
+fail:
+	while (nw > 0)
+		unlink(written[--nw]);
 	rc = cli_bad("saarsim", d.msg);
 done:
 	chip_destroy(c);

@@ -46,8 +46,8 @@ void report_text(FILE *f, const report_info *ri);
 /* Writes the JSON report atomically (tmp + rename). */
 int report_json(const char *path, const report_info *ri, diag *d);
 /* Appends one CSV row (for sweeps) to path, with the header line first when
- * the file is new or empty. Atomic: the old contents and the row go to
- * path.tmp, which is renamed over path. */
+ * the file is new or empty. Atomic: the old contents and the row go to a
+ * temporary beside path (atomicfile.h), renamed over it. */
 int report_csv(const char *path, const report_info *ri, diag *d);
 /* Before a run: fails when path exists, is not empty and does not start
  * with our header line (a CSV of other columns), as report_csv would. */

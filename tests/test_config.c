@@ -364,6 +364,27 @@ Test(config, diag_message_is_one_line)
 	cr_assert_str_eq(d.msg, "f.ply:3: bad \"k?0?1?\"");
 }
 
+/* Writes {"a": {FLAG: true, "vma": {"vma": 3}}, "b": (the same)} to p and
+ * returns jsonw_close's result: FLAG "vma" repeats a key in one object. */
+static int write_doc(const char *p, const char *flag, diag *d)
+{
+	jsonw w;
+	cr_assert_eq(jsonw_open(&w, p, d), 0);
+	jsonw_obj_begin(&w);
+	for (int i = 0; i < 2; i++) {
+		jsonw_key(&w, i ? "b" : "a");
+		jsonw_obj_begin(&w);
+		jsonw_kbool(&w, flag, 1);
+		jsonw_key(&w, "vma");
+		jsonw_obj_begin(&w);
+		jsonw_kuint(&w, "vma", 3);
+		jsonw_obj_end(&w);
+		jsonw_obj_end(&w);
+	}
+	jsonw_obj_end(&w);
+	return jsonw_close(&w, d);
+}
+
 /* A key twice in one object is a writer bug the report must not hide
  * (parsers keep one of the values): jsonw_close fails naming it and leaves
  * no file. The same key in sibling or nested objects is fine. */
@@ -373,39 +394,12 @@ Test(config, json_writer_refuses_a_repeated_key)
 	tu_tmpdir(dir, sizeof dir);
 	snprintf(p, sizeof p, "%s/r.json", dir);
 	diag d = {{0}};
-	jsonw w;
-	cr_assert_eq(jsonw_open(&w, p, &d), 0);
-	jsonw_obj_begin(&w);
-	for (int i = 0; i < 2; i++) {
-		jsonw_key(&w, i ? "b" : "a");
-		jsonw_obj_begin(&w);
-		jsonw_kbool(&w, "vma", 1);
-		jsonw_key(&w, "vma");
-		jsonw_obj_begin(&w);
-		jsonw_kuint(&w, "vma", 3);
-		jsonw_obj_end(&w);
-		jsonw_obj_end(&w);
-	}
-	jsonw_obj_end(&w);
-	cr_assert_eq(jsonw_close(&w, &d), -1);
+	cr_assert_eq(write_doc(p, "vma", &d), -1);
 	cr_assert(strstr(d.msg, "r.json: key 'vma' written twice"), "%s", d.msg);
 	cr_assert_not(tu_exists(dir, "r.json"));
 	cr_assert_eq(tu_temps(dir, "r.json"), 0);
 
-	cr_assert_eq(jsonw_open(&w, p, &d), 0);
-	jsonw_obj_begin(&w);
-	for (int i = 0; i < 2; i++) {
-		jsonw_key(&w, i ? "b" : "a");
-		jsonw_obj_begin(&w);
-		jsonw_kbool(&w, "vma_enabled", 1);
-		jsonw_key(&w, "vma");
-		jsonw_obj_begin(&w);
-		jsonw_kuint(&w, "vma", 3);
-		jsonw_obj_end(&w);
-		jsonw_obj_end(&w);
-	}
-	jsonw_obj_end(&w);
-	cr_assert_eq(jsonw_close(&w, &d), 0, "%s", d.msg);
+	cr_assert_eq(write_doc(p, "vma_enabled", &d), 0, "%s", d.msg);
 	cr_assert(tu_exists(dir, "r.json"));
 	unlink(p);
 	rmdir(dir);

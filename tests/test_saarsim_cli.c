@@ -353,6 +353,17 @@ Test(saarsim_cli, trace_replays_to_the_same_l1_counts, .timeout = 300)
 	}
 }
 
+/* saarsim OPTS --no-check --census DIR/s.csv fails: one line naming
+ * `what`, exit 2, no census written. */
+static void census_refused(const char *opts, const char *what)
+{
+	char args[2048];
+	snprintf(args, sizeof args, "%s --no-check --census %s/s.csv", opts, dir);
+	cr_assert_eq(saarsim(args), 2, "%s", args);
+	one_line_naming(what);
+	cr_assert_not(exists("s.csv"));
+}
+
 /* --census over two frames: rows of the units' size (rtps x threads per
  * RTP tiles) in hand-out order, each frame's covering its tiles; a frame's
  * cycles add up to its cycles in the report and the last frame's demand,
@@ -415,30 +426,21 @@ Test(saarsim_cli, census_adds_up_to_the_report)
 			          "%s: census %.3f, report %.3f", res[k], dem[k], want);
 		}
 	}
-	char args[1024];
-	snprintf(args, sizeof args,
-	         "--size 256x192 --set chip.rtps=1 --set chip.threads_per_rtp=2 --fidelity sampled "
-	         "--sample-rate 0.1 --unit-tiles 8 --no-check --census %s/s.csv",
-	         dir);
-	cr_assert_eq(saarsim(args), 2);
-	one_line_naming("--census");
-	cr_assert_not(exists("s.csv"));
+	census_refused("--size 256x192 --set chip.rtps=1 --set chip.threads_per_rtp=2 "
+	               "--fidelity sampled --sample-rate 0.1 --unit-tiles 8",
+	               "--census");
 	/* a million frames of 12288 one-tile chunks: more marks than an int
 	 * counts (their product overflowed before), refused before the run */
-	snprintf(args, sizeof args,
-	         "--size 1024x768 --set chip.rtps=1 --set chip.threads_per_rtp=1 --frames 1000000 "
-	         "--no-check --census %s/s.csv",
-	         dir);
-	cr_assert_eq(saarsim(args), 2);
-	one_line_naming("--census: too many chunks");
-	cr_assert_not(exists("s.csv"));
+	census_refused("--size 1024x768 --set chip.rtps=1 --set chip.threads_per_rtp=1 "
+	               "--frames 1000000",
+	               "--census: too many chunks");
 	/* refused from the config, before the scene loads: a scene that
 	 * does not exist is never opened */
+	char scene[600];
 	snprintf(
-	    args, sizeof args,
+	    scene, sizeof scene,
 	    "--scene %s/none.obj --size 256x192 --set chip.rtps=1 --set chip.threads_per_rtp=2 "
-	    "--fidelity sampled --sample-rate 0.1 --unit-tiles 8 --no-check --census %s/s.csv",
-	    dir, dir);
-	cr_assert_eq(saarsim(args), 2);
-	one_line_naming("--census");
+	    "--fidelity sampled --sample-rate 0.1 --unit-tiles 8",
+	    dir);
+	census_refused(scene, "--census");
 }
