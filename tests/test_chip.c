@@ -1,9 +1,10 @@
 /*
  * test_chip.c: the chip model: unit timing (one op through an idle unit,
- * N ops through one unit, several units, masked packets), the image equal
- * to kernel-ref's on the embedded scene and every shared view for several
- * thread and RTP counts, kernel-ref's traversal counts, stack overflow
- * spilling, determinism, and the memory port.
+ * N ops through one unit, several units, masked packets, the order the
+ * waiting policies serve in), the image equal to kernel-ref's on the
+ * embedded scene and every shared view for several thread and RTP counts,
+ * kernel-ref's traversal counts, stack overflow spilling, determinism, and
+ * the memory port.
  */
 #include <string.h>
 
@@ -65,6 +66,89 @@ Test(chip, n_packets_through_one_unit_take_predicted_cycles)
 	for (int k = 0; k < n; k++)
 		cr_assert_eq(done_at[k], (uint64_t)((k / 2 + 1) * issue + lat) * clk.period,
 		             "op %d", k);
+}
+
+/* ---- waiting policies ---- */
+
+static int served[300], nserved;
+
+static void on_served(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)ctx;
+	served[nserved++] = (int)arg;
+}
+
+/* Requests ids[0..n) at once from one busy single-instance unit (the first
+ * starts at once, the rest wait) and returns the order they issued in. */
+static void serve_batch(thr_unit *u, eng *e, const int *ids, const uint64_t *age, int n)
+{
+	nserved = 0;
+	for (int k = 0; k < n; k++)
+		thr_unit_request(u, ids[k], age[ids[k]], 64, on_served, NULL, (uint64_t)ids[k]);
+	eng_run(e, ENG_FOREVER);
+	cr_assert_eq(nserved, n);
+}
+
+/* The waiters are kept in a bitset (round robin) or a heap (oldest first);
+ * both must serve what a scan over every waiter picks: round robin the
+ * first id after the one served last, wrapping round; oldest first the
+ * smallest (age, id). 200 ids span four bitset words. */
+Test(chip, waiting_policies_serve_in_their_order)
+{
+	enum { N = 200 };
+	int ids[N];
+	uint64_t age[N];
+	uint32_t x = 12345;
+	for (int i = 0; i < N; i++) {
+		ids[i] = i;
+		x = x * 1103515245u + 12345u;
+		age[i] = (x >> 16) % 40; /* many equal ages: ties go to the smaller id */
+	}
+	for (int i = N - 1; i > 0; i--) { /* requested in a shuffled order */
+		x = x * 1103515245u + 12345u;
+		int j = (int)((x >> 8) % (uint32_t)(i + 1)), t = ids[i];
+		ids[i] = ids[j];
+		ids[j] = t;
+	}
+	eng_clock clk = eng_clock_mhz(500);
+	cfg_unit cu = {1, 64, 0};
+	for (int sched = 0; sched < 2; sched++) {
+		eng *e = eng_create(0);
+		thr_unit u;
+		int pol = sched ? CFG_SCHED_OLDEST_FIRST : CFG_SCHED_ROUND_ROBIN;
+		cr_assert_eq(thr_unit_init(&u, e, clk, &cu, 1, pol, N), 0);
+		/* two batches: the second starts where the first left rr */
+		for (int b = 0; b < 2; b++) {
+			int n = b ? 77 : N, *want = malloc(sizeof(int) * (size_t)n);
+			const int *req = b ? ids + 50 : ids;
+			int *left = malloc(sizeof(int) * (size_t)n), nl = n - 1;
+			/* the first request finds the unit idle and starts at once */
+			want[0] = req[0];
+			int rr = req[0];
+			memcpy(left, req + 1, sizeof(int) * (size_t)nl);
+			for (int k = 1; k < n; k++) {
+				int best = 0;
+				for (int i = 1; i < nl; i++) {
+					int a = left[i], c = left[best];
+					if (sched ? age[a] < age[c] || (age[a] == age[c] && a < c)
+					          : (a - rr - 1 + 2 * N) % N <
+					                (c - rr - 1 + 2 * N) % N)
+						best = i;
+				}
+				want[k] = rr = left[best];
+				left[best] = left[--nl];
+			}
+			serve_batch(&u, e, req, age, n);
+			for (int k = 0; k < n; k++)
+				cr_assert_eq(served[k], want[k], "policy %d batch %d: op %d", sched,
+				             b, k);
+			free(want);
+			free(left);
+		}
+		thr_unit_free(&u);
+		eng_destroy(e);
+	}
 }
 
 Test(chip, fixed_memory_answers_after_latency_and_counts)

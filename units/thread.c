@@ -30,7 +30,9 @@ int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int m
 	u->free_at = calloc((size_t)u->count, sizeof *u->free_at);
 	u->ops = calloc((size_t)max_waiters, sizeof *u->ops);
 	u->wait = calloc((size_t)max_waiters, sizeof *u->wait);
-	return u->free_at && u->ops && u->wait ? 0 : -1;
+	u->nwords = (max_waiters + 63) / 64;
+	u->wbits = calloc((size_t)u->nwords, sizeof *u->wbits);
+	return u->free_at && u->ops && u->wait && u->wbits ? 0 : -1;
 }
 
 void thr_unit_free(thr_unit *u)
@@ -38,6 +40,7 @@ void thr_unit_free(thr_unit *u)
 	free(u->free_at);
 	free(u->ops);
 	free(u->wait);
+	free(u->wbits);
 	memset(u, 0, sizeof *u);
 }
 
@@ -84,28 +87,71 @@ static void arm(thr_unit *u)
 	eng_schedule(u->e, when > now ? when : now, wake, u, 0);
 }
 
-/* Index into u->wait of the waiter the policy serves next. */
-static int pick(const thr_unit *u)
+/* The waiters, kept so that the policy's next one is found without a scan
+ * over every waiting thread (with a thousand threads per RTP that scan was
+ * a quarter of the host time): round robin keeps them as a bitset of ids
+ * and serves the first id after the one served last; oldest first keeps
+ * them in a binary heap on (age, id). Either serves exactly the waiter the
+ * plain scan over them would. */
+static int older(const thr_unit *u, int a, int b)
 {
-	int best = 0;
-	if (u->sched == CFG_SCHED_OLDEST_FIRST) {
-		for (int i = 1; i < u->nwait; i++) {
-			const thr_op *a = &u->ops[u->wait[i]], *b = &u->ops[u->wait[best]];
-			if (a->age < b->age || (a->age == b->age && u->wait[i] < u->wait[best]))
-				best = i;
-		}
-		return best;
+	uint64_t x = u->ops[a].age, y = u->ops[b].age;
+	return x < y || (x == y && a < b);
+}
+
+static void heap_push(thr_unit *u, int id)
+{
+	int i = u->nwait;
+	while (i > 0) {
+		int parent = (i - 1) / 2;
+		if (!older(u, id, u->wait[parent]))
+			break;
+		u->wait[i] = u->wait[parent];
+		i = parent;
 	}
-	/* round robin: the first id after the one served last */
-	int bd = u->maxw + 1;
-	for (int i = 0; i < u->nwait; i++) {
-		int d = (u->wait[i] - u->rr - 1 + 2 * u->maxw) % u->maxw;
-		if (d < bd) {
-			bd = d;
-			best = i;
-		}
+	u->wait[i] = id;
+}
+
+/* Removes and returns the heap's oldest waiter (nwait not yet lowered). */
+static int heap_pop(thr_unit *u)
+{
+	int top = u->wait[0], n = u->nwait - 1, last = u->wait[n], i = 0;
+	for (;;) {
+		int c = 2 * i + 1;
+		if (c >= n)
+			break;
+		if (c + 1 < n && older(u, u->wait[c + 1], u->wait[c]))
+			c++;
+		if (!older(u, u->wait[c], last))
+			break;
+		u->wait[i] = u->wait[c];
+		i = c;
 	}
-	return best;
+	u->wait[i] = last;
+	return top;
+}
+
+/* The first waiting id after rr, wrapping round (rr itself last). */
+static int rr_pop(thr_unit *u)
+{
+	int start = u->rr + 1 < u->maxw ? u->rr + 1 : 0, w = start / 64;
+	uint64_t bits = u->wbits[w] & (~0ull << (start % 64));
+	for (int k = 0; k <= u->nwords; k++) {
+		if (bits) {
+			int id = w * 64 + __builtin_ctzll(bits);
+			u->wbits[w] &= ~(1ull << (id % 64));
+			return id;
+		}
+		w = w + 1 < u->nwords ? w + 1 : 0;
+		bits = u->wbits[w];
+	}
+	return -1; /* unreachable: nwait > 0 */
+}
+
+/* Removes and returns the waiter the policy serves next. */
+static int pick(thr_unit *u)
+{
+	return u->sched == CFG_SCHED_OLDEST_FIRST ? heap_pop(u) : rr_pop(u);
 }
 
 static void wake(eng *e, void *ctx, uint64_t arg)
@@ -119,9 +165,8 @@ static void wake(eng *e, void *ctx, uint64_t arg)
 		int inst = first_free(u, &when);
 		if (when > now)
 			break;
-		int k = pick(u);
-		int id = u->wait[k];
-		u->wait[k] = u->wait[--u->nwait];
+		int id = pick(u);
+		u->nwait--;
 		u->rr = id;
 		thr_op op = u->ops[id];
 		start(u, inst, &op);
@@ -144,7 +189,11 @@ void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler d
 		}
 	}
 	u->ops[id] = op;
-	u->wait[u->nwait++] = id;
+	if (u->sched == CFG_SCHED_OLDEST_FIRST)
+		heap_push(u, id);
+	else
+		u->wbits[id / 64] |= 1ull << (id % 64);
+	u->nwait++;
 	if (!u->wake_pending)
 		arm(u);
 }

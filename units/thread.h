@@ -58,10 +58,12 @@ typedef struct thr_unit {
 	eng *e;
 	eng_clock clk;
 	int count, width, latency, masked, sched;
-	uint64_t *free_at; /* per instance: tick it accepts the next op */
-	thr_op *ops;       /* per requester id: its waiting op */
-	int *wait, nwait, maxw;
-	int rr; /* round robin: id served last */
+	uint64_t *free_at;      /* per instance: tick it accepts the next op */
+	thr_op *ops;            /* per requester id: its waiting op */
+	int *wait, nwait, maxw; /* oldest first: a heap of waiting ids on (age, id) */
+	uint64_t *wbits;        /* round robin: waiting ids as a bitset */
+	int nwords;             /* of wbits */
+	int rr;                 /* round robin: id served last */
 	int wake_pending;
 	/* called when an op issues (the requester stops waiting) */
 	void (*on_start)(void *ctx, uint64_t arg);
