@@ -4,7 +4,9 @@
  * Owns the byte layout of docs/memory-map.md. Invariants of a built image:
  * one calloc'd array of m->size bytes; regions in enum order (header,
  * nodes, lists, tris, shade, mats, texhdr, texels), each starting on a
- * MIMG_ALIGN (128-byte) boundary, so no two regions share a cache line;
+ * MIMG_ALIGN (128-byte) boundary, so no two regions share a cache line
+ * (the triangles on a MIMG_TRI_ALIGN one, so each record fills one 36-byte
+ * triangle-cache line);
  * every address (list entries, texel_addr) fits in 32 bits, as the chip's
  * address registers are 32 bits wide. Gaps between regions are zero.
  *
@@ -34,6 +36,8 @@ typedef struct mimg_header {
 _Static_assert(sizeof(mimg_header) == 192, "header layout of docs/memory-map.md");
 _Static_assert(sizeof(kd_node) == MIMG_NODE_BYTES, "node record");
 _Static_assert(sizeof(mimg_tri) == MIMG_TRI_BYTES, "triangle record");
+_Static_assert(MIMG_TRI_ALIGN % MIMG_TRI_BYTES == 0 && MIMG_TRI_ALIGN % MIMG_ALIGN == 0,
+               "triangle region alignment");
 _Static_assert(sizeof(mimg_shade) == MIMG_SHADE_BYTES, "shading record");
 _Static_assert(sizeof(mimg_mat) == MIMG_MAT_BYTES, "material record");
 _Static_assert(sizeof(mimg_texhdr) == MIMG_TEXHDR_BYTES, "texture header record");
@@ -82,6 +86,8 @@ int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
 	};
 	uint64_t at = 0;
 	for (int r = 0; r < MIMG_NREGIONS; r++) {
+		if (r == MIMG_TRIS)
+			at = (at + MIMG_TRI_ALIGN - 1) / MIMG_TRI_ALIGN * MIMG_TRI_ALIGN;
 		m->base[r] = at;
 		m->len[r] = len[r];
 		at = align_up(at + len[r]);

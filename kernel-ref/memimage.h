@@ -40,6 +40,14 @@ enum mimg_region {
 #define MIMG_MAT_BYTES    64u
 #define MIMG_TEXHDR_BYTES 16u
 #define MIMG_ALIGN        128u
+/* The triangle region starts on a multiple of this, the least common
+ * multiple of MIMG_ALIGN and MIMG_TRI_BYTES: the triangle cache's 36-byte
+ * lines are numbered address / 36, so only a region starting on a multiple
+ * of 36 puts each record in one line (from a 128-byte boundary alone every
+ * record straddled two, and each triangle fetch cost two L1 lines). 1152
+ * is also a multiple of 72, 144 and 288, and of every power of two up to
+ * 128, the other line sizes a config may give the triangle cache. */
+#define MIMG_TRI_ALIGN 1152u
 
 /* Triangle record (36 bytes). */
 typedef struct mimg_tri {

@@ -66,6 +66,9 @@ static void check_image(const mimg *m, const scene *s, const kdtree *t)
 	uint64_t end = 0;
 	for (int r = 0; r < MIMG_NREGIONS; r++) {
 		cr_assert_eq(m->base[r] % MIMG_ALIGN, 0, "%s unaligned", mimg_region_name(r));
+		/* a triangle record fills one 36-byte triangle-cache line */
+		if (r == MIMG_TRIS)
+			cr_assert_eq(m->base[r] % MIMG_TRI_BYTES, 0, "tris not on a 36-byte line");
 		cr_assert_eq(m->len[r], want[r], "%s length", mimg_region_name(r));
 		cr_assert_geq(m->base[r], end, "%s overlaps", mimg_region_name(r));
 		for (uint64_t g = end; g < m->base[r]; g++)

@@ -93,6 +93,12 @@ Test(memsys_chip, default_is_hierarchy_and_identical_embedded)
 	cr_assert_gt(s.sdram.read_bytes, 0);
 	cr_assert_eq(s.vma_enabled, 0);
 	assert_consistent(ch);
+	/* a triangle fetch is one 36-byte record, one triangle-cache line
+	 * (the triangle region starts on a multiple of 36; when it did not,
+	 * every fetch touched two lines) */
+	cr_assert_eq(s.l1[MEM_TRI].accesses, s.reads[MEM_TRI], "tri lines %llu per %llu fetches",
+	             (unsigned long long)s.l1[MEM_TRI].accesses,
+	             (unsigned long long)s.reads[MEM_TRI]);
 	chip_destroy(ch);
 	world_free(&w);
 }
