@@ -668,8 +668,9 @@ void hier_write_json(const hier_stats *s, jsonw *w)
 	jsonw_knum(w, "row_hit_rate", ratio(d->row_hits, rows));
 	jsonw_kuint(w, "busy_ns", d->busy_ticks / 1000);
 	jsonw_knum(w, "utilization", ratio(d->busy_ticks, s->now_ticks));
+	double run_s = s->run_ticks ? (double)s->run_ticks * 1e-12 : secs;
 	jsonw_knum(w, "bandwidth_gb_s",
-	           secs > 0 ? (double)(d->read_bytes + d->write_bytes) / secs / 1e9 : 0.0);
+	           run_s > 0 ? (double)(d->read_bytes + d->write_bytes) / run_s / 1e9 : 0.0);
 	jsonw_knum(w, "peak_gb_s", s->sdram_peak_bytes_per_s / 1e9);
 	jsonw_obj_end(w);
 

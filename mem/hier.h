@@ -37,6 +37,11 @@
 typedef struct hier_stats {
 	int vma_enabled;
 	uint64_t now_ticks;         /* engine time when the stats were taken */
+	/* the whole run's simulated time: 0 (the default) for now_ticks; set
+	 * by the report when functional stretches did work the engine never
+	 * timed (sampled: the estimated cycles, functional: the bound), so
+	 * that the bandwidth divides every byte by the time they took */
+	uint64_t run_ticks;
 	uint64_t core_period;       /* ticks per core cycle */
 	cache_stats l1[MEM_NTYPES]; /* per L1: accesses = hits + misses (lines) */
 	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];

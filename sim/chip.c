@@ -335,7 +335,8 @@ static int fid_init(chip *c)
 	F->est = calloc(nf, sizeof *F->est);
 	F->half = calloc(nf, sizeof *F->half);
 	F->floor = calloc(nf, sizeof *F->floor);
-	if (!F->est || !F->half || !F->floor)
+	F->prev_rtp = calloc((size_t)c->nrtp * UNIT_NKINDS, sizeof *F->prev_rtp);
+	if (!F->est || !F->half || !F->floor || !F->prev_rtp)
 		return -1;
 	if (F->mode != CFG_FIDELITY_SAMPLED)
 		return 0;
@@ -599,6 +600,7 @@ void chip_destroy(chip *c)
 	free(c->fid.est);
 	free(c->fid.half);
 	free(c->fid.floor);
+	free(c->fid.prev_rtp);
 	free(c->fid.unit_rate);
 	free(c->fid.unit_pc);
 	free(c->fid.unit_cyc);
@@ -1048,9 +1050,12 @@ static void rec_pixels(chip *c)
 }
 
 /* The busiest-resource bound of frame f: the core cycles each resource
- * needs at least for the frame's work (units: issue cycles per instance;
+ * needs at least for the frame's work (units: the busiest RTP's issue
+ * cycles per instance, since an RTP's units serve its own threads only;
  * L1s: requests / ports; SDRAM and host bus: data-bus time); the frame
- * cannot be faster than the largest. Needs the frame's snapshot. */
+ * cannot be faster than the largest. Needs the frame's snapshot.
+ * (chip_demand, the sampled estimator's demand, takes the RTPs' mean
+ * instead: it is summed chunk by chunk, which a maximum is not.) */
 static void resource_bound(chip *c)
 {
 	chip_fidelity *F = &c->fid;
@@ -1059,6 +1064,18 @@ static void resource_bound(chip *c)
 	for (int r = 0; r < RES_N; r++) {
 		F->res_cycles[r] = d[r] - F->prev_dem[r];
 		F->prev_dem[r] = d[r];
+	}
+	for (int k = 0; k < UNIT_NKINDS; k++) {
+		double most = 0;
+		for (int r = 0; r < c->nrtp; r++) {
+			const thr_unit *u = &c->rtp[r].u[k];
+			double w = (double)*u->busy / u->count,
+			       *prev = &F->prev_rtp[r * UNIT_NKINDS + k];
+			if (w - *prev > most)
+				most = w - *prev;
+			*prev = w;
+		}
+		F->res_cycles[RES_RGS + k] = most;
 	}
 	F->bound_by = 0;
 	for (int r = 1; r < RES_N; r++)

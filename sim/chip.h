@@ -99,6 +99,9 @@ typedef struct chip_fidelity {
 	double res_cycles[RES_N];
 	int bound_by; /* enum chip_res */
 	double prev_dem[RES_N];
+	/* per RTP and unit kind (nrtp x UNIT_NKINDS): issue cycles per
+	 * instance at the last frame's end (the bound takes the busiest RTP) */
+	double *prev_rtp;
 } chip_fidelity;
 
 typedef struct chip {

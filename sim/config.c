@@ -150,10 +150,10 @@ static const cfg_key keys[] = {
     {INT("chip.stack_depth", chip.stack_depth, 64, 1, 1024, "entries"),
      .source = "not published; kernel-ref kd-trees are at most 64 deep (automatic limit <= 60)",
      .desc = "on-chip traversal stack entries per thread; deeper entries spill to memory"},
-    {INT("chip.packet_w", chip.packet_w, 8, 1, 64, "pixels"), PUB "§4.5",
-     .desc = "packet (tile) width; packet_w * packet_h <= 64"},
-    {INT("chip.packet_h", chip.packet_h, 8, 1, 64, "pixels"), PUB "§4.5",
-     .desc = "packet (tile) height"},
+    {INT("chip.packet_w", chip.packet_w, 8, 8, 8, "pixels"), PUB "§4.5",
+     .desc = "packet (tile) width; 8 only: a packet is one of kernel-ref's 8 x 8 tiles"},
+    {INT("chip.packet_h", chip.packet_h, 8, 8, 8, "pixels"), PUB "§4.5",
+     .desc = "packet (tile) height; 8 only (as packet_w)"},
     {BOOL("chip.masked_packets", chip.masked_packets, 1),
      .source = "§4.5: partly active packets cost about as much as full ones",
      .desc = "true: every packet op costs all packet_w*packet_h rays (inactive rays masked); "
@@ -665,18 +665,15 @@ int cfg_set(saar_config *c, const char *assignment, diag *d)
 
 int cfg_validate(const saar_config *c, diag *d)
 {
-	int rays = c->chip.packet_w * c->chip.packet_h;
-	if (rays > 64)
-		return diag_set(
-		    d, "config", 0, 0,
-		    "chip.packet_w x chip.packet_h = %d x %d = %d rays; a packet holds at "
-		    "most 64",
-		    c->chip.packet_w, c->chip.packet_h, rays);
-	/* chip.stack_depth may be below the tree depth: the traversal unit spills
-	 * the entries beyond it to memory and reads them back (units/traversal.c,
-	 * counted as trav.stack_overflows / trav.stack_refills). The spill area
-	 * always has room for PKT_STACK_MAX entries per thread, and
-	 * kdtree.max_depth is at most 64 = PKT_STACK_MAX by its range. */
+	(void)c;
+	(void)d;
+	/* No key constrains another today. (A packet is an 8 x 8 tile: both
+	 * packet keys' ranges are [8, 8].) chip.stack_depth may be below the
+	 * tree depth: the traversal unit spills the entries beyond it to
+	 * memory and reads them back (units/traversal.c, counted as
+	 * trav.stack_overflows / trav.stack_refills). The spill area always
+	 * has room for PKT_STACK_MAX entries per thread, and kdtree.max_depth
+	 * is at most 64 = PKT_STACK_MAX by its range. */
 	return 0;
 }
 
@@ -879,7 +876,6 @@ void cfg_write_markdown(FILE *f)
 	    "--set: expected key=value, got 'chip.rtps'\n"
 	    "--set: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)\n"
 	    "--set: chip.masked_packets: expected true or false, got 'maybe'\n"
-	    "config: chip.packet_w x chip.packet_h = 16 x 8 = 128 rays; a packet holds at most 64\n"
 	    "```\n",
 	    f);
 }

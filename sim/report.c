@@ -116,11 +116,13 @@ static void memfig_span(const chip *c, int f0, int f1, memfig *m)
 		if (r == MEMIF_META)
 			meta = x;
 	}
-	m->meta_share = ratio((double)meta, (double)all);
+	/* -1 (null, an empty CSV field) when no access was made: a share of
+	 * nothing is not 0% */
+	m->meta_share = all ? (double)meta / (double)all : -1;
 	uint64_t rh = b->sdram.row_hits - a->sdram.row_hits;
 	uint64_t rows = rh + b->sdram.row_empty - a->sdram.row_empty + b->sdram.row_conflicts -
 	                a->sdram.row_conflicts;
-	m->row_hit_rate = ratio((double)rh, (double)rows);
+	m->row_hit_rate = rows ? (double)rh / (double)rows : -1;
 	double ticks = (double)(b->now_ticks - a->now_ticks);
 	m->sdram_util = ratio((double)(b->sdram.busy_ticks - a->sdram.busy_ticks), ticks);
 	m->pci_util = ratio((double)(b->hostbus.busy_ticks - a->hostbus.busy_ticks), ticks);
@@ -295,6 +297,16 @@ static uint64_t stall_cycles(const chip *c, int type)
 	return c->mem.n.reads[type] * (uint64_t)c->cfg.memory.latency;
 }
 
+/* A ratio, or null where it has no denominator (stored as -1). */
+static void knum_or_null(jsonw *j, const char *key, double v)
+{
+	jsonw_key(j, key);
+	if (v < 0)
+		jsonw_null(j);
+	else
+		jsonw_num(j, v);
+}
+
 static void memfig_json(jsonw *j, const memfig *m)
 {
 	jsonw_obj_begin(j);
@@ -306,16 +318,11 @@ static void memfig_json(jsonw *j, const memfig *m)
 	jsonw_knum(j, "pci_mb", m->pci_mb);
 	jsonw_key(j, "hit_rate");
 	jsonw_obj_begin(j);
-	for (int k = 0; k < HR_N; k++) {
-		jsonw_key(j, hr_names[k]);
-		if (m->hit[k] < 0)
-			jsonw_null(j);
-		else
-			jsonw_num(j, m->hit[k]);
-	}
+	for (int k = 0; k < HR_N; k++)
+		knum_or_null(j, hr_names[k], m->hit[k]);
 	jsonw_obj_end(j);
-	jsonw_knum(j, "meta_share", m->meta_share);
-	jsonw_knum(j, "sdram_row_hit_rate", m->row_hit_rate);
+	knum_or_null(j, "meta_share", m->meta_share);
+	knum_or_null(j, "sdram_row_hit_rate", m->row_hit_rate);
 	jsonw_knum(j, "sdram_utilisation", m->sdram_util);
 	jsonw_knum(j, "pci_utilisation", m->pci_util);
 	jsonw_obj_end(j);
@@ -411,9 +418,11 @@ void report_text(FILE *f, const report_info *ri)
 		for (int k = 0; k < HR_N; k++)
 			if (k < MEM_NTYPES || g->memory.vma.enabled)
 				pct(f, hr_names[k], m.hit[k]);
-		fprintf(f,
-		        "\n  SDRAM: row hits %.1f%%, bus busy %.1f%%, meta-data %.1f%% of accesses",
-		        100 * m.row_hit_rate, 100 * m.sdram_util, 100 * m.meta_share);
+		fputs("\n  SDRAM:", f);
+		pct(f, "row hits", m.row_hit_rate);
+		fprintf(f, ", bus busy %.1f%%,", 100 * m.sdram_util);
+		pct(f, "meta-data", m.meta_share);
+		fputs(" of accesses", f);
 		if (g->memory.vma.enabled)
 			fprintf(f, "; PCI busy %.1f%%", 100 * m.pci_util);
 		fputc('\n', f);
@@ -628,6 +637,8 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_obj_end(j);
 	hier_stats hs;
 	int have_h = !hier_get_stats(&c->mem, &hs);
+	if (have_h && hs.func_requests) /* the bytes of untimed stretches too */
+		hs.run_ticks = chip_cycles(c) * hs.core_period;
 	jsonw_key(j, "hierarchy");
 	if (have_h)
 		hier_write_json(&hs, j);

@@ -170,7 +170,7 @@ Test(config, wrong_types)
 Test(config, out_of_range)
 {
 	expect_error("chip:\n  rtps: 0\n", "2:9: chip.rtps: must be in [1, 1024], got 0");
-	expect_error("chip:\n  packet_w: 65\n", "2:13: chip.packet_w: must be in [1, 64], got 65");
+	expect_error("chip:\n  packet_w: 65\n", "2:13: chip.packet_w: must be in [8, 8], got 65");
 	expect_error("kdtree.empty_bonus: 1\n",
 	             "1:21: kdtree.empty_bonus: must be in [0, 0.99], got 1");
 	expect_error("chip.clock_mhz: 0.5\n",
@@ -261,12 +261,9 @@ Test(config, validate_cross_keys)
 	saar_config c;
 	diag d = {{0}};
 	cfg_defaults(&c);
-	cfg_set(&c, "chip.packet_w=16", &d);
-	cr_assert_eq(cfg_validate(&c, &d), -1);
-	cr_assert_str_eq(d.msg, "config: chip.packet_w x chip.packet_h = 16 x 8 = 128 rays; a "
-	                        "packet holds at most 64");
-	cfg_set(&c, "chip.packet_h=4", &d);
-	cr_assert_eq(cfg_validate(&c, &d), 0, "16x4 = 64 is fine");
+	/* a packet is one 8 x 8 tile (kernel-ref's): other sizes are out of range */
+	cr_assert_eq(cfg_set(&c, "chip.packet_w=4", &d), -1);
+	cr_assert_str_eq(d.msg, "--set: chip.packet_w: must be in [8, 8], got 4");
 	/* a stack below the tree depth spills to memory: a design-space parameter */
 	cfg_set(&c, "chip.stack_depth=4", &d);
 	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);

@@ -187,6 +187,16 @@ static void assert_same_traffic(const world *w, saar_config *c, const char *what
 	cr_assert_leq(y->frame_cycles[0], x->frame_cycles[0], "%s: bound %llu > true %llu", what,
 	              (unsigned long long)y->frame_cycles[0],
 	              (unsigned long long)x->frame_cycles[0]);
+	/* ... nor faster than any RTP's own units allow (an RTP's units serve
+	 * its threads only: the bound once took the RTPs' mean, and a busier
+	 * RTP's utilisation came out above 100%) */
+	for (int r = 0; r < y->nrtp; r++)
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			const thr_unit *u = &y->rtp[r].u[k];
+			cr_assert_leq((double)*u->busy / u->count, (double)y->frame_cycles[0],
+			              "%s: RTP %d %s busier than the bound", what, r,
+			              chip_unit_name(k));
+		}
 	cr_assert_eq(y->fid.detailed_tiles, 0);
 	cr_assert_eq(hy.func_sdram_merge_ticks, 0, "%s: no timed access, no merge share", what);
 	chip_destroy(x);
