@@ -855,27 +855,26 @@ void cfg_write_markdown(FILE *f)
 		        def, range, k->unit, k->published ? "published" : "assumed", k->source,
 		        k->desc);
 	}
-	fputs(
-	    "\n## Errors\n\n"
-	    "Every error is one line and the program exits with status 2. In a file the\n"
-	    "line and column (1-based) point at the offending key or value:\n\n"
-	    "```\n"
-	    "cfg.yaml: cannot open: No such file or directory\n"
-	    "cfg.yaml:2:3: unknown key 'chip.tarv' (did you mean 'chip.trav'?)\n"
-	    "cfg.yaml:1:1: unknown key 'rtps' (did you mean 'chip.rtps'?)\n"
-	    "cfg.yaml:2:9: chip.rtps: expected an integer, got 'four'\n"
-	    "cfg.yaml:2:9: chip.rtps: must be in [1, 1024], got 0\n"
-	    "cfg.yaml:2:17: chip.thread_sched: expected one of round_robin, oldest_first; got "
-	    "'lifo'\n"
-	    "cfg.yaml:3:5: chip.rtps: expected a single value, got a mapping\n"
-	    "cfg.yaml:1:7: 'chip' is a section: expected a mapping of its keys, got a value\n"
-	    "cfg.yaml:3:3: duplicate key 'rtps' (first at line 2)\n"
-	    "cfg.yaml:3:2: YAML syntax error: did not find expected key (while parsing a block "
-	    "mapping)\n"
-	    "cfg.yaml:4:1: only one YAML document is allowed\n"
-	    "--set: expected key=value, got 'chip.rtps'\n"
-	    "--set: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)\n"
-	    "--set: chip.masked_packets: expected true or false, got 'maybe'\n"
-	    "```\n",
-	    f);
+	fputs("\n## Errors\n\n"
+	      "Every error is one line and the program exits with status 2. In a file the\n"
+	      "line and column (1-based) point at the offending key or value:\n\n"
+	      "```\n"
+	      "cfg.yaml: cannot open: No such file or directory\n"
+	      "cfg.yaml:2:3: unknown key 'chip.tarv' (did you mean 'chip.trav'?)\n"
+	      "cfg.yaml:1:1: unknown key 'rtps' (did you mean 'chip.rtps'?)\n"
+	      "cfg.yaml:2:9: chip.rtps: expected an integer, got 'four'\n"
+	      "cfg.yaml:2:9: chip.rtps: must be in [1, 1024], got 0\n"
+	      "cfg.yaml:2:17: chip.thread_sched: expected one of round_robin, oldest_first; got "
+	      "'lifo'\n"
+	      "cfg.yaml:3:5: chip.rtps: expected a single value, got a mapping\n"
+	      "cfg.yaml:1:7: 'chip' is a section: expected a mapping of its keys, got a value\n"
+	      "cfg.yaml:3:3: duplicate key 'rtps' (first at line 2)\n"
+	      "cfg.yaml:3:2: YAML syntax error: did not find expected key (while parsing a block "
+	      "mapping)\n"
+	      "cfg.yaml:4:1: only one YAML document is allowed\n"
+	      "--set: expected key=value, got 'chip.rtps'\n"
+	      "--set: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)\n"
+	      "--set: chip.masked_packets: expected true or false, got 'maybe'\n"
+	      "```\n",
+	      f);
 }
