@@ -9,9 +9,55 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+/* A dangling link's target, relative to the link's folder when relative;
+ * 0 when it cannot be read or is too long. */
+static int link_target(const char *link, char out[PATH_MAX])
+{
+	char t[PATH_MAX];
+	ssize_t n = readlink(link, t, sizeof t - 1);
+	if (n <= 0)
+		return 0;
+	t[n] = 0;
+	const char *slash = strrchr(link, '/');
+	int dirlen = t[0] == '/' || !slash ? 0 : (int)(slash - link + 1);
+	if (snprintf(out, PATH_MAX, "%.*s%s", dirlen, link, t) >= PATH_MAX) {
+		errno = ENAMETOOLONG;
+		return 0;
+	}
+	return 1;
+}
+
 int af_open(afile *a, const char *path, const char *suffix, int want_file)
 {
 	memset(a, 0, sizeof *a);
+	if (!path[0]) {
+		errno = ENOENT;
+		return -1;
+	}
+	/* The rename replaces whatever path names: a symbolic link is written
+	 * through (the temporary goes beside its target, which is renamed
+	 * over, and the link stays), and a device, FIFO or directory is
+	 * refused (run as root, --report /dev/null once replaced the device
+	 * with a plain file) */
+	char real[PATH_MAX];
+	struct stat st;
+	if (lstat(path, &st) == 0) {
+		if (S_ISLNK(st.st_mode)) {
+			if (realpath(path, real)) {
+				if (stat(real, &st) != 0)
+					return -1;
+			} else if (errno == ENOENT && link_target(path, real)) {
+				st.st_mode = S_IFREG; /* dangling: the write creates it */
+			} else {
+				return -1;
+			}
+			path = real;
+		}
+		if (!S_ISREG(st.st_mode)) {
+			errno = S_ISDIR(st.st_mode) ? EISDIR : EPERM;
+			return -1;
+		}
+	}
 	size_t ns = strlen(suffix);
 	if (snprintf(a->path, sizeof a->path, "%s", path) >= (int)sizeof a->path ||
 	    snprintf(a->tmp, sizeof a->tmp, "%s.XXXXXX%s", path, suffix) >= (int)sizeof a->tmp ||

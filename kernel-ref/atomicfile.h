@@ -22,6 +22,8 @@ typedef struct afile {
  * image's ".png", so a library can tell the format; "" for none), readable
  * as any file the user creates (umask). With want_file, a->f is open on
  * it ("wb"); without, it is closed and the caller writes a->tmp by name.
+ * A symbolic link is written through to its target; an empty path, or
+ * one naming a directory (EISDIR) or a device or FIFO (EPERM), is refused.
  * -1 with errno set (ENAMETOOLONG for a path too long). */
 int af_open(afile *a, const char *path, const char *suffix, int want_file);
 /* Closes a->f (a write error there fails the commit too) and renames the

@@ -8,6 +8,8 @@
  * saarsim-replay with the same L1 counts.
  */
 #include <math.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "testutil.h"
 
@@ -100,6 +102,38 @@ Test(saarsim_cli, failed_writes_leave_no_temporaries)
 		cr_assert_eq(tu_temps(dir, names[i]), 0, "%s: a temporary is left", names[i]);
 		cr_assert_eq(rmdir(p), 0);
 	}
+}
+
+/* The rename must not replace what an output path names when that is not
+ * a file: a FIFO (as a device would be) is refused and left as it was, a
+ * symbolic link is written through to its target and stays a link, and an
+ * empty name is refused (it once exited 0 leaving a temporary). */
+Test(saarsim_cli, outputs_keep_fifos_and_links)
+{
+	char fifo[512], link[512], target[512], args[1024];
+	snprintf(fifo, sizeof fifo, "%s/fifo.json", dir);
+	snprintf(link, sizeof link, "%s/link.json", dir);
+	snprintf(target, sizeof target, "%s/target.json", dir);
+	cr_assert_eq(mkfifo(fifo, 0644), 0);
+	const char *opt[] = {"--out", "--report", "--census"};
+	for (int i = 0; i < 3; i++) {
+		snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 %s %s", opt[i], fifo);
+		cr_assert_eq(saarsim(args), 2, "%s", opt[i]);
+		one_line_naming("fifo.json");
+		struct stat st;
+		cr_assert_eq(lstat(fifo, &st), 0);
+		cr_assert(S_ISFIFO(st.st_mode), "%s replaced the FIFO", opt[i]);
+		cr_assert_eq(tu_temps(dir, "fifo.json"), 0);
+	}
+	cr_assert_eq(symlink("target.json", link), 0);
+	snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 --report %s", link);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	struct stat st;
+	cr_assert_eq(lstat(link, &st), 0);
+	cr_assert(S_ISLNK(st.st_mode), "the link was replaced");
+	cr_assert(strstr(slurp("target.json"), "\"fps\""), "the target holds no report");
+	cr_assert_eq(saarsim("--size 16x16 --set chip.rtps=1 --report ''"), 2);
+	one_line_naming("cannot write");
 }
 
 /* Rows are appended under our header only: a CSV of other columns (another
