@@ -111,3 +111,8 @@ void af_abort(afile *a)
 	a->f = NULL;
 	unlink(a->tmp);
 }
+
+int af_diag(diag *d, const char *path)
+{
+	return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+}

@@ -13,6 +13,8 @@
 #include <limits.h>
 #include <stdio.h>
 
+#include "diag.h"
+
 typedef struct afile {
 	FILE *f; /* the temporary, open for writing; NULL when a library writes it by name */
 	char path[PATH_MAX], tmp[PATH_MAX + 32];
@@ -29,6 +31,9 @@ int af_open(afile *a, const char *path, const char *suffix, int want_file);
 /* Closes a->f (a write error there fails the commit too) and renames the
  * temporary over path. -1 with errno set; the temporary is removed. */
 int af_commit(afile *a);
+/* The one line for an af_open or af_commit that failed (errno set):
+ * "path: cannot write: reason"; returns diag_set's -1. */
+int af_diag(diag *d, const char *path);
 /* Closes and removes the temporary. */
 void af_abort(afile *a);
 

@@ -25,7 +25,7 @@ int jsonw_open(jsonw *w, const char *path, diag *d)
 	}
 	afile a;
 	if (af_open(&a, path, "", 1))
-		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+		return af_diag(d, path);
 	jsonw_init_file(w, a.f);
 	w->af = a;
 	return 0;

@@ -16,6 +16,8 @@
 #define _GNU_SOURCE /* asprintf */
 #include "chip.h"
 
+#include "bitset.h"
+
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -79,12 +81,19 @@ static const char *const shade_names[11] = {"shade.hits",
                                             "shade.shadow_occluded",
                                             "shade.shadow_lit"};
 
+/* Issue cycles of unit kind k of RTP r so far, per instance. */
+static double rtp_work(const chip *c, int r, int k)
+{
+	const thr_unit *u = &c->rtp[r].u[k];
+	return (double)*u->busy / u->count;
+}
+
 /* Issue cycles of unit kind k so far, per instance, summed over RTPs. */
 static double chip_work(const chip *c, int k)
 {
 	double w = 0;
 	for (int r = 0; r < c->nrtp; r++)
-		w += (double)*c->rtp[r].u[k].busy / c->rtp[r].u[k].count;
+		w += rtp_work(c, r, k);
 	return w;
 }
 
@@ -546,7 +555,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 		for (int r = 0; r < c->nrtp; r++)
 			c->turn[s * c->nrtp + r] = &c->rtp[r].t[s];
 	size_t nslots = (size_t)c->nrtp * (size_t)c->tpr;
-	c->live = malloc((nslots + 63) / 64 * sizeof *c->live);
+	c->live = malloc((size_t)bits_words((int)nslots) * sizeof *c->live);
 	c->park = malloc(nslots * sizeof *c->park);
 	c->park_n = malloc((size_t)c->nrtp * sizeof *c->park_n);
 	if (!c->live || !c->park || !c->park_n)
@@ -736,36 +745,18 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
 /* Thread slots ahead whose packet streams func_range prefetches. */
 #define PREFETCH_TURNS 4
 
-/* The first live slot at turn index `from` or after it; n when none. Bits
- * set ahead of the pass during it are seen (the words are read as it goes). */
-static int next_live(const uint64_t *live, int n, int from)
-{
-	if (from >= n)
-		return n;
-	int w = from >> 6, nw = (n + 63) >> 6;
-	uint64_t b = live[w] & (~0ull << (from & 63));
-	while (!b) {
-		if (++w >= nw)
-			return n;
-		b = live[w];
-	}
-	return (w << 6) + __builtin_ctzll(b);
-}
-
 /* Takes idle slot i (turn order) of RTP r off func_range's passes. */
 static void park_slot(chip *c, int i, int r)
 {
-	c->live[i >> 6] &= ~(1ull << (i & 63));
+	bits_clear(c->live, i);
 	c->park[r * c->tpr + c->park_n[r]++] = i;
 }
 
 /* Puts RTP r's parked slots back on the passes. */
 static void unpark_rtp(chip *c, int r)
 {
-	for (int k = 0; k < c->park_n[r]; k++) {
-		int j = c->park[r * c->tpr + k];
-		c->live[j >> 6] |= 1ull << (j & 63);
-	}
+	for (int k = 0; k < c->park_n[r]; k++)
+		bits_set(c->live, c->park[r * c->tpr + k]);
 	c->park_n[r] = 0;
 }
 
@@ -797,7 +788,7 @@ static int func_range(chip *c, int end, int drain)
 	if (chunked)
 		chip_demand(c, d0);
 	/* every slot on the passes; the drain parks idle ones (below) */
-	memset(c->live, 0xff, (size_t)(n + 63) / 64 * sizeof *c->live);
+	memset(c->live, 0xff, (size_t)bits_words(n) * sizeof *c->live);
 	if (n % 64)
 		c->live[n / 64] = (1ull << (n % 64)) - 1;
 	memset(c->park_n, 0, (size_t)c->nrtp * sizeof *c->park_n);
@@ -808,7 +799,7 @@ static int func_range(chip *c, int end, int drain)
 		if (!drain && c->g.next >= end)
 			break;
 		busy = 0;
-		for (int i = next_live(c->live, n, 0); i < n; i = next_live(c->live, n, i + 1)) {
+		for (int i = bits_next(c->live, n, 0); i < n; i = bits_next(c->live, n, i + 1)) {
 			thr_ctx *t = c->turn[i];
 			int r = (int)(t->rtp - c->rtp);
 			if (!t->p && !t->rp) {
@@ -1068,9 +1059,7 @@ static void resource_bound(chip *c)
 	for (int k = 0; k < UNIT_NKINDS; k++) {
 		double most = 0;
 		for (int r = 0; r < c->nrtp; r++) {
-			const thr_unit *u = &c->rtp[r].u[k];
-			double w = (double)*u->busy / u->count,
-			       *prev = &F->prev_rtp[r * UNIT_NKINDS + k];
+			double w = rtp_work(c, r, k), *prev = &F->prev_rtp[r * UNIT_NKINDS + k];
 			if (w - *prev > most)
 				most = w - *prev;
 			*prev = w;

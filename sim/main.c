@@ -239,7 +239,7 @@ int main(int argc, char **argv)
 	trace_tmp.tmp[0] = 0;
 	if (trace) {
 		if (af_open(&trace_tmp, trace, "", 0)) {
-			diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
+			af_diag(&d, trace);
 			rc = cli_bad("saarsim", d.msg);
 			goto done;
 		}
@@ -284,7 +284,7 @@ int main(int argc, char **argv)
 		int bad = af_commit(&trace_tmp);
 		trace_tmp.tmp[0] = 0; /* renamed, or removed by af_commit */
 		if (bad) {
-			diag_set(&d, trace, 0, 0, "cannot write: %s", strerror(errno));
+			af_diag(&d, trace);
 			goto fail;
 		}
 		written[nw++] = trace;

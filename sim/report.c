@@ -815,7 +815,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	afile a;
 	if (af_open(&a, path, "", 1)) {
 		free(old);
-		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+		return af_diag(d, path);
 	}
 	FILE *f = a.f;
 	if (nold) {
@@ -864,7 +864,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 		fputc(',', f);
 	fprintf(f, "%.4f,%.4f\n", c->sim_ms / 1e3, ri->wall_ms / 1e3);
 	if (af_commit(&a))
-		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+		return af_diag(d, path);
 	return 0;
 }
 
@@ -873,7 +873,7 @@ int report_census(const char *path, const report_info *ri, diag *d)
 	const chip *c = ri->c;
 	afile a;
 	if (af_open(&a, path, "", 1))
-		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+		return af_diag(d, path);
 	FILE *f = a.f;
 	fputs("frame,first_tile,tiles,cycles", f);
 	for (int r = 0; r < RES_N; r++)
@@ -893,6 +893,6 @@ int report_census(const char *path, const report_info *ri, diag *d)
 		fputc('\n', f);
 	}
 	if (af_commit(&a))
-		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+		return af_diag(d, path);
 	return 0;
 }

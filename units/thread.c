@@ -4,6 +4,8 @@
  */
 #include "thread.h"
 
+#include "bitset.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,8 +32,7 @@ int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int m
 	u->free_at = calloc((size_t)u->count, sizeof *u->free_at);
 	u->ops = calloc((size_t)max_waiters, sizeof *u->ops);
 	u->wait = calloc((size_t)max_waiters, sizeof *u->wait);
-	u->nwords = (max_waiters + 63) / 64;
-	u->wbits = calloc((size_t)u->nwords, sizeof *u->wbits);
+	u->wbits = calloc((size_t)bits_words(max_waiters), sizeof *u->wbits);
 	return u->free_at && u->ops && u->wait && u->wbits ? 0 : -1;
 }
 
@@ -134,18 +135,11 @@ static int heap_pop(thr_unit *u)
 /* The first waiting id after rr, wrapping round (rr itself last). */
 static int rr_pop(thr_unit *u)
 {
-	int start = u->rr + 1 < u->maxw ? u->rr + 1 : 0, w = start / 64;
-	uint64_t bits = u->wbits[w] & (~0ull << (start % 64));
-	for (int k = 0; k <= u->nwords; k++) {
-		if (bits) {
-			int id = w * 64 + __builtin_ctzll(bits);
-			u->wbits[w] &= ~(1ull << (id % 64));
-			return id;
-		}
-		w = w + 1 < u->nwords ? w + 1 : 0;
-		bits = u->wbits[w];
-	}
-	return -1; /* unreachable: nwait > 0 */
+	int id = bits_next(u->wbits, u->maxw, u->rr + 1);
+	if (id == u->maxw)
+		id = bits_next(u->wbits, u->maxw, 0);
+	bits_clear(u->wbits, id); /* a member: nwait > 0 */
+	return id;
 }
 
 /* Removes and returns the waiter the policy serves next. */
@@ -192,7 +186,7 @@ void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler d
 	if (u->sched == CFG_SCHED_OLDEST_FIRST)
 		heap_push(u, id);
 	else
-		u->wbits[id / 64] |= 1ull << (id % 64);
+		bits_set(u->wbits, id);
 	u->nwait++;
 	if (!u->wake_pending)
 		arm(u);

@@ -61,8 +61,7 @@ typedef struct thr_unit {
 	uint64_t *free_at;      /* per instance: tick it accepts the next op */
 	thr_op *ops;            /* per requester id: its waiting op */
 	int *wait, nwait, maxw; /* oldest first: a heap of waiting ids on (age, id) */
-	uint64_t *wbits;        /* round robin: waiting ids as a bitset */
-	int nwords;             /* of wbits */
+	uint64_t *wbits;        /* round robin: waiting ids (bitset.h) */
 	int rr;                 /* round robin: id served last */
 	int wake_pending;
 	/* called when an op issues (the requester stops waiting) */
