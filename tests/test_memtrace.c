@@ -137,7 +137,7 @@ static mtr_rec edge_rec(uint64_t i)
 {
 	static const uint64_t addrs[] = {0,          1,    0x1000, UINT64_MAX, UINT64_MAX - 7,
 	                                 1ull << 63, 12345};
-	static const uint32_t bytes[] = {8, 36, 4, 0, 1, UINT32_MAX, 128, 12};
+	static const uint32_t bytes[] = {8, 36, 4, 0, 1, MTR_MAX_BYTES, 128, 12};
 	uint64_t cyc = i % 11 == 10 ? UINT64_MAX - i : i % 13 == 5 ? i / 2 : i * 3 + i % 7;
 	mtr_rec r = {cyc, addrs[i % 7] + (i % 3 ? i * 40 : 0), bytes[i % 8], (uint8_t)(i % 4),
 	             (uint8_t)(i / 4 % 2)};
@@ -411,5 +411,86 @@ Test(memtrace, replay_tool)
 		snprintf(cmd, sizeof cmd,
 		         "test $(wc -l < %s/err.txt) -eq 1 && grep -q cut.gz %s/err.txt", dir, dir);
 		cr_assert_eq(tu_run(cmd), 0, "one line naming the trace (%s)", modes[m]);
+	}
+}
+
+/* Records that would make a replay run away: a request of gigabytes (a
+ * replay walks it line by line; one such record took 85 s) is refused by
+ * the writer and by both readers; a cycle beyond what the engine's ticks
+ * hold (2^63 aborted on the engine's assert, 2^64-2 hung) is refused by the
+ * timed replay with one line and exit 2, while a large but representable
+ * cycle still replays. */
+Test(memtrace, runaway_records_are_refused)
+{
+	char dir[64], p[128], cmd[512];
+	diag d;
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/t.gz", dir);
+	mtr_writer *w = malloc(sizeof *w);
+	cr_assert_eq(mtr_open_write(w, p, &d), 0, "%s", d.msg);
+	mtr_rec big = {1, 0x1000, MTR_MAX_BYTES + 1, 0, 0};
+	cr_assert_eq(mtr_write(w, &big, &d), -1, "a %u-byte request recorded", big.bytes);
+	cr_assert(strstr(d.msg, "cannot record a request"), "%s", d.msg);
+	big.bytes = MTR_MAX_BYTES;
+	cr_assert_eq(mtr_write(w, &big, &d), 0, "%s", d.msg);
+	cr_assert_eq(mtr_close_write(w, &d), 0, "%s", d.msg);
+	free(w);
+	cr_assert_eq(read_all(p, &d), 1, "%s", d.msg);
+
+	/* v2: patch the one record's bytes varint up to MTR_MAX_BYTES + 1 (the
+	 * same 4-byte varint length: 2^24 and 2^24 + 1 both take four bytes) */
+	unsigned char *b;
+	size_t n = gunzip(p, &b);
+	unsigned char *last = b + n - 16 - 1; /* the record's last byte, before the end block */
+	cr_assert_eq(*last, (MTR_MAX_BYTES >> 21) & 0x7F, "varint layout");
+	cr_assert_eq(last[-3], 0x80, "varint layout");
+	last[-3] = 0x81;
+	gz_bytes(p, b, n);
+	cr_assert_eq(read_all(p, &d), -1, "a v2 record over the cap read");
+	cr_assert(strstr(d.msg, "asks for more than") && strstr(d.msg, p), "%s", d.msg);
+	free(b);
+
+	/* v1: 0xFFFFFFFF bytes */
+	size_t len = 32 + 2 * 24;
+	b = calloc(1, len);
+	memcpy(b, "SAARMTRC", 8);
+	le32(b + 8, 1);
+	le32(b + 12, 24);
+	le32(b + 16, MTR_FIELDS);
+	le32(b + 32 + 16, 0xFFFFFFFFu);
+	memset(b + 56, 0xFF, 8); /* the end record: cycle UINT64_MAX, type 0xFF, count 1 */
+	le32(b + 64, 1);
+	b[56 + 20] = 0xFF;
+	gz_bytes(p, b, len);
+	cr_assert_eq(read_all(p, &d), -1, "a v1 record over the cap read");
+	cr_assert(strstr(d.msg, "record 0 asks for 4294967295 bytes"), "%s", d.msg);
+	free(b);
+
+	/* cycles: too far for the engine, and far but fine */
+	const uint64_t cyc[] = {1ull << 63, UINT64_MAX - 1, 1000000000000ull};
+	for (int i = 0; i < 3; i++) {
+		w = malloc(sizeof *w);
+		cr_assert_eq(mtr_open_write(w, p, &d), 0, "%s", d.msg);
+		mtr_rec r = {5, 0x1000, 8, 1, 0};
+		cr_assert_eq(mtr_write(w, &r, &d), 0);
+		r.cycle = cyc[i];
+		cr_assert_eq(mtr_write(w, &r, &d), 0);
+		cr_assert_eq(mtr_close_write(w, &d), 0, "%s", d.msg);
+		free(w);
+		snprintf(cmd, sizeof cmd,
+		         "timeout 60 %s/saarsim-replay --timing %s >/dev/null 2>%s/err.txt",
+		         tu_bin_dir(), p, dir);
+		int rc = tu_run(cmd);
+		if (i < 2) {
+			cr_assert_eq(rc, 2, "cycle %llu: exit %d", (unsigned long long)cyc[i], rc);
+			snprintf(cmd, sizeof cmd,
+			         "test $(wc -l < %s/err.txt) -eq 1 && grep -q 'record 2 (counting "
+			         "from 1) is at cycle %llu' %s/err.txt",
+			         dir, (unsigned long long)cyc[i], dir);
+			cr_assert_eq(tu_run(cmd), 0, "one line naming the record (cycle %llu)",
+			             (unsigned long long)cyc[i]);
+		} else {
+			cr_assert_eq(rc, 0, "cycle %llu: exit %d", (unsigned long long)cyc[i], rc);
+		}
 	}
 }

@@ -82,6 +82,10 @@ int mtr_write(mtr_writer *w, const mtr_rec *r, diag *d)
 	if (r->type >= 4 || r->write > 1)
 		return diag_set(d, w->path, 0, 0, "cannot record type %u, write flag %u", r->type,
 		                r->write);
+	if (r->bytes > MTR_MAX_BYTES)
+		return diag_set(d, w->path, 0, 0,
+		                "cannot record a request of %u bytes (a trace holds at most %u)",
+		                r->bytes, MTR_MAX_BYTES);
 	unsigned char *p0 = w->buf + MTR_BLOCK_HDR + w->used, *p = p0 + 1;
 	uint64_t dc = r->cycle - w->cycle;
 	unsigned cc = dc < 7 ? (unsigned)dc : 7;
@@ -270,8 +274,8 @@ static int decode_v2(mtr_reader *r, diag *d)
 		uint64_t nb = bc == 0 ? 8 : bc == 1 ? 36 : 4;
 		if (bc == 3) {
 			GETVAR(nb, p);
-			if (nb > UINT32_MAX)
-				goto bad;
+			if (nb > MTR_MAX_BYTES)
+				goto big;
 		}
 		if (p > end)
 			goto bad;
@@ -290,6 +294,9 @@ bad:
 	return diag_set(d, r->path, 0, 0,
 	                "corrupt trace: bad record in the block after record %llu",
 	                (unsigned long long)r->n);
+big:
+	return diag_set(d, r->path, 0, 0, "corrupt trace: record %llu asks for more than %u bytes",
+	                (unsigned long long)(r->n + (uint64_t)(o - r->rec)), MTR_MAX_BYTES);
 }
 
 static int decode_v1(mtr_reader *r, diag *d)
@@ -321,6 +328,10 @@ static int decode_v1(mtr_reader *r, diag *d)
 			return diag_set(d, r->path, 0, 0,
 			                "corrupt trace: bad record %llu (type %u, write %u)",
 			                (unsigned long long)(r->n + k), o->type, o->write);
+		if (o->bytes > MTR_MAX_BYTES)
+			return diag_set(d, r->path, 0, 0,
+			                "corrupt trace: record %llu asks for %u bytes (at most %u)",
+			                (unsigned long long)(r->n + k), o->bytes, MTR_MAX_BYTES);
 	}
 	r->n += k;
 	return (int)k;

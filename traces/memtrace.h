@@ -25,7 +25,7 @@
  *            bits 6-7 bytes code: 0 = 8, 1 = 36, 2 = 4, 3 = a varint follows
  *   [cycle]  zigzag(cycle - previous record's cycle), if cycle code 7
  *   address  zigzag(addr - previous address of the same type)
- *   [bytes]  bytes (<= UINT32_MAX), if bytes code 3
+ *   [bytes]  bytes (<= MTR_MAX_BYTES), if bytes code 3
  *
  * Deltas are 64-bit wrapping differences, zigzag-mapped (0,-1,1,-2.. to
  * 0,1,2,3..), so any sequence round-trips; the previous cycle and the four
@@ -67,6 +67,12 @@
 #define MTR_WBUF          (MTR_BLOCK_HDR + MTR_BLOCK_PAYLOAD)
 #define MTR_RBUF          (1u << 18) /* >= 2 blocks; gzread fills it in one call */
 #define MTR_SLACK         32u        /* zeroed bytes past the data: a decoder may overrun */
+/* The largest request a record may ask for, written or read: 16 MiB, a
+ * leaf's list of four million triangles (the chip's largest requests are
+ * list reads; a real leaf holds a handful). Replaying walks a request line
+ * by line, so without a cap one 10-byte record could ask for 4 GiB and
+ * keep a replay busy for minutes. */
+#define MTR_MAX_BYTES (1u << 24)
 
 typedef struct mtr_rec {
 	uint64_t cycle, addr;
@@ -97,7 +103,8 @@ typedef struct mtr_reader {
 } mtr_reader;
 
 int mtr_open_write(mtr_writer *w, const char *path, diag *d);
-/* Appends one record; -1 on an I/O error or a type >= 4 / write flag > 1. */
+/* Appends one record; -1 on an I/O error, a type >= 4, a write flag > 1 or
+ * bytes > MTR_MAX_BYTES. */
 int mtr_write(mtr_writer *w, const mtr_rec *r, diag *d);
 /* Writes the end block and closes; -1 on an I/O error. */
 int mtr_close_write(mtr_writer *w, diag *d);

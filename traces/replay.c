@@ -52,6 +52,7 @@ typedef struct feeder {
 	memport *mp;
 	mtr_reader *rd;
 	mtr_rec next;
+	uint64_t max_cycle; /* beyond it the engine's picosecond ticks overflow */
 	int have, err;
 	uint64_t issued, answered;
 	diag *d;
@@ -62,6 +63,23 @@ static void answered(eng *e, void *ctx, uint64_t arg)
 	((feeder *)ctx)->answered++;
 }
 
+/* The next record into f->next: 1, 0 at the end, -1 on an error (also a
+ * cycle the engine cannot represent). */
+static int next_rec(feeder *f)
+{
+	int rc = mtr_read(f->rd, &f->next, f->d);
+	if (rc == 1 && f->next.cycle > f->max_cycle)
+		rc = diag_set(f->d, f->rd->path, 0, 0,
+		              "record %llu (counting from 1) is at cycle %llu, beyond the %llu "
+		              "a timed replay at %g MHz can represent",
+		              (unsigned long long)(f->rd->n - (f->rd->have - f->rd->next)),
+		              (unsigned long long)f->next.cycle, (unsigned long long)f->max_cycle,
+		              1e6 / (double)f->clk.period);
+	f->have = rc == 1;
+	f->err |= rc < 0;
+	return rc;
+}
+
 static void feed(eng *e, void *ctx, uint64_t arg)
 {
 	feeder *f = ctx;
@@ -70,9 +88,7 @@ static void feed(eng *e, void *ctx, uint64_t arg)
 		mem_req r = {f->next.addr, f->next.bytes, f->next.type, f->next.write, 0};
 		mem_access(f->mp, &r, r.write ? NULL : answered, f, 0);
 		f->issued++;
-		int rc = mtr_read(f->rd, &f->next, f->d);
-		f->have = rc == 1;
-		f->err |= rc < 0;
+		next_rec(f);
 	}
 	if (f->have)
 		eng_schedule(e, eng_cycles_to_ticks(f->clk, f->next.cycle), feed, f, 0);
@@ -159,11 +175,10 @@ int main(int argc, char **argv)
 		if (mem_init_hier(&mp, e, clk, &cfg, img, &d))
 			goto out;
 		have_mp = 1;
-		feeder f = {e, clk, &mp, rdp, {0}, 0, 0, 0, 0, &d};
-		int rc = mtr_read(rdp, &f.next, &d);
-		if (rc < 0)
+		/* a quarter of the tick range: room for the hierarchy's latencies */
+		feeder f = {e, clk, &mp, rdp, {0}, (UINT64_MAX >> 2) / clk.period, 0, 0, 0, 0, &d};
+		if (next_rec(&f) < 0)
 			goto out;
-		f.have = rc == 1;
 		if (f.have)
 			eng_schedule(e, eng_cycles_to_ticks(clk, f.next.cycle), feed, &f, 0);
 		eng_run(e, ENG_FOREVER);
