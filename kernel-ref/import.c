@@ -322,6 +322,261 @@ static int obj_scan(const char *text, const char *file, diag *d)
 	return 0;
 }
 
+/* PLY pre-scan. Assimp 5.2's PLY reader never returns on a header without
+ * a whole end_header line (also when the words appear inside another line,
+ * "end_headerX" or "comment end_header"), pads an ASCII file that ends
+ * early with made-up faces (a header declaring ten faces over one face line
+ * gave ten triangles), and allocates for whatever count a header declares
+ * before it reads the data. So the header is parsed here, line by line
+ * (PLY 1.0: ply, format, comment, obj_info, element NAME COUNT, property
+ * TYPE NAME, property list COUNT_TYPE ITEM_TYPE NAME, end_header), and the
+ * data is walked element by element against it, ASCII by its lines and
+ * tokens, binary by its sizes and list counts: a file that holds less than
+ * its header declares is an error naming the element (and, for ASCII, the
+ * line); numbers themselves are left to Assimp. The walk is one pass over
+ * bytes already in memory and stops at the first shortfall, however large
+ * the declared counts. */
+#define PLY_MAX_ELEMS 16
+#define PLY_MAX_PROPS 64
+
+typedef struct ply_prop {
+	unsigned char list, csize, isize; /* list: count and item sizes; else isize */
+} ply_prop;
+
+typedef struct ply_elem {
+	char name[32];
+	unsigned long long count;
+	int nprops;
+	ply_prop prop[PLY_MAX_PROPS];
+} ply_elem;
+
+/* Byte size of a PLY scalar type name, 0 if it is none. */
+static int ply_type_size(const char *t, size_t n)
+{
+	static const struct {
+		const char *name;
+		int size;
+	} types[] = {{"char", 1},  {"int8", 1},    {"uchar", 1},  {"uint8", 1},
+	             {"short", 2}, {"int16", 2},   {"ushort", 2}, {"uint16", 2},
+	             {"int", 4},   {"int32", 4},   {"uint", 4},   {"uint32", 4},
+	             {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+	for (size_t i = 0; i < sizeof types / sizeof types[0]; i++)
+		if (strlen(types[i].name) == n && !memcmp(types[i].name, t, n))
+			return types[i].size;
+	return 0;
+}
+
+/* The next whitespace-separated token of [*s, e): its start in *t and length
+ * (0 at the end of the range); *s moves past it. */
+static size_t ply_tok(const char **s, const char *e, const char **t)
+{
+	const char *p = *s;
+	while (p < e && isspace((unsigned char)*p))
+		p++;
+	*t = p;
+	while (p < e && !isspace((unsigned char)*p))
+		p++;
+	*s = p;
+	return (size_t)(p - *t);
+}
+
+static int tok_is(const char *t, size_t n, const char *word)
+{
+	return strlen(word) == n && !memcmp(t, word, n);
+}
+
+/* The header of the PLY in [buf, buf + len): fills el[0, *nel), *fmt (0
+ * ascii, 1 binary little-endian, 2 big-endian) and *data (the first byte
+ * after the end_header line) and *line (that line's number). */
+static int ply_header(const char *buf, size_t len, const char *file, ply_elem *el, int *nel,
+                      int *fmt, size_t *data, int *line, diag *d)
+{
+	const char *p = buf, *end = buf + len;
+	*nel = 0;
+	*fmt = -1;
+	for (int ln = 1;; ln++) {
+		if (p >= end)
+			return diag_set(d, file, 0, 0, "PLY header has no end_header line");
+		const char *eol = memchr(p, '\n', (size_t)(end - p));
+		if (!eol)
+			eol = end;
+		const char *s = p, *t, *ls = p;
+		size_t n = ply_tok(&s, eol, &t);
+		p = eol < end ? eol + 1 : end;
+#define COL ((int)(t - ls) + 1)
+		if (ln == 1) {
+			if (!tok_is(t, n, "ply") || ply_tok(&s, eol, &t))
+				return diag_set(d, file, 1, 0, "not a PLY file (no 'ply' line)");
+			continue;
+		}
+		if (n == 0 || tok_is(t, n, "comment") || tok_is(t, n, "obj_info"))
+			continue;
+		if (tok_is(t, n, "end_header")) {
+			if (ply_tok(&s, eol, &t))
+				return diag_set(d, file, ln, COL, "text after end_header");
+			if (*fmt < 0)
+				return diag_set(d, file, ln, 0, "PLY header has no format line");
+			*data = (size_t)(p - buf);
+			*line = ln;
+			return 0;
+		}
+		if (tok_is(t, n, "format")) {
+			n = ply_tok(&s, eol, &t);
+			*fmt = tok_is(t, n, "ascii")                  ? 0
+			       : tok_is(t, n, "binary_little_endian") ? 1
+			       : tok_is(t, n, "binary_big_endian")    ? 2
+			                                              : -1;
+			if (*fmt < 0)
+				return diag_set(d, file, ln, COL,
+				                "unknown PLY format '%.*s' (ascii, "
+				                "binary_little_endian or binary_big_endian)",
+				                (int)(n > 40 ? 40 : n), t);
+		} else if (tok_is(t, n, "element")) {
+			if (*nel == PLY_MAX_ELEMS)
+				return diag_set(d, file, ln, 0, "more than %d PLY elements",
+				                PLY_MAX_ELEMS);
+			ply_elem *e = &el[(*nel)++];
+			memset(e, 0, sizeof *e);
+			n = ply_tok(&s, eol, &t);
+			if (!n)
+				return diag_set(d, file, ln, 0, "element without a name");
+			snprintf(e->name, sizeof e->name, "%.*s", (int)n, t);
+			n = ply_tok(&s, eol, &t);
+			char *cend;
+			char num[24];
+			if (n == 0 || n >= sizeof num || !isdigit((unsigned char)*t))
+				return diag_set(d, file, ln, n ? COL : 0,
+				                "element %s: expected a count", e->name);
+			memcpy(num, t, n);
+			num[n] = '\0';
+			errno = 0;
+			e->count = strtoull(num, &cend, 10);
+			if (*cend || errno)
+				return diag_set(d, file, ln, COL, "element %s: bad count '%s'",
+				                e->name, num);
+		} else if (tok_is(t, n, "property")) {
+			if (!*nel)
+				return diag_set(d, file, ln, COL, "property before any element");
+			ply_elem *e = &el[*nel - 1];
+			if (e->nprops == PLY_MAX_PROPS)
+				return diag_set(d, file, ln, 0,
+				                "element %s has more than %d properties", e->name,
+				                PLY_MAX_PROPS);
+			ply_prop *pr = &e->prop[e->nprops++];
+			n = ply_tok(&s, eol, &t);
+			int list = tok_is(t, n, "list");
+			if (list) {
+				pr->list = 1;
+				n = ply_tok(&s, eol, &t);
+				pr->csize = (unsigned char)ply_type_size(t, n);
+				if (!pr->csize)
+					goto bad_type;
+				n = ply_tok(&s, eol, &t);
+			}
+			pr->isize = (unsigned char)ply_type_size(t, n);
+			if (!pr->isize)
+				goto bad_type;
+			if (!ply_tok(&s, eol, &t))
+				return diag_set(d, file, ln, 0, "property without a name");
+			continue;
+		bad_type:
+			return diag_set(d, file, ln, n ? COL : 0, "unknown PLY type '%.*s'",
+			                (int)(n > 40 ? 40 : n), t);
+		} else {
+			return diag_set(d, file, ln, COL, "unknown PLY header line '%.*s'",
+			                (int)(n > 40 ? 40 : n), t);
+		}
+#undef COL
+	}
+}
+
+/* An unsigned list count of `size` bytes at p in the file's byte order
+ * (a negative signed count reads as huge, which no file holds). */
+static unsigned long long ply_count(const unsigned char *p, int size, int big)
+{
+	unsigned long long v = 0;
+	for (int i = 0; i < size; i++)
+		v |= (unsigned long long)p[big ? size - 1 - i : i] << (8 * i);
+	return v;
+}
+
+static int ply_short(const char *file, int line, const ply_elem *e, unsigned long long i, diag *d)
+{
+	return diag_set(d, file, line, 0,
+	                "PLY data ends inside %s %llu of the %llu its header declares", e->name,
+	                i + 1, e->count);
+}
+
+static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
+{
+	ply_elem el[PLY_MAX_ELEMS];
+	int nel = 0, fmt = 0, line = 0;
+	size_t at = 0;
+	if (ply_header(buf, len, file, el, &nel, &fmt, &at, &line, d))
+		return -1;
+	const char *p = buf + at, *end = buf + len;
+	for (int k = 0; k < nel; k++) {
+		const ply_elem *e = &el[k];
+		if (e->count && !e->nprops)
+			return diag_set(d, file, 0, 0, "element %s has no properties", e->name);
+		for (unsigned long long i = 0; i < e->count; i++) {
+			if (fmt) { /* binary: sizes and list counts */
+				for (int j = 0; j < e->nprops; j++) {
+					const ply_prop *pr = &e->prop[j];
+					unsigned long long items = 1;
+					if (pr->list) {
+						if ((size_t)(end - p) < pr->csize)
+							return ply_short(file, 0, e, i, d);
+						items = ply_count((const unsigned char *)p,
+						                  pr->csize, fmt == 2);
+						p += pr->csize;
+					}
+					if (items > (unsigned long long)(end - p) / pr->isize)
+						return ply_short(file, 0, e, i, d);
+					p += items * pr->isize;
+				}
+				continue;
+			}
+			/* ASCII: one element per line (a blank line is one with
+			 * no values, as Assimp reads it) */
+			line++;
+			if (p >= end)
+				return ply_short(file, 0, e, i, d);
+			const char *eol = memchr(p, '\n', (size_t)(end - p));
+			if (!eol)
+				eol = end;
+			const char *s = p, *t;
+			for (int j = 0; j < e->nprops; j++) {
+				unsigned long long items = 1;
+				if (e->prop[j].list) {
+					size_t n = ply_tok(&s, eol, &t);
+					char num[24];
+					char *cend = num;
+					if (n && n < sizeof num) {
+						memcpy(num, t, n);
+						num[n] = '\0';
+						items = strtoull(num, &cend, 10);
+					}
+					if (!n || n >= sizeof num || *cend ||
+					    !isdigit((unsigned char)*t))
+						return diag_set(d, file, line,
+						                n ? (int)(t - p) + 1 : 0,
+						                "%s %llu: expected a list length",
+						                e->name, i + 1);
+				}
+				for (unsigned long long m = 0; m < items; m++)
+					if (!ply_tok(&s, eol, &t))
+						return diag_set(d, file, line, 0,
+						                "%s %llu has fewer values than its "
+						                "header declares",
+						                e->name, i + 1);
+			}
+			p = eol < end ? eol + 1 : end;
+		}
+	}
+	return 0;
+}
+
 /* Assimp 5.2 (Debian 12) crashes on some malformed files instead of
  * failing: its binary PLY reader reads out of bounds on a corrupt face
  * list, and an ai_assert in TriangulateProcess aborts on one that does not
@@ -645,11 +900,9 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 			return diag_set(d, path, 0, 0, "%s", cache.err);
 		snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
 		cache.n = 1;
-		/* Assimp 5.2's PLY reader never returns on a header without
-		 * end_header, so that is checked first. */
-		if (ply && !strstr(cache.e[0].buf, "end_header")) {
+		if (ply && ply_scan(cache.e[0].buf, cache.e[0].len, path, d) != 0) {
 			free(cache.e[0].buf);
-			return diag_set(d, path, 0, 0, "PLY header has no end_header line");
+			return -1;
 		}
 		if (obj && obj_scan(cache.e[0].buf, path, d) != 0) {
 			free(cache.e[0].buf);

@@ -559,3 +559,89 @@ Test(default_scene, room_and_spheres)
 	}
 	scene_free(&s);
 }
+
+/* PLY files Assimp 5.2 mishandles are refused before it sees them
+ * (import.c's ply_scan): an end_header that is only part of a line hung it;
+ * an ASCII file ending early, or a face line with fewer indices than its
+ * count, became made-up faces; declared counts far beyond the data made it
+ * allocate for them. Each is one message naming the file (and line where
+ * there is one); "comment end_header" before the real line still loads. */
+Test(import, ply_header_and_data_are_checked)
+{
+	char dir[256], p[512], text[1024];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	const char *head = "ply\nformat ascii 1.0\n%selement vertex 3\nproperty float x\n"
+	                   "property float y\nproperty float z\nelement face %s\n"
+	                   "property list uchar int vertex_indices\n%s\n0 0 0\n1 0 0\n0 1 0\n%s";
+	struct {
+		const char *extra, *faces, *endh, *data, *msg;
+	} cases[] = {
+	    {"", "1", "end_header", "3 0 1 2\n", NULL},
+	    {"comment end_header\n", "1", "end_header", "3 0 1 2\n", NULL},
+	    {"", "1", "end_header", "3 0 1 2\n\n\n", NULL},
+	    {"", "1", "end_header", "\n3 0 1 2\n", ":13: face 1: expected a list length"},
+	    {"comment end_header\n", "1", "end_headerX", "3 0 1 2\n",
+	     ":10:1: unknown PLY header line 'end_headerX'"},
+	    {"", "1", "end_header x", "3 0 1 2\n", ":9:12: text after end_header"},
+	    {"", "1", "", "3 0 1 2\n", ":10:1: unknown PLY header line '0'"},
+	    {"", "10", "end_header", "3 0 1 2\n", ": PLY data ends inside face 2 of the 10"},
+	    {"", "1", "end_header", "4 0 1 2\n", ":13: face 1 has fewer values"},
+	    {"", "1", "end_header", "x 0 1 2\n", ":13:1: face 1: expected a list length"},
+	    {"", "4000000000000", "end_header", "3 0 1 2\n",
+	     ": PLY data ends inside face 2 of the 4000000000000"},
+	    {"", "-1", "end_header", "3 0 1 2\n", ":7:14: element face: expected a count"},
+	    {"element edge 1\n", "1", "end_header", "3 0 1 2\n",
+	     ": element edge has no properties"},
+	    {"property float w\n", "1", "end_header", "3 0 1 2\n",
+	     ":3:1: property before any element"},
+	    {"", "1 extra", "end_header", "3 0 1 2\n", NULL},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+		snprintf(text, sizeof text, head, cases[i].extra, cases[i].faces, cases[i].endh,
+		         cases[i].data);
+		char name[32];
+		snprintf(name, sizeof name, "c%zu.ply", i);
+		tu_write(p, sizeof p, dir, name, text);
+		scene s;
+		int rc = scene_load(&s, p, &d);
+		if (!cases[i].msg) {
+			cr_assert_eq(rc, 0, "case %zu: %s", i, d.msg);
+			cr_assert_eq(s.ntris, 1, "case %zu", i);
+			scene_free(&s);
+			continue;
+		}
+		cr_assert_neq(rc, 0, "case %zu loaded %u triangles", i, s.ntris);
+		char want[600];
+		snprintf(want, sizeof want, "%s%s", p, cases[i].msg);
+		cr_assert(strstr(d.msg, want), "case %zu: '%s' lacks '%s'", i, d.msg, want);
+	}
+	tu_write(p, sizeof p, dir, "cut.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "cut.ply: PLY header has no end_header line"), "%s", d.msg);
+	/* binary: a vertex count far beyond the data; a big-endian list count
+	 * past the end; the same file whole loads */
+	const unsigned char ok[] = {3, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0};
+	snprintf(p, sizeof p, "%s/huge.ply", dir);
+	FILE *f = fopen(p, "wb");
+	fputs("ply\nformat binary_little_endian 1.0\nelement vertex 9000000000\nproperty float "
+	      "x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int "
+	      "vertex_indices\nend_header\n",
+	      f);
+	fwrite(ok, sizeof ok, 1, f);
+	fclose(f);
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "ends inside vertex 2 of the 9000000000"), "%s", d.msg);
+	snprintf(p, sizeof p, "%s/be.ply", dir);
+	f = fopen(p, "wb");
+	fputs("ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty "
+	      "float y\nproperty float z\nelement face 1\nproperty list ushort int "
+	      "vertex_indices\nend_header\n",
+	      f);
+	const unsigned char v[36] = {0}, face[] = {1, 0, 0, 0, 0};
+	fwrite(v, sizeof v, 1, f);
+	fwrite(face, sizeof face, 1, f); /* count 256 big-endian, one index */
+	fclose(f);
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "ends inside face 1 of the 1"), "%s", d.msg);
+}
