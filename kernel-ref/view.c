@@ -10,6 +10,7 @@
 #include "view.h"
 
 #include <errno.h>
+#include <float.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -165,7 +166,13 @@ static int get_vec3(yfile *y, const yaml_node_t *n, const char *what, vec3 *out)
 
 /* The checks shared by view files and command-line flags. Up must not be
  * parallel to the view direction: the camera basis (right = dir x up)
- * would be undefined, so it is rejected rather than guessed. */
+ * would be undefined, so it is rejected rather than guessed. The basis is
+ * built in float (camera.c normalises lookat - eye and dir x up through
+ * their squared lengths), so a view direction or up whose squared length
+ * overflows (lookat - eye infinite from two huge finite points, or longer
+ * than about 1e19) or underflows to zero would make it NaN or zero: those
+ * are refused for what they are, not passed on as a blank frame or blamed
+ * on up. */
 static const char *camera_problem(const camera *c, enum cam_field *field)
 {
 	*field = CAM_EYE;
@@ -177,11 +184,20 @@ static const char *camera_problem(const camera *c, enum cam_field *field)
 		return "fov must be between 0 and 180 degrees (exclusive)";
 	*field = CAM_LOOKAT;
 	vec3 dir = v3_sub(c->lookat, c->eye);
-	if (!(v3_len(dir) > 0.0f))
+	float d2 = v3_dot(dir, dir), u2 = v3_dot(c->up, c->up);
+	if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f)
 		return "eye and lookat are the same point";
+	if (!(d2 <= FLT_MAX))
+		return "eye and lookat are too far apart for float math (more than about 1e19)";
+	if (!(d2 >= FLT_MIN))
+		return "eye and lookat are too close together for float math (less than about "
+		       "1e-19)";
 	*field = CAM_UP;
-	if (!(v3_len(c->up) > 0.0f))
+	if (c->up.x == 0.0f && c->up.y == 0.0f && c->up.z == 0.0f)
 		return "up must not be the zero vector";
+	if (!(u2 <= FLT_MAX) || !(u2 >= FLT_MIN))
+		return "up is too long or too short for float math (its length must be between "
+		       "about 1e-19 and 1e19)";
 	if (v3_len(v3_cross(v3_norm(dir), v3_norm(c->up))) < 1e-3f)
 		return "up is parallel to the view direction (lookat - eye)";
 	return NULL;

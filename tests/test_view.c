@@ -3,6 +3,7 @@
  * default light. Every error must read "FILE:LINE:COL: ..." and point at
  * the offending node.
  */
+#include "camera.h"
 #include "testutil.h"
 #include "view.h"
 
@@ -213,6 +214,43 @@ Test(view, camera_validate_flags)
 	c.fov_deg = 200;
 	cr_assert_eq(camera_validate(&c, "--fov", &d), -1);
 	cr_assert(strstr(d.msg, "--fov: fov must be between"), "%s", d.msg);
+}
+
+/* The camera basis is built in float through squared lengths: a view
+ * direction that overflows (two huge finite points: lookat - eye is
+ * infinite) made a NaN basis and a blank frame with no error, and one
+ * whose squared length overflows (eye at 1e20) was blamed on up. Each is
+ * refused for what it is; a far but representable camera is accepted and
+ * gives a finite basis. */
+Test(view, camera_beyond_float_range_is_refused)
+{
+	diag d = {{0}};
+	struct {
+		camera c;
+		const char *msg;
+	} cases[] = {
+	    {{v3(-3e38f, 5, 5), v3(3e38f, 5, 5), v3(0, 1, 0), 45}, "too far apart"},
+	    {{v3(1e20f, 5, 5), v3(0, 0, 0), v3(0, 1, 0), 45}, "too far apart"},
+	    {{v3(1e-25f, 0, 0), v3(0, 0, 0), v3(0, 1, 0), 45}, "too close together"},
+	    {{v3(0, 0, 5), v3(0, 0, 0), v3(0, 1e25f, 0), 45}, "up is too long or too short"},
+	    {{v3(0, 0, 5), v3(0, 0, 0), v3(0, 1e-25f, 0), 45}, "up is too long or too short"},
+	    {{v3(1e18f, 5, 5), v3(0, 0, 0), v3(0, 1, 0), 45}, NULL},
+	    {{v3(0, 0, 5), v3(0, 0, 0), v3(0, 1e-15f, 0), 45}, NULL},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+		int rc = camera_validate(&cases[i].c, "--eye", &d);
+		if (cases[i].msg) {
+			cr_assert_eq(rc, -1, "case %zu accepted", i);
+			cr_assert(strstr(d.msg, cases[i].msg), "case %zu: %s", i, d.msg);
+			continue;
+		}
+		cr_assert_eq(rc, 0, "case %zu: %s", i, d.msg);
+		cam_frame cs;
+		cam_setup(&cs, &cases[i].c, 64, 64);
+		cr_assert(v3_finite(cs.u) && v3_finite(cs.v) && v3_finite(cs.w), "case %zu", i);
+		cr_assert_float_eq(v3_len(cs.u), 1.0f, 1e-5f, "case %zu", i);
+		cr_assert_float_eq(v3_len(cs.w), 1.0f, 1e-5f, "case %zu", i);
+	}
 }
 
 Test(view, default_view_frames_default_scene)
