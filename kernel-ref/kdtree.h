@@ -47,6 +47,9 @@ typedef struct kdtree {
 	aabb bounds; /* the scene box the root stands for */
 	/* build statistics */
 	uint32_t nleaves, nempty_leaves;
+	/* leaves made because the build's work budget ran out (kdtree.c
+	 * KD_WORK_BUDGET: heavily overlapping triangles); 0 on real scenes */
+	uint32_t nbudget_leaves;
 	int depth;       /* deepest leaf */
 	double sah_cost; /* expected cost of the whole tree */
 	double build_ms; /* host wall time of kd_build */

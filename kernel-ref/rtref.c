@@ -103,6 +103,7 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kuint(j, "leaves", w->kd.nleaves);
 	jsonw_kuint(j, "empty_leaves", w->kd.nempty_leaves);
 	jsonw_kint(j, "depth", w->kd.depth);
+	jsonw_kuint(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_knum(j, "sah_cost", w->kd.sah_cost);
 	jsonw_obj_end(j);
 	jsonw_kuint(j, "memory_image_bytes", w->m.size);

@@ -321,6 +321,12 @@ int world_load(world *w, const world_opts *o, diag *d)
 	}
 	wc_files_free(&files);
 	free(ckey);
+	if (w->kd.nbudget_leaves) /* also from the cache: each run says so */
+		fprintf(stderr,
+		        "warning: %s: the kd-tree build ran out of its work budget (%u leaves cut "
+		        "short): the triangles overlap heavily; the tree is correct but slower to "
+		        "trace than SAH would make it (kdtree.budget_leaves in the report)\n",
+		        w->s.name, w->kd.nbudget_leaves);
 	return 0;
 fail:
 	wc_files_free(&files);

@@ -515,6 +515,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	kv(j, "nodes", w->kd.nnodes);
 	kv(j, "leaves", w->kd.nleaves);
 	jsonw_kint(j, "depth", w->kd.depth);
+	kv(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_obj_end(j);
 	kv(j, "memory_image_bytes", w->m.size);
 	kv(j, "spill_base", c->spill_base);
