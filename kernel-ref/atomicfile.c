@@ -84,7 +84,8 @@ int af_open(afile *a, const char *path, const char *suffix, int want_file)
 	return 0;
 }
 
-int af_commit(afile *a)
+/* Closes a->f; -1 with errno set on a write error. */
+static int af_close(afile *a)
 {
 	int err = 0;
 	if (a->f) {
@@ -94,6 +95,13 @@ int af_commit(afile *a)
 			err = errno ? errno : EIO;
 		a->f = NULL;
 	}
+	errno = err;
+	return err ? -1 : 0;
+}
+
+int af_commit(afile *a)
+{
+	int err = af_close(a) ? errno : 0;
 	if (!err && rename(a->tmp, a->path) != 0)
 		err = errno;
 	if (err) {
@@ -102,6 +110,45 @@ int af_commit(afile *a)
 		return -1;
 	}
 	return 0;
+}
+
+int af_commit_to(afile *a, af_group *g)
+{
+	if (!g)
+		return af_commit(a);
+	int err = 0;
+	if (af_close(a))
+		err = errno;
+	else if (g->n == AF_GROUP_MAX)
+		err = E2BIG;
+	if (err) {
+		unlink(a->tmp);
+		errno = err;
+		return -1;
+	}
+	g->a[g->n++] = *a;
+	return 0;
+}
+
+int af_group_commit(af_group *g, diag *d)
+{
+	int rc = 0;
+	for (int i = 0; i < g->n; i++) {
+		if (rc) {
+			unlink(g->a[i].tmp);
+		} else if (af_commit(&g->a[i])) {
+			rc = af_diag(d, g->a[i].path);
+		}
+	}
+	g->n = 0;
+	return rc;
+}
+
+void af_group_abort(af_group *g)
+{
+	for (int i = 0; i < g->n; i++)
+		af_abort(&g->a[i]);
+	g->n = 0;
 }
 
 void af_abort(afile *a)

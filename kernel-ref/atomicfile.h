@@ -37,4 +37,27 @@ int af_diag(diag *d, const char *path);
 /* Closes and removes the temporary. */
 void af_abort(afile *a);
 
+/* Outputs that appear together. A program writing several files (an
+ * image, a report, a trace, a CSV row) commits each into a group, which
+ * only closes its temporary (a write error fails there); once every one is
+ * complete af_group_commit renames them all, and on any failure before
+ * that af_group_abort removes them: the user's files at the outputs' paths
+ * stay as they were unless the run succeeds. (Undoing by deleting outputs
+ * already renamed would delete the files they had replaced.) */
+#define AF_GROUP_MAX 8
+typedef struct af_group {
+	int n;
+	afile a[AF_GROUP_MAX];
+} af_group;
+
+/* With g NULL, af_commit; else closes a->f and keeps the temporary in g.
+ * -1 with errno set, the temporary removed (E2BIG: the group is full). */
+int af_commit_to(afile *a, af_group *g);
+/* Renames every temporary of g over its path, in the order committed;
+ * empties g. -1 with d naming the first path that failed (the temporaries
+ * after it are removed; those before it are in place). */
+int af_group_commit(af_group *g, diag *d);
+/* Removes every temporary of g; empties it. */
+void af_group_abort(af_group *g);
+
 #endif

@@ -52,7 +52,7 @@ void fb_to_rgb8(const framebuf *fb, uint8_t *rgb8, float *rgbf)
 	}
 }
 
-int fb_write(const framebuf *fb, const char *path, diag *d)
+int fb_write(const framebuf *fb, const char *path, af_group *g, diag *d)
 {
 	size_t n = (size_t)fb->w * (size_t)fb->h * 3;
 	uint8_t *rgb8 = malloc(n);
@@ -63,7 +63,7 @@ int fb_write(const framebuf *fb, const char *path, diag *d)
 		return diag_set(d, path, 0, 0, "out of memory");
 	}
 	fb_to_rgb8(fb, rgb8, rgbf);
-	int rc = img_write(path, fb->w, fb->h, rgb8, rgbf, d);
+	int rc = img_write(path, fb->w, fb->h, rgb8, rgbf, g, d);
 	free(rgb8);
 	free(rgbf);
 	return rc;

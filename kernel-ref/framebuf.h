@@ -14,6 +14,7 @@
 
 #include <stdint.h>
 
+#include "atomicfile.h"
 #include "diag.h"
 
 #define FB_FRAC_BITS   20
@@ -48,8 +49,9 @@ static inline void fb_add(framebuf *fb, uint32_t pixel, float r, float g, float 
 /* Converts to 8-bit sRGB (w*h*3) and, if rgbf is non-NULL, linear floats. */
 void fb_to_rgb8(const framebuf *fb, uint8_t *rgb8, float *rgbf);
 
-/* Writes the frame (format from the extension) atomically. */
-int fb_write(const framebuf *fb, const char *path, diag *d);
+/* Writes the frame (format from the extension) atomically; with a group g
+ * it is renamed into place by af_group_commit (atomicfile.h). */
+int fb_write(const framebuf *fb, const char *path, af_group *g, diag *d);
 
 /* Compares two 8-bit images: differing pixels and PSNR (dB; INFINITY when
  * identical). */

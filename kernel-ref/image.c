@@ -95,7 +95,8 @@ static const char *ext_of(const char *path, char *buf, size_t cap)
 	return buf;
 }
 
-int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, diag *d)
+int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, af_group *g,
+              diag *d)
 {
 	if (w <= 0 || h <= 0 || (!rgb8 && !rgbf))
 		return diag_set(d, path, 0, 0, "cannot write a %dx%d image without pixels", w, h);
@@ -135,8 +136,8 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
 		diag_set(d, path, 0, 0, "cannot write image: %s", err);
 		goto out;
 	}
-	if (af_commit(&a)) {
-		diag_set(d, path, 0, 0, "cannot write image: rename: %s", strerror(errno));
+	if (af_commit_to(&a, g)) {
+		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
 		goto out;
 	}
 	rc = 0;

@@ -11,6 +11,7 @@
 
 #include <stdint.h>
 
+#include "atomicfile.h"
 #include "diag.h"
 
 #ifdef __cplusplus
@@ -19,8 +20,10 @@ extern "C" {
 
 /* Writes an 8-bit RGB image (w*h*3 bytes, row 0 at the top). The format
  * follows the extension (.png, .exr, .ppm, .tif, ...); float formats such as
- * EXR get the float buffer `rgbf` (w*h*3, linear) when it is non-NULL. */
-int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, diag *d);
+ * EXR get the float buffer `rgbf` (w*h*3, linear) when it is non-NULL.
+ * With a group g the file is renamed into place by af_group_commit. */
+int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, af_group *g,
+              diag *d);
 
 /* 0 if an image can be written to path's format (the plugin loads and has
  * a writer for the extension), else -1 with d set: lets a program refuse

@@ -45,7 +45,7 @@ int jsonw_close(jsonw *w, diag *d)
 		                "key '%s' written twice into one object (a bug: please report it)",
 		                w->dup);
 	}
-	if (to_file && af_commit(&w->af))
+	if (to_file && af_commit_to(&w->af, w->group))
 		return diag_set(d, w->af.path, 0, 0, "write failed: %s", strerror(errno));
 	return 0;
 }

@@ -24,7 +24,8 @@ typedef struct jsonw {
 	int depth;
 	int first[JSONW_MAX_DEPTH]; /* no element written yet at this depth */
 	int after_key;
-	afile af; /* the file (a temporary until jsonw_close); af.path "" for stdout */
+	afile af;        /* the file (a temporary until jsonw_close); af.path "" for stdout */
+	af_group *group; /* set after jsonw_open: jsonw_close commits into it */
 	/* A key twice in one object is legal JSON that parsers read
 	 * differently (most keep the last value): the hashes of the open
 	 * objects' keys, keys[mark[d]..nkeys) those of the object at depth d,

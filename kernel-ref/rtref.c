@@ -215,21 +215,30 @@ int main(int argc, char **argv)
 		rc = cli_bad("rtref", d.msg);
 		goto done;
 	}
-	if (out && fb_write(&fb, out, &d)) {
+	/* the image and the statistics appear together or not at all */
+	af_group outs = {0};
+	if (out && fb_write(&fb, out, &outs, &d)) {
 		rc = cli_bad("rtref", d.msg);
 		goto done;
 	}
 	if (stats) {
 		jsonw j;
 		if (jsonw_open(&j, stats, &d)) {
+			af_group_abort(&outs);
 			rc = cli_bad("rtref", d.msg);
 			goto done;
 		}
+		j.group = &outs;
 		write_stats(&j, &w, &ro, &st);
 		if (jsonw_close(&j, &d)) {
+			af_group_abort(&outs);
 			rc = cli_bad("rtref", d.msg);
 			goto done;
 		}
+	}
+	if (af_group_commit(&outs, &d)) {
+		rc = cli_bad("rtref", d.msg);
+		goto done;
 	}
 	uint64_t total = 0;
 	for (int t = 0; t < PKT_NTYPES; t++)

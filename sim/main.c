@@ -12,8 +12,8 @@
  * rtref), runs the chip, checks the (last) frame against kernel-ref, prints
  * a summary and writes the frame, the JSON report, the memory trace and one
  * CSV row. Bad input: one line "saarsim: ..." on stderr, exit status 2, no
- * output file (each is written to a temporary file and renamed; the CSV row
- * is appended last, when everything else has succeeded).
+ * output file changed (each is written to a temporary file, and all are
+ * renamed into place together once every one is complete).
  */
 #include <errno.h>
 #include <stdio.h>
@@ -259,44 +259,35 @@ int main(int argc, char **argv)
 	}
 	if (pr.shown)
 		fputc('\n', stderr);
-	/* the outputs in the order they are written; a failure removes those
-	 * already written, so a run leaves all of them or none (the CSV row,
-	 * appended last, is all or nothing itself) */
-	const char *written[4];
-	int nw = 0;
-	if (out) {
-		if (fb_write(&c->fb, out, &d))
-			goto fail;
-		written[nw++] = out;
-	}
-	report_info ri = {c, &w, check ? &chk : NULL, load_ms, now_ms() - t_start};
-	if (report) {
-		if (report_json(report, &ri, &d))
-			goto fail;
-		written[nw++] = report;
-	}
-	if (census) {
-		if (report_census(census, &ri, &d))
-			goto fail;
-		written[nw++] = census;
-	}
+	/* every output is written complete under a temporary name first and
+	 * all are renamed into place together once the last one (the CSV
+	 * with its new row) is done: a run that fails on any leaves the
+	 * files at all the output paths as they were */
+	af_group outs = {0};
+	if (out && fb_write(&c->fb, out, &outs, &d))
+		goto fail;
+	report_info ri = {c, &w, check ? &chk : NULL, load_ms, now_ms() - t_start, &outs};
+	if (report && report_json(report, &ri, &d))
+		goto fail;
+	if (census && report_census(census, &ri, &d))
+		goto fail;
 	if (trace) {
-		int bad = af_commit(&trace_tmp);
-		trace_tmp.tmp[0] = 0; /* renamed, or removed by af_commit */
+		int bad = af_commit_to(&trace_tmp, &outs);
+		trace_tmp.tmp[0] = 0; /* in the group, or removed */
 		if (bad) {
 			af_diag(&d, trace);
 			goto fail;
 		}
-		written[nw++] = trace;
 	}
 	ri.wall_ms = now_ms() - t_start;
 	if (csv && report_csv(csv, &ri, &d))
 		goto fail;
+	if (af_group_commit(&outs, &d))
+		goto fail;
 	report_text(stdout, &ri);
 	goto done;
 fail:
-	while (nw > 0)
-		unlink(written[--nw]);
+	af_group_abort(&outs);
 	rc = cli_bad("saarsim", d.msg);
 done:
 	chip_destroy(c);

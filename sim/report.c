@@ -497,6 +497,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw jw, *j = &jw;
 	if (jsonw_open(j, path, d))
 		return -1;
+	j->group = ri->group;
 	jsonw_obj_begin(j);
 	jsonw_kstr(j, "program", "saarsim");
 	jsonw_key(j, "config");
@@ -864,7 +865,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	else
 		fputc(',', f);
 	fprintf(f, "%.4f,%.4f\n", c->sim_ms / 1e3, ri->wall_ms / 1e3);
-	if (af_commit(&a))
+	if (af_commit_to(&a, ri->group))
 		return af_diag(d, path);
 	return 0;
 }
@@ -893,7 +894,7 @@ int report_census(const char *path, const report_info *ri, diag *d)
 			fprintf(f, ",%.10g", m1->dem[r] - m0->dem[r]);
 		fputc('\n', f);
 	}
-	if (af_commit(&a))
+	if (af_commit_to(&a, ri->group))
 		return af_diag(d, path);
 	return 0;
 }

@@ -19,6 +19,7 @@ typedef struct report_info {
 	const chip_check *check; /* NULL: --no-check */
 	double load_ms;          /* scene load, kd-tree, memory image */
 	double wall_ms;          /* whole run so far */
+	af_group *group;         /* the files are renamed by af_group_commit; NULL: each at once */
 } report_info;
 
 /* Memory figures over a span of frames (the report's steady_state and

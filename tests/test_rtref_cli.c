@@ -123,6 +123,24 @@ Test(rtref_cli, unwritable_output_leaves_nothing)
 	one_line_naming("f.png");
 }
 
+/* The image and the statistics appear together or not at all: a --stats
+ * that cannot be written leaves no new image (it was written before the
+ * statistics failed) and keeps a file already at the image's path. */
+Test(rtref_cli, failed_stats_writes_no_image)
+{
+	char args[1024], p[512];
+	snprintf(p, sizeof p, "%s/s.json", dir);
+	cr_assert_eq(mkdir(p, 0755), 0);
+	snprintf(args, sizeof args, "--size 16x16 --out %s/f.png --stats %s", dir, p);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("s.json");
+	cr_assert_not(exists("f.png"), "the image was written");
+	tu_write(p, sizeof p, dir, "f.png", "precious\n");
+	cr_assert_eq(rtref(args), 2);
+	cr_assert_str_eq(slurp("f.png"), "precious\n", "the image was replaced");
+	cr_assert_eq(tu_temps(dir, "f.png"), 0);
+}
+
 Test(rtref_cli, world_cache_gives_the_same_frame)
 {
 	char args[1024], cmd[1024];

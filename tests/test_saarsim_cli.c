@@ -104,6 +104,40 @@ Test(saarsim_cli, failed_writes_leave_no_temporaries)
 	}
 }
 
+/* A run whose later output fails leaves the files at the earlier outputs'
+ * paths as they were: the outputs are renamed into place together, only
+ * once all are complete. (They were renamed one by one and the ones done
+ * unlinked on a failure, which deleted the user's files they had
+ * replaced.) The census here fails after the frame and the report. */
+Test(saarsim_cli, failed_run_keeps_the_files_it_would_replace)
+{
+	const char *names[] = {"f.png", "r.json", "t.gz"};
+	char p[512], args[2048];
+	for (int i = 0; i < 3; i++)
+		tu_write(p, sizeof p, dir, names[i], "precious\n");
+	snprintf(p, sizeof p, "%s/c.csv", dir);
+	cr_assert_eq(mkdir(p, 0755), 0);
+	snprintf(args, sizeof args,
+	         "--size 16x16 --set chip.rtps=1 --out %s/f.png --report %s/r.json --trace-mem "
+	         "%s/t.gz --census %s",
+	         dir, dir, dir, p);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("c.csv");
+	for (int i = 0; i < 3; i++) {
+		cr_assert(exists(names[i]), "%s was removed", names[i]);
+		cr_assert_str_eq(slurp(names[i]), "precious\n", "%s was replaced", names[i]);
+		cr_assert_eq(tu_temps(dir, names[i]), 0, "%s: a temporary is left", names[i]);
+	}
+	/* the same outputs with a writable census: all replaced */
+	snprintf(args, sizeof args,
+	         "--size 16x16 --set chip.rtps=1 --out %s/f.png --report %s/r.json --trace-mem "
+	         "%s/t.gz --census %s/c2.csv",
+	         dir, dir, dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	for (int i = 0; i < 3; i++)
+		cr_assert_str_neq(slurp(names[i]), "precious\n", "%s not written", names[i]);
+}
+
 /* The rename must not replace what an output path names when that is not
  * a file: a FIFO (as a device would be) is refused and left as it was, a
  * symbolic link is written through to its target and stays a link, and an

@@ -374,7 +374,7 @@ Test(import, texture_map_kd)
 	uint8_t px[3 * 2 * 3];
 	for (int i = 0; i < (int)sizeof px; i++)
 		px[i] = (uint8_t)(i * 13);
-	cr_assert_eq(img_write(png, 3, 2, px, NULL, &d), 0, "%s", d.msg);
+	cr_assert_eq(img_write(png, 3, 2, px, NULL, NULL, &d), 0, "%s", d.msg);
 	tu_write(p, sizeof p, dir, "t.mtl",
 	         "newmtl a\nKd 1 1 1\nmap_Kd tex.png\n"
 	         "newmtl b\nKd 1 1 1\nmap_Kd tex.png\nbump -bm 0.5 tex.png\n");
@@ -426,7 +426,7 @@ Test(image, write_read_formats)
 	static const char *const exts[] = {"png", "exr", "ppm", "tif", "jpg"};
 	for (int e = 0; e < 5; e++) {
 		snprintf(p, sizeof p, "%s/img.%s", dir, exts[e]);
-		cr_assert_eq(img_write(p, 4, 3, px, e == 1 ? pf : NULL, &d), 0, "%s", d.msg);
+		cr_assert_eq(img_write(p, 4, 3, px, e == 1 ? pf : NULL, NULL, &d), 0, "%s", d.msg);
 		int w, h;
 		uint8_t *rgba;
 		cr_assert_eq(img_read_rgba8(p, &w, &h, &rgba, &d), 0, "%s", d.msg);
@@ -442,10 +442,10 @@ Test(image, write_read_formats)
 	cr_assert_neq(tu_run(cmd), 0);
 
 	snprintf(p, sizeof p, "%s/no/such/dir/x.png", dir);
-	cr_assert_eq(img_write(p, 4, 3, px, NULL, &d), -1);
+	cr_assert_eq(img_write(p, 4, 3, px, NULL, NULL, &d), -1);
 	cr_assert(strstr(d.msg, p), "%s", d.msg);
 	snprintf(p, sizeof p, "%s/x.unknownext", dir);
-	cr_assert_eq(img_write(p, 4, 3, px, NULL, &d), -1);
+	cr_assert_eq(img_write(p, 4, 3, px, NULL, NULL, &d), -1);
 	cr_assert_eq(tu_run(cmd), 1, "failed writes leave no temporary");
 	int w, h;
 	uint8_t *rgba;
@@ -486,7 +486,7 @@ Test(image, missing_plugin_is_one_clear_error)
 	setenv("SAAR_IMAGE_PLUGIN", "/nonexistent/libsaar-oiio.so", 1);
 	diag d = {{0}};
 	uint8_t px[12] = {0};
-	cr_assert_eq(img_write("/tmp/never.png", 2, 2, px, NULL, &d), -1);
+	cr_assert_eq(img_write("/tmp/never.png", 2, 2, px, NULL, NULL, &d), -1);
 	cr_assert(strstr(d.msg, "/tmp/never.png") && strstr(d.msg, "libsaar-oiio.so") &&
 	              strstr(d.msg, "/nonexistent/"),
 	          "%s", d.msg);

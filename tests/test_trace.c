@@ -336,12 +336,12 @@ Test(trace, textures_and_bump_maps_are_shaded)
 	char path[512];
 	diag d;
 	snprintf(path, sizeof path, "%s/checker.png", dir);
-	cr_assert_eq(img_write(path, 2, 2, px, NULL, &d), 0, "%s", d.msg);
+	cr_assert_eq(img_write(path, 2, 2, px, NULL, NULL, &d), 0, "%s", d.msg);
 	uint8_t bump[4 * 4 * 3];
 	for (int i = 0; i < 16; i++)
 		memset(bump + 3 * i, (i * 53) % 256, 3); /* a rough height field */
 	snprintf(path, sizeof path, "%s/bump.png", dir);
-	cr_assert_eq(img_write(path, 4, 4, bump, NULL, &d), 0, "%s", d.msg);
+	cr_assert_eq(img_write(path, 4, 4, bump, NULL, NULL, &d), 0, "%s", d.msg);
 
 	framebuf plain, bumped;
 	render_stats sp, sb;

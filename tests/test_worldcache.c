@@ -24,7 +24,7 @@ static void write_scene(const char *dir, const char *kd, char *obj, size_t n)
 	uint8_t px[2 * 2 * 3] = {255, 0, 0, 0, 0, 255, 0, 0, 255, 255, 0, 0};
 	diag d;
 	snprintf(p, sizeof p, "%s/checker.png", dir);
-	cr_assert_eq(img_write(p, 2, 2, px, NULL, &d), 0, "%s", d.msg);
+	cr_assert_eq(img_write(p, 2, 2, px, NULL, NULL, &d), 0, "%s", d.msg);
 	snprintf(text, sizeof text, "newmtl tex\nKd %s\nmap_Kd checker.png\n", kd);
 	tu_write(p, sizeof p, dir, "quad.mtl", text);
 	tu_write(obj, n, dir, "quad.obj",
@@ -132,7 +132,7 @@ Test(worldcache, changed_source_files_miss)
 	uint8_t px[2 * 2 * 3] = {0};
 	diag d;
 	snprintf(p, sizeof p, "%s/checker.png", dir);
-	cr_assert_eq(img_write(p, 2, 2, px, NULL, &d), 0, "%s", d.msg);
+	cr_assert_eq(img_write(p, 2, 2, px, NULL, NULL, &d), 0, "%s", d.msg);
 	touch_ahead(dir, "checker.png", 10);
 	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a changed texture is a miss");
 	world_free(&w);
