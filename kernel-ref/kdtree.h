@@ -55,6 +55,15 @@ typedef struct kdtree {
 	double build_ms; /* host wall time of kd_build */
 } kdtree;
 
+/* The ranges the kd parameters take from the command line (--kd-*) and
+ * from configs (kdtree.*): one definition for both. */
+#define KD_COST_MIN  0.001
+#define KD_COST_MAX  1000.0
+#define KD_DEPTH_MAX 64 /* the traversal stack's PKT_STACK_MAX */
+#define KD_LEAF_MIN  1
+#define KD_LEAF_MAX  1024
+#define KD_BONUS_MAX 0.99
+
 void kd_params_default(kd_params *p);
 
 /* Builds the tree. Fails (diag, -1) only on bad parameters or out of

@@ -109,6 +109,7 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	const char *v = argv[*i + 1];
 	*i += 2;
 	double x;
+	long n;
 	if (!strcmp(a, "--scene"))
 		o->scene = v;
 	else if (!strcmp(a, "--views"))
@@ -139,23 +140,23 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 			return -1;
 		o->nlights++;
 	} else if (!strcmp(a, "--kd-cost-trav")) {
-		if (parse_num(a, v, 1e-6, 1e6, &x, d))
+		if (parse_num(a, v, KD_COST_MIN, KD_COST_MAX, &x, d))
 			return -1;
 		o->kd.cost_trav = (float)x;
 	} else if (!strcmp(a, "--kd-cost-isect")) {
-		if (parse_num(a, v, 1e-6, 1e6, &x, d))
+		if (parse_num(a, v, KD_COST_MIN, KD_COST_MAX, &x, d))
 			return -1;
 		o->kd.cost_isect = (float)x;
 	} else if (!strcmp(a, "--kd-max-depth")) {
-		if (parse_num(a, v, 0, 64, &x, d)) /* kdtree.max_depth: at most PKT_STACK_MAX */
+		if (cli_parse_int(a, v, 0, KD_DEPTH_MAX, &n, d))
 			return -1;
-		o->kd.max_depth = (int)x;
+		o->kd.max_depth = (int)n;
 	} else if (!strcmp(a, "--kd-leaf-size")) {
-		if (parse_num(a, v, 1, 1e6, &x, d))
+		if (cli_parse_int(a, v, KD_LEAF_MIN, KD_LEAF_MAX, &n, d))
 			return -1;
-		o->kd.leaf_size = (int)x;
+		o->kd.leaf_size = (int)n;
 	} else if (!strcmp(a, "--kd-empty-bonus")) {
-		if (parse_num(a, v, 0, 0.99, &x, d))
+		if (parse_num(a, v, 0, KD_BONUS_MAX, &x, d))
 			return -1;
 		o->kd.empty_bonus = (float)x;
 	}

@@ -9,6 +9,7 @@
  * seed paper (Wald et al., EG 2003 STAR, seed 002 §4); "assumed" ones say why.
  */
 #include "config.h"
+#include "kdtree.h"
 
 #include <errno.h>
 #include <math.h>
@@ -185,17 +186,17 @@ static const cfg_key keys[] = {
     {INT("shading.max_depth", shading.max_depth, 3, 0, 64, "bounces"),
      .source = "deepest reflection depth in seed 002 Table 4 (Office)",
      .desc = "maximum recursion depth of reflection/refraction rays"},
-    {FLT("kdtree.cost_trav", kdtree.cost_trav, 1, 0.001, 1000, ""),
+    {FLT("kdtree.cost_trav", kdtree.cost_trav, 1, KD_COST_MIN, KD_COST_MAX, ""),
      .source = "kernel-ref kd_params_default", .desc = "SAH cost of a traversal step (K_T)"},
-    {FLT("kdtree.cost_isect", kdtree.cost_isect, 1.5, 0.001, 1000, ""),
+    {FLT("kdtree.cost_isect", kdtree.cost_isect, 1.5, KD_COST_MIN, KD_COST_MAX, ""),
      .source = "kernel-ref kd_params_default", .desc = "SAH cost of a triangle test (K_I)"},
-    {INT("kdtree.max_depth", kdtree.max_depth, 0, 0, 64, "levels"),
+    {INT("kdtree.max_depth", kdtree.max_depth, 0, 0, KD_DEPTH_MAX, "levels"),
      .source = "kernel-ref kd_params_default",
      .desc = "kd-tree depth limit; 0 = 8 + 1.3 log2(triangles), at most 60"},
-    {INT("kdtree.leaf_size", kdtree.leaf_size, 2, 1, 1024, "triangles"),
+    {INT("kdtree.leaf_size", kdtree.leaf_size, 2, KD_LEAF_MIN, KD_LEAF_MAX, "triangles"),
      .source = "kernel-ref kd_params_default",
      .desc = "stop splitting at or below this many triangles"},
-    {FLT("kdtree.empty_bonus", kdtree.empty_bonus, 0.2, 0, 0.99, ""),
+    {FLT("kdtree.empty_bonus", kdtree.empty_bonus, 0.2, 0, KD_BONUS_MAX, ""),
      .source = "kernel-ref kd_params_default", .desc = "SAH discount for cutting off empty space"},
     {KEY("memory.model", CFG_ENUM, memory.model, CFG_MEM_HIERARCHY, 0, 0, ""),
      .names = mem_model_names,
@@ -822,7 +823,11 @@ void cfg_write_markdown(FILE *f)
 	      "`true`/`false` (also `yes`/`no`, `on`/`off`), enum names, or strings.\n"
 	      "Unknown keys, duplicate keys and values out of range are errors.\n\n"
 	      "`saarsim --set key=value` (repeatable) overrides one key after the file is\n"
-	      "read, e.g. `--set chip.trav.width=8`. Checks that involve several keys run\n"
+	      "read, e.g. `--set chip.trav.width=8`. The shorthand flags `--fidelity`,\n"
+	      "`--sample-rate`, `--unit-tiles`, `--warmup-tiles` and `--kd-cost-trav`,\n"
+	      "`--kd-cost-isect`, `--kd-max-depth`, `--kd-leaf-size`, `--kd-empty-bonus`\n"
+	      "are `--set` of their keys, with the same checks; among them and `--set`\n"
+	      "the last given wins. Checks that involve several keys run\n"
 	      "after all overrides. Every report embeds the resolved config under\n"
 	      "`\"config\"`, nested along the dotted paths, so a report says exactly what\n"
 	      "was simulated.\n\n"

@@ -74,17 +74,45 @@ static void show_progress(void *ctx, int frame, int done, int total)
 	p->shown = 1;
 }
 
-/* The config key a fidelity flag sets, NULL if a is not one. */
-static const char *fid_flag(const char *a)
+/* The config key a shorthand flag sets, NULL if a is not one: the
+ * fidelity flags (saarsim's own) and the kd-tree flags (the world flags
+ * rtref shares; here they go through the config like --set, in order with
+ * it, so the config's ranges and types apply). */
+static const char *key_flag(const char *a)
 {
 	static const char *const f[][2] = {{"--fidelity", "fidelity"},
 	                                   {"--sample-rate", "sampling.rate"},
 	                                   {"--unit-tiles", "sampling.unit_tiles"},
-	                                   {"--warmup-tiles", "sampling.warmup_tiles"}};
+	                                   {"--warmup-tiles", "sampling.warmup_tiles"},
+	                                   {"--kd-cost-trav", "kdtree.cost_trav"},
+	                                   {"--kd-cost-isect", "kdtree.cost_isect"},
+	                                   {"--kd-max-depth", "kdtree.max_depth"},
+	                                   {"--kd-leaf-size", "kdtree.leaf_size"},
+	                                   {"--kd-empty-bonus", "kdtree.empty_bonus"}};
 	for (size_t i = 0; i < sizeof f / sizeof *f; i++)
 		if (!strcmp(a, f[i][0]))
 			return f[i][1];
 	return NULL;
+}
+
+/* cfg_set of "key=value" for the shorthand flag: the whole value (cfg_set
+ * refuses one too long), and a message that names the flag. */
+static int set_key(saar_config *cfg, const char *flag, const char *value, diag *d)
+{
+	const char *key = key_flag(flag);
+	size_t n = strlen(key) + strlen(value) + 2;
+	char *kv = malloc(n);
+	if (!kv)
+		return diag_set(d, flag, 0, 0, "out of memory");
+	snprintf(kv, n, "%s=%s", key, value);
+	int rc = cfg_set(cfg, kv, d);
+	free(kv);
+	if (rc && !strncmp(d->msg, "--set: ", 7)) {
+		diag e;
+		diag_set(&e, flag, 0, 0, "%s", d->msg + 7);
+		*d = e;
+	}
+	return rc;
 }
 
 int main(int argc, char **argv)
@@ -97,7 +125,7 @@ int main(int argc, char **argv)
 	int check = 1, list = 0, doc = 0;
 	diag d = {{0}};
 	for (int i = 1; i < argc;) {
-		int r = world_parse_arg(&wo, argc, argv, &i, &d);
+		int r = key_flag(argv[i]) ? 0 : world_parse_arg(&wo, argc, argv, &i, &d);
 		if (r < 0)
 			return cli_bad("saarsim", d.msg);
 		if (r > 0)
@@ -121,7 +149,7 @@ int main(int argc, char **argv)
 		const char *v = argv[i + 1];
 		if (!strcmp(a, "--config"))
 			config = v;
-		else if (!strcmp(a, "--set") || fid_flag(a))
+		else if (!strcmp(a, "--set") || key_flag(a))
 			; /* applied below, in order, once the config file is read */
 		else if (!strcmp(a, "--size"))
 			size = v;
@@ -160,7 +188,7 @@ int main(int argc, char **argv)
 	world_opts skip;
 	world_opts_default(&skip);
 	for (int i = 1; i < argc;) {
-		if (world_parse_arg(&skip, argc, argv, &i, &d) > 0)
+		if (!key_flag(argv[i]) && world_parse_arg(&skip, argc, argv, &i, &d) > 0)
 			continue;
 		const char *a = argv[i];
 		if (!strcmp(a, "--no-check") || !strcmp(a, "--list-config") ||
@@ -170,12 +198,8 @@ int main(int argc, char **argv)
 		}
 		if (!strcmp(a, "--set") && cfg_set(&cfg, argv[i + 1], &d))
 			return cli_bad("saarsim", d.msg);
-		if (fid_flag(a)) { /* shorthands of --set for the fidelity keys */
-			char kv[256];
-			snprintf(kv, sizeof kv, "%s=%s", fid_flag(a), argv[i + 1]);
-			if (cfg_set(&cfg, kv, &d))
-				return cli_bad("saarsim", d.msg);
-		}
+		if (key_flag(a) && set_key(&cfg, a, argv[i + 1], &d))
+			return cli_bad("saarsim", d.msg);
 		i += 2;
 	}
 	if (size && cli_parse_size(size, &cfg.frame.width, &cfg.frame.height, &d))
@@ -186,18 +210,6 @@ int main(int argc, char **argv)
 			return cli_bad("saarsim", d.msg);
 		cfg.frame.frames = (int)nframes;
 	}
-	kd_params kd0;
-	kd_params_default(&kd0);
-	if (wo.kd.cost_trav != kd0.cost_trav)
-		cfg.kdtree.cost_trav = wo.kd.cost_trav;
-	if (wo.kd.cost_isect != kd0.cost_isect)
-		cfg.kdtree.cost_isect = wo.kd.cost_isect;
-	if (wo.kd.max_depth != kd0.max_depth)
-		cfg.kdtree.max_depth = wo.kd.max_depth;
-	if (wo.kd.leaf_size != kd0.leaf_size)
-		cfg.kdtree.leaf_size = wo.kd.leaf_size;
-	if (wo.kd.empty_bonus != kd0.empty_bonus)
-		cfg.kdtree.empty_bonus = wo.kd.empty_bonus;
 	if (cfg_validate(&cfg, &d))
 		return cli_bad("saarsim", d.msg);
 	wo.kd.cost_trav = (float)cfg.kdtree.cost_trav;

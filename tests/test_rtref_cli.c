@@ -96,10 +96,21 @@ Test(rtref_cli, bad_view_file)
 Test(rtref_cli, absurd_sizes_and_threads)
 {
 	char args[1024];
-	const char *bad[] = {"--size 0x10",   "--size 100000x10", "--size 10",
-	                     "--size axb",    "--threads 0",      "--threads 99999",
-	                     "--threads two", "--depth -1",       "--fov 0",
-	                     "--eye 1,2",     "--bogus-flag 3",   "--kd-max-depth 65"};
+	const char *bad[] = {"--size 0x10",
+	                     "--size 100000x10",
+	                     "--size 10",
+	                     "--size axb",
+	                     "--threads 0",
+	                     "--threads 99999",
+	                     "--threads two",
+	                     "--depth -1",
+	                     "--fov 0",
+	                     "--eye 1,2",
+	                     "--bogus-flag 3",
+	                     "--kd-max-depth 65",
+	                     "--kd-max-depth 3.7",
+	                     "--kd-leaf-size 100000",
+	                     "--kd-cost-trav 0"};
 	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
 		snprintf(args, sizeof args, "%s --out %s/f.png", bad[k], dir);
 		cr_assert_eq(rtref(args), 2, "'%s' should exit 2", bad[k]);

@@ -197,6 +197,52 @@ Test(saarsim_cli, csv_of_other_columns_is_refused)
 	cr_assert(row && row[1] && !strncmp(two, first, strlen(first)), "%s", two);
 }
 
+/* The kd-tree flags are shorthands of --set kdtree.*: the config's ranges
+ * and types apply (--kd-leaf-size 100000 and --kd-max-depth 3.7, read as
+ * 3, went through), and the later of a flag and a --set wins (a flag equal
+ * to the default was ignored, so a --set before it won). A fidelity
+ * shorthand's value reaches the config whole (it was cut at 255 bytes). */
+Test(saarsim_cli, kd_flags_go_through_the_config)
+{
+	const char *bad[][2] = {{"--kd-leaf-size 100000", "--kd-leaf-size: kdtree.leaf_size"},
+	                        {"--kd-max-depth 3.7", "--kd-max-depth: kdtree.max_depth"},
+	                        {"--kd-empty-bonus 1", "--kd-empty-bonus: kdtree.empty_bonus"}};
+	char args[2048];
+	for (int i = 0; i < 3; i++) {
+		snprintf(args, sizeof args, "--size 16x16 %s", bad[i][0]);
+		cr_assert_eq(saarsim(args), 2, "%s", bad[i][0]);
+		one_line_naming(bad[i][1]);
+	}
+	const char *order[][2] = {{"--kd-leaf-size 2 --set kdtree.leaf_size=3", "3"},
+	                          {"--set kdtree.leaf_size=3 --kd-leaf-size 2", "2"}};
+	for (int i = 0; i < 2; i++) {
+		snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 %s --report %s/r.json",
+		         order[i][0], dir);
+		cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+		char want[64];
+		snprintf(want, sizeof want, "\"leaf_size\": %s", order[i][1]);
+		cr_assert(strstr(slurp("r.json"), want), "%s: no %s", order[i][0], want);
+	}
+	/* 300 characters: the whole number reaches the config (cut at 255,
+	 * 296 zeros and a 4 were all zeros) */
+	char rate[700];
+	memset(rate, '0', 299);
+	rate[299] = '4';
+	rate[300] = 0;
+	snprintf(args, sizeof args,
+	         "--size 16x16 --set chip.rtps=1 --fidelity sampled --unit-tiles %s --report "
+	         "%s/r.json",
+	         rate, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(strstr(slurp("r.json"), "\"unit_tiles\": 4"), "unit_tiles is not 4");
+	strcpy(rate, "0.5");
+	memset(rate + 3, '0', 600);
+	rate[603] = 0;
+	snprintf(args, sizeof args, "--size 16x16 --sample-rate %s", rate);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--sample-rate");
+}
+
 Test(saarsim_cli, bad_config_key_names_file_line_col)
 {
 	char p[512], args[2048];
