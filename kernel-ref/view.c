@@ -64,6 +64,27 @@ static int yfile_open(yfile *y, const char *file, diag *d)
 	yaml_parser_initialize(&p);
 	yaml_parser_set_input_file(&p, f);
 	int ok = yaml_parser_load(&p, &y->doc);
+	yaml_document_t extra;
+	/* a second document would be silently ignored: refuse it */
+	if (ok && yaml_document_get_root_node(&y->doc)) {
+		if (!yaml_parser_load(&p, &extra)) {
+			yaml_document_delete(&y->doc);
+			ok = 0;
+		} else {
+			yaml_node_t *r2 = yaml_document_get_root_node(&extra);
+			if (r2)
+				diag_set(d, file, (int)r2->start_mark.line + 1,
+				         (int)r2->start_mark.column + 1,
+				         "only one YAML document is allowed");
+			yaml_document_delete(&extra);
+			if (r2) {
+				yaml_document_delete(&y->doc);
+				yaml_parser_delete(&p);
+				fclose(f);
+				return -1;
+			}
+		}
+	}
 	if (!ok) {
 		const char *ctx = p.context ? p.context : "";
 		diag_set(d, file, (int)p.problem_mark.line + 1, (int)p.problem_mark.column + 1,
@@ -73,6 +94,20 @@ static int yfile_open(yfile *y, const char *file, diag *d)
 	yaml_parser_delete(&p);
 	fclose(f);
 	return ok ? 0 : -1;
+}
+
+/* The key of a mapping pair before `pair` with the same scalar as k, NULL
+ * if none (the first of two duplicate keys). */
+static yaml_node_t *earlier_key(yfile *y, const yaml_node_t *map, const yaml_node_pair_t *pair,
+                                const char *k)
+{
+	for (yaml_node_pair_t *q = map->data.mapping.pairs.start; q < pair; q++) {
+		yaml_node_t *qk = node(y, q->key);
+		const char *s = scalar(qk);
+		if (s && strcmp(s, k) == 0)
+			return qk;
+	}
+	return NULL;
 }
 
 /* Looks key up in a mapping node; NULL when absent. */
@@ -101,6 +136,26 @@ static yaml_node_t *views_map(yfile *y)
 		         "file is empty; expected a top-level `views` mapping");
 		return NULL;
 	}
+	if (root->type == YAML_MAPPING_NODE) {
+		/* `views` is the only top-level key, once */
+		for (yaml_node_pair_t *p = root->data.mapping.pairs.start;
+		     p < root->data.mapping.pairs.top; p++) {
+			yaml_node_t *k = node(y, p->key), *first;
+			const char *s = scalar(k);
+			if (!s || strcmp(s, "views") != 0) {
+				node_err(
+				    y, k,
+				    "unknown top-level key '%s' (a views file has only `views`)",
+				    s ? s : "?");
+				return NULL;
+			}
+			if ((first = earlier_key(y, root, p, s))) {
+				node_err(y, k, "duplicate key 'views' (first at line %d)",
+				         (int)first->start_mark.line + 1);
+				return NULL;
+			}
+		}
+	}
 	yaml_node_t *views =
 	    root->type == YAML_MAPPING_NODE ? map_get(y, root, "views", NULL) : NULL;
 	if (!views) {
@@ -121,6 +176,12 @@ static yaml_node_t *views_map(yfile *y)
 		}
 		if (strlen(s) >= VIEW_NAME_MAX) {
 			node_err(y, k, "view name is longer than %d characters", VIEW_NAME_MAX - 1);
+			return NULL;
+		}
+		yaml_node_t *first = earlier_key(y, views, p, s);
+		if (first) {
+			node_err(y, k, "duplicate view name '%s' (first at line %d)", s,
+			         (int)first->start_mark.line + 1);
 			return NULL;
 		}
 	}
@@ -337,16 +398,25 @@ int view_load(view *v, const char *file, const char *name, diag *d)
 			snprintf(v->name, sizeof v->name, "%s", name);
 			rc = parse_view(&y, vn, name, v);
 		} else {
-			char list[700] = "";
+			/* the names that fit in one message, then how many more */
+			char list[600] = "";
 			size_t len = 0;
+			int more = 0;
 			for (yaml_node_pair_t *p = views->data.mapping.pairs.start;
-			     p < views->data.mapping.pairs.top && len < sizeof list; p++) {
-				int k = snprintf(list + len, sizeof list - len, "%s%s",
-				                 len ? ", " : "", scalar(node(&y, p->key)));
-				len += k > 0 ? (size_t)k : 0;
+			     p < views->data.mapping.pairs.top; p++) {
+				const char *s = scalar(node(&y, p->key));
+				if (more || len + strlen(s) + 2 >= sizeof list) {
+					more++;
+					continue;
+				}
+				len += (size_t)snprintf(list + len, sizeof list - len, "%s%s",
+				                        len ? ", " : "", s);
 			}
-			diag_set(d, file, 0, 0, "no view named '%s'; available views: %s", name,
-			         len ? list : "(none)");
+			char tail[48] = "";
+			if (more)
+				snprintf(tail, sizeof tail, " and %d more", more);
+			diag_set(d, file, 0, 0, "no view named '%s'; available views: %s%s", name,
+			         len ? list : "(none)", tail);
 		}
 	}
 	yaml_document_delete(&y.doc);

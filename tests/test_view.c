@@ -187,8 +187,42 @@ Test(view, file_level_errors)
 
 	tu_write(path, sizeof path, dir, "noviews.yaml", "cameras:\n  a: 1\n");
 	cr_assert_eq(view_load(&v, path, "a", &d), -1);
-	snprintf(want, sizeof want, "%s:1:1: no top-level `views` mapping", path);
+	snprintf(want, sizeof want,
+	         "%s:1:1: unknown top-level key 'cameras' (a views file has only `views`)", path);
 	cr_assert_str_eq(d.msg, want);
+
+	/* what the config loader refuses too: a key beside `views`, `views`
+	 * twice, a view name twice (the later one was silently ignored), a
+	 * second document */
+	const char *cam =
+	    "    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], fov: 45}\n";
+	struct {
+		const char *text, *msg;
+	} files[] = {
+	    {"views:\n  a:\n%sextra: 1\n", ":4:1: unknown top-level key 'extra'"},
+	    {"views:\n  a:\n%sviews:\n  b: 1\n", ":4:1: duplicate key 'views' (first at line 1)"},
+	    {"views:\n  a:\n%s  a:\n%s", ":4:3: duplicate view name 'a' (first at line 2)"},
+	    {"views:\n  a:\n%s---\nviews: {}\n", ":5:1: only one YAML document is allowed"},
+	};
+	for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+		char text[512];
+		snprintf(text, sizeof text, files[i].text, cam, cam);
+		tu_write(path, sizeof path, dir, "dup.yaml", text);
+		cr_assert_eq(view_load(&v, path, "a", &d), -1, "case %zu loaded", i);
+		snprintf(want, sizeof want, "%s%s", path, files[i].msg);
+		cr_assert(strncmp(d.msg, want, strlen(want)) == 0, "case %zu: got '%s', want '%s'",
+		          i, d.msg, want);
+		cr_assert_eq(view_list(path, names, 4, &d), -1, "case %zu listed", i);
+	}
+	/* a list of names too long for one line ends with how many more */
+	char big[8192] = "views:\n";
+	for (int i = 0; i < 60; i++)
+		snprintf(big + strlen(big), sizeof big - strlen(big), "  view_number_%03d:\n%s", i,
+		         cam);
+	tu_write(path, sizeof path, dir, "many.yaml", big);
+	cr_assert_eq(view_load(&v, path, "zz", &d), -1);
+	cr_assert(strstr(d.msg, "view_number_000, view_number_001") && strstr(d.msg, " more"), "%s",
+	          d.msg);
 
 	tu_write(path, sizeof path, dir, "prose.yaml", "just some words\n");
 	cr_assert_eq(view_list(path, names, 4, &d), -1);
