@@ -22,18 +22,34 @@ their own ratios and Neyman allocation.
 import math
 import sys
 
+class Bad(Exception):
+    """Bad input: one line, exit status 2."""
+
 def analyse(path, RW, hard_share=0.6):
     rows = []
-    for l in open(path):
-        if l.startswith("frame"):
-            continue
-        v = l.strip().split(",")
-        if v[0] != "1":
-            continue
-        rows.append((int(v[1]), int(v[2]), float(v[3]), [float(x) for x in v[4:]]))
+    try:
+        f = open(path)
+    except OSError as e:
+        raise Bad("%s: cannot read: %s" % (path, e.strerror))
+    with f:
+        for no, l in enumerate(f, 1):
+            if l.startswith("frame"):
+                continue
+            v = l.strip().split(",")
+            if v[0] != "1":
+                continue
+            try:
+                if len(v) < 14:
+                    raise ValueError("%d fields" % len(v))
+                rows.append((int(v[1]), int(v[2]), float(v[3]), [float(x) for x in v[4:]]))
+            except ValueError as e:
+                raise Bad("%s:%d: not a census row (saarsim --census): %s" % (path, no, e))
     N = sum(r[1] for r in rows)
     T = sum(r[2] for r in rows)
     mid = [r for r in rows if r[0] >= RW and r[0] + r[1] <= N - RW]
+    if len(mid) < 2:
+        raise Bad("%s: %d chunks of frame 1 between the head and tail regions of %d tiles; "
+                  "need at least 2" % (path, len(mid), RW))
     c = [r[2] for r in mid]
     M = sum(c)
     comp = [max(r[3][:8]) for r in mid]
@@ -93,19 +109,37 @@ def analyse(path, RW, hard_share=0.6):
     return dict(n=n, k=k, hard=hard, q=q, nrms=need(0.01), n95=need(0.01 / 1.96), share=share,
                 srms=need_st(0.01), s95=need_st(0.01 / 1.96),
                 i8=ideal(8) if n >= 8 else None, i16=ideal(16) if n >= 16 else None)
+def bad(msg):
+    print("census-need.py: " + msg, file=sys.stderr)
+    sys.exit(2)
+
 a = sys.argv[1:]
 hs = 0.6
 if a[:1] == ["--hard-share"] and len(a) > 1:
-    hs = float(a[1])
+    try:
+        hs = float(a[1])
+    except ValueError:
+        bad("--hard-share: expected a number, got '%s'" % a[1])
+    if not 0 <= hs < 1e9:
+        bad("--hard-share: %s is out of range" % a[1])
     a = a[2:]
 if not a or len(a) % 4:
-    sys.exit("usage: census-need.py [--hard-share X] CONFIG THREADS REGION_TILES CENSUS.csv [...]")
+    bad("usage: census-need.py [--hard-share X] CONFIG THREADS REGION_TILES CENSUS.csv [...]")
+for i in range(0, len(a), 4):
+    if not a[i + 2].isdigit():
+        bad("REGION_TILES: expected a whole number, got '%s'" % a[i + 2])
+rows = []
+for i in range(0, len(a), 4):
+    try:
+        rows.append((a[i], a[i + 1], analyse(a[i + 3], int(a[i + 2]), hs)))
+    except Bad as e:
+        bad(str(e))
+    except (ZeroDivisionError, ValueError) as e:
+        bad("%s: a census these figures cannot come from (%s)" % (a[i + 3], e))
 print("| config | threads | chunks | memory bound | s | 8 units: rms / max fps err % "
       "| plain: 1% rms | plain: 95% within 1% | strata: 1% rms | strata: 95% within 1% |")
 print("|---|---:|---:|---:|---:|---|---:|---:|---:|---:|")
-for i in range(0, len(a), 4):
-    cfg, tpr, RW, path = a[i], a[i + 1], int(a[i + 2]), a[i + 3]
-    r = analyse(path, RW, hs)
+for cfg, tpr, r in rows:
     fmt = lambda t: "%.2f / %.2f" % t if t else "-"
     sh = lambda u: "%.0f%%" % (100 * r["share"](u))
     print("| %s | %s | %d | %.0f%% | %.3f | %s | %.0f (%s) | %.0f (%s) | %.0f (%s) | %.0f (%s) |" % (

@@ -95,6 +95,19 @@ csv_cols() {
 	}' "$_f"
 }
 
+# point_ok FILE ID: FILE is a finished point's CSV, whole: a header whose
+# first column is id, then exactly one row with as many fields whose id is
+# ID. (A point writes it atomically; this catches one damaged or emptied
+# afterwards, which would otherwise count as done and never run again.)
+point_ok() {
+	[ -s "$1" ] || return 1
+	awk -v id="$2" "$AWK_CSV"'
+	NR == 1 { nh = csv_split($0, h); ok = h[1] == "id"; next }
+	NR == 2 { n = csv_split($0, f); ok = ok && n == nh && f[1] == id; next }
+	{ ok = 0 }
+	END { exit !(ok && NR == 2) }' "$1"
+}
+
 # csv_union OUT FILE...: concatenates CSV files into OUT (atomically),
 # matching columns by header name: the header is the union of all headers in
 # order of first appearance; a file without a column gets empty fields.

@@ -766,15 +766,77 @@ static int csv_not_ours(const char *path, diag *d)
 	                "docs/report.md lists); give a new file");
 }
 
+/* The old contents of a CSV to append to: our header, then rows of as
+ * many fields (RFC 4180: a quoted field may hold commas, quotes and line
+ * breaks), the last one ended by a line break or not; blank lines are
+ * passed over. A row cut short (a
+ * run killed while another program wrote it, a foreign row) would make
+ * every later row misread, so the file is refused, naming the line. */
+static int csv_old_ok(const char *path, const char *old, size_t nold, diag *d)
+{
+	if (!csv_header_ok(old, nold))
+		return csv_not_ours(path, d);
+	int want = 1;
+	for (const char *h = csv_header; *h; h++)
+		want += *h == ',';
+	size_t i = sizeof csv_header - 1;
+	int line = 2;
+	while (i < nold) {
+		if (old[i] == '\n' || (old[i] == '\r' && i + 1 < nold && old[i + 1] == '\n')) {
+			i += old[i] == '\r' ? 2 : 1; /* a blank line: no row */
+			line++;
+			continue;
+		}
+		int fields = 1, start = line, quoted = 0;
+		for (; i < nold; i++) {
+			char ch = old[i];
+			if (quoted) {
+				if (ch == '"' && i + 1 < nold && old[i + 1] == '"')
+					i++;
+				else if (ch == '"')
+					quoted = 0;
+				else if (ch == '\n')
+					line++;
+			} else if (ch == '"') {
+				quoted = 1;
+			} else if (ch == ',') {
+				fields++;
+			} else if (ch == '\n') {
+				i++;
+				line++;
+				break;
+			}
+		}
+		if (quoted || fields != want)
+			return diag_set(d, path, start, 0,
+			                "row has %d fields, the header %d%s (a damaged or foreign "
+			                "row); give a new file",
+			                fields, want, quoted ? " and an unclosed quote" : "");
+	}
+	return 0;
+}
+
 int report_csv_check(const char *path, diag *d)
 {
 	FILE *in = fopen(path, "rb");
 	if (!in)
 		return 0; /* new, or report_csv will say why it cannot be read */
-	char head[sizeof csv_header];
-	size_t n = fread(head, 1, sizeof head - 1, in);
+	struct stat st;
+	if (fstat(fileno(in), &st) != 0 || !S_ISREG(st.st_mode)) {
+		fclose(in);
+		return 0; /* report_csv says why it cannot append */
+	}
+	size_t cap = (size_t)st.st_size + 1, n = 0;
+	char *old = malloc(cap);
+	if (!old) {
+		fclose(in);
+		return diag_set(d, path, 0, 0, "out of memory");
+	}
+	n = fread(old, 1, cap, in);
 	fclose(in);
-	return csv_header_ok(head, n) ? 0 : csv_not_ours(path, d);
+	int rc = csv_old_ok(path, old, n, d);
+	free(old);
+	return rc;
 }
 
 int report_csv(const char *path, const report_info *ri, diag *d)
@@ -810,9 +872,9 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	} else if (errno != ENOENT) {
 		return diag_set(d, path, 0, 0, "cannot read: %s", strerror(errno));
 	}
-	if (!csv_header_ok(old, nold)) {
+	if (csv_old_ok(path, old, nold, d)) {
 		free(old);
-		return csv_not_ours(path, d);
+		return -1;
 	}
 	afile a;
 	if (af_open(&a, path, "", 1)) {

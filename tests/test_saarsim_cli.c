@@ -195,6 +195,30 @@ Test(saarsim_cli, csv_of_other_columns_is_refused)
 	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
 	char *two = slurp("h2.csv"), *row = strchr(two, '\n');
 	cr_assert(row && row[1] && !strncmp(two, first, strlen(first)), "%s", two);
+	/* every row is checked, not only the header: a row cut short (here
+	 * its last 20 bytes) or a foreign one is refused before the run,
+	 * naming its line, the file untouched; blank lines pass */
+	two = strdup(two); /* slurp's buffers are reused */
+	size_t len = strlen(two);
+	char *cut = malloc(len + 64);
+	memcpy(cut, two, len - 20);
+	cut[len - 20] = 0;
+	tu_write(p, sizeof p, dir, "cut.csv", cut);
+	snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 --csv %s", p);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("cut.csv:2: row has");
+	cr_assert_str_eq(slurp("cut.csv"), cut);
+	snprintf(cut, len + 64, "%s\n\n", two);
+	tu_write(p, sizeof p, dir, "blank.csv", cut);
+	snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 --csv %s", p);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	snprintf(cut, len + 64, "%sa,\"b\n", two);
+	tu_write(p, sizeof p, dir, "quote.csv", cut);
+	snprintf(args, sizeof args, "--size 16x16 --set chip.rtps=1 --csv %s", p);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("quote.csv:3: row has 2 fields");
+	free(cut);
+	free(two);
 }
 
 /* The kd-tree flags are shorthands of --set kdtree.*: the config's ranges

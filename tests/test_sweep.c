@@ -147,6 +147,31 @@ Test(sweep, tiny_grid_csv_png_and_resume, .timeout = 120)
 	snprintf(path, sizeof path, "%s/points/0002.json", dir);
 	cr_assert_eq(count_in(path, "\"world_cache\": \"hit\""), 1, "the rerun built its world");
 
+	/* a point CSV damaged afterwards (emptied, or cut to its header) is
+	 * not collected and not taken as done: collect says so and exits 1,
+	 * the next run reruns exactly that point */
+	char env0[4200];
+	env_prefix(env0, sizeof env0);
+	const char *damage[] = {": > %s/points/0001.csv", "head -n 1 %s/points/0001.csv > %s/h && "
+	                                                  "mv %s/h %s/points/0001.csv"};
+	for (int k = 0; k < 2; k++) {
+		snprintf(cmd, sizeof cmd, damage[k], dir, dir, dir, dir);
+		cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+		snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep --collect %s 2>%s/collect.txt",
+		         env0, root(), dir, dir);
+		cr_assert_eq(tu_run(cmd), 1, "damage %d: collect succeeded", k);
+		snprintf(path, sizeof path, "%s/collect.txt", dir);
+		cr_assert_eq(count_in(path, "0001.csv is damaged"), 1, "damage %d", k);
+		snprintf(path, sizeof path, "%s/results.csv", dir);
+		cr_assert_eq(count_lines(path), 2, "damage %d: the damaged row collected", k);
+		run_tiny_sweep(dir, "", 0);
+		snprintf(path, sizeof path, "%s/run.log", dir);
+		cr_assert_eq(count_in(path, "0001 start"), 2 + k, "damage %d: point 1 not rerun",
+		             k);
+		snprintf(path, sizeof path, "%s/results.csv", dir);
+		cr_assert_eq(count_lines(path), 3);
+	}
+
 	/* a different grid in the same folder is refused */
 	char env[4200];
 	env_prefix(env, sizeof env);
@@ -255,10 +280,19 @@ Test(sweep, bad_input_exit_2)
 	    "--out %s --set chip.rtps=1",
 	    "--scene spd:tetra:1 --set chip.rtps=1",
 	    "--out %s --scene spd:tetra:1 -j 0",
+	    /* targets and size checked before anything runs */
+	    "--out %s --scene spd:nosuch --set chip.rtps=1",
+	    "--out %s --scene /nonexistent/scene.obj --set chip.rtps=1",
+	    "--out %s --views %s/v.yaml --view nosuch --set chip.rtps=1",
+	    "--out %s --scene spd:tetra:1 --size 99999x8",
 	};
+	char vy[512];
+	tu_write(vy, sizeof vy, dir, "v.yaml",
+	         "views:\n  a:\n    camera: {eye: [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, 0], "
+	         "fov: 45}\n");
 	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
-		char args[512];
-		snprintf(args, sizeof args, bad[i], dir);
+		char args[1024];
+		snprintf(args, sizeof args, bad[i], dir, dir);
 		snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep %s 2>%s/err >/dev/null", env,
 		         root(), args, dir);
 		cr_expect_eq(tu_run(cmd), 2, "%s", args);
@@ -376,6 +410,25 @@ Test(sweep, census_need_from_a_known_spread)
 		free(s);
 		unlink(t);
 	}
+	/* bad input: one line naming what is wrong, exit 2 (it was a Python
+	 * traceback and exit 1) */
+	char e[512];
+	snprintf(e, sizeof e, "%s/e.txt", dir);
+	const char *bad[] = {"std 16 64 %s/none.csv", "std 16 x %s/c.csv", "std 16 2000 %s/c.csv",
+	                     "--hard-share q std 16 64 %s/c.csv", "std 16 64 %s/junk.csv"};
+	char junk[512];
+	tu_write(junk, sizeof junk, dir, "junk.csv", "frame,x\n1,0,64,abc\n");
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		char args[1024];
+		snprintf(args, sizeof args, bad[k], dir);
+		snprintf(cmd, sizeof cmd, "python3 %s/scripts/census-need.py %s >/dev/null 2>%s",
+		         root(), args, e);
+		cr_assert_eq(tu_run(cmd), 2, "%s", args);
+		cr_assert_eq(count_lines(e), 1, "one line for %s", args);
+		cr_assert_eq(count_in(e, "census-need.py: "), 1, "%s", args);
+	}
+	unlink(junk);
+	unlink(e);
 	unlink(p);
 	rmdir(dir);
 }
