@@ -296,7 +296,7 @@ static char *slurp(const char *path)
 int main(int argc, char **argv)
 {
 	const char *out = "docs/NUMERICS.md", *views = NULL;
-	int quick = 0, precision = 1;
+	int quick = 0, precision = 1, views_given = 0;
 	char vbuf[1024];
 	const char *sc = getenv("SAAR_SCENES");
 	snprintf(vbuf, sizeof vbuf, "%s/views.yaml", sc && *sc ? sc : "../shared/scenes");
@@ -305,7 +305,7 @@ int main(int argc, char **argv)
 		if (!strcmp(argv[i], "--out") && i + 1 < argc)
 			out = argv[++i];
 		else if (!strcmp(argv[i], "--views") && i + 1 < argc)
-			views = argv[++i];
+			views = argv[++i], views_given = 1;
 		else if (!strcmp(argv[i], "--quick"))
 			quick = 1;
 		else if (!strcmp(argv[i], "--no-precision"))
@@ -315,6 +315,24 @@ int main(int argc, char **argv)
 			        "saarsim-stress: %s: unknown option (usage: saarsim-stress [--out "
 			        "FILE] [--quick] [--views FILE] [--no-precision])\n",
 			        argv[i]);
+			return 2;
+		}
+	}
+	/* a views file given, or present where it is looked for, must load
+	 * whole (every view) before the long run: a bad one is bad input, not
+	 * a document that quietly leaves views out. Only a views file absent
+	 * from the default place skips the shared views. */
+	if (precision && (views_given || access(views, F_OK) == 0)) {
+		char names[16][VIEW_NAME_MAX];
+		diag d;
+		int nv = view_list(views, names, 16, &d);
+		for (int v = 0; nv > 0 && v < nv; v++) {
+			view vw;
+			if (view_load(&vw, views, names[v], &d))
+				nv = -1;
+		}
+		if (nv < 0) {
+			fprintf(stderr, "saarsim-stress: %s\n", d.msg);
 			return 2;
 		}
 	}

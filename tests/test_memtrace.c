@@ -377,7 +377,7 @@ Test(memtrace, replay_hit_path_equals_lookup)
 
 Test(memtrace, replay_tool)
 {
-	char dir[64], p[128], cmd[512];
+	char dir[64], p[128], cmd[1024];
 	tu_tmpdir(dir, sizeof dir);
 	snprintf(p, sizeof p, "%s/t.gz", dir);
 	write_trace(p, 20000);
@@ -411,6 +411,26 @@ Test(memtrace, replay_tool)
 		snprintf(cmd, sizeof cmd,
 		         "test $(wc -l < %s/err.txt) -eq 1 && grep -q cut.gz %s/err.txt", dir, dir);
 		cr_assert_eq(tu_run(cmd), 0, "one line naming the trace (%s)", modes[m]);
+	}
+	/* bad command lines: one line with the program's name (the usage
+	 * came as a second line; --image-bytes took "", -1 and huge values) */
+	const char *bad[] = {"--image-bytes '' %s",
+	                     "--image-bytes -1 %s",
+	                     "--image-bytes 99999999999999999999 %s",
+	                     "--bogus %s",
+	                     "%s %s",
+	                     ""};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		char args[512];
+		snprintf(args, sizeof args, bad[k], p, p);
+		snprintf(cmd, sizeof cmd, "%s/saarsim-replay %s >/dev/null 2>%s/err.txt",
+		         tu_bin_dir(), args, dir);
+		cr_assert_eq(tu_run(cmd), 2, "%s", args);
+		snprintf(
+		    cmd, sizeof cmd,
+		    "test $(wc -l < %s/err.txt) -eq 1 && grep -q '^saarsim-replay: ' %s/err.txt",
+		    dir, dir);
+		cr_assert_eq(tu_run(cmd), 0, "one line starting with the program's name: %s", args);
 	}
 }
 

@@ -71,3 +71,28 @@ Test(stress, random_rays_vs_double_precision)
 	/* ties exist but are rare: a handful per 100k at most */
 	cr_assert_lt(r.ties, r.rays / 1000, "%llu ties", (unsigned long long)r.ties);
 }
+
+/* A views file given to saarsim-stress that does not load (or one view in
+ * it that does not) is bad input before the long run: one line, exit 2,
+ * no document (it printed a line, left the views out and exited 0). */
+Test(stress, bad_views_file_is_refused_first)
+{
+	char dir[256], p[512], args[2048];
+	tu_tmpdir(dir, sizeof dir);
+	const char *files[][2] = {
+	    {"views:\n  a: 1\n", "view 'a' must be a mapping"},
+	    {"views:\n  a:\n    camera: {eye: [0, 0, 5], lookat: [0, 0, 5], up: [0, 1, 0], fov: "
+	     "45}\n",
+	     "same point"},
+	};
+	for (int i = 0; i < 2; i++) {
+		tu_write(p, sizeof p, dir, "v.yaml", files[i][0]);
+		snprintf(args, sizeof args, "--quick --views %s --out %s/n.md", p, dir);
+		cr_assert_eq(tu_prog(dir, "saarsim-stress", args), 2, "case %d", i);
+		tu_one_line(dir, "saarsim-stress", files[i][1]);
+		cr_assert_not(tu_exists(dir, "n.md"));
+	}
+	snprintf(args, sizeof args, "--quick --views %s/none.yaml --out %s/n.md", dir, dir);
+	cr_assert_eq(tu_prog(dir, "saarsim-stress", args), 2);
+	tu_one_line(dir, "saarsim-stress", "cannot open views file");
+}

@@ -14,6 +14,7 @@
  * Reads at or above --image-bytes (the chip's stack-spill area) bypass the
  * L1s, as in the chip. Bad input: one line on stderr, exit 2.
  */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,17 +31,20 @@ static double now_s(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int usage(void)
+#define USAGE                                                                                      \
+	"saarsim-replay [--config FILE] [--set key=value]... [--timing] [--image-bytes N] "        \
+	"[--json FILE] TRACE.gz"
+
+/* Bad command line: one line, what is wrong and the usage. */
+static int usage(const char *what)
 {
-	fputs("usage: saarsim-replay [--config FILE] [--set key=value]... [--timing] "
-	      "[--image-bytes N] [--json FILE] TRACE.gz\n",
-	      stderr);
+	fprintf(stderr, "saarsim-replay: %s (usage: " USAGE ")\n", what);
 	return DIAG_EXIT;
 }
 
 static int fail(const diag *d)
 {
-	fprintf(stderr, "%s\n", d->msg);
+	fprintf(stderr, "saarsim-replay: %s\n", d->msg);
 	return DIAG_EXIT;
 }
 
@@ -113,26 +117,35 @@ int main(int argc, char **argv)
 		} else if (!strcmp(a, "--timing")) {
 			timing = 1;
 		} else if (!strcmp(a, "--image-bytes") && i + 1 < argc) {
+			/* a byte count: digits only (strtoull takes "", "-1" and
+			 * " 7"), at most 2^48 (no memory image is larger) */
+			const char *v = argv[++i];
 			char *end;
-			image_bytes = strtoull(argv[++i], &end, 10);
-			if (*end) {
-				fprintf(stderr, "--image-bytes: expected a number, got '%s'\n",
-				        argv[i]);
+			errno = 0;
+			image_bytes = strtoull(v, &end, 10);
+			if (!*v || strspn(v, "0123456789") != strlen(v) || errno ||
+			    image_bytes > (1ull << 48)) {
+				fprintf(
+				    stderr,
+				    "saarsim-replay: --image-bytes: expected a byte count 0..2^48, "
+				    "got '%s'\n",
+				    v);
 				return DIAG_EXIT;
 			}
 		} else if (!strcmp(a, "--json") && i + 1 < argc) {
 			json = argv[++i];
 		} else if (a[0] == '-' && a[1]) {
-			fprintf(stderr, "unknown option '%s'\n", a);
-			return usage();
+			char what[256];
+			snprintf(what, sizeof what, "%s: unknown option or missing value", a);
+			return usage(what);
 		} else if (!trace) {
 			trace = a;
 		} else {
-			return usage();
+			return usage("more than one trace");
 		}
 	}
 	if (!trace)
-		return usage();
+		return usage("no trace given");
 	if (cfg_validate(&cfg, &d))
 		return fail(&d);
 
