@@ -19,6 +19,7 @@
 
 #include "atomicfile.h"
 #include "image_plugin.h"
+#include "infile.h"
 
 /* Opens the plugin. RTLD_NODELETE keeps it mapped after dlclose, so the next
  * call's dlopen is a lookup, not a second 0.3 s load, and no handle has to
@@ -164,6 +165,10 @@ int img_can_write(const char *path, diag *d)
 int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d)
 {
 	*rgba = NULL;
+	/* the plugin opens it by name: a FIFO would block it */
+	int st = in_check(path);
+	if (st)
+		return diag_set(d, path, 0, 0, "cannot read image: %s", in_strerror(st));
 	const img_plugin *p;
 	void *lib = plugin_open(&p, path, d);
 	if (!lib)

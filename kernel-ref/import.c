@@ -9,6 +9,7 @@
  * docs/views.md ("Scene files").
  */
 #include "image.h"
+#include "infile.h"
 #include "scene.h"
 
 #include <assimp/ObjMaterial.h>
@@ -66,10 +67,13 @@ static int ends_with(const char *s, const char *suffix)
  * files through unchanged). The buffer is NUL-terminated for the scan. */
 static int read_all(const char *path, int gz, char **out, size_t *outlen, char *err, size_t errn)
 {
-	gzFile g = gz ? gzopen(path, "rb") : NULL;
-	FILE *f = gz ? NULL : fopen(path, "rb");
-	if (!g && !f) {
-		snprintf(err, errn, "cannot open: %s", strerror(errno ? errno : ENOENT));
+	FILE *f = NULL;
+	int st = gz ? in_check(path) : in_open(path, &f);
+	gzFile g = gz && !st ? gzopen(path, "rb") : NULL;
+	if (!st && !g && !f)
+		st = errno ? errno : ENOENT;
+	if (st) {
+		snprintf(err, errn, "cannot open: %s", in_strerror(st));
 		return -1;
 	}
 	size_t cap = 1 << 16, len = 0;
@@ -218,8 +222,15 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 		k++;
 	if (k == c->n) {
 		if (!gz) {
-			if (!(fp = fopen(rp, "rb")))
+			int st = in_open(rp, &fp);
+			if (st) {
+				/* Assimp says only "cannot open" (or, for a
+				 * directory, "vector::reserve"): keep the reason */
+				if (!c->err[0] && st != ENOENT)
+					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp,
+					         in_strerror(st));
 				return NULL;
+			}
 		} else {
 			char err[256];
 			if (c->n == CACHE_MAX)
@@ -788,6 +799,25 @@ static int convert_material(scene *s, const struct aiMaterial *am, const char *d
 	if (m.tex_bump >= 0 && aiGetMaterialFloatArray(am, AI_MATKEY_OBJ_BUMPMULT(bt, 0), &f,
 	                                               &one) == aiReturn_SUCCESS)
 		m.bump_scale = f;
+	/* Assimp reads "Kd nan 0 0" and "Ns inf" without complaint; a NaN
+	 * colour would reach every shaded pixel of the material */
+	const struct {
+		const char *key;
+		int ok;
+	} vals[] = {{"Kd", v3_finite(m.kd)},
+	            {"Ka", v3_finite(m.ka)},
+	            {"Ks", v3_finite(m.ks)},
+	            {"Ke", v3_finite(m.ke)},
+	            {"Ns", isfinite(m.ns)},
+	            {"Ni", isfinite(m.ni)},
+	            {"d/Tr/Tf (transparency)", isfinite(m.transmit)},
+	            {"reflectivity", isfinite(m.reflect)},
+	            {"bump multiplier (-bm)", isfinite(m.bump_scale)}};
+	for (size_t i = 0; i < sizeof vals / sizeof vals[0]; i++)
+		if (!vals[i].ok)
+			return diag_set(d, file, 0, 0,
+			                "material '%s': %s has a NaN or infinite value", m.name,
+			                vals[i].key);
 	scene_add_material(s, &m);
 	return 0;
 }
@@ -882,10 +912,9 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	if (ends_with(virt, ".gz"))
 		virt[strlen(virt) - 3] = '\0';
 	int gz = real_path(virt, rp, sizeof rp);
-	FILE *probe = fopen(rp, "rb");
-	if (!probe)
-		return diag_set(d, path, 0, 0, "cannot open scene file: %s", strerror(errno));
-	fclose(probe);
+	int st = in_check(rp);
+	if (st)
+		return diag_set(d, path, 0, 0, "cannot open scene file: %s", in_strerror(st));
 
 	memcache cache;
 	memset(&cache, 0, sizeof cache);

@@ -9,6 +9,8 @@
  */
 #include "view.h"
 
+#include "infile.h"
+
 #include <errno.h>
 #include <float.h>
 #include <stdarg.h>
@@ -57,9 +59,10 @@ static int yfile_open(yfile *y, const char *file, diag *d)
 	memset(y, 0, sizeof *y);
 	y->file = file;
 	y->d = d;
-	FILE *f = fopen(file, "rb");
-	if (!f)
-		return diag_set(d, file, 0, 0, "cannot open views file: %s", strerror(errno));
+	FILE *f;
+	int st = in_open(file, &f);
+	if (st)
+		return diag_set(d, file, 0, 0, "cannot open views file: %s", in_strerror(st));
 	yaml_parser_t p;
 	yaml_parser_initialize(&p);
 	yaml_parser_set_input_file(&p, f);

@@ -329,14 +329,16 @@ int wc_get_mapped(const char *file, const char *key, const wc_part *parts, int n
 		*tail = NULL;
 		*ntail = 0;
 	}
-	int fd = open(file, O_RDONLY | O_CLOEXEC);
+	/* O_NONBLOCK: something else under the entry's name (a FIFO would
+	 * block the open) is a miss like any damaged entry */
+	int fd = open(file, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
 	if (fd < 0)
 		return 0;
 	struct stat st;
 	void *base = MAP_FAILED;
 	/* populated at once: faulting the pages in one by one as the replay
 	 * reaches them cost several times more here */
-	if (fstat(fd, &st) == 0 && st.st_size >= WC_MAGIC_LEN + WC_TRAILER &&
+	if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size >= WC_MAGIC_LEN + WC_TRAILER &&
 	    (uint64_t)st.st_size <= SIZE_MAX)
 		base = mmap(NULL, (size_t)st.st_size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
 	close(fd);

@@ -9,6 +9,7 @@
  * seed paper (Wald et al., EG 2003 STAR, seed 002 §4); "assumed" ones say why.
  */
 #include "config.h"
+#include "infile.h"
 #include "kdtree.h"
 
 #include <errno.h>
@@ -588,9 +589,10 @@ static int yaml_error(yaml_parser_t *p, const char *file, diag *d)
 int cfg_load(saar_config *c, const char *file, diag *d)
 {
 	cfg_defaults(c);
-	FILE *f = fopen(file, "rb");
-	if (!f)
-		return diag_set(d, file, 0, 0, "cannot open: %s", strerror(errno));
+	FILE *f;
+	int st = in_open(file, &f);
+	if (st)
+		return diag_set(d, file, 0, 0, "cannot open: %s", in_strerror(st));
 	yaml_parser_t parser;
 	yaml_document_t doc, extra;
 	loader L = {.c = c, .file = file, .doc = &doc, .d = d};

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "atomicfile.h"
+#include "infile.h"
 
 static double ratio(double a, double b)
 {
@@ -816,25 +817,56 @@ static int csv_old_ok(const char *path, const char *old, size_t nold, diag *d)
 	return 0;
 }
 
+/* The contents of the CSV to append to into *old (malloc'd, NULL when
+ * empty or new); a path that is not a regular file is refused (fopen on a
+ * FIFO would wait for a writer; a directory opens and seeks to a huge
+ * size). */
+static int csv_read_old(const char *path, char **old, size_t *nold, diag *d)
+{
+	*old = NULL;
+	*nold = 0;
+	FILE *in;
+	int st = in_open(path, &in);
+	if (st == ENOENT)
+		return 0; /* a new file */
+	if (st)
+		return diag_set(d, path, 0, 0, "cannot append a row: %s", in_strerror(st));
+	char *buf = NULL;
+	size_t n = 0, cap = 0;
+	for (;;) {
+		if (n == cap) {
+			cap = cap ? 2 * cap : 65536;
+			char *nb = realloc(buf, cap);
+			if (!nb) {
+				free(buf);
+				fclose(in);
+				return diag_set(d, path, 0, 0, "out of memory");
+			}
+			buf = nb;
+		}
+		size_t got = fread(buf + n, 1, cap - n, in);
+		n += got;
+		if (got == 0)
+			break;
+	}
+	int err = ferror(in);
+	fclose(in);
+	if (err) {
+		free(buf);
+		return diag_set(d, path, 0, 0, "cannot read: %s", strerror(errno ? errno : EIO));
+	}
+	*old = buf;
+	*nold = n;
+	return 0;
+}
+
 int report_csv_check(const char *path, diag *d)
 {
-	FILE *in = fopen(path, "rb");
-	if (!in)
-		return 0; /* new, or report_csv will say why it cannot be read */
-	struct stat st;
-	if (fstat(fileno(in), &st) != 0 || !S_ISREG(st.st_mode)) {
-		fclose(in);
-		return 0; /* report_csv says why it cannot append */
-	}
-	size_t cap = (size_t)st.st_size + 1, n = 0;
-	char *old = malloc(cap);
-	if (!old) {
-		fclose(in);
-		return diag_set(d, path, 0, 0, "out of memory");
-	}
-	n = fread(old, 1, cap, in);
-	fclose(in);
-	int rc = csv_old_ok(path, old, n, d);
+	char *old;
+	size_t nold;
+	if (csv_read_old(path, &old, &nold, d))
+		return -1;
+	int rc = csv_old_ok(path, old, nold, d);
 	free(old);
 	return rc;
 }
@@ -843,35 +875,10 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 {
 	const chip *c = ri->c;
 	const saar_config *g = &c->cfg;
-	/* the old contents, if any */
-	char *old = NULL;
-	size_t nold = 0;
-	FILE *in = fopen(path, "rb");
-	struct stat st;
-	if (in && (fstat(fileno(in), &st) != 0 || !S_ISREG(st.st_mode))) {
-		/* a directory opens too, and seeks to a huge size */
-		fclose(in);
-		return diag_set(d, path, 0, 0, "cannot append a row: not a regular file");
-	}
-	if (in) {
-		fseek(in, 0, SEEK_END);
-		long n = ftell(in);
-		rewind(in);
-		if (n > 0 && !(old = malloc((size_t)n))) {
-			fclose(in);
-			return diag_set(d, path, 0, 0, "out of memory");
-		}
-		nold = n > 0 ? fread(old, 1, (size_t)n, in) : 0;
-		int err = n < 0 || nold != (size_t)n || ferror(in);
-		fclose(in);
-		if (err) {
-			free(old);
-			return diag_set(d, path, 0, 0, "cannot read: %s",
-			                strerror(errno ? errno : EIO));
-		}
-	} else if (errno != ENOENT) {
-		return diag_set(d, path, 0, 0, "cannot read: %s", strerror(errno));
-	}
+	char *old;
+	size_t nold;
+	if (csv_read_old(path, &old, &nold, d))
+		return -1;
 	if (csv_old_ok(path, old, nold, d)) {
 		free(old);
 		return -1;

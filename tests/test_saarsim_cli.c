@@ -170,6 +170,50 @@ Test(saarsim_cli, outputs_keep_fifos_and_links)
 	one_line_naming("cannot write");
 }
 
+/* Inputs must be regular files: a FIFO named as the config, scene, views
+ * file, CSV to append to, texture or world-cache entry blocked the run
+ * (fopen waits for a writer), so each is refused in one line, or for the
+ * cache entry passed over as a miss. (timeout: the old code hangs.) */
+Test(saarsim_cli, fifo_inputs_do_not_block, .timeout = 120)
+{
+	const char *names[] = {"c.yaml", "s.obj", "v.yaml", "r.csv"};
+	const char *args[] = {"--config %s/c.yaml", "--scene %s/s.obj",
+	                      "--views %s/v.yaml --view a", "--csv %s/r.csv"};
+	char p[512], a[2048], cmd[4096];
+	for (int i = 0; i < 4; i++) {
+		snprintf(p, sizeof p, "%s/%s", dir, names[i]);
+		cr_assert_eq(mkfifo(p, 0644), 0);
+		snprintf(a, sizeof a, args[i], dir);
+		snprintf(cmd, sizeof cmd, "timeout 20 %s/saarsim --size 8x8 %s >/dev/null 2>%s/err",
+		         tu_bin_dir(), a, dir);
+		cr_assert_eq(tu_run(cmd), 2, "%s", a);
+		one_line_naming("not a regular file");
+	}
+	/* a texture */
+	tu_write(p, sizeof p, dir, "t.obj",
+	         "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\n"
+	         "f 1/1 2/2 3/3\n");
+	tu_write(p, sizeof p, dir, "t.mtl", "newmtl a\nmap_Kd tex.png\n");
+	snprintf(p, sizeof p, "%s/tex.png", dir);
+	cr_assert_eq(mkfifo(p, 0644), 0);
+	snprintf(cmd, sizeof cmd,
+	         "timeout 20 %s/saarsim --size 8x8 --scene %s/t.obj >/dev/null 2>%s/err",
+	         tu_bin_dir(), dir, dir);
+	cr_assert_eq(tu_run(cmd), 2);
+	one_line_naming("tex.png: cannot read image: not a regular file");
+	/* a world-cache entry replaced by a FIFO: a miss, the run completes */
+	snprintf(a, sizeof a, "--size 8x8 --scene spd:tetra:1 --world-cache %s/wc", dir);
+	cr_assert_eq(saarsim(a), 0, "%s", slurp("err"));
+	snprintf(p, sizeof p, "%s/wc", dir);
+	char entry[1024];
+	cr_assert_geq(tu_find_files(p, "world-", entry, sizeof entry), 1);
+	cr_assert_eq(unlink(entry), 0);
+	cr_assert_eq(mkfifo(entry, 0644), 0);
+	snprintf(cmd, sizeof cmd, "timeout 20 %s/saarsim %s >/dev/null 2>%s/err", tu_bin_dir(), a,
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", slurp("err"));
+}
+
 /* Rows are appended under our header only: a CSV of other columns (another
  * program's, or an older saarsim's) is refused before the run, untouched. */
 Test(saarsim_cli, csv_of_other_columns_is_refused)

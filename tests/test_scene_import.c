@@ -313,6 +313,43 @@ Test(import, corrupt_binary_ply)
 	scene_free(&s);
 }
 
+/* Assimp reads NaN and infinite MTL values without complaint; a NaN
+ * colour would shade every pixel of the material NaN. Each is refused,
+ * naming the material and the key. An MTL path that is a directory is as
+ * good as a missing MTL file (Assimp's "vector::reserve" before). */
+Test(import, mtl_values_must_be_finite)
+{
+	char dir[256], p[512];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	const char *obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+	const char *bad[][2] = {{"Kd nan 0 0", "Kd"},
+	                        {"Ks 0 inf 0", "Ks"},
+	                        {"Ns inf", "Ns"},
+	                        {"Kd 1e99 0 0", "Kd"},
+	                        {"d nan", "d/Tr/Tf (transparency)"}};
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		char mtl[128];
+		snprintf(mtl, sizeof mtl, "newmtl a\n%s\n", bad[i][0]);
+		tu_write(p, sizeof p, dir, "m.mtl", mtl);
+		tu_write(p, sizeof p, dir, "s.obj", obj);
+		load_fails(p, &d);
+		char want[64];
+		snprintf(want, sizeof want, "material 'a': %s", bad[i][1]);
+		cr_assert(strstr(d.msg, want) && strstr(d.msg, "s.obj"), "%s: %s", bad[i][0],
+		          d.msg);
+	}
+	unlink(p);
+	snprintf(p, sizeof p, "%s/m.mtl", dir);
+	unlink(p);
+	cr_assert_eq(mkdir(p, 0755), 0);
+	tu_write(p, sizeof p, dir, "s.obj", obj);
+	scene s;
+	cr_assert_eq(scene_load(&s, p, &d), 0, "%s", d.msg);
+	cr_assert_eq(s.ntris, 1);
+	scene_free(&s);
+}
+
 Test(import, nan_vertex_names_line)
 {
 	char dir[256], p[512], want[600];
