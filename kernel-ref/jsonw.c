@@ -109,10 +109,45 @@ void jsonw_arr_end(jsonw *w)
 	close_(w, ']');
 }
 
+/* The length of the well-formed UTF-8 sequence at p (1-4), or 0 (a stray
+ * continuation byte, a truncated or overlong sequence, a surrogate, or a
+ * code point above U+10FFFF). */
+static int utf8_len(const unsigned char *p)
+{
+	unsigned c = p[0];
+	int n = c < 0x80                ? 1
+	        : c >= 0xC2 && c < 0xE0 ? 2
+	        : c >= 0xE0 && c < 0xF0 ? 3
+	        : c >= 0xF0 && c < 0xF5 ? 4
+	                                : 0;
+	for (int i = 1; i < n; i++)
+		if ((p[i] & 0xC0) != 0x80)
+			return 0; /* also stops at the terminating NUL */
+	if ((c == 0xE0 && p[1] < 0xA0) || (c == 0xED && p[1] >= 0xA0) ||
+	    (c == 0xF0 && p[1] < 0x90) || (c == 0xF4 && p[1] >= 0x90))
+		return 0;
+	return n;
+}
+
+/* A JSON string: quotes, backslashes and control characters escaped, and
+ * bytes that are not UTF-8 (a file name in Latin-1, say) written as
+ * U+FFFD: JSON text must be Unicode, and a parser refuses the whole report
+ * over one such byte. */
 static void put_str(FILE *f, const char *s)
 {
 	fputc('"', f);
-	for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+	for (const unsigned char *p = (const unsigned char *)s; *p;) {
+		int n = utf8_len(p);
+		if (n == 0) {
+			fputs("\\ufffd", f);
+			p++;
+			continue;
+		}
+		if (n > 1) {
+			fwrite(p, 1, (size_t)n, f);
+			p += n;
+			continue;
+		}
 		if (*p == '"' || *p == '\\')
 			fprintf(f, "\\%c", *p);
 		else if (*p == '\n')
@@ -121,6 +156,7 @@ static void put_str(FILE *f, const char *s)
 			fprintf(f, "\\u%04x", *p);
 		else
 			fputc(*p, f);
+		p++;
 	}
 	fputc('"', f);
 }

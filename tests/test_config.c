@@ -401,3 +401,39 @@ Test(config, json_writer_refuses_a_repeated_key)
 	unlink(p);
 	rmdir(dir);
 }
+
+/* JSON text must be Unicode: a byte that is not UTF-8 (a Latin-1 file
+ * name in the report's scene path) made the whole report unreadable to a
+ * JSON parser. Such bytes become U+FFFD; well-formed UTF-8 passes as is;
+ * quotes, backslashes and control characters are escaped. */
+Test(config, json_strings_are_always_utf8)
+{
+	char dir[256], p[512];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/u.json", dir);
+	diag d = {{0}};
+	jsonw w;
+	cr_assert_eq(jsonw_open(&w, p, &d), 0, "%s", d.msg);
+	jsonw_obj_begin(&w);
+	jsonw_kstr(&w, "latin1", "sc\xe9ne");                /* lone lead byte */
+	jsonw_kstr(&w, "utf8", "sc\xc3\xa9ne \xe2\x82\xac"); /* e-acute, euro */
+	jsonw_kstr(&w, "bad", "\x80\xc0\xaf\xed\xa0\x80\xf4\x90\x80\x80\xe2\x82");
+	jsonw_kstr(&w, "esc", "a\"b\\c\n\x01");
+	jsonw_obj_end(&w);
+	cr_assert_eq(jsonw_close(&w, &d), 0, "%s", d.msg);
+	char *t = tu_slurp(dir, "u.json");
+	cr_assert(strstr(t, "\"latin1\": \"sc\\ufffdne\""), "%s", t);
+	cr_assert(strstr(t, "\"utf8\": \"sc\xc3\xa9ne \xe2\x82\xac\""), "%s", t);
+	/* a stray continuation, an overlong 2-byte form, a surrogate, a code
+	 * point above U+10FFFF, a cut 3-byte form: one U+FFFD per byte */
+	cr_assert(strstr(t, "\"bad\": \"\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd"
+	                    "\\ufffd\\ufffd\\ufffd\\ufffd\""),
+	          "%s", t);
+	cr_assert(strstr(t, "\"esc\": \"a\\\"b\\\\c\\n\\u0001\""), "%s", t);
+	/* none of the bad bytes is left raw */
+	for (const unsigned char *q = (const unsigned char *)t; *q; q++)
+		cr_assert(*q != 0xe9 && *q != 0x80 && *q != 0xc0 && *q != 0xed && *q != 0xf4,
+		          "raw byte 0x%02x at %td", *q, (const char *)q - t);
+	unlink(p);
+	rmdir(dir);
+}
