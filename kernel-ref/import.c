@@ -283,10 +283,52 @@ static void io_close(struct aiFileIO *io, struct aiFile *af)
 
 /* OBJ pre-scan: Assimp's fast_atof reads "1.0x" as 1 and "nan" as NaN
  * without complaint, and by the time a NaN reaches scene_finish the line
- * is lost. So the `v` and `vn` lines are checked here, with their line. */
+ * is lost. So the `v` and `vn` lines are checked here, with their line,
+ * and so are the `f` lines' indices (obj_face). */
+/* The indices of an `f` line: each v, v/vt, v//vn or v/vt/vn must name an
+ * element defined above it (1..count, or -1..-count from the last), as
+ * Assimp only says "index out of range" without the line. */
+static int obj_face(const char *p, const char *t, const char *eol, const long cnt[3],
+                    const char *file, int line, diag *d)
+{
+	static const char *const what[3] = {"vertex", "texture coordinate", "normal"};
+	while (t < eol && *t != '#') {
+		while (t < eol && isspace((unsigned char)*t))
+			t++;
+		if (t >= eol || *t == '#')
+			break;
+		for (int k = 0; k < 3 && t < eol && !isspace((unsigned char)*t) && *t != '#'; k++) {
+			if (*t == '/') { /* v//vn: no texture coordinate */
+				t++;
+				continue;
+			}
+			const char *s = t;
+			char *end;
+			errno = 0;
+			long i = strtol(t, &end, 10);
+			if (end == t || errno)
+				return diag_set(d, file, line, (int)(s - p) + 1,
+				                "malformed face index '%.*s'",
+				                (int)(end > t ? end - t : 1), t);
+			t = end;
+			long n = cnt[k];
+			if (i == 0 || i > n || i < -n)
+				return diag_set(d, file, line, (int)(s - p) + 1,
+				                "face refers to %s %ld of %ld defined above it",
+				                what[k], i, n);
+			if (t < eol && *t == '/')
+				t++;
+		}
+		while (t < eol && !isspace((unsigned char)*t) && *t != '#')
+			t++;
+	}
+	return 0;
+}
+
 static int obj_scan(const char *text, const char *file, diag *d)
 {
 	int line = 1;
+	long cnt[3] = {0, 0, 0}; /* v, vt, vn so far */
 	for (const char *p = text; *p; line++) {
 		const char *eol = strchr(p, '\n');
 		if (!eol)
@@ -294,6 +336,22 @@ static int obj_scan(const char *text, const char *file, diag *d)
 		const char *q = p;
 		while (q < eol && (*q == ' ' || *q == '\t'))
 			q++;
+		int sp = q + 1 < eol && (q[1] == ' ' || q[1] == '\t');
+		int sp2 = q + 2 < eol && (q[2] == ' ' || q[2] == '\t');
+		if (q < eol && q[0] == 'v') {
+			if (sp)
+				cnt[0]++;
+			else if (q[1] == 't' && sp2)
+				cnt[1]++;
+			else if (q[1] == 'n' && sp2)
+				cnt[2]++;
+		}
+		if (q < eol && q[0] == 'f' && sp) {
+			if (obj_face(p, q + 1, eol, cnt, file, line, d))
+				return -1;
+			p = *eol ? eol + 1 : eol;
+			continue;
+		}
 		int normal = q + 1 < eol && q[0] == 'v' && q[1] == 'n';
 		int vertex = q < eol && q[0] == 'v';
 		const char *t = q + (normal ? 2 : 1);
