@@ -165,14 +165,16 @@ int img_can_write(const char *path, diag *d)
 int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d)
 {
 	*rgba = NULL;
-	/* the plugin opens it by name: a FIFO would block it */
-	int st = in_check(path);
-	if (st)
-		return diag_set(d, path, 0, 0, "cannot read image: %s", in_strerror(st));
 	const img_plugin *p;
 	void *lib = plugin_open(&p, path, d);
 	if (!lib)
 		return -1;
+	/* the plugin opens it by name: a FIFO would block it */
+	int st = in_check(path);
+	if (st) {
+		dlclose(lib);
+		return diag_set(d, path, 0, 0, "cannot read image: %s", in_strerror(st));
+	}
 	char err[512] = "";
 	int rc = p->read_rgba8(path, w, h, rgba, err, sizeof err);
 	if (rc != 0)
