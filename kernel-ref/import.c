@@ -63,79 +63,6 @@ static int ends_with(const char *s, const char *suffix)
 	return n >= k && strcasecmp(s + n - k, suffix) == 0;
 }
 
-/* Reads a whole file, inflating it when gz is set (gzread also passes plain
- * files through unchanged). The buffer is NUL-terminated for the scan. */
-static int read_all(const char *path, int gz, char **out, size_t *outlen, char *err, size_t errn)
-{
-	FILE *f = NULL;
-	int st = gz ? in_check(path) : in_open(path, &f);
-	gzFile g = gz && !st ? gzopen(path, "rb") : NULL;
-	if (!st && !g && !f)
-		st = errno ? errno : ENOENT;
-	if (st) {
-		snprintf(err, errn, "cannot open: %s", in_strerror(st));
-		return -1;
-	}
-	size_t cap = 1 << 16, len = 0;
-	char *buf = malloc(cap + 1);
-	for (;;) {
-		if (len == cap) {
-			cap *= 2;
-			char *nb = realloc(buf, cap + 1);
-			if (!nb) {
-				snprintf(err, errn, "out of memory reading the file");
-				goto fail;
-			}
-			buf = nb;
-		}
-		size_t want = cap - len;
-		long got;
-		if (g) {
-			int r =
-			    gzread(g, buf + len, want > (1u << 30) ? (1u << 30) : (unsigned)want);
-			if (r < 0) {
-				int zerr;
-				const char *m = gzerror(g, &zerr);
-				snprintf(err, errn, "gzip data is corrupt: %s", m);
-				goto fail;
-			}
-			got = r;
-		} else {
-			got = (long)fread(buf + len, 1, want, f);
-			if (got == 0 && ferror(f)) {
-				snprintf(err, errn, "read error: %s", strerror(errno));
-				goto fail;
-			}
-		}
-		if (got == 0)
-			break;
-		len += (size_t)got;
-	}
-	if (g) {
-		/* A truncated or corrupt stream ends reads early without -1. */
-		int zerr;
-		const char *m = gzerror(g, &zerr);
-		if (zerr != Z_OK) {
-			snprintf(err, errn, "gzip data is corrupt or truncated: %s", m);
-			goto fail;
-		}
-		gzclose(g);
-	} else {
-		fclose(f);
-	}
-	buf[len] = '\0';
-	*out = buf;
-	*outlen = len;
-	return 0;
-fail:
-	free(buf);
-	if (g)
-		gzclose(g);
-	else
-		fclose(f);
-	return -1;
-}
-
 /* Maps a name Assimp asks for to the file on disk: "X.gz" is inflated, and
  * so is "X" when only "X.gz" exists (that is how "conference.obj" reaches
  * "conference.obj.gz"). Returns 1 for gzip, 0 for a plain file. */
@@ -235,7 +162,7 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 			char err[256];
 			if (c->n == CACHE_MAX)
 				return NULL;
-			if (read_all(rp, 1, &c->e[k].buf, &c->e[k].len, err, sizeof err) != 0) {
+			if (in_read_all(rp, 1, &c->e[k].buf, &c->e[k].len, err, sizeof err) != 0) {
 				if (!c->err[0] && access(rp, F_OK) == 0)
 					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp, err);
 				return NULL;
@@ -982,8 +909,8 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 		fn(ctx, rp);
 	int obj = ends_with(virt, ".obj"), ply = ends_with(virt, ".ply");
 	if (obj || ply) {
-		if (read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err,
-		             sizeof cache.err) != 0)
+		if (in_read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err,
+		                sizeof cache.err) != 0)
 			return diag_set(d, path, 0, 0, "%s", cache.err);
 		snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
 		cache.n = 1;

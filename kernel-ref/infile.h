@@ -10,6 +10,7 @@
 #ifndef SAAR_KREF_INFILE_H
 #define SAAR_KREF_INFILE_H
 
+#include <stddef.h>
 #include <stdio.h>
 
 /* A non-zero status of in_open/in_check that is not an errno value. */
@@ -24,5 +25,11 @@ int in_open(const char *path, FILE **f);
 int in_check(const char *path);
 /* The reason for a status: strerror, or "not a regular file ...". */
 const char *in_strerror(int status);
+/* Reads all of path (a regular file), inflated when gz is set (gzread also
+ * passes a plain file through unchanged), into *out (malloc'd, NUL-
+ * terminated; *outlen bytes before the NUL). 0, or the in_open status
+ * (ENOENT for a missing file, ...) or EIO for a read, inflate or memory
+ * failure, with the reason in err. */
+int in_read_all(const char *path, int gz, char **out, size_t *outlen, char *err, size_t errn);
 
 #endif

@@ -51,24 +51,6 @@ enum { C_LEFT = 1, C_RIGHT = 2, C_BOTH = 3, C_STRADDLE = 4 };
 #define MAX_TRIS    ((1u << 30) - 1) /* triangle id shares a word with the type */
 #define MAX_NODES   (1u << 30)       /* child index field is 30 bits */
 #define DEPTH_LIMIT 64
-/* The build's work budget, per triangle: a split of a node into children
- * of cl and cr triangles spends cl + cr (its events are partitioned, and
- * the children's lists and sweeps cost that again). SAH keeps splitting
- * where many triangles overlap (a few thousand coplanar ones covering each
- * other: each split copies most of them to both sides, and the sweep still
- * finds a slightly cheaper split), so the work and the lists grow
- * exponentially with depth: a thousand such triangles took 11 s and 26
- * million list entries (100 MB), four thousand minutes and gigabytes.
- * Once a split would overdraw the budget it is not made and the node
- * becomes a leaf (counted in kdtree.nbudget_leaves), and so do the nodes
- * after it: the build stays linear in the triangles, deterministic, and
- * the tree correct (poorer where it was cut). The benchmark scenes spend
- * 34-51 per triangle (Conference 45, the dragon 48) and are far from it:
- * their trees are bit-identical with and without the budget. A
- * per-subtree budget (split in proportion to the children's counts) was
- * tried first and changed real trees even at 8192 per triangle, where a
- * dense patch of a scene duplicates many triangles over a few levels. */
-#define KD_WORK_BUDGET 1024.0
 
 typedef struct event {
 	float pos;
@@ -526,6 +508,7 @@ static int build(builder *b, const scene *s)
 		return -1;
 	/* Root events: count per axis first so the lists can be laid out. */
 	work root = {.box = s->bounds, .off = 0, .ntris = nt, .node = 0, .depth = 0};
+	/* kdtree.h KD_WORK_BUDGET: why the build has one */
 	double work_left = KD_WORK_BUDGET * (double)nt;
 	uint32_t np[3] = {0, 0, 0};
 	for (uint32_t i = 0; i < nt; i++) {
@@ -574,6 +557,7 @@ static int build(builder *b, const scene *s)
 					return -1;
 			} else {
 				work_left -= (double)cl + cr;
+				t->work += (uint64_t)cl + cr;
 				if (split(b, &w, k, p, stack, &sp))
 					return -1;
 			}

@@ -47,13 +47,33 @@ typedef struct kdtree {
 	aabb bounds; /* the scene box the root stands for */
 	/* build statistics */
 	uint32_t nleaves, nempty_leaves;
-	/* leaves made because the build's work budget ran out (kdtree.c
-	 * KD_WORK_BUDGET: heavily overlapping triangles); 0 on real scenes */
+	/* leaves made because the build's work budget ran out
+	 * (KD_WORK_BUDGET: heavily overlapping triangles); 0 on real scenes */
 	uint32_t nbudget_leaves;
+	uint64_t work;   /* triangle references the splits spent (KD_WORK_BUDGET) */
 	int depth;       /* deepest leaf */
 	double sah_cost; /* expected cost of the whole tree */
 	double build_ms; /* host wall time of kd_build */
 } kdtree;
+
+/* The build's work budget, per triangle: a split of a node into children
+ * of cl and cr triangles spends cl + cr (its events are partitioned, and
+ * the children's lists and sweeps cost that again). SAH keeps splitting
+ * where many triangles overlap (a few thousand coplanar ones covering each
+ * other: each split copies most of them to both sides, and the sweep still
+ * finds a slightly cheaper split), so the work and the lists grow
+ * exponentially with depth: a thousand such triangles took 11 s and 26
+ * million list entries (100 MB), four thousand minutes and gigabytes.
+ * Once a split would overdraw the budget it is not made and the node
+ * becomes a leaf (counted in kdtree.nbudget_leaves), and so do the nodes
+ * after it: the build stays linear in the triangles, deterministic, and
+ * the tree correct (poorer where it was cut). Real scenes spend well
+ * under a tenth of it (kdtree.work; tests/test_kdtree.c checks the shared
+ * scenes it builds), so their trees are the same with and without it. A
+ * per-subtree budget (split in proportion to the children's counts) was
+ * tried first and changed real trees even at 8192 per triangle, where a
+ * dense patch of a scene duplicates many triangles over a few levels. */
+#define KD_WORK_BUDGET 1024.0
 
 /* The ranges the kd parameters take from the command line (--kd-*) and
  * from configs (kdtree.*): one definition for both. */

@@ -66,27 +66,23 @@ static int yfile_open(yfile *y, const char *file, diag *d)
 	yaml_parser_t p;
 	yaml_parser_initialize(&p);
 	yaml_parser_set_input_file(&p, f);
-	int ok = yaml_parser_load(&p, &y->doc);
-	yaml_document_t extra;
-	/* a second document would be silently ignored: refuse it */
+	int ok = yaml_parser_load(&p, &y->doc), second = 0;
+	/* a second document would be silently ignored: refuse it (a syntax
+	 * error in it is reported as any other) */
 	if (ok && yaml_document_get_root_node(&y->doc)) {
-		if (!yaml_parser_load(&p, &extra)) {
-			yaml_document_delete(&y->doc);
-			ok = 0;
-		} else {
-			yaml_node_t *r2 = yaml_document_get_root_node(&extra);
-			if (r2)
-				diag_set(d, file, (int)r2->start_mark.line + 1,
-				         (int)r2->start_mark.column + 1,
-				         "only one YAML document is allowed");
-			yaml_document_delete(&extra);
-			if (r2) {
-				yaml_document_delete(&y->doc);
-				yaml_parser_delete(&p);
-				fclose(f);
-				return -1;
-			}
+		yaml_document_t extra;
+		ok = yaml_parser_load(&p, &extra);
+		yaml_node_t *r2 = ok ? yaml_document_get_root_node(&extra) : NULL;
+		if (r2) {
+			second = 1;
+			diag_set(d, file, (int)r2->start_mark.line + 1,
+			         (int)r2->start_mark.column + 1,
+			         "only one YAML document is allowed");
 		}
+		if (ok)
+			yaml_document_delete(&extra);
+		if (!ok || second)
+			yaml_document_delete(&y->doc);
 	}
 	if (!ok) {
 		const char *ctx = p.context ? p.context : "";
@@ -96,7 +92,7 @@ static int yfile_open(yfile *y, const char *file, diag *d)
 	}
 	yaml_parser_delete(&p);
 	fclose(f);
-	return ok ? 0 : -1;
+	return ok && !second ? 0 : -1;
 }
 
 /* The key of a mapping pair before `pair` with the same scalar as k, NULL

@@ -645,25 +645,30 @@ static int trim(char *out, size_t n, const char *b, const char *e)
 	return 0;
 }
 
-int cfg_set(saar_config *c, const char *assignment, diag *d)
+int cfg_set_as(saar_config *c, const char *who, const char *assignment, diag *d)
 {
 	char key[256], val[512], msg[512];
 	const char *eq = strchr(assignment, '=');
 	if (!eq)
-		return diag_set(d, "--set", 0, 0, "expected key=value, got '%s'", assignment);
+		return diag_set(d, who, 0, 0, "expected key=value, got '%s'", assignment);
 	if (trim(key, sizeof key, assignment, eq) || trim(val, sizeof val, eq + 1, strchr(eq, 0)))
-		return diag_set(d, "--set", 0, 0, "key or value too long in '%s'", assignment);
+		return diag_set(d, who, 0, 0, "key or value too long in '%s'", assignment);
 	const cfg_key *k = cfg_find(key);
 	if (!k) {
 		if (is_section(key))
-			return diag_set(d, "--set", 0, 0,
+			return diag_set(d, who, 0, 0,
 			                "'%s' is a section; set one of its keys (%s.*)", key, key);
 		unknown_key(msg, sizeof msg, key, false);
-		return diag_set(d, "--set", 0, 0, "%s", msg);
+		return diag_set(d, who, 0, 0, "%s", msg);
 	}
 	if (set_value(c, k, val, msg, sizeof msg))
-		return diag_set(d, "--set", 0, 0, "%s", msg);
+		return diag_set(d, who, 0, 0, "%s", msg);
 	return 0;
+}
+
+int cfg_set(saar_config *c, const char *assignment, diag *d)
+{
+	return cfg_set_as(c, "--set", assignment, d);
 }
 
 int cfg_validate(const saar_config *c, diag *d)

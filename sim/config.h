@@ -152,6 +152,9 @@ void cfg_defaults(saar_config *c);
 int cfg_load(saar_config *c, const char *file, diag *d);
 /* One "key=value" override (the argument of --set). Errors: "--set: ...". */
 int cfg_set(saar_config *c, const char *assignment, diag *d);
+/* cfg_set on behalf of `who` (a shorthand flag such as --kd-leaf-size):
+ * its messages start with who instead of --set. */
+int cfg_set_as(saar_config *c, const char *who, const char *assignment, diag *d);
 /* Checks that involve several keys. Errors: "config: ...". */
 int cfg_validate(const saar_config *c, diag *d);
 

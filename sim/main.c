@@ -95,8 +95,8 @@ static const char *key_flag(const char *a)
 	return NULL;
 }
 
-/* cfg_set of "key=value" for the shorthand flag: the whole value (cfg_set
- * refuses one too long), and a message that names the flag. */
+/* The shorthand flag's "key=value" through the config, the whole value
+ * (cfg_set refuses one too long), its messages naming the flag. */
 static int set_key(saar_config *cfg, const char *flag, const char *value, diag *d)
 {
 	const char *key = key_flag(flag);
@@ -105,13 +105,8 @@ static int set_key(saar_config *cfg, const char *flag, const char *value, diag *
 	if (!kv)
 		return diag_set(d, flag, 0, 0, "out of memory");
 	snprintf(kv, n, "%s=%s", key, value);
-	int rc = cfg_set(cfg, kv, d);
+	int rc = cfg_set_as(cfg, flag, kv, d);
 	free(kv);
-	if (rc && !strncmp(d->msg, "--set: ", 7)) {
-		diag e;
-		diag_set(&e, flag, 0, 0, "%s", d->msg + 7);
-		*d = e;
-	}
 	return rc;
 }
 

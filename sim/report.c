@@ -817,46 +817,21 @@ static int csv_old_ok(const char *path, const char *old, size_t nold, diag *d)
 	return 0;
 }
 
-/* The contents of the CSV to append to into *old (malloc'd, NULL when
- * empty or new); a path that is not a regular file is refused (fopen on a
- * FIFO would wait for a writer; a directory opens and seeks to a huge
- * size). */
+/* The contents of the CSV to append to into *old (malloc'd; NULL for a
+ * new file); a path that is not a regular file is refused (fopen on a FIFO
+ * would wait for a writer; a directory opens and seeks to a huge size). */
 static int csv_read_old(const char *path, char **old, size_t *nold, diag *d)
 {
+	char why[256];
 	*old = NULL;
 	*nold = 0;
-	FILE *in;
-	int st = in_open(path, &in);
+	int st = in_read_all(path, 0, old, nold, why, sizeof why);
 	if (st == ENOENT)
 		return 0; /* a new file */
+	if (st == EIO)
+		return diag_set(d, path, 0, 0, "%s", why);
 	if (st)
 		return diag_set(d, path, 0, 0, "cannot append a row: %s", in_strerror(st));
-	char *buf = NULL;
-	size_t n = 0, cap = 0;
-	for (;;) {
-		if (n == cap) {
-			cap = cap ? 2 * cap : 65536;
-			char *nb = realloc(buf, cap);
-			if (!nb) {
-				free(buf);
-				fclose(in);
-				return diag_set(d, path, 0, 0, "out of memory");
-			}
-			buf = nb;
-		}
-		size_t got = fread(buf + n, 1, cap - n, in);
-		n += got;
-		if (got == 0)
-			break;
-	}
-	int err = ferror(in);
-	fclose(in);
-	if (err) {
-		free(buf);
-		return diag_set(d, path, 0, 0, "cannot read: %s", strerror(errno ? errno : EIO));
-	}
-	*old = buf;
-	*nold = n;
 	return 0;
 }
 

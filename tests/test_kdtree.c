@@ -265,6 +265,14 @@ static void check_tree(const scene *s, const kdtree *t, const kd_params *p, int 
 	free(leaves);
 }
 
+/* Builds s with the default parameters (returned in p) into t. */
+static void build_default(const scene *s, kd_params *p, kdtree *t)
+{
+	diag d;
+	kd_params_default(p);
+	cr_assert_eq(kd_build(t, s, p, &d), 0, "%s", d.msg);
+}
+
 static void build_check(const scene *s, const kd_params *p, int brute)
 {
 	kdtree t;
@@ -346,10 +354,8 @@ Test(kdtree, single_triangle)
 	add_tri(&s, v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0.5f));
 	finish(&s);
 	kd_params p;
-	kd_params_default(&p);
 	kdtree t;
-	diag d;
-	cr_assert_eq(kd_build(&t, &s, &p, &d), 0, "%s", d.msg);
+	build_default(&s, &p, &t);
 	cr_assert_eq(t.nnodes, 1);
 	cr_assert(kd_is_leaf(t.nodes[0]));
 	cr_assert_eq(kd_count(t.nodes[0]), 1);
@@ -503,8 +509,8 @@ Test(kdtree, duplicates_terminate)
 /* A thousand random triangles in one plane, each covering part of the
  * others: SAH splits them again and again (each copy to both sides), and
  * the build took 11 s and 26 million list entries before it had a work
- * budget. Now it stops at the budget (kdtree.c KD_WORK_BUDGET, 1024 per
- * triangle), says so in nbudget_leaves, and the tree is still correct. */
+ * budget. Now it stops at the budget (KD_WORK_BUDGET per triangle), says
+ * so in nbudget_leaves, and the tree is still correct. */
 Test(kdtree, overlapping_coplanar_triangles_stay_linear)
 {
 	scene s;
@@ -519,11 +525,10 @@ Test(kdtree, overlapping_coplanar_triangles_stay_linear)
 	}
 	finish(&s);
 	kd_params p;
-	kd_params_default(&p);
 	kdtree t;
-	diag d;
-	cr_assert_eq(kd_build(&t, &s, &p, &d), 0, "%s", d.msg);
-	cr_assert_leq(t.nlist, 1024u * n, "%u list entries for %u triangles", t.nlist, n);
+	build_default(&s, &p, &t);
+	cr_assert_leq(t.nlist, KD_WORK_BUDGET * n, "%u list entries for %u triangles", t.nlist, n);
+	cr_assert_leq(t.work, KD_WORK_BUDGET * n);
 	cr_assert_gt(t.nbudget_leaves, 0, "the budget was not reached");
 	check_tree(&s, &t, &p, 0);
 	kd_free(&t);
@@ -551,12 +556,13 @@ static void shared_scene(const char *rel, int brute)
 	scene s;
 	cr_assert_eq(objmini_load(&s, path), 0, "cannot read %s", path);
 	kd_params p;
-	kd_params_default(&p);
 	kdtree t;
-	diag d;
-	cr_assert_eq(kd_build(&t, &s, &p, &d), 0, "%s", d.msg);
+	build_default(&s, &p, &t);
 	check_tree(&s, &t, &p, brute);
 	cr_assert_eq(t.nbudget_leaves, 0, "a real scene reached the work budget");
+	/* far from it: under a tenth (kdtree.h says so) */
+	cr_assert_lt(t.work, KD_WORK_BUDGET / 10 * s.ntris, "%llu references for %u triangles",
+	             (unsigned long long)t.work, s.ntris);
 	kd_free(&t);
 	scene_free(&s);
 }
