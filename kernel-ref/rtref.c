@@ -47,6 +47,7 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kstr(j, "program", "rtref");
 	jsonw_kstr(j, "scene", w->scene_label);
 	jsonw_kstr(j, "view", w->v.name);
+	view_json(j, &w->v);
 	jsonw_kuint(j, "triangles", w->s.ntris);
 	jsonw_key(j, "size");
 	jsonw_arr_begin(j);

@@ -1,7 +1,8 @@
 /*
  * view.c: views files (cameras and point lights) through libyaml.
  *
- * Owns view_load, view_list, camera_validate and view_place_default_light
+ * Owns view_load, view_list, camera_validate, view_place_default_light
+ * and the views' description in reports (view_json, view_describe)
  * (view_default lives with the geometry it frames, in default_scene.c).
  * The file is loaded with libyaml's document API so every node keeps its
  * start mark; each error points at the node it is about as
@@ -10,6 +11,7 @@
 #include "view.h"
 
 #include "infile.h"
+#include "jsonw.h"
 
 #include <errno.h>
 #include <float.h>
@@ -449,4 +451,46 @@ void view_place_default_light(view *v, const scene *s)
 	v->lights[0].pos = v3_add(v->cam.lookat, v3(0, 2 * r, r));
 	v->lights[0].color = v3(1, 1, 1);
 	v->nlights = 1;
+}
+
+static void json_vec(jsonw *j, const char *k, vec3 p)
+{
+	if (k)
+		jsonw_key(j, k);
+	jsonw_arr_begin(j);
+	jsonw_num(j, p.x);
+	jsonw_num(j, p.y);
+	jsonw_num(j, p.z);
+	jsonw_arr_end(j);
+}
+
+void view_json(struct jsonw *j, const view *v)
+{
+	jsonw_key(j, "camera");
+	jsonw_obj_begin(j);
+	json_vec(j, "eye", v->cam.eye);
+	json_vec(j, "lookat", v->cam.lookat);
+	json_vec(j, "up", v->cam.up);
+	jsonw_knum(j, "fov_deg", v->cam.fov_deg);
+	jsonw_obj_end(j);
+	jsonw_key(j, "light_positions");
+	jsonw_arr_begin(j);
+	for (int i = 0; i < v->nlights; i++)
+		json_vec(j, NULL, v->lights[i].pos);
+	jsonw_arr_end(j);
+}
+
+void view_describe(const view *v, char *buf, size_t n)
+{
+	const camera *c = &v->cam;
+	size_t k = (size_t)snprintf(
+	    buf, n, "eye (%g,%g,%g) lookat (%g,%g,%g) up (%g,%g,%g) fov %g; ", c->eye.x, c->eye.y,
+	    c->eye.z, c->lookat.x, c->lookat.y, c->lookat.z, c->up.x, c->up.y, c->up.z, c->fov_deg);
+	if (k < n && v->nlights == 0)
+		k += (size_t)snprintf(buf + k, n - k, "no lights");
+	else if (k < n)
+		k += (size_t)snprintf(buf + k, n - k, "light%s", v->nlights == 1 ? "" : "s");
+	for (int i = 0; i < v->nlights && k < n; i++)
+		k += (size_t)snprintf(buf + k, n - k, " (%g,%g,%g)", v->lights[i].pos.x,
+		                      v->lights[i].pos.y, v->lights[i].pos.z);
 }

@@ -59,6 +59,16 @@ int view_list(const char *file, char (*names)[VIEW_NAME_MAX], int max, diag *d);
  * the source in the message (e.g. "--eye"). */
 int camera_validate(const camera *c, const char *what, diag *d);
 
+/* Writes the view's camera and lights as the JSON keys "camera" ({eye,
+ * lookat, up: [x,y,z], fov_deg}) and "light_positions" ([[x,y,z], ...]),
+ * so a report says what was rendered even when flags changed the view. */
+struct jsonw;
+void view_json(struct jsonw *j, const view *v);
+
+/* Describes the camera and lights in one line ("eye (x,y,z) lookat ...
+ * fov F; lights (x,y,z) ..."), for text reports. */
+void view_describe(const view *v, char *buf, size_t n);
+
 /* The view of the embedded default scene (scene_default). */
 void view_default(view *v);
 

@@ -275,15 +275,19 @@ int world_load(world *w, const world_opts *o, diag *d)
 		if (camera_validate(&w->v.cam, "--eye/--lookat/--up/--fov", d))
 			goto fail;
 		snprintf(w->v.name, sizeof w->v.name, "%s", "custom");
+		w->view_changed = 1;
 	}
 	if (o->nlights) {
 		w->v.nlights = o->nlights;
 		memcpy(w->v.lights, o->lights, sizeof o->lights);
 		w->v.lights_given = 1;
+		w->view_changed = 1;
 	}
 	view_place_default_light(&w->v, &w->s);
-	if (o->no_lights)
+	if (o->no_lights) {
 		w->v.nlights = 0;
+		w->view_changed = 1;
+	}
 	if (w->cache != WORLD_CACHE_HIT) {
 		t0 = now_ms();
 		if (kd_build(&w->kd, &w->s, &o->kd, d))

@@ -39,6 +39,7 @@ typedef struct world {
 	kdtree kd;
 	mimg m;
 	char scene_label[1024]; /* what the reports call the scene */
+	int view_changed;       /* camera or light flags changed the view (reports describe it) */
 	double load_ms, kd_ms, image_ms;
 	/* WORLD_CACHE_*. On a hit, s and kd hold their figures only (counts,
 	 * bounds; the arrays are NULL: nothing after the build reads them)

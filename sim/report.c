@@ -360,6 +360,11 @@ void report_text(FILE *f, const report_info *ri)
 	fprintf(f, "saarsim: %s, view %s, %dx%d, %d frame%s, config %s\n", ri->w->scene_label,
 	        ri->w->v.name, g->frame.width, g->frame.height, c->frames_done,
 	        c->frames_done == 1 ? "" : "s", g->name);
+	if (ri->w->view_changed) {
+		char vd[1024];
+		view_describe(&ri->w->v, vd, sizeof vd);
+		fprintf(f, "  view: %s\n", vd);
+	}
 	if (c->frame_mem)
 		fprintf(
 		    f,
@@ -505,6 +510,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	cfg_write_json(g, j);
 	jsonw_kstr(j, "scene", w->scene_label);
 	jsonw_kstr(j, "view", w->v.name);
+	view_json(j, &w->v);
 	kv(j, "triangles", w->s.ntris);
 	kv(j, "lights", (uint64_t)w->v.nlights);
 	jsonw_key(j, "size");

@@ -43,6 +43,18 @@ Test(rtref_cli, good_run_writes_image_and_stats)
 		cr_assert(strstr(buf, keys[k]), "stats lack %s", keys[k]);
 }
 
+/* The stats say which camera and lights were rendered. */
+Test(rtref_cli, stats_describe_camera_and_lights)
+{
+	char args[512];
+	snprintf(args, sizeof args, "--size 16x12 --eye 0,1,9 --light 2,3,4 --stats %s/s.json",
+	         dir);
+	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+	char *s = tu_squeeze_json(slurp("s.json"));
+	cr_assert(strstr(s, "\"view\":\"custom\",\"camera\":{\"eye\":[0.0,1.0,9.0]"), "%s", s);
+	cr_assert(strstr(s, "\"light_positions\":[[2.0,3.0,4.0]]"), "%s", s);
+}
+
 Test(rtref_cli, missing_scene_file)
 {
 	char args[1024];

@@ -65,6 +65,37 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	cr_assert_str_eq(a, b, "reports differ outside \"host\"");
 }
 
+/* The report says what was rendered: the camera and lights are in the
+ * JSON always, and in the text when flags changed the view (the name
+ * "custom", or the view's name with other lights, says too little). */
+Test(saarsim_cli, report_describes_camera_and_lights)
+{
+	char args[1024];
+	snprintf(args, sizeof args,
+	         "--size 32x24 --no-check --eye 1,2,3.5 --lookat 0,0.25,0 --fov 50 "
+	         "--light 1,1,1 --light -2,4,0.5 --report %s/a.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *a = tu_squeeze_json(slurp("a.json")), *out = slurp("out");
+	cr_assert(strstr(a, "\"camera\":{\"eye\":[1.0,2.0,3.5],\"lookat\":[0.0,0.25,0.0],"
+	                    "\"up\":[0.0,1.0,0.0],\"fov_deg\":50.0}"),
+	          "%s", a);
+	cr_assert(strstr(a, "\"light_positions\":[[1.0,1.0,1.0],[-2.0,4.0,0.5]]"), "%s", a);
+	cr_assert(strstr(out, "\n  view: eye (1,2,3.5) lookat (0,0.25,0) up (0,1,0) fov 50; lights "
+	                      "(1,1,1) (-2,4,0.5)\n"),
+	          "%s", out);
+	/* the default view: described in the JSON, no extra text line */
+	snprintf(args, sizeof args, "--size 32x24 --no-check --report %s/b.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(
+	    strstr(tu_squeeze_json(slurp("b.json")), "\"view\":\"default\",\"camera\":{\"eye\":["));
+	cr_assert_null(strstr(slurp("out"), "  view: "));
+	snprintf(args, sizeof args, "--size 32x24 --no-check --no-lights --report %s/c.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(strstr(tu_squeeze_json(slurp("c.json")), "\"light_positions\":[]"));
+	cr_assert(strstr(slurp("out"), "; no lights\n"));
+}
+
 /* A run that writes no image never opens the image plugin; one that would
  * write one checks --out before it simulates (exit 2, nothing written). */
 Test(saarsim_cli, image_plugin_only_when_writing_images)

@@ -147,6 +147,28 @@ static inline char *tu_slurp(const char *dir, const char *name)
 	return buf;
 }
 
+/* Removes the whitespace outside strings from JSON text s, in place, so a
+ * test can look for a compact fragment ("key":[1.0,2.0]) whatever the
+ * writer's layout. Returns s. */
+static inline char *tu_squeeze_json(char *s)
+{
+	char *o = s;
+	int in = 0;
+	for (const char *p = s; *p; p++) {
+		if (in && *p == '\\' && p[1]) {
+			*o++ = *p++;
+			*o++ = *p;
+			continue;
+		}
+		if (*p == '"')
+			in = !in;
+		if (in || !strchr(" \t\r\n", *p))
+			*o++ = *p;
+	}
+	*o = 0;
+	return s;
+}
+
 /* dir/err must be exactly one line "prog: ..." containing what. */
 static inline void tu_one_line(const char *dir, const char *prog, const char *what)
 {
