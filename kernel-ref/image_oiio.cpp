@@ -10,7 +10,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <fcntl.h>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 using namespace OIIO;
@@ -29,6 +31,38 @@ static int fail(char *err, size_t errlen, const std::string &what)
 	std::snprintf(err, errlen, "%s", what.c_str());
 	return -1;
 }
+
+/* Silences file descriptor 2 while it lives. Some readers print a damaged
+ * file's error on stderr themselves besides returning it (libpng's
+ * default handler: "libpng error: ..."), which would make a second line
+ * beside the one the C side prints. Images are read while a world loads,
+ * before any other thread runs. */
+struct QuietStderr {
+	int saved = -1;
+	QuietStderr()
+	{
+		std::fflush(stderr);
+		int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+		if (null < 0)
+			return;
+		saved = fcntl(2, F_DUPFD_CLOEXEC, 3);
+		if (saved >= 0 && dup2(null, 2) < 0) {
+			close(saved);
+			saved = -1;
+		}
+		close(null);
+	}
+	~QuietStderr()
+	{
+		if (saved < 0)
+			return;
+		std::fflush(stderr);
+		dup2(saved, 2);
+		close(saved);
+	}
+	QuietStderr(const QuietStderr &) = delete;
+	QuietStderr &operator=(const QuietStderr &) = delete;
+};
 
 static int write_rgb(const char *path, const char *ext_c, int w, int h, const uint8_t *rgb8,
                      const float *rgbf, char *err, size_t errlen)
@@ -73,6 +107,7 @@ static int can_write(const char *path, char *err, size_t errlen)
 static int read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, char *err, size_t errlen)
 {
 	*rgba = nullptr;
+	QuietStderr quiet;
 	try {
 		auto in = ImageInput::open(path);
 		if (!in)
@@ -85,7 +120,10 @@ static int read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, char *er
 			                std::to_string(ih) + " with " + std::to_string(nc) +
 			                " channels");
 		std::vector<uint8_t> px((size_t)iw * ih * nc);
-		if (!in->read_image(0, 0, 0, nc, TypeDesc::UINT8, px.data()))
+		/* a file cut short can still "succeed": libjpeg fills the
+		 * missing scanlines with grey and OpenImageIO keeps its warning
+		 * as a pending error, so a pending error fails the read too */
+		if (!in->read_image(0, 0, 0, nc, TypeDesc::UINT8, px.data()) || in->has_error())
 			return fail(err, errlen, one_line(in->geterror()));
 		in->close();
 		uint8_t *out = (uint8_t *)std::malloc((size_t)iw * ih * 4);

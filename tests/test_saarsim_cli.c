@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "image.h"
 #include "testutil.h"
 
 static char dir[256];
@@ -94,6 +95,37 @@ Test(saarsim_cli, report_describes_camera_and_lights)
 	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
 	cr_assert(strstr(tu_squeeze_json(slurp("c.json")), "\"light_positions\":[]"));
 	cr_assert(strstr(slurp("out"), "; no lights\n"));
+}
+
+/* A texture cut short is one line naming it, exit 2: libpng printed its
+ * own "libpng error" line on stderr too, and a JPEG was read as a
+ * partial, grey-filled texture. */
+Test(saarsim_cli, truncated_texture_is_one_line)
+{
+	static const char *const exts[] = {"png", "jpg"};
+	static uint8_t px[64 * 64 * 3];
+	for (int i = 0; i < (int)sizeof px; i++)
+		px[i] = (uint8_t)((i * 2654435761u) >> 24);
+	for (int e = 0; e < 2; e++) {
+		char p[512], args[1024];
+		diag d = {{0}};
+		snprintf(p, sizeof p, "%s/t.%s", dir, exts[e]);
+		cr_assert_eq(img_write(p, 64, 64, px, NULL, NULL, &d), 0, "%s", d.msg);
+		struct stat st;
+		cr_assert_eq(stat(p, &st), 0);
+		cr_assert_eq(truncate(p, st.st_size / 2), 0);
+		char mtl[64];
+		snprintf(mtl, sizeof mtl, "newmtl a\nmap_Kd t.%s\n", exts[e]);
+		tu_write(p, sizeof p, dir, "t.mtl", mtl);
+		tu_write(p, sizeof p, dir, "t.obj",
+		         "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+		         "usemtl a\nf 1/1 2/2 3/3\n");
+		snprintf(args, sizeof args, "--scene %s --size 32x24 --no-check", p);
+		cr_assert_eq(saarsim(args), 2);
+		char what[16];
+		snprintf(what, sizeof what, "t.%s", exts[e]);
+		one_line_naming(what);
+	}
 }
 
 /* A run that writes no image never opens the image plugin; one that would

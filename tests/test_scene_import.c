@@ -512,6 +512,34 @@ Test(image, write_read_formats)
 	cr_assert(strstr(d.msg, "/nonexistent.png"), "%s", d.msg);
 }
 
+/* An image file cut short is an error, not a partial texture: OpenImageIO
+ * fills the missing JPEG scanlines with grey and says so only as a
+ * warning. */
+Test(image, truncated_images_are_refused)
+{
+	char dir[256], p[512];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	enum { W = 64, H = 64 };
+	static uint8_t px[W * H * 3];
+	for (int i = 0; i < (int)sizeof px; i++)
+		px[i] = (uint8_t)((i * 2654435761u) >> 24); /* noise: no tiny file */
+	static const char *const exts[] = {"jpg", "png", "tif", "ppm"};
+	for (int e = 0; e < 4; e++) {
+		snprintf(p, sizeof p, "%s/cut.%s", dir, exts[e]);
+		cr_assert_eq(img_write(p, W, H, px, NULL, NULL, &d), 0, "%s", d.msg);
+		struct stat st;
+		cr_assert_eq(stat(p, &st), 0);
+		cr_assert_eq(truncate(p, st.st_size / 2), 0);
+		int w, h;
+		uint8_t *rgba = NULL;
+		cr_assert_eq(img_read_rgba8(p, &w, &h, &rgba, &d), -1, "%s read whole", p);
+		cr_assert_null(rgba);
+		cr_assert(strstr(d.msg, p), "names the file: %s", d.msg);
+		cr_assert_null(strchr(d.msg, '\n'), "one line: %s", d.msg);
+	}
+}
+
 /* 1 if a shared library whose name contains `name` is mapped into this
  * process. */
 static int mapped(const char *name)
