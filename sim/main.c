@@ -271,6 +271,7 @@ int main(int argc, char **argv)
 	 * with its new row) is done: a run that fails on any leaves the
 	 * files at all the output paths as they were */
 	af_group outs = {0};
+	int csv_lock = -1;
 	if (out && fb_write(&c->fb, out, &outs, &d))
 		goto fail;
 	report_info ri = {c, &w, check ? &chk : NULL, load_ms, now_ms() - t_start, &outs};
@@ -287,14 +288,20 @@ int main(int argc, char **argv)
 		}
 	}
 	ri.wall_ms = now_ms() - t_start;
+	/* other runs appending to the same CSV wait from here until our
+	 * rename is done, so no row is lost */
+	if (csv)
+		csv_lock = report_csv_lock(csv);
 	if (csv && report_csv(csv, &ri, &d))
 		goto fail;
 	if (af_group_commit(&outs, &d))
 		goto fail;
+	report_csv_unlock(csv_lock);
 	report_text(stdout, &ri);
 	goto done;
 fail:
 	af_group_abort(&outs);
+	report_csv_unlock(csv_lock);
 	rc = cli_bad("saarsim", d.msg);
 done:
 	chip_destroy(c);

@@ -50,6 +50,15 @@ int report_json(const char *path, const report_info *ri, diag *d);
  * the file is new or empty. Atomic: the old contents and the row go to a
  * temporary beside path (atomicfile.h), renamed over it. */
 int report_csv(const char *path, const report_info *ri, diag *d);
+/* Serialises appends to CSVs in path's folder among saarsim processes:
+ * hold it from before report_csv reads the old rows until the new file is
+ * renamed into place (concurrent runs of a sweep into one CSV lost rows:
+ * each renamed its copy over the others'). An exclusive flock on the
+ * folder (the CSV itself is replaced by the rename, so it cannot carry
+ * the lock). Returns the descriptor to pass to report_csv_unlock, or -1
+ * when the folder cannot be opened (the append goes on unlocked). */
+int report_csv_lock(const char *path);
+void report_csv_unlock(int fd);
 /* Before a run: fails when path exists, is not empty and does not start
  * with our header line (a CSV of other columns), as report_csv would. */
 int report_csv_check(const char *path, diag *d);

@@ -333,6 +333,26 @@ Test(saarsim_cli, csv_of_other_columns_is_refused)
  * 3, went through), and the later of a flag and a --set wins (a flag equal
  * to the default was ignored, so a --set before it won). A fidelity
  * shorthand's value reaches the config whole (it was cut at 255 bytes). */
+/* Runs appending to one CSV at once keep every row: each used to rename
+ * its copy of the old rows plus its own over the others' (24 runs left 4
+ * rows). */
+Test(saarsim_cli, concurrent_csv_appends_keep_every_row, .timeout = 120)
+{
+	char cmd[1024];
+	snprintf(cmd, sizeof cmd,
+	         "for i in $(seq 1 24); do %s/saarsim --size 16x16 --no-check --csv %s/c.csv "
+	         ">/dev/null 2>>%s/err & done; wait",
+	         tu_bin_dir(), dir, dir);
+	cr_assert_eq(tu_run(cmd), 0);
+	char *csv = slurp("c.csv");
+	int lines = 0;
+	for (char *p = csv; *p; p++)
+		lines += *p == '\n';
+	cr_assert_eq(lines, 25, "header and 24 rows expected: %d lines; stderr: %s", lines,
+	             slurp("err"));
+	cr_assert_eq(tu_temps(dir, "c.csv"), 0);
+}
+
 Test(saarsim_cli, kd_flags_go_through_the_config)
 {
 	const char *bad[][2] = {{"--kd-leaf-size 100000", "--kd-leaf-size: kdtree.leaf_size"},
