@@ -291,13 +291,22 @@ static void fidelity_json(jsonw *j, const chip *c)
 
 /* Cycles each unit type's reads waited for memory (issue -> data, summed
  * over reads; overlapping reads of one packet all count). The fixed model
- * answers every read after memory.latency cycles. */
-static uint64_t stall_cycles(const chip *c, int type)
+ * answers every read after memory.latency cycles. Only timed reads wait:
+ * an estimated sampled run scales its detailed regions' waits by the
+ * frame's estimated cycles over theirs (the same ratio estimate as its
+ * cycles), and a functional run's hierarchy has none to give (-1). */
+static double stall_cycles(const chip *c, int type)
 {
+	const chip_fidelity *F = &c->fid;
 	hier_stats h;
-	if (!hier_get_stats(&c->mem, &h))
-		return h.wait_cycles[type];
-	return c->mem.n.reads[type] * (uint64_t)c->cfg.memory.latency;
+	if (hier_get_stats(&c->mem, &h))
+		return (double)(c->mem.n.reads[type] * (uint64_t)c->cfg.memory.latency);
+	if (F->mode == CFG_FIDELITY_FUNCTIONAL)
+		return -1;
+	if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact && F->detailed_cycles)
+		return round((double)h.wait_cycles[type] * (double)chip_cycles(c) /
+		             (double)F->detailed_cycles);
+	return (double)h.wait_cycles[type];
 }
 
 /* A ratio, or null where it has no denominator (stored as -1). */
@@ -435,10 +444,14 @@ void report_text(FILE *f, const report_info *ri)
 			fprintf(f, "; PCI busy %.1f%%", 100 * m.pci_util);
 		fputc('\n', f);
 	}
-	fputs("  read cycles waiting for memory:", f);
-	for (int k = 0; k < UNIT_NKINDS; k++)
-		fprintf(f, " %s %llu", chip_unit_name(k), (unsigned long long)stall_cycles(c, k));
-	fputc('\n', f);
+	if (stall_cycles(c, 0) >= 0) {
+		fputs("  read cycles waiting for memory:", f);
+		for (int k = 0; k < UNIT_NKINDS; k++)
+			fprintf(f, " %s %.0f", chip_unit_name(k), stall_cycles(c, k));
+		fputs(c->fid.mode == CFG_FIDELITY_SAMPLED && !c->fid.exact ? " (estimated)\n"
+		                                                           : "\n",
+		      f);
+	}
 	if (ri->check && ri->check->done)
 		fprintf(f, "  check vs kernel-ref: %s (PSNR %.2f dB, %llu differing pixels)%s\n",
 		        ri->check->cmp.identical ? "identical" : "DIFFERENT", ri->check->cmp.psnr,
@@ -643,8 +656,14 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	               "unit kinds and memory requester types must line up");
 	jsonw_key(j, "stall_cycles");
 	jsonw_obj_begin(j);
-	for (int k = 0; k < UNIT_NKINDS; k++)
-		kv(j, chip_unit_name(k), stall_cycles(c, k));
+	for (int k = 0; k < UNIT_NKINDS; k++) {
+		double wait = stall_cycles(c, k);
+		jsonw_key(j, chip_unit_name(k));
+		if (wait < 0)
+			jsonw_null(j);
+		else
+			jsonw_uint(j, (uint64_t)wait);
+	}
 	jsonw_obj_end(j);
 	hier_stats hs;
 	int have_h = !hier_get_stats(&c->mem, &hs);
