@@ -413,13 +413,14 @@ void report_text(FILE *f, const report_info *ri)
 	        (unsigned long long)tests, ratio((double)steps, (double)tests),
 	        (unsigned long long)get(c, "trav.stack_overflows"));
 	memfig m;
+	/* the fixed model has no SDRAM: its bytes are the memory port's */
+	const char *mem_name = c->frame_mem ? "SDRAM" : "memory port";
 	if (c->frames_done > 1) {
 		for (int fr = 0; fr < c->frames_done; fr++) {
 			memfig_span(c, fr, fr + 1, &m);
 			fprintf(
-			    f,
-			    "  frame %d: %.0f cycles = %.2f fps, SDRAM %.2f MB, PCI %.2f MB, hits:",
-			    fr + 1, m.cycles, m.fps, m.sdram_mb, m.pci_mb);
+			    f, "  frame %d: %.0f cycles = %.2f fps, %s %.2f MB, PCI %.2f MB, hits:",
+			    fr + 1, m.cycles, m.fps, mem_name, m.sdram_mb, m.pci_mb);
 			for (int k = 0; k < HR_N; k++)
 				if (k < MEM_NTYPES || g->memory.vma.enabled)
 					pct(f, hr_names[k], m.hit[k]);
@@ -427,9 +428,9 @@ void report_text(FILE *f, const report_info *ri)
 		}
 	}
 	report_steady_state(c, &m);
-	fprintf(f, "  %s: %.2f fps, SDRAM %.2f MB/frame, PCI %.2f MB/frame\n",
+	fprintf(f, "  %s: %.2f fps, %s %.2f MB/frame, PCI %.2f MB/frame\n",
 	        c->frames_done > 1 ? "steady state (mean of frames 2..N)" : "frame", m.fps,
-	        m.sdram_mb, m.pci_mb);
+	        mem_name, m.sdram_mb, m.pci_mb);
 	if (c->frame_mem) {
 		fputs("  hit rates:", f);
 		for (int k = 0; k < HR_N; k++)

@@ -583,6 +583,30 @@ Test(saarsim_cli, stall_cycles_are_the_frames)
 	}
 }
 
+/* The fixed memory model has no SDRAM: the text calls its bytes the
+ * memory port's (the JSON's sdram_mb says so in docs/report.md), and its
+ * wait is reads x latency. */
+Test(saarsim_cli, fixed_model_names_its_bytes)
+{
+	char args[512];
+	snprintf(args, sizeof args,
+	         "--size 32x24 --no-check --frames 2 --set memory.model=fixed "
+	         "--set memory.latency=7 --report %s/r.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *r = slurp("r.json"), *out = slurp("out");
+	cr_assert_null(strstr(out, "SDRAM"), "%s", out);
+	cr_assert(strstr(out, "  frame 2: ") && strstr(out, ", memory port "), "%s", out);
+	cr_assert(strstr(out, "fps, memory port ") && strstr(out, " MB/frame, PCI "), "%s", out);
+	/* the report's memory section: the last "memory" object (the
+	 * config's comes first) */
+	const char *mem = NULL;
+	for (const char *q = r; (q = strstr(q, "\"memory\": {")); q++)
+		mem = q;
+	cr_assert(mem);
+	cr_assert_eq(JNUM(mem, "stall_cycles", "trav"), 7 * JNUM(mem, "kd", "reads"));
+}
+
 /* A warm 8x8 frame through the VMA makes no SDRAM access in its steady
  * state: the meta-data share and row-hit rate of nothing are null (an
  * empty CSV field), not 0% (which validate.sh's mean once counted in). */
