@@ -121,7 +121,7 @@ run: all
 
 # Tests find the binaries and the shared scenes through the environment.
 test: all $(B)/saarsim-tests $(PLUGIN)
-	LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
 	SAAR_BIN=$(CURDIR)/$(B) SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) \
 	  ./$(B)/saarsim-tests --jobs 2
 
