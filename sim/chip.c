@@ -1083,7 +1083,7 @@ int chip_run(chip *c, diag *d)
 		c->tiles_given = 0;
 		if (F->mode == CFG_FIDELITY_FUNCTIONAL)
 			func_range(c, c->g.ntiles, 1);
-		else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact)
+		else if (chip_estimates(&c->cfg))
 			sampled_frame(c, f);
 		else /* cycle, and sampled at rate 1: the same event sequence */
 			F->est[f] = (double)eng_ticks_to_cycles(c->clk, run_region(c, c->g.ntiles));

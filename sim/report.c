@@ -96,7 +96,7 @@ static void memfig_span(const chip *c, int f0, int f1, memfig *m)
 	    b->sdram.read_bytes + b->sdram.write_bytes - a->sdram.read_bytes - a->sdram.write_bytes;
 	m->sdram_mb = (double)sd / MB / n;
 	m->pci_mb = (double)(b->hostbus.bytes - a->hostbus.bytes) / MB / n;
-	int est = c->fid.mode == CFG_FIDELITY_SAMPLED && !c->fid.exact;
+	int est = chip_estimates(&c->cfg);
 	for (int t = 0; t < MEM_NTYPES; t++)
 		m->hit[t] = span_hit_rate(&a->l1[t], &b->l1[t], est, NULL);
 	if (b->vma_enabled) {
@@ -206,7 +206,7 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "  fidelity functional: no timing; fps <= %.2f (a bound: the busiest "
 		        "resource is %s, %.0f cycles/frame)\n",
 		        x.fps_bound, x.bound_by, F->res_cycles[F->bound_by]);
-	else if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact) {
+	else if (chip_estimates(&c->cfg)) {
 		char ms[64];
 		fprintf(f,
 		        "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up), "
@@ -231,7 +231,7 @@ static void fidelity_json(jsonw *j, const chip *c)
 	jsonw_obj_begin(j);
 	jsonw_kstr(j, "mode", x.mode);
 	jsonw_kbool(j, "timed", F->mode != CFG_FIDELITY_FUNCTIONAL);
-	jsonw_kbool(j, "estimated", F->mode == CFG_FIDELITY_SAMPLED && !F->exact);
+	jsonw_kbool(j, "estimated", chip_estimates(&c->cfg));
 	jsonw_knum(j, "cycles_per_frame", x.cycles);
 	jsonw_key(j, "cycles_ci95");
 	jsonw_arr_begin(j);
@@ -303,7 +303,7 @@ static double stall_cycles(const chip *c, int type)
 		return (double)(c->mem.n.reads[type] * (uint64_t)c->cfg.memory.latency);
 	if (F->mode == CFG_FIDELITY_FUNCTIONAL)
 		return -1;
-	if (F->mode == CFG_FIDELITY_SAMPLED && !F->exact && F->detailed_cycles)
+	if (chip_estimates(&c->cfg) && F->detailed_cycles)
 		return round((double)h.wait_cycles[type] * (double)chip_cycles(c) /
 		             (double)F->detailed_cycles);
 	return (double)h.wait_cycles[type];
@@ -449,9 +449,7 @@ void report_text(FILE *f, const report_info *ri)
 		fputs("  read cycles waiting for memory:", f);
 		for (int k = 0; k < UNIT_NKINDS; k++)
 			fprintf(f, " %s %.0f", chip_unit_name(k), stall_cycles(c, k));
-		fputs(c->fid.mode == CFG_FIDELITY_SAMPLED && !c->fid.exact ? " (estimated)\n"
-		                                                           : "\n",
-		      f);
+		fputs(chip_estimates(&c->cfg) ? " (estimated)\n" : "\n", f);
 	}
 	if (ri->check && ri->check->done)
 		fprintf(f, "  check vs kernel-ref: %s (PSNR %.2f dB, %llu differing pixels)%s\n",

@@ -11,7 +11,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "image.h"
 #include "testutil.h"
 
 static char dir[256];
@@ -103,17 +102,10 @@ Test(saarsim_cli, report_describes_camera_and_lights)
 Test(saarsim_cli, truncated_texture_is_one_line)
 {
 	static const char *const exts[] = {"png", "jpg"};
-	static uint8_t px[64 * 64 * 3];
-	for (int i = 0; i < (int)sizeof px; i++)
-		px[i] = (uint8_t)((i * 2654435761u) >> 24);
 	for (int e = 0; e < 2; e++) {
 		char p[512], args[1024];
-		diag d = {{0}};
 		snprintf(p, sizeof p, "%s/t.%s", dir, exts[e]);
-		cr_assert_eq(img_write(p, 64, 64, px, NULL, NULL, &d), 0, "%s", d.msg);
-		struct stat st;
-		cr_assert_eq(stat(p, &st), 0);
-		cr_assert_eq(truncate(p, st.st_size / 2), 0);
+		tu_write_cut_image(p);
 		char mtl[64];
 		snprintf(mtl, sizeof mtl, "newmtl a\nmap_Kd t.%s\n", exts[e]);
 		tu_write(p, sizeof p, dir, "t.mtl", mtl);
@@ -328,11 +320,6 @@ Test(saarsim_cli, csv_of_other_columns_is_refused)
 	free(two);
 }
 
-/* The kd-tree flags are shorthands of --set kdtree.*: the config's ranges
- * and types apply (--kd-leaf-size 100000 and --kd-max-depth 3.7, read as
- * 3, went through), and the later of a flag and a --set wins (a flag equal
- * to the default was ignored, so a --set before it won). A fidelity
- * shorthand's value reaches the config whole (it was cut at 255 bytes). */
 /* Runs appending to one CSV at once keep every row: each used to rename
  * its copy of the old rows plus its own over the others' (24 runs left 4
  * rows). */
@@ -353,6 +340,11 @@ Test(saarsim_cli, concurrent_csv_appends_keep_every_row, .timeout = 120)
 	cr_assert_eq(tu_temps(dir, "c.csv"), 0);
 }
 
+/* The kd-tree flags are shorthands of --set kdtree.*: the config's ranges
+ * and types apply (--kd-leaf-size 100000 and --kd-max-depth 3.7, read as
+ * 3, went through), and the later of a flag and a --set wins (a flag equal
+ * to the default was ignored, so a --set before it won). A fidelity
+ * shorthand's value reaches the config whole (it was cut at 255 bytes). */
 Test(saarsim_cli, kd_flags_go_through_the_config)
 {
 	const char *bad[][2] = {{"--kd-leaf-size 100000", "--kd-leaf-size: kdtree.leaf_size"},

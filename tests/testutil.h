@@ -18,6 +18,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "image.h"
+
 static inline const char *tu_scenes_dir(void)
 {
 	const char *d = getenv("SAAR_SCENES");
@@ -145,6 +147,22 @@ static inline char *tu_slurp(const char *dir, const char *name)
 	buf[n] = 0;
 	fclose(f);
 	return buf;
+}
+
+/* Writes a 64x64 image of noise (no format shrinks it to a few bytes) at
+ * path, in the format its extension names, and cuts the file to half its
+ * size: a damaged image for the readers to refuse. */
+static inline void tu_write_cut_image(const char *path)
+{
+	enum { W = 64, H = 64 };
+	static uint8_t px[W * H * 3];
+	for (int i = 0; i < (int)sizeof px; i++)
+		px[i] = (uint8_t)((i * 2654435761u) >> 24);
+	diag d = {{0}};
+	cr_assert_eq(img_write(path, W, H, px, NULL, NULL, &d), 0, "%s", d.msg);
+	struct stat st;
+	cr_assert_eq(stat(path, &st), 0);
+	cr_assert_eq(truncate(path, st.st_size / 2), 0, "cannot cut %s", path);
 }
 
 /* Removes the whitespace outside strings from JSON text s, in place, so a
