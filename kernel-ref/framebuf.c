@@ -4,18 +4,32 @@
  */
 #include "framebuf.h"
 
+#include <sys/mman.h>
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "image.h"
 
+#define FB_HUGE ((uintptr_t)2 << 20)
+
 int fb_init(framebuf *fb, int w, int h)
 {
 	fb->w = w;
 	fb->h = h;
-	fb->acc = calloc((size_t)w * (size_t)h * 3, sizeof *fb->acc);
-	return fb->acc ? 0 : -1;
+	size_t n = (size_t)w * (size_t)h * 3 * sizeof *fb->acc;
+	fb->acc = calloc(1, n);
+	if (!fb->acc)
+		return -1;
+	/* 19 MB at 1024x768: in huge pages its first touch takes a few page
+	 * faults instead of thousands (a tenth of a sampled run's host time
+	 * with stored warming) */
+	uintptr_t a = ((uintptr_t)fb->acc + FB_HUGE - 1) & ~(uintptr_t)(FB_HUGE - 1),
+	          e = ((uintptr_t)fb->acc + n) & ~(uintptr_t)(FB_HUGE - 1);
+	if (e > a)
+		madvise((void *)a, e - a, MADV_HUGEPAGE);
+	return 0;
 }
 
 void fb_free(framebuf *fb)

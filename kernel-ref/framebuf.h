@@ -25,6 +25,7 @@ typedef struct framebuf {
 	uint64_t *acc; /* 3 per pixel, fixed point */
 } framebuf;
 
+/* A cleared frame buffer. */
 int fb_init(framebuf *fb, int w, int h);
 void fb_free(framebuf *fb);
 void fb_clear(framebuf *fb);

@@ -50,8 +50,59 @@ void cache_free(cache *c)
 {
 	free(c->way);
 	free(c->mshr_line);
+	free(c->dirty);
 	c->way = NULL;
 	c->mshr_line = NULL;
+	c->dirty = NULL;
+}
+
+int cache_track(cache *c)
+{
+	if (!c->dirty)
+		c->dirty = calloc((c->nsets + 63) / 64, sizeof *c->dirty);
+	return c->dirty ? 0 : -1;
+}
+
+void cache_dirty_clear(cache *c)
+{
+	if (c->dirty)
+		memset(c->dirty, 0, (c->nsets + 63) / 64 * sizeof *c->dirty);
+}
+
+int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *rank)
+{
+	uint32_t W = c->p.ways;
+	for (uint32_t s = 0; s < n; s++) {
+		const cache_way *w = c->way + (size_t)(set0 + s) * W;
+		for (uint32_t i = 0; i < W; i++) {
+			size_t k = (size_t)s * W + i;
+			if (w[i].tag != CACHE_INVALID && w[i].tag >= UINT32_MAX)
+				return -1;
+			line[k] = w[i].tag == CACHE_INVALID ? UINT32_MAX : (uint32_t)w[i].tag;
+			/* rank: the ways used before it (ways <= 64) */
+			uint32_t r = 0;
+			for (uint32_t j = 0; j < W; j++)
+				r += w[j].use < w[i].use;
+			rank[k] = (uint8_t)r;
+		}
+	}
+	return 0;
+}
+
+void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const uint8_t *rank)
+{
+	uint32_t W = c->p.ways;
+	for (uint32_t s = 0; s < n; s++) {
+		cache_way *w = c->way + (size_t)(set0 + s) * W;
+		for (uint32_t i = 0; i < W; i++) {
+			size_t k = (size_t)s * W + i;
+			w[i].tag = line[k] == UINT32_MAX ? CACHE_INVALID : line[k];
+			w[i].use = rank[k];
+		}
+	}
+	/* later uses must be newer than every restored one */
+	if (c->stamp < W)
+		c->stamp = W;
 }
 
 void cache_flush(cache *c)
@@ -115,6 +166,7 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 	if (w >= 0) {
 		size_t i = (size_t)set * c->p.ways + (size_t)w;
 		c->way[i].use = ++c->stamp;
+		cache_touch(c, set);
 		c->s.accesses++;
 		c->s.hits++;
 		c->s.bytes += bytes;
@@ -185,6 +237,7 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 		w = (int)best;
 	}
 	s[w].use = ++c->stamp;
+	cache_touch(c, set);
 	return (uint32_t)(base + (size_t)w);
 }
 
@@ -197,6 +250,7 @@ int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
 	c->s.bytes += bytes;
 	if (w >= 0) {
 		c->way[(size_t)set * c->p.ways + (size_t)w].use = ++c->stamp;
+		cache_touch(c, set);
 		c->s.hits++;
 		c->s.func_hits++;
 		return 1;

@@ -80,6 +80,11 @@ typedef struct cache {
 	uint64_t *mshr_line; /* p.mshrs entries; CACHE_INVALID when free */
 	uint32_t mshr_used;
 	cache_stats s;
+	/* sets changed since the last cache_dirty_clear, one bit each; NULL:
+	 * not tracked (cache_track). Stored warming (sim/warming.h) restores
+	 * only the sets of the on-board cache that a region or the checkpoints
+	 * between changed: copying all of it took longer than the region */
+	uint64_t *dirty;
 } cache;
 
 #define CACHE_INVALID UINT64_MAX
@@ -90,6 +95,25 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d);
 void cache_free(cache *c);
 /* Empties every line and MSHR; keeps the counters. */
 void cache_flush(cache *c);
+
+/* Tracks the sets that change from now on (cache.dirty). -1 when out of
+ * memory. */
+int cache_track(cache *c);
+static inline void cache_touch(cache *c, uint32_t set)
+{
+	if (c->dirty)
+		c->dirty[set >> 6] |= 1ull << (set & 63);
+}
+void cache_dirty_clear(cache *c);
+
+/* The state of sets [set0, set0 + n) in compact form, ways in order:
+ * each way's line (UINT32_MAX when empty) and its LRU rank in its set
+ * (0 = least recent), all LRU order needs. -1 when a line does not fit
+ * in 31 bits (nothing stored beyond it). */
+int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *rank);
+/* Sets [set0, set0 + n) from cache_save's form (their MSHRs must be
+ * free); hits and fills after it see the same LRU order. */
+void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const uint8_t *rank);
 
 static inline uint64_t cache_line_of(const cache *c, uint64_t addr)
 {
@@ -128,10 +152,12 @@ static inline int cache_mshr_free(const cache *c)
 static inline int cache_try_hit(cache *c, uint64_t line, uint32_t bytes)
 {
 	uint32_t ways = c->p.ways;
-	cache_way *s = c->way + (size_t)cache_set_of(c, line) * ways;
+	uint32_t set = cache_set_of(c, line);
+	cache_way *s = c->way + (size_t)set * ways;
 	for (uint32_t w = 0; w < ways; w++)
 		if (s[w].tag == line) {
 			s[w].use = ++c->stamp;
+			cache_touch(c, set);
 			c->s.accesses++;
 			c->s.hits++;
 			c->s.bytes += bytes;

@@ -76,6 +76,10 @@ struct hier {
 	 * such read's ticks times the share of merges among the timed
 	 * accesses that found their line present or arriving, so far) */
 	double fmerge_ticks;
+	/* of fsd.busy_ticks: all reads that were on-board-cache hits (what
+	 * fmerge_ticks takes its share of; stored warming applies the share
+	 * to the checkpoints' traffic after the fact, sim/warming.h) */
+	uint64_t fl2hit_ticks;
 };
 
 /* ---- free lists ---- */
@@ -337,6 +341,7 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 		if (!write && dr) {
 			/* the reads are on-board-cache hits; a timed chip merges a
 			 * share of them into fetches still on their way */
+			h->fl2hit_ticks += h->fsd.busy_ticks - t0;
 			h->fmerge_ticks += (double)(h->fsd.busy_ticks - t0) *
 			                   cache_timed_merge_share(NULL, &h->v.l2.s);
 		}
@@ -584,6 +589,66 @@ int hier_get_stats(const memport *p, hier_stats *s)
 		s->hostbus_peak_bytes_per_s = hbus_peak_bw(&h->hb);
 	}
 	return 0;
+}
+
+/* ---- stored warming (sim/warming.h) ---- */
+
+void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2)
+{
+	hier *h = p->impl;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		l1[t] = &h->l1[t].c;
+	*tag = h->use_vma && h->v.p.tag_cache_enabled ? &h->v.tag : NULL;
+	*l2 = h->use_vma ? &h->v.l2 : NULL;
+}
+
+/* Adds the n 64-bit counters of a stats struct to out (every field of
+ * these structs is a uint64_t counter). */
+#define COUNTERS(st) (uint64_t *)&(st), sizeof(st) / sizeof(uint64_t)
+_Static_assert(sizeof(cache_stats) % 8 == 0 && sizeof(sdram_stats) % 8 == 0 &&
+                   sizeof(memif_stats) % 8 == 0 && sizeof(hbus_stats) % 8 == 0 &&
+                   sizeof(vma_stats) % 8 == 0,
+               "stats structs hold uint64_t counters only");
+
+static size_t add_ptrs(uint64_t **out, size_t n, size_t cap, uint64_t *a, size_t k)
+{
+	for (size_t i = 0; i < k; i++, n++)
+		if (out && n < cap)
+			out[n] = a + i;
+	return n;
+}
+
+size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap)
+{
+	hier *h = p->impl;
+	size_t n = 0;
+	uint64_t *arr[] = {h->reads,  h->read_bytes, h->writes,     h->write_bytes,
+	                   h->bypass, h->wait_ticks, h->stall_ticks};
+	for (size_t i = 0; i < sizeof arr / sizeof *arr; i++)
+		n = add_ptrs(out, n, cap, arr[i], MEM_NTYPES);
+	for (int t = 0; t < MEM_NTYPES; t++)
+		n = add_ptrs(out, n, cap, COUNTERS(h->l1[t].c.s));
+	n = add_ptrs(out, n, cap, COUNTERS(h->fsd));
+	n = add_ptrs(out, n, cap, COUNTERS(h->fmi));
+	n = add_ptrs(out, n, cap, COUNTERS(h->fhb));
+	n = add_ptrs(out, n, cap, &h->freqs, 1);
+	n = add_ptrs(out, n, cap, &h->fl2hit_ticks, 1);
+	if (h->use_vma) {
+		n = add_ptrs(out, n, cap, COUNTERS(h->v.s));
+		n = add_ptrs(out, n, cap, COUNTERS(h->v.tag.s));
+		n = add_ptrs(out, n, cap, COUNTERS(h->v.l2.s));
+	}
+	return n;
+}
+
+uint64_t hier_l2hit_ticks(const memport *p)
+{
+	return ((const hier *)p->impl)->fl2hit_ticks;
+}
+
+void hier_add_merge_ticks(memport *p, double ticks)
+{
+	((hier *)p->impl)->fmerge_ticks += ticks;
 }
 
 /* ---- JSON ---- */

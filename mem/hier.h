@@ -19,6 +19,7 @@
 #ifndef SAAR_MEM_HIER_H
 #define SAAR_MEM_HIER_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "cache.h"
@@ -36,7 +37,7 @@
  * (hit rates, utilisation) are derived by hier_write_json, not counted. */
 typedef struct hier_stats {
 	int vma_enabled;
-	uint64_t now_ticks;         /* engine time when the stats were taken */
+	uint64_t now_ticks; /* engine time when the stats were taken */
 	/* the whole run's simulated time: 0 (the default) for now_ticks; set
 	 * by the report when functional stretches did work the engine never
 	 * timed (sampled: the estimated cycles, functional: the bound), so
@@ -83,6 +84,17 @@ void hier_hbus_params(const saar_config *cfg, hbus_params *p);
 int hier_is(const memport *p);
 /* Copies every counter; -1 if p is not a hierarchy. */
 int hier_get_stats(const memport *p, hier_stats *s);
+/* Stored warming (sim/warming.h): the caches whose state functional
+ * processing moves (the four L1s; with the VMA its tag cache, NULL when
+ * disabled, and on-board cache, else both NULL); pointers to every counter
+ * functional processing moves (out may be NULL; returns how many there
+ * are, at most cap written); the ticks of on-board-cache hits among
+ * functional SDRAM reads; and adding to the merged part of them
+ * (hier_stats.func_sdram_merge_ticks). */
+void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2);
+size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap);
+uint64_t hier_l2hit_ticks(const memport *p);
+void hier_add_merge_ticks(memport *p, double ticks);
 /* Writes the stats as one JSON object (a value: the caller writes the key). */
 void hier_write_json(const hier_stats *s, jsonw *w);
 

@@ -132,6 +132,17 @@ static void census_mark(chip *c, int tile)
 	chip_demand(c, m->dem);
 }
 
+/* A warming run's checkpoint at hand-out index tile (sim/warming.h): the
+ * slot taking it is idle, every other one between two steps. */
+static void warm_mark(chip *c, int tile)
+{
+	if (tile % c->wcap->g_full == 0)
+		wm_put_full(c->wcap, c, c->frames_done, tile);
+	double dem[RES_N];
+	chip_demand(c, dem);
+	wm_put_light(c->wcap, c, c->frames_done, tile, dem);
+}
+
 int chip_census_check(const saar_config *cfg, diag *d)
 {
 	if (chip_estimates(cfg))
@@ -168,6 +179,8 @@ static int take_tile(chip *c, thr_ctx *t)
 		return 0;
 	if (c->census && c->tiles_given % c->fid.unit_tiles == 0)
 		census_mark(c, c->tiles_given);
+	if (c->wcap && c->tiles_given % c->wcap->g_light == 0)
+		warm_mark(c, c->tiles_given);
 	c->tiles_given++;
 	if (c->progress && c->tiles_given % 64 == 0)
 		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
@@ -310,6 +323,12 @@ static int fid_plan(const saar_config *cfg, int *unit, int *warmup, long *units)
 	 * per RTP a 64-tile warm-up measured as well as a 256-tile one */
 	int warm = nrtp * (tpr < WARMUP_TPR ? tpr : WARMUP_TPR);
 	int W = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : warm;
+	/* stored warming's regions start and end on its light grid (one tile
+	 * per RTP, chip_warm_grid) */
+	if (cfg->sampling.warming == CFG_WARMING_STORED) {
+		U = (U + nrtp - 1) / nrtp * nrtp;
+		W = (W + nrtp - 1) / nrtp * nrtp;
+	}
 	/* n units of U tiles, at least sampling.min_units and 3 (the head,
 	 * the tail and one between); when the regions would cover the frame
 	 * anyway, simulate all of it */
@@ -595,6 +614,9 @@ void chip_destroy(chip *c)
 	free(c->rec_key);
 	free(c->replayed);
 	free(c->census);
+	wm_close(&c->warm);
+	wc_unmap(&c->warm_map);
+	free(c->warm_own);
 	mem_free(&c->mem);
 	thr_env_free(&c->env);
 	if (c->e)
@@ -867,16 +889,18 @@ static int func_range(chip *c, int end, int drain)
  * finished after the unit), detailed or functional alike. The interval
  * adds sampling.bias_bound. A memory-bound functional chunk brings an
  * extra region (func_range). docs/fidelity.md. */
+static void sampled_estimate(chip *c, int f, int nr, uint64_t t0);
+static void sampled_region(chip *c, int j, int tail);
+
 static void sampled_frame(chip *c, int f)
 {
 	chip_fidelity *F = &c->fid;
-	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits;
+	int W = F->warmup_tiles, n = F->nunits;
 	uint64_t t0 = eng_now(c->e);
 	F->us_next = F->ue_next = 0;
 	F->npc = 0;
 	F->extra_left = F->unit_cap - n;
 	F->last_end = 0;
-	double per = (double)c->clk.period, *cyc = F->unit_cyc;
 	int j = 0;
 	for (int b = 0; b < n; j++) {
 		int rs = F->base_s[b] - W;
@@ -891,24 +915,148 @@ static void sampled_frame(chip *c, int f)
 		} else {
 			F->unit_s[j] = F->base_s[b++];
 		}
-		double r0[RES_N], r1[RES_N];
-		chip_demand(c, r0);
-		F->mark_r0[j] = eng_now(c->e);
-		int tail = b == n && !extra;
-		run_region(c, tail ? N : F->unit_s[j] + U);
-		F->last_end = c->g.next;
-		chip_demand(c, r1);
-		/* the region's pieces in order: warm-up, unit, what finished after
-		 * the unit; the head's first two and the tail are measured */
-		const double *ds = &F->dem_s[j * RES_N], *de = &F->dem_e[j * RES_N];
-		F->unit_pc[j] = piece(c, ds, de);
-		cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / per;
-		account(F, piece(c, r0, ds), j > 0 && !tail);
-		account(F, F->unit_pc[j], j > 0 && !tail);
-		account(F, piece(c, de, r1), !tail);
+		sampled_region(c, j, b == n && !extra);
 	}
-	int nr = F->nreg = j;
-	F->region_end = N;
+	sampled_estimate(c, f, j, t0);
+}
+
+/* Region j of a sampled frame (its unit_s set): runs it and keeps its
+ * pieces in order: warm-up, unit, what finished after the unit; the
+ * head's first two and the tail are measured, not estimated. */
+static void sampled_region(chip *c, int j, int tail)
+{
+	chip_fidelity *F = &c->fid;
+	double r0[RES_N], r1[RES_N];
+	chip_demand(c, r0);
+	F->mark_r0[j] = eng_now(c->e);
+	run_region(c, tail ? c->g.ntiles : F->unit_s[j] + F->unit_tiles);
+	F->last_end = c->g.next;
+	chip_demand(c, r1);
+	const double *ds = &F->dem_s[j * RES_N], *de = &F->dem_e[j * RES_N];
+	F->unit_pc[j] = piece(c, ds, de);
+	F->unit_cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / (double)c->clk.period;
+	account(F, piece(c, r0, ds), j > 0 && !tail);
+	account(F, F->unit_pc[j], j > 0 && !tail);
+	account(F, piece(c, de, r1), !tail);
+}
+
+/* The merge share of the on-board cache so far (hier.c fmerge_ticks):
+ * 0 without the VMA. */
+static double l2_merge_share(chip *c)
+{
+	if (!hier_is(&c->mem))
+		return 0;
+	cache *k[MEM_NTYPES], *tag, *l2;
+	hier_caches(&c->mem, k, &tag, &l2);
+	return l2 ? cache_timed_merge_share(NULL, &l2->s) : 0;
+}
+
+/* A piece of the warming run between two light checkpoints, its SDRAM
+ * demand less the share m of on-board-cache hits a timed chip merges. */
+static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
+{
+	double d0[RES_N], d1[RES_N], per = (double)c->clk.period;
+	uint64_t h0, h1;
+	memcpy(d0, wm_demand(&c->warm, f, a, &h0), sizeof d0);
+	memcpy(d1, wm_demand(&c->warm, f, b, &h1), sizeof d1);
+	d0[RES_SDRAM] -= m * (double)h0 / per;
+	d1[RES_SDRAM] -= m * (double)h1 / per;
+	return piece(c, d0, d1);
+}
+
+/* A sampled frame with stored warming (docs/fidelity.md "Stored
+ * warming"): as sampled_frame, but a gap between regions is not run: its
+ * chunks' demands come from the warming run's light checkpoints and the
+ * next region starts from the full checkpoint at its start
+ * (wm_restore), which also adds the gap's counts. Region starts snap
+ * down to the full grid; a region whose start falls at or before the
+ * last one's end follows it without a gap. */
+static void sampled_frame_stored(chip *c, int f)
+{
+	chip_fidelity *F = &c->fid;
+	wm *r = &c->warm;
+	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits, G = r->g_full;
+	uint64_t t0 = eng_now(c->e);
+	F->us_next = F->ue_next = 0;
+	F->npc = 0;
+	F->extra_left = F->unit_cap - n;
+	F->last_end = 0;
+	int j = 0, at = 0, room = W + U;
+	for (int b = 0; b < n; j++) {
+		int tail = b == n - 1, rs = (F->base_s[b] - W) / G * G, extra = 0;
+		if (!tail && (rs > at ? rs : at) + room > (F->base_s[n - 1] - W) / G * G) {
+			b++; /* no room before the tail: left out */
+			j--;
+			continue;
+		}
+		if (rs > at && j > 0) {
+			/* the last region's packets in flight go on functionally
+			 * for one tile per thread slot first: a timed chip holds
+			 * more work in flight when a tile is wanted than the
+			 * warming run did when it handed out the same tile, and
+			 * jumping to the checkpoint at once lost that work (the
+			 * frame's SDRAM bytes came out several percent low) */
+			int e = at + c->nrtp * c->tpr < rs ? at + c->nrtp * c->tpr : rs;
+			int xl = F->extra_left; /* an extra region starts in a gap only */
+			F->extra_left = 0;
+			func_range(c, e, 0);
+			F->extra_left = xl;
+			at = c->g.next;
+		}
+		if (rs > at) {
+			/* the gap [at, rs): the warming run's chunks of U tiles; a
+			 * memory-bound one brings an extra region at the next full
+			 * checkpoint after it, as func_range does */
+			double m = l2_merge_share(c);
+			wm_region_end(r, f, at);
+			for (int a = at; a < rs;) {
+				int e = a + U < rs ? a + U : rs;
+				int hard = account(F, warm_piece(c, f, a, e, m), 1);
+				int xs = (e + G - 1) / G * G;
+				if (hard && e - a == U && F->extra_left > 0 &&
+				    e - F->last_end >= F->gap && rs - xs >= room) {
+					if (xs > e)
+						account(F, warm_piece(c, f, e, xs, m), 1);
+					rs = xs;
+					extra = 1;
+					break;
+				}
+				a = e;
+			}
+			F->functional_tiles += (uint64_t)(rs - at);
+			F->replayed_tiles += (uint64_t)(rs - at);
+			if (wm_restore(r, c, f, rs, m))
+				c->warm_err = 1;
+		} else
+			rs = at;
+		if (extra) {
+			F->extra_left--;
+			tail = 0;
+		} else
+			b++;
+		int us = rs + W;
+		if (tail && us > N - U)
+			us = N - U > rs ? N - U : rs;
+		F->unit_s[j] = us;
+		sampled_region(c, j, tail);
+		at = c->g.next;
+		if (c->warm_err)
+			break;
+	}
+	/* every tile's packets were replayed, here or in the warming run */
+	memset(c->replayed, 1, (size_t)N);
+	sampled_estimate(c, f, j, t0);
+}
+
+/* The estimate of a sampled frame of nr regions that started at t0 from
+ * its units and pieces (sampling.c): the head and tail measured, the
+ * middle estimated, plus sampling.bias_bound. */
+static void sampled_estimate(chip *c, int f, int nr, uint64_t t0)
+{
+	chip_fidelity *F = &c->fid;
+	double per = (double)c->clk.period, *cyc = F->unit_cyc;
+	F->nreg = nr;
+	F->region_end = c->g.ntiles;
 	uint64_t t1 = eng_now(c->e);
 	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[nr - 1]) / per;
 	smp_est r;
@@ -1040,6 +1188,166 @@ static void rec_pixels(chip *c)
 		}
 }
 
+const char *chip_warm_name(int state)
+{
+	static const char *const n[] = {"off", "loaded", "built", "not stored", "unavailable"};
+	return state >= 0 && state <= WARM_UNAVAILABLE ? n[state] : "?";
+}
+
+/* Stored warming's grids: a light checkpoint per RTP's worth of tiles
+ * (units and warm-ups are multiples of it, fid_plan), a full one every
+ * 1/64 of the frame, rounded to the light grid. */
+static void warm_grid(const chip *c, int *gl, int *gf)
+{
+	*gl = c->nrtp;
+	*gf = c->g.ntiles / 64 / c->nrtp * c->nrtp;
+	if (*gf < *gl)
+		*gf = *gl;
+}
+
+/* The warming run's key: the packet record's (the frame) and every config
+ * key functional processing reads. Left out: fidelity, sampling and the
+ * keys only timing reads (unit latencies, thread scheduling, L1 hit
+ * latencies and MSHRs, SDRAM bank timing and mapping, the memory
+ * interface's policy, the tag cache's latency, the fixed model's
+ * latency), so a sweep over those reuses one warming run. */
+static char *warm_key(const chip *c, int gl, int gf)
+{
+	saar_config k = c->cfg, d;
+	cfg_defaults(&d);
+	k.fidelity = d.fidelity;
+	k.sampling = d.sampling;
+	cfg_unit *u[] = {&k.chip.rgs, &k.chip.trav, &k.chip.list, &k.chip.isect};
+	for (int i = 0; i < 4; i++)
+		u[i]->latency = 0;
+	k.chip.thread_sched = d.chip.thread_sched;
+	cfg_l1 *l[] = {&k.memory.l1.shade, &k.memory.l1.kd, &k.memory.l1.list, &k.memory.l1.tri};
+	for (int i = 0; i < 4; i++)
+		l[i]->hit_latency = l[i]->mshrs = 0;
+	k.memory.sdram.banks = k.memory.sdram.row_bytes = k.memory.sdram.cl = 0;
+	k.memory.sdram.trcd = k.memory.sdram.trp = k.memory.sdram.tras = 0;
+	k.memory.sdram.mapping = d.memory.sdram.mapping;
+	k.memory.memif = d.memory.memif;
+	k.memory.vma.tag_cache_latency = 0;
+	k.memory.latency = 0;
+	char *js = NULL, *key = NULL;
+	size_t n = 0;
+	FILE *f = open_memstream(&js, &n);
+	if (!f)
+		return NULL;
+	jsonw w;
+	jsonw_init_file(&w, f);
+	cfg_write_json(&k, &w);
+	if (fclose(f) || asprintf(&key, "saarsim warming 1\n%sgrid %d %d\nconfig %s\n", c->rec_key,
+	                          gl, gf, js) < 0)
+		key = NULL;
+	free(js);
+	return key;
+}
+
+/* The warming run of chip h (functional, replaying the packet record):
+ * every frame with checkpoints on the grids (sim/warming.h). */
+static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
+{
+	wm_writer w;
+	if (wm_writer_init(&w, h, gl, gf))
+		return -1;
+	/* take_tile takes the checkpoints (warm_mark), so the run steps as
+	 * functional mode does: stopping it at each checkpoint left slots
+	 * idle until the next and missed fewer L1 lines */
+	h->wcap = &w;
+	double dem[RES_N];
+	for (int f = 0; f < h->cfg.frame.frames && !h->oom; f++) {
+		h->frames_done = f;
+		rgc_reset(&h->g);
+		h->tiles_given = 0;
+		func_range(h, h->g.ntiles, 1);
+		chip_demand(h, dem);
+		wm_put_light(&w, h, f, h->g.ntiles, dem);
+	}
+	h->wcap = NULL;
+	int rc = h->oom ? -1 : wm_writer_finish(&w, h, out, n);
+	wm_writer_free(&w);
+	return rc;
+}
+
+/* A functional chip like c for the record and warming runs. */
+static chip *helper_chip(const chip *c, int frames)
+{
+	saar_config k = c->cfg;
+	k.fidelity = CFG_FIDELITY_FUNCTIONAL;
+	k.frame.frames = frames;
+	diag d;
+	return chip_create(&k, c->w, &d);
+}
+
+/* Stored warming: the checkpoints of this frame and config from the world
+ * cache, else a warming run now (stored for the next run). Needs the
+ * packet record; without one this run records it first, with a
+ * functional chip of one frame. When impossible, full warming runs. */
+static void warm_open(chip *c)
+{
+	if (c->cfg.sampling.warming != CFG_WARMING_STORED || !chip_estimates(&c->cfg))
+		return;
+	double t0 = now_ms();
+	c->warm_state = WARM_UNAVAILABLE;
+	if (c->rec_state == REC_UNSTORED) {
+		/* make the record now: a warming run replays it */
+		chip *h = helper_chip(c, 1);
+		diag d;
+		int ok = h && !chip_run(h, &d) && h->rec_state == REC_STORED;
+		chip_destroy(h);
+		c->env.rec_out = NULL;
+		pr_free(&c->rec);
+		free(c->rec_key);
+		c->rec_key = NULL;
+		c->rec_state = REC_OFF;
+		c->rec_ms += now_ms() - t0;
+		rec_open(c);
+		if (ok && c->rec_state == REC_REPLAYED)
+			c->rec_state = REC_STORED;
+		t0 = now_ms();
+	}
+	int gl, gf;
+	warm_grid(c, &gl, &gf);
+	char *key = c->env.rec_in ? warm_key(c, gl, gf) : NULL;
+	if (!key || wc_file(c->warm_file, sizeof c->warm_file, c->w->cache_dir, "warming", key)) {
+		free(key);
+		fprintf(stderr, "warning: sampling.warming stored needs --world-cache and a packet "
+		                "record; the functional stretches run instead\n");
+		return;
+	}
+	const void *tail;
+	size_t n;
+	if (wc_get_mapped(c->warm_file, key, NULL, 0, &tail, &n, &c->warm_map) == 1 &&
+	    !wm_open(&c->warm, tail, n, c)) {
+		c->warm_state = WARM_LOADED;
+	} else {
+		wc_unmap(&c->warm_map);
+		chip *h = helper_chip(c, c->cfg.frame.frames);
+		void *b = NULL;
+		if (h)
+			rec_open(h);
+		if (h && h->env.rec_in && !warm_build(h, gl, gf, &b, &n)) {
+			diag d;
+			c->warm_state = WARM_UNSTORED;
+			if (wc_put(c->warm_file, key, NULL, NULL, 0, b, n, &d))
+				fprintf(stderr, "warning: %s\n", d.msg);
+			else
+				c->warm_state = WARM_BUILT;
+			if (wm_open(&c->warm, b, n, c)) {
+				free(b);
+				c->warm_state = WARM_UNAVAILABLE;
+			} else
+				c->warm_own = b;
+		} else
+			free(b);
+		chip_destroy(h);
+	}
+	free(key);
+	c->warm_ms += now_ms() - t0;
+}
+
 /* The busiest-resource bound of frame f: the core cycles each resource
  * needs at least for the frame's work (units: the busiest RTP's issue
  * cycles per instance, since an RTP's units serve its own threads only;
@@ -1077,16 +1385,25 @@ int chip_run(chip *c, diag *d)
 	double t0 = now_ms();
 	chip_fidelity *F = &c->fid;
 	rec_open(c);
+	warm_open(c);
+	int stored = c->warm_state != WARM_OFF && c->warm_state != WARM_UNAVAILABLE;
 	for (int f = 0; f < c->cfg.frame.frames; f++) {
-		fb_clear(&c->fb);
+		if (f > 0) /* fb_init cleared it */
+			fb_clear(&c->fb);
 		rgc_reset(&c->g);
 		c->tiles_given = 0;
 		if (F->mode == CFG_FIDELITY_FUNCTIONAL)
 			func_range(c, c->g.ntiles, 1);
+		else if (stored)
+			sampled_frame_stored(c, f);
 		else if (chip_estimates(&c->cfg))
 			sampled_frame(c, f);
 		else /* cycle, and sampled at rate 1: the same event sequence */
 			F->est[f] = (double)eng_ticks_to_cycles(c->clk, run_region(c, c->g.ntiles));
+		if (c->warm_err)
+			return diag_set(
+			    d, c->warm_file, 0, 0,
+			    "stored warming: a checkpoint is damaged (delete the file)");
 		for (int r = 0; r < c->nrtp; r++) {
 			for (int i = 0; i < c->tpr; i++)
 				thr_flush(&c->rtp[r].t[i]);

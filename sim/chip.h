@@ -30,6 +30,7 @@
 #include "sampling.h"
 #include "stats.h"
 #include "thread.h"
+#include "warming.h"
 #include "world.h"
 #include "worldcache.h"
 
@@ -154,6 +155,17 @@ typedef struct chip {
 	int *park, *park_n;
 	char *rec_key, rec_file[1200];
 	double rec_ms; /* host time loading or storing the record */
+	/* stored warming (sampling.warming: stored; sim/warming.h): the
+	 * checkpoints (mapped from the world cache, or built by this run and
+	 * held in warm_own), warm_state: enum chip_warm */
+	wm warm;
+	wm_writer *wcap; /* a warming run's checkpoints are taken (take_tile) */
+	wc_map warm_map;
+	void *warm_own;
+	int warm_state;
+	char warm_file[1200];
+	double warm_ms; /* host time loading or building them */
+	int warm_err;   /* a checkpoint could not be restored */
 	/* --census (chip_census_on): marks at every fid.unit_tiles tiles
 	 * handed out and at each frame's end; NULL: off */
 	chip_mark *census;
@@ -162,6 +174,11 @@ typedef struct chip {
 
 enum chip_rec { REC_OFF, REC_REPLAYED, REC_STORED, REC_UNSTORED };
 const char *chip_rec_name(int state);
+/* Stored warming: not asked for (or every tile detailed), loaded from the
+ * world cache, built by this run (and stored, or not), or asked for but
+ * impossible (no world cache or packet record): full warming ran. */
+enum chip_warm { WARM_OFF, WARM_LOADED, WARM_BUILT, WARM_UNSTORED, WARM_UNAVAILABLE };
+const char *chip_warm_name(int state);
 
 /* cfg must already be validated; w stays owned by the caller and must
  * outlive the chip. Fails (diag) on an unsupported config or out of memory. */

@@ -23,6 +23,7 @@
 
 static const char *const thread_sched_names[] = {"round_robin", "oldest_first", NULL};
 static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
+static const char *const warming_names[] = {"full", "stored", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
 /* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
 static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};
@@ -137,6 +138,16 @@ static const cfg_key keys[] = {
              "linear = a non-negative sum of unit issue cycles, SDRAM and host-bus time fitted "
              "to the units (few threads: latency bound; needs 30 units), auto = linear when its "
              "leave-one-out error over the units is below the max model's residual variance"},
+    {ENUM("sampling.warming", sampling.warming, warming_names),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: full = the functional stretches between regions run, "
+             "warming the caches as they go; stored = a warming run of the whole frame "
+             "(functional, replaying the packet record) is stored once in the world cache "
+             "with checkpoints of the chip's state, and each region starts from the "
+             "checkpoint at its start, so a run simulates only its regions (needs "
+             "--world-cache; regions start on a grid of 1/64 of the frame). A warming run "
+             "is reused by every run whose config differs only in timing (latencies, "
+             "SDRAM timings, MSHRs, scheduling) and sampling keys"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

@@ -26,6 +26,8 @@
 typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
 /* sampling.demand_model (docs/fidelity.md "Demand models") */
 typedef enum { CFG_DEMAND_AUTO, CFG_DEMAND_MAX, CFG_DEMAND_LINEAR } cfg_demand_model;
+/* sampling.warming (docs/fidelity.md "Stored warming") */
+typedef enum { CFG_WARMING_FULL, CFG_WARMING_STORED } cfg_warming;
 typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
 typedef enum { CFG_MEM_FIXED, CFG_MEM_HIERARCHY } cfg_mem_model;
 typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN, CFG_MEMIF_FRFCFS } cfg_memif_policy;
@@ -119,6 +121,7 @@ typedef struct saar_config {
 		double bias_bound; /* share of the estimate added to the interval for window bias */
 		double sdram_factor; /* k on SDRAM time in the demand; 0 = fitted per frame */
 		cfg_demand_model demand_model; /* how a chunk's demand follows its resources */
+		cfg_warming warming; /* functional stretches run (full) or restored (stored) */
 	} sampling;
 } saar_config;
 

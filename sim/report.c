@@ -212,11 +212,15 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up), "
 		        "demand %s in the last frame; cycles "
 		        "%.0f +- %.0f (95%%), fps %.2f [%.2f, %.2f]; %llu tiles detailed, %llu "
-		        "functional; %llu replayed from the packet record\n",
+		        "functional%s; %llu replayed from the packet record\n",
 		        F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles,
 		        model_str(F, ms, sizeof ms), x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
 		        (unsigned long long)F->detailed_tiles,
 		        (unsigned long long)F->functional_tiles,
+		        c->warm_state == WARM_LOADED || c->warm_state == WARM_BUILT ||
+		                c->warm_state == WARM_UNSTORED
+		            ? " (stored warming)"
+		            : "",
 		        (unsigned long long)F->replayed_tiles);
 	} else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
@@ -463,6 +467,9 @@ void report_text(FILE *f, const report_info *ri)
 	if (c->rec_state != REC_OFF)
 		fprintf(f, "; packet record %s (%.3f s of the simulating)",
 		        chip_rec_name(c->rec_state), c->rec_ms / 1e3);
+	if (c->warm_state != WARM_OFF)
+		fprintf(f, "; stored warming %s (%.3f s of the simulating)",
+		        chip_warm_name(c->warm_state), c->warm_ms / 1e3);
 	fputc('\n', f);
 }
 
@@ -734,6 +741,8 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_kstr(j, "world_cache", world_cache_name(ri->w->cache));
 	jsonw_kstr(j, "packet_record", chip_rec_name(c->rec_state));
 	jsonw_knum(j, "packet_record_s", c->rec_ms / 1e3);
+	jsonw_kstr(j, "stored_warming", chip_warm_name(c->warm_state));
+	jsonw_knum(j, "stored_warming_s", c->warm_ms / 1e3);
 	jsonw_knum(j, "sim_cycles_per_s", ratio((double)cyc, c->sim_ms / 1e3));
 	jsonw_knum(j, "sim_to_ref_ratio",
 	           ri->check && ri->check->done ? ratio(c->sim_ms, ri->check->ref_ms) : 0.0);

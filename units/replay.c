@@ -137,3 +137,13 @@ void thr_replay_begin(thr_ctx *t, int32_t id)
 	t->rp = pr_stream(r, (uint32_t)id, &t->rpe);
 	run(t);
 }
+
+void thr_replay_resume(thr_ctx *t, int32_t id, uint64_t off, int kind, int rays)
+{
+	const pktrec *r = t->env->rec_in;
+	t->rec = id;
+	t->rp = pr_stream(r, (uint32_t)id, &t->rpe) + off;
+	t->fnext = op_done;
+	t->fkind = kind;
+	t->frays = rays;
+}

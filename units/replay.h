@@ -19,5 +19,11 @@
  * its first unit op, as rgs_primary / rgs_secondary do. Its later steps
  * are the ops' completions (timed) or thr_step_func (functional). */
 void thr_replay_begin(thr_ctx *t, int32_t id);
+/* Functional: thread t takes over packet id stopped `off` bytes into its
+ * stream before the next unit op of kind `kind` with `rays` rays, already
+ * counted (as thr_use left it): where stored warming's checkpoint had it
+ * (sim/warming.h). The caller sets its read history (raddr, rbytes), age
+ * and state. */
+void thr_replay_resume(thr_ctx *t, int32_t id, uint64_t off, int kind, int rays);
 
 #endif

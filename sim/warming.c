@@ -1,0 +1,631 @@
+/*
+ * warming.c: stored warming's checkpoints: writing them from a functional
+ * chip, and restoring a chip from them (see warming.h).
+ *
+ * Layout of the stored block (8-byte aligned sections; all of it this
+ * build's own, validated against the chip that reads it):
+ *
+ *   head       wm_head
+ *   light      frames x nlight records: demand (WM_NDEM doubles), the
+ *              on-board-cache hit ticks, the counters (ncnt uint64)
+ *   offsets    frames x nfull uint64: each full checkpoint's offset
+ *   full       per full checkpoint: wm_fhead, the slots (wm_slot, turn
+ *              order), per RTP its queue length then the queued packet
+ *              ids, the L1s and tag cache whole (cache_save form: lines
+ *              then ranks), the on-board cache's changed sets (their
+ *              count, indices, lines, ranks)
+ */
+#include "warming.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "bitset.h"
+#include "chip.h"
+#include "replay.h"
+
+_Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
+
+#define WM_MAGIC   "saarwm01"
+#define WM_NCACHES 5 /* the four L1s and the VMA tag cache */
+
+typedef struct wm_head {
+	char magic[8];
+	int32_t frames, ntiles, g_light, g_full, nlight, nfull, nslots, nrtp;
+	int32_t l2_sets, l2_ways;
+	uint32_t sets[WM_NCACHES], ways[WM_NCACHES];
+	uint64_t ncnt, light_at, offs_at, full_at, full_bytes;
+} wm_head;
+
+typedef struct wm_fhead {
+	int32_t frame, tile;
+	uint64_t next_age;
+} wm_fhead;
+
+typedef struct wm_slot {
+	int32_t rec; /* -1: idle */
+	int16_t kind, rays;
+	uint64_t off, age;
+	uint64_t raddr[MEM_NTYPES];
+	uint32_t rbytes[MEM_NTYPES];
+} wm_slot;
+
+static size_t pad8(size_t n)
+{
+	return (n + 7) & ~(size_t)7;
+}
+
+/* Every counter functional processing moves, in one order for writer and
+ * reader: the stats registry, the memory port, shade_counts, the
+ * hierarchy's. out NULL: only counts them. */
+static size_t chip_counter_ptrs(chip *c, uint64_t **out, size_t cap)
+{
+	size_t n = 0;
+#define PUT(p)                                                                                     \
+	do {                                                                                       \
+		if (out && n < cap)                                                                \
+			out[n] = (p);                                                              \
+		n++;                                                                               \
+	} while (0)
+	for (size_t i = 0; i < c->st.n; i++)
+		PUT(c->st.e[i].value);
+	uint64_t *mn = (uint64_t *)&c->mem.n, *sh = (uint64_t *)&c->env.sh;
+	for (size_t i = 0; i < sizeof c->mem.n / sizeof(uint64_t); i++)
+		PUT(mn + i);
+	for (size_t i = 0; i < sizeof c->env.sh / sizeof(uint64_t); i++)
+		PUT(sh + i);
+#undef PUT
+	if (hier_is(&c->mem))
+		n += hier_counter_ptrs(&c->mem, out ? out + (n < cap ? n : cap) : NULL,
+		                       n < cap ? cap - n : 0);
+	return n;
+}
+
+static uint64_t **counters_of(chip *c, size_t *n)
+{
+	*n = chip_counter_ptrs(c, NULL, 0);
+	uint64_t **p = malloc((*n ? *n : 1) * sizeof *p);
+	if (p)
+		chip_counter_ptrs(c, p, *n);
+	return p;
+}
+
+/* The caches stored whole (NULL entries: absent) and the on-board one. */
+static int caches_of(chip *c, cache *k[WM_NCACHES], cache **l2)
+{
+	if (!hier_is(&c->mem)) {
+		memset(k, 0, WM_NCACHES * sizeof *k);
+		*l2 = NULL;
+		return 0;
+	}
+	hier_caches(&c->mem, k, &k[4], l2);
+	return 1;
+}
+
+static int nlight_of(int ntiles, int g)
+{
+	return ntiles / g + 1 + (ntiles % g != 0);
+}
+
+/* Index of the light checkpoint at tile (a multiple of g, or ntiles). */
+static int light_index(int ntiles, int g, int tile)
+{
+	return tile == ntiles ? nlight_of(ntiles, g) - 1 : tile / g;
+}
+
+/* ---- writing ---- */
+
+int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full)
+{
+	memset(w, 0, sizeof *w);
+	w->frames = c->cfg.frame.frames;
+	w->ntiles = c->g.ntiles;
+	w->g_light = g_light;
+	w->g_full = g_full;
+	w->nlight = nlight_of(w->ntiles, g_light);
+	w->nfull = (w->ntiles + g_full - 1) / g_full;
+	w->cnt = counters_of(c, &w->ncnt);
+	w->lsize = sizeof(double) * WM_NDEM + sizeof(uint64_t) * (1 + w->ncnt);
+	w->light = calloc((size_t)w->frames * (size_t)w->nlight, w->lsize);
+	w->foff = calloc((size_t)w->frames * (size_t)w->nfull, sizeof *w->foff);
+	cache *k[WM_NCACHES], *l2;
+	if (caches_of(c, k, &l2) && l2 && cache_track(l2))
+		w->failed = 1;
+	if (!w->cnt || !w->light || !w->foff || w->failed) {
+		wm_writer_free(w);
+		return -1;
+	}
+	return 0;
+}
+
+void wm_writer_free(wm_writer *w)
+{
+	free(w->cnt);
+	free(w->light);
+	free(w->foff);
+	free(w->full);
+	memset(w, 0, sizeof *w);
+}
+
+void wm_put_light(wm_writer *w, chip *c, int frame, int tile, const double *dem)
+{
+	if (w->failed || frame >= w->frames)
+		return;
+	uint8_t *p = w->light + ((size_t)frame * (size_t)w->nlight +
+	                         (size_t)light_index(w->ntiles, w->g_light, tile)) *
+	                            w->lsize;
+	memcpy(p, dem, sizeof(double) * WM_NDEM);
+	uint64_t *u = (uint64_t *)(void *)(p + sizeof(double) * WM_NDEM);
+	u[0] = hier_is(&c->mem) ? hier_l2hit_ticks(&c->mem) : 0;
+	for (size_t i = 0; i < w->ncnt; i++)
+		u[1 + i] = *w->cnt[i];
+}
+
+/* Room for n more bytes of full checkpoints (8-byte aligned). */
+static uint8_t *full_room(wm_writer *w, size_t n)
+{
+	n = pad8(n);
+	if (w->nfullb + n > w->capfull) {
+		size_t cap = w->capfull ? w->capfull : 1 << 20;
+		while (cap < w->nfullb + n)
+			cap *= 2;
+		uint8_t *b = realloc(w->full, cap);
+		if (!b) {
+			w->failed = 1;
+			return NULL;
+		}
+		w->full = b;
+		w->capfull = cap;
+	}
+	uint8_t *p = w->full + w->nfullb;
+	memset(p, 0, n);
+	w->nfullb += n;
+	return p;
+}
+
+/* Appends cache_save's form of n sets from set0 (lines, then ranks). */
+static void put_sets(wm_writer *w, const cache *k, uint32_t set0, uint32_t n)
+{
+	size_t nw = (size_t)n * k->p.ways;
+	size_t at = w->nfullb;
+	if (!full_room(w, nw * 4) || !full_room(w, nw))
+		return;
+	uint32_t *line = (uint32_t *)(void *)(w->full + at);
+	uint8_t *rank = w->full + at + pad8(nw * 4);
+	if (cache_save(k, set0, n, line, rank))
+		w->failed = 1;
+}
+
+void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
+{
+	if (w->failed || frame >= w->frames)
+		return;
+	w->foff[(size_t)frame * (size_t)w->nfull + (size_t)(tile / w->g_full)] = w->nfullb;
+	int ns = c->nrtp * c->tpr;
+	wm_fhead fh = {frame, tile, c->env.next_age};
+	uint8_t *p = full_room(w, sizeof fh);
+	if (!p)
+		return;
+	memcpy(p, &fh, sizeof fh);
+	for (int i = 0; i < ns; i++) {
+		const thr_ctx *t = c->turn[i];
+		wm_slot s;
+		memset(&s, 0, sizeof s);
+		s.rec = -1;
+		if (t->p || (t->rp && !t->fnext)) { /* running its math, or mid-step */
+			w->failed = 1;
+			return;
+		}
+		if (t->rp) {
+			const uint8_t *end, *st = pr_stream(c->env.rec_in, (uint32_t)t->rec, &end);
+			s.rec = t->rec;
+			s.kind = (int16_t)t->fkind;
+			s.rays = (int16_t)t->frays;
+			s.off = (uint64_t)(t->rp - st);
+			s.age = t->age;
+			memcpy(s.raddr, t->raddr, sizeof s.raddr);
+			memcpy(s.rbytes, t->rbytes, sizeof s.rbytes);
+		}
+		if (!(p = full_room(w, sizeof s)))
+			return;
+		memcpy(p, &s, sizeof s);
+	}
+	for (int r = 0; r < c->nrtp; r++) {
+		const thr_rtp *rp = &c->rtp[r];
+		if (!(p = full_room(w, 4 + 4 * (size_t)rp->qn)))
+			return;
+		int32_t n = rp->qn;
+		memcpy(p, &n, 4);
+		for (int i = 0; i < rp->qn; i++) {
+			thr_qitem it = rp->q[(rp->qhead + i) % rp->qcap];
+			if (it.p) {
+				w->failed = 1;
+				return;
+			}
+			memcpy(p + 4 + 4 * (size_t)i, &it.rec, 4);
+		}
+	}
+	cache *k[WM_NCACHES], *l2;
+	if (!caches_of(c, k, &l2))
+		return;
+	for (int i = 0; i < WM_NCACHES; i++)
+		if (k[i])
+			put_sets(w, k[i], 0, k[i]->nsets);
+	if (!l2)
+		return;
+	/* the on-board cache's sets changed since the last full checkpoint */
+	uint32_t nd = 0;
+	size_t words = (l2->nsets + 63) / 64;
+	for (size_t i = 0; i < words; i++)
+		nd += (uint32_t)__builtin_popcountll(l2->dirty[i]);
+	size_t at = w->nfullb;
+	if (!full_room(w, 4 + 4 * (size_t)nd))
+		return;
+	memcpy(w->full + at, &nd, 4);
+	uint32_t j = 0;
+	for (int s = bits_next(l2->dirty, (int)l2->nsets, 0); s < (int)l2->nsets;
+	     s = bits_next(l2->dirty, (int)l2->nsets, s + 1)) {
+		uint32_t set = (uint32_t)s;
+		memcpy(w->full + at + 4 + 4 * (size_t)j++, &set, 4);
+	}
+	for (int s = bits_next(l2->dirty, (int)l2->nsets, 0); s < (int)l2->nsets;
+	     s = bits_next(l2->dirty, (int)l2->nsets, s + 1))
+		put_sets(w, l2, (uint32_t)s, 1);
+	cache_dirty_clear(l2);
+}
+
+static void geometry(chip *c, wm_head *h);
+
+int wm_writer_finish(wm_writer *w, chip *c, void **out, size_t *n)
+{
+	if (w->failed)
+		return -1;
+	wm_head h;
+	memset(&h, 0, sizeof h);
+	memcpy(h.magic, WM_MAGIC, 8);
+	h.frames = w->frames;
+	h.ntiles = w->ntiles;
+	h.g_light = w->g_light;
+	h.g_full = w->g_full;
+	h.nlight = w->nlight;
+	h.nfull = w->nfull;
+	h.ncnt = w->ncnt;
+	size_t nl = (size_t)w->frames * (size_t)w->nlight * w->lsize,
+	       no = (size_t)w->frames * (size_t)w->nfull * sizeof(uint64_t);
+	h.light_at = pad8(sizeof h);
+	h.offs_at = h.light_at + nl;
+	h.full_at = h.offs_at + no;
+	h.full_bytes = w->nfullb;
+	geometry(c, &h); /* wm_open checks it against the reader's */
+	*n = (size_t)h.full_at + w->nfullb;
+	uint8_t *b = malloc(*n);
+	if (!b)
+		return -1;
+	memcpy(b, &h, sizeof h);
+	memcpy(b + h.light_at, w->light, nl);
+	memcpy(b + h.offs_at, w->foff, no);
+	memcpy(b + h.full_at, w->full, w->nfullb);
+	*out = b;
+	return 0;
+}
+
+/* The chip's geometry as the head stores it. */
+static void geometry(chip *c, wm_head *h)
+{
+	h->nslots = c->nrtp * c->tpr;
+	h->nrtp = c->nrtp;
+	cache *k[WM_NCACHES], *l2;
+	caches_of(c, k, &l2);
+	for (int i = 0; i < WM_NCACHES; i++) {
+		h->sets[i] = k[i] ? k[i]->nsets : 0;
+		h->ways[i] = k[i] ? k[i]->p.ways : 0;
+	}
+	h->l2_sets = l2 ? (int32_t)l2->nsets : 0;
+	h->l2_ways = l2 ? (int32_t)l2->p.ways : 0;
+}
+
+/* ---- reading ---- */
+
+void wm_close(wm *r)
+{
+	free(r->cnt);
+	free(r->is_max);
+	free(r->prev);
+	free(r->l2line);
+	free(r->l2rank);
+	free(r->l2pend);
+	memset(r, 0, sizeof *r);
+}
+
+int wm_open(wm *r, const void *b, size_t n, chip *c)
+{
+	memset(r, 0, sizeof *r);
+	wm_head h, g;
+	if (n < sizeof h)
+		return -1;
+	memcpy(&h, b, sizeof h);
+	g = h;
+	geometry(c, &g);
+	size_t ncnt = chip_counter_ptrs(c, NULL, 0);
+	if (memcmp(h.magic, WM_MAGIC, 8) || memcmp(&h, &g, sizeof h) || h.ncnt != ncnt ||
+	    h.frames != c->cfg.frame.frames || h.ntiles != c->g.ntiles || h.g_light < 1 ||
+	    h.g_full < h.g_light || h.g_full % h.g_light ||
+	    h.nlight != nlight_of(h.ntiles, h.g_light) ||
+	    h.nfull != (h.ntiles + h.g_full - 1) / h.g_full)
+		return -1;
+	r->b = b;
+	r->n = n;
+	r->frames = h.frames;
+	r->ntiles = h.ntiles;
+	r->g_light = h.g_light;
+	r->g_full = h.g_full;
+	r->nlight = h.nlight;
+	r->nfull = h.nfull;
+	r->ncnt = ncnt;
+	r->lsize = sizeof(double) * WM_NDEM + sizeof(uint64_t) * (1 + ncnt);
+	size_t nl = (size_t)h.frames * (size_t)h.nlight * r->lsize,
+	       no = (size_t)h.frames * (size_t)h.nfull * sizeof(uint64_t);
+	if (h.light_at != pad8(sizeof h) || h.offs_at != h.light_at + nl ||
+	    h.full_at != h.offs_at + no || h.full_at + h.full_bytes != n)
+		return -1;
+	r->cnt = counters_of(c, &ncnt);
+	r->is_max = calloc(ncnt ? ncnt : 1, 1);
+	r->prev = calloc(ncnt ? ncnt : 1, sizeof *r->prev);
+	if (!r->cnt || !r->is_max || !r->prev)
+		goto fail;
+	for (size_t i = 0; i < ncnt; i++)
+		r->is_max[i] =
+		    r->cnt[i] == c->env.c[C_MAX_SP] || r->cnt[i] == c->env.c[C_MAX_QUEUE];
+	cache *k[WM_NCACHES], *l2;
+	caches_of(c, k, &l2);
+	if (l2) {
+		size_t nw = (size_t)l2->nsets * l2->p.ways;
+		r->l2line = malloc(nw * sizeof *r->l2line);
+		r->l2rank = calloc(nw, 1);
+		r->l2pend = calloc((l2->nsets + 63) / 64, sizeof *r->l2pend);
+		if (!r->l2line || !r->l2rank || !r->l2pend || cache_track(l2))
+			goto fail;
+		memset(r->l2line, 0xff, nw * sizeof *r->l2line);
+	}
+	return 0;
+fail:
+	wm_close(r);
+	return -1;
+}
+
+static const uint8_t *light_at(const wm *r, int frame, int tile)
+{
+	const wm_head *h = (const wm_head *)(const void *)r->b;
+	return r->b + h->light_at +
+	       ((size_t)frame * (size_t)r->nlight +
+	        (size_t)light_index(r->ntiles, r->g_light, tile)) *
+	           r->lsize;
+}
+
+const double *wm_demand(const wm *r, int frame, int tile, uint64_t *l2hit)
+{
+	const uint8_t *p = light_at(r, frame, tile);
+	memcpy(l2hit, p + sizeof(double) * WM_NDEM, sizeof *l2hit);
+	return (const double *)(const void *)p;
+}
+
+void wm_region_end(wm *r, int frame, int tile)
+{
+	const uint8_t *p = light_at(r, frame, tile) + sizeof(double) * WM_NDEM;
+	memcpy(&r->prev_l2hit, p, 8);
+	memcpy(r->prev, p + 8, r->ncnt * sizeof *r->prev);
+}
+
+/* A reader over the full checkpoints' bytes that fails once past them. */
+typedef struct rd {
+	const uint8_t *p, *end;
+	int bad;
+} rd;
+
+static const uint8_t *take(rd *d, size_t n)
+{
+	n = pad8(n);
+	if (d->bad || (size_t)(d->end - d->p) < n) {
+		d->bad = 1;
+		return NULL;
+	}
+	const uint8_t *q = d->p;
+	d->p += n;
+	return q;
+}
+
+/* Skips (or, for the last, stops before) the parts of full checkpoint gi
+ * ahead of its caches; returns the reader at its slots. */
+static rd full_reader(const wm *r, int gi)
+{
+	const wm_head *h = (const wm_head *)(const void *)r->b;
+	rd d = {NULL, r->b + h->full_at + h->full_bytes, 1};
+	uint64_t off;
+	memcpy(&off, r->b + h->offs_at + (size_t)gi * 8, 8);
+	if (off < h->full_bytes) {
+		d.p = r->b + h->full_at + off;
+		d.bad = 0;
+	}
+	return d;
+}
+
+/* Reads past the slots and queues of a full checkpoint. */
+static void skip_threads(rd *d, int nslots, int nrtp)
+{
+	take(d, sizeof(wm_fhead));
+	take(d, sizeof(wm_slot) * (size_t)nslots);
+	for (int q = 0; q < nrtp && !d->bad; q++) {
+		int32_t qn;
+		const uint8_t *p = d->p;
+		if ((size_t)(d->end - p) < 4) {
+			d->bad = 1;
+			return;
+		}
+		memcpy(&qn, p, 4);
+		if (qn < 0 || !take(d, 4 + 4 * (size_t)qn))
+			d->bad = 1;
+	}
+}
+
+/* The on-board cache's changes in full checkpoint gi, into the warm
+ * image (their sets become pending for the chip). */
+static void roll_l2(wm *r, chip *c, int gi, const cache *l2)
+{
+	const wm_head *h = (const wm_head *)(const void *)r->b;
+	rd d = full_reader(r, gi);
+	skip_threads(&d, h->nslots, h->nrtp);
+	for (int i = 0; i < WM_NCACHES; i++)
+		if (h->sets[i]) {
+			size_t nw = (size_t)h->sets[i] * h->ways[i];
+			take(&d, nw * 4);
+			take(&d, nw);
+		}
+	/* the count and the set indices are one block */
+	uint32_t nd = 0;
+	if (!d.bad && d.end - d.p >= 4)
+		memcpy(&nd, d.p, 4);
+	const uint8_t *p = take(&d, 4 + 4 * (size_t)nd), *sets = p ? p + 4 : NULL;
+	uint32_t W = l2->p.ways;
+	for (uint32_t j = 0; j < nd && !d.bad; j++) {
+		uint32_t s;
+		memcpy(&s, sets + 4 * (size_t)j, 4);
+		const uint8_t *line = take(&d, 4 * (size_t)W), *rank = take(&d, W);
+		if (!line || !rank || s >= l2->nsets)
+			break;
+		memcpy(r->l2line + (size_t)s * W, line, 4 * (size_t)W);
+		memcpy(r->l2rank + (size_t)s * W, rank, W);
+		bits_set(r->l2pend, (int)s);
+	}
+	(void)c;
+}
+
+int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
+{
+	const wm_head *h = (const wm_head *)(const void *)r->b;
+	if (frame >= r->frames || tile % r->g_full || tile >= r->ntiles)
+		return -1;
+	int gi = frame * r->nfull + tile / r->g_full;
+	cache *k[WM_NCACHES], *l2;
+	caches_of(c, k, &l2);
+	if (gi < r->next_full - 1)
+		return -1;
+	for (; r->next_full <= gi; r->next_full++)
+		if (l2)
+			roll_l2(r, c, r->next_full, l2);
+	rd d = full_reader(r, gi);
+	const uint8_t *p = take(&d, sizeof(wm_fhead));
+	wm_fhead fh;
+	if (!p)
+		return -1;
+	memcpy(&fh, p, sizeof fh);
+	if (fh.frame != frame || fh.tile != tile)
+		return -1;
+	/* the slots, in turn order */
+	const pktrec *rec = c->env.rec_in;
+	for (int i = 0; i < h->nslots; i++) {
+		wm_slot s;
+		if (!(p = take(&d, sizeof s)))
+			return -1;
+		memcpy(&s, p, sizeof s);
+		thr_ctx *t = c->turn[i];
+		if (t->p) { /* stored warming replays every packet */
+			thr_pkt_free(&c->env, t->p);
+			t->p = NULL;
+		}
+		t->pending = 0;
+		t->cont = NULL;
+		if (s.rec < 0) {
+			t->rec = -1;
+			t->rp = t->rpe = NULL;
+			t->fnext = NULL;
+			if (t->state != THR_IDLE)
+				thr_set(t, THR_IDLE);
+			continue;
+		}
+		const uint8_t *end, *st;
+		if (!rec || (uint32_t)s.rec >= rec->npk || s.kind < 0 || s.kind >= UNIT_NKINDS)
+			return -1;
+		st = pr_stream(rec, (uint32_t)s.rec, &end);
+		if (s.off > (uint64_t)(end - st))
+			return -1;
+		thr_replay_resume(t, s.rec, s.off, s.kind, s.rays);
+		memcpy(t->raddr, s.raddr, sizeof t->raddr);
+		memcpy(t->rbytes, s.rbytes, sizeof t->rbytes);
+		t->age = s.age;
+		if (t->state == THR_IDLE)
+			thr_set(t, THR_RUN);
+	}
+	for (int q = 0; q < h->nrtp; q++) {
+		thr_rtp *rp = &c->rtp[q];
+		int32_t qn;
+		if ((size_t)(d.end - d.p) < 4)
+			return -1;
+		memcpy(&qn, d.p, 4);
+		if (qn < 0 || !(p = take(&d, 4 + 4 * (size_t)qn)))
+			return -1;
+		if (qn > rp->qcap) {
+			thr_qitem *nq = malloc((size_t)qn * sizeof *nq);
+			if (!nq)
+				return -1;
+			free(rp->q);
+			rp->q = nq;
+			rp->qcap = qn;
+		}
+		for (int i = 0; i < qn; i++) {
+			int32_t id;
+			memcpy(&id, p + 4 + 4 * (size_t)i, 4);
+			if ((uint32_t)id >= rec->npk)
+				return -1;
+			rp->q[i] = (thr_qitem){NULL, id};
+		}
+		rp->qhead = 0;
+		rp->qn = qn;
+	}
+	/* the caches stored whole */
+	for (int i = 0; i < WM_NCACHES; i++) {
+		if (!h->sets[i])
+			continue;
+		size_t nw = (size_t)h->sets[i] * h->ways[i];
+		const uint8_t *line = take(&d, nw * 4), *rank = take(&d, nw);
+		if (!line || !rank || !k[i] || k[i]->mshr_used)
+			return -1;
+		cache_load(k[i], 0, k[i]->nsets, (const uint32_t *)(const void *)line, rank);
+	}
+	/* the on-board cache: the sets the checkpoints since the last restore
+	 * or the region since it changed */
+	if (l2) {
+		if (l2->mshr_used)
+			return -1;
+		uint32_t W = l2->p.ways;
+		size_t words = (l2->nsets + 63) / 64;
+		for (size_t w = 0; w < words; w++) {
+			uint64_t m = r->l2pend[w] | l2->dirty[w];
+			for (; m; m &= m - 1) {
+				size_t s = w * 64 + (size_t)__builtin_ctzll(m);
+				cache_load(l2, (uint32_t)s, 1, r->l2line + s * W,
+				           r->l2rank + s * W);
+			}
+			r->l2pend[w] = 0;
+		}
+		cache_dirty_clear(l2);
+	}
+	c->g.next = tile;
+	c->tiles_given = tile;
+	c->env.next_age = fh.next_age;
+	/* the counters: what the warming run counted since the last region's
+	 * end; maxima take the larger */
+	const uint8_t *lp = light_at(r, frame, tile) + sizeof(double) * WM_NDEM;
+	uint64_t l2hit;
+	memcpy(&l2hit, lp, 8);
+	for (size_t i = 0; i < r->ncnt; i++) {
+		uint64_t v;
+		memcpy(&v, lp + 8 + 8 * i, 8);
+		if (r->is_max[i])
+			*r->cnt[i] = v > *r->cnt[i] ? v : *r->cnt[i];
+		else
+			*r->cnt[i] += v - r->prev[i];
+	}
+	if (hier_is(&c->mem) && l2hit > r->prev_l2hit)
+		hier_add_merge_ticks(&c->mem, merge_share * (double)(l2hit - r->prev_l2hit));
+	return 0;
+}

@@ -1,0 +1,107 @@
+/*
+ * warming.h: stored warming (sampling.warming: stored; docs/fidelity.md,
+ * "Stored warming"): the functional chip's state at checkpoints through
+ * the frame, written once by a warming run and restored by sampled runs,
+ * which then simulate only their detailed regions.
+ *
+ * A warming run is functional processing of the whole frame replaying the
+ * packet record (traces/pktrec.h), stopped at every `g_light` tiles handed
+ * out. There it writes a light checkpoint: the resource demand so far
+ * (chip_demand) and every counter functional processing moves (the stats
+ * registry, the memory port's counts, shade_counts, the hierarchy's
+ * counters). At every `g_full` tiles it also writes a full checkpoint:
+ * each thread slot's packet stream and where in it the slot stopped, the
+ * RTP queues, the L1s and VMA tag cache whole, and the sets of the VMA
+ * on-board cache changed since the full checkpoint before (that cache is
+ * 64 MB on board; a copy per checkpoint would be most of the file).
+ *
+ * A sampled run restores the full checkpoint where a region starts: the
+ * caches, slots and queues become the warming run's there, and every
+ * counter gains what the warming run counted between the last region's
+ * end (a light checkpoint) and this start. Regions therefore start on the
+ * full grid and end on the light grid. The on-board cache is rolled
+ * forward through the diffs into a warm image kept by the reader, and
+ * only the sets a diff or the region changed are copied into the chip.
+ *
+ * The file format is this build's own (its key names the program, the
+ * frame and every config key functional processing reads); a file that
+ * does not match the chip is rebuilt.
+ */
+#ifndef SAAR_SIM_WARMING_H
+#define SAAR_SIM_WARMING_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+struct chip;
+
+/* Resource demands per light checkpoint (chip.h RES_N). */
+#define WM_NDEM 10
+
+/* ---- writing (the warming run) ---- */
+
+typedef struct wm_writer {
+	int frames, ntiles, g_light, g_full, nlight, nfull;
+	size_t ncnt, lsize;
+	uint64_t **cnt; /* the chip's counters */
+	uint8_t *light; /* frames x nlight records of lsize bytes */
+	uint64_t *foff; /* frames x nfull offsets into full */
+	uint8_t *full;  /* full checkpoints, appended */
+	size_t nfullb, capfull;
+	int failed;
+} wm_writer;
+
+/* For chip c (functional, replaying a packet record; every slot's
+ * packet must be a replayed one): checkpoints every g_light tiles and
+ * every g_full (a multiple of g_light) in full. -1 when out of memory or
+ * the chip's caches cannot be stored. */
+int wm_writer_init(wm_writer *w, struct chip *c, int g_light, int g_full);
+/* A light checkpoint at hand-out index tile of frame (tile: a multiple
+ * of g_light, or the frame's tile count), dem: chip_demand now. */
+void wm_put_light(wm_writer *w, struct chip *c, int frame, int tile, const double *dem);
+/* A full checkpoint at tile (a multiple of g_full below the tile count);
+ * the chip's slots must be stopped between steps. */
+void wm_put_full(wm_writer *w, struct chip *c, int frame, int tile);
+/* The stored form, one malloc'd block. -1 when out of memory. */
+int wm_writer_finish(wm_writer *w, struct chip *c, void **out, size_t *n);
+void wm_writer_free(wm_writer *w);
+
+/* ---- reading (sampled runs) ---- */
+
+typedef struct wm {
+	const uint8_t *b;
+	size_t n;
+	int frames, ntiles, g_light, g_full, nlight, nfull;
+	size_t ncnt, lsize;
+	uint64_t **cnt;  /* the chip's counters */
+	uint8_t *is_max; /* per counter: a maximum, not a sum */
+	uint64_t *prev;  /* the counters at the last region's end */
+	uint64_t prev_l2hit;
+	/* the on-board cache at the last full checkpoint applied, sets to
+	 * copy into the chip at the next restore, and that checkpoint */
+	uint32_t *l2line;
+	uint8_t *l2rank;
+	uint64_t *l2pend;
+	int next_full;
+} wm;
+
+/* Takes a stored block for chip c (kept by the caller until wm_close).
+ * -1 when it does not fit the chip (damaged, other geometry) or out of
+ * memory. */
+int wm_open(wm *r, const void *b, size_t n, struct chip *c);
+void wm_close(wm *r);
+/* The light checkpoint at tile of frame (on the light grid, or the tile
+ * count): the demand so far (WM_NDEM) and *l2hit, the on-board-cache hit
+ * ticks so far. */
+const double *wm_demand(const wm *r, int frame, int tile, uint64_t *l2hit);
+/* A region ended at tile (on the light grid): the next restore adds what
+ * the warming run counted from there. */
+void wm_region_end(wm *r, int frame, int tile);
+/* Sets chip c (no event pending, every MSHR free) to the full checkpoint
+ * at tile of frame (on the full grid, at or after the last one restored);
+ * merge_share: of the warming run's on-board-cache hit ticks since the
+ * last region's end, the share a timed chip merges
+ * (hier_stats.func_sdram_merge_ticks). -1 when the block is damaged. */
+int wm_restore(wm *r, struct chip *c, int frame, int tile, double merge_share);
+
+#endif

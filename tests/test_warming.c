@@ -1,0 +1,221 @@
+/*
+ * test_warming.c: stored warming (sampling.warming: stored; sim/warming.h,
+ * docs/fidelity.md "Stored warming"). The first run builds the warming
+ * run's checkpoints and stores them; the next loads them and gives the
+ * same figures and the reference image. A config that differs in timing
+ * keys only reuses them; one that changes what functional processing does
+ * (an L1's size) builds its own; a damaged file is rebuilt. Restored
+ * regions count the frame's traffic as cycle does (memory-port requests
+ * within 1%; through a VMA whose on-board cache is too small for the
+ * scene, PCI bytes within 3%: restoring the on-board cache wrong once
+ * gave 30% more) and the interval covers cycle's fps. Without a world
+ * cache the functional stretches run instead, figure for figure.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "chiptest.h"
+
+/* A sampled config (through a 1 MB VMA with onboard)
+ * at size x size with stored warming. */
+static void config(saar_config *c, int size, int onboard)
+{
+	cfg_defaults(c);
+	c->frame.width = c->frame.height = size;
+	c->fidelity = CFG_FIDELITY_SAMPLED;
+	c->chip.threads_per_rtp = 4;
+	c->sampling.rate = 0.1;
+	c->sampling.warming = CFG_WARMING_STORED;
+	if (onboard) {
+		c->memory.vma.enabled = true;
+		c->memory.sdram.mb = 1;
+	}
+}
+
+/* Frame cycles, interval and every registry counter equal. */
+static void same_figures(const chip *a, const chip *b, const char *what)
+{
+	for (int f = 0; f < a->frames_done; f++) {
+		cr_assert_eq(a->frame_cycles[f], b->frame_cycles[f], "%s: frame %d", what, f);
+		cr_assert(a->fid.half[f] == b->fid.half[f], "%s: interval", what);
+	}
+	cr_assert_eq(a->st.n, b->st.n);
+	for (size_t i = 0; i < a->st.n; i++)
+		cr_assert_eq(*a->st.e[i].value, *b->st.e[i].value, "%s: %s", what, a->st.e[i].name);
+}
+
+static uint64_t port_reads(const chip *c)
+{
+	uint64_t n = 0;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		n += c->mem.n.reads[t];
+	return n;
+}
+
+Test(warming, built_then_loaded_alike)
+{
+	char dir[256];
+	tu_tmpdir(dir, sizeof dir);
+	world w;
+	tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+	saar_config c;
+	config(&c, 256, 0);
+	c.frame.frames = 2;
+	chip *a = tu_run_chip(&w, &c);
+	cr_assert_eq(a->warm_state, WARM_BUILT, "%s", chip_warm_name(a->warm_state));
+	char path[1024];
+	cr_assert_eq(tu_find_files(dir, "warming-", path, sizeof path), 1);
+	chip *b = tu_run_chip(&w, &c);
+	cr_assert_eq(b->warm_state, WARM_LOADED, "%s", chip_warm_name(b->warm_state));
+	same_figures(a, b, "loaded against built");
+	tu_assert_identical(b, "stored warming");
+	uint64_t N = (uint64_t)a->g.ntiles * 2;
+	cr_assert_gt(b->fid.functional_tiles, N / 2, "%llu functional tiles of %llu",
+	             (unsigned long long)b->fid.functional_tiles, (unsigned long long)N);
+	cr_assert_lt(b->fid.detailed_tiles, N / 2);
+	chip_destroy(a);
+	chip_destroy(b);
+	world_free(&w);
+}
+
+Test(warming, timing_keys_reuse_it_l1_sizes_do_not)
+{
+	char dir[256], path[1024];
+	tu_tmpdir(dir, sizeof dir);
+	world w;
+	tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+	saar_config c;
+	config(&c, 256, 0);
+	chip_destroy(tu_run_chip(&w, &c));
+	/* latencies, SDRAM timing, MSHRs and the sampling plan: the same
+	 * warming run */
+	c.chip.isect.latency += 7;
+	c.memory.sdram.trcd += 2;
+	c.memory.l1.kd.mshrs = 2;
+	c.sampling.offset = 0.2;
+	chip *b = tu_run_chip(&w, &c);
+	cr_assert_eq(b->warm_state, WARM_LOADED, "%s", chip_warm_name(b->warm_state));
+	chip_destroy(b);
+	cr_assert_eq(tu_find_files(dir, "warming-", path, sizeof path), 1);
+	/* a smaller kd cache misses differently: a warming run of its own */
+	c.memory.l1.kd.size_kb = 8;
+	chip *k = tu_run_chip(&w, &c);
+	cr_assert_eq(k->warm_state, WARM_BUILT, "%s", chip_warm_name(k->warm_state));
+	chip_destroy(k);
+	cr_assert_eq(tu_find_files(dir, "warming-", path, sizeof path), 2);
+	world_free(&w);
+}
+
+Test(warming, damaged_file_is_rebuilt)
+{
+	char dir[256], path[1024];
+	tu_tmpdir(dir, sizeof dir);
+	world w;
+	tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+	saar_config c;
+	config(&c, 256, 1);
+	chip *a = tu_run_chip(&w, &c);
+	cr_assert_eq(tu_find_files(dir, "warming-", path, sizeof path), 1);
+	/* cut short: a fresh warming run, the same figures */
+	FILE *f = fopen(path, "r+");
+	cr_assert(f);
+	cr_assert_eq(fseek(f, 0, SEEK_END), 0);
+	long n = ftell(f);
+	fclose(f);
+	cr_assert_eq(truncate(path, n - 100), 0);
+	chip *b = tu_run_chip(&w, &c);
+	cr_assert_eq(b->warm_state, WARM_BUILT, "%s", chip_warm_name(b->warm_state));
+	same_figures(a, b, "rebuilt");
+	chip_destroy(a);
+	chip_destroy(b);
+	world_free(&w);
+}
+
+Test(warming, without_a_world_cache_the_stretches_run)
+{
+	world w;
+	tu_load_world(&w, NULL, NULL, NULL);
+	saar_config c;
+	config(&c, 256, 0);
+	chip *a = tu_run_chip(&w, &c);
+	cr_assert_eq(a->warm_state, WARM_UNAVAILABLE, "%s", chip_warm_name(a->warm_state));
+	c.sampling.warming = CFG_WARMING_FULL;
+	chip *b = tu_run_chip(&w, &c);
+	cr_assert_eq(b->warm_state, WARM_OFF);
+	same_figures(a, b, "unavailable against full");
+	chip_destroy(a);
+	chip_destroy(b);
+	world_free(&w);
+}
+
+/* Traffic and the estimate against cycle on frame c (every offset o of
+ * n): memory-port requests within 1%, PCI bytes within pci_tol, the
+ * interval around cycle's fps. */
+static void against_cycle(const world *w, saar_config c, int n, double pci_tol, const char *what)
+{
+	saar_config k = c;
+	k.fidelity = CFG_FIDELITY_CYCLE;
+	chip *t = tu_run_chip(w, &k);
+	double fps = c.chip.clock_mhz * 1e6 / (double)t->frame_cycles[0];
+	hier_stats ht;
+	int pci = !hier_get_stats(&t->mem, &ht) && ht.vma_enabled;
+	for (int o = 0; o < n; o++) {
+		c.sampling.offset = (o + 0.5) / n;
+		chip *s = tu_run_chip(w, &c);
+		cr_assert(s->warm_state == WARM_BUILT || s->warm_state == WARM_LOADED, "%s: %s",
+		          what, chip_warm_name(s->warm_state));
+		cr_assert_gt(s->fid.functional_tiles, 0, "%s", what);
+		double dr = (double)port_reads(s) / (double)port_reads(t) - 1;
+		cr_assert_lt(fabs(dr), 0.01, "%s offset %.2f: memory-port reads %+.2f%%", what,
+		             c.sampling.offset, 100 * dr);
+		if (pci) {
+			hier_stats hs;
+			hier_get_stats(&s->mem, &hs);
+			double dp = (double)hs.hostbus.bytes / (double)ht.hostbus.bytes - 1;
+			cr_assert_lt(fabs(dp), pci_tol, "%s offset %.2f: PCI bytes %+.2f%%", what,
+			             c.sampling.offset, 100 * dp);
+		}
+		double est = c.chip.clock_mhz * 1e6 / s->fid.est[0],
+		       lo = c.chip.clock_mhz * 1e6 / (s->fid.est[0] + s->fid.half[0]),
+		       hi = c.chip.clock_mhz * 1e6 / fmax(s->fid.est[0] - s->fid.half[0], 1);
+		cr_log_info("%s offset %.2f: fps %.2f, cycle %.2f (%+.2f%%), interval [%.2f, %.2f]",
+		            what, c.sampling.offset, est, fps, 100 * (est / fps - 1), lo, hi);
+		cr_assert(fps >= lo && fps <= hi,
+		          "%s offset %.2f: cycle's %.2f fps outside [%.2f, %.2f]", what,
+		          c.sampling.offset, fps, lo, hi);
+		chip_destroy(s);
+	}
+	chip_destroy(t);
+}
+
+Test(warming, counts_and_covers_as_cycle)
+{
+	char dir[256];
+	tu_tmpdir(dir, sizeof dir);
+	world w;
+	tu_load_world_cached(&w, "spd:balls:2", NULL, NULL, dir);
+	saar_config c;
+	config(&c, 256, 1);
+	against_cycle(&w, c, 3, 0.03, "balls through a 1 MB VMA");
+	world_free(&w);
+}
+
+Test(warming, conference_counts_and_covers_as_cycle, .timeout = 300)
+{
+	char views[1024], dir[256];
+	SCENE_OR_SKIP(views, "views.yaml");
+	tu_tmpdir(dir, sizeof dir);
+	world w;
+	tu_load_world_cached(&w, NULL, views, "conference", dir);
+	saar_config c;
+	config(&c, 0, 1);
+	c.memory.sdram.mb = 64;
+	c.frame.width = 1024;
+	c.frame.height = 768;
+	c.chip.threads_per_rtp = 16;
+	c.sampling.rate = 0.02;
+	against_cycle(&w, c, 2, 0.03, "Conference through the VMA, 16 threads");
+	world_free(&w);
+}
