@@ -764,6 +764,26 @@ static int func_give(chip *c, thr_ctx *t, int end, int *given)
 	return 1;
 }
 
+/* Sampled: does a memory-bound chunk (hard) that ended at tile `from`
+ * bring an extra region starting at `start`, before the next planned one
+ * at `next`? When one is left, the last region ended at least `gap` tiles
+ * before `from`, and a warm-up and unit fit before `next`. Functional
+ * stretches (func_range) and stored warming's gaps alike. */
+static int extra_due(const chip_fidelity *F, int hard, int from, int start, int next)
+{
+	return hard && F->extra_left > 0 && from - F->last_end >= F->gap &&
+	       next - start >= F->warmup_tiles + F->unit_tiles;
+}
+
+/* A sampled frame's bookkeeping at its start. */
+static void sampled_begin(chip_fidelity *F)
+{
+	F->us_next = F->ue_next = 0;
+	F->npc = 0;
+	F->extra_left = F->unit_cap - F->nunits;
+	F->last_end = 0;
+}
+
 /* Thread slots ahead whose packet streams func_range prefetches. */
 #define PREFETCH_TURNS 4
 
@@ -793,11 +813,15 @@ static void unpark_rtp(chip *c, int r)
  * its RTP, else the next tile. With a packet record, packets replay their
  * streams instead of running their math (units/replay.h). Memory goes
  * through the hierarchy's functional path: the data is there at once, and
- * a line a region left in flight counts as on its way (hier.c). With
- * drain, the range ends with every slot free; without, as soon as its last
- * tile is handed out, packets still in flight. */
-static int func_range(chip *c, int end, int drain)
+ * a line a region left in flight counts as on its way (hier.c). FR_DRAIN
+ * ends the range with every slot free; FR_STOP and FR_STOP_ONLY as soon as
+ * its last tile is handed out, packets still in flight, and FR_STOP may
+ * end it earlier for an extra region (returning 1). */
+enum fr_mode { FR_DRAIN, FR_STOP, FR_STOP_ONLY };
+
+static int func_range(chip *c, int end, int mode)
 {
+	int drain = mode == FR_DRAIN;
 	chip_fidelity *F = &c->fid;
 	/* sampled: the demand of each chunk of unit_tiles tiles (the units'
 	 * size) adds to its stratum's; the chunk's busiest resource is its
@@ -805,7 +829,7 @@ static int func_range(chip *c, int end, int drain)
 	 * region, when one is left, the last region ended at least `gap`
 	 * tiles ago, and there is room before the next planned one. */
 	int chunked = F->mode == CFG_FIDELITY_SAMPLED, given = 0, extra = 0;
-	int room = F->warmup_tiles + F->unit_tiles, n = c->nrtp * c->tpr;
+	int n = c->nrtp * c->tpr;
 	double d0[RES_N], d1[RES_N];
 	if (chunked)
 		chip_demand(c, d0);
@@ -830,9 +854,8 @@ static int func_range(chip *c, int end, int drain)
 					int hard = account(F, piece(c, d0, d1), 1);
 					memcpy(d0, d1, sizeof d0);
 					given = 0;
-					if (hard && !drain && F->extra_left > 0 &&
-					    c->g.next - F->last_end >= F->gap &&
-					    end - c->g.next >= room) {
+					if (mode == FR_STOP &&
+					    extra_due(F, hard, c->g.next, c->g.next, end)) {
 						end = c->g.next;
 						extra = 1;
 					}
@@ -897,10 +920,7 @@ static void sampled_frame(chip *c, int f)
 	chip_fidelity *F = &c->fid;
 	int W = F->warmup_tiles, n = F->nunits;
 	uint64_t t0 = eng_now(c->e);
-	F->us_next = F->ue_next = 0;
-	F->npc = 0;
-	F->extra_left = F->unit_cap - n;
-	F->last_end = 0;
+	sampled_begin(F);
 	int j = 0;
 	for (int b = 0; b < n; j++) {
 		int rs = F->base_s[b] - W;
@@ -908,7 +928,7 @@ static void sampled_frame(chip *c, int f)
 			rs = c->g.next;
 		/* the stretch before the next planned region may stop early at a
 		 * memory-bound chunk: an extra region starts there */
-		int extra = c->g.next < rs && func_range(c, rs, 0);
+		int extra = c->g.next < rs && func_range(c, rs, FR_STOP);
 		if (extra) {
 			F->extra_left--;
 			F->unit_s[j] = c->g.next + W;
@@ -977,10 +997,7 @@ static void sampled_frame_stored(chip *c, int f)
 	wm *r = &c->warm;
 	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits, G = r->g_full;
 	uint64_t t0 = eng_now(c->e);
-	F->us_next = F->ue_next = 0;
-	F->npc = 0;
-	F->extra_left = F->unit_cap - n;
-	F->last_end = 0;
+	sampled_begin(F);
 	int j = 0, at = 0, room = W + U;
 	for (int b = 0; b < n; j++) {
 		int tail = b == n - 1, rs = (F->base_s[b] - W) / G * G, extra = 0;
@@ -997,10 +1014,7 @@ static void sampled_frame_stored(chip *c, int f)
 			 * jumping to the checkpoint at once lost that work (the
 			 * frame's SDRAM bytes came out several percent low) */
 			int e = at + c->nrtp * c->tpr < rs ? at + c->nrtp * c->tpr : rs;
-			int xl = F->extra_left; /* an extra region starts in a gap only */
-			F->extra_left = 0;
-			func_range(c, e, 0);
-			F->extra_left = xl;
+			func_range(c, e, FR_STOP_ONLY); /* extra regions start in gaps */
 			at = c->g.next;
 		}
 		if (rs > at) {
@@ -1013,8 +1027,7 @@ static void sampled_frame_stored(chip *c, int f)
 				int e = a + U < rs ? a + U : rs;
 				int hard = account(F, warm_piece(c, f, a, e, m), 1);
 				int xs = (e + G - 1) / G * G;
-				if (hard && e - a == U && F->extra_left > 0 &&
-				    e - F->last_end >= F->gap && rs - xs >= room) {
+				if (e - a == U && extra_due(F, hard, e, xs, rs)) {
 					if (xs > e)
 						account(F, warm_piece(c, f, e, xs, m), 1);
 					rs = xs;
@@ -1261,7 +1274,7 @@ static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
 		h->frames_done = f;
 		rgc_reset(&h->g);
 		h->tiles_given = 0;
-		func_range(h, h->g.ntiles, 1);
+		func_range(h, h->g.ntiles, FR_DRAIN);
 		chip_demand(h, dem);
 		wm_put_light(&w, h, f, h->g.ntiles, dem);
 	}
@@ -1393,7 +1406,7 @@ int chip_run(chip *c, diag *d)
 		rgc_reset(&c->g);
 		c->tiles_given = 0;
 		if (F->mode == CFG_FIDELITY_FUNCTIONAL)
-			func_range(c, c->g.ntiles, 1);
+			func_range(c, c->g.ntiles, FR_DRAIN);
 		else if (stored)
 			sampled_frame_stored(c, f);
 		else if (chip_estimates(&c->cfg))

@@ -9,7 +9,7 @@
  *   light      frames x nlight records: demand (WM_NDEM doubles), the
  *              on-board-cache hit ticks, the counters (ncnt uint64)
  *   offsets    frames x nfull uint64: each full checkpoint's offset
- *   full       per full checkpoint: wm_fhead, the slots (wm_slot, turn
+ *   full       per full checkpoint: wm_fhead, the slots (thr_replay_state, turn
  *              order), per RTP its queue length then the queued packet
  *              ids, the L1s and tag cache whole (cache_save form: lines
  *              then ranks), the on-board cache's changed sets (their
@@ -23,6 +23,7 @@
 #include "bitset.h"
 #include "chip.h"
 #include "replay.h"
+#include "rgs.h"
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
 
@@ -41,14 +42,6 @@ typedef struct wm_fhead {
 	int32_t frame, tile;
 	uint64_t next_age;
 } wm_fhead;
-
-typedef struct wm_slot {
-	int32_t rec; /* -1: idle */
-	int16_t kind, rays;
-	uint64_t off, age;
-	uint64_t raddr[MEM_NTYPES];
-	uint32_t rbytes[MEM_NTYPES];
-} wm_slot;
 
 static size_t pad8(size_t n)
 {
@@ -208,23 +201,10 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 		return;
 	memcpy(p, &fh, sizeof fh);
 	for (int i = 0; i < ns; i++) {
-		const thr_ctx *t = c->turn[i];
-		wm_slot s;
-		memset(&s, 0, sizeof s);
-		s.rec = -1;
-		if (t->p || (t->rp && !t->fnext)) { /* running its math, or mid-step */
+		thr_replay_state s;
+		if (thr_replay_save(c->turn[i], &s)) {
 			w->failed = 1;
 			return;
-		}
-		if (t->rp) {
-			const uint8_t *end, *st = pr_stream(c->env.rec_in, (uint32_t)t->rec, &end);
-			s.rec = t->rec;
-			s.kind = (int16_t)t->fkind;
-			s.rays = (int16_t)t->frays;
-			s.off = (uint64_t)(t->rp - st);
-			s.age = t->age;
-			memcpy(s.raddr, t->raddr, sizeof s.raddr);
-			memcpy(s.rbytes, t->rbytes, sizeof s.rbytes);
 		}
 		if (!(p = full_room(w, sizeof s)))
 			return;
@@ -334,6 +314,7 @@ void wm_close(wm *r)
 	free(r->l2line);
 	free(r->l2rank);
 	free(r->l2pend);
+	free(r->q);
 	memset(r, 0, sizeof *r);
 }
 
@@ -453,7 +434,7 @@ static rd full_reader(const wm *r, int gi)
 static void skip_threads(rd *d, int nslots, int nrtp)
 {
 	take(d, sizeof(wm_fhead));
-	take(d, sizeof(wm_slot) * (size_t)nslots);
+	take(d, sizeof(thr_replay_state) * (size_t)nslots);
 	for (int q = 0; q < nrtp && !d->bad; q++) {
 		int32_t qn;
 		const uint8_t *p = d->p;
@@ -521,65 +502,37 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 	if (fh.frame != frame || fh.tile != tile)
 		return -1;
 	/* the slots, in turn order */
-	const pktrec *rec = c->env.rec_in;
 	for (int i = 0; i < h->nslots; i++) {
-		wm_slot s;
+		thr_replay_state s;
 		if (!(p = take(&d, sizeof s)))
 			return -1;
 		memcpy(&s, p, sizeof s);
-		thr_ctx *t = c->turn[i];
-		if (t->p) { /* stored warming replays every packet */
-			thr_pkt_free(&c->env, t->p);
-			t->p = NULL;
-		}
-		t->pending = 0;
-		t->cont = NULL;
-		if (s.rec < 0) {
-			t->rec = -1;
-			t->rp = t->rpe = NULL;
-			t->fnext = NULL;
-			if (t->state != THR_IDLE)
-				thr_set(t, THR_IDLE);
-			continue;
-		}
-		const uint8_t *end, *st;
-		if (!rec || (uint32_t)s.rec >= rec->npk || s.kind < 0 || s.kind >= UNIT_NKINDS)
+		if (thr_replay_restore(c->turn[i], &s))
 			return -1;
-		st = pr_stream(rec, (uint32_t)s.rec, &end);
-		if (s.off > (uint64_t)(end - st))
-			return -1;
-		thr_replay_resume(t, s.rec, s.off, s.kind, s.rays);
-		memcpy(t->raddr, s.raddr, sizeof t->raddr);
-		memcpy(t->rbytes, s.rbytes, sizeof t->rbytes);
-		t->age = s.age;
-		if (t->state == THR_IDLE)
-			thr_set(t, THR_RUN);
 	}
 	for (int q = 0; q < h->nrtp; q++) {
-		thr_rtp *rp = &c->rtp[q];
 		int32_t qn;
 		if ((size_t)(d.end - d.p) < 4)
 			return -1;
 		memcpy(&qn, d.p, 4);
 		if (qn < 0 || !(p = take(&d, 4 + 4 * (size_t)qn)))
 			return -1;
-		if (qn > rp->qcap) {
-			thr_qitem *nq = malloc((size_t)qn * sizeof *nq);
+		if (qn > r->nq) {
+			thr_qitem *nq = realloc(r->q, (size_t)qn * sizeof *nq);
 			if (!nq)
 				return -1;
-			free(rp->q);
-			rp->q = nq;
-			rp->qcap = qn;
+			r->q = nq;
+			r->nq = qn;
 		}
 		for (int i = 0; i < qn; i++) {
 			int32_t id;
 			memcpy(&id, p + 4 + 4 * (size_t)i, 4);
-			if ((uint32_t)id >= rec->npk)
+			if ((uint32_t)id >= c->env.rec_in->npk)
 				return -1;
-			rp->q[i] = (thr_qitem){NULL, id};
+			r->q[i] = (thr_qitem){NULL, id};
 		}
-		rp->qhead = 0;
-		rp->qn = qn;
+		if (rgs_queue_set(&c->rtp[q], r->q, qn))
+			return -1;
 	}
 	/* the caches stored whole */
 	for (int i = 0; i < WM_NCACHES; i++) {

@@ -8,7 +8,7 @@
  * regions count the frame's traffic as cycle does (memory-port requests
  * within 1%; through a VMA whose on-board cache is too small for the
  * scene, PCI bytes within 3%: restoring the on-board cache wrong once
- * gave 30% more) and the interval covers cycle's fps. Without a world
+ * gave tens of percent more) and the interval covers cycle's fps. Without a world
  * cache the functional stretches run instead, figure for figure.
  */
 #include <math.h>
@@ -34,6 +34,14 @@ static void config(saar_config *c, int size, int onboard)
 	}
 }
 
+/* Scene path (NULL: the embedded room) through a world cache in a fresh
+ * folder dir. */
+static void cached(world *w, const char *path, char *dir, size_t n)
+{
+	tu_tmpdir(dir, n);
+	tu_load_world_cached(w, path, NULL, NULL, dir);
+}
+
 /* Frame cycles, interval and every registry counter equal. */
 static void same_figures(const chip *a, const chip *b, const char *what)
 {
@@ -57,9 +65,8 @@ static uint64_t port_reads(const chip *c)
 Test(warming, built_then_loaded_alike)
 {
 	char dir[256];
-	tu_tmpdir(dir, sizeof dir);
 	world w;
-	tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+	cached(&w, NULL, dir, sizeof dir);
 	saar_config c;
 	config(&c, 256, 0);
 	c.frame.frames = 2;
@@ -83,9 +90,8 @@ Test(warming, built_then_loaded_alike)
 Test(warming, timing_keys_reuse_it_l1_sizes_do_not)
 {
 	char dir[256], path[1024];
-	tu_tmpdir(dir, sizeof dir);
 	world w;
-	tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+	cached(&w, NULL, dir, sizeof dir);
 	saar_config c;
 	config(&c, 256, 0);
 	chip_destroy(tu_run_chip(&w, &c));
@@ -111,9 +117,8 @@ Test(warming, timing_keys_reuse_it_l1_sizes_do_not)
 Test(warming, damaged_file_is_rebuilt)
 {
 	char dir[256], path[1024];
-	tu_tmpdir(dir, sizeof dir);
 	world w;
-	tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+	cached(&w, NULL, dir, sizeof dir);
 	saar_config c;
 	config(&c, 256, 1);
 	chip *a = tu_run_chip(&w, &c);
@@ -193,9 +198,8 @@ static void against_cycle(const world *w, saar_config c, int n, double pci_tol, 
 Test(warming, counts_and_covers_as_cycle)
 {
 	char dir[256];
-	tu_tmpdir(dir, sizeof dir);
 	world w;
-	tu_load_world_cached(&w, "spd:balls:2", NULL, NULL, dir);
+	cached(&w, "spd:balls:2", dir, sizeof dir);
 	saar_config c;
 	config(&c, 256, 1);
 	against_cycle(&w, c, 3, 0.03, "balls through a 1 MB VMA");

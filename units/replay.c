@@ -8,6 +8,8 @@
  */
 #include "replay.h"
 
+#include <string.h>
+
 #include "rgs.h"
 
 /* The children a packet's shading queued, in its stream as their ids. */
@@ -138,12 +140,58 @@ void thr_replay_begin(thr_ctx *t, int32_t id)
 	run(t);
 }
 
-void thr_replay_resume(thr_ctx *t, int32_t id, uint64_t off, int kind, int rays)
+int thr_replay_save(const thr_ctx *t, thr_replay_state *s)
+{
+	memset(s, 0, sizeof *s);
+	s->rec = -1;
+	if (t->p || (t->rp && !t->fnext))
+		return -1;
+	if (!t->rp)
+		return 0;
+	const uint8_t *end, *st = pr_stream(t->env->rec_in, (uint32_t)t->rec, &end);
+	s->rec = t->rec;
+	s->kind = (int16_t)t->fkind;
+	s->rays = (int16_t)t->frays;
+	s->off = (uint64_t)(t->rp - st);
+	s->age = t->age;
+	memcpy(s->raddr, t->raddr, sizeof s->raddr);
+	memcpy(s->rbytes, t->rbytes, sizeof s->rbytes);
+	return 0;
+}
+
+int thr_replay_restore(thr_ctx *t, const thr_replay_state *s)
 {
 	const pktrec *r = t->env->rec_in;
-	t->rec = id;
-	t->rp = pr_stream(r, (uint32_t)id, &t->rpe) + off;
+	if (t->p) { /* its math: stored warming replays every packet */
+		thr_pkt_free(t->env, t->p);
+		t->p = NULL;
+	}
+	t->pending = 0;
+	t->cont = NULL;
+	t->rec = -1;
+	t->rp = t->rpe = NULL;
+	t->fnext = NULL;
+	const uint8_t *end = NULL, *st = NULL;
+	int ok = s->rec < 0;
+	if (!ok && r && (uint32_t)s->rec < r->npk && s->kind >= 0 && s->kind < UNIT_NKINDS) {
+		st = pr_stream(r, (uint32_t)s->rec, &end);
+		ok = s->off <= (uint64_t)(end - st);
+	}
+	if (s->rec < 0 || !ok) {
+		if (t->state != THR_IDLE)
+			thr_set(t, THR_IDLE);
+		return ok ? 0 : -1;
+	}
+	t->rec = s->rec;
+	t->rp = st + s->off;
+	t->rpe = end;
 	t->fnext = op_done;
-	t->fkind = kind;
-	t->frays = rays;
+	t->fkind = s->kind;
+	t->frays = s->rays;
+	t->age = s->age;
+	memcpy(t->raddr, s->raddr, sizeof t->raddr);
+	memcpy(t->rbytes, s->rbytes, sizeof t->rbytes);
+	if (t->state == THR_IDLE)
+		thr_set(t, THR_RUN);
+	return 0;
 }

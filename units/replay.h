@@ -19,11 +19,26 @@
  * its first unit op, as rgs_primary / rgs_secondary do. Its later steps
  * are the ops' completions (timed) or thr_step_func (functional). */
 void thr_replay_begin(thr_ctx *t, int32_t id);
-/* Functional: thread t takes over packet id stopped `off` bytes into its
- * stream before the next unit op of kind `kind` with `rays` rays, already
- * counted (as thr_use left it): where stored warming's checkpoint had it
- * (sim/warming.h). The caller sets its read history (raddr, rbytes), age
- * and state. */
-void thr_replay_resume(thr_ctx *t, int32_t id, uint64_t off, int kind, int rays);
+
+/* Where a functional thread slot is between two steps, as stored
+ * warming's checkpoints keep it (sim/warming.h): idle (rec -1), or
+ * replaying packet rec stopped `off` bytes into its stream before its
+ * next unit op (of `kind`, `rays` rays, already counted, as thr_use left
+ * it), with the packet's read history and age. A fixed layout: it is
+ * stored as it is. */
+typedef struct thr_replay_state {
+	int32_t rec;
+	int16_t kind, rays;
+	uint64_t off, age;
+	uint64_t raddr[MEM_NTYPES];
+	uint32_t rbytes[MEM_NTYPES];
+} thr_replay_state;
+
+/* Thread t's state (functional, between steps); -1 when it cannot be
+ * kept: it runs a packet's math, or it is in the middle of a step. */
+int thr_replay_save(const thr_ctx *t, thr_replay_state *s);
+/* Thread t (no read outstanding, no event pending) takes state s; -1
+ * when s does not fit env.rec_in (t is then left idle). */
+int thr_replay_restore(thr_ctx *t, const thr_replay_state *s);
 
 #endif

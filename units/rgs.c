@@ -56,25 +56,47 @@ static void shadow_done(eng *e, void *ctx, uint64_t arg)
 	thr_release(ctx);
 }
 
+/* Room for n packets in the queue (amortised growth; order kept). */
+static int queue_room(thr_rtp *r, int n)
+{
+	if (n <= r->qcap)
+		return 0;
+	int cap = r->qcap ? 2 * r->qcap : 64;
+	while (cap < n)
+		cap *= 2;
+	thr_qitem *q = malloc((size_t)cap * sizeof *q);
+	if (!q)
+		return -1;
+	for (int i = 0; i < r->qn; i++)
+		q[i] = r->q[(r->qhead + i) % r->qcap];
+	free(r->q);
+	r->q = q;
+	r->qhead = 0;
+	r->qcap = cap;
+	return 0;
+}
+
 int rgs_spawn(thr_rtp *r, thr_qitem it)
 {
-	if (r->qn == r->qcap) {
-		int cap = r->qcap ? 2 * r->qcap : 64;
-		thr_qitem *q = malloc((size_t)cap * sizeof *q);
-		if (!q)
-			return -1;
-		for (int i = 0; i < r->qn; i++)
-			q[i] = r->q[(r->qhead + i) % r->qcap];
-		free(r->q);
-		r->q = q;
-		r->qhead = 0;
-		r->qcap = cap;
-	}
+	if (queue_room(r, r->qn + 1))
+		return -1;
 	r->q[(r->qhead + r->qn++) % r->qcap] = it;
 	thr_env *v = r->env;
 	++*v->c[C_SPAWNED];
 	if ((uint64_t)r->qn > *v->c[C_MAX_QUEUE])
 		*v->c[C_MAX_QUEUE] = (uint64_t)r->qn;
+	return 0;
+}
+
+int rgs_queue_set(thr_rtp *r, const thr_qitem *it, int n)
+{
+	r->qn = 0;
+	r->qhead = 0;
+	if (queue_room(r, n))
+		return -1;
+	for (int i = 0; i < n; i++)
+		r->q[i] = it[i];
+	r->qn = n;
 	return 0;
 }
 

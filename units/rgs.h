@@ -37,6 +37,10 @@ void rgs_finish(thr_ctx *t);
 int rgs_spawn(thr_rtp *r, thr_qitem it);
 void rgs_spawned(thr_rtp *r);
 int rgs_dequeue(thr_rtp *r, thr_qitem *it);
+/* The queue becomes the n packets it[] in that order, counting nothing
+ * (stored warming restores a checkpoint's queue, sim/warming.h). -1 when
+ * out of memory (the queue is then empty). */
+int rgs_queue_set(thr_rtp *r, const thr_qitem *it, int n);
 /* A packet of `type` with `rays` valid rays enters thread t: its age, the
  * packet and ray counters (the math and a replayed stream alike). */
 void rgs_enter_count(thr_ctx *t, int type, uint64_t rays);
