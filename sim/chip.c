@@ -136,7 +136,7 @@ static void census_mark(chip *c, int tile)
  * slot taking it is idle, every other one between two steps. */
 static void warm_mark(chip *c, int tile)
 {
-	if (tile % c->wcap->g_full == 0)
+	if (tile == wm_full_tile(c->wcap->g_light, c->wcap->g_full, tile / c->wcap->g_full))
 		wm_put_full(c->wcap, c, c->frames_done, tile);
 	double dem[RES_N];
 	chip_demand(c, dem);
@@ -577,7 +577,8 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	c->live = malloc((size_t)bits_words((int)nslots) * sizeof *c->live);
 	c->park = malloc(nslots * sizeof *c->park);
 	c->park_n = malloc((size_t)c->nrtp * sizeof *c->park_n);
-	if (!c->live || !c->park || !c->park_n)
+	c->relax_n = malloc(nslots * sizeof *c->relax_n);
+	if (!c->live || !c->park || !c->park_n || !c->relax_n)
 		goto oom;
 	if (c->oom || fid_init(c))
 		goto oom;
@@ -607,6 +608,7 @@ void chip_destroy(chip *c)
 	free(c->live);
 	free(c->park);
 	free(c->park_n);
+	free(c->relax_n);
 	rgc_free(&c->g);
 	fb_free(&c->fb);
 	pr_free(&c->rec);
@@ -814,14 +816,25 @@ static void unpark_rtp(chip *c, int r)
  * streams instead of running their math (units/replay.h). Memory goes
  * through the hierarchy's functional path: the data is there at once, and
  * a line a region left in flight counts as on its way (hier.c). FR_DRAIN
- * ends the range with every slot free; FR_STOP and FR_STOP_ONLY as soon as
- * its last tile is handed out, packets still in flight, and FR_STOP may
- * end it earlier for an extra region (returning 1). */
-enum fr_mode { FR_DRAIN, FR_STOP, FR_STOP_ONLY };
+ * ends the range with every slot free; FR_STOP as soon as its last tile
+ * is handed out, packets still in flight, or earlier for an extra region
+ * (returning 1). FR_RELAX (stored warming, after a region) ends when a
+ * slot wants a tile on the light-checkpoint grid (its RTP's queue empty)
+ * once every slot has taken RELAX_TILES tiles since the range began: the
+ * moment at which the warming run takes its checkpoints (warm_mark), with
+ * the packets in flight about as far along as the warming run's are
+ * (docs/fidelity.md "Stored warming"); or when the tile wanted is `end`,
+ * or earlier for an extra region (returning 1), as FR_STOP. */
+enum fr_mode { FR_DRAIN, FR_STOP, FR_RELAX };
+
+/* Tiles every slot takes in a relax. One leaves the slot that finished
+ * last holding a packet just begun where the warming run's slots are part
+ * way through theirs: the frame's PCI bytes came out 1.5% low on Sponza
+ * through the VMA at one thread per RTP; two brought it within 0.2%. */
+#define RELAX_TILES 2
 
 static int func_range(chip *c, int end, int mode)
 {
-	int drain = mode == FR_DRAIN;
 	chip_fidelity *F = &c->fid;
 	/* sampled: the demand of each chunk of unit_tiles tiles (the units'
 	 * size) adds to its stratum's; the chunk's busiest resource is its
@@ -838,14 +851,18 @@ static int func_range(chip *c, int end, int mode)
 	if (n % 64)
 		c->live[n / 64] = (1ull << (n % 64)) - 1;
 	memset(c->park_n, 0, (size_t)c->nrtp * sizeof *c->park_n);
+	int relaxed = 0, stop = 0;
+	if (mode == FR_RELAX)
+		memset(c->relax_n, 0, (size_t)n * sizeof *c->relax_n);
 	c->env.func = 1;
-	for (int busy = 1; busy && !c->oom;) {
+	for (int busy = 1; busy && !stop && !c->oom;) {
 		/* before a region: stop once the tiles are handed out and leave
 		 * the packets in flight for the region to take over */
-		if (!drain && c->g.next >= end)
+		if (mode == FR_STOP && c->g.next >= end)
 			break;
 		busy = 0;
-		for (int i = bits_next(c->live, n, 0); i < n; i = bits_next(c->live, n, i + 1)) {
+		for (int i = bits_next(c->live, n, 0); i < n && !stop;
+		     i = bits_next(c->live, n, i + 1)) {
 			thr_ctx *t = c->turn[i];
 			int r = (int)(t->rtp - c->rtp);
 			if (!t->p && !t->rp) {
@@ -854,12 +871,19 @@ static int func_range(chip *c, int end, int mode)
 					int hard = account(F, piece(c, d0, d1), 1);
 					memcpy(d0, d1, sizeof d0);
 					given = 0;
-					if (mode == FR_STOP &&
+					if (mode != FR_DRAIN &&
 					    extra_due(F, hard, c->g.next, c->g.next, end)) {
 						end = c->g.next;
 						extra = 1;
 					}
 				}
+				if (mode == FR_RELAX && t->rtp->qn == 0 &&
+				    ((relaxed == n && c->g.next % c->warm.g_light == 0) ||
+				     c->g.next >= end)) {
+					stop = 1;
+					break;
+				}
+				int had = given;
 				if (!func_give(c, t, end, &given)) {
 					/* no tile is left (`end` only comes closer) and
 					 * its RTP's queue is empty: until the RTP queues
@@ -870,6 +894,9 @@ static int func_range(chip *c, int end, int mode)
 						park_slot(c, i, r);
 					continue;
 				}
+				if (mode == FR_RELAX && given != had &&
+				    ++c->relax_n[i] == RELAX_TILES)
+					relaxed++;
 			}
 			if (t->rp) {
 				/* the stream of the slot a few turns on is elsewhere
@@ -989,35 +1016,45 @@ static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
  * chunks' demands come from the warming run's light checkpoints and the
  * next region starts from the full checkpoint at its start
  * (wm_restore), which also adds the gap's counts. Region starts snap
- * down to the full grid; a region whose start falls at or before the
- * last one's end follows it without a gap. */
+ * down to the last full checkpoint (wm_full_below); a region whose start
+ * falls at or before the last one's end follows it without a gap. */
 static void sampled_frame_stored(chip *c, int f)
 {
 	chip_fidelity *F = &c->fid;
 	wm *r = &c->warm;
-	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits, G = r->g_full;
+	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits;
 	uint64_t t0 = eng_now(c->e);
 	sampled_begin(F);
 	int j = 0, at = 0, room = W + U;
 	for (int b = 0; b < n; j++) {
-		int tail = b == n - 1, rs = (F->base_s[b] - W) / G * G, extra = 0;
-		if (!tail && (rs > at ? rs : at) + room > (F->base_s[n - 1] - W) / G * G) {
+		int tail = b == n - 1, rs = wm_full_below(r, F->base_s[b] - W), extra = 0;
+		if (!tail && (rs > at ? rs : at) + room > wm_full_below(r, F->base_s[n - 1] - W)) {
 			b++; /* no room before the tail: left out */
 			j--;
 			continue;
 		}
 		if (rs > at && j > 0) {
 			/* the last region's packets in flight go on functionally
-			 * for one tile per thread slot first: a timed chip holds
-			 * more work in flight when a tile is wanted than the
-			 * warming run did when it handed out the same tile, and
-			 * jumping to the checkpoint at once lost that work (the
-			 * frame's SDRAM bytes came out several percent low) */
-			int e = at + c->nrtp * c->tpr < rs ? at + c->nrtp * c->tpr : rs;
-			func_range(c, e, FR_STOP_ONLY); /* extra regions start in gaps */
+			 * until none is left in a slot and those in flight are as
+			 * far along as the warming run's when it takes a
+			 * checkpoint (FR_RELAX): the work the chip leaves undone
+			 * at the jump is then what the gap's counts hold. A
+			 * timed chip holds more work in flight when a tile is
+			 * wanted than the warming run does (slow packets stay
+			 * longer), and jumping at once lost that work: the
+			 * frame's PCI bytes came out 8% low on Sponza through the
+			 * VMA at one thread per RTP. A memory-bound chunk on the
+			 * way brings an extra region there and then, as in full
+			 * warming (a relax takes two tiles per slot: 512 tiles at
+			 * 64 threads, and without this the extra regions at 64
+			 * threads were lost, and with them the estimate's
+			 * memory-bound units). */
+			extra = func_range(c, rs, FR_RELAX);
 			at = c->g.next;
 		}
-		if (rs > at) {
+		if (extra) /* it stopped at a memory-bound chunk: a region follows */
+			rs = at;
+		else if (rs > at) {
 			/* the gap [at, rs): the warming run's chunks of U tiles; a
 			 * memory-bound one brings an extra region at the next full
 			 * checkpoint after it, as func_range does */
@@ -1026,7 +1063,7 @@ static void sampled_frame_stored(chip *c, int f)
 			for (int a = at; a < rs;) {
 				int e = a + U < rs ? a + U : rs;
 				int hard = account(F, warm_piece(c, f, a, e, m), 1);
-				int xs = (e + G - 1) / G * G;
+				int xs = wm_full_above(r, e);
 				if (e - a == U && extra_due(F, hard, e, xs, rs)) {
 					if (xs > e)
 						account(F, warm_piece(c, f, e, xs, m), 1);

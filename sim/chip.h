@@ -153,6 +153,9 @@ typedef struct chip {
 	 * park[r * tpr ..], park_n[r] of them for RTP r. */
 	uint64_t *live;
 	int *park, *park_n;
+	/* stored warming's relax (func_range FR_RELAX): tiles each slot took
+	 * since it began */
+	int *relax_n;
 	char *rec_key, rec_file[1200];
 	double rec_ms; /* host time loading or storing the record */
 	/* stored warming (sampling.warming: stored; sim/warming.h): the

@@ -145,9 +145,9 @@ static const cfg_key keys[] = {
              "(functional, replaying the packet record) is stored once in the world cache "
              "with checkpoints of the chip's state, and each region starts from the "
              "checkpoint at its start, so a run simulates only its regions (needs "
-             "--world-cache; regions start on a grid of 1/64 of the frame). A warming run "
-             "is reused by every run whose config differs only in timing (latencies, "
-             "SDRAM timings, MSHRs, scheduling) and sampling keys"},
+             "--world-cache; regions start at checkpoints, one in every 1/64 of the "
+             "frame). A warming run is reused by every run whose config differs only in "
+             "timing (latencies, SDRAM timings, MSHRs, scheduling) and sampling keys"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

@@ -27,7 +27,7 @@
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
 
-#define WM_MAGIC   "saarwm01"
+#define WM_MAGIC   "saarwm02"
 #define WM_NCACHES 5 /* the four L1s and the VMA tag cache */
 
 typedef struct wm_head {
@@ -106,6 +106,17 @@ static int light_index(int ntiles, int g, int tile)
 	return tile == ntiles ? nlight_of(ntiles, g) - 1 : tile / g;
 }
 
+int wm_full_tile(int g_light, int g_full, int k)
+{
+	if (k <= 0)
+		return 0;
+	/* a multiplicative hash of k (Knuth's), scaled to the places by its
+	 * high bits (its low bits repeat with short periods) */
+	uint32_t h = (uint32_t)k * 2654435761u;
+	uint64_t j = ((uint64_t)h * (uint64_t)(g_full / g_light)) >> 32;
+	return k * g_full + (int)j * g_light;
+}
+
 /* ---- writing ---- */
 
 int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full)
@@ -120,7 +131,9 @@ int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full)
 	w->cnt = counters_of(c, &w->ncnt);
 	w->lsize = sizeof(double) * WM_NDEM + sizeof(uint64_t) * (1 + w->ncnt);
 	w->light = calloc((size_t)w->frames * (size_t)w->nlight, w->lsize);
-	w->foff = calloc((size_t)w->frames * (size_t)w->nfull, sizeof *w->foff);
+	w->foff = malloc((size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
+	if (w->foff) /* a checkpoint jittered past the frame's end is never written */
+		memset(w->foff, 0xff, (size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
 	cache *k[WM_NCACHES], *l2;
 	if (caches_of(c, k, &l2) && l2 && cache_track(l2))
 		w->failed = 1;
@@ -390,6 +403,20 @@ const double *wm_demand(const wm *r, int frame, int tile, uint64_t *l2hit)
 	return (const double *)(const void *)p;
 }
 
+int wm_full_below(const wm *r, int tile)
+{
+	int k = tile / r->g_full, t = wm_full_tile(r->g_light, r->g_full, k);
+	return t <= tile ? t : wm_full_tile(r->g_light, r->g_full, k - 1);
+}
+
+int wm_full_above(const wm *r, int tile)
+{
+	int k = tile / r->g_full, t = wm_full_tile(r->g_light, r->g_full, k);
+	if (t < tile)
+		t = wm_full_tile(r->g_light, r->g_full, k + 1);
+	return t < r->ntiles ? t : r->ntiles;
+}
+
 void wm_region_end(wm *r, int frame, int tile)
 {
 	const uint8_t *p = light_at(r, frame, tile) + sizeof(double) * WM_NDEM;
@@ -483,7 +510,8 @@ static void roll_l2(wm *r, chip *c, int gi, const cache *l2)
 int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 {
 	const wm_head *h = (const wm_head *)(const void *)r->b;
-	if (frame >= r->frames || tile % r->g_full || tile >= r->ntiles)
+	if (frame >= r->frames || tile >= r->ntiles ||
+	    tile != wm_full_tile(r->g_light, r->g_full, tile / r->g_full))
 		return -1;
 	int gi = frame * r->nfull + tile / r->g_full;
 	cache *k[WM_NCACHES], *l2;

@@ -9,17 +9,25 @@
  * out. There it writes a light checkpoint: the resource demand so far
  * (chip_demand) and every counter functional processing moves (the stats
  * registry, the memory port's counts, shade_counts, the hierarchy's
- * counters). At every `g_full` tiles it also writes a full checkpoint:
+ * counters). Once in every `g_full` tiles it also writes a full checkpoint:
  * each thread slot's packet stream and where in it the slot stopped, the
  * RTP queues, the L1s and VMA tag cache whole, and the sets of the VMA
  * on-board cache changed since the full checkpoint before (that cache is
  * 64 MB on board; a copy per checkpoint would be most of the file).
  *
+ * Full checkpoint k sits at k x g_full plus a jitter on the light grid
+ * below g_full, fixed by k (wm_full_tile; none for k = 0). On a grid of
+ * plain multiples every region would start at the same place in the tile
+ * order's blocks (192 tiles: three Morton blocks of 8x8 tiles on
+ * Conference), and its unit would always sample the same few positions:
+ * that biased estimates by +0.5% there; the jitter spreads the positions
+ * as a systematic sample's are.
+ *
  * A sampled run restores the full checkpoint where a region starts: the
  * caches, slots and queues become the warming run's there, and every
  * counter gains what the warming run counted between the last region's
- * end (a light checkpoint) and this start. Regions therefore start on the
- * full grid and end on the light grid. The on-board cache is rolled
+ * end (a light checkpoint) and this start. Regions therefore start on
+ * full checkpoints and end on the light grid. The on-board cache is rolled
  * forward through the diffs into a warm image kept by the reader, and
  * only the sets a diff or the region changed are copied into the chip.
  *
@@ -37,6 +45,11 @@ struct chip;
 
 /* Resource demands per light checkpoint (chip.h RES_N). */
 #define WM_NDEM 10
+
+/* The tile of full checkpoint k (below the tile count or not): k x g_full
+ * plus its jitter, a multiple of g_light below g_full (g_full a multiple
+ * of g_light). */
+int wm_full_tile(int g_light, int g_full, int k);
 
 /* ---- writing (the warming run) ---- */
 
@@ -59,8 +72,8 @@ int wm_writer_init(wm_writer *w, struct chip *c, int g_light, int g_full);
 /* A light checkpoint at hand-out index tile of frame (tile: a multiple
  * of g_light, or the frame's tile count), dem: chip_demand now. */
 void wm_put_light(wm_writer *w, struct chip *c, int frame, int tile, const double *dem);
-/* A full checkpoint at tile (a multiple of g_full below the tile count);
- * the chip's slots must be stopped between steps. */
+/* A full checkpoint at tile (wm_full_tile of tile / g_full, below the
+ * tile count); the chip's slots must be stopped between steps. */
 void wm_put_full(wm_writer *w, struct chip *c, int frame, int tile);
 /* The stored form, one malloc'd block. -1 when out of memory. */
 int wm_writer_finish(wm_writer *w, struct chip *c, void **out, size_t *n);
@@ -99,8 +112,14 @@ const double *wm_demand(const wm *r, int frame, int tile, uint64_t *l2hit);
 /* A region ended at tile (on the light grid): the next restore adds what
  * the warming run counted from there. */
 void wm_region_end(wm *r, int frame, int tile);
+/* The tile of the last full checkpoint at or before tile (0 for tiles
+ * before the first jittered one), and of the first at or after it (the
+ * tile count when there is none). */
+int wm_full_below(const wm *r, int tile);
+int wm_full_above(const wm *r, int tile);
 /* Sets chip c (no event pending, every MSHR free) to the full checkpoint
- * at tile of frame (on the full grid, at or after the last one restored);
+ * at tile of frame (wm_full_below of it, at or after the last one
+ * restored);
  * merge_share: of the warming run's on-board-cache hit ticks since the
  * last region's end, the share a timed chip merges
  * (hier_stats.func_sdram_merge_ticks). -1 when the block is damaged. */
