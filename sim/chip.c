@@ -1387,11 +1387,17 @@ static void warm_open(chip *c)
 				c->warm_state = WARM_BUILT;
 			if (wm_open(&c->warm, b, n, c)) {
 				free(b);
+				b = NULL;
 				c->warm_state = WARM_UNAVAILABLE;
 			} else
 				c->warm_own = b;
-		} else
+		} else {
 			free(b);
+			b = NULL;
+		}
+		if (!b) /* out of memory, or a cache line index past what is stored */
+			fprintf(stderr, "warning: sampling.warming stored: the warming run failed; "
+			                "the functional stretches run instead\n");
 		chip_destroy(h);
 	}
 	free(key);
