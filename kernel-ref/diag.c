@@ -3,8 +3,10 @@
  */
 #include "diag.h"
 
+#include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <unistd.h>
 
 int diag_set(diag *d, const char *file, int line, int col, const char *fmt, ...)
 {
@@ -30,4 +32,28 @@ int diag_set(diag *d, const char *file, int line, int col, const char *fmt, ...)
 		if ((unsigned char)*c < 0x20 || *c == 0x7f)
 			*c = '?';
 	return -1;
+}
+
+int diag_quiet_begin(void)
+{
+	fflush(stderr);
+	int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+	if (null < 0)
+		return -1;
+	int saved = fcntl(2, F_DUPFD_CLOEXEC, 3);
+	if (saved >= 0 && dup2(null, 2) < 0) {
+		close(saved);
+		saved = -1;
+	}
+	close(null);
+	return saved;
+}
+
+void diag_quiet_end(int saved)
+{
+	if (saved < 0)
+		return;
+	fflush(stderr);
+	dup2(saved, 2);
+	close(saved);
 }

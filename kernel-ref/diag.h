@@ -25,4 +25,12 @@ typedef struct diag {
 int diag_set(diag *d, const char *file, int line, int col, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
 
+/* Silences file descriptor 2 until diag_quiet_end: around a library that
+ * prints a damaged file's error on stderr itself besides returning it
+ * (Assimp's importers, libpng's default handler), which would make a
+ * second line beside the diag. Returns what diag_quiet_end takes (-1: not
+ * silenced). Not for while other threads print. */
+int diag_quiet_begin(void);
+void diag_quiet_end(int saved);
+
 #endif

@@ -176,7 +176,10 @@ int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d)
 		return diag_set(d, path, 0, 0, "cannot read image: %s", in_strerror(st));
 	}
 	char err[512] = "";
+	/* libpng's default handler prints "libpng error: ..." itself */
+	int quiet = diag_quiet_begin();
 	int rc = p->read_rgba8(path, w, h, rgba, err, sizeof err);
+	diag_quiet_end(quiet);
 	if (rc != 0)
 		diag_set(d, path, 0, 0, "cannot read image: %s", err);
 	dlclose(lib);

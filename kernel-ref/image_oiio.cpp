@@ -10,9 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <fcntl.h>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 using namespace OIIO;
@@ -31,38 +29,6 @@ static int fail(char *err, size_t errlen, const std::string &what)
 	std::snprintf(err, errlen, "%s", what.c_str());
 	return -1;
 }
-
-/* Silences file descriptor 2 while it lives. Some readers print a damaged
- * file's error on stderr themselves besides returning it (libpng's
- * default handler: "libpng error: ..."), which would make a second line
- * beside the one the C side prints. Images are read while a world loads,
- * before any other thread runs. */
-struct QuietStderr {
-	int saved = -1;
-	QuietStderr()
-	{
-		std::fflush(stderr);
-		int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
-		if (null < 0)
-			return;
-		saved = fcntl(2, F_DUPFD_CLOEXEC, 3);
-		if (saved >= 0 && dup2(null, 2) < 0) {
-			close(saved);
-			saved = -1;
-		}
-		close(null);
-	}
-	~QuietStderr()
-	{
-		if (saved < 0)
-			return;
-		std::fflush(stderr);
-		dup2(saved, 2);
-		close(saved);
-	}
-	QuietStderr(const QuietStderr &) = delete;
-	QuietStderr &operator=(const QuietStderr &) = delete;
-};
 
 static int write_rgb(const char *path, const char *ext_c, int w, int h, const uint8_t *rgb8,
                      const float *rgbf, char *err, size_t errlen)
@@ -107,7 +73,6 @@ static int can_write(const char *path, char *err, size_t errlen)
 static int read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, char *err, size_t errlen)
 {
 	*rgba = nullptr;
-	QuietStderr quiet;
 	try {
 		auto in = ImageInput::open(path);
 		if (!in)

@@ -20,7 +20,6 @@
 #include <assimp/scene.h>
 #include <ctype.h>
 #include <errno.h>
-#include <fcntl.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdio.h>
@@ -611,12 +610,7 @@ static const struct aiScene *import_guarded(const char *virt, struct aiFileIO *i
 	sa.sa_handler = on_crash;
 	sa.sa_flags = have_alt ? SA_ONSTACK : 0;
 	sigemptyset(&sa.sa_mask);
-	fflush(stderr);
-	int err_fd = dup(2), null_fd = open("/dev/null", O_WRONLY);
-	if (err_fd >= 0 && null_fd >= 0)
-		dup2(null_fd, 2);
-	if (null_fd >= 0)
-		close(null_fd);
+	int err_fd = diag_quiet_begin();
 	crash_sig = 0;
 	for (int i = 0; i < GUARD_NSIG; i++)
 		sigaction(sigs[i], &sa, &old[i]);
@@ -629,10 +623,7 @@ static const struct aiScene *import_guarded(const char *virt, struct aiFileIO *i
 		                                  io, props);
 	for (int i = 0; i < GUARD_NSIG; i++)
 		sigaction(sigs[i], &old[i], NULL);
-	if (err_fd >= 0) {
-		dup2(err_fd, 2);
-		close(err_fd);
-	}
+	diag_quiet_end(err_fd);
 	if (have_alt)
 		sigaltstack(&old_alt, NULL);
 	free(alt.ss_sp);

@@ -48,9 +48,8 @@ enum { EV_END = 0, EV_PLANAR = 1, EV_START = 2 };
 /* Side classes; bit 0 = goes left unchanged, bit 1 = goes right unchanged. */
 enum { C_LEFT = 1, C_RIGHT = 2, C_BOTH = 3, C_STRADDLE = 4 };
 
-#define MAX_TRIS    ((1u << 30) - 1) /* triangle id shares a word with the type */
-#define MAX_NODES   (1u << 30)       /* child index field is 30 bits */
-#define DEPTH_LIMIT 64
+#define MAX_TRIS  ((1u << 30) - 1) /* triangle id shares a word with the type */
+#define MAX_NODES (1u << 30)       /* child index field is 30 bits */
 
 typedef struct event {
 	float pos;
@@ -539,7 +538,7 @@ static int build(builder *b, const scene *s)
 	double ra = half_area(&s->bounds);
 	b->inv_root_area = ra > 0 ? 1.0 / ra : 0.0;
 
-	work stack[DEPTH_LIMIT + 4];
+	work stack[KD_DEPTH_MAX + 4];
 	int sp = 0;
 	stack[sp++] = root;
 	while (sp > 0) {
@@ -582,12 +581,12 @@ int kd_build(kdtree *t, const scene *s, const kd_params *params, diag *d)
 		kd_params_default(&p);
 	if (!(p.cost_trav >= 0 && isfinite(p.cost_trav)) ||
 	    !(p.cost_isect > 0 && isfinite(p.cost_isect)) || p.max_depth < 0 ||
-	    p.max_depth > DEPTH_LIMIT || p.leaf_size < 0 ||
+	    p.max_depth > KD_DEPTH_MAX || p.leaf_size < 0 ||
 	    !(p.empty_bonus >= 0 && p.empty_bonus < 1))
 		return diag_set(d, "kd_build", 0, 0,
 		                "bad parameters (need cost_trav >= 0, cost_isect > 0, 0 <= "
 		                "max_depth <= %d, leaf_size >= 0, 0 <= empty_bonus < 1)",
-		                DEPTH_LIMIT);
+		                KD_DEPTH_MAX);
 	if (s->ntris == 0 || s->ntris > MAX_TRIS)
 		return diag_set(d, s->name, 0, 0, "kd-tree needs 1 to %u triangles, scene has %u",
 		                MAX_TRIS, s->ntris);

@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "atomicfile.h"
+#include "infile.h"
 #include "render.h"
 #include "stress.h"
 #include "world.h"
@@ -278,19 +279,12 @@ static char *splice(const char *doc, const char *begin, const char *end, const c
 	return o;
 }
 
+/* The document to splice into (NULL: none yet). */
 static char *slurp(const char *path)
 {
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return NULL;
-	fseek(f, 0, SEEK_END);
-	long n = ftell(f);
-	fseek(f, 0, SEEK_SET);
-	char *b = malloc((size_t)n + 1);
-	size_t got = fread(b, 1, (size_t)n, f);
-	b[got] = 0;
-	fclose(f);
-	return b;
+	char *b, err[256];
+	size_t n;
+	return in_read_all(path, 0, &b, &n, err, sizeof err) ? NULL : b;
 }
 
 int main(int argc, char **argv)

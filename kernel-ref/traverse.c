@@ -22,6 +22,9 @@
 #include "packet.h"
 #include "simd.h"
 
+/* a tree kd_build accepts fits the traversal stack */
+_Static_assert(KD_DEPTH_MAX <= PKT_STACK_MAX, "kdtree.h KD_DEPTH_MAX fits packet.h PKT_STACK_MAX");
+
 /* gamma(n) = n u / (1 - n u), u = 2^-24 (pbrt): relative error bound of n
  * chained float roundings. A split distance (split - o) * (1/d) carries
  * three roundings. */

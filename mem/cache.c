@@ -59,14 +59,14 @@ void cache_free(cache *c)
 int cache_track(cache *c)
 {
 	if (!c->dirty)
-		c->dirty = calloc((c->nsets + 63) / 64, sizeof *c->dirty);
+		c->dirty = calloc((size_t)bits_words((int)c->nsets), sizeof *c->dirty);
 	return c->dirty ? 0 : -1;
 }
 
 void cache_dirty_clear(cache *c)
 {
 	if (c->dirty)
-		memset(c->dirty, 0, (c->nsets + 63) / 64 * sizeof *c->dirty);
+		memset(c->dirty, 0, (size_t)bits_words((int)c->nsets) * sizeof *c->dirty);
 }
 
 int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *rank)
@@ -165,8 +165,7 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 	int w = find_way(c, set, line);
 	if (w >= 0) {
 		size_t i = (size_t)set * c->p.ways + (size_t)w;
-		c->way[i].use = ++c->stamp;
-		cache_touch(c, set);
+		cache_use(c, set, &c->way[i]);
 		c->s.accesses++;
 		c->s.hits++;
 		c->s.bytes += bytes;
@@ -236,8 +235,7 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 		c->s.fill_bytes += c->p.line_bytes;
 		w = (int)best;
 	}
-	s[w].use = ++c->stamp;
-	cache_touch(c, set);
+	cache_use(c, set, &s[w]);
 	return (uint32_t)(base + (size_t)w);
 }
 
@@ -249,8 +247,7 @@ int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
 	c->s.func_accesses++;
 	c->s.bytes += bytes;
 	if (w >= 0) {
-		c->way[(size_t)set * c->p.ways + (size_t)w].use = ++c->stamp;
-		cache_touch(c, set);
+		cache_use(c, set, &c->way[(size_t)set * c->p.ways + (size_t)w]);
 		c->s.hits++;
 		c->s.func_hits++;
 		return 1;

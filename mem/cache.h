@@ -26,6 +26,7 @@
 
 #include <stdint.h>
 
+#include "bitset.h"
 #include "diag.h"
 
 enum cache_hash { CACHE_HASH_NONE, CACHE_HASH_XOR };
@@ -102,14 +103,21 @@ int cache_track(cache *c);
 static inline void cache_touch(cache *c, uint32_t set)
 {
 	if (c->dirty)
-		c->dirty[set >> 6] |= 1ull << (set & 63);
+		bits_set(c->dirty, (int)set);
+}
+/* Way w of set `set` is used now: the most recent in LRU order, and the
+ * set changed (every LRU update goes through here, so tracking sees it). */
+static inline void cache_use(cache *c, uint32_t set, cache_way *w)
+{
+	w->use = ++c->stamp;
+	cache_touch(c, set);
 }
 void cache_dirty_clear(cache *c);
 
 /* The state of sets [set0, set0 + n) in compact form, ways in order:
  * each way's line (UINT32_MAX when empty) and its LRU rank in its set
- * (0 = least recent), all LRU order needs. -1 when a line does not fit
- * in 31 bits (nothing stored beyond it). */
+ * (0 = least recent), all LRU order needs. -1 when a line index is
+ * UINT32_MAX or more (nothing stored beyond it). */
 int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *rank);
 /* Sets [set0, set0 + n) from cache_save's form (their MSHRs must be
  * free); hits and fills after it see the same LRU order. */
@@ -156,8 +164,7 @@ static inline int cache_try_hit(cache *c, uint64_t line, uint32_t bytes)
 	cache_way *s = c->way + (size_t)set * ways;
 	for (uint32_t w = 0; w < ways; w++)
 		if (s[w].tag == line) {
-			s[w].use = ++c->stamp;
-			cache_touch(c, set);
+			cache_use(c, set, &s[w]);
 			c->s.accesses++;
 			c->s.hits++;
 			c->s.bytes += bytes;

@@ -312,6 +312,13 @@ static void func_sdram_n(hier *h, int requester, uint64_t n, uint64_t bytes, int
 	}
 }
 
+/* The share of on-board-cache hits a timed chip merges into fetches on
+ * their way, from the on-board cache's counts so far; 0 without the VMA. */
+static double merge_share(const hier *h)
+{
+	return h->use_vma ? cache_timed_merge_share(NULL, &h->v.l2.s) : 0;
+}
+
 /* Below the L1s without time: SDRAM directly, or the VMA's functional walk
  * whose counter deltas become SDRAM and host-bus traffic. */
 static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int write)
@@ -342,8 +349,7 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 			/* the reads are on-board-cache hits; a timed chip merges a
 			 * share of them into fetches still on their way */
 			h->fl2hit_ticks += h->fsd.busy_ticks - t0;
-			h->fmerge_ticks += (double)(h->fsd.busy_ticks - t0) *
-			                   cache_timed_merge_share(NULL, &h->v.l2.s);
+			h->fmerge_ticks += (double)(h->fsd.busy_ticks - t0) * merge_share(h);
 		}
 	}
 	for (uint64_t i = 0; i < fetches; i++) {
@@ -649,6 +655,11 @@ uint64_t hier_l2hit_ticks(const memport *p)
 void hier_add_merge_ticks(memport *p, double ticks)
 {
 	((hier *)p->impl)->fmerge_ticks += ticks;
+}
+
+double hier_merge_share(const memport *p)
+{
+	return hier_is(p) ? merge_share(p->impl) : 0;
 }
 
 /* ---- JSON ---- */

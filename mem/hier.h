@@ -95,6 +95,10 @@ void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2);
 size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap);
 uint64_t hier_l2hit_ticks(const memport *p);
 void hier_add_merge_ticks(memport *p, double ticks);
+/* The share of on-board-cache hits a timed chip merges into fetches on
+ * their way, from the on-board cache's counts so far (the factor on
+ * func_sdram_merge_ticks); 0 without the VMA or without a hierarchy. */
+double hier_merge_share(const memport *p);
 /* Writes the stats as one JSON object (a value: the caller writes the key). */
 void hier_write_json(const hier_stats *s, jsonw *w);
 

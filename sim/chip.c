@@ -33,6 +33,13 @@ static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isec
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
                                                      "waiting_unit"};
 
+const cfg_unit *chip_unit_cfg(const saar_config *cfg, int kind)
+{
+	const cfg_unit *u[UNIT_NKINDS] = {&cfg->chip.rgs, &cfg->chip.trav, &cfg->chip.list,
+	                                  &cfg->chip.isect};
+	return u[kind];
+}
+
 const char *chip_unit_name(int kind)
 {
 	return kind >= 0 && kind < UNIT_NKINDS ? unit_names[kind] : "?";
@@ -136,7 +143,7 @@ static void census_mark(chip *c, int tile)
  * slot taking it is idle, every other one between two steps. */
 static void warm_mark(chip *c, int tile)
 {
-	if (tile == wm_full_tile(c->wcap->g_light, c->wcap->g_full, tile / c->wcap->g_full))
+	if (wm_is_full(c->wcap->g_light, c->wcap->g_full, tile))
 		wm_put_full(c->wcap, c, c->frames_done, tile);
 	double dem[RES_N];
 	chip_demand(c, dem);
@@ -307,6 +314,13 @@ static uint64_t *reg(chip *c, const char *name, const char *unit, const char *de
 /* Threads per RTP whose tiles the default warm-up holds at most. */
 #define WARMUP_TPR 16
 
+/* Stored warming's light grid: a checkpoint per RTP's worth of tiles
+ * (the units and warm-ups of its plan are multiples of it). */
+static int warm_light_grid(const saar_config *cfg)
+{
+	return cfg->chip.rtps;
+}
+
 /* The sampling plan's sizes from the config alone: tiles per unit and
  * per warm-up, and the units per frame; 1 when the regions would cover
  * the frame anyway (every tile simulated, as cycle). */
@@ -323,11 +337,11 @@ static int fid_plan(const saar_config *cfg, int *unit, int *warmup, long *units)
 	 * per RTP a 64-tile warm-up measured as well as a 256-tile one */
 	int warm = nrtp * (tpr < WARMUP_TPR ? tpr : WARMUP_TPR);
 	int W = cfg->sampling.warmup_tiles >= 0 ? cfg->sampling.warmup_tiles : warm;
-	/* stored warming's regions start and end on its light grid (one tile
-	 * per RTP, chip_warm_grid) */
+	/* stored warming's regions start and end on its light grid */
 	if (cfg->sampling.warming == CFG_WARMING_STORED) {
-		U = (U + nrtp - 1) / nrtp * nrtp;
-		W = (W + nrtp - 1) / nrtp * nrtp;
+		int g = warm_light_grid(cfg);
+		U = (U + g - 1) / g * g;
+		W = (W + g - 1) / g * g;
 	}
 	/* n units of U tiles, at least sampling.min_units and 3 (the head,
 	 * the tail and one between); when the regions would cover the frame
@@ -531,8 +545,6 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	c->rtp = calloc((size_t)c->nrtp, sizeof *c->rtp);
 	if (!c->rtp)
 		goto oom;
-	const cfg_unit *ucfg[UNIT_NKINDS] = {&cfg->chip.rgs, &cfg->chip.trav, &cfg->chip.list,
-	                                     &cfg->chip.isect};
 	int nkids = w->v.nlights + 2;
 	for (int r = 0; r < c->nrtp; r++) {
 		thr_rtp *rp = &c->rtp[r];
@@ -540,8 +552,8 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 		rp->id = r;
 		for (int k = 0; k < UNIT_NKINDS; k++) {
 			thr_unit *u = &rp->u[k];
-			if (thr_unit_init(u, c->e, c->clk, ucfg[k], cfg->chip.masked_packets,
-			                  cfg->chip.thread_sched, c->tpr))
+			if (thr_unit_init(u, c->e, c->clk, chip_unit_cfg(cfg, k),
+			                  cfg->chip.masked_packets, cfg->chip.thread_sched, c->tpr))
 				goto oom;
 			u->on_start = thr_on_start;
 			snprintf(name, sizeof name, "rtp%d.%s.ops", r, unit_names[k]);
@@ -829,8 +841,9 @@ enum fr_mode { FR_DRAIN, FR_STOP, FR_RELAX };
 
 /* Tiles every slot takes in a relax. One leaves the slot that finished
  * last holding a packet just begun where the warming run's slots are part
- * way through theirs: the frame's PCI bytes came out 1.5% low on Sponza
- * through the VMA at one thread per RTP; two brought it within 0.2%. */
+ * way through theirs, and the frame's counts come out low; two do not
+ * (docs/fidelity.md "Stored warming", tests/test_warming.c
+ * sponza_one_thread_pci_as_cycle). */
 #define RELAX_TILES 2
 
 static int func_range(chip *c, int end, int mode)
@@ -987,17 +1000,6 @@ static void sampled_region(chip *c, int j, int tail)
 	account(F, piece(c, de, r1), !tail);
 }
 
-/* The merge share of the on-board cache so far (hier.c fmerge_ticks):
- * 0 without the VMA. */
-static double l2_merge_share(chip *c)
-{
-	if (!hier_is(&c->mem))
-		return 0;
-	cache *k[MEM_NTYPES], *tag, *l2;
-	hier_caches(&c->mem, k, &tag, &l2);
-	return l2 ? cache_timed_merge_share(NULL, &l2->s) : 0;
-}
-
 /* A piece of the warming run between two light checkpoints, its SDRAM
  * demand less the share m of on-board-cache hits a timed chip merges. */
 static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
@@ -1041,14 +1043,13 @@ static void sampled_frame_stored(chip *c, int f)
 			 * at the jump is then what the gap's counts hold. A
 			 * timed chip holds more work in flight when a tile is
 			 * wanted than the warming run does (slow packets stay
-			 * longer), and jumping at once lost that work: the
-			 * frame's PCI bytes came out 8% low on Sponza through the
-			 * VMA at one thread per RTP. A memory-bound chunk on the
-			 * way brings an extra region there and then, as in full
-			 * warming (a relax takes two tiles per slot: 512 tiles at
-			 * 64 threads, and without this the extra regions at 64
-			 * threads were lost, and with them the estimate's
-			 * memory-bound units). */
+			 * longer), and jumping at once lost that work (the
+			 * frame's PCI bytes came out low; docs/fidelity.md). A
+			 * memory-bound chunk on the way brings an extra region
+			 * there and then, as in full warming: a relax takes
+			 * RELAX_TILES tiles per slot, and with many threads the
+			 * gaps after it were too short for the extra regions,
+			 * and the estimate lost its memory-bound units. */
 			extra = func_range(c, rs, FR_RELAX);
 			at = c->g.next;
 		}
@@ -1058,7 +1059,7 @@ static void sampled_frame_stored(chip *c, int f)
 			/* the gap [at, rs): the warming run's chunks of U tiles; a
 			 * memory-bound one brings an extra region at the next full
 			 * checkpoint after it, as func_range does */
-			double m = l2_merge_share(c);
+			double m = hier_merge_share(&c->mem);
 			wm_region_end(r, f, at);
 			for (int a = at; a < rs;) {
 				int e = a + U < rs ? a + U : rs;
@@ -1244,42 +1245,39 @@ const char *chip_warm_name(int state)
 	return state >= 0 && state <= WARM_UNAVAILABLE ? n[state] : "?";
 }
 
-/* Stored warming's grids: a light checkpoint per RTP's worth of tiles
- * (units and warm-ups are multiples of it, fid_plan), a full one every
- * 1/64 of the frame, rounded to the light grid. */
+int chip_warm_stored(const chip *c)
+{
+	return c->warm_state == WARM_LOADED || c->warm_state == WARM_BUILT ||
+	       c->warm_state == WARM_UNSTORED;
+}
+
+/* Stored warming's grids: the light one (warm_light_grid), and one full
+ * checkpoint in every 1/WM_FULL_PER_FRAME of the frame, rounded to the
+ * light grid. */
 static void warm_grid(const chip *c, int *gl, int *gf)
 {
-	*gl = c->nrtp;
-	*gf = c->g.ntiles / 64 / c->nrtp * c->nrtp;
+	*gl = warm_light_grid(&c->cfg);
+	*gf = c->g.ntiles / WM_FULL_PER_FRAME / *gl * *gl;
 	if (*gf < *gl)
 		*gf = *gl;
 }
 
 /* The warming run's key: the packet record's (the frame) and every config
- * key functional processing reads. Left out: fidelity, sampling and the
- * keys only timing reads (unit latencies, thread scheduling, L1 hit
- * latencies and MSHRs, SDRAM bank timing and mapping, the memory
- * interface's policy, the tag cache's latency, the fixed model's
- * latency), so a sweep over those reuses one warming run. */
+ * key functional processing reads. Left out (at their defaults): fidelity,
+ * sampling and the keys only timing reads (cfg_key.timing_only), so a
+ * sweep over those reuses one warming run. */
 static char *warm_key(const chip *c, int gl, int gf)
 {
 	saar_config k = c->cfg, d;
 	cfg_defaults(&d);
 	k.fidelity = d.fidelity;
 	k.sampling = d.sampling;
-	cfg_unit *u[] = {&k.chip.rgs, &k.chip.trav, &k.chip.list, &k.chip.isect};
-	for (int i = 0; i < 4; i++)
-		u[i]->latency = 0;
-	k.chip.thread_sched = d.chip.thread_sched;
-	cfg_l1 *l[] = {&k.memory.l1.shade, &k.memory.l1.kd, &k.memory.l1.list, &k.memory.l1.tri};
-	for (int i = 0; i < 4; i++)
-		l[i]->hit_latency = l[i]->mshrs = 0;
-	k.memory.sdram.banks = k.memory.sdram.row_bytes = k.memory.sdram.cl = 0;
-	k.memory.sdram.trcd = k.memory.sdram.trp = k.memory.sdram.tras = 0;
-	k.memory.sdram.mapping = d.memory.sdram.mapping;
-	k.memory.memif = d.memory.memif;
-	k.memory.vma.tag_cache_latency = 0;
-	k.memory.latency = 0;
+	size_t nk;
+	const cfg_key *keys = cfg_keys(&nk);
+	for (size_t i = 0; i < nk; i++)
+		if (keys[i].timing_only)
+			memcpy((char *)&k + keys[i].off, (const char *)&d + keys[i].off,
+			       keys[i].size);
 	char *js = NULL, *key = NULL;
 	size_t n = 0;
 	FILE *f = open_memstream(&js, &n);
@@ -1296,27 +1294,20 @@ static char *warm_key(const chip *c, int gl, int gf)
 }
 
 /* The warming run of chip h (functional, replaying the packet record):
- * every frame with checkpoints on the grids (sim/warming.h). */
+ * chip_run with checkpoints on the grids (sim/warming.h). take_tile takes
+ * them (warm_mark) and chip_run the last of each frame, so the run steps
+ * as functional mode does: stopping it at each checkpoint left slots idle
+ * until the next and missed fewer L1 lines. */
 static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
 {
 	wm_writer w;
 	if (wm_writer_init(&w, h, gl, gf))
 		return -1;
-	/* take_tile takes the checkpoints (warm_mark), so the run steps as
-	 * functional mode does: stopping it at each checkpoint left slots
-	 * idle until the next and missed fewer L1 lines */
 	h->wcap = &w;
-	double dem[RES_N];
-	for (int f = 0; f < h->cfg.frame.frames && !h->oom; f++) {
-		h->frames_done = f;
-		rgc_reset(&h->g);
-		h->tiles_given = 0;
-		func_range(h, h->g.ntiles, FR_DRAIN);
-		chip_demand(h, dem);
-		wm_put_light(&w, h, f, h->g.ntiles, dem);
-	}
+	diag d;
+	int rc =
+	    chip_run(h, &d) || h->rec_state != REC_REPLAYED ? -1 : wm_writer_finish(&w, h, out, n);
 	h->wcap = NULL;
-	int rc = h->oom ? -1 : wm_writer_finish(&w, h, out, n);
 	wm_writer_free(&w);
 	return rc;
 }
@@ -1376,9 +1367,7 @@ static void warm_open(chip *c)
 		wc_unmap(&c->warm_map);
 		chip *h = helper_chip(c, c->cfg.frame.frames);
 		void *b = NULL;
-		if (h)
-			rec_open(h);
-		if (h && h->env.rec_in && !warm_build(h, gl, gf, &b, &n)) {
+		if (h && !warm_build(h, gl, gf, &b, &n)) {
 			diag d;
 			c->warm_state = WARM_UNSTORED;
 			if (wc_put(c->warm_file, key, NULL, NULL, 0, b, n, &d))
@@ -1442,7 +1431,7 @@ int chip_run(chip *c, diag *d)
 	chip_fidelity *F = &c->fid;
 	rec_open(c);
 	warm_open(c);
-	int stored = c->warm_state != WARM_OFF && c->warm_state != WARM_UNAVAILABLE;
+	int stored = chip_warm_stored(c);
 	for (int f = 0; f < c->cfg.frame.frames; f++) {
 		if (f > 0) /* fb_init cleared it */
 			fb_clear(&c->fb);
@@ -1469,6 +1458,11 @@ int chip_run(chip *c, diag *d)
 		}
 		if (c->census)
 			census_mark(c, c->g.ntiles);
+		if (c->wcap) { /* a warming run: the frame's last light checkpoint */
+			double dem[RES_N];
+			chip_demand(c, dem);
+			wm_put_light(c->wcap, c, f, c->g.ntiles, dem);
+		}
 		if (c->env.rec_in)
 			rec_pixels(c);
 		rec_store(c);

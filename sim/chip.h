@@ -182,6 +182,9 @@ const char *chip_rec_name(int state);
  * impossible (no world cache or packet record): full warming ran. */
 enum chip_warm { WARM_OFF, WARM_LOADED, WARM_BUILT, WARM_UNSTORED, WARM_UNAVAILABLE };
 const char *chip_warm_name(int state);
+/* Whether c's sampled frames run from stored checkpoints (loaded, built
+ * or built but not stored), not from functional stretches. */
+int chip_warm_stored(const chip *c);
 
 /* cfg must already be validated; w stays owned by the caller and must
  * outlive the chip. Fails (diag) on an unsupported config or out of memory. */
@@ -221,7 +224,9 @@ const char *chip_res_name(int res);
 /* Name of the linear demand model's regressor i (sampling.h SMP_LIN): the
  * chip resource it is ("rgs", ..., "sdram", "hostbus"). */
 const char *chip_lin_name(int i);
-const char *chip_unit_name(int kind);   /* "rgs", "trav", "list", "isect" */
+const char *chip_unit_name(int kind); /* "rgs", "trav", "list", "isect" */
+/* The config of unit kind `kind` (enum unit_kind): chip.rgs, ... */
+const cfg_unit *chip_unit_cfg(const saar_config *cfg, int kind);
 const char *chip_state_name(int state); /* "idle", "running", "waiting_memory", "waiting_unit" */
 
 #endif

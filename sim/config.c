@@ -11,6 +11,7 @@
 #include "config.h"
 #include "infile.h"
 #include "kdtree.h"
+#include "warming.h"
 
 #include <errno.h>
 #include <math.h>
@@ -18,6 +19,10 @@
 #include <string.h>
 #include <strings.h>
 #include <yaml.h>
+
+/* a number macro as the digits of a string literal */
+#define NUM_STR_(x) #x
+#define NUM_STR(x)  NUM_STR_(x)
 
 /* ======================== the schema ======================== */
 
@@ -36,6 +41,7 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 
 #define FIELD(f) .off = offsetof(saar_config, f), .size = sizeof(((saar_config *)0)->f)
 #define PUB      .published = true, .source = "seed 002 "
+#define TIMING   .timing_only = true
 #define KEY(p, t, f, d, lo, hi, u)                                                                 \
 	.path = p, .type = t, FIELD(f), .def = d, .min = lo, .max = hi, .unit = u
 #define INT(p, f, d, lo, hi, u) KEY(p, CFG_INT, f, d, lo, hi, u)
@@ -52,7 +58,7 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 	 .desc = "number of " what " units per RTP"},                                              \
 	{INT("chip." #u ".width", chip.u.width, w, 1, 64, "rays/cycle"), .source = why,            \
 	 .desc = "rays one " what " unit accepts per cycle"},                                        \
-	{INT("chip." #u ".latency", chip.u.latency, l, 1, 10000, "core cycles"),                   \
+	{INT("chip." #u ".latency", chip.u.latency, l, 1, 10000, "core cycles"), TIMING,           \
 	 .source = "pipeline depth not published; a few cycles per stage group",                   \
 	 .desc = "pipeline latency of one " what " unit"}
 /* One first-level cache: sizes and line sizes are published (seed 002 §4.1,
@@ -66,12 +72,13 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 	 PUB "§4.1 (8 B kd-nodes, 36 B triangles, 8 B shading/lists: 64-bit bus)",                \
 	 .desc = "line size of the " what " cache; any size (36 need not be a power of two)"},     \
 	{INT("memory.l1." #c ".hit_latency", memory.l1.c.hit_latency, 2, 1, 1000, "core cycles"),  \
+	 TIMING,                                                                                   \
 	 .source = "not published; a small pipelined SRAM",                                        \
 	 .desc = "cycles from access to data for a hit in the " what " cache"},                   \
 	{INT("memory.l1." #c ".ports", memory.l1.c.ports, 4, 1, 64, "accesses/cycle"),             \
 	 .source = "not published; one port per RTP of the standard chip",                         \
 	 .desc = "accesses the " what " cache accepts per core cycle (all RTPs together)"},        \
-	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, 16, 1, 4096, "lines"),                   \
+	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, 16, 1, 4096, "lines"), TIMING,           \
 	 .source = "not published; one per thread of an RTP",                                      \
 	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"}
 #define FP(st, what)                                                                               \
@@ -145,9 +152,11 @@ static const cfg_key keys[] = {
              "(functional, replaying the packet record) is stored once in the world cache "
              "with checkpoints of the chip's state, and each region starts from the "
              "checkpoint at its start, so a run simulates only its regions (needs "
-             "--world-cache; regions start at checkpoints, one in every 1/64 of the "
-             "frame). A warming run is reused by every run whose config differs only in "
-             "timing (latencies, SDRAM timings, MSHRs, scheduling) and sampling keys"},
+             "--world-cache; regions start at checkpoints, one in every "
+             "1/" NUM_STR(WM_FULL_PER_FRAME) " of the frame). A warming run is reused by every run "
+                                             "whose config differs only in "
+                                             "timing (latencies, SDRAM timings, MSHRs, scheduling) "
+                                             "and sampling keys"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "
@@ -171,7 +180,7 @@ static const cfg_key keys[] = {
      .source = "§4.5: partly active packets cost about as much as full ones",
      .desc = "true: every packet op costs all packet_w*packet_h rays (inactive rays masked); "
              "false: only active rays cost"},
-    {ENUM("chip.thread_sched", chip.thread_sched, thread_sched_names),
+    {ENUM("chip.thread_sched", chip.thread_sched, thread_sched_names), TIMING,
      .source = "not published; the simplest fair policy",
      .desc = "which ready thread a unit serves next"},
     {ENUM("chip.tile_order", chip.tile_order, tile_order_names),
@@ -215,7 +224,7 @@ static const cfg_key keys[] = {
      .source = "hierarchy models the published memory system; fixed isolates the units",
      .desc = "memory model: fixed = every access takes memory.latency; hierarchy = L1 "
              "caches, memory interface, SDRAM (and the VMA if memory.vma.enabled)"},
-    {INT("memory.latency", memory.latency, 20, 0, 100000, "core cycles"),
+    {INT("memory.latency", memory.latency, 20, 0, 100000, "core cycles"), TIMING,
      .source = "placeholder; an L1 hit plus some misses",
      .desc = "latency of every memory access in the fixed model"},
     L1(shade, "shading (RGS)", 64),
@@ -228,27 +237,27 @@ static const cfg_key keys[] = {
      .desc = "SDRAM clock (its own clock domain)"},
     {INT("memory.sdram.bus_bits", memory.sdram.bus_bits, 128, 8, 4096, "bits"), PUB "§4.7",
      .desc = "SDRAM data bus width; one beat per SDRAM cycle (128 bit x 133 MHz = 2 GB/s)"},
-    {INT("memory.sdram.banks", memory.sdram.banks, 4, 1, 64, ""),
+    {INT("memory.sdram.banks", memory.sdram.banks, 4, 1, 64, ""), TIMING,
      .source = "not published; PC133 SDRAM devices have 4 internal banks",
      .desc = "independent banks, each with one open row (power of two)"},
-    {INT("memory.sdram.row_bytes", memory.sdram.row_bytes, 8192, 16, 1048576, "bytes"),
+    {INT("memory.sdram.row_bytes", memory.sdram.row_bytes, 8192, 16, 1048576, "bytes"), TIMING,
      .source = "not published; 512 columns x 16 bytes across the 128-bit bus",
      .desc = "bytes of one row of one bank across the whole bus (power of two)"},
-    {INT("memory.sdram.cl", memory.sdram.cl, 3, 1, 100, "SDRAM cycles"),
+    {INT("memory.sdram.cl", memory.sdram.cl, 3, 1, 100, "SDRAM cycles"), TIMING,
      .source = "not published; PC133 CL3", .desc = "CAS latency: read command to first data"},
-    {INT("memory.sdram.trcd", memory.sdram.trcd, 3, 1, 100, "SDRAM cycles"),
+    {INT("memory.sdram.trcd", memory.sdram.trcd, 3, 1, 100, "SDRAM cycles"), TIMING,
      .source = "not published; PC133 (20 ns)", .desc = "ACTIVATE to READ/WRITE"},
-    {INT("memory.sdram.trp", memory.sdram.trp, 3, 1, 100, "SDRAM cycles"),
+    {INT("memory.sdram.trp", memory.sdram.trp, 3, 1, 100, "SDRAM cycles"), TIMING,
      .source = "not published; PC133 (20 ns)", .desc = "PRECHARGE to ACTIVATE"},
-    {INT("memory.sdram.tras", memory.sdram.tras, 6, 1, 100, "SDRAM cycles"),
+    {INT("memory.sdram.tras", memory.sdram.tras, 6, 1, 100, "SDRAM cycles"), TIMING,
      .source = "not published; PC133 (45 ns)", .desc = "ACTIVATE to PRECHARGE, at least"},
     {INT("memory.sdram.burst", memory.sdram.burst, 1, 1, 256, "beats"),
      .source = "not published; SDR burst length is programmable and L1 lines are 1-3 beats",
      .desc = "beats per column command; transfers round up to whole bursts"},
-    {ENUM("memory.sdram.mapping", memory.sdram.mapping, sdram_mapping_names),
+    {ENUM("memory.sdram.mapping", memory.sdram.mapping, sdram_mapping_names), TIMING,
      .source = "not published; consecutive rows interleave over the banks",
      .desc = "address bits from most to least significant: row:bank:col or bank:row:col"},
-    {KEY("memory.memif.policy", CFG_ENUM, memory.memif.policy, CFG_MEMIF_FRFCFS, 0, 0, ""),
+    {KEY("memory.memif.policy", CFG_ENUM, memory.memif.policy, CFG_MEMIF_FRFCFS, 0, 0, ""), TIMING,
      .names = memif_policy_names,
      .source = "not published; a first-ready controller (fifo's head-of-line blocking on a busy "
                "bank held the SDRAM near 30% bus use: docs/memory.md)",
@@ -270,7 +279,7 @@ static const cfg_key keys[] = {
     {INT("memory.vma.tag_cache_ways", memory.vma.tag_cache_ways, 4, 1, 64, ""),
      PUB "§4.7 (L1 caches are 4-way)", .desc = "associativity of the tag cache"},
     {INT("memory.vma.tag_cache_latency", memory.vma.tag_cache_latency, 2, 1, 1000, "core cycles"),
-     .source = "not published; as the L1 caches", .desc = "tag cache hit latency"},
+     TIMING, .source = "not published; as the L1 caches", .desc = "tag cache hit latency"},
     {BOOL("memory.vma.tag_cache_enabled", memory.vma.tag_cache_enabled, 1), PUB "§4.2",
      .desc = "false: every meta-data lookup reads SDRAM (for studies)"},
     {ENUM("memory.hostbus.preset", memory.hostbus.preset, hostbus_preset_names),

@@ -139,7 +139,11 @@ typedef struct cfg_key {
 	const char *const *names; /* CFG_ENUM names, NULL-terminated */
 	const char *unit;         /* "" when dimensionless */
 	bool published;           /* value taken from a paper (else assumed) */
-	const char *source;       /* where published, or why assumed */
+	/* only timing reads it (latencies, SDRAM timing, MSHRs, scheduling):
+	 * functional processing does the same with any value, so stored
+	 * warming's key leaves it out (sim/chip.c warm_key) */
+	bool timing_only;
+	const char *source; /* where published, or why assumed */
 	const char *desc;
 } cfg_key;
 

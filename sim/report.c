@@ -34,9 +34,8 @@ static uint64_t get(const chip *c, const char *name)
 /* Unit utilisation: issue cycles / (cycles x units of that kind on the chip). */
 static double util(const chip *c, int kind, uint64_t busy)
 {
-	const cfg_unit *u[UNIT_NKINDS] = {&c->cfg.chip.rgs, &c->cfg.chip.trav, &c->cfg.chip.list,
-	                                  &c->cfg.chip.isect};
-	return ratio((double)busy, (double)chip_cycles(c) * u[kind]->count * c->nrtp);
+	return ratio((double)busy,
+	             (double)chip_cycles(c) * chip_unit_cfg(&c->cfg, kind)->count * c->nrtp);
 }
 
 static double fps(const chip *c)
@@ -217,10 +216,7 @@ static void fidelity_text(FILE *f, const chip *c)
 		        model_str(F, ms, sizeof ms), x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
 		        (unsigned long long)F->detailed_tiles,
 		        (unsigned long long)F->functional_tiles,
-		        c->warm_state == WARM_LOADED || c->warm_state == WARM_BUILT ||
-		                c->warm_state == WARM_UNSTORED
-		            ? " (stored warming)"
-		            : "",
+		        chip_warm_stored(c) ? " (stored warming)" : "",
 		        (unsigned long long)F->replayed_tiles);
 	} else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
@@ -563,13 +559,11 @@ int report_json(const char *path, const report_info *ri, diag *d)
 
 	jsonw_key(j, "units");
 	jsonw_obj_begin(j);
-	const cfg_unit *uc[UNIT_NKINDS] = {&g->chip.rgs, &g->chip.trav, &g->chip.list,
-	                                   &g->chip.isect};
 	for (int k = 0; k < UNIT_NKINDS; k++) {
 		const char *un = chip_unit_name(k);
 		jsonw_key(j, un);
 		jsonw_obj_begin(j);
-		jsonw_kint(j, "units", (int64_t)uc[k]->count * c->nrtp);
+		jsonw_kint(j, "units", (int64_t)chip_unit_cfg(g, k)->count * c->nrtp);
 		snprintf(name, sizeof name, "%s.ops", un);
 		kv(j, "ops", chip_rtp_sum(c, name));
 		snprintf(name, sizeof name, "%s.rays", un);
@@ -582,7 +576,8 @@ int report_json(const char *path, const report_info *ri, diag *d)
 		jsonw_arr_begin(j);
 		for (int r = 0; r < c->nrtp; r++) {
 			snprintf(name, sizeof name, "rtp%d.%s.busy_cycles", r, un);
-			jsonw_num(j, ratio((double)get(c, name), (double)cyc * uc[k]->count));
+			jsonw_num(j, ratio((double)get(c, name),
+			                   (double)cyc * chip_unit_cfg(g, k)->count));
 		}
 		jsonw_arr_end(j);
 		jsonw_obj_end(j);

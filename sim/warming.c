@@ -117,6 +117,11 @@ int wm_full_tile(int g_light, int g_full, int k)
 	return k * g_full + (int)j * g_light;
 }
 
+int wm_is_full(int g_light, int g_full, int tile)
+{
+	return tile == wm_full_tile(g_light, g_full, tile / g_full);
+}
+
 /* ---- writing ---- */
 
 int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full)
@@ -247,10 +252,7 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 	if (!l2)
 		return;
 	/* the on-board cache's sets changed since the last full checkpoint */
-	uint32_t nd = 0;
-	size_t words = (l2->nsets + 63) / 64;
-	for (size_t i = 0; i < words; i++)
-		nd += (uint32_t)__builtin_popcountll(l2->dirty[i]);
+	uint32_t nd = (uint32_t)bits_count(l2->dirty, (int)l2->nsets);
 	size_t at = w->nfullb;
 	if (!full_room(w, 4 + 4 * (size_t)nd))
 		return;
@@ -376,7 +378,7 @@ int wm_open(wm *r, const void *b, size_t n, chip *c)
 		size_t nw = (size_t)l2->nsets * l2->p.ways;
 		r->l2line = malloc(nw * sizeof *r->l2line);
 		r->l2rank = calloc(nw, 1);
-		r->l2pend = calloc((l2->nsets + 63) / 64, sizeof *r->l2pend);
+		r->l2pend = calloc((size_t)bits_words((int)l2->nsets), sizeof *r->l2pend);
 		if (!r->l2line || !r->l2rank || !r->l2pend || cache_track(l2))
 			goto fail;
 		memset(r->l2line, 0xff, nw * sizeof *r->l2line);
@@ -510,8 +512,7 @@ static void roll_l2(wm *r, chip *c, int gi, const cache *l2)
 int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 {
 	const wm_head *h = (const wm_head *)(const void *)r->b;
-	if (frame >= r->frames || tile >= r->ntiles ||
-	    tile != wm_full_tile(r->g_light, r->g_full, tile / r->g_full))
+	if (frame >= r->frames || tile >= r->ntiles || !wm_is_full(r->g_light, r->g_full, tile))
 		return -1;
 	int gi = frame * r->nfull + tile / r->g_full;
 	cache *k[WM_NCACHES], *l2;
@@ -578,16 +579,14 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		if (l2->mshr_used)
 			return -1;
 		uint32_t W = l2->p.ways;
-		size_t words = (l2->nsets + 63) / 64;
-		for (size_t w = 0; w < words; w++) {
-			uint64_t m = r->l2pend[w] | l2->dirty[w];
-			for (; m; m &= m - 1) {
-				size_t s = w * 64 + (size_t)__builtin_ctzll(m);
-				cache_load(l2, (uint32_t)s, 1, r->l2line + s * W,
-				           r->l2rank + s * W);
-			}
-			r->l2pend[w] = 0;
-		}
+		int ns = (int)l2->nsets;
+		for (int w = 0; w < bits_words(ns); w++)
+			r->l2pend[w] |= l2->dirty[w];
+		for (int s = bits_next(r->l2pend, ns, 0); s < ns;
+		     s = bits_next(r->l2pend, ns, s + 1))
+			cache_load(l2, (uint32_t)s, 1, r->l2line + (size_t)s * W,
+			           r->l2rank + (size_t)s * W);
+		memset(r->l2pend, 0, (size_t)bits_words(ns) * sizeof *r->l2pend);
 		cache_dirty_clear(l2);
 	}
 	c->g.next = tile;

@@ -20,7 +20,7 @@
  * plain multiples every region would start at the same place in the tile
  * order's blocks (192 tiles: three Morton blocks of 8x8 tiles on
  * Conference), and its unit would always sample the same few positions:
- * that biased estimates by +0.5% there; the jitter spreads the positions
+ * that biased the estimates there (docs/fidelity.md); the jitter spreads the positions
  * as a systematic sample's are.
  *
  * A sampled run restores the full checkpoint where a region starts: the
@@ -43,6 +43,10 @@
 
 struct chip;
 
+/* Full checkpoints per frame (about: one in each 1/WM_FULL_PER_FRAME of
+ * it, rounded to the light grid). */
+#define WM_FULL_PER_FRAME 64
+
 /* Resource demands per light checkpoint (chip.h RES_N). */
 #define WM_NDEM 10
 
@@ -50,6 +54,8 @@ struct chip;
  * plus its jitter, a multiple of g_light below g_full (g_full a multiple
  * of g_light). */
 int wm_full_tile(int g_light, int g_full, int k);
+/* Whether a full checkpoint sits at tile (wm_full_tile of tile / g_full). */
+int wm_is_full(int g_light, int g_full, int tile);
 
 /* ---- writing (the warming run) ---- */
 
@@ -72,8 +78,8 @@ int wm_writer_init(wm_writer *w, struct chip *c, int g_light, int g_full);
 /* A light checkpoint at hand-out index tile of frame (tile: a multiple
  * of g_light, or the frame's tile count), dem: chip_demand now. */
 void wm_put_light(wm_writer *w, struct chip *c, int frame, int tile, const double *dem);
-/* A full checkpoint at tile (wm_full_tile of tile / g_full, below the
- * tile count); the chip's slots must be stopped between steps. */
+/* A full checkpoint at tile (wm_is_full, below the tile count); the
+ * chip's slots must be stopped between steps. */
 void wm_put_full(wm_writer *w, struct chip *c, int frame, int tile);
 /* The stored form, one malloc'd block. -1 when out of memory. */
 int wm_writer_finish(wm_writer *w, struct chip *c, void **out, size_t *n);

@@ -118,7 +118,9 @@ Test(chip, waiting_policies_serve_in_their_order)
 		thr_unit u;
 		int pol = sched ? CFG_SCHED_OLDEST_FIRST : CFG_SCHED_ROUND_ROBIN;
 		cr_assert_eq(thr_unit_init(&u, e, clk, &cu, 1, pol, N), 0);
-		/* two batches: the second starts where the first left rr */
+		/* two batches on the same unit: the second, smaller, finds the
+		 * waiter set the first emptied (its first request starts at
+		 * once and sets the round-robin position itself) */
 		for (int b = 0; b < 2; b++) {
 			int n = b ? 77 : N, *want = malloc(sizeof(int) * (size_t)n);
 			const int *req = b ? ids + 50 : ids;

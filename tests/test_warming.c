@@ -273,9 +273,9 @@ Test(warming, full_checkpoints_jitter_on_the_light_grid)
 	cr_assert_geq(distinct, 24, "%d places of 48 in a block", distinct);
 	for (int tile = 0; tile < r.ntiles; tile += 7) {
 		int b = wm_full_below(&r, tile), a = wm_full_above(&r, tile);
-		cr_assert(b <= tile && b == wm_full_tile(4, 192, b / 192), "below %d: %d", tile, b);
-		cr_assert(a >= tile && (a == r.ntiles || a == wm_full_tile(4, 192, a / 192)),
-		          "above %d: %d", tile, a);
+		cr_assert(b <= tile && wm_is_full(4, 192, b), "below %d: %d", tile, b);
+		cr_assert(a >= tile && (a == r.ntiles || wm_is_full(4, 192, a)), "above %d: %d",
+		          tile, a);
 		/* nothing between */
 		cr_assert(wm_full_above(&r, b + 1) > tile || wm_full_above(&r, b + 1) == a);
 	}

@@ -1,11 +1,12 @@
 /*
  * bitset.h: sets of small integer ids as arrays of 64-bit words, for the
  * places that look up the next member without scanning every id: a
- * unit's round-robin waiters (thread.c) and functional processing's live
- * thread slots (sim/chip.c func_range).
+ * unit's round-robin waiters (units/thread.c), functional processing's
+ * live thread slots (sim/chip.c func_range) and a cache's changed sets
+ * (mem/cache.h, sim/warming.c).
  */
-#ifndef SAAR_UNITS_BITSET_H
-#define SAAR_UNITS_BITSET_H
+#ifndef SAAR_BITSET_H
+#define SAAR_BITSET_H
 
 #include <stdint.h>
 
@@ -23,6 +24,15 @@ static inline void bits_set(uint64_t *w, int i)
 static inline void bits_clear(uint64_t *w, int i)
 {
 	w[i >> 6] &= ~(1ull << (i & 63));
+}
+
+/* Members among ids 0..n-1. */
+static inline int bits_count(const uint64_t *w, int n)
+{
+	int c = 0;
+	for (int k = 0; k < bits_words(n); k++)
+		c += __builtin_popcountll(w[k]);
+	return c;
 }
 
 /* The first member at `from` or after it among ids 0..n-1; n when none.
