@@ -4,10 +4,98 @@
 #include "atomicfile.h"
 
 #include <errno.h>
+#include <pthread.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+/* ---- Temporaries that exist now, removed on exit or a fatal signal.
+ * The handler reads only this static table: a slot's path is written
+ * before its flag is set, and unlink is async-signal-safe. */
+static char live_path[AF_LIVE_MAX][PATH_MAX + 32];
+static volatile sig_atomic_t live_on[AF_LIVE_MAX];
+static pthread_mutex_t live_mu = PTHREAD_MUTEX_INITIALIZER;
+static pthread_once_t live_once = PTHREAD_ONCE_INIT;
+
+static const int live_sigs[] = {SIGINT, SIGTERM, SIGHUP};
+
+static void live_remove_all(void)
+{
+	for (int i = 0; i < AF_LIVE_MAX; i++)
+		if (live_on[i])
+			unlink(live_path[i]);
+}
+
+static void on_fatal(int sig)
+{
+	live_remove_all();
+	signal(sig, SIG_DFL);
+	raise(sig);
+}
+
+static void live_install(void)
+{
+	atexit(live_remove_all);
+	for (size_t i = 0; i < sizeof live_sigs / sizeof *live_sigs; i++) {
+		struct sigaction old, sa;
+		if (sigaction(live_sigs[i], NULL, &old) != 0 || old.sa_handler != SIG_DFL ||
+		    (old.sa_flags & SA_SIGINFO))
+			continue; /* the program handles it itself */
+		memset(&sa, 0, sizeof sa);
+		sa.sa_handler = on_fatal;
+		sigemptyset(&sa.sa_mask);
+		sigaction(live_sigs[i], &sa, NULL);
+	}
+}
+
+static void live_add(const char *tmp)
+{
+	pthread_once(&live_once, live_install);
+	pthread_mutex_lock(&live_mu);
+	for (int i = 0; i < AF_LIVE_MAX; i++)
+		if (!live_on[i]) {
+			snprintf(live_path[i], sizeof live_path[i], "%s", tmp);
+			live_on[i] = 1;
+			break;
+		}
+	pthread_mutex_unlock(&live_mu);
+}
+
+static void live_del(const char *tmp)
+{
+	pthread_mutex_lock(&live_mu);
+	for (int i = 0; i < AF_LIVE_MAX; i++)
+		if (live_on[i] && !strcmp(live_path[i], tmp)) {
+			live_on[i] = 0;
+			break;
+		}
+	pthread_mutex_unlock(&live_mu);
+}
+
+/* ---- Reservations (af_reserve): temporaries made before their writer
+ * runs, keyed by the path and suffix the writer will ask for. */
+#define RES_MAX 16
+static struct {
+	char path[PATH_MAX], suffix[32];
+	afile a;
+	int on;
+} res[RES_MAX];
+
+static int res_take(afile *a, const char *path, const char *suffix)
+{
+	int found = 0;
+	pthread_mutex_lock(&live_mu);
+	for (int i = 0; i < RES_MAX && !found; i++)
+		if (res[i].on && !strcmp(res[i].path, path) && !strcmp(res[i].suffix, suffix)) {
+			*a = res[i].a;
+			res[i].on = 0;
+			found = 1;
+		}
+	pthread_mutex_unlock(&live_mu);
+	return found;
+}
 
 /* A dangling link's target, relative to the link's folder when relative;
  * 0 when it cannot be read or is too long. */
@@ -30,6 +118,15 @@ static int link_target(const char *link, char out[PATH_MAX])
 int af_open(afile *a, const char *path, const char *suffix, int want_file)
 {
 	memset(a, 0, sizeof *a);
+	if (res_take(a, path, suffix)) {
+		if (want_file && !(a->f = fopen(a->tmp, "wb"))) {
+			int e = errno;
+			af_abort(a);
+			errno = e;
+			return -1;
+		}
+		return 0;
+	}
 	if (!path[0]) {
 		errno = ENOENT;
 		return -1;
@@ -68,6 +165,7 @@ int af_open(afile *a, const char *path, const char *suffix, int want_file)
 	int fd = mkstemps(a->tmp, (int)ns);
 	if (fd < 0)
 		return -1;
+	live_add(a->tmp);
 	/* mkstemps makes it 0600; the target should read like any file the
 	 * user writes */
 	mode_t um = umask(0);
@@ -76,6 +174,7 @@ int af_open(afile *a, const char *path, const char *suffix, int want_file)
 		int e = errno;
 		close(fd);
 		unlink(a->tmp);
+		live_del(a->tmp);
 		errno = e;
 		return -1;
 	}
@@ -104,12 +203,11 @@ int af_commit(afile *a)
 	int err = af_close(a) ? errno : 0;
 	if (!err && rename(a->tmp, a->path) != 0)
 		err = errno;
-	if (err) {
+	if (err)
 		unlink(a->tmp);
-		errno = err;
-		return -1;
-	}
-	return 0;
+	live_del(a->tmp);
+	errno = err;
+	return err ? -1 : 0;
 }
 
 int af_commit_to(afile *a, af_group *g)
@@ -123,6 +221,7 @@ int af_commit_to(afile *a, af_group *g)
 		err = E2BIG;
 	if (err) {
 		unlink(a->tmp);
+		live_del(a->tmp);
 		errno = err;
 		return -1;
 	}
@@ -136,6 +235,7 @@ int af_group_commit(af_group *g, diag *d)
 	for (int i = 0; i < g->n; i++) {
 		if (rc) {
 			unlink(g->a[i].tmp);
+			live_del(g->a[i].tmp);
 		} else if (af_commit(&g->a[i])) {
 			rc = af_diag(d, g->a[i].path);
 		}
@@ -157,9 +257,68 @@ void af_abort(afile *a)
 		fclose(a->f);
 	a->f = NULL;
 	unlink(a->tmp);
+	live_del(a->tmp);
+}
+
+int af_reserve(const char *path, const char *suffix, diag *d)
+{
+	afile a;
+	if (strlen(path) >= sizeof res[0].path || strlen(suffix) >= sizeof res[0].suffix) {
+		errno = ENAMETOOLONG;
+		return af_diag(d, path);
+	}
+	if (af_open(&a, path, suffix, 0))
+		return af_diag(d, path);
+	pthread_mutex_lock(&live_mu);
+	int i = 0;
+	while (i < RES_MAX && res[i].on)
+		i++;
+	if (i < RES_MAX) {
+		snprintf(res[i].path, sizeof res[i].path, "%s", path);
+		snprintf(res[i].suffix, sizeof res[i].suffix, "%s", suffix);
+		res[i].a = a;
+		res[i].on = 1;
+	}
+	pthread_mutex_unlock(&live_mu);
+	if (i == RES_MAX) /* nothing lost: the writer makes its own later */
+		af_abort(&a);
+	return 0;
+}
+
+/* The folder part of path ("." when none), into out. */
+static void folder_of(const char *path, char *out, size_t n)
+{
+	const char *slash = strrchr(path, '/');
+	if (!slash)
+		snprintf(out, n, ".");
+	else if (slash == path)
+		snprintf(out, n, "/");
+	else
+		snprintf(out, n, "%.*s", (int)(slash - path), path);
 }
 
 int af_diag(diag *d, const char *path)
 {
-	return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno));
+	int e = errno;
+	char dir[PATH_MAX];
+	struct stat st;
+	folder_of(path, dir, sizeof dir);
+	size_t n = strlen(path);
+	if (e == EISDIR || (n && path[n - 1] == '/') ||
+	    (stat(path, &st) == 0 && S_ISDIR(st.st_mode)))
+		return diag_set(d, path, 0, 0, "cannot write: it names a folder, not a file");
+	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode))
+		return diag_set(d, path, 0, 0,
+		                "cannot write: it is a device or FIFO, not a regular file");
+	if (e == ENOENT && stat(dir, &st) != 0)
+		return diag_set(d, path, 0, 0, "cannot write: folder %s does not exist", dir);
+	if (e == ENOTDIR)
+		return diag_set(d, path, 0, 0, "cannot write: %s is not a folder", dir);
+	if (e == ENOENT || e == EACCES || e == EPERM || e == EROFS)
+		/* the folder exists: the file system refused the new file
+		 * (/proc, a read-only mount, no write permission) */
+		return diag_set(d, path, 0, 0,
+		                "cannot write: cannot create a file in folder %s (%s)", dir,
+		                strerror(e));
+	return diag_set(d, path, 0, 0, "cannot write: %s", strerror(e));
 }

@@ -37,6 +37,23 @@ int af_diag(diag *d, const char *path);
 /* Closes and removes the temporary. */
 void af_abort(afile *a);
 
+/* Outputs checked before the work that fills them. af_reserve creates
+ * path's temporary now (af_open's rules, suffix as af_open's), so a
+ * missing or unwritable folder is found before a long simulation instead
+ * of after it; the next af_open of the same path and suffix takes that
+ * temporary instead of making another. A reservation nobody takes is
+ * removed at exit. -1 with d set (af_diag's line). */
+int af_reserve(const char *path, const char *suffix, diag *d);
+
+/* Every temporary that is open (made by af_open or af_reserve, not yet
+ * renamed or removed) is removed when the program exits normally or is
+ * ended by SIGINT, SIGTERM or SIGHUP (the signal's default action then
+ * runs: the exit status still says the program was interrupted). The
+ * handlers are installed by the first af_open, and only for signals whose
+ * disposition is still the default. At most AF_LIVE_MAX temporaries are
+ * watched at once; more are still written, only not cleaned on a signal. */
+#define AF_LIVE_MAX 64
+
 /* Outputs that appear together. A program writing several files (an
  * image, a report, a trace, a CSV row) commits each into a group, which
  * only closes its temporary (a write error fails there); once every one is

@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "atomicfile.h"
@@ -160,6 +161,22 @@ int img_can_write(const char *path, diag *d)
 		diag_set(d, path, 0, 0, "cannot write image: %s", err);
 	dlclose(lib);
 	return rc ? -1 : 0;
+}
+
+int img_reserve(const char *path, diag *d)
+{
+	size_t n = strlen(path);
+	struct stat st;
+	if ((n && path[n - 1] == '/') || (stat(path, &st) == 0 && S_ISDIR(st.st_mode)))
+		return diag_set(d, path, 0, 0,
+		                "cannot write image: it names a folder, not a file (give a name "
+		                "such as %s%sframe.png)",
+		                path, n && path[n - 1] == '/' ? "" : "/");
+	if (img_can_write(path, d))
+		return -1;
+	char ext[32], sfx[34];
+	snprintf(sfx, sizeof sfx, ".%s", ext_of(path, ext, sizeof ext));
+	return af_reserve(path, sfx, d);
 }
 
 int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d)

@@ -30,6 +30,12 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
  * --out before it spends the run. */
 int img_can_write(const char *path, diag *d);
 
+/* img_can_write, then the image's temporary made now (af_reserve), so a
+ * missing or unwritable folder is refused before the run too; img_write
+ * to the same path takes it. A path naming a folder ("out/") is refused
+ * as such. */
+int img_reserve(const char *path, diag *d);
+
 /* The image plugin file that reads and writes images (out, n bytes); -1
  * with d set when there is none. A world cache keys texture-decoding
  * results on it, since rebuilding the plugin does not rebuild the program. */

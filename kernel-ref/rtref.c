@@ -200,7 +200,9 @@ int main(int argc, char **argv)
 	if (fp_arg[0] || fp_arg[1] || fp_arg[2])
 		ro.prec = &prec;
 	/* an unwritable --out format fails now, not after the run */
-	if (out && img_can_write(out, &d))
+	if (out && img_reserve(out, &d))
+		return cli_bad("rtref", d.msg);
+	if (stats && strcmp(stats, "-") && af_reserve(stats, "", &d))
 		return cli_bad("rtref", d.msg);
 	world w;
 	if (world_load(&w, &wo, &d))

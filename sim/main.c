@@ -213,11 +213,18 @@ int main(int argc, char **argv)
 	wo.kd.leaf_size = cfg.kdtree.leaf_size;
 	wo.kd.empty_bonus = (float)cfg.kdtree.empty_bonus;
 
-	/* an unwritable --out format fails now, not after the run */
-	if (out && img_can_write(out, &d))
+	/* every output's temporary is made now, so an unwritable --out
+	 * format, a missing or read-only folder or a CSV of other columns
+	 * fails before the run, not after it (af_reserve) */
+	if (out && img_reserve(out, &d))
 		return cli_bad("saarsim", d.msg);
-	/* and rows for a CSV of other columns */
-	if (csv && report_csv_check(csv, &d))
+	if (csv && (report_csv_check(csv, &d) || af_reserve(csv, "", &d)))
+		return cli_bad("saarsim", d.msg);
+	if (report && strcmp(report, "-") && af_reserve(report, "", &d))
+		return cli_bad("saarsim", d.msg);
+	if (census && af_reserve(census, "", &d))
+		return cli_bad("saarsim", d.msg);
+	if (trace && af_reserve(trace, "", &d))
 		return cli_bad("saarsim", d.msg);
 	/* so does a census the run cannot keep, before the world loads */
 	if (census && chip_census_check(&cfg, &d))

@@ -144,6 +144,12 @@ Test(rtref_cli, unwritable_output_leaves_nothing)
 	snprintf(args, sizeof args, "--size 16x16 --out %s/no/such/dir/f.png", dir);
 	cr_assert_eq(rtref(args), 2);
 	one_line_naming("f.png");
+	/* --stats is checked before the render too, and says what is wrong
+	 * (the render ran first, then "No such file or directory") */
+	snprintf(args, sizeof args, "--size 16x16 --stats %s/missing/s.json", dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("folder");
+	one_line_naming("missing does not exist");
 }
 
 /* The image and the statistics appear together or not at all: a --stats

@@ -7,7 +7,9 @@
  * VMA error and config, small stacks, and --trace-mem replayed by
  * saarsim-replay with the same L1 counts.
  */
+#include <fcntl.h>
 #include <math.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -223,6 +225,85 @@ Test(saarsim_cli, outputs_keep_fifos_and_links)
 	cr_assert(strstr(slurp("target.json"), "\"fps\""), "the target holds no report");
 	cr_assert_eq(saarsim("--size 16x16 --set chip.rtps=1 --report ''"), 2);
 	one_line_naming("cannot write");
+}
+
+/* Every output is checked before the run, by making its temporary
+ * (af_reserve): an output into a missing folder, or a folder that takes no
+ * new file (/proc), is refused in one line before the world even loads.
+ * (The whole simulation ran first, then exit 2 with nothing on stdout:
+ * the world cache shows whether the world was loaded.) The messages say
+ * what is wrong with the folder, not a bare "No such file or directory"
+ * (--report /proc/version said that), and an --out naming a folder says
+ * so (it said "no image writer"). */
+Test(saarsim_cli, outputs_are_checked_before_the_run)
+{
+	const char *opt[] = {"--report", "--out", "--csv", "--trace-mem", "--census"};
+	const char *name[] = {"r.json", "f.png", "c.csv", "t.gz", "c.csv"};
+	char args[2048], wc[512], found[1024];
+	snprintf(wc, sizeof wc, "%s/wc", dir);
+	for (int i = 0; i < 5; i++) {
+		snprintf(args, sizeof args,
+		         "--size 16x16 --set chip.rtps=1 --world-cache %s %s %s/missing/%s", wc,
+		         opt[i], dir, name[i]);
+		cr_assert_eq(saarsim(args), 2, "%s", opt[i]);
+		one_line_naming("missing does not exist");
+		cr_assert_eq(exists("wc") ? tu_find_files(wc, "world-", found, sizeof found) : 0, 0,
+		             "%s: the world was loaded before the output was refused", opt[i]);
+		snprintf(args, sizeof args, "--size 16x16 --world-cache %s %s /proc/%s", wc, opt[i],
+		         name[i]);
+		cr_assert_eq(saarsim(args), 2, "%s", opt[i]);
+		one_line_naming("cannot create a file in folder /proc");
+	}
+	cr_assert_eq(saarsim("--size 16x16 --report /proc/version"), 2);
+	one_line_naming("cannot create a file in folder /proc");
+	snprintf(args, sizeof args, "--size 16x16 --out %s/", dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("names a folder, not a file");
+	cr_assert_eq(saarsim("--size 16x16 --report /dev/null"), 2);
+	one_line_naming("not a regular file");
+}
+
+/* A run ended by SIGTERM or SIGINT removes the temporaries of its outputs
+ * (an 8 MB t.gz.XXXXXX trace was left) and still ends by the signal. */
+Test(saarsim_cli, interrupted_run_leaves_no_temporaries, .timeout = 120)
+{
+	const int sigs[] = {SIGTERM, SIGINT};
+	for (int k = 0; k < 2; k++) {
+		char bin[512], tr[512], rep[512];
+		snprintf(bin, sizeof bin, "%s/saarsim", tu_bin_dir());
+		snprintf(tr, sizeof tr, "%s/t%d.gz", dir, k);
+		snprintf(rep, sizeof rep, "%s/r%d.json", dir, k);
+		pid_t pid = fork();
+		cr_assert(pid >= 0);
+		if (pid == 0) {
+			int nul = open("/dev/null", O_WRONLY);
+			dup2(nul, 1);
+			dup2(nul, 2);
+			/* SIGINT is ignored in a background job's children; the
+			 * test wants the default the user's terminal gives */
+			signal(SIGINT, SIG_DFL);
+			execl(bin, bin, "--size", "512x512", "--frames", "50", "--trace-mem", tr,
+			      "--report", rep, (char *)NULL);
+			_exit(127);
+		}
+		/* wait until the trace's temporary exists, then interrupt */
+		char base[32];
+		snprintf(base, sizeof base, "t%d.gz", k);
+		for (int i = 0; i < 2000 && tu_temps(dir, base) == 0; i++)
+			usleep(10000);
+		cr_assert_eq(tu_temps(dir, base), 1, "no trace temporary appeared");
+		usleep(100000);
+		kill(pid, sigs[k]);
+		int st;
+		cr_assert_eq(waitpid(pid, &st, 0), pid);
+		cr_assert(WIFSIGNALED(st) && WTERMSIG(st) == sigs[k],
+		          "saarsim did not end by signal %d (status %d)", sigs[k], st);
+		snprintf(base, sizeof base, "r%d.json", k);
+		cr_assert_eq(tu_temps(dir, base), 0, "the report's temporary is left");
+		snprintf(base, sizeof base, "t%d.gz", k);
+		cr_assert_eq(tu_temps(dir, base), 0, "the trace's temporary is left");
+		cr_assert_not(tu_exists(dir, base), "a partial trace was renamed into place");
+	}
 }
 
 /* Inputs must be regular files: a FIFO named as the config, scene, views
