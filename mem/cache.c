@@ -46,6 +46,13 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 	return 0;
 }
 
+uint64_t cache_host_bytes(const cache_params *p)
+{
+	uint64_t per_set = (uint64_t)p->ways * p->line_bytes;
+	uint64_t nsets = per_set ? p->size_bytes / per_set : 0;
+	return nsets * p->ways * sizeof(cache_way) + (uint64_t)p->mshrs * sizeof(uint64_t);
+}
+
 void cache_free(cache *c)
 {
 	free(c->way);

@@ -70,6 +70,10 @@ typedef struct cache_way {
 	uint64_t use; /* LRU stamp (larger = more recent) */
 } cache_way;
 
+/* Host bytes cache_init allocates for p (its way array and MSHRs): what a
+ * run's memory estimate counts before it builds anything (sim/hostmem). */
+uint64_t cache_host_bytes(const cache_params *p);
+
 typedef struct cache {
 	cache_params p;
 	uint32_t nsets;

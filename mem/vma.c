@@ -106,6 +106,32 @@ static void req_release(vma *v, vma_req *r)
 
 /* ---- setup ---- */
 
+/* The on-board cache's parameters for sdram_bytes of on-board memory: as
+ * many sets as fit beside their meta-data (0 sets: too small). */
+static cache_params vma_l2_params(uint64_t sdram_bytes, const vma_params *p)
+{
+	uint64_t meta = (uint64_t)p->ways * VMA_META_BYTES_PER_LINE;
+	uint64_t nsets = sdram_bytes / ((uint64_t)p->ways * p->line + meta);
+	return (cache_params){
+	    nsets * p->ways * p->line, p->ways, p->line, VMA_MSHRS, 0, 1, p->hash};
+}
+
+static cache_params vma_tag_params(const vma_params *p)
+{
+	return (cache_params){
+	    p->tag_cache_bytes, p->tag_cache_ways,  p->ways * VMA_META_BYTES_PER_LINE,
+	    VMA_TAG_MSHRS,      p->tag_hit_latency, 1,
+	    CACHE_HASH_NONE};
+}
+
+uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p)
+{
+	if (p->ways < 1 || p->line < 1)
+		return 0;
+	cache_params lp = vma_l2_params(sdram_bytes, p), tp = vma_tag_params(p);
+	return cache_host_bytes(&lp) + (p->tag_cache_enabled ? cache_host_bytes(&tp) : 0);
+}
+
 int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram_bytes,
              const vma_params *p, diag *d)
 {
@@ -119,19 +145,15 @@ int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram
 		return diag_set(d, "config", 0, 0,
 		                "memory.vma.ways and memory.vma.line must be >= 1");
 	v->meta_set_bytes = p->ways * VMA_META_BYTES_PER_LINE;
-	uint64_t per_set = (uint64_t)p->ways * p->line + v->meta_set_bytes;
-	uint64_t nsets = sdram_bytes / per_set;
-	if (nsets < 1)
+	cache_params lp = vma_l2_params(sdram_bytes, p);
+	if (lp.size_bytes == 0)
 		return diag_set(d, "config", 0, 0,
 		                "memory.sdram.mb: on-board memory too small for one VMA set");
-	cache_params lp = {nsets * p->ways * p->line, p->ways, p->line, VMA_MSHRS, 0, 1, p->hash};
 	if (cache_init(&v->l2, &lp, "memory.vma", d))
 		return -1;
-	v->meta_base = nsets * p->ways * p->line;
+	v->meta_base = lp.size_bytes;
 	if (p->tag_cache_enabled) {
-		cache_params tp = {p->tag_cache_bytes, p->tag_cache_ways,  v->meta_set_bytes,
-		                   VMA_TAG_MSHRS,      p->tag_hit_latency, 1,
-		                   CACHE_HASH_NONE};
+		cache_params tp = vma_tag_params(p);
 		if (cache_init(&v->tag, &tp, "memory.vma.tag_cache", d)) {
 			vma_free(v);
 			return -1;

@@ -84,6 +84,9 @@ int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram
 void vma_free(vma *v);
 /* Lines the L2 holds (capacity = lines * line bytes). */
 uint64_t vma_capacity(const vma *v);
+/* Host bytes vma_init allocates for on-board memory of sdram_bytes with
+ * parameters p: the on-board cache's tags and the tag cache. */
+uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p);
 
 /* A read of bytes at host address addr, issued at tick t (>= eng_now),
  * for requester type (MEM_*): done(e, ctx, arg) when all bytes are there.

@@ -25,6 +25,7 @@
 #include "atomicfile.h"
 #include "chip.h"
 #include "config.h"
+#include "hostmem.h"
 #include "image.h"
 #include "report.h"
 #include "world.h"
@@ -48,6 +49,8 @@ static void usage(FILE *f)
 	        "  --unit-tiles N        sampled: tiles per measured unit (sampling.unit_tiles)\n"
 	        "  --warmup-tiles N      sampled: detailed warm-up tiles (sampling.warmup_tiles)\n"
 	        "  --no-check            skip the comparison with kernel-ref\n"
+	        "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
+	        "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
 	        "  --list-config         print every config key and exit\n"
 	        "  --config-doc          print docs/config.md and exit\n");
 	fputs(world_usage, f);
@@ -116,7 +119,7 @@ int main(int argc, char **argv)
 	world_opts wo;
 	world_opts_default(&wo);
 	const char *config = NULL, *out = NULL, *report = NULL, *size = NULL, *frames = NULL;
-	const char *csv = NULL, *trace = NULL, *census = NULL;
+	const char *csv = NULL, *trace = NULL, *census = NULL, *mem_limit = NULL;
 	int check = 1, list = 0, doc = 0;
 	diag d = {{0}};
 	for (int i = 1; i < argc;) {
@@ -160,6 +163,8 @@ int main(int argc, char **argv)
 			trace = v;
 		else if (!strcmp(a, "--census"))
 			census = v;
+		else if (!strcmp(a, "--host-mem-limit"))
+			mem_limit = v;
 		else {
 			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", a);
 			return DIAG_EXIT;
@@ -207,6 +212,9 @@ int main(int argc, char **argv)
 	}
 	if (cfg_validate(&cfg, &d))
 		return cli_bad("saarsim", d.msg);
+	uint64_t limit_mb;
+	if (hm_limit_mb(mem_limit, &limit_mb, &d))
+		return cli_bad("saarsim", d.msg);
 	wo.kd.cost_trav = (float)cfg.kdtree.cost_trav;
 	wo.kd.cost_isect = (float)cfg.kdtree.cost_isect;
 	wo.kd.max_depth = cfg.kdtree.max_depth;
@@ -234,6 +242,14 @@ int main(int argc, char **argv)
 	if (world_load(&w, &wo, &d))
 		return cli_bad("saarsim", d.msg);
 	double load_ms = now_ms() - t0;
+	/* a config inside every key's range can still want more memory than
+	 * the host has: refuse it before building anything */
+	hm_est mem;
+	hm_estimate(&cfg, &w, &mem);
+	if (hm_check(&mem, limit_mb, &d)) {
+		world_free(&w);
+		return cli_bad("saarsim", d.msg);
+	}
 	chip *c = chip_create(&cfg, &w, &d);
 	if (!c) {
 		world_free(&w);
@@ -281,7 +297,13 @@ int main(int argc, char **argv)
 	int csv_lock = -1;
 	if (out && fb_write(&c->fb, out, &outs, &d))
 		goto fail;
-	report_info ri = {c, &w, check ? &chk : NULL, load_ms, now_ms() - t_start, &outs};
+	report_info ri = {c,
+	                  &w,
+	                  check ? &chk : NULL,
+	                  load_ms,
+	                  now_ms() - t_start,
+	                  &outs,
+	                  (double)mem.total / (1 << 20)};
 	if (report && report_json(report, &ri, &d))
 		goto fail;
 	if (census && report_census(census, &ri, &d))

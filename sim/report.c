@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "atomicfile.h"
+#include "hostmem.h"
 #include "infile.h"
 
 static double ratio(double a, double b)
@@ -738,6 +739,8 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_knum(j, "packet_record_s", c->rec_ms / 1e3);
 	jsonw_kstr(j, "stored_warming", chip_warm_name(c->warm_state));
 	jsonw_knum(j, "stored_warming_s", c->warm_ms / 1e3);
+	jsonw_knum(j, "mem_estimate_mb", ri->mem_estimate_mb);
+	jsonw_knum(j, "peak_rss_mb", (double)hm_peak_rss() / (1 << 20));
 	jsonw_knum(j, "sim_cycles_per_s", ratio((double)cyc, c->sim_ms / 1e3));
 	jsonw_knum(j, "sim_to_ref_ratio",
 	           ri->check && ri->check->done ? ratio(c->sim_ms, ri->check->ref_ms) : 0.0);

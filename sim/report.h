@@ -20,6 +20,7 @@ typedef struct report_info {
 	double load_ms;          /* scene load, kd-tree, memory image */
 	double wall_ms;          /* whole run so far */
 	af_group *group;         /* the files are renamed by af_group_commit; NULL: each at once */
+	double mem_estimate_mb;  /* hostmem.h's estimate before the run (0: none made) */
 } report_info;
 
 /* Memory figures over a span of frames (the report's steady_state and

@@ -306,6 +306,93 @@ Test(saarsim_cli, interrupted_run_leaves_no_temporaries, .timeout = 120)
 	}
 }
 
+/* The number after "key": in JSON text s (the first occurrence). */
+static double json_num(const char *s, const char *key)
+{
+	char k[128];
+	snprintf(k, sizeof k, "\"%s\":", key);
+	const char *p = strstr(s, k);
+	cr_assert(p, "no %s in the report", key);
+	return strtod(p + strlen(k), NULL);
+}
+
+/* A config inside every key's range can want more host memory than the
+ * host has (1024 RTPs x 1024 threads: 14 GB; four 1 GB L1s: 7 GB; a 64 GB
+ * board through the VMA: 8 GB); such a run is refused before the chip is
+ * built, in one line naming the keys that drive the estimate and how to
+ * raise the limit (--host-mem-limit, SAARSIM_HOST_MEM_MB; default 4096 MB).
+ * Small limits make the same refusals cheap: the old build allocated. */
+Test(saarsim_cli, host_memory_is_estimated_and_limited)
+{
+	static const struct {
+		const char *args, *key;
+	} cases[] = {
+	    {"--set chip.rtps=1024 --set chip.threads_per_rtp=1024",
+	     "chip.rtps x chip.threads_per_rtp"},
+	    {"--set memory.l1.kd.size_kb=1048576 --set memory.l1.list.size_kb=1048576 "
+	     "--set memory.l1.tri.size_kb=1048576 --set memory.l1.shade.size_kb=1048576",
+	     "memory.l1.*.size_kb"},
+	    {"--set memory.vma.enabled=true --set memory.sdram.mb=65536", "memory.sdram.mb"},
+	    {"--set chip.rtps=16 --set chip.threads_per_rtp=1024 --host-mem-limit 64",
+	     "chip.rtps x chip.threads_per_rtp"},
+	    {"--set memory.l1.kd.size_kb=262144 --host-mem-limit 100", "memory.l1.*.size_kb"},
+	};
+	char args[1024];
+	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+		snprintf(args, sizeof args, "--size 16x16 --no-check --report %s/r.json %s", dir,
+		         cases[i].args);
+		cr_assert_eq(saarsim(args), 2, "%s", cases[i].args);
+		one_line_naming(cases[i].key);
+		one_line_naming("--host-mem-limit MB or SAARSIM_HOST_MEM_MB raises it");
+		cr_assert_not(exists("r.json"));
+	}
+	/* the environment sets the limit; the flag wins over it */
+	cr_assert_eq(saarsim("--size 16x16 --no-check --set chip.rtps=16 --set "
+	                     "chip.threads_per_rtp=1024 --host-mem-limit 100000"),
+	             0, "%s", slurp("err"));
+	cr_assert_eq(tu_run_env("SAARSIM_HOST_MEM_MB=64", dir, "saarsim",
+	                        "--size 16x16 --no-check --set chip.rtps=16 --set "
+	                        "chip.threads_per_rtp=1024"),
+	             2);
+	one_line_naming("over the limit of 64 MB");
+	const char *bad[] = {"0", "-5", "1e3", "12MB", "", "99999999999999"};
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		snprintf(args, sizeof args, "--size 16x16 --host-mem-limit '%s'", bad[i]);
+		cr_assert_eq(saarsim(args), 2, "'%s' accepted", bad[i]);
+		one_line_naming("--host-mem-limit");
+	}
+	cr_assert_eq(tu_run_env("SAARSIM_HOST_MEM_MB=x", dir, "saarsim", "--size 16x16"), 2);
+	one_line_naming("SAARSIM_HOST_MEM_MB");
+}
+
+/* The estimate is honest: on runs dominated by each part (idle thread
+ * slots, busy ones, an L1, the VMA's on-board cache) it is within a few
+ * times of the peak resident memory the report gives, and not below it by
+ * more than a tenth (sanitizer builds inflate the resident memory: there
+ * only the upper side is checked). */
+Test(saarsim_cli, host_memory_estimate_bounds_the_peak, .timeout = 120)
+{
+#if defined(__SANITIZE_ADDRESS__)
+	const double low = 0; /* the sanitizer's shadow memory inflates the peak */
+#else
+	const double low = 0.9;
+#endif
+	const char *cases[] = {"--size 16x16 --set chip.rtps=16 --set chip.threads_per_rtp=512",
+	                       "--size 128x128 --set chip.rtps=16 --set chip.threads_per_rtp=64",
+	                       "--size 16x16 --set memory.l1.kd.size_kb=131072",
+	                       "--size 16x16 --set memory.vma.enabled=true --set "
+	                       "memory.sdram.mb=1024"};
+	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+		char args[1024];
+		snprintf(args, sizeof args, "%s --no-check --report %s/r.json", cases[i], dir);
+		cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+		const char *r = tu_squeeze_json(slurp("r.json"));
+		double est = json_num(r, "mem_estimate_mb"), peak = json_num(r, "peak_rss_mb");
+		cr_assert(est >= low * peak && est <= 3 * peak + 64,
+		          "%s: estimate %.0f MB, peak %.0f MB", cases[i], est, peak);
+	}
+}
+
 /* Inputs must be regular files: a FIFO named as the config, scene, views
  * file, CSV to append to, texture or world-cache entry blocked the run
  * (fopen waits for a writer), so each is refused in one line, or for the

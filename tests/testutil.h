@@ -109,6 +109,15 @@ static inline int tu_prog(const char *dir, const char *prog, const char *args)
 	return tu_run(cmd);
 }
 
+/* tu_prog with an environment assignment ("NAME=value") before it. */
+static inline int tu_run_env(const char *env, const char *dir, const char *prog, const char *args)
+{
+	char cmd[8192];
+	snprintf(cmd, sizeof cmd, "%s %s/%s %s >%s/out 2>%s/err", env, tu_bin_dir(), prog, args,
+	         dir, dir);
+	return tu_run(cmd);
+}
+
 static inline int tu_exists(const char *dir, const char *name)
 {
 	char p[1024];

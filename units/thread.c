@@ -36,6 +36,14 @@ int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int m
 	return u->free_at && u->ops && u->wait && u->wbits ? 0 : -1;
 }
 
+uint64_t thr_unit_host_bytes(int count, int max_waiters)
+{
+	thr_unit *u = NULL;
+	return (uint64_t)(count > 0 ? count : 1) * sizeof *u->free_at +
+	       (uint64_t)max_waiters * (sizeof *u->ops + sizeof *u->wait) +
+	       (uint64_t)bits_words(max_waiters) * sizeof *u->wbits;
+}
+
 void thr_unit_free(thr_unit *u)
 {
 	free(u->free_at);

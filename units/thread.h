@@ -79,6 +79,9 @@ typedef struct thr_unit {
 int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int masked, int sched,
                   int max_waiters);
 void thr_unit_free(thr_unit *u);
+/* Host bytes thr_unit_init allocates for count instances and max_waiters
+ * requesters (the run's memory estimate, sim/hostmem.c). */
+uint64_t thr_unit_host_bytes(int count, int max_waiters);
 /* Issue cycles of an op with `rays` active rays. */
 uint64_t thr_unit_issue_div(const thr_unit *u, int rays);
 static inline uint64_t thr_unit_issue(const thr_unit *u, int rays)
