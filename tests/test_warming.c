@@ -173,8 +173,13 @@ Test(warming, without_a_world_cache_the_stretches_run)
 	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	config(&c, 256, 0);
+	tu_capture cap = tu_stderr_begin();
 	chip *a = tu_run_chip(&w, &c);
+	const char *err = tu_stderr_end(cap);
 	cr_assert_eq(a->warm_state, WARM_UNAVAILABLE, "%s", chip_warm_name(a->warm_state));
+	/* the user is told, in one line */
+	cr_assert_str_eq(err, "warning: sampling.warming stored needs --world-cache and a packet "
+	                      "record; the functional stretches run instead\n");
 	c.sampling.warming = CFG_WARMING_FULL;
 	chip *b = tu_run_chip(&w, &c);
 	cr_assert_eq(b->warm_state, WARM_OFF);

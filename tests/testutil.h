@@ -98,6 +98,39 @@ static inline int tu_run(const char *cmd)
 	return WEXITSTATUS(st);
 }
 
+/* Captures what the test itself writes to stderr (a library's warning
+ * line), so it is checked instead of landing in `make test`'s output:
+ * tu_stderr_begin returns a token for tu_stderr_end, which restores stderr
+ * and returns the text written meanwhile (static, up to 64 KB). */
+typedef struct tu_capture {
+	int saved;
+	FILE *f;
+} tu_capture;
+
+static inline tu_capture tu_stderr_begin(void)
+{
+	tu_capture c;
+	fflush(stderr);
+	c.f = tmpfile();
+	cr_assert(c.f, "tmpfile failed");
+	c.saved = dup(2);
+	dup2(fileno(c.f), 2);
+	return c;
+}
+
+static inline const char *tu_stderr_end(tu_capture c)
+{
+	static char buf[1 << 16];
+	fflush(stderr);
+	dup2(c.saved, 2);
+	close(c.saved);
+	rewind(c.f);
+	size_t n = fread(buf, 1, sizeof buf - 1, c.f);
+	buf[n] = 0;
+	fclose(c.f);
+	return buf;
+}
+
 /* ---- command-line programs (rtref, saarsim, saarsim-replay) ---- */
 
 /* Runs SAAR_BIN/prog with args; stdout into dir/out, stderr into dir/err.

@@ -1,0 +1,52 @@
+/*
+ * main.c: the test runner. Criterion's own, plus an account of skipped
+ * tests: its summary line counts only tests that ran, so 25 tests that
+ * skipped for want of the shared scenes were invisible. After the run this
+ * prints how many tests skipped and which, with their reasons; and when the
+ * shared scenes are present (SAAR_SCENES names a folder that exists) a
+ * skipped test fails the run, since then nothing has a reason to skip.
+ */
+#include <criterion/criterion.h>
+#include <criterion/hooks.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+
+#include "testutil.h"
+
+static size_t nskipped;
+
+ReportHook(POST_ALL)(struct criterion_global_stats *stats)
+{
+	nskipped = 0;
+	for (struct criterion_suite_stats *s = stats->suites; s; s = s->next)
+		for (struct criterion_test_stats *t = s->tests; t; t = t->next)
+			if (t->test_status == CR_STATUS_SKIPPED) {
+				if (!nskipped)
+					fputs("[SKIP] skipped tests:\n", stderr);
+				nskipped++;
+				fprintf(stderr, "[SKIP]   %s::%s%s%s\n", t->test->category,
+				        t->test->name, t->message ? ": " : "",
+				        t->message ? t->message : "");
+			}
+	fprintf(stderr, "[====] Skipped: %zu\n", nskipped);
+}
+
+int main(int argc, char *argv[])
+{
+	struct criterion_test_set *tests = criterion_initialize();
+	int result = 0;
+	if (criterion_handle_args(argc, argv, true))
+		result = !criterion_run_all_tests(tests);
+	criterion_finalize(tests);
+	struct stat st;
+	const char *scenes = tu_scenes_dir();
+	if (nskipped && stat(scenes, &st) == 0 && S_ISDIR(st.st_mode)) {
+		fprintf(stderr,
+		        "[FAIL] %zu tests skipped although the shared scenes are at %s: none may "
+		        "skip there\n",
+		        nskipped, scenes);
+		result = 1;
+	}
+	return result;
+}
