@@ -6,7 +6,8 @@
  * document at a tiny size, and scripts/census-need.py on known censuses.
  * Robustness: paths with spaces, quotes and other shell characters through
  * each back end (GNU parallel here, over a fake ssh, the Slurm script run
- * as Slurm would). The scripts are found
+ * as Slurm would), and bad saarsim arguments after -- refused once before
+ * any point. The scripts are found
  * beside the tests (SAAR_ROOT, else the current folder: `make test` runs from the repo).
  */
 #include "testutil.h"
@@ -420,6 +421,29 @@ Test(sweep, special_paths_over_ssh, .timeout = 120)
 	/* both points ran through the fake ssh */
 	snprintf(path, sizeof path, "%s/ssh.log", dir);
 	cr_assert_eq(count_in(path, "GNU_Parallel_worker"), 2);
+}
+
+/* The saarsim arguments after -- are checked once, before anything runs:
+ * one line and exit 2 (every point failed with exit 1 before), and no
+ * sweep folder made. */
+Test(sweep, bad_pass_through_args_fail_first)
+{
+	char dir[256], env[4200], cmd[16384], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	const char *bad[] = {"--no-such-flag", "--frames 0", "--set chip.rtps=x"};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		snprintf(cmd, sizeof cmd,
+		         "%s sh %s/scripts/sweep --out %s/out --scene spd:tetra:1 --size 16x16 "
+		         "--set chip.threads_per_rtp=2,4 -j 2 -- %s 2>%s/err",
+		         env, root(), dir, bad[k], dir);
+		cr_assert_eq(tu_run(cmd), 2, "%s", bad[k]);
+		snprintf(path, sizeof path, "%s/err", dir);
+		cr_assert_eq(count_lines(path), 1, "%s", bad[k]);
+		cr_assert_eq(count_in(path, "sweep: arguments for saarsim: "), 1, "%s", bad[k]);
+		snprintf(path, sizeof path, "%s/out", dir);
+		cr_assert(access(path, F_OK) != 0, "%s: the sweep folder was made", bad[k]);
+	}
 }
 
 Test(validate, tiny_end_to_end, .timeout = 150)
