@@ -6,8 +6,8 @@
  * document at a tiny size, and scripts/census-need.py on known censuses.
  * Robustness: paths with spaces, quotes and other shell characters through
  * each back end (GNU parallel here, over a fake ssh, the Slurm script run
- * as Slurm would), and bad saarsim arguments after -- refused once before
- * any point. The scripts are found
+ * as Slurm would), bad saarsim arguments after -- refused once before any
+ * point, and the plots' axes (fps from 0, x margins). The scripts are found
  * beside the tests (SAAR_ROOT, else the current folder: `make test` runs from the repo).
  */
 #include "testutil.h"
@@ -443,6 +443,27 @@ Test(sweep, bad_pass_through_args_fail_first)
 		cr_assert_eq(count_in(path, "sweep: arguments for saarsim: "), 1, "%s", bad[k]);
 		snprintf(path, sizeof path, "%s/out", dir);
 		cr_assert(access(path, F_OK) != 0, "%s: the sweep folder was made", bad[k]);
+	}
+}
+
+/* The plots' gnuplot scripts (kept in plots/data): fps from 0, not from
+ * near its smallest value (an 8% change looked huge), and a margin left
+ * and right so the end points' markers are whole. */
+Test(sweep, plots_from_zero_with_x_margin, .timeout = 120)
+{
+	char dir[256], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	run_tiny_sweep(dir, "--plot", 0);
+	const char *gp[] = {"threads.gp", "threads-spd_tetra_2.gp"};
+	for (size_t k = 0; k < 2; k++) {
+		snprintf(path, sizeof path, "%s/plots/data/%s", dir, gp[k]);
+		char *s = slurp(path);
+		cr_assert(s, "%s missing", path);
+		char *fps = strstr(s, "set ylabel 'frames per second'; set yrange [0:*]\n");
+		cr_assert(fps, "%s: fps not from 0:\n%s", gp[k], s);
+		char *off = strstr(s, "set offsets graph 0.05, graph 0.05,");
+		cr_assert(off && off < fps, "%s: no x margin before the plot:\n%s", gp[k], s);
+		free(s);
 	}
 }
 
