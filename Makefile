@@ -50,6 +50,7 @@ $(DEPSTAMP):
 	@mkdir -p $(B)
 	@if command -v pkg-config >/dev/null 2>&1 && pkg-config --exists $(PKGS) $(IMGPKGS) $(TESTPKGS) \
 	    && command -v gnuplot >/dev/null 2>&1 && command -v parallel >/dev/null 2>&1 \
+	    && command -v rsync >/dev/null 2>&1 \
 	    && command -v python3 >/dev/null 2>&1; then :; else \
 	  echo "make: some dependencies are missing; running scripts/install-deps.sh"; \
 	  sh scripts/install-deps.sh || { echo "make: error: could not install dependencies (see above)" >&2; exit 1; }; \

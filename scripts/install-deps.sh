@@ -5,7 +5,7 @@
 set -eu
 
 PKGS="build-essential pkg-config libopenimageio-dev openimageio-tools \
-libyaml-dev zlib1g-dev libassimp-dev libcriterion-dev gnuplot-nox parallel python3"
+libyaml-dev zlib1g-dev libassimp-dev libcriterion-dev gnuplot-nox parallel rsync python3"
 
 missing=""
 for p in $PKGS; do

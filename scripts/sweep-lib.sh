@@ -141,6 +141,13 @@ csv_union() {
 	mv -f "$_out.tmp.$$" "$_out"
 }
 
+# sh_q STRING: STRING quoted for a POSIX shell, in single quotes (a single
+# quote inside as '\''): for the commands the sweep writes into scripts
+# (sweep.slurm) and prints to be pasted.
+sh_q() {
+	printf "'%s'" "$(printf '%s\n' "$1" | sed "s/'/'\\\\''/g")"
+}
+
 # is_true VALUE: a config boolean that means true (YAML spellings and 1).
 is_true() {
 	case $1 in true | True | TRUE | yes | Yes | on | On | 1) return 0 ;; *) return 1 ;; esac

@@ -4,7 +4,7 @@
  *   saarsim [--config FILE] [scene/view flags] [--size WxH] [--frames N]
  *           [--out frame.png] [--report report.json] [--csv FILE]
  *           [--trace-mem FILE.gz] [--census FILE.csv] [--set key=value ...]
- *           [--no-check]
+ *           [--no-check] [--dry-run]
  *           [--list-config] [--config-doc]
  *
  * Loads the config (built-in defaults = configs/saarcor-std.yaml, then the
@@ -13,7 +13,10 @@
  * a summary and writes the frame, the JSON report, the memory trace and one
  * CSV row. Bad input: one line "saarsim: ..." on stderr, exit status 2, no
  * output file changed (each is written to a temporary file, and all are
- * renamed into place together once every one is complete).
+ * renamed into place together once every one is complete). --dry-run stops
+ * after the checks that need no world (every argument, the config, the
+ * output formats, the CSV's columns): exit 0 if they pass, nothing loaded
+ * or written (scripts/sweep checks its pass-through arguments with it).
  */
 #include <errno.h>
 #include <stdio.h>
@@ -51,6 +54,8 @@ static void usage(FILE *f)
 	        "  --no-check            skip the comparison with kernel-ref\n"
 	        "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
 	        "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
+	        "  --dry-run             check the arguments and the config, then exit (no scene\n"
+	        "                        loaded, nothing run or written)\n"
 	        "  --list-config         print every config key and exit\n"
 	        "  --config-doc          print docs/config.md and exit\n");
 	fputs(world_usage, f);
@@ -98,6 +103,17 @@ static const char *key_flag(const char *a)
 	return NULL;
 }
 
+/* The flags without a value: their index in this list, -1 for others. */
+static int bare_flag(const char *a)
+{
+	static const char *const bare_flags[] = {"--no-check", "--list-config", "--config-doc",
+	                                         "--dry-run"};
+	for (int k = 0; k < (int)(sizeof bare_flags / sizeof *bare_flags); k++)
+		if (!strcmp(a, bare_flags[k]))
+			return k;
+	return -1;
+}
+
 /* The shorthand flag's "key=value" through the config, the whole value
  * (cfg_set refuses one too long), its messages naming the flag. */
 static int set_key(saar_config *cfg, const char *flag, const char *value, diag *d)
@@ -120,7 +136,7 @@ int main(int argc, char **argv)
 	world_opts_default(&wo);
 	const char *config = NULL, *out = NULL, *report = NULL, *size = NULL, *frames = NULL;
 	const char *csv = NULL, *trace = NULL, *census = NULL, *mem_limit = NULL;
-	int check = 1, list = 0, doc = 0;
+	int check = 1, list = 0, doc = 0, dry = 0;
 	diag d = {{0}};
 	for (int i = 1; i < argc;) {
 		int r = key_flag(argv[i]) ? 0 : world_parse_arg(&wo, argc, argv, &i, &d);
@@ -133,9 +149,10 @@ int main(int argc, char **argv)
 			usage(stdout);
 			return 0;
 		}
-		if (!strcmp(a, "--no-check") || !strcmp(a, "--list-config") ||
-		    !strcmp(a, "--config-doc")) {
-			*(a[2] == 'n' ? &check : a[2] == 'l' ? &list : &doc) = a[2] != 'n';
+		int b = bare_flag(a);
+		if (b >= 0) {
+			int *set[] = {&check, &list, &doc, &dry}; /* bare_flags' order */
+			*set[b] = b != 0;
 			i++;
 			continue;
 		}
@@ -191,8 +208,7 @@ int main(int argc, char **argv)
 		if (!key_flag(argv[i]) && world_parse_arg(&skip, argc, argv, &i, &d) > 0)
 			continue;
 		const char *a = argv[i];
-		if (!strcmp(a, "--no-check") || !strcmp(a, "--list-config") ||
-		    !strcmp(a, "--config-doc")) {
+		if (bare_flag(a) >= 0) {
 			i++;
 			continue;
 		}
@@ -237,6 +253,8 @@ int main(int argc, char **argv)
 	/* so does a census the run cannot keep, before the world loads */
 	if (census && chip_census_check(&cfg, &d))
 		return cli_bad("saarsim", d.msg);
+	if (dry)
+		return 0;
 	double t0 = now_ms();
 	world w;
 	if (world_load(&w, &wo, &d))

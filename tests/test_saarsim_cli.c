@@ -612,6 +612,30 @@ Test(saarsim_cli, unknown_option_and_missing_scene)
 	cr_assert_not(exists("f.png"));
 }
 
+/* --dry-run checks the arguments and the config like a run (one line,
+ * exit 2) and otherwise exits 0 at once: no world loaded (a missing scene
+ * is not its business), nothing run, no file written. */
+Test(saarsim_cli, dry_run_checks_and_writes_nothing)
+{
+	char args[2048];
+	snprintf(args, sizeof args,
+	         "--dry-run --scene %s/nope.obj --size 32x24 --out %s/f.png --report %s/r.json "
+	         "--csv %s/c.csv",
+	         dir, dir, dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert_str_eq(slurp("out"), "");
+	cr_assert_str_eq(slurp("err"), "");
+	cr_assert_not(exists("f.png") || exists("r.json") || exists("c.csv"));
+	const char *bad[][2] = {{"--dry-run --no-such-flag", "--no-such-flag"},
+	                        {"--no-such-flag 1 --dry-run", "--no-such-flag"},
+	                        {"--dry-run --frames 0", "--frames"},
+	                        {"--dry-run --set chip.rtps=x", "chip.rtps"}};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		cr_assert_eq(saarsim(bad[k][0]), 2, "%s", bad[k][0]);
+		one_line_naming(bad[k][1]);
+	}
+}
+
 Test(saarsim_cli, config_doc_matches_docs)
 {
 	char cmd[1024];

@@ -3,7 +3,11 @@
  * end to end with the real saarsim (SAAR_BIN), on tiny grids: the CSV and
  * PNG of a 2-point sweep, resume after an interruption (only the missing
  * point runs), the Slurm array script, bad input, the validation
- * document at a tiny size, and scripts/census-need.py on known censuses. The scripts are found
+ * document at a tiny size, and scripts/census-need.py on known censuses.
+ * Robustness: paths with spaces, quotes and other shell characters through
+ * each back end (GNU parallel here, over a fake ssh, the Slurm script run
+ * as Slurm would), bad saarsim arguments after -- refused once before any
+ * point, and the plots' axes (fps from 0, x margins). The scripts are found
  * beside the tests (SAAR_ROOT, else the current folder: `make test` runs from the repo).
  */
 #include "testutil.h"
@@ -305,6 +309,162 @@ Test(sweep, bad_input_exit_2)
 	         "--set chip.rtps=1 2>/dev/null",
 	         root(), dir);
 	cr_expect_eq(tu_run(cmd), 2, "missing saarsim");
+}
+
+/* Paths with characters a shell reads: the repository (a copy of the
+ * scripts) under "re po'x" and the sweep folder "o ut'q $x*;y", both in
+ * the environment (SW_REPO, SW_OUT) so the commands below quote them
+ * plainly. GNU parallel runs its command through a shell, over ssh a
+ * remote shell parses it again, and sweep.slurm is a shell script: each
+ * must quote them (every point failed with a usage message before). */
+static void special_paths(char *dir, size_t n)
+{
+	char cmd[4096], p[1024];
+	tu_tmpdir(dir, n);
+	snprintf(p, sizeof p, "%s/re po'x", dir);
+	setenv("SW_REPO", p, 1);
+	snprintf(p, sizeof p, "%s/o ut'q $x*;y", dir);
+	setenv("SW_OUT", p, 1);
+	snprintf(cmd, sizeof cmd,
+	         "mkdir -p \"$SW_REPO/scripts\" && cp %s/scripts/sweep %s/scripts/sweep-lib.sh "
+	         "%s/scripts/sweep-plot \"$SW_REPO/scripts/\"",
+	         root(), root(), root());
+	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+}
+
+#define SPECIAL_SWEEP                                                                              \
+	"sh \"$SW_REPO/scripts/sweep\" --out \"$SW_OUT\" --scene spd:tetra:1 --size 16x16 "        \
+	"--set chip.threads_per_rtp=2,4"
+
+/* the sweep in SW_OUT collected both points */
+static void special_done(void)
+{
+	char path[1024];
+	snprintf(path, sizeof path, "%s/results.csv", getenv("SW_OUT"));
+	cr_assert_eq(count_lines(path), 3, "results.csv: a header and two points");
+}
+
+Test(sweep, special_paths_local_jobs_and_plots, .timeout = 120)
+{
+	char dir[256], env[4200], cmd[16384], path[1024];
+	special_paths(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	snprintf(cmd, sizeof cmd, "%s " SPECIAL_SWEEP " -j 2 --plot 2>%s/err", env, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	special_done();
+	/* gnuplot reads the paths in its own quotes */
+	snprintf(path, sizeof path, "%s/plots/threads.png", getenv("SW_OUT"));
+	cr_assert(exists(path), "%s missing", path);
+}
+
+/* What Slurm does with sweep.slurm: sbatch splits each #SBATCH line into
+ * words (backslash escapes, quotes) as sh does; a task runs the script
+ * with SLURM_ARRAY_TASK_ID set, from anywhere. */
+Test(sweep, special_paths_slurm_script, .timeout = 120)
+{
+	char dir[256], env[4200], cmd[16384], path[1024];
+	special_paths(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	snprintf(cmd, sizeof cmd, "%s " SPECIAL_SWEEP " --slurm 2>%s/err", env, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	snprintf(cmd, sizeof cmd,
+	         "cd / && env -i PATH=\"$PATH\" SLURM_ARRAY_TASK_ID=2 sh \"$SW_OUT/sweep.slurm\" "
+	         "2>%s/task.err",
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0, "the array task failed");
+	snprintf(path, sizeof path, "%s/points/0002.csv", getenv("SW_OUT"));
+	cr_assert(exists(path), "%s missing", path);
+	snprintf(path, sizeof path, "%s/points/0001.csv", getenv("SW_OUT"));
+	cr_assert(!exists(path), "task 2 ran point 1");
+	snprintf(cmd, sizeof cmd,
+	         "l=$(grep '^#SBATCH --output=' \"$SW_OUT/sweep.slurm\") && "
+	         "eval \"set -- ${l#'#SBATCH '}\" && [ $# = 1 ] && "
+	         "[ \"$1\" = \"--output=$SW_OUT/slurm/%%A_%%a.out\" ]");
+	cr_assert_eq(tu_run(cmd), 0, "the #SBATCH --output line is not the log path");
+}
+
+/* The ssh back end with a fake ssh (no sshd here): GNU parallel takes a
+ * login "COMMAND HOST"; the fake runs what it is sent the way sshd does,
+ * the words after the host joined by spaces for sh -c, in $HOME. rsync
+ * (--basefile, --return) goes through it too. */
+Test(sweep, special_paths_over_ssh, .timeout = 120)
+{
+	if (tu_run("command -v rsync >/dev/null") != 0)
+		cr_skip_test("rsync absent (GNU parallel sends files over ssh with it)");
+	char dir[256], env[4200], cmd[16384], path[1024], ssh[512];
+	special_paths(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	char text[2048];
+	snprintf(text, sizeof text,
+	         "#!/bin/sh\n"
+	         "while [ $# -gt 0 ]; do\n"
+	         "\tcase $1 in\n"
+	         "\t-[lpoSiFEJ]) shift 2 ;;\n"
+	         "\t--) shift; break ;;\n"
+	         "\t-*) shift ;;\n"
+	         "\t*) shift; break ;;\n"
+	         "\tesac\n"
+	         "done\n"
+	         "[ \"${1-}\" != -- ] || shift\n"
+	         "printf '%%s\\n' \"$*\" >> %s/ssh.log\n"
+	         "cd \"${HOME:-/}\" && exec sh -c \"$*\"\n",
+	         dir);
+	tu_write(ssh, sizeof ssh, dir, "fakessh", text);
+	cr_assert_eq(chmod(ssh, 0755), 0);
+	char logins[1024];
+	snprintf(text, sizeof text, "%s localhost\n", ssh);
+	tu_write(logins, sizeof logins, dir, "logins", text);
+	snprintf(cmd, sizeof cmd, "%s " SPECIAL_SWEEP " --sshloginfile %s 2>%s/err", env, logins,
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	special_done();
+	/* both points ran through the fake ssh */
+	snprintf(path, sizeof path, "%s/ssh.log", dir);
+	cr_assert_eq(count_in(path, "GNU_Parallel_worker"), 2);
+}
+
+/* The saarsim arguments after -- are checked once, before anything runs:
+ * one line and exit 2 (every point failed with exit 1 before), and no
+ * sweep folder made. */
+Test(sweep, bad_pass_through_args_fail_first)
+{
+	char dir[256], env[4200], cmd[16384], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	const char *bad[] = {"--no-such-flag", "--frames 0", "--set chip.rtps=x"};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		snprintf(cmd, sizeof cmd,
+		         "%s sh %s/scripts/sweep --out %s/out --scene spd:tetra:1 --size 16x16 "
+		         "--set chip.threads_per_rtp=2,4 -j 2 -- %s 2>%s/err",
+		         env, root(), dir, bad[k], dir);
+		cr_assert_eq(tu_run(cmd), 2, "%s", bad[k]);
+		snprintf(path, sizeof path, "%s/err", dir);
+		cr_assert_eq(count_lines(path), 1, "%s", bad[k]);
+		cr_assert_eq(count_in(path, "sweep: arguments for saarsim: "), 1, "%s", bad[k]);
+		snprintf(path, sizeof path, "%s/out", dir);
+		cr_assert(access(path, F_OK) != 0, "%s: the sweep folder was made", bad[k]);
+	}
+}
+
+/* The plots' gnuplot scripts (kept in plots/data): fps from 0, not from
+ * near its smallest value (an 8% change looked huge), and a margin left
+ * and right so the end points' markers are whole. */
+Test(sweep, plots_from_zero_with_x_margin, .timeout = 120)
+{
+	char dir[256], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	run_tiny_sweep(dir, "--plot", 0);
+	const char *gp[] = {"threads.gp", "threads-spd_tetra_2.gp"};
+	for (size_t k = 0; k < 2; k++) {
+		snprintf(path, sizeof path, "%s/plots/data/%s", dir, gp[k]);
+		char *s = slurp(path);
+		cr_assert(s, "%s missing", path);
+		char *fps = strstr(s, "set ylabel 'frames per second'; set yrange [0:*]\n");
+		cr_assert(fps, "%s: fps not from 0:\n%s", gp[k], s);
+		char *off = strstr(s, "set offsets graph 0.05, graph 0.05,");
+		cr_assert(off && off < fps, "%s: no x margin before the plot:\n%s", gp[k], s);
+		free(s);
+	}
 }
 
 Test(validate, tiny_end_to_end, .timeout = 150)
