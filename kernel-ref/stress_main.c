@@ -1,18 +1,21 @@
 /*
  * stress_main.c: `make stress` — the numerical stress suite at full size.
  * Runs every case of stress.h over scales and offsets, prints the table
- * and writes it into docs/NUMERICS.md between the markers
+ * and, with --out, writes it into that document between the markers
  * <!-- BEGIN stress --> and <!-- END stress --> (the rest of the file is
- * kept; written to a temporary file and renamed).
+ * kept; written to a temporary file and renamed). Without --out nothing
+ * is written (it once rewrote docs/NUMERICS.md relative to whatever
+ * folder it ran in).
  *
- *   saarsim-stress [--out docs/NUMERICS.md] [--quick] [--views FILE]
+ *   saarsim-stress [--out docs/NUMERICS.md] [--quick] [--views FILE] [--no-precision]
  *
  * It also writes the reduced-precision table between <!-- BEGIN precision
  * --> and <!-- END precision -->: mantissa bits against image error,
  * leaked rays and extra traversal steps, per shared view (views file from
  * --views, else $SAAR_SCENES/views.yaml, else ../shared/scenes/views.yaml;
- * skipped with a note when absent) and the embedded scene, and the plot
- * docs/precision.png through gnuplot when it is installed.
+ * skipped with a note when absent) and the embedded scene, and with --out
+ * the plot precision.png beside the document, through gnuplot when it is
+ * installed.
  */
 #include <errno.h>
 #include <math.h>
@@ -257,10 +260,12 @@ static size_t prec_section(char *t, size_t cap, int quick, const char *views, co
 			mt[k] = sum_ti[k] / nsum;
 			ms[k] = sum_sh[k] / nsum;
 		}
-		prec_plot(png, mt, ms, leaks);
-		len +=
-		    (size_t)snprintf(t + len, cap - len,
-		                     "\n![mantissa bits against PSNR and leaks](precision.png)\n");
+		if (png) {
+			prec_plot(png, mt, ms, leaks);
+			len += (size_t)snprintf(
+			    t + len, cap - len,
+			    "\n![mantissa bits against PSNR and leaks](precision.png)\n");
+		}
 	}
 	return len;
 }
@@ -289,7 +294,7 @@ static char *slurp(const char *path)
 
 int main(int argc, char **argv)
 {
-	const char *out = "docs/NUMERICS.md", *views = NULL;
+	const char *out = NULL, *views = NULL;
 	int quick = 0, precision = 1, views_given = 0;
 	char vbuf[1024];
 	const char *sc = getenv("SAAR_SCENES");
@@ -304,13 +309,30 @@ int main(int argc, char **argv)
 			quick = 1;
 		else if (!strcmp(argv[i], "--no-precision"))
 			precision = 0;
-		else {
+		else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+			printf(
+			    "usage: saarsim-stress [--out FILE.md] [--quick] [--views FILE] "
+			    "[--no-precision]\n"
+			    "  prints the numerical stress tables; with --out also writes them "
+			    "into FILE.md\n"
+			    "  between its <!-- BEGIN/END stress --> and <!-- BEGIN/END precision "
+			    "--> markers\n"
+			    "  and the plot precision.png beside it (make stress: --out "
+			    "docs/NUMERICS.md)\n");
+			return 0;
+		} else {
 			fprintf(stderr,
 			        "saarsim-stress: %s: unknown option (usage: saarsim-stress [--out "
 			        "FILE] [--quick] [--views FILE] [--no-precision])\n",
 			        argv[i]);
 			return 2;
 		}
+	}
+	/* the document is checked before the long run */
+	diag od;
+	if (out && af_reserve(out, "", &od)) {
+		fprintf(stderr, "saarsim-stress: %s\n", od.msg);
+		return 2;
 	}
 	/* a views file given, or present where it is looked for, must load
 	 * whole (every view) before the long run: a bad one is bad input, not
@@ -394,11 +416,16 @@ int main(int argc, char **argv)
 	if (precision) {
 		ptable = malloc(65536);
 		char png[1100];
-		const char *slash = strrchr(out, '/');
-		snprintf(png, sizeof png, "%.*sprecision.png", slash ? (int)(slash - out + 1) : 0,
-		         out);
-		prec_section(ptable, 65536, quick, views, png);
+		const char *slash = out ? strrchr(out, '/') : NULL;
+		if (out)
+			snprintf(png, sizeof png, "%.*sprecision.png",
+			         slash ? (int)(slash - out + 1) : 0, out);
+		prec_section(ptable, 65536, quick, views, out ? png : NULL);
 		fputs(ptable, stdout);
+	}
+	if (!out) {
+		free(ptable);
+		return bad ? 1 : 0;
 	}
 
 	/* splice into the document between the markers */

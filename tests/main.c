@@ -21,7 +21,9 @@ ReportHook(POST_ALL)(struct criterion_global_stats *stats)
 	nskipped = 0;
 	for (struct criterion_suite_stats *s = stats->suites; s; s = s->next)
 		for (struct criterion_test_stats *t = s->tests; t; t = t->next)
-			if (t->test_status == CR_STATUS_SKIPPED) {
+			/* a test left out by --filter is "skipped" with no
+			 * reason; cr_skip_test always gives one */
+			if (t->test_status == CR_STATUS_SKIPPED && t->message) {
 				if (!nskipped)
 					fputs("[SKIP] skipped tests:\n", stderr);
 				nskipped++;

@@ -96,3 +96,41 @@ Test(stress, bad_views_file_is_refused_first)
 	cr_assert_eq(tu_prog(dir, "saarsim-stress", args), 2);
 	tu_one_line(dir, "saarsim-stress", "cannot open views file");
 }
+
+/* Without --out the stress tool writes nothing: it rewrote
+ * docs/NUMERICS.md and docs/precision.png relative to the folder it was
+ * run in. With --out it splices its tables into that document only. */
+Test(stress, writes_only_the_document_asked_for)
+{
+	char dir[256], sub[512], p[1024], cmd[4096];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(sub, sizeof sub, "%s/docs", dir);
+	cr_assert_eq(mkdir(sub, 0755), 0);
+	tu_write(p, sizeof p, sub, "NUMERICS.md", "precious\n");
+	snprintf(cmd, sizeof cmd, "cd %s && %s/saarsim-stress --quick --no-precision >out 2>err",
+	         dir, tu_bin_dir());
+	cr_assert_eq(tu_run(cmd), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_str_eq(tu_slurp(sub, "NUMERICS.md"), "precious\n", "the document was rewritten");
+	cr_assert(strstr(tu_slurp(dir, "out"), "| case |"), "no table on stdout");
+	tu_write(p, sizeof p, dir, "n.md",
+	         "a\n<!-- BEGIN stress -->\nold\n<!-- END stress -->\nb\n");
+	snprintf(cmd, sizeof cmd, "--quick --no-precision --out %s", p);
+	cr_assert_eq(tu_prog(dir, "saarsim-stress", cmd), 0, "%s", tu_slurp(dir, "err"));
+	const char *n = tu_slurp(dir, "n.md");
+	cr_assert(strstr(n, "| case |") && !strstr(n, "old") && !strncmp(n, "a\n", 2),
+	          "the document was not spliced: %s", n);
+}
+
+/* --help prints the usage on stdout and exits 0 in every program (the
+ * replay and stress tools exited 2). */
+Test(stress, every_program_has_help)
+{
+	char dir[256];
+	tu_tmpdir(dir, sizeof dir);
+	const char *progs[] = {"rtref", "saarsim", "saarsim-replay", "saarsim-stress"};
+	for (int i = 0; i < 4; i++) {
+		cr_assert_eq(tu_prog(dir, progs[i], "--help"), 0, "%s --help", progs[i]);
+		cr_assert(strstr(tu_slurp(dir, "out"), "usage: "), "%s: no usage", progs[i]);
+		cr_assert_str_eq(tu_slurp(dir, "err"), "", "%s wrote to stderr", progs[i]);
+	}
+}

@@ -108,6 +108,17 @@ int main(int argc, char **argv)
 	uint64_t image_bytes = UINT64_MAX;
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i];
+		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+			printf("usage: " USAGE "\n"
+			       "  replays a memory trace (saarsim --trace-mem) through the caches, "
+			       "SDRAM and VMA\n"
+			       "  of a config: functional by default, --timing issues each request "
+			       "at its cycle\n"
+			       "  --image-bytes N: reads at or above N bypass the L1s (the chip's "
+			       "stack spills)\n"
+			       "  --json FILE: the figures as JSON\n");
+			return 0;
+		}
 		if (!strcmp(a, "--config") && i + 1 < argc) {
 			if (cfg_load(&cfg, argv[++i], &d))
 				return fail(&d);
