@@ -453,6 +453,46 @@ void view_place_default_light(view *v, const scene *s)
 	v->nlights = 1;
 }
 
+void view_frame_bbox(view *v, aabb b)
+{
+	*v = (view){0};
+	snprintf(v->name, sizeof v->name, "bbox");
+	/* in double: a box far from the origin must not lose the framing */
+	double c[3] = {0.5 * ((double)b.lo.x + b.hi.x), 0.5 * ((double)b.lo.y + b.hi.y),
+	               0.5 * ((double)b.lo.z + b.hi.z)};
+	const double dir[3] = {0.35, 0.45, 1.0};
+	double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+	double f[3] = {-dir[0] / dl, -dir[1] / dl, -dir[2] / dl}; /* forward */
+	/* right = f x up(0,1,0), then up = right x f */
+	double r[3] = {-f[2], 0, f[0]};
+	double rl = sqrt(r[0] * r[0] + r[2] * r[2]);
+	r[0] /= rl;
+	r[2] /= rl;
+	double u[3] = {r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
+	               r[0] * f[1] - r[1] * f[0]};
+	const double fov = 45.0, t = 0.95 * tan(fov * M_PI / 360.0);
+	/* eye = c - D f: a corner p (from c) sits at depth D + p.f and must
+	 * have |p.r| and |p.u| within t times that depth */
+	double dist = 0;
+	for (int k = 0; k < 8; k++) {
+		double p[3] = {(k & 1 ? b.hi.x : b.lo.x) - c[0], (k & 2 ? b.hi.y : b.lo.y) - c[1],
+		               (k & 4 ? b.hi.z : b.lo.z) - c[2]};
+		double z = p[0] * f[0] + p[1] * f[1] + p[2] * f[2];
+		double x = fabs(p[0] * r[0] + p[1] * r[1] + p[2] * r[2]);
+		double y = fabs(p[0] * u[0] + p[1] * u[1] + p[2] * u[2]);
+		double need = fmax(x, y) / t - z;
+		if (need > dist)
+			dist = need;
+	}
+	if (!(dist > 0))
+		dist = 1; /* a single point: any distance frames it */
+	v->cam.lookat = v3((float)c[0], (float)c[1], (float)c[2]);
+	v->cam.eye = v3((float)(c[0] - dist * f[0]), (float)(c[1] - dist * f[1]),
+	                (float)(c[2] - dist * f[2]));
+	v->cam.up = v3(0, 1, 0);
+	v->cam.fov_deg = (float)fov;
+}
+
 static void json_vec(jsonw *j, const char *k, vec3 p)
 {
 	if (k)

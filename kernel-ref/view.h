@@ -75,4 +75,12 @@ void view_default(view *v);
 /* If the view has no lights, places the default one for scene s. */
 void view_place_default_light(view *v, const scene *s);
 
+/* The view of a scene file given without one: named "bbox", it looks at
+ * the centre of box b from direction (0.35, 0.45, 1) with a 45-degree
+ * field of view and up (0, 1, 0), at the closest distance that keeps all
+ * eight corners inside 95% of a square frame: the rule of the shared
+ * views file's "bbox framed from +z" views. Lights are left to
+ * view_place_default_light. */
+void view_frame_bbox(view *v, aabb b);
+
 #endif

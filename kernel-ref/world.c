@@ -260,6 +260,10 @@ int world_load(world *w, const world_opts *o, diag *d)
 	 * gave one */
 	if (spd && !o->views)
 		w->v = sv;
+	/* a scene file without a view: framed by its bounding box (the
+	 * embedded room's camera showed a model as a few pixels) */
+	if (path && !spd && !o->views)
+		view_frame_bbox(&w->v, w->s.bounds);
 	snprintf(w->scene_label, sizeof w->scene_label, "%s", path ? path : w->s.name);
 	w->load_ms = now_ms() - t0;
 	/* flags override the view */

@@ -6,6 +6,7 @@
 #include "camera.h"
 #include "testutil.h"
 #include "view.h"
+#include "world.h"
 
 #include <math.h>
 #include <string.h>
@@ -303,4 +304,37 @@ Test(view, default_view_frames_default_scene)
 		cr_assert(p.z > s.bounds.lo.z && p.z < s.bounds.hi.z);
 	}
 	scene_free(&s);
+}
+
+/* A scene file given without a view is framed by its bounding box, by the
+ * shared views file's "bbox framed from +z" rule (the embedded room's
+ * camera showed the bunny as a few pixels): its camera is the one the
+ * views file gives those scenes, computed independently, and its light
+ * too. */
+Test(view, scene_without_view_is_framed_by_its_box)
+{
+	const char *names[] = {"teapot", "bunny", "dragon4"};
+	char views[1024];
+	SCENE_OR_SKIP(views, "views.yaml");
+	for (int i = 0; i < 3; i++) {
+		view ref;
+		diag d;
+		cr_assert_eq(view_load(&ref, views, names[i], &d), 0, "%s", d.msg);
+		world_opts o;
+		world_opts_default(&o);
+		o.scene = ref.scene;
+		world w;
+		cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+		cr_assert_str_eq(w.v.name, "bbox");
+		const vec3 a[4] = {w.v.cam.eye, w.v.cam.lookat, w.v.lights[0].pos, w.v.cam.up};
+		const vec3 b[4] = {ref.cam.eye, ref.cam.lookat, ref.lights[0].pos, ref.cam.up};
+		float size = v3_len(v3_sub(w.s.bounds.hi, w.s.bounds.lo));
+		for (int k = 0; k < 4; k++)
+			cr_assert_lt(v3_len(v3_sub(a[k], b[k])), 1e-4f * size,
+			             "%s: point %d is (%g, %g, %g), the views file's (%g, %g, %g)",
+			             names[i], k, a[k].x, a[k].y, a[k].z, b[k].x, b[k].y, b[k].z);
+		cr_assert_eq(w.v.cam.fov_deg, ref.cam.fov_deg);
+		cr_assert_eq(w.v.nlights, 1);
+		world_free(&w);
+	}
 }
