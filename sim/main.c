@@ -204,6 +204,7 @@ int main(int argc, char **argv)
 	 * option/value pairs: world flags are skipped by the same parser */
 	world_opts skip;
 	world_opts_default(&skip);
+	const char *sampling_flag = NULL; /* the last --sample-rate, --unit-tiles, ... */
 	for (int i = 1; i < argc;) {
 		if (!key_flag(argv[i]) && world_parse_arg(&skip, argc, argv, &i, &d) > 0)
 			continue;
@@ -216,7 +217,18 @@ int main(int argc, char **argv)
 			return cli_bad("saarsim", d.msg);
 		if (key_flag(a) && set_key(&cfg, a, argv[i + 1], &d))
 			return cli_bad("saarsim", d.msg);
+		if (key_flag(a) && !strncmp(key_flag(a), "sampling.", 9))
+			sampling_flag = a;
 		i += 2;
+	}
+	/* a sampling flag on a run that does not sample would be ignored
+	 * without a word */
+	if (sampling_flag && cfg.fidelity != CFG_FIDELITY_SAMPLED) {
+		fprintf(stderr,
+		        "saarsim: %s: applies only to sampled runs (--fidelity sampled); this "
+		        "run's fidelity is %s\n",
+		        sampling_flag, cfg.fidelity == CFG_FIDELITY_CYCLE ? "cycle" : "functional");
+		return DIAG_EXIT;
 	}
 	if (size && cli_parse_size(size, &cfg.frame.width, &cfg.frame.height, &d))
 		return cli_bad("saarsim", d.msg);

@@ -401,8 +401,11 @@ void report_text(FILE *f, const report_info *ri)
 		snprintf(sfx, sizeof sfx, "threads.%s_ps", chip_state_name(s));
 		tot += occ[s] = (double)chip_rtp_sum(c, sfx);
 	}
-	for (int s = 0; s < THR_NSTATES; s++)
-		fprintf(f, " %s %.1f%%", chip_state_name(s), 100 * ratio(occ[s], tot));
+	if (tot > 0)
+		for (int s = 0; s < THR_NSTATES; s++)
+			fprintf(f, " %s %.1f%%", chip_state_name(s), 100 * occ[s] / tot);
+	else
+		fputs(" not timed (functional mode: no thread states)", f);
 	uint64_t steps = get(c, "trav.node_steps"), tests = get(c, "isect.tri_tests");
 	fprintf(f,
 	        "\n  rays: %llu primary, %llu shadow, %llu reflection, %llu refraction; "
@@ -593,8 +596,16 @@ int report_json(const char *path, const report_info *ri, diag *d)
 		snprintf(name, sizeof name, "threads.%s_ps", chip_state_name(s));
 		tot += occ[s] = (double)chip_rtp_sum(c, name);
 	}
-	for (int s = 0; s < THR_NSTATES; s++)
-		jsonw_knum(j, chip_state_name(s), ratio(occ[s], tot));
+	for (int s = 0; s < THR_NSTATES; s++) {
+		/* no thread time at all (functional: nothing is timed): no
+		 * shares, rather than four zeros that do not add up to 1 */
+		if (tot > 0) {
+			jsonw_knum(j, chip_state_name(s), occ[s] / tot);
+		} else {
+			jsonw_key(j, chip_state_name(s));
+			jsonw_null(j);
+		}
+	}
 	jsonw_obj_end(j);
 
 	static const char *const tn[PKT_NTYPES] = {"primary", "shadow", "reflection", "refraction"};

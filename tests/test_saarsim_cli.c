@@ -393,6 +393,49 @@ Test(saarsim_cli, host_memory_estimate_bounds_the_peak, .timeout = 120)
 	}
 }
 
+/* A sampling flag on a run that does not sample was silently ignored:
+ * now one line naming the flag and the run's fidelity. With --fidelity
+ * sampled (in either order) it is taken. */
+Test(saarsim_cli, sampling_flags_need_a_sampled_run)
+{
+	const char *bad[][2] = {
+	    {"--sample-rate 0.1", "cycle"},
+	    {"--unit-tiles 4 --fidelity functional", "functional"},
+	    {"--fidelity sampled --warmup-tiles 2 --set fidelity=cycle", "cycle"}};
+	char args[512];
+	for (int i = 0; i < 3; i++) {
+		snprintf(args, sizeof args, "--size 16x16 %s", bad[i][0]);
+		cr_assert_eq(saarsim(args), 2, "%s", bad[i][0]);
+		one_line_naming("applies only to sampled runs");
+		one_line_naming(bad[i][1]);
+	}
+	cr_assert_eq(saarsim("--size 16x16 --sample-rate 0.5 --fidelity sampled"), 0, "%s",
+	             slurp("err"));
+}
+
+/* A functional run times no thread: its text says so instead of a line of
+ * four 0.0% shares, and its JSON shares are null. */
+Test(saarsim_cli, functional_run_has_no_thread_shares)
+{
+	char args[512];
+	snprintf(args, sizeof args, "--size 16x16 --fidelity functional --report %s/r.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *out = slurp("out");
+	cr_assert(strstr(out, "threads: not timed"), "%s", out);
+	cr_assert_not(strstr(out, "idle 0.0%"), "%s", out);
+	char *r = tu_squeeze_json(slurp("r.json"));
+	cr_assert(strstr(r, "\"idle\":null,\"running\":null,\"waiting_memory\":null,"
+	                    "\"waiting_unit\":null"),
+	          "%s", r);
+	/* a cycle run's shares add up to 1 */
+	snprintf(args, sizeof args, "--size 16x16 --report %s/r.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	r = tu_squeeze_json(slurp("r.json"));
+	double sum = json_num(r, "idle") + json_num(r, "running") + json_num(r, "waiting_memory") +
+	             json_num(r, "waiting_unit");
+	cr_assert_float_eq(sum, 1.0, 1e-6);
+}
+
 /* Inputs must be regular files: a FIFO named as the config, scene, views
  * file, CSV to append to, texture or world-cache entry blocked the run
  * (fopen waits for a writer), so each is refused in one line, or for the
