@@ -97,7 +97,9 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 
 static const cfg_key keys[] = {
     {KEY("name", CFG_STR, name, 0, 0, 0, ""), .sdef = "saarcor-std",
-     .source = "a label, not hardware", .desc = "name of this configuration, copied into reports"},
+     .source = "a label, not hardware",
+     .desc = "name of this configuration, copied into reports; a config file without it is "
+             "named after the file (its base name without the extension)"},
     {ENUM("fidelity", fidelity, fidelity_names), .source = "a run setting (docs/fidelity.md)",
      .desc = "simulation detail: cycle = cycle-level timing of every unit; sampled = "
              "systematic sample of tiles cycle by cycle, the rest functional, cycles with a 95% "
@@ -590,6 +592,19 @@ static int check_item(void *ctx, const yl_item *it)
 	return 0;
 }
 
+/* A config that does not name itself is named after its file: the base
+ * name without its extension ("configs/fpga-2004.yaml" -> "fpga-2004"). */
+static void name_from_file(saar_config *c, const char *file)
+{
+	const char *b = strrchr(file, '/');
+	b = b ? b + 1 : file;
+	const char *dot = strrchr(b, '.');
+	size_t n = dot && dot > b ? (size_t)(dot - b) : strlen(b);
+	if (n)
+		snprintf(c->name, sizeof c->name, "%.*s",
+		         (int)(n < sizeof c->name ? n : sizeof c->name - 1), b);
+}
+
 int cfg_load(saar_config *c, const char *file, diag *d)
 {
 	cfg_defaults(c);
@@ -617,6 +632,8 @@ int cfg_load(saar_config *c, const char *file, diag *d)
 		rc = err_at(&L, root, "expected a mapping of keys at the top level, got %s%s",
 		            node_kind(root), "");
 	yaml_document_delete(&doc);
+	if (!rc && !L.seen[cfg_find("name") - keys])
+		name_from_file(c, file);
 	return rc;
 }
 

@@ -161,8 +161,9 @@ const cfg_key *cfg_find(const char *path);
 /* ---- loading ---- */
 
 void cfg_defaults(saar_config *c);
-/* Defaults, then the YAML file on top. Errors: "file:line:col: message",
- * at the first problem in the file. */
+/* Defaults, then the YAML file on top; a file without `name` is named
+ * after itself (its base name without the extension). Errors:
+ * "file:line:col: message", at the first problem in the file. */
 int cfg_load(saar_config *c, const char *file, diag *d);
 /* One "key=value" override (the argument of --set). Errors: "--set: ...". */
 int cfg_set(saar_config *c, const char *assignment, diag *d);

@@ -127,6 +127,9 @@ Test(config, empty_file_is_defaults)
 	char path[128];
 	cr_assert_eq(load_text(&c, "# nothing but a comment\n", &d, path, sizeof path), 0);
 	cfg_defaults(&def);
+	/* named after its file, as any config without `name` */
+	cr_assert_str_eq(c.name, "cfg");
+	snprintf(def.name, sizeof def.name, "cfg");
 	cr_assert(!memcmp(&c, &def, sizeof c));
 }
 

@@ -420,6 +420,26 @@ Test(saarsim_cli, deep_yaml_is_refused_at_the_depth_limit)
 	cr_assert_not(exists("r.json"));
 }
 
+/* A config file without `name` is labelled by its file's base name without
+ * the extension in the report, the summary and the CSV row (it was
+ * labelled saarcor-std, the embedded default's name, which it need not
+ * be); one with `name` keeps it. */
+Test(saarsim_cli, config_without_name_is_named_after_its_file)
+{
+	char p[512], args[2048];
+	tu_write(p, sizeof p, dir, "my-chip.v2.yaml", "chip:\n  rtps: 2\n");
+	snprintf(args, sizeof args, "--config %s --size 8x8 --report %s/r.json --csv %s/c.csv", p,
+	         dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(strstr(slurp("r.json"), "\"name\": \"my-chip.v2\""), "%s", slurp("r.json"));
+	cr_assert(strstr(slurp("out"), "config my-chip.v2"), "%s", slurp("out"));
+	cr_assert(strstr(slurp("c.csv"), "\nmy-chip.v2,"), "%s", slurp("c.csv"));
+	tu_write(p, sizeof p, dir, "named.yaml", "name: mine\nchip:\n  rtps: 2\n");
+	snprintf(args, sizeof args, "--config %s --size 8x8 --report %s/r.json", p, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(strstr(slurp("r.json"), "\"name\": \"mine\""), "%s", slurp("r.json"));
+}
+
 Test(saarsim_cli, bad_config_value_out_of_range)
 {
 	char p[512], args[2048];
