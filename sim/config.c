@@ -157,7 +157,7 @@ static const cfg_key keys[] = {
              "checkpoint at its start, so a run simulates only its regions (needs "
              "--world-cache; regions start at checkpoints, one in every "
              "1/" NUM_STR(WM_FULL_PER_FRAME) " of the frame). A warming run is reused by every run "
-                                             "whose config differs only in "
+                                             "whose config differs only in its name, "
                                              "timing (latencies, SDRAM timings, MSHRs, scheduling) "
                                              "and sampling keys"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
