@@ -4,14 +4,17 @@
  * Owns view_load, view_list, camera_validate, view_place_default_light
  * and the views' description in reports (view_json, view_describe)
  * (view_default lives with the geometry it frames, in default_scene.c).
- * The file is loaded with libyaml's document API so every node keeps its
- * start mark; each error points at the node it is about as
- * "file:line:col: message". The format is described in docs/views.md.
+ * The file is read into a libyaml document by yl_load (yload.h), which
+ * enforces the size, depth and node limits and the file-level rules as it
+ * streams; every node keeps its start mark, so each error points at the
+ * node it is about as "file:line:col: message". The format is described in
+ * docs/views.md.
  */
 #include "view.h"
 
 #include "infile.h"
 #include "jsonw.h"
+#include "yload.h"
 
 #include <errno.h>
 #include <float.h>
@@ -20,12 +23,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <yaml.h>
 
 typedef struct yfile {
 	const char *file;
 	yaml_document_t doc;
 	diag *d;
+	int root_map; /* the root is a mapping: check_item checks its keys */
 } yfile;
 
 /* Which camera field a problem is about, so view_load can point at it. */
@@ -56,6 +59,47 @@ static yaml_node_t *node(yfile *y, int idx)
 	return yaml_document_get_node(&y->doc, idx);
 }
 
+/* The file-level rules, checked as the file streams (yload.h): the root
+ * is a mapping whose only key is `views`, once, a mapping of view names,
+ * each a plain string of fewer than VIEW_NAME_MAX characters and unique.
+ * The views themselves are checked when one is loaded. */
+static int check_item(void *ctx, const yl_item *it)
+{
+	yfile *y = ctx;
+	if (it->at == YL_ROOT) { /* any other root is refused once the file is read */
+		y->root_map = it->value->type == YAML_MAPPING_NODE;
+		return 0;
+	}
+	if (!y->root_map)
+		return 0;
+	const char *s = scalar(it->key);
+	if (it->depth == 0) {
+		if (!s || strcmp(s, "views") != 0)
+			return node_err(
+			    y, it->key,
+			    "unknown top-level key '%s' (a views file has only `views`)",
+			    s ? s : "?");
+		if (it->first)
+			return node_err(y, it->key, "duplicate key 'views' (first at line %d)",
+			                (int)it->first->start_mark.line + 1);
+		if (it->value->type != YAML_MAPPING_NODE)
+			return node_err(y, it->value,
+			                "`views` must be a mapping of view names to views");
+		return 0;
+	}
+	if (it->depth > 1)
+		return 0;
+	if (!s)
+		return node_err(y, it->key, "view names must be plain strings");
+	if (strlen(s) >= VIEW_NAME_MAX)
+		return node_err(y, it->key, "view name is longer than %d characters",
+		                VIEW_NAME_MAX - 1);
+	if (it->first)
+		return node_err(y, it->key, "duplicate view name '%s' (first at line %d)", s,
+		                (int)it->first->start_mark.line + 1);
+	return 0;
+}
+
 static int yfile_open(yfile *y, const char *file, diag *d)
 {
 	memset(y, 0, sizeof *y);
@@ -65,50 +109,16 @@ static int yfile_open(yfile *y, const char *file, diag *d)
 	int st = in_open(file, &f);
 	if (st)
 		return diag_set(d, file, 0, 0, "cannot open views file: %s", in_strerror(st));
-	yaml_parser_t p;
-	yaml_parser_initialize(&p);
-	yaml_parser_set_input_file(&p, f);
-	int ok = yaml_parser_load(&p, &y->doc), second = 0;
-	/* a second document would be silently ignored: refuse it (a syntax
-	 * error in it is reported as any other) */
-	if (ok && yaml_document_get_root_node(&y->doc)) {
-		yaml_document_t extra;
-		ok = yaml_parser_load(&p, &extra);
-		yaml_node_t *r2 = ok ? yaml_document_get_root_node(&extra) : NULL;
-		if (r2) {
-			second = 1;
-			diag_set(d, file, (int)r2->start_mark.line + 1,
-			         (int)r2->start_mark.column + 1,
-			         "only one YAML document is allowed");
-		}
-		if (ok)
-			yaml_document_delete(&extra);
-		if (!ok || second)
-			yaml_document_delete(&y->doc);
-	}
-	if (!ok) {
-		const char *ctx = p.context ? p.context : "";
-		diag_set(d, file, (int)p.problem_mark.line + 1, (int)p.problem_mark.column + 1,
-		         "not valid YAML: %s%s%s", p.problem ? p.problem : "parse error",
-		         *ctx ? " " : "", ctx);
-	}
-	yaml_parser_delete(&p);
+	yl_opts o = {.what = "a views file",
+	             .syntax = "not valid YAML",
+	             .max_bytes = VIEW_FILE_MAX,
+	             .max_nodes = VIEW_NODES_MAX,
+	             .max_depth = YL_DEPTH_MAX,
+	             .check = check_item,
+	             .ctx = y};
+	int rc = yl_load(&y->doc, f, file, &o, d);
 	fclose(f);
-	return ok && !second ? 0 : -1;
-}
-
-/* The key of a mapping pair before `pair` with the same scalar as k, NULL
- * if none (the first of two duplicate keys). */
-static yaml_node_t *earlier_key(yfile *y, const yaml_node_t *map, const yaml_node_pair_t *pair,
-                                const char *k)
-{
-	for (yaml_node_pair_t *q = map->data.mapping.pairs.start; q < pair; q++) {
-		yaml_node_t *qk = node(y, q->key);
-		const char *s = scalar(qk);
-		if (s && strcmp(s, k) == 0)
-			return qk;
-	}
-	return NULL;
+	return rc;
 }
 
 /* Looks key up in a mapping node; NULL when absent. */
@@ -128,7 +138,8 @@ static yaml_node_t *map_get(yfile *y, const yaml_node_t *map, const char *key,
 	return NULL;
 }
 
-/* The `views` mapping of the document, or NULL with diag filled. */
+/* The `views` mapping of the document, or NULL with diag filled (what the
+ * file-level rules leave: an empty file, a root without `views`). */
 static yaml_node_t *views_map(yfile *y)
 {
 	yaml_node_t *root = yaml_document_get_root_node(&y->doc);
@@ -137,55 +148,10 @@ static yaml_node_t *views_map(yfile *y)
 		         "file is empty; expected a top-level `views` mapping");
 		return NULL;
 	}
-	if (root->type == YAML_MAPPING_NODE) {
-		/* `views` is the only top-level key, once */
-		for (yaml_node_pair_t *p = root->data.mapping.pairs.start;
-		     p < root->data.mapping.pairs.top; p++) {
-			yaml_node_t *k = node(y, p->key), *first;
-			const char *s = scalar(k);
-			if (!s || strcmp(s, "views") != 0) {
-				node_err(
-				    y, k,
-				    "unknown top-level key '%s' (a views file has only `views`)",
-				    s ? s : "?");
-				return NULL;
-			}
-			if ((first = earlier_key(y, root, p, s))) {
-				node_err(y, k, "duplicate key 'views' (first at line %d)",
-				         (int)first->start_mark.line + 1);
-				return NULL;
-			}
-		}
-	}
 	yaml_node_t *views =
 	    root->type == YAML_MAPPING_NODE ? map_get(y, root, "views", NULL) : NULL;
-	if (!views) {
+	if (!views)
 		node_err(y, root, "no top-level `views` mapping");
-		return NULL;
-	}
-	if (views->type != YAML_MAPPING_NODE) {
-		node_err(y, views, "`views` must be a mapping of view names to views");
-		return NULL;
-	}
-	for (yaml_node_pair_t *p = views->data.mapping.pairs.start;
-	     p < views->data.mapping.pairs.top; p++) {
-		yaml_node_t *k = node(y, p->key);
-		const char *s = scalar(k);
-		if (!s) {
-			node_err(y, k, "view names must be plain strings");
-			return NULL;
-		}
-		if (strlen(s) >= VIEW_NAME_MAX) {
-			node_err(y, k, "view name is longer than %d characters", VIEW_NAME_MAX - 1);
-			return NULL;
-		}
-		yaml_node_t *first = earlier_key(y, views, p, s);
-		if (first) {
-			node_err(y, k, "duplicate view name '%s' (first at line %d)", s,
-			         (int)first->start_mark.line + 1);
-			return NULL;
-		}
-	}
 	return views;
 }
 

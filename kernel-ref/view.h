@@ -25,6 +25,10 @@
 
 #define VIEW_MAX_LIGHTS 16
 #define VIEW_NAME_MAX   64
+/* Limits of a views file (docs/views.md "Limits"); nesting: YL_DEPTH_MAX
+ * (yload.h). */
+#define VIEW_FILE_MAX  (4u << 20)
+#define VIEW_NODES_MAX (1u << 18)
 
 typedef struct camera {
 	vec3 eye, lookat, up;

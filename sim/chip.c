@@ -1263,13 +1263,15 @@ static void warm_grid(const chip *c, int *gl, int *gf)
 }
 
 /* The warming run's key: the packet record's (the frame) and every config
- * key functional processing reads. Left out (at their defaults): fidelity,
+ * key functional processing reads. Left out (at their defaults): the name
+ * (a label; a config file without one is named after the file), fidelity,
  * sampling and the keys only timing reads (cfg_key.timing_only), so a
  * sweep over those reuses one warming run. */
 static char *warm_key(const chip *c, int gl, int gf)
 {
 	saar_config k = c->cfg, d;
 	cfg_defaults(&d);
+	memcpy(k.name, d.name, sizeof k.name);
 	k.fidelity = d.fidelity;
 	k.sampling = d.sampling;
 	size_t nk;

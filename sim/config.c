@@ -1,7 +1,8 @@
 /*
  * config.c: the config schema table and everything driven by it: defaults,
- * the YAML loader (libyaml document API), --set overrides, cross-key checks,
- * the JSON dump, --list-config and docs/config.md.
+ * the YAML loader (kernel-ref/yload.h; each key is checked and set as the
+ * file streams), --set overrides, cross-key checks, the JSON dump,
+ * --list-config and docs/config.md.
  *
  * Adding a key is one line in `keys` plus the field in saar_config. Keys of
  * one section must stay contiguous in the table (the JSON writer opens each
@@ -12,13 +13,13 @@
 #include "infile.h"
 #include "kdtree.h"
 #include "warming.h"
+#include "yload.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <yaml.h>
 
 /* a number macro as the digits of a string literal */
 #define NUM_STR_(x) #x
@@ -96,7 +97,9 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 
 static const cfg_key keys[] = {
     {KEY("name", CFG_STR, name, 0, 0, 0, ""), .sdef = "saarcor-std",
-     .source = "a label, not hardware", .desc = "name of this configuration, copied into reports"},
+     .source = "a label, not hardware",
+     .desc = "name of this configuration, copied into reports; a config file without it is "
+             "named after the file (its base name without the extension)"},
     {ENUM("fidelity", fidelity, fidelity_names), .source = "a run setting (docs/fidelity.md)",
      .desc = "simulation detail: cycle = cycle-level timing of every unit; sampled = "
              "systematic sample of tiles cycle by cycle, the rest functional, cycles with a 95% "
@@ -154,7 +157,7 @@ static const cfg_key keys[] = {
              "checkpoint at its start, so a run simulates only its regions (needs "
              "--world-cache; regions start at checkpoints, one in every "
              "1/" NUM_STR(WM_FULL_PER_FRAME) " of the frame). A warming run is reused by every run "
-                                             "whose config differs only in "
+                                             "whose config differs only in its name, "
                                              "timing (latencies, SDRAM timings, MSHRs, scheduling) "
                                              "and sampling keys"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
@@ -518,92 +521,88 @@ static void unknown_key(char *err, size_t n, const char *p, bool want_section)
 typedef struct loader {
 	saar_config *c;
 	const char *file;
-	yaml_document_t *doc;
 	diag *d;
+	int root_map;    /* the root is a mapping: its keys are read */
 	int seen[NKEYS]; /* line where each key was set, 0 = not yet */
 } loader;
 
-static int err_at(loader *L, yaml_node_t *nd, const char *fmt, const char *a, const char *b)
+static int err_at(loader *L, const yaml_node_t *nd, const char *fmt, const char *a, const char *b)
 {
 	return diag_set(L->d, L->file, (int)nd->start_mark.line + 1, (int)nd->start_mark.column + 1,
 	                fmt, a, b);
 }
 
-static const char *node_kind(yaml_node_t *nd)
+static const char *node_kind(const yaml_node_t *nd)
 {
 	return nd->type == YAML_MAPPING_NODE    ? "a mapping"
 	       : nd->type == YAML_SEQUENCE_NODE ? "a sequence"
 	                                        : "a value";
 }
 
-static int walk(loader *L, yaml_node_t *map, const char *prefix)
+/* The whole config is read here, as the file streams (kernel-ref/yload.h):
+ * each key is checked and its value set as soon as the value starts, so
+ * the first bad key stops the load, whatever follows it. A mapping that is
+ * a section is read on by the loader, its keys under the section's path. */
+static int check_item(void *ctx, const yl_item *it)
 {
-	yaml_node_pair_t *b = map->data.mapping.pairs.start, *e = map->data.mapping.pairs.top;
+	loader *L = ctx;
 	char path[256], msg[512];
-	for (yaml_node_pair_t *pr = b; pr < e; pr++) {
-		yaml_node_t *kn = yaml_document_get_node(L->doc, pr->key);
-		yaml_node_t *vn = yaml_document_get_node(L->doc, pr->value);
-		if (kn->type != YAML_SCALAR_NODE)
-			return err_at(L, kn, "keys must be plain names, got %s%s", node_kind(kn),
-			              "");
-		const char *key = (const char *)kn->data.scalar.value;
-		for (yaml_node_pair_t *q = b; q < pr; q++) {
-			yaml_node_t *qk = yaml_document_get_node(L->doc, q->key);
-			if (qk->type == YAML_SCALAR_NODE &&
-			    !strcmp((const char *)qk->data.scalar.value, key)) {
-				snprintf(msg, sizeof msg, "%d", (int)qk->start_mark.line + 1);
-				return err_at(L, kn, "duplicate key '%s' (first at line %s)", key,
-				              msg);
-			}
-		}
-		if ((size_t)snprintf(path, sizeof path, "%s%s%s", prefix, *prefix ? "." : "",
-		                     key) >= sizeof path)
-			return err_at(L, kn, "key too long: '%s'%s", key, "");
-		const cfg_key *k = cfg_find(path);
-		if (vn->type == YAML_MAPPING_NODE && !k) {
-			if (!is_section(path)) {
-				unknown_key(msg, sizeof msg, path, true);
-				return err_at(L, kn, "%s%s", msg, "");
-			}
-			if (walk(L, vn, path))
-				return -1;
-			continue;
-		}
-		if (!k) {
-			if (is_section(path))
-				return err_at(
-				    L, vn,
-				    "'%s' is a section: expected a mapping of its keys, got %s",
-				    path, node_kind(vn));
-			unknown_key(msg, sizeof msg, path, false);
-			return err_at(L, kn, "%s%s", msg, "");
-		}
-		if (vn->type != YAML_SCALAR_NODE)
-			return err_at(L, vn, "%s: expected a single value, got %s", path,
-			              node_kind(vn));
-		size_t i = (size_t)(k - keys);
-		if (L->seen[i]) {
-			snprintf(msg, sizeof msg, "%d", L->seen[i]);
-			return err_at(L, kn, "duplicate key '%s' (first at line %s)", path, msg);
-		}
-		L->seen[i] = (int)kn->start_mark.line + 1;
-		if (set_value(L->c, k, (const char *)vn->data.scalar.value, msg, sizeof msg))
-			return err_at(L, vn, "%s%s", msg, "");
+	if (it->at == YL_ROOT) { /* any other root is refused once the file is read */
+		L->root_map = it->value->type == YAML_MAPPING_NODE;
+		return 0;
 	}
+	if (!L->root_map)
+		return 0;
+	const yaml_node_t *kn = it->key, *vn = it->value;
+	if (kn->type != YAML_SCALAR_NODE)
+		return err_at(L, kn, "keys must be plain names, got %s%s", node_kind(kn), "");
+	const char *key = (const char *)kn->data.scalar.value;
+	if (it->first) {
+		snprintf(msg, sizeof msg, "%d", (int)it->first->start_mark.line + 1);
+		return err_at(L, kn, "duplicate key '%s' (first at line %s)", key, msg);
+	}
+	if ((size_t)snprintf(path, sizeof path, "%s%s%s", it->path, *it->path ? "." : "", key) >=
+	    sizeof path)
+		return err_at(L, kn, "key too long: '%s'%s", key, "");
+	const cfg_key *k = cfg_find(path);
+	if (vn->type == YAML_MAPPING_NODE && !k) {
+		if (is_section(path))
+			return 0;
+		unknown_key(msg, sizeof msg, path, true);
+		return err_at(L, kn, "%s%s", msg, "");
+	}
+	if (!k) {
+		if (is_section(path))
+			return err_at(L, vn,
+			              "'%s' is a section: expected a mapping of its keys, got %s",
+			              path, node_kind(vn));
+		unknown_key(msg, sizeof msg, path, false);
+		return err_at(L, kn, "%s%s", msg, "");
+	}
+	if (vn->type != YAML_SCALAR_NODE)
+		return err_at(L, vn, "%s: expected a single value, got %s", path, node_kind(vn));
+	size_t i = (size_t)(k - keys);
+	if (L->seen[i]) {
+		snprintf(msg, sizeof msg, "%d", L->seen[i]);
+		return err_at(L, kn, "duplicate key '%s' (first at line %s)", path, msg);
+	}
+	L->seen[i] = (int)kn->start_mark.line + 1;
+	if (set_value(L->c, k, (const char *)vn->data.scalar.value, msg, sizeof msg))
+		return err_at(L, vn, "%s%s", msg, "");
 	return 0;
 }
 
-static int yaml_error(yaml_parser_t *p, const char *file, diag *d)
+/* A config that does not name itself is named after its file: the base
+ * name without its extension ("configs/fpga-2004.yaml" -> "fpga-2004"). */
+static void name_from_file(saar_config *c, const char *file)
 {
-	if (p->error == YAML_MEMORY_ERROR)
-		return diag_set(d, file, 0, 0, "out of memory while reading YAML");
-	if (p->error == YAML_READER_ERROR)
-		return diag_set(d, file, 0, 0, "unreadable input at byte %zu: %s",
-		                p->problem_offset, p->problem ? p->problem : "?");
-	return diag_set(d, file, (int)p->problem_mark.line + 1, (int)p->problem_mark.column + 1,
-	                "YAML syntax error: %s%s%s%s", p->problem ? p->problem : "?",
-	                p->context ? " (" : "", p->context ? p->context : "",
-	                p->context ? ")" : "");
+	const char *b = strrchr(file, '/');
+	b = b ? b + 1 : file;
+	const char *dot = strrchr(b, '.');
+	size_t n = dot && dot > b ? (size_t)(dot - b) : strlen(b);
+	if (n)
+		snprintf(c->name, sizeof c->name, "%.*s",
+		         (int)(n < sizeof c->name ? n : sizeof c->name - 1), b);
 }
 
 int cfg_load(saar_config *c, const char *file, diag *d)
@@ -613,40 +612,28 @@ int cfg_load(saar_config *c, const char *file, diag *d)
 	int st = in_open(file, &f);
 	if (st)
 		return diag_set(d, file, 0, 0, "cannot open: %s", in_strerror(st));
-	yaml_parser_t parser;
-	yaml_document_t doc, extra;
-	loader L = {.c = c, .file = file, .doc = &doc, .d = d};
-	int rc = -1;
-	if (!yaml_parser_initialize(&parser)) {
-		fclose(f);
-		return diag_set(d, file, 0, 0, "out of memory while reading YAML");
-	}
-	yaml_parser_set_input_file(&parser, f);
-	if (!yaml_parser_load(&parser, &doc)) {
-		yaml_error(&parser, file, d);
-		goto out;
-	}
-	yaml_node_t *root = yaml_document_get_root_node(&doc);
-	if (!root) {
-		rc = 0; /* empty file: all defaults */
-	} else if (root->type != YAML_MAPPING_NODE) {
-		err_at(&L, root, "expected a mapping of keys at the top level, got %s%s",
-		       node_kind(root), "");
-	} else if (!walk(&L, root, "")) {
-		/* A second document would be silently ignored: refuse it. */
-		if (!yaml_parser_load(&parser, &extra)) {
-			yaml_error(&parser, file, d);
-		} else {
-			yaml_node_t *r2 = yaml_document_get_root_node(&extra);
-			rc = r2 ? err_at(&L, r2, "only one YAML document is allowed%s%s", "", "")
-			        : 0;
-			yaml_document_delete(&extra);
-		}
-	}
-	yaml_document_delete(&doc);
-out:
-	yaml_parser_delete(&parser);
+	loader L = {.c = c, .file = file, .d = d};
+	yl_opts o = {.what = "a config",
+	             .syntax = "YAML syntax error",
+	             .max_bytes = CFG_FILE_MAX,
+	             .max_nodes = CFG_NODES_MAX,
+	             .max_depth = YL_DEPTH_MAX,
+	             .check = check_item,
+	             .ctx = &L};
+	yaml_document_t doc;
+	int rc = yl_load(&doc, f, file, &o, d);
 	fclose(f);
+	if (rc)
+		return -1;
+	/* everything was read as it streamed, but for a root that is not a
+	 * mapping (an empty file has none: all defaults) */
+	yaml_node_t *root = yaml_document_get_root_node(&doc);
+	if (root && root->type != YAML_MAPPING_NODE)
+		rc = err_at(&L, root, "expected a mapping of keys at the top level, got %s%s",
+		            node_kind(root), "");
+	yaml_document_delete(&doc);
+	if (!rc && !L.seen[cfg_find("name") - keys])
+		name_from_file(c, file);
 	return rc;
 }
 
@@ -848,7 +835,9 @@ void cfg_write_markdown(FILE *f)
 	      "Every key is optional: a missing key keeps its default, so an empty file is\n"
 	      "the default chip. Values are plain scalars: integers in base 10, numbers,\n"
 	      "`true`/`false` (also `yes`/`no`, `on`/`off`), enum names, or strings.\n"
-	      "Unknown keys, duplicate keys and values out of range are errors.\n\n"
+	      "Unknown keys, duplicate keys and values out of range are errors. The file\n"
+	      "is checked as it is read (`kernel-ref/yload.c`), so the first bad key stops\n"
+	      "it, however much follows.\n\n"
 	      "`saarsim --set key=value` (repeatable) overrides one key after the file is\n"
 	      "read, e.g. `--set chip.trav.width=8`. The shorthand flags `--fidelity`,\n"
 	      "`--sample-rate`, `--unit-tiles`, `--warmup-tiles` and `--kd-cost-trav`,\n"
@@ -866,6 +855,23 @@ void cfg_write_markdown(FILE *f)
 	      "round(10^6 / f) ps (533 MHz -> 1876 ps, 133 MHz -> 7519 ps); the error is\n"
 	      "below 0.03% up to 1 GHz.\n",
 	      f);
+	fprintf(f,
+	        "\n### Limits\n\n"
+	        "A config is refused, at the line and column where it goes past the limit,\n"
+	        "when it\n\n"
+	        "- is larger than %u bytes (1 MiB), checked on the file's size before it\n"
+	        "  is parsed;\n"
+	        "- nests collections deeper than %d levels (a config needs 4: the root,\n"
+	        "  `memory:`, `l1:`, `kd:`);\n"
+	        "- has more than %d YAML nodes (one that sets every key has about 250);\n"
+	        "- has an anchor or alias (`&name`, `*name`): a config has no use for them,\n"
+	        "  and an alias lets a few lines stand for a huge document (the \"billion\n"
+	        "  laughs\");\n"
+	        "- or a second YAML document.\n\n"
+	        "The configs in `configs/` are about 5 KB; the limits keep a damaged or\n"
+	        "hostile file from costing time or memory (libyaml's scanner takes\n"
+	        "quadratic time over deep flow nesting: 200,000 `[` took over a minute).\n",
+	        CFG_FILE_MAX, YL_DEPTH_MAX, CFG_NODES_MAX);
 	char sec[64] = "?"; /* top-level section of the previous key, "" = top level */
 	for (size_t i = 0; i < NKEYS; i++) {
 		const cfg_key *k = &keys[i];
@@ -904,6 +910,9 @@ void cfg_write_markdown(FILE *f)
 	      "cfg.yaml:3:2: YAML syntax error: did not find expected key (while parsing a block "
 	      "mapping)\n"
 	      "cfg.yaml:4:1: only one YAML document is allowed\n"
+	      "cfg.yaml: larger than the size limit for a config (1048576 bytes)\n"
+	      "cfg.yaml:1:33: YAML nested deeper than 32 levels (the depth limit for a config)\n"
+	      "cfg.yaml:2:9: YAML anchors and aliases are not allowed in a config (&r)\n"
 	      "--set: expected key=value, got 'chip.rtps'\n"
 	      "--set: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)\n"
 	      "--set: chip.masked_packets: expected true or false, got 'maybe'\n"

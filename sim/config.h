@@ -37,6 +37,12 @@ typedef enum { CFG_HBUS_PCI, CFG_HBUS_PCI66, CFG_HBUS_AGP } cfg_hostbus_preset;
 typedef enum { CFG_FIDELITY_CYCLE, CFG_FIDELITY_SAMPLED, CFG_FIDELITY_FUNCTIONAL } cfg_fidelity;
 
 #define CFG_STR_MAX 128
+/* Limits of a config file (docs/config.md "Limits"): the configs in
+ * configs/ are about 5 KB and under 400 YAML nodes even with every key set,
+ * so 1 MiB and 16384 nodes refuse only what is not a config, before it costs
+ * time or memory. Nesting: YL_DEPTH_MAX (kernel-ref/yload.h). */
+#define CFG_FILE_MAX  (1u << 20)
+#define CFG_NODES_MAX 16384
 
 /* One first-level cache (mem/cache.h). */
 typedef struct cfg_l1 {
@@ -155,7 +161,9 @@ const cfg_key *cfg_find(const char *path);
 /* ---- loading ---- */
 
 void cfg_defaults(saar_config *c);
-/* Defaults, then the YAML file on top. Errors: "file:line:col: message". */
+/* Defaults, then the YAML file on top; a file without `name` is named
+ * after itself (its base name without the extension). Errors:
+ * "file:line:col: message", at the first problem in the file. */
 int cfg_load(saar_config *c, const char *file, diag *d);
 /* One "key=value" override (the argument of --set). Errors: "--set: ...". */
 int cfg_set(saar_config *c, const char *assignment, diag *d);

@@ -9,6 +9,7 @@
 #include "config.h"
 #include "jsonw.h"
 #include "testutil.h"
+#include "yload.h"
 
 /* Loads text from a fresh temporary file; returns cfg_load's result and
  * leaves the file path in path. */
@@ -126,6 +127,9 @@ Test(config, empty_file_is_defaults)
 	char path[128];
 	cr_assert_eq(load_text(&c, "# nothing but a comment\n", &d, path, sizeof path), 0);
 	cfg_defaults(&def);
+	/* named after its file, as any config without `name` */
+	cr_assert_str_eq(c.name, "cfg");
+	snprintf(def.name, sizeof def.name, "cfg");
 	cr_assert(!memcmp(&c, &def, sizeof c));
 }
 
@@ -212,6 +216,81 @@ Test(config, bad_yaml)
 	             "flow mapping)");
 	expect_error("chip:\n\trtps: 4\n", "2:1: YAML syntax error: found character that cannot "
 	                                   "start any token (while scanning for the next token)");
+}
+
+/* The config is checked as it streams (kernel-ref/yload.h): the first
+ * unknown key stops the load whatever follows it. A 45 MB config whose
+ * valid keys were followed by a 5-million-item list under `stuff` took
+ * 808 MB before it was refused; here the list is followed by a syntax
+ * error, which the old loader (the whole document first, then the keys)
+ * reported instead. */
+Test(config, first_unknown_key_stops_the_load)
+{
+	char *text = tu_repeat("name: x\nchip:\n  rtps: 2\nstuff: [", "1, ", 300000, "1]\n]]]\n");
+	expect_error(text, "4:1: unknown key 'stuff'");
+	free(text);
+}
+
+/* The limits of a config (docs/config.md "Limits"), each refused at the
+ * event that breaks it; the old loader read all of it (and took minutes
+ * over 200,000 `[`). The largest input within each limit loads as far as
+ * its other checks. */
+Test(config, size_depth_and_node_limits)
+{
+	/* size: CFG_FILE_MAX bytes of comment load; one byte more does not */
+	char *text = tu_repeat("#", " ", CFG_FILE_MAX - 2, "\n");
+	saar_config c;
+	diag d = {{0}};
+	char path[128], want[512];
+	cr_assert_eq(load_text(&c, text, &d, path, sizeof path), 0, "%s", d.msg);
+	free(text);
+	text = tu_repeat("#", " ", CFG_FILE_MAX - 1, "\n");
+	cr_assert_eq(load_text(&c, text, &d, path, sizeof path), -1);
+	snprintf(want, sizeof want, "%s: larger than the size limit for a config (%u bytes)", path,
+	         CFG_FILE_MAX);
+	cr_assert_str_eq(d.msg, want);
+	free(text);
+
+	/* depth: YL_DEPTH_MAX nested sequences parse (the root is no mapping),
+	 * one more is refused where it opens */
+	char *close = tu_repeat("", "]", YL_DEPTH_MAX, "\n");
+	text = tu_repeat("", "[", YL_DEPTH_MAX, close);
+	expect_error(text, "1:1: expected a mapping of keys at the top level, got a sequence");
+	free(text);
+	free(close);
+	text = tu_repeat("", "[", 200000, "");
+	expect_error(text,
+	             "1:33: YAML nested deeper than 32 levels (the depth limit for a config)");
+	free(text);
+
+	/* nodes: the root and CFG_NODES_MAX - 1 items parse, one more does not */
+	text = tu_repeat("[0", ",1", CFG_NODES_MAX - 2, "]\n");
+	expect_error(text, "1:1: expected a mapping of keys at the top level, got a sequence");
+	free(text);
+	text = tu_repeat("[0", ",1", CFG_NODES_MAX - 1, "]\n");
+	snprintf(want, sizeof want, "1:%d: more than %d YAML nodes (the node limit for a config)",
+	         2 + 2 * (CFG_NODES_MAX - 1), CFG_NODES_MAX);
+	expect_error(text, want);
+	free(text);
+}
+
+/* Anchors and aliases are refused (kernel-ref/yload.h says why): the
+ * billion laughs, nine levels of ten aliases each, at its first anchor. */
+Test(config, anchors_and_aliases_are_refused)
+{
+	char text[2048] = "lol0: &a0 [lol]\n";
+	for (int i = 1; i < 10; i++) {
+		snprintf(text + strlen(text), sizeof text - strlen(text), "lol%d: &a%d [", i, i);
+		for (int j = 0; j < 10; j++)
+			snprintf(text + strlen(text), sizeof text - strlen(text), "%s*a%d",
+			         j ? ", " : "", i - 1);
+		snprintf(text + strlen(text), sizeof text - strlen(text), "]\n");
+	}
+	expect_error(text, "1:7: YAML anchors and aliases are not allowed in a config (&a0)");
+	expect_error("chip:\n  rtps: &r 2\n", "2:9: YAML anchors and aliases are not allowed in a "
+	                                      "config (&r)");
+	expect_error("name: *x\n",
+	             "1:7: YAML anchors and aliases are not allowed in a config (*x)");
 }
 
 Test(config, set_overrides)

@@ -607,6 +607,50 @@ Test(saarsim_cli, bad_config_key_names_file_line_col)
 	cr_assert_not(exists("f.png") || exists("r.json"));
 }
 
+/* 200,000 nested `[` in a config or views file are refused at the level
+ * past the depth limit, in one line naming file:line:col (libyaml's
+ * scanner took over a minute over them, then the config loader said its
+ * root was no mapping and the views loader the same of `a`'s camera). */
+Test(saarsim_cli, deep_yaml_is_refused_at_the_depth_limit)
+{
+	char p[512], args[2048];
+	char *deep = tu_repeat("", "[", 200000, "\n");
+	tu_write(p, sizeof p, dir, "cfg.yaml", deep);
+	snprintf(args, sizeof args, "--config %s --size 8x8 --report %s/r.json", p, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("cfg.yaml:1:33: YAML nested deeper than 32 levels (the depth limit for a "
+	                "config)");
+	free(deep);
+	deep = tu_repeat("views:\n  a: ", "[", 200000, "\n");
+	tu_write(p, sizeof p, dir, "v.yaml", deep);
+	snprintf(args, sizeof args, "--views %s --view a --size 8x8 --report %s/r.json", p, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("v.yaml:2:36: YAML nested deeper than 32 levels (the depth limit for a "
+	                "views file)");
+	free(deep);
+	cr_assert_not(exists("r.json"));
+}
+
+/* A config file without `name` is labelled by its file's base name without
+ * the extension in the report, the summary and the CSV row (it was
+ * labelled saarcor-std, the embedded default's name, which it need not
+ * be); one with `name` keeps it. */
+Test(saarsim_cli, config_without_name_is_named_after_its_file)
+{
+	char p[512], args[2048];
+	tu_write(p, sizeof p, dir, "my-chip.v2.yaml", "chip:\n  rtps: 2\n");
+	snprintf(args, sizeof args, "--config %s --size 8x8 --report %s/r.json --csv %s/c.csv", p,
+	         dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(strstr(slurp("r.json"), "\"name\": \"my-chip.v2\""), "%s", slurp("r.json"));
+	cr_assert(strstr(slurp("out"), "config my-chip.v2"), "%s", slurp("out"));
+	cr_assert(strstr(slurp("c.csv"), "\nmy-chip.v2,"), "%s", slurp("c.csv"));
+	tu_write(p, sizeof p, dir, "named.yaml", "name: mine\nchip:\n  rtps: 2\n");
+	snprintf(args, sizeof args, "--config %s --size 8x8 --report %s/r.json", p, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert(strstr(slurp("r.json"), "\"name\": \"mine\""), "%s", slurp("r.json"));
+}
+
 Test(saarsim_cli, bad_config_value_out_of_range)
 {
 	char p[512], args[2048];

@@ -7,6 +7,7 @@
 #include "testutil.h"
 #include "view.h"
 #include "world.h"
+#include "yload.h"
 
 #include <math.h>
 #include <string.h>
@@ -233,6 +234,95 @@ Test(view, file_level_errors)
 	tu_write(path, sizeof path, dir, "empty.yaml", "");
 	cr_assert_eq(view_list(path, names, 4, &d), -1);
 	cr_assert(strncmp(d.msg, path, strlen(path)) == 0, "%s", d.msg);
+}
+
+/* Writes text to a fresh views.yaml; view_load of `a` must give exactly
+ * "path<where_msg>" (where_msg "" = must load). */
+static void expect_load(const char *text, const char *where_msg)
+{
+	char dir[256], path[512], want[1024];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(path, sizeof path, dir, "views.yaml", text);
+	view v;
+	diag d = {{0}};
+	int rc = view_load(&v, path, "a", &d);
+	if (!*where_msg) {
+		cr_assert_eq(rc, 0, "%s", d.msg);
+		return;
+	}
+	cr_assert_eq(rc, -1, "loaded, want%s", where_msg);
+	snprintf(want, sizeof want, "%s%s", path, where_msg);
+	cr_assert_str_eq(d.msg, want);
+}
+
+/* The limits of a views file (docs/views.md "Limits"), each refused at the
+ * event that breaks it; the old loader read all of it (and took minutes
+ * over 200,000 `[`). The largest input within each limit loads. */
+Test(view, size_depth_and_node_limits)
+{
+	const char *head = "views:\n  a:\n" CAM "    note: ";
+	char want[256];
+	/* depth: the root, `views` and `a` are three levels; a note nested to
+	 * the limit loads, one more is refused where it opens */
+	char *close = tu_repeat("", "]", YL_DEPTH_MAX - 3, "\n");
+	char *text = tu_repeat(head, "[", YL_DEPTH_MAX - 3, close);
+	expect_load(text, "");
+	free(text);
+	free(close);
+	text = tu_repeat(head, "[", 200000, "\n");
+	expect_load(text, ":4:40: YAML nested deeper than 32 levels (the depth limit for a views "
+	                  "file)");
+	free(text);
+
+	/* nodes: 26 before the note's items (root, views, a, the camera's 19,
+	 * note and its sequence); the items up to the limit load */
+	char *open = tu_repeat(head, "[", 1, "");
+	text = tu_repeat(open, "0,", VIEW_NODES_MAX - 27, "0]\n");
+	expect_load(text, "");
+	free(text);
+	text = tu_repeat(open, "0,", VIEW_NODES_MAX - 26, "0]\n");
+	snprintf(want, sizeof want,
+	         ":4:%d: more than %d YAML nodes (the node limit for a views file)",
+	         12 + 2 * (VIEW_NODES_MAX - 26), VIEW_NODES_MAX);
+	expect_load(text, want);
+	free(text);
+	free(open);
+
+	/* size: VIEW_FILE_MAX bytes load, one more does not */
+	size_t pad = VIEW_FILE_MAX - strlen(head) - strlen("1\n#\n");
+	text = tu_repeat("", " ", pad, "");
+	char *full = tu_repeat(head, "1\n#", 1, text);
+	free(text);
+	text = tu_repeat(full, "", 0, "\n");
+	cr_assert_eq(strlen(text), VIEW_FILE_MAX);
+	expect_load(text, "");
+	free(text);
+	text = tu_repeat(full, " ", 1, "\n");
+	snprintf(want, sizeof want, ": larger than the size limit for a views file (%u bytes)",
+	         VIEW_FILE_MAX);
+	expect_load(text, want);
+	free(text);
+	free(full);
+}
+
+/* Anchors and aliases are refused (kernel-ref/yload.h says why), also in a
+ * note: the billion laughs (nine levels of ten aliases each) at its first
+ * anchor. The old loader accepted it. */
+Test(view, anchors_and_aliases_are_refused)
+{
+	char text[4096] = "views:\n  a:\n" CAM "    note:\n      lol0: &a0 [lol]\n";
+	for (int i = 1; i < 10; i++) {
+		snprintf(text + strlen(text), sizeof text - strlen(text), "      lol%d: &a%d [", i,
+		         i);
+		for (int j = 0; j < 10; j++)
+			snprintf(text + strlen(text), sizeof text - strlen(text), "%s*a%d",
+			         j ? ", " : "", i - 1);
+		snprintf(text + strlen(text), sizeof text - strlen(text), "]\n");
+	}
+	expect_load(text, ":5:13: YAML anchors and aliases are not allowed in a views file (&a0)");
+	expect_load("views:\n  a:\n    camera: {eye: &e [0, 0, 5], lookat: [0, 0, 0], up: [0, 1, "
+	            "0], fov: 45}\n",
+	            ":3:19: YAML anchors and aliases are not allowed in a views file (&e)");
 }
 
 Test(view, camera_validate_flags)

@@ -3,7 +3,7 @@
  * docs/fidelity.md "Stored warming"). The first run builds the warming
  * run's checkpoints and stores them; the next loads them and gives the
  * same figures and the reference image. A config that differs in timing
- * keys only reuses them; one that changes what functional processing does
+ * keys or its name only reuses them; one that changes what functional processing does
  * (an L1's size) builds its own; a damaged file is rebuilt. Restored
  * regions count the frame's traffic as cycle does (memory-port requests
  * within 1%; through a VMA whose on-board cache is too small for the
@@ -124,8 +124,10 @@ Test(warming, timing_keys_reuse_it_l1_sizes_do_not)
 	saar_config c;
 	config(&c, 256, 0);
 	chip_destroy(tu_run_chip(&w, &c));
-	/* latencies, SDRAM timing, MSHRs and the sampling plan: the same
+	/* latencies, SDRAM timing, MSHRs, the sampling plan and the name (a
+	 * label: a config file without one is named after the file): the same
 	 * warming run */
+	snprintf(c.name, sizeof c.name, "another-label");
 	c.chip.isect.latency += 7;
 	c.memory.sdram.trcd += 2;
 	c.memory.l1.kd.mshrs = 2;

@@ -59,6 +59,20 @@ static inline void tu_write(char *out, size_t n, const char *dir, const char *na
 	fclose(f);
 }
 
+/* A malloc'd string: head, then unit n times, then tail (big generated
+ * inputs: deep nesting, long lists). */
+static inline char *tu_repeat(const char *head, const char *unit, size_t n, const char *tail)
+{
+	size_t h = strlen(head), u = strlen(unit), t = strlen(tail);
+	char *s = malloc(h + u * n + t + 1);
+	cr_assert(s, "out of memory");
+	memcpy(s, head, h);
+	for (size_t i = 0; i < n; i++)
+		memcpy(s + h + u * i, unit, u);
+	memcpy(s + h + u * n, tail, t + 1);
+	return s;
+}
+
 /* The files in dir whose names start with prefix (a world cache's
  * "world-", "packets-"): how many there are, the last one's path in out. */
 static inline int tu_find_files(const char *dir, const char *prefix, char *out, size_t n)
