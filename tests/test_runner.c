@@ -1,0 +1,34 @@
+/*
+ * test_runner.c: the test runner's account of skipped tests (tests/main.c).
+ * Criterion's summary counted only tests that ran, so tests skipped for
+ * want of the shared scenes were invisible; and with the scenes present no
+ * test may skip. The runner is run on one scene test with the scenes
+ * absent (a missing folder: the skip is counted and named, the run passes)
+ * and with a scenes folder that lacks the file (the skip fails the run).
+ */
+#include "testutil.h"
+
+Test(runner, skips_are_counted_and_named)
+{
+	char dir[256], cmd[4096];
+	tu_tmpdir(dir, sizeof dir);
+	const char *filter = "--filter 'view/scene_without_view_is_framed_by_its_box'";
+	/* the runner must not take itself for one of its own sandboxed
+	 * workers (Criterion's worker variables are left out) */
+	snprintf(
+	    cmd, sizeof cmd,
+	    "env -u BXFI_MAP -u IS_SANDBOX SAAR_SCENES=%s/none %s/saarsim-tests %s >%s/out 2>&1",
+	    dir, tu_bin_dir(), filter, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", tu_slurp(dir, "out"));
+	const char *out = tu_slurp(dir, "out");
+	cr_assert(strstr(out, "[====] Skipped: 1\n"), "%s", out);
+	cr_assert(strstr(out, "view::scene_without_view_is_framed_by_its_box: shared scene"),
+	          "the skipped test is not named: %s", out);
+	/* the scenes folder exists but lacks the file: the skip fails */
+	snprintf(cmd, sizeof cmd,
+	         "env -u BXFI_MAP -u IS_SANDBOX SAAR_SCENES=%s %s/saarsim-tests %s >%s/out 2>&1",
+	         dir, tu_bin_dir(), filter, dir);
+	cr_assert_neq(tu_run(cmd), 0, "a skip passed with the scenes present");
+	cr_assert(strstr(tu_slurp(dir, "out"), "1 tests skipped although the shared scenes are at"),
+	          "%s", tu_slurp(dir, "out"));
+}
