@@ -20,6 +20,7 @@
 #include <assimp/scene.h>
 #include <ctype.h>
 #include <errno.h>
+#include <limits.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdio.h>
@@ -134,6 +135,31 @@ static enum aiReturn of_seek(struct aiFile *af, size_t off, enum aiOrigin origin
 }
 
 static void of_flush(struct aiFile *af) {}
+
+/* Text formats hold no control bytes but tab, LF and CR: the first other
+ * byte below 0x20 (or 0x7f) is an error naming its line (counted from
+ * first_line) and column. `what` names the kind of file ("an OBJ"). */
+static int text_check(const char *buf, size_t len, long first_line, const char *file,
+                      const char *what, diag *d)
+{
+	long line = first_line;
+	size_t ls = 0;
+	for (size_t i = 0; i < len; i++) {
+		unsigned char c = (unsigned char)buf[i];
+		if (c >= 0x20 && c != 0x7f)
+			continue;
+		if (c == '\n') {
+			line++;
+			ls = i + 1;
+		} else if (c != '\t' && c != '\r') {
+			size_t col = i - ls + 1;
+			return diag_set(d, file, line > INT_MAX ? INT_MAX : (int)line,
+			                col > INT_MAX ? INT_MAX : (int)col,
+			                "not %s text file (control byte 0x%02x)", what, c);
+		}
+	}
+	return 0;
+}
 
 static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char *mode)
 {
@@ -361,18 +387,57 @@ static int ply_type_size(const char *t, size_t n)
 	return 0;
 }
 
-/* The next whitespace-separated token of [*s, e): its start in *t and length
- * (0 at the end of the range); *s moves past it. */
+/* PLY text is split on spaces and tabs only. isspace also takes a form
+ * feed or vertical tab for a blank, while Assimp 5.2 takes them for line
+ * ends (and never returned on a form feed before end_header), so the two
+ * readings of such a file would differ: ply_line refuses them. */
+static int ply_blank(char c)
+{
+	return c == ' ' || c == '\t';
+}
+
+/* The next token of [*s, e) between spaces and tabs: its start in *t and
+ * length (0 at the end of the range); *s moves past it. */
 static size_t ply_tok(const char **s, const char *e, const char **t)
 {
 	const char *p = *s;
-	while (p < e && isspace((unsigned char)*p))
+	while (p < e && ply_blank(*p))
 		p++;
 	*t = p;
-	while (p < e && !isspace((unsigned char)*p))
+	while (p < e && !ply_blank(*p))
 		p++;
 	*s = p;
 	return (size_t)(p - *t);
+}
+
+/* The text line ln starting at p: its end in *eol (before the '\n', and
+ * before a '\r' just ahead of it) and the next line's start in *next. A
+ * control byte on it (below 0x20 but a tab, or 0x7f) is an error naming
+ * its line and column; `where` says which part of the file it is in. */
+static int ply_line(const char *p, const char *end, const char **eol, const char **next,
+                    const char *file, int ln, const char *where, diag *d)
+{
+	const char *nl = memchr(p, '\n', (size_t)(end - p));
+	const char *e = nl ? nl : end;
+	*next = nl ? nl + 1 : end;
+	if (e > p && e[-1] == '\r')
+		e--;
+	for (const char *q = p; q < e; q++) {
+		unsigned char c = (unsigned char)*q;
+		if ((c < 0x20 && c != '\t') || c == 0x7f)
+			return diag_set(d, file, ln, (int)(q - p) + 1,
+			                "control byte 0x%02x in the PLY %s", c, where);
+	}
+	*eol = e;
+	return 0;
+}
+
+/* A PLY element or property name starts with a letter or an underscore:
+ * Assimp read "element 400000000vertex 3" as 400000000 vertices. */
+static int ply_name_ok(const char *t, size_t n)
+{
+	char c = n ? *t : '\0';
+	return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
 }
 
 static int tok_is(const char *t, size_t n, const char *word)
@@ -392,18 +457,25 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 	for (int ln = 1;; ln++) {
 		if (p >= end)
 			return diag_set(d, file, 0, 0, "PLY header has no end_header line");
-		const char *eol = memchr(p, '\n', (size_t)(end - p));
-		if (!eol)
-			eol = end;
-		const char *s = p, *t, *ls = p;
-		size_t n = ply_tok(&s, eol, &t);
-		p = eol < end ? eol + 1 : end;
-#define COL ((int)(t - ls) + 1)
-		if (ln == 1) {
-			if (!tok_is(t, n, "ply") || ply_tok(&s, eol, &t))
-				return diag_set(d, file, 1, 0, "not a PLY file (no 'ply' line)");
+		const char *eol, *next, *ls = p;
+		if (ln == 1) { /* exactly "ply", before anything else is read */
+			const char *nl = memchr(p, '\n', (size_t)(end - p));
+			size_t k = nl ? (size_t)(nl - p) : (size_t)(end - p);
+			if (k && p[k - 1] == '\r')
+				k--;
+			if (k != 3 || memcmp(p, "ply", 3) != 0)
+				return diag_set(
+				    d, file, 1, 0,
+				    "not a PLY file (it does not begin with a 'ply' line)");
+			p = nl ? nl + 1 : end;
 			continue;
 		}
+		if (ply_line(p, end, &eol, &next, file, ln, "header", d))
+			return -1;
+		const char *s = p, *t;
+		size_t n = ply_tok(&s, eol, &t);
+		p = next;
+#define COL ((int)(t - ls) + 1)
 		if (n == 0 || tok_is(t, n, "comment") || tok_is(t, n, "obj_info"))
 			continue;
 		if (tok_is(t, n, "end_header")) {
@@ -435,6 +507,12 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			n = ply_tok(&s, eol, &t);
 			if (!n)
 				return diag_set(d, file, ln, 0, "element without a name");
+			if (!ply_name_ok(t, n))
+				return diag_set(
+				    d, file, ln, COL,
+				    "element name '%.*s' does not begin with a letter or "
+				    "underscore",
+				    (int)(n > 40 ? 40 : n), t);
 			snprintf(e->name, sizeof e->name, "%.*s", (int)n, t);
 			n = ply_tok(&s, eol, &t);
 			char *cend;
@@ -471,8 +549,15 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			pr->isize = (unsigned char)ply_type_size(t, n);
 			if (!pr->isize)
 				goto bad_type;
-			if (!ply_tok(&s, eol, &t))
+			n = ply_tok(&s, eol, &t);
+			if (!n)
 				return diag_set(d, file, ln, 0, "property without a name");
+			if (!ply_name_ok(t, n))
+				return diag_set(
+				    d, file, ln, COL,
+				    "property name '%.*s' does not begin with a letter or "
+				    "underscore",
+				    (int)(n > 40 ? 40 : n), t);
 			continue;
 		bad_type:
 			return diag_set(d, file, ln, n ? COL : 0, "unknown PLY type '%.*s'",
@@ -509,6 +594,8 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 	size_t at = 0;
 	if (ply_header(buf, len, file, el, &nel, &fmt, &at, &line, d))
 		return -1;
+	if (fmt == 0 && text_check(buf + at, len - at, line + 1, file, "an ASCII PLY", d))
+		return -1;
 	const char *p = buf + at, *end = buf + len;
 	for (int k = 0; k < nel; k++) {
 		const ply_elem *e = &el[k];
@@ -537,9 +624,9 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 			line++;
 			if (p >= end)
 				return ply_short(file, 0, e, i, d);
-			const char *eol = memchr(p, '\n', (size_t)(end - p));
-			if (!eol)
-				eol = end;
+			const char *eol, *next;
+			if (ply_line(p, end, &eol, &next, file, line, "data", d))
+				return -1;
 			const char *s = p, *t;
 			for (int j = 0; j < e->nprops; j++) {
 				unsigned long long items = 1;
@@ -566,7 +653,7 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 						                "header declares",
 						                e->name, i + 1);
 			}
-			p = eol < end ? eol + 1 : end;
+			p = next;
 		}
 	}
 	return 0;

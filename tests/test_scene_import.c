@@ -725,3 +725,70 @@ Test(import, ply_header_and_data_are_checked)
 	load_fails(p, &d);
 	cr_assert(strstr(d.msg, "ends inside face 1 of the 1"), "%s", d.msg);
 }
+
+/* Issue 28: a PLY header is split on spaces and tabs only. A form feed
+ * before end_header hung Assimp for good (the pre-scan took it for a
+ * blank, Assimp for a line end); "element 400000000vertex 3" was 3
+ * vertices to the pre-scan and 400000000 to Assimp, which allocated
+ * 9.4 GB for them (4294967295vertex: std::bad_alloc). Each is now one
+ * message naming line and column, at once. (timeout: the old code hangs.) */
+Test(import, ply_header_is_strict, .timeout = 60)
+{
+	char dir[256], p[512], want[700];
+	tu_tmpdir(dir, sizeof dir);
+	struct {
+		const char *text, *msg;
+	} cases[] = {
+	    /* the audit's file, form feed and all */
+	    {"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\fend_header\n0\n0\n0\n",
+	     ":5:1: control byte 0x0c in the PLY header"},
+	    {"ply\nformat ascii 1.0\nelement vertex 3\nproperty\vfloat x\n",
+	     ":4:9: control byte 0x0b in the PLY header"},
+	    {"ply\nformat ascii 1.0\ncomment made by\x01 hand\nelement vertex 3\nproperty float "
+	     "x\n",
+	     ":3:16: control byte 0x01 in the PLY header"},
+	    {"ply\nformat ascii 1.0\nelement 400000000vertex 3\nproperty float x\n",
+	     ":3:9: element name '400000000vertex' does not begin with a letter or underscore"},
+	    {"ply\nformat ascii 1.0\nelement 4294967295vertex 3\nproperty float x\n",
+	     ":3:9: element name '4294967295vertex' does not begin with a letter or underscore"},
+	    {"ply\nformat ascii 1.0\nelement vertex 3\nproperty float 9x\n",
+	     ":4:16: property name '9x' does not begin with a letter or underscore"},
+	    {"ply \nformat ascii 1.0\nelement vertex 3\nproperty float x\n",
+	     ":1: not a PLY file (it does not begin with a 'ply' line)"},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+		char name[32];
+		snprintf(name, sizeof name, "h%zu.ply", i);
+		tu_write(p, sizeof p, dir, name, cases[i].text);
+		double t0 = tu_now();
+		diag d = {{0}};
+		load_fails(p, &d);
+		cr_assert_lt(tu_now() - t0, 10.0, "case %zu took %.1f s", i, tu_now() - t0);
+		snprintf(want, sizeof want, "%s%s", p, cases[i].msg);
+		cr_assert(strstr(d.msg, want), "case %zu: '%s' lacks '%s'", i, d.msg, want);
+	}
+	/* a NUL in the header, and control bytes in ASCII data */
+	static const char nul[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\0\n";
+	tu_write_bytes(p, sizeof p, dir, "nul.ply", nul, sizeof nul - 1);
+	diag d = {{0}};
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s:4:17: control byte 0x00 in the PLY header", p);
+	cr_assert(strstr(d.msg, want), "'%s' lacks '%s'", d.msg, want);
+	tu_write(p, sizeof p, dir, "ff.ply",
+	         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+	         "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+	         "end_header\n0 0 0\n1 0\f0\n0 1 0\n3 0 1 2\n");
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s:11:4: not an ASCII PLY text file (control byte 0x0c)", p);
+	cr_assert(strstr(d.msg, want), "'%s' lacks '%s'", d.msg, want);
+	/* CRLF line ends and tabs still load */
+	tu_write(p, sizeof p, dir, "crlf.ply",
+	         "ply\r\nformat\tascii 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
+	         "property float y\r\nproperty float z\r\nelement face 1\r\n"
+	         "property list uchar int vertex_indices\r\nend_header\r\n0 0 0\r\n1\t0 0\r\n"
+	         "0 1 0\r\n3 0 1 2\r\n");
+	scene s;
+	load_ok(&s, p);
+	cr_assert_eq(s.ntris, 1);
+	scene_free(&s);
+}

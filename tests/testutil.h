@@ -16,6 +16,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "image.h"
@@ -198,6 +199,25 @@ static inline void tu_one_line(const char *dir, const char *prog, const char *wh
 	cr_assert(!strncmp(buf, prog, n) && buf[n] == ':' && buf[n + 1] == ' ',
 	          "stderr does not start with '%s: ': %s", prog, buf);
 	cr_assert(strstr(buf, what), "stderr does not name '%s': %s", what, buf);
+}
+
+/* Writes len bytes to dir/name (NULs and all), returns the path in out. */
+static inline void tu_write_bytes(char *out, size_t n, const char *dir, const char *name,
+                                  const void *bytes, size_t len)
+{
+	snprintf(out, n, "%s/%s", dir, name);
+	FILE *f = fopen(out, "wb");
+	cr_assert(f, "cannot write %s", out);
+	cr_assert_eq(fwrite(bytes, 1, len, f), len);
+	fclose(f);
+}
+
+/* Seconds on the monotonic clock. */
+static inline double tu_now(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
 #endif
