@@ -1,12 +1,13 @@
 /*
  * import.c: scene_load(), scene files through Assimp's C API.
  *
- * Owns: the zlib-backed aiFileIO (so "x.obj.gz" loads as "x.obj" while the
- * .mtl beside it is still read from disk), the OBJ text pre-scan that gives
- * NaN/Inf and malformed numbers a line number, and the mapping of Assimp
- * materials and textures onto scene.h, and the guard that turns Assimp
- * crashing on a malformed file into an error. The rules are documented in
- * docs/views.md ("Scene files").
+ * Owns: the formats accepted and their content checks (import_format,
+ * content_check), the zlib-backed aiFileIO (so "x.obj.gz" loads as "x.obj"
+ * while the .mtl beside it is still read from disk), the OBJ and PLY
+ * pre-scans that give bad numbers, indices and headers a line number, the
+ * mapping of Assimp materials and textures onto scene.h, and the guard that
+ * turns Assimp crashing on a malformed file into an error. The rules are
+ * documented in docs/views.md ("Scene files").
  */
 #include "image.h"
 #include "infile.h"
@@ -32,12 +33,13 @@
 
 #define PATH_MAX_LEN 1024
 
-/* Files held in memory. Assimp opens the main file twice (an existence
- * probe, then the read), so the decompressed (or pre-scanned) text is kept
- * and served from memory instead of being inflated twice. Entries live
- * until scene_load returns: a stream may still be reading one (the OBJ)
- * while another (a gzipped MTL) is opened. */
-#define CACHE_MAX 8
+/* Files held in memory: the scene file (its content is checked before
+ * Assimp sees it), MTL files (checked as text) and gzipped files. Assimp
+ * opens the main file twice (an existence probe, then the read), so it is
+ * read and inflated once and served from memory. Entries live until the
+ * import returns: a stream may still be reading one (the OBJ) while
+ * another (a gzipped MTL) is opened. */
+#define CACHE_MAX 16
 typedef struct memcache {
 	struct {
 		char path[PATH_MAX_LEN]; /* real path on disk */
@@ -46,6 +48,7 @@ typedef struct memcache {
 	} e[CACHE_MAX];
 	int n;
 	char err[512];    /* first I/O error, reported instead of Assimp's */
+	int bad;          /* err is a content check's: the import fails */
 	scene_file_fn fn; /* told of every file opened (scene_load_files) */
 	void *fn_ctx;
 } memcache;
@@ -168,12 +171,14 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 		return NULL;
 	char rp[PATH_MAX_LEN];
 	int gz = real_path(name, rp, sizeof rp);
+	/* an MTL is text too: read whole and checked like the OBJ */
+	int mtl = ends_with(rp, ".mtl") || ends_with(rp, ".mtl.gz");
 	FILE *fp = NULL;
 	int k = 0;
 	while (k < c->n && strcmp(rp, c->e[k].path) != 0)
 		k++;
 	if (k == c->n) {
-		if (!gz) {
+		if (!gz && !mtl) {
 			int st = in_open(rp, &fp);
 			if (st) {
 				/* Assimp says only "cannot open" (or, for a
@@ -185,11 +190,28 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 			}
 		} else {
 			char err[256];
-			if (c->n == CACHE_MAX)
+			if (c->n == CACHE_MAX) {
+				if (!c->err[0]) {
+					snprintf(c->err, sizeof c->err,
+					         "the scene refers to more than %d files",
+					         CACHE_MAX);
+					c->bad = 1;
+				}
 				return NULL;
-			if (in_read_all(rp, 1, &c->e[k].buf, &c->e[k].len, err, sizeof err) != 0) {
-				if (!c->err[0] && access(rp, F_OK) == 0)
+			}
+			int st = in_read_all(rp, gz, &c->e[k].buf, &c->e[k].len, err, sizeof err);
+			if (st) {
+				if (!c->err[0] && st != ENOENT)
 					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp, err);
+				return NULL;
+			}
+			diag td;
+			if (mtl && text_check(c->e[k].buf, c->e[k].len, 1, rp, "an MTL", &td)) {
+				free(c->e[k].buf);
+				if (!c->err[0]) {
+					snprintf(c->err, sizeof c->err, "%.500s", td.msg);
+					c->bad = 1;
+				}
 				return NULL;
 			}
 			snprintf(c->e[k].path, sizeof c->e[k].path, "%s", rp);
@@ -659,6 +681,122 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 	return 0;
 }
 
+/* The formats saarsim reads (docs/views.md, "Scene files"): Assimp 5.2
+ * guesses at many more (3,000 random bytes named .ase were an 8-triangle
+ * scene), so only these extensions are handed to it, and only when the
+ * content is what the extension says (content_check). */
+typedef enum { FMT_OBJ, FMT_PLY, FMT_STL, FMT_3DS, FMT_GLTF, FMT_GLB, FMT_DAE } scene_fmt;
+
+static const struct {
+	const char *ext;
+	scene_fmt fmt;
+} formats[] = {{".obj", FMT_OBJ},   {".ply", FMT_PLY}, {".stl", FMT_STL}, {".3ds", FMT_3DS},
+               {".gltf", FMT_GLTF}, {".glb", FMT_GLB}, {".dae", FMT_DAE}};
+
+#define FORMAT_LIST ".obj (with .mtl), .ply, .stl, .3ds, .gltf, .glb and .dae, each also gzipped"
+
+/* The format of virt (the name without ".gz"), or -1. */
+static int import_format(const char *virt)
+{
+	for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++)
+		if (ends_with(virt, formats[i].ext))
+			return (int)formats[i].fmt;
+	return -1;
+}
+
+static uint32_t le32(const char *p)
+{
+	const unsigned char *u = (const unsigned char *)p;
+	return (uint32_t)u[0] | (uint32_t)u[1] << 8 | (uint32_t)u[2] << 16 | (uint32_t)u[3] << 24;
+}
+
+/* The first byte of text past a UTF-8 byte order mark and blanks. */
+static const char *text_start(const char *buf, size_t len)
+{
+	const char *p = buf, *end = buf + len;
+	if (len >= 3 && !memcmp(p, "\xef\xbb\xbf", 3))
+		p += 3;
+	while (p < end && (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n'))
+		p++;
+	return p;
+}
+
+/* Is the scene file's content the format its extension names? Then the
+ * format's own pre-scan (OBJ, PLY). */
+static int content_check(scene_fmt fmt, const char *buf, size_t len, const char *file, diag *d)
+{
+	const char *p = text_start(buf, len), *end = buf + len;
+	switch (fmt) {
+	case FMT_OBJ:
+		if (text_check(buf, len, 1, file, "an OBJ", d))
+			return -1;
+		return obj_scan(buf, file, d);
+	case FMT_PLY:
+		return ply_scan(buf, len, file, d);
+	case FMT_STL: {
+		/* binary: an 80-byte header, a triangle count, 50 bytes each
+		 * (the header may begin with "solid" too) */
+		if (len >= 84 && 84 + 50 * (uint64_t)le32(buf + 80) == len)
+			return 0;
+		if ((size_t)(end - p) < 5 || memcmp(p, "solid", 5) != 0) {
+			if (len < 84)
+				return diag_set(
+				    d, file, 0, 0,
+				    "not an STL file (%zu bytes: too short for a binary "
+				    "STL, and it does not begin with 'solid')",
+				    len);
+			return diag_set(d, file, 0, 0,
+			                "not an STL file (a binary STL of %u triangles has %llu "
+			                "bytes, not %zu, and it does not begin with 'solid')",
+			                le32(buf + 80),
+			                84 + 50 * (unsigned long long)le32(buf + 80), len);
+		}
+		return text_check(buf, len, 1, file, "an ASCII STL", d);
+	}
+	case FMT_3DS: {
+		unsigned id = len >= 2 ? (unsigned char)buf[0] | (unsigned char)buf[1] << 8 : 0;
+		if (len < 6 || id != 0x4D4D)
+			return diag_set(d, file, 0, 0,
+			                "not a 3DS file (it does not begin with chunk 0x4D4D)");
+		if (le32(buf + 2) != len)
+			return diag_set(d, file, 0, 0,
+			                "not a 3DS file (its main chunk says %u bytes, the file "
+			                "has %zu)",
+			                le32(buf + 2), len);
+		return 0;
+	}
+	case FMT_GLB:
+		if (len < 4 || memcmp(buf, "glTF", 4) != 0)
+			return diag_set(d, file, 0, 0,
+			                "not a GLB file (it does not begin with 'glTF')");
+		if (len < 12)
+			return diag_set(d, file, 0, 0,
+			                "not a GLB file (%zu bytes: no whole header)", len);
+		if (le32(buf + 8) != len)
+			return diag_set(
+			    d, file, 0, 0,
+			    "not a GLB file (its header says %u bytes, the file has %zu)",
+			    le32(buf + 8), len);
+		return 0;
+	case FMT_GLTF:
+		if (text_check(buf, len, 1, file, "a glTF JSON", d))
+			return -1;
+		if (p == end || *p != '{')
+			return diag_set(d, file, 0, 0,
+			                "not a glTF JSON file (it does not begin with '{')");
+		return 0;
+	case FMT_DAE:
+		if (text_check(buf, len, 1, file, "a Collada XML", d))
+			return -1;
+		/* no NUL in it now, and in_read_all ends it with one */
+		if (p == end || *p != '<' || !strstr(buf, "<COLLADA"))
+			return diag_set(d, file, 0, 0,
+			                "not a Collada file (XML with a <COLLADA> element)");
+		return 0;
+	}
+	return 0;
+}
+
 /* Assimp 5.2 (Debian 12) crashes on some malformed files instead of
  * failing: its binary PLY reader reads out of bounds on a corrupt face
  * list, and an ai_assert in TriangulateProcess aborts on one that does not
@@ -974,6 +1112,17 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	 * name without ".gz"; io_open maps it back. */
 	if (ends_with(virt, ".gz"))
 		virt[strlen(virt) - 3] = '\0';
+	int fmt = import_format(virt);
+	if (fmt < 0) {
+		const char *slash = strrchr(virt, '/'), *dot = strrchr(virt, '.');
+		if (!dot || (slash && dot < slash))
+			return diag_set(d, path, 0, 0,
+			                "unsupported scene format (no extension; saarsim reads %s)",
+			                FORMAT_LIST);
+		return diag_set(d, path, 0, 0,
+		                "unsupported scene format '%.40s' (saarsim reads %s)", dot,
+		                FORMAT_LIST);
+	}
 	int gz = real_path(virt, rp, sizeof rp);
 	int st = in_check(rp);
 	if (st)
@@ -985,21 +1134,13 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	cache.fn_ctx = ctx;
 	if (fn)
 		fn(ctx, rp);
-	int obj = ends_with(virt, ".obj"), ply = ends_with(virt, ".ply");
-	if (obj || ply) {
-		if (in_read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err,
-		                sizeof cache.err) != 0)
-			return diag_set(d, path, 0, 0, "%s", cache.err);
-		snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
-		cache.n = 1;
-		if (ply && ply_scan(cache.e[0].buf, cache.e[0].len, path, d) != 0) {
-			free(cache.e[0].buf);
-			return -1;
-		}
-		if (obj && obj_scan(cache.e[0].buf, path, d) != 0) {
-			free(cache.e[0].buf);
-			return -1;
-		}
+	if (in_read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err, sizeof cache.err) != 0)
+		return diag_set(d, path, 0, 0, "%s", cache.err);
+	snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
+	cache.n = 1;
+	if (content_check((scene_fmt)fmt, cache.e[0].buf, cache.e[0].len, path, d) != 0) {
+		free(cache.e[0].buf);
+		return -1;
 	}
 
 	struct aiFileIO io = {io_open, io_close, (aiUserData)&cache};
@@ -1016,6 +1157,12 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 		              "cannot import scene: the importer (Assimp) crashed on it (%s); the "
 		              "file is malformed",
 		              strsignal(sig));
+	} else if (cache.bad) {
+		/* a file it opened failed its check (an MTL with control bytes):
+		 * Assimp passed over it as missing */
+		rc = diag_set(d, path, 0, 0, "%s", cache.err);
+		if (as)
+			aiReleaseImport(as);
 	} else if (!as) {
 		const char *msg = cache.err[0] ? cache.err : aiGetErrorString();
 		/* A file with vertices but no faces ends as Assimp's "No output

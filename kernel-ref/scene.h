@@ -58,12 +58,13 @@ typedef struct scene {
 	uint32_t ndegenerate; /* zero-area triangles kept as they are */
 } scene;
 
-/* Loads a scene file through Assimp (OBJ+MTL, PLY, 3DS, glTF, ...). A path
- * ending in .gz is decompressed with zlib first; files it refers to (an
- * MTL beside the OBJ) are still found next to it. Textures named by the
- * materials are read with OpenImageIO. Fails (diag filled, -1) on a missing
- * or unreadable file, a malformed scene, NaN/Inf positions or zero
- * triangles. */
+/* Loads a scene file through Assimp: .obj (with .mtl), .ply, .stl, .3ds,
+ * .gltf, .glb or .dae, its content checked against the extension first. A
+ * path ending in .gz is decompressed with zlib first; files it refers to
+ * (an MTL beside the OBJ) are still found next to it. Textures named by
+ * the materials are read with OpenImageIO. Fails (diag filled, -1) on an
+ * unsupported format, a missing or unreadable file, a malformed scene,
+ * NaN/Inf positions or zero triangles. */
 int scene_load(scene *s, const char *path, diag *d);
 
 /* scene_load, and calls fn(ctx, path) for the scene file and every other

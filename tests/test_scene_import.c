@@ -792,3 +792,138 @@ Test(import, ply_header_is_strict, .timeout = 60)
 	cr_assert_eq(s.ntris, 1);
 	scene_free(&s);
 }
+
+/* Issue 28: only the formats docs/views.md lists are read, and only when
+ * the content is what the extension says: 3,000 random bytes named .ase
+ * were an 8-triangle scene, the same named x.obj.gz "a scene with no
+ * triangles". One triangle in each listed format loads. */
+Test(import, formats_by_extension_and_content)
+{
+	char dir[256], p[512], want[1024];
+	diag d = {{0}};
+	tu_tmpdir(dir, sizeof dir);
+	/* the listed formats, one triangle each */
+	static const float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+	unsigned char b[512];
+	memset(b, 0, 84); /* binary STL: header, count, normal, corners, attribute */
+	b[80] = 1;
+	memcpy(b + 96, tri, sizeof tri);
+	b[132] = b[133] = 0;
+	tu_write_bytes(p, sizeof p, dir, "b.stl", b, 134);
+	static const unsigned char tds_head[] = {
+	    0x4d, 0x4d, 88,  0, 0,    0,    0x3d, 0x3d, 82, 0, 0,    0,    0x00, 0x40, 76, 0, 0, 0,
+	    't',  'r',  'i', 0, 0x00, 0x41, 66,   0,    0,  0, 0x10, 0x41, 44,   0,    0,  0, 3, 0};
+	static const unsigned char tds_faces[] = {0x20, 0x41, 16, 0, 0, 0, 1, 0,
+	                                          0,    0,    1,  0, 2, 0, 0, 0};
+	memcpy(b, tds_head, sizeof tds_head);
+	memcpy(b + sizeof tds_head, tri, sizeof tri);
+	memcpy(b + sizeof tds_head + sizeof tri, tds_faces, sizeof tds_faces);
+	tu_write_bytes(p, sizeof p, dir, "t.3ds", b, 88);
+	static const char json[] =
+	    "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":"
+	    "[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+	    "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":"
+	    "\"VEC3\",\"min\":[0,0,0],\"max\":[1,1,0]}],\"bufferViews\":[{\"buffer\":0,"
+	    "\"byteLength\":36}],\"buffers\":[{\"byteLength\":36%s}]}";
+	char text[1024];
+	snprintf(text, sizeof text, json,
+	         ",\"uri\":\"data:application/octet-stream;base64,"
+	         "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"");
+	tu_write(p, sizeof p, dir, "t.gltf", text);
+	snprintf(text, sizeof text, json, "");
+	size_t jl = (strlen(text) + 3) & ~(size_t)3, glb = 12 + 8 + jl + 8 + 36;
+	memset(b, ' ', sizeof b);
+	uint32_t w[3] = {2, (uint32_t)glb, (uint32_t)jl};
+	memcpy(b, "glTF", 4);
+	memcpy(b + 4, w, 8);
+	memcpy(b + 12, w + 2, 4);
+	memcpy(b + 16, "JSON", 4);
+	memcpy(b + 20, text, strlen(text));
+	w[0] = 36;
+	memcpy(b + 20 + jl, w, 4);
+	memcpy(b + 24 + jl, "BIN", 4);
+	b[27 + jl] = 0;
+	memcpy(b + 28 + jl, tri, sizeof tri);
+	tu_write_bytes(p, sizeof p, dir, "t.glb", b, glb);
+	tu_write(p, sizeof p, dir, "a.stl",
+	         "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+	         "vertex 0 1 0\nendloop\nendfacet\nendsolid t\n");
+	tu_write(p, sizeof p, dir, "t.dae",
+	         "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<COLLADA xmlns=\"http://www.collada"
+	         ".org/2005/11/COLLADASchema\" version=\"1.4.1\">\n<library_geometries><geometry "
+	         "id=\"g\"><mesh><source id=\"p\"><float_array id=\"pa\" count=\"9\">0 0 0 1 0 0 "
+	         "0 1 0</float_array><technique_common><accessor source=\"#pa\" count=\"3\" "
+	         "stride=\"3\"><param name=\"X\" type=\"float\"/><param name=\"Y\" "
+	         "type=\"float\"/><param name=\"Z\" type=\"float\"/></accessor>"
+	         "</technique_common></source><vertices id=\"v\"><input semantic=\"POSITION\" "
+	         "source=\"#p\"/></vertices><triangles count=\"1\"><input semantic=\"VERTEX\" "
+	         "source=\"#v\" offset=\"0\"/><p>0 1 2</p></triangles></mesh></geometry>"
+	         "</library_geometries>\n<library_visual_scenes><visual_scene id=\"s\"><node "
+	         "id=\"n\"><instance_geometry url=\"#g\"/></node></visual_scene>"
+	         "</library_visual_scenes>\n<scene><instance_visual_scene url=\"#s\"/></scene>\n"
+	         "</COLLADA>\n");
+	static const char *const good[] = {"b.stl", "t.3ds", "t.gltf", "t.glb", "a.stl", "t.dae"};
+	for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+		snprintf(p, sizeof p, "%s/%s", dir, good[i]);
+		scene s;
+		load_ok(&s, p);
+		cr_assert_eq(s.ntris, 1, "%s: %u triangles", good[i], s.ntris);
+		scene_free(&s);
+	}
+
+	/* random bytes: another extension, and named as a gzipped OBJ */
+	unsigned char noise[3000];
+	tu_noise(noise, sizeof noise, 28);
+	tu_write_bytes(p, sizeof p, dir, "g.ase", noise, sizeof noise);
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s: unsupported scene format '.ase' (saarsim reads .obj", p);
+	cr_assert(strstr(d.msg, want), "'%s' lacks '%s'", d.msg, want);
+	tu_write_bytes(p, sizeof p, dir, "noext", noise, sizeof noise);
+	load_fails(p, &d);
+	cr_assert(strstr(d.msg, "unsupported scene format (no extension"), "%s", d.msg);
+	tu_write_bytes(p, sizeof p, dir, "x.obj.gz", noise, sizeof noise);
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s:1:", p);
+	cr_assert(strstr(d.msg, want) && strstr(d.msg, "not an OBJ text file (control byte 0x"),
+	          "%s", d.msg);
+
+	/* content that is not what the extension says */
+	struct {
+		const char *name, *text;
+		size_t len; /* 0: strlen */
+		const char *msg;
+	} bad[] = {
+	    {"n.obj", "v 0 0 0\nv 1\x7f 0\n", 0, ":2:4: not an OBJ text file (control byte 0x7f)"},
+	    {"c.stl", "solid t\nfacet normal 0 0 1\x0c\n", 0,
+	     ":2:19: not an ASCII STL text file (control byte 0x0c)"},
+	    {"d.stl", "not solid", 0, ": not an STL file (9 bytes: too short for a binary STL"},
+	    {"e.stl", "", 200, ": not an STL file (a binary STL of 0 triangles has 84 bytes"},
+	    {"t2.3ds", "MM\x05\0\0\0", 6,
+	     ": not a 3DS file (its main chunk says 5 bytes, the file has 6)"},
+	    {"t3.3ds", "PK\x03\x04 zip", 0,
+	     ": not a 3DS file (it does not begin with chunk 0x4D4D)"},
+	    {"t2.glb", "glTF\x02\0\0\0\x63\0\0\0", 12,
+	     ": not a GLB file (its header says 99 bytes, the file has 12)"},
+	    {"t3.glb", "{\"asset\":{}}", 0, ": not a GLB file (it does not begin with 'glTF')"},
+	    {"t2.gltf", "[1, 2]", 0, ": not a glTF JSON file (it does not begin with '{')"},
+	    {"t2.dae", "<?xml version=\"1.0\"?>\n<svg/>\n", 0,
+	     ": not a Collada file (XML with a <COLLADA> element)"},
+	};
+	static const char zeros[200];
+	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+		size_t len = bad[i].len ? bad[i].len : strlen(bad[i].text);
+		const char *bytes = len > strlen(bad[i].text) + 8 ? zeros : bad[i].text;
+		tu_write_bytes(p, sizeof p, dir, bad[i].name, bytes, len);
+		load_fails(p, &d);
+		snprintf(want, sizeof want, "%s%s", p, bad[i].msg);
+		cr_assert(strstr(d.msg, want), "'%s' lacks '%s'", d.msg, want);
+	}
+	/* an MTL with a control byte: named with its line and column */
+	tu_write(p, sizeof p, dir, "m.mtl", "newmtl a\nKd 1 1\x1b 1\n");
+	tu_write(p, sizeof p, dir, "m.obj",
+	         "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+	load_fails(p, &d);
+	snprintf(want, sizeof want, "%s: %s/m.mtl:2:7: not an MTL text file (control byte 0x1b)", p,
+	         dir);
+	cr_assert(strstr(d.msg, want), "'%s' lacks '%s'", d.msg, want);
+}

@@ -212,6 +212,16 @@ static inline void tu_write_bytes(char *out, size_t n, const char *dir, const ch
 	fclose(f);
 }
 
+/* n bytes of noise from seed (the same every run): "random bytes". */
+static inline void tu_noise(unsigned char *buf, size_t n, unsigned seed)
+{
+	unsigned x = seed * 2654435761u + 1;
+	for (size_t i = 0; i < n; i++) {
+		x = x * 1103515245u + 12345u;
+		buf[i] = (unsigned char)(x >> 16);
+	}
+}
+
 /* Seconds on the monotonic clock. */
 static inline double tu_now(void)
 {
