@@ -1,5 +1,7 @@
 /*
- * import.c: scene_load(), scene files through Assimp's C API.
+ * import.c: scene_import_inproc(), scene files through Assimp's C API, in
+ * the calling process. scene_load runs it in a child process under limits
+ * (importproc.c); fuzzers and tests may call it directly.
  *
  * Owns: the formats accepted and their content checks (import_format,
  * content_check), the zlib-backed aiFileIO (so "x.obj.gz" loads as "x.obj"
@@ -9,6 +11,7 @@
  * turns Assimp crashing on a malformed file into an error. The rules are
  * documented in docs/views.md ("Scene files").
  */
+#include "import.h"
 #include "image.h"
 #include "infile.h"
 #include "scene.h"
@@ -139,6 +142,16 @@ static enum aiReturn of_seek(struct aiFile *af, size_t off, enum aiOrigin origin
 
 static void of_flush(struct aiFile *af) {}
 
+/* Set when the import failed for want of memory (Assimp's std::bad_alloc,
+ * an allocation of ours): the importer process reports its memory limit
+ * then. One import at a time, like the crash guard below. */
+static int import_oom;
+
+static int oom_text(const char *m)
+{
+	return strstr(m, "bad_alloc") || strstr(m, "out of memory");
+}
+
 /* Text formats hold no control bytes but tab, LF and CR: the first other
  * byte below 0x20 (or 0x7f) is an error naming its line (counted from
  * first_line) and column. `what` names the kind of file ("an OBJ"). */
@@ -203,6 +216,7 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 			if (st) {
 				if (!c->err[0] && st != ENOENT)
 					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp, err);
+				import_oom |= oom_text(err);
 				return NULL;
 			}
 			diag td;
@@ -805,10 +819,11 @@ static int content_check(scene_fmt fmt, const char *buf, size_t len, const char 
  * SIGBUS, SIGABRT, SIGFPE and SIGILL jump back here (on their own stack,
  * in case the fault is a stack overflow), and Assimp's assert message is
  * kept off stderr (fd 2 points at /dev/null meanwhile; it reports through
- * aiGetErrorString otherwise). What Assimp held is lost then, and the
- * caller is about to exit. A signal handler reaches only static storage,
- * hence the jump buffer below, used only during one import (scene_load is
- * not called from several threads). */
+ * aiGetErrorString otherwise; in the importer process, whose stderr the
+ * parent captures, fd 2 stays: diag_quiet_off). What Assimp held is
+ * lost then, and the caller is about to exit. A signal handler reaches
+ * only static storage, hence the jump buffer below, used only during one
+ * import (imports are not run from several threads). */
 static sigjmp_buf crash_jmp;
 static volatile sig_atomic_t crash_sig;
 
@@ -913,11 +928,15 @@ static int load_texture(scene *s, const struct aiMaterial *am, enum aiTextureTyp
 		}
 	}
 	diag td;
-	if (img_read_rgba8(t.path, &t.w, &t.h, &t.rgba, &td) != 0)
+	if (img_read_rgba8(t.path, &t.w, &t.h, &t.rgba, &td) != 0) {
+		/* the message after the texture's path */
+		import_oom |= oom_text(td.msg + strnlen(t.path, sizeof t.path));
 		return diag_set(d, file, 0, 0, "material '%s': texture %s", mname, td.msg);
+	}
 	texture *nt = realloc(s->texs, (s->ntexs + 1) * sizeof *nt);
 	if (!nt) {
 		free(t.rgba);
+		import_oom = 1;
 		return diag_set(d, file, 0, 0, "out of memory loading textures");
 	}
 	s->texs = nt;
@@ -1036,8 +1055,10 @@ static int convert_scene(scene *s, const struct aiScene *as, const char *dir, co
                          diag *d)
 {
 	uint32_t *remap = malloc((as->mNumMaterials + 1) * sizeof *remap);
-	if (!remap)
+	if (!remap) {
+		import_oom = 1;
 		return diag_set(d, file, 0, 0, "out of memory");
+	}
 	for (unsigned i = 0; i < as->mNumMaterials; i++)
 		remap[i] = UINT32_MAX;
 	for (unsigned i = 0; i < as->mNumMeshes; i++) {
@@ -1098,14 +1119,11 @@ static int convert_scene(scene *s, const struct aiScene *as, const char *dir, co
 	return 0;
 }
 
-int scene_load(scene *s, const char *path, diag *d)
-{
-	return scene_load_files(s, path, NULL, NULL, d);
-}
-
-int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d)
+int import_body(scene *s, const char *path, scene_file_fn fn, void *ctx, int *oom, diag *d)
 {
 	scene_init(s, path);
+	import_oom = 0;
+	*oom = 0;
 	char virt[PATH_MAX_LEN], rp[PATH_MAX_LEN];
 	snprintf(virt, sizeof virt, "%s", path);
 	/* Assimp picks the importer from the extension, so it is handed the
@@ -1134,8 +1152,11 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	cache.fn_ctx = ctx;
 	if (fn)
 		fn(ctx, rp);
-	if (in_read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err, sizeof cache.err) != 0)
+	if (in_read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err, sizeof cache.err) !=
+	    0) {
+		*oom = oom_text(cache.err);
 		return diag_set(d, path, 0, 0, "%s", cache.err);
+	}
 	snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
 	cache.n = 1;
 	if (content_check((scene_fmt)fmt, cache.e[0].buf, cache.e[0].len, path, d) != 0) {
@@ -1165,6 +1186,7 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 			aiReleaseImport(as);
 	} else if (!as) {
 		const char *msg = cache.err[0] ? cache.err : aiGetErrorString();
+		import_oom |= oom_text(msg);
 		/* A file with vertices but no faces ends as Assimp's "No output
 		 * meshes"; say what that means for a ray tracer. */
 		if (strstr(msg, "No output meshes") || strstr(msg, "No meshes remaining"))
@@ -1189,6 +1211,13 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	if (rc != 0) {
 		scene_free(s);
 		scene_init(s, path);
+		*oom = import_oom;
 	}
 	return rc;
+}
+
+int scene_import_inproc(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d)
+{
+	int oom;
+	return import_body(s, path, fn, ctx, &oom, d);
 }

@@ -856,6 +856,12 @@ static int saarsim_env(const char *env, const char *args, double *secs)
 	return rc;
 }
 
+/* A small scene made here (the leash tests need a file that imports). */
+static void tiny_scene(char *p, size_t n)
+{
+	tu_write(p, n, dir, "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+}
+
 /* Issue 28: scene files a user audit found: a form feed before end_header
  * hung saarsim inside Assimp for good; "element 400000000vertex 3" made it
  * allocate 9.4 GB for half a minute (4294967295vertex: std::bad_alloc);
@@ -897,4 +903,81 @@ Test(saarsim_cli, bad_scene_files_are_one_line, .timeout = 240)
 		cr_assert_lt(secs, 20.0, "%s took %.1f s", cases[i].name, secs);
 		one_line_naming(cases[i].msg);
 	}
+}
+
+/* Issue 28: the importer runs in a child process under a CPU limit: one
+ * that spins (the test-only fault hook) ends after SAARSIM_IMPORT_CPU_S
+ * seconds of CPU with one line saying so. */
+Test(saarsim_cli, import_cpu_limit, .timeout = 120)
+{
+	char p[512], args[1024];
+	tiny_scene(p, sizeof p);
+	snprintf(args, sizeof args, "--scene %s --size 8x8 --no-check", p);
+	double secs;
+	cr_assert_eq(saarsim_env("SAAR_IMPORT_FAULT=spin SAARSIM_IMPORT_CPU_S=1", args, &secs), 2,
+	             "%s", slurp("err"));
+	cr_assert_lt(secs, 6.0, "took %.1f s", secs);
+	one_line_naming("t.obj: cannot import scene: the importer (Assimp) used its 1 s CPU limit "
+	                "on it; SAARSIM_IMPORT_CPU_S raises it");
+}
+
+/* ... and an address-space limit: one that allocates without end gets
+ * one line naming the limit. A sanitizer build's child reports the failed
+ * allocation itself; that report is passed on before the line (it was
+ * lost: the import's stderr pointed at /dev/null). */
+Test(saarsim_cli, import_memory_limit, .timeout = 120)
+{
+	char p[512], args[1024];
+	tiny_scene(p, sizeof p);
+	snprintf(args, sizeof args, "--scene %s --size 8x8 --no-check", p);
+	double secs;
+	cr_assert_eq(saarsim_env("SAAR_IMPORT_FAULT=hog SAARSIM_IMPORT_MEM_MB=64", args, &secs), 2,
+	             "%s", slurp("err"));
+	tu_last_line(dir, "saarsim",
+	             "t.obj: cannot import scene: the importer (Assimp) exceeded its 64 MB memory "
+	             "limit; SAARSIM_IMPORT_MEM_MB raises it");
+	if (TU_SANITIZE)
+		cr_assert(strstr(slurp("err"), "AddressSanitizer"), "%s", slurp("err"));
+}
+
+/* ... and a wall-clock deadline (twice the CPU limit and 5 s) for one
+ * that blocks without using CPU; a crash and an exit without a result are
+ * one line each too. */
+Test(saarsim_cli, import_crash_hang_and_exit, .timeout = 120)
+{
+	char p[512], args[1024];
+	tiny_scene(p, sizeof p);
+	snprintf(args, sizeof args, "--scene %s --size 8x8 --no-check", p);
+	double secs;
+	cr_assert_eq(saarsim_env("SAAR_IMPORT_FAULT=crash", args, &secs), 2);
+	one_line_naming("t.obj: cannot import scene: the importer (Assimp) crashed on it "
+	                "(Segmentation fault); the file is malformed");
+	cr_assert_eq(saarsim_env("SAAR_IMPORT_FAULT=exit", args, &secs), 2);
+	one_line_naming("t.obj: cannot import scene: the importer process ended without a result "
+	                "(exit status 1)");
+	cr_assert_eq(saarsim_env("SAAR_IMPORT_FAULT=hang SAARSIM_IMPORT_CPU_S=1", args, &secs), 2);
+	cr_assert(secs > 6.5 && secs < 30.0, "took %.1f s", secs);
+	one_line_naming("t.obj: cannot import scene: the importer (Assimp) was stopped after 7 s "
+	                "of wall-clock time (twice its CPU limit and 5 s); SAARSIM_IMPORT_CPU_S "
+	                "raises it");
+}
+
+/* The limits' variables are checked: a bad value is one line naming it. */
+Test(saarsim_cli, import_limits_are_checked)
+{
+	char p[512], args[1024];
+	tiny_scene(p, sizeof p);
+	snprintf(args, sizeof args, "--scene %s --size 8x8 --no-check", p);
+	const char *bad[][2] = {{"SAARSIM_IMPORT_CPU_S=abc", "SAARSIM_IMPORT_CPU_S: 'abc' is not"},
+	                        {"SAARSIM_IMPORT_CPU_S=0", "whole number of seconds from 1 to"},
+	                        {"SAARSIM_IMPORT_CPU_S=99999999999", "SAARSIM_IMPORT_CPU_S"},
+	                        {"SAARSIM_IMPORT_MEM_MB=-5", "SAARSIM_IMPORT_MEM_MB: '-5' is not"},
+	                        {"SAARSIM_IMPORT_MEM_MB=12x", "whole number of megabytes from 1"}};
+	double secs;
+	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+		cr_assert_eq(saarsim_env(bad[i][0], args, &secs), 2, "%s", bad[i][0]);
+		one_line_naming(bad[i][1]);
+	}
+	cr_assert_eq(saarsim_env("SAARSIM_IMPORT_CPU_S=30 SAARSIM_IMPORT_MEM_MB=2048", args, &secs),
+	             0, "%s", slurp("err"));
 }
