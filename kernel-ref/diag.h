@@ -33,4 +33,10 @@ int diag_set(diag *d, const char *file, int line, int col, const char *fmt, ...)
 int diag_quiet_begin(void);
 void diag_quiet_end(int saved);
 
+/* For a process whose fd 2 is captured by its parent (the importer
+ * process, importproc.c): from now on diag_quiet_begin leaves fd 2 alone,
+ * so a library's lines land in the capture (the parent drops them) and a
+ * sanitizer's report there is not lost. */
+void diag_quiet_off(void);
+
 #endif

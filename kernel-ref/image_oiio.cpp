@@ -114,7 +114,19 @@ static int read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, char *er
 
 static const img_plugin plugin = {IMG_PLUGIN_ABI, write_rgb, can_write, read_rgba8};
 
+/* No worker pools: OpenImageIO's own and OpenEXR's (which an EXR read or
+ * write, or an EXR writer's creation, starts) would be threads the scene
+ * importer's child process does not have, and an EXR texture read there
+ * waited on them for good (importproc.c forks after rtref and saarsim
+ * open this plugin for --out). Images are read and written on the
+ * calling thread instead; saarsim's frames and textures are small. */
 extern "C" const img_plugin *saar_image_plugin(void)
 {
+	static const bool serial = [] {
+		OIIO::attribute("threads", 1);
+		OIIO::attribute("exr_threads", -1);
+		return true;
+	}();
+	(void)serial;
 	return &plugin;
 }

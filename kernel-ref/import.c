@@ -1,13 +1,17 @@
 /*
- * import.c: scene_load(), scene files through Assimp's C API.
+ * import.c: scene_import_inproc(), scene files through Assimp's C API, in
+ * the calling process. scene_load runs it in a child process under limits
+ * (importproc.c); fuzzers and tests may call it directly.
  *
- * Owns: the zlib-backed aiFileIO (so "x.obj.gz" loads as "x.obj" while the
- * .mtl beside it is still read from disk), the OBJ text pre-scan that gives
- * NaN/Inf and malformed numbers a line number, and the mapping of Assimp
- * materials and textures onto scene.h, and the guard that turns Assimp
- * crashing on a malformed file into an error. The rules are documented in
- * docs/views.md ("Scene files").
+ * Owns: the formats accepted and their content checks (import_format,
+ * content_check), the zlib-backed aiFileIO (so "x.obj.gz" loads as "x.obj"
+ * while the .mtl beside it is still read from disk), the OBJ and PLY
+ * pre-scans that give bad numbers, indices and headers a line number, the
+ * mapping of Assimp materials and textures onto scene.h, and the guard that
+ * turns Assimp crashing on a malformed file into an error. The rules are
+ * documented in docs/views.md ("Scene files").
  */
+#include "import.h"
 #include "image.h"
 #include "infile.h"
 #include "scene.h"
@@ -20,6 +24,7 @@
 #include <assimp/scene.h>
 #include <ctype.h>
 #include <errno.h>
+#include <limits.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdio.h>
@@ -31,12 +36,13 @@
 
 #define PATH_MAX_LEN 1024
 
-/* Files held in memory. Assimp opens the main file twice (an existence
- * probe, then the read), so the decompressed (or pre-scanned) text is kept
- * and served from memory instead of being inflated twice. Entries live
- * until scene_load returns: a stream may still be reading one (the OBJ)
- * while another (a gzipped MTL) is opened. */
-#define CACHE_MAX 8
+/* Files held in memory: the scene file (its content is checked before
+ * Assimp sees it), MTL files (checked as text) and gzipped files. Assimp
+ * opens the main file twice (an existence probe, then the read), so it is
+ * read and inflated once and served from memory. Entries live until the
+ * import returns: a stream may still be reading one (the OBJ) while
+ * another (a gzipped MTL) is opened. */
+#define CACHE_MAX 16
 typedef struct memcache {
 	struct {
 		char path[PATH_MAX_LEN]; /* real path on disk */
@@ -45,6 +51,7 @@ typedef struct memcache {
 	} e[CACHE_MAX];
 	int n;
 	char err[512];    /* first I/O error, reported instead of Assimp's */
+	int bad;          /* err is a content check's: the import fails */
 	scene_file_fn fn; /* told of every file opened (scene_load_files) */
 	void *fn_ctx;
 } memcache;
@@ -135,6 +142,41 @@ static enum aiReturn of_seek(struct aiFile *af, size_t off, enum aiOrigin origin
 
 static void of_flush(struct aiFile *af) {}
 
+/* Set when the import failed for want of memory (Assimp's std::bad_alloc,
+ * an allocation of ours): the importer process reports its memory limit
+ * then. One import at a time, like the crash guard below. */
+static int import_oom;
+
+static int oom_text(const char *m)
+{
+	return strstr(m, "bad_alloc") || strstr(m, "out of memory");
+}
+
+/* Text formats hold no control bytes but tab, LF and CR: the first other
+ * byte below 0x20 (or 0x7f) is an error naming its line (counted from
+ * first_line) and column. `what` names the kind of file ("an OBJ"). */
+static int text_check(const char *buf, size_t len, long first_line, const char *file,
+                      const char *what, diag *d)
+{
+	long line = first_line;
+	size_t ls = 0;
+	for (size_t i = 0; i < len; i++) {
+		unsigned char c = (unsigned char)buf[i];
+		if (c >= 0x20 && c != 0x7f)
+			continue;
+		if (c == '\n') {
+			line++;
+			ls = i + 1;
+		} else if (c != '\t' && c != '\r') {
+			size_t col = i - ls + 1;
+			return diag_set(d, file, line > INT_MAX ? INT_MAX : (int)line,
+			                col > INT_MAX ? INT_MAX : (int)col,
+			                "not %s text file (control byte 0x%02x)", what, c);
+		}
+	}
+	return 0;
+}
+
 static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char *mode)
 {
 	memcache *c = (memcache *)io->UserData;
@@ -142,12 +184,14 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 		return NULL;
 	char rp[PATH_MAX_LEN];
 	int gz = real_path(name, rp, sizeof rp);
+	/* an MTL is text too: read whole and checked like the OBJ */
+	int mtl = ends_with(rp, ".mtl") || ends_with(rp, ".mtl.gz");
 	FILE *fp = NULL;
 	int k = 0;
 	while (k < c->n && strcmp(rp, c->e[k].path) != 0)
 		k++;
 	if (k == c->n) {
-		if (!gz) {
+		if (!gz && !mtl) {
 			int st = in_open(rp, &fp);
 			if (st) {
 				/* Assimp says only "cannot open" (or, for a
@@ -159,11 +203,29 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 			}
 		} else {
 			char err[256];
-			if (c->n == CACHE_MAX)
+			if (c->n == CACHE_MAX) {
+				if (!c->err[0]) {
+					snprintf(c->err, sizeof c->err,
+					         "the scene refers to more than %d files",
+					         CACHE_MAX);
+					c->bad = 1;
+				}
 				return NULL;
-			if (in_read_all(rp, 1, &c->e[k].buf, &c->e[k].len, err, sizeof err) != 0) {
-				if (!c->err[0] && access(rp, F_OK) == 0)
+			}
+			int st = in_read_all(rp, gz, &c->e[k].buf, &c->e[k].len, err, sizeof err);
+			if (st) {
+				if (!c->err[0] && st != ENOENT)
 					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp, err);
+				import_oom |= oom_text(err);
+				return NULL;
+			}
+			diag td;
+			if (mtl && text_check(c->e[k].buf, c->e[k].len, 1, rp, "an MTL", &td)) {
+				free(c->e[k].buf);
+				if (!c->err[0]) {
+					snprintf(c->err, sizeof c->err, "%.500s", td.msg);
+					c->bad = 1;
+				}
 				return NULL;
 			}
 			snprintf(c->e[k].path, sizeof c->e[k].path, "%s", rp);
@@ -361,18 +423,57 @@ static int ply_type_size(const char *t, size_t n)
 	return 0;
 }
 
-/* The next whitespace-separated token of [*s, e): its start in *t and length
- * (0 at the end of the range); *s moves past it. */
+/* PLY text is split on spaces and tabs only. isspace also takes a form
+ * feed or vertical tab for a blank, while Assimp 5.2 takes them for line
+ * ends (and never returned on a form feed before end_header), so the two
+ * readings of such a file would differ: ply_line refuses them. */
+static int ply_blank(char c)
+{
+	return c == ' ' || c == '\t';
+}
+
+/* The next token of [*s, e) between spaces and tabs: its start in *t and
+ * length (0 at the end of the range); *s moves past it. */
 static size_t ply_tok(const char **s, const char *e, const char **t)
 {
 	const char *p = *s;
-	while (p < e && isspace((unsigned char)*p))
+	while (p < e && ply_blank(*p))
 		p++;
 	*t = p;
-	while (p < e && !isspace((unsigned char)*p))
+	while (p < e && !ply_blank(*p))
 		p++;
 	*s = p;
 	return (size_t)(p - *t);
+}
+
+/* The text line ln starting at p: its end in *eol (before the '\n', and
+ * before a '\r' just ahead of it) and the next line's start in *next. A
+ * control byte on it (below 0x20 but a tab, or 0x7f) is an error naming
+ * its line and column; `where` says which part of the file it is in. */
+static int ply_line(const char *p, const char *end, const char **eol, const char **next,
+                    const char *file, int ln, const char *where, diag *d)
+{
+	const char *nl = memchr(p, '\n', (size_t)(end - p));
+	const char *e = nl ? nl : end;
+	*next = nl ? nl + 1 : end;
+	if (e > p && e[-1] == '\r')
+		e--;
+	for (const char *q = p; q < e; q++) {
+		unsigned char c = (unsigned char)*q;
+		if ((c < 0x20 && c != '\t') || c == 0x7f)
+			return diag_set(d, file, ln, (int)(q - p) + 1,
+			                "control byte 0x%02x in the PLY %s", c, where);
+	}
+	*eol = e;
+	return 0;
+}
+
+/* A PLY element or property name starts with a letter or an underscore:
+ * Assimp read "element 400000000vertex 3" as 400000000 vertices. */
+static int ply_name_ok(const char *t, size_t n)
+{
+	char c = n ? *t : '\0';
+	return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
 }
 
 static int tok_is(const char *t, size_t n, const char *word)
@@ -392,18 +493,25 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 	for (int ln = 1;; ln++) {
 		if (p >= end)
 			return diag_set(d, file, 0, 0, "PLY header has no end_header line");
-		const char *eol = memchr(p, '\n', (size_t)(end - p));
-		if (!eol)
-			eol = end;
-		const char *s = p, *t, *ls = p;
-		size_t n = ply_tok(&s, eol, &t);
-		p = eol < end ? eol + 1 : end;
-#define COL ((int)(t - ls) + 1)
-		if (ln == 1) {
-			if (!tok_is(t, n, "ply") || ply_tok(&s, eol, &t))
-				return diag_set(d, file, 1, 0, "not a PLY file (no 'ply' line)");
+		const char *eol, *next, *ls = p;
+		if (ln == 1) { /* exactly "ply", before anything else is read */
+			const char *nl = memchr(p, '\n', (size_t)(end - p));
+			size_t k = nl ? (size_t)(nl - p) : (size_t)(end - p);
+			if (k && p[k - 1] == '\r')
+				k--;
+			if (k != 3 || memcmp(p, "ply", 3) != 0)
+				return diag_set(
+				    d, file, 1, 0,
+				    "not a PLY file (it does not begin with a 'ply' line)");
+			p = nl ? nl + 1 : end;
 			continue;
 		}
+		if (ply_line(p, end, &eol, &next, file, ln, "header", d))
+			return -1;
+		const char *s = p, *t;
+		size_t n = ply_tok(&s, eol, &t);
+		p = next;
+#define COL ((int)(t - ls) + 1)
 		if (n == 0 || tok_is(t, n, "comment") || tok_is(t, n, "obj_info"))
 			continue;
 		if (tok_is(t, n, "end_header")) {
@@ -435,6 +543,12 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			n = ply_tok(&s, eol, &t);
 			if (!n)
 				return diag_set(d, file, ln, 0, "element without a name");
+			if (!ply_name_ok(t, n))
+				return diag_set(
+				    d, file, ln, COL,
+				    "element name '%.*s' does not begin with a letter or "
+				    "underscore",
+				    (int)(n > 40 ? 40 : n), t);
 			snprintf(e->name, sizeof e->name, "%.*s", (int)n, t);
 			n = ply_tok(&s, eol, &t);
 			char *cend;
@@ -471,8 +585,15 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			pr->isize = (unsigned char)ply_type_size(t, n);
 			if (!pr->isize)
 				goto bad_type;
-			if (!ply_tok(&s, eol, &t))
+			n = ply_tok(&s, eol, &t);
+			if (!n)
 				return diag_set(d, file, ln, 0, "property without a name");
+			if (!ply_name_ok(t, n))
+				return diag_set(
+				    d, file, ln, COL,
+				    "property name '%.*s' does not begin with a letter or "
+				    "underscore",
+				    (int)(n > 40 ? 40 : n), t);
 			continue;
 		bad_type:
 			return diag_set(d, file, ln, n ? COL : 0, "unknown PLY type '%.*s'",
@@ -509,6 +630,8 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 	size_t at = 0;
 	if (ply_header(buf, len, file, el, &nel, &fmt, &at, &line, d))
 		return -1;
+	if (fmt == 0 && text_check(buf + at, len - at, line + 1, file, "an ASCII PLY", d))
+		return -1;
 	const char *p = buf + at, *end = buf + len;
 	for (int k = 0; k < nel; k++) {
 		const ply_elem *e = &el[k];
@@ -537,9 +660,9 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 			line++;
 			if (p >= end)
 				return ply_short(file, 0, e, i, d);
-			const char *eol = memchr(p, '\n', (size_t)(end - p));
-			if (!eol)
-				eol = end;
+			const char *eol, *next;
+			if (ply_line(p, end, &eol, &next, file, line, "data", d))
+				return -1;
 			const char *s = p, *t;
 			for (int j = 0; j < e->nprops; j++) {
 				unsigned long long items = 1;
@@ -566,8 +689,124 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 						                "header declares",
 						                e->name, i + 1);
 			}
-			p = eol < end ? eol + 1 : end;
+			p = next;
 		}
+	}
+	return 0;
+}
+
+/* The formats saarsim reads (docs/views.md, "Scene files"): Assimp 5.2
+ * guesses at many more (3,000 random bytes named .ase were an 8-triangle
+ * scene), so only these extensions are handed to it, and only when the
+ * content is what the extension says (content_check). */
+typedef enum { FMT_OBJ, FMT_PLY, FMT_STL, FMT_3DS, FMT_GLTF, FMT_GLB, FMT_DAE } scene_fmt;
+
+static const struct {
+	const char *ext;
+	scene_fmt fmt;
+} formats[] = {{".obj", FMT_OBJ},   {".ply", FMT_PLY}, {".stl", FMT_STL}, {".3ds", FMT_3DS},
+               {".gltf", FMT_GLTF}, {".glb", FMT_GLB}, {".dae", FMT_DAE}};
+
+#define FORMAT_LIST ".obj (with .mtl), .ply, .stl, .3ds, .gltf, .glb and .dae, each also gzipped"
+
+/* The format of virt (the name without ".gz"), or -1. */
+static int import_format(const char *virt)
+{
+	for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++)
+		if (ends_with(virt, formats[i].ext))
+			return (int)formats[i].fmt;
+	return -1;
+}
+
+static uint32_t le32(const char *p)
+{
+	const unsigned char *u = (const unsigned char *)p;
+	return (uint32_t)u[0] | (uint32_t)u[1] << 8 | (uint32_t)u[2] << 16 | (uint32_t)u[3] << 24;
+}
+
+/* The first byte of text past a UTF-8 byte order mark and blanks. */
+static const char *text_start(const char *buf, size_t len)
+{
+	const char *p = buf, *end = buf + len;
+	if (len >= 3 && !memcmp(p, "\xef\xbb\xbf", 3))
+		p += 3;
+	while (p < end && (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n'))
+		p++;
+	return p;
+}
+
+/* Is the scene file's content the format its extension names? Then the
+ * format's own pre-scan (OBJ, PLY). */
+static int content_check(scene_fmt fmt, const char *buf, size_t len, const char *file, diag *d)
+{
+	const char *p = text_start(buf, len), *end = buf + len;
+	switch (fmt) {
+	case FMT_OBJ:
+		if (text_check(buf, len, 1, file, "an OBJ", d))
+			return -1;
+		return obj_scan(buf, file, d);
+	case FMT_PLY:
+		return ply_scan(buf, len, file, d);
+	case FMT_STL: {
+		/* binary: an 80-byte header, a triangle count, 50 bytes each
+		 * (the header may begin with "solid" too) */
+		if (len >= 84 && 84 + 50 * (uint64_t)le32(buf + 80) == len)
+			return 0;
+		if ((size_t)(end - p) < 5 || memcmp(p, "solid", 5) != 0) {
+			if (len < 84)
+				return diag_set(
+				    d, file, 0, 0,
+				    "not an STL file (%zu bytes: too short for a binary "
+				    "STL, and it does not begin with 'solid')",
+				    len);
+			return diag_set(d, file, 0, 0,
+			                "not an STL file (a binary STL of %u triangles has %llu "
+			                "bytes, not %zu, and it does not begin with 'solid')",
+			                le32(buf + 80),
+			                84 + 50 * (unsigned long long)le32(buf + 80), len);
+		}
+		return text_check(buf, len, 1, file, "an ASCII STL", d);
+	}
+	case FMT_3DS: {
+		unsigned id = len >= 2 ? (unsigned char)buf[0] | (unsigned char)buf[1] << 8 : 0;
+		if (len < 6 || id != 0x4D4D)
+			return diag_set(d, file, 0, 0,
+			                "not a 3DS file (it does not begin with chunk 0x4D4D)");
+		if (le32(buf + 2) != len)
+			return diag_set(d, file, 0, 0,
+			                "not a 3DS file (its main chunk says %u bytes, the file "
+			                "has %zu)",
+			                le32(buf + 2), len);
+		return 0;
+	}
+	case FMT_GLB:
+		if (len < 4 || memcmp(buf, "glTF", 4) != 0)
+			return diag_set(d, file, 0, 0,
+			                "not a GLB file (it does not begin with 'glTF')");
+		if (len < 12)
+			return diag_set(d, file, 0, 0,
+			                "not a GLB file (%zu bytes: no whole header)", len);
+		if (le32(buf + 8) != len)
+			return diag_set(
+			    d, file, 0, 0,
+			    "not a GLB file (its header says %u bytes, the file has %zu)",
+			    le32(buf + 8), len);
+		return 0;
+	case FMT_GLTF:
+		if (text_check(buf, len, 1, file, "a glTF JSON", d))
+			return -1;
+		if (p == end || *p != '{')
+			return diag_set(d, file, 0, 0,
+			                "not a glTF JSON file (it does not begin with '{')");
+		return 0;
+	case FMT_DAE:
+		if (text_check(buf, len, 1, file, "a Collada XML", d))
+			return -1;
+		/* no NUL in it now, and in_read_all ends it with one */
+		if (p == end || *p != '<' || !strstr(buf, "<COLLADA"))
+			return diag_set(d, file, 0, 0,
+			                "not a Collada file (XML with a <COLLADA> element)");
+		return 0;
 	}
 	return 0;
 }
@@ -580,10 +819,11 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
  * SIGBUS, SIGABRT, SIGFPE and SIGILL jump back here (on their own stack,
  * in case the fault is a stack overflow), and Assimp's assert message is
  * kept off stderr (fd 2 points at /dev/null meanwhile; it reports through
- * aiGetErrorString otherwise). What Assimp held is lost then, and the
- * caller is about to exit. A signal handler reaches only static storage,
- * hence the jump buffer below, used only during one import (scene_load is
- * not called from several threads). */
+ * aiGetErrorString otherwise; in the importer process, whose stderr the
+ * parent captures, fd 2 stays: diag_quiet_off). What Assimp held is
+ * lost then, and the caller is about to exit. A signal handler reaches
+ * only static storage, hence the jump buffer below, used only during one
+ * import (imports are not run from several threads). */
 static sigjmp_buf crash_jmp;
 static volatile sig_atomic_t crash_sig;
 
@@ -688,11 +928,15 @@ static int load_texture(scene *s, const struct aiMaterial *am, enum aiTextureTyp
 		}
 	}
 	diag td;
-	if (img_read_rgba8(t.path, &t.w, &t.h, &t.rgba, &td) != 0)
+	if (img_read_rgba8(t.path, &t.w, &t.h, &t.rgba, &td) != 0) {
+		/* the message after the texture's path */
+		import_oom |= oom_text(td.msg + strnlen(t.path, sizeof t.path));
 		return diag_set(d, file, 0, 0, "material '%s': texture %s", mname, td.msg);
+	}
 	texture *nt = realloc(s->texs, (s->ntexs + 1) * sizeof *nt);
 	if (!nt) {
 		free(t.rgba);
+		import_oom = 1;
 		return diag_set(d, file, 0, 0, "out of memory loading textures");
 	}
 	s->texs = nt;
@@ -811,8 +1055,10 @@ static int convert_scene(scene *s, const struct aiScene *as, const char *dir, co
                          diag *d)
 {
 	uint32_t *remap = malloc((as->mNumMaterials + 1) * sizeof *remap);
-	if (!remap)
+	if (!remap) {
+		import_oom = 1;
 		return diag_set(d, file, 0, 0, "out of memory");
+	}
 	for (unsigned i = 0; i < as->mNumMaterials; i++)
 		remap[i] = UINT32_MAX;
 	for (unsigned i = 0; i < as->mNumMeshes; i++) {
@@ -873,20 +1119,28 @@ static int convert_scene(scene *s, const struct aiScene *as, const char *dir, co
 	return 0;
 }
 
-int scene_load(scene *s, const char *path, diag *d)
-{
-	return scene_load_files(s, path, NULL, NULL, d);
-}
-
-int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d)
+int import_body(scene *s, const char *path, scene_file_fn fn, void *ctx, int *oom, diag *d)
 {
 	scene_init(s, path);
+	import_oom = 0;
+	*oom = 0;
 	char virt[PATH_MAX_LEN], rp[PATH_MAX_LEN];
 	snprintf(virt, sizeof virt, "%s", path);
 	/* Assimp picks the importer from the extension, so it is handed the
 	 * name without ".gz"; io_open maps it back. */
 	if (ends_with(virt, ".gz"))
 		virt[strlen(virt) - 3] = '\0';
+	int fmt = import_format(virt);
+	if (fmt < 0) {
+		const char *slash = strrchr(virt, '/'), *dot = strrchr(virt, '.');
+		if (!dot || (slash && dot < slash))
+			return diag_set(d, path, 0, 0,
+			                "unsupported scene format (no extension; saarsim reads %s)",
+			                FORMAT_LIST);
+		return diag_set(d, path, 0, 0,
+		                "unsupported scene format '%.40s' (saarsim reads %s)", dot,
+		                FORMAT_LIST);
+	}
 	int gz = real_path(virt, rp, sizeof rp);
 	int st = in_check(rp);
 	if (st)
@@ -898,21 +1152,16 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	cache.fn_ctx = ctx;
 	if (fn)
 		fn(ctx, rp);
-	int obj = ends_with(virt, ".obj"), ply = ends_with(virt, ".ply");
-	if (obj || ply) {
-		if (in_read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err,
-		                sizeof cache.err) != 0)
-			return diag_set(d, path, 0, 0, "%s", cache.err);
-		snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
-		cache.n = 1;
-		if (ply && ply_scan(cache.e[0].buf, cache.e[0].len, path, d) != 0) {
-			free(cache.e[0].buf);
-			return -1;
-		}
-		if (obj && obj_scan(cache.e[0].buf, path, d) != 0) {
-			free(cache.e[0].buf);
-			return -1;
-		}
+	if (in_read_all(rp, gz, &cache.e[0].buf, &cache.e[0].len, cache.err, sizeof cache.err) !=
+	    0) {
+		*oom = oom_text(cache.err);
+		return diag_set(d, path, 0, 0, "%s", cache.err);
+	}
+	snprintf(cache.e[0].path, sizeof cache.e[0].path, "%s", rp);
+	cache.n = 1;
+	if (content_check((scene_fmt)fmt, cache.e[0].buf, cache.e[0].len, path, d) != 0) {
+		free(cache.e[0].buf);
+		return -1;
 	}
 
 	struct aiFileIO io = {io_open, io_close, (aiUserData)&cache};
@@ -929,8 +1178,15 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 		              "cannot import scene: the importer (Assimp) crashed on it (%s); the "
 		              "file is malformed",
 		              strsignal(sig));
+	} else if (cache.bad) {
+		/* a file it opened failed its check (an MTL with control bytes):
+		 * Assimp passed over it as missing */
+		rc = diag_set(d, path, 0, 0, "%s", cache.err);
+		if (as)
+			aiReleaseImport(as);
 	} else if (!as) {
 		const char *msg = cache.err[0] ? cache.err : aiGetErrorString();
+		import_oom |= oom_text(msg);
 		/* A file with vertices but no faces ends as Assimp's "No output
 		 * meshes"; say what that means for a ray tracer. */
 		if (strstr(msg, "No output meshes") || strstr(msg, "No meshes remaining"))
@@ -955,6 +1211,13 @@ int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, di
 	if (rc != 0) {
 		scene_free(s);
 		scene_init(s, path);
+		*oom = import_oom;
 	}
 	return rc;
+}
+
+int scene_import_inproc(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d)
+{
+	int oom;
+	return import_body(s, path, fn, ctx, &oom, d);
 }

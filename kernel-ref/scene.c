@@ -17,7 +17,9 @@ static void *xrealloc(void *p, size_t n)
 	void *q = realloc(p, n);
 	if (!q && n) {
 		/* Out of memory while building a scene is not bad input; there is
-		 * nothing sensible to continue with. */
+		 * nothing sensible to continue with. The line says why (the
+		 * importer process reports its memory limit on it). */
+		fputs("scene: out of memory building the scene\n", stderr);
 		abort();
 	}
 	return q;

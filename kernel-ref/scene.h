@@ -3,10 +3,10 @@
  *
  * A scene is a flat triangle soup with per-corner normals and texture
  * coordinates, a material per triangle and decoded textures. Importers
- * (import.c: Assimp, .gz through zlib), the embedded default scene
- * (default_scene.c) and procedural generators all fill it through the small
- * builder API below, so everything downstream (kd-tree, memory image,
- * tracer, chip model) sees one representation.
+ * (import.c: Assimp, .gz through zlib, run by importproc.c), the embedded
+ * default scene (default_scene.c) and procedural generators all fill it
+ * through the small builder API below, so everything downstream (kd-tree,
+ * memory image, tracer, chip model) sees one representation.
  *
  * Invariants after scene_finish(): ntris > 0; every position is finite;
  * n[] is never NULL (face normals are filled in when the file had none, and
@@ -58,20 +58,35 @@ typedef struct scene {
 	uint32_t ndegenerate; /* zero-area triangles kept as they are */
 } scene;
 
-/* Loads a scene file through Assimp (OBJ+MTL, PLY, 3DS, glTF, ...). A path
- * ending in .gz is decompressed with zlib first; files it refers to (an
- * MTL beside the OBJ) are still found next to it. Textures named by the
- * materials are read with OpenImageIO. Fails (diag filled, -1) on a missing
- * or unreadable file, a malformed scene, NaN/Inf positions or zero
- * triangles. */
+/* Loads a scene file through Assimp: .obj (with .mtl), .ply, .stl, .3ds,
+ * .gltf, .glb or .dae, its content checked against the extension first. A
+ * path ending in .gz is decompressed with zlib first; files it refers to
+ * (an MTL beside the OBJ) are still found next to it. Textures named by
+ * the materials are read with OpenImageIO. Fails (diag filled, -1) on an
+ * unsupported format, a missing or unreadable file, a malformed scene,
+ * NaN/Inf positions or zero triangles.
+ *
+ * The import runs in a child process under a CPU and an address-space
+ * limit (importproc.c; docs/design.md, "Third-party parsers"), so a file
+ * that makes Assimp loop, allocate without end or crash is an error too.
+ * SAARSIM_IMPORT_CPU_S and SAARSIM_IMPORT_MEM_MB set the limits; a bad
+ * value is an error naming the variable. */
 int scene_load(scene *s, const char *path, diag *d);
 
 /* scene_load, and calls fn(ctx, path) for the scene file and every other
  * file the import opens through Assimp (an MTL, a glTF buffer): what a
  * cache of the built scene must watch (worldcache.c). Textures are not
- * passed; their paths are in s->texs. fn may see a path more than once. */
+ * passed; their paths are in s->texs. fn may see a path more than once;
+ * it runs in the calling process, after the import. */
 typedef void (*scene_file_fn)(void *ctx, const char *path);
 int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d);
+
+/* The same import in the calling process, without the child process and
+ * its limits: for fuzzers and tests that exercise the checks and the
+ * conversion themselves. Assimp's stderr is silenced while it runs. Not
+ * for user input in the programs: a file that makes Assimp hang hangs the
+ * caller. */
+int scene_import_inproc(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d);
 
 /* The embedded default scene: a Cornell-like room with a diffuse box, a
  * mirror sphere and a glass sphere (tessellated), needing no files. Its

@@ -15,7 +15,8 @@
 #include <time.h>
 
 const char world_usage[] =
-    "  --scene PATH          scene file (OBJ/PLY/3DS/glTF, .gz ok) or a procedural scene\n"
+    "  --scene PATH          scene file (.obj .ply .stl .3ds .gltf .glb .dae, .gz ok; limits:\n"
+    "                        SAARSIM_IMPORT_CPU_S, SAARSIM_IMPORT_MEM_MB) or a procedural scene\n"
     "                        spd:balls|tetra|mount|rings|cornell[:SIZE[:TESS]] (docs/spd.md);\n"
     "                        default: the view's scene, else the embedded Cornell-like room\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"

@@ -188,3 +188,26 @@ Test(rtref_cli, world_cache_gives_the_same_frame)
 		cr_assert_eq(tu_run(cmd), 0, "run %d: the frames differ", i);
 	}
 }
+
+/* Issue 28: a PLY with a form feed before end_header hung rtref inside
+ * Assimp; 3,000 random bytes named g.ase rendered as a scene. Each is one
+ * line and exit 2, at once. (timeout: the old code hangs.) */
+Test(rtref_cli, bad_scene_files_are_one_line, .timeout = 120)
+{
+	char p[512], args[1024], cmd[2048];
+	tu_write(
+	    p, sizeof p, dir, "h.ply",
+	    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\fend_header\n0\n0\n0\n");
+	snprintf(args, sizeof args, "--scene %s --size 8x8 --out %s/f.png", p, dir);
+	snprintf(cmd, sizeof cmd, "timeout 60 %s/rtref %s >%s/out 2>%s/err", tu_bin_dir(), args,
+	         dir, dir);
+	cr_assert_eq(tu_run(cmd), 2);
+	one_line_naming("h.ply:5:1: control byte 0x0c in the PLY header");
+	unsigned char noise[3000];
+	tu_noise(noise, sizeof noise, 28);
+	tu_write_bytes(p, sizeof p, dir, "g.ase", noise, sizeof noise);
+	snprintf(args, sizeof args, "--scene %s --size 8x8 --out %s/f.png", p, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("g.ase: unsupported scene format '.ase'");
+	cr_assert_not(exists("f.png"));
+}

@@ -16,9 +16,19 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "image.h"
+
+/* 1 in a sanitizer build (make SANITIZE=1, which compiles the tests with
+ * -fsanitize=address too): there a sanitizer's own report may come before
+ * a program's one line. */
+#ifdef __SANITIZE_ADDRESS__
+#define TU_SANITIZE 1
+#else
+#define TU_SANITIZE 0
+#endif
 
 static inline const char *tu_scenes_dir(void)
 {
@@ -254,6 +264,59 @@ static inline void tu_one_line(const char *dir, const char *prog, const char *wh
 	cr_assert(!strncmp(buf, prog, n) && buf[n] == ':' && buf[n + 1] == ' ',
 	          "stderr does not start with '%s: ': %s", prog, buf);
 	cr_assert(strstr(buf, what), "stderr does not name '%s': %s", what, buf);
+}
+
+/* Writes len bytes to dir/name (NULs and all), returns the path in out. */
+static inline void tu_write_bytes(char *out, size_t n, const char *dir, const char *name,
+                                  const void *bytes, size_t len)
+{
+	snprintf(out, n, "%s/%s", dir, name);
+	FILE *f = fopen(out, "wb");
+	cr_assert(f, "cannot write %s", out);
+	cr_assert_eq(fwrite(bytes, 1, len, f), len);
+	fclose(f);
+}
+
+/* n bytes of noise from seed (the same every run): "random bytes". */
+static inline void tu_noise(unsigned char *buf, size_t n, unsigned seed)
+{
+	unsigned x = seed * 2654435761u + 1;
+	for (size_t i = 0; i < n; i++) {
+		x = x * 1103515245u + 12345u;
+		buf[i] = (unsigned char)(x >> 16);
+	}
+}
+
+/* Seconds on the monotonic clock. */
+static inline double tu_now(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* dir/err ends with the line "prog: ..." containing what, and holds
+ * nothing else but, in a sanitizer build, a sanitizer's report before it
+ * (an importer process passes its report on before the program's line). */
+static inline void tu_last_line(const char *dir, const char *prog, const char *what)
+{
+	if (!TU_SANITIZE) {
+		tu_one_line(dir, prog, what);
+		return;
+	}
+	char *buf = tu_slurp(dir, "err");
+	size_t len = strlen(buf);
+	cr_assert(len && buf[len - 1] == '\n', "stderr does not end in a line: %s", buf);
+	buf[len - 1] = 0;
+	char *last = strrchr(buf, '\n');
+	last = last ? last + 1 : buf;
+	size_t n = strlen(prog);
+	cr_assert(!strncmp(last, prog, n) && last[n] == ':' && last[n + 1] == ' ',
+	          "last line does not start with '%s: ': %s", prog, last);
+	cr_assert(strstr(last, what), "last line does not name '%s': %s", what, last);
+	if (last != buf)
+		cr_assert(strstr(buf, "Sanitizer"), "lines before the last are no sanitizer's: %s",
+		          buf);
 }
 
 #endif
