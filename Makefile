@@ -6,6 +6,7 @@
 #   make bench      benchmarks; writes docs/PERFORMANCE.md
 #   make install    install binaries into $(PREFIX)/bin
 #   make SANITIZE=1 test   the same under ASan/UBSan (build-san/)
+#   make fuzz-smoke libFuzzer harnesses, each run briefly (docs/TESTING.md)
 #
 # One static library (libsaar.a) holds kernel-ref and the chip model; the
 # programs and the test binary link against it. OpenImageIO lives in a
@@ -143,6 +144,44 @@ stress: all
 	./$(B)/saarsim-stress --out docs/NUMERICS.md
 	sh scripts/precision-chip.sh $(B)
 
+# ---- fuzzing (docs/TESTING.md) ----
+# libFuzzer harnesses (clang) for the config, views, OBJ, PLY and memory
+# trace readers: `make fuzz` builds them into build-fuzz/, `make
+# fuzz-smoke` runs each for FUZZ_SECONDS (default 20) from the seeds in
+# tests/fuzz/seeds/ and files the repository and shared scenes already
+# have; FUZZ_SECONDS=600 is the long run. A finding stops the run with the
+# input saved as build-fuzz/<harness>-crash-*.
+FZ_B      := build-fuzz
+FZ_CC     ?= clang
+FZ_CXX    ?= clang++
+FZ_SAN    := -fsanitize=address,undefined -fno-sanitize-recover=undefined
+FZ_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -O1 -g -ffp-contract=off \
+             -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter $(FZ_SAN) \
+             -I. -Ikernel-ref -Isim -Iunits -Imem -Itraces -Itests/fuzz
+FZ_OBJ    := $(LIB_C:%.c=$(FZ_B)/%.o)
+FZ_NAMES  := config views trace obj ply
+FZ_BINS   := $(FZ_NAMES:%=$(FZ_B)/fuzz-%)
+FUZZ_SECONDS ?= 20
+
+.PHONY: fuzz fuzz-smoke
+fuzz: $(FZ_BINS)
+
+$(FZ_B)/%.o: %.c | $(DEPSTAMP)
+	@mkdir -p $(dir $@)
+	$(FZ_CC) $(FZ_CFLAGS) -fsanitize=fuzzer-no-link $(PKG_CFLAGS) -c $< -o $@
+$(FZ_B)/libsaar-fuzz.a: $(FZ_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+$(FZ_B)/fuzz-obj: tests/fuzz/fuzz_scene.c tests/fuzz/fuzz.h $(FZ_B)/libsaar-fuzz.a
+	$(FZ_CXX) -x c $(FZ_CFLAGS) -DFUZZ_EXT='".obj"' -fsanitize=fuzzer $< -x none $(FZ_B)/libsaar-fuzz.a $(PKG_LIBS) $(LDLIBS) -o $@
+$(FZ_B)/fuzz-ply: tests/fuzz/fuzz_scene.c tests/fuzz/fuzz.h $(FZ_B)/libsaar-fuzz.a
+	$(FZ_CXX) -x c $(FZ_CFLAGS) -DFUZZ_EXT='".ply"' -fsanitize=fuzzer $< -x none $(FZ_B)/libsaar-fuzz.a $(PKG_LIBS) $(LDLIBS) -o $@
+$(FZ_B)/fuzz-%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz.h $(FZ_B)/libsaar-fuzz.a
+	$(FZ_CXX) -x c $(FZ_CFLAGS) -fsanitize=fuzzer $< -x none $(FZ_B)/libsaar-fuzz.a $(PKG_LIBS) $(LDLIBS) -o $@
+
+fuzz-smoke: fuzz all
+	sh scripts/fuzz-run.sh $(FZ_B) $(FUZZ_SECONDS) $(B) $(FZ_NAMES)
+
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin
 	install -m 755 $(PROGS) $(DESTDIR)$(PREFIX)/bin/
@@ -150,6 +189,6 @@ install: all
 	install -m 644 $(PLUGIN) $(DESTDIR)$(PREFIX)/lib/saarsim/
 
 clean:
-	rm -rf build build-san
+	rm -rf build build-san build-fuzz
 
 -include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(MAINS:%.c=$(B)/%.d)

@@ -1,0 +1,46 @@
+#!/bin/sh
+# fuzz-run.sh FZ_B SECONDS BUILD NAME...: runs each libFuzzer harness
+# FZ_B/fuzz-NAME for SECONDS (make fuzz-smoke; docs/TESTING.md). Corpora
+# live in FZ_B/corpus-NAME, seeded from tests/fuzz/seeds/NAME and from files
+# the repository and the shared scenes already hold (never copied into the
+# repository). Limits per input: 10 s, 2 GB resident, 1 GB in one malloc.
+# Exit 1 on the first finding (its input is FZ_B/NAME-crash-* or similar).
+set -eu
+FZ_B=$1
+SECS=$2
+BUILD=$3
+shift 3
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+SCENES=${SAAR_SCENES:-$ROOT/../shared/scenes}
+status=0
+for name in "$@"; do
+	corpus=$FZ_B/corpus-$name
+	mkdir -p "$corpus"
+	if [ -d "$ROOT/tests/fuzz/seeds/$name" ]; then
+		cp "$ROOT/tests/fuzz/seeds/$name"/* "$corpus"/
+	fi
+	case $name in
+	config) cp "$ROOT"/configs/*.yaml "$corpus"/ ;;
+	views) [ -f "$SCENES/views.yaml" ] && cp "$SCENES/views.yaml" "$corpus"/ ;;
+	obj) for f in "$SCENES"/cornell_box/*.obj "$SCENES"/utah_teapot/*.obj; do
+		[ -f "$f" ] && cp "$f" "$corpus"/
+	done ;;
+	trace) [ -f "$corpus/seed.gz" ] || "$BUILD/saarsim" --size 16x16 --no-check \
+		--trace-mem "$corpus/seed.gz" >/dev/null ;;
+	esac
+	echo "fuzz-$name: ${SECS} s from $(ls "$corpus" | wc -l) corpus files"
+	# leaks inside Assimp, Criterion and OpenImageIO are suppressed as in
+	# make SANITIZE=1 test (tests/lsan.supp says which and why)
+	if ! LSAN_OPTIONS="suppressions=$ROOT/tests/lsan.supp:print_suppressions=0" \
+		"$FZ_B/fuzz-$name" -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 \
+		-malloc_limit_mb=1024 -print_final_stats=1 \
+		-artifact_prefix="$FZ_B/$name-" "$corpus" >"$FZ_B/fuzz-$name.log" 2>&1; then
+		echo "fuzz-$name: FOUND a failing input; see $FZ_B/fuzz-$name.log" >&2
+		tail -30 "$FZ_B/fuzz-$name.log" >&2
+		status=1
+		break
+	fi
+	grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "$FZ_B/fuzz-$name.log" |
+		sed "s/^/fuzz-$name: /"
+done
+exit $status
