@@ -4,6 +4,8 @@
 #   make run        render the embedded default scene and print the report
 #   make test       build and run the Criterion test suite
 #   make bench      benchmarks; writes docs/PERFORMANCE.md
+#   make mutate     mutation tests: each tests/mutants/ patch must be caught
+#                   by the tests it names (docs/TESTING.md)
 #   make install    install binaries into $(PREFIX)/bin
 #   make SANITIZE=1 test   the same under ASan/UBSan (build-san/)
 #   make fuzz-smoke libFuzzer harnesses, each run briefly (docs/TESTING.md)
@@ -78,7 +80,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity stress validate install clean deps
+.PHONY: all run test bench bench-fidelity stress validate mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -181,6 +183,11 @@ $(FZ_B)/fuzz-%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz.h $(FZ_B)/libsaar-fuzz.a
 
 fuzz-smoke: fuzz all
 	sh scripts/fuzz-run.sh $(FZ_B) $(FUZZ_SECONDS) $(B) $(FZ_NAMES)
+# Standing mutation tests in a scratch copy (build-mutate/); writes the
+# table in docs/TESTING.md and fails unless every mutant is caught by the
+# tests it names (scripts/mutate.sh). Not part of `make test`.
+mutate:
+	sh scripts/mutate.sh
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin
@@ -189,6 +196,6 @@ install: all
 	install -m 644 $(PLUGIN) $(DESTDIR)$(PREFIX)/lib/saarsim/
 
 clean:
-	rm -rf build build-san build-fuzz
+	rm -rf build build-san build-fuzz build-mutate
 
 -include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(MAINS:%.c=$(B)/%.d)

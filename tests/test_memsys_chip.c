@@ -5,7 +5,9 @@
  * VMA with PCI traffic, or is refused without it; disabling the tag cache
  * raises meta-data traffic; a warm static second frame moves nothing over
  * PCI; the counters add up across levels; per-frame snapshots cover the
- * run. Scenes: the embedded one and SPD balls (1.3 MB image, larger than a
+ * run; a frame's cycles and read latency grow with the CAS latency; the
+ * PCI bytes are the on-board cache's line fills, timed and functional.
+ * Scenes: the embedded one and SPD balls (1.3 MB image, larger than a
  * 1 MB board).
  */
 #include <string.h>
@@ -205,5 +207,76 @@ Test(memsys_chip, fixed_model_still_available)
 	cr_assert_null(ch->frame_mem);
 	tu_assert_identical(ch, "fixed model");
 	chip_destroy(ch);
+	world_free(&w);
+}
+
+/* Mistake: the SDRAM ignores the CAS latency (memory.sdram.cl): CL taken
+ * as 0, or a read's data coming with its column command. On the embedded
+ * room at CL 2, 5 and 9 SDRAM cycles, a frame's cycles must grow with CL,
+ * and so must the memory interface's mean read latency (submit to data),
+ * by at least the CL step: every read waits CL once more (measured: 18.6,
+ * 23.9, 31.1 SDRAM cycles; reads that skip CL grow by under one cycle). */
+Test(memsys_chip, frame_cycles_grow_with_cas_latency)
+{
+	world w;
+	tu_load_world(&w, NULL, NULL, NULL);
+	saar_config c;
+	cfg_small(&c, 32);
+	static const int cl[] = {2, 5, 9};
+	uint64_t cyc[3];
+	double lat[3];
+	for (int i = 0; i < 3; i++) {
+		c.memory.sdram.cl = cl[i];
+		chip *ch = tu_run_chip(&w, &c);
+		cyc[i] = chip_cycles(ch);
+		hier_stats s = stats_of(ch);
+		uint64_t ticks = 0, reads = 0;
+		for (int r = 0; r < MEMIF_NREQ; r++) {
+			ticks += s.memif.latency_ticks[r];
+			reads += s.memif.reads[r];
+		}
+		cr_assert_gt(reads, 1000);
+		/* in SDRAM cycles */
+		lat[i] = (double)ticks / (double)reads /
+		         (double)eng_clock_mhz(c.memory.sdram.clock_mhz).period;
+		chip_destroy(ch);
+	}
+	for (int i = 1; i < 3; i++) {
+		cr_assert_gt(cyc[i], cyc[i - 1], "CL %d: %llu cycles, CL %d: %llu", cl[i],
+		             (unsigned long long)cyc[i], cl[i - 1], (unsigned long long)cyc[i - 1]);
+		cr_assert_geq(lat[i] - lat[i - 1], cl[i] - cl[i - 1],
+		              "mean read latency %.2f SDRAM cycles at CL %d, %.2f at CL %d", lat[i],
+		              cl[i], lat[i - 1], cl[i - 1]);
+	}
+	world_free(&w);
+}
+
+/* Mistake: the PCI bytes are not counted (the host bus, or the VMA's
+ * functional walk, moves lines without adding their bytes), so a run
+ * through the VMA reports 0 PCI MB while the bus was busy. Through a
+ * 1 MB board, timed and functional: the bus is busy, and its bytes are
+ * exactly the lines fetched into the on-board cache (its fills) times the
+ * line size, plus the bytes written around it. */
+Test(memsys_chip, pci_bytes_are_the_fetched_lines)
+{
+	world w;
+	tu_load_world(&w, "spd:balls:2", NULL, NULL);
+	for (int f = 0; f < 2; f++) {
+		saar_config c;
+		cfg_vma(&c, 32, 1);
+		c.fidelity = f ? CFG_FIDELITY_FUNCTIONAL : CFG_FIDELITY_CYCLE;
+		const char *mode = f ? "functional" : "cycle";
+		chip *ch = tu_run_chip(&w, &c);
+		hier_stats s = stats_of(ch);
+		uint64_t busy = f ? s.func_hostbus_busy_ticks : s.hostbus.busy_ticks;
+		cr_assert_gt(busy, 0, "%s: the host bus was never busy", mode);
+		cr_assert_gt(s.l2.fills, 0, "%s", mode);
+		cr_assert_eq(s.hostbus.bytes,
+		             s.l2.fills * (uint64_t)c.memory.vma.line + s.vma.host_write_bytes,
+		             "%s: %llu PCI bytes for %llu line fills of %d bytes", mode,
+		             (unsigned long long)s.hostbus.bytes, (unsigned long long)s.l2.fills,
+		             c.memory.vma.line);
+		chip_destroy(ch);
+	}
 	world_free(&w);
 }

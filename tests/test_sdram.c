@@ -1,7 +1,8 @@
 /*
  * test_sdram.c: SDRAM latencies exactly as the timing parameters say (row
  * hit, idle bank, row conflict with tRAS), data-bus serialization, address
- * mapping bit by bit; host-bus transfer time and contention; memif order.
+ * mapping bit by bit; host-bus transfer time and contention; memif order
+ * (fifo, round robin, FR-FCFS: ready banks and row hits first).
  */
 #include <string.h>
 
@@ -215,4 +216,35 @@ Test(memif, frfcfs_serves_a_ready_bank_first)
 	cr_assert_lt(other_done[1], conflict_done[1], "frfcfs: bank 1 goes first");
 	cr_assert_lt(other_done[1], other_done[0], "frfcfs serves bank 1 sooner than fifo");
 	cr_assert_eq(memif_policy_parse("frfcfs"), MEMIF_FRFCFS);
+}
+
+/* Mistake: FR-FCFS ignores row hits and serves the oldest ready request
+ * (plain FCFS). One requester's queue: a request opens bank 0's row 1, an
+ * older one wants row 2 of the same bank (a row conflict), a younger one
+ * row 1 again (a row hit); FR-FCFS serves the hit before the older
+ * conflict, fifo in submission order. */
+Test(memif, frfcfs_serves_row_hits_before_older_requests)
+{
+	uint64_t conflict_done[2], hit_done[2];
+	const int pols[2] = {MEMIF_FIFO, MEMIF_FRFCFS};
+	for (int k = 0; k < 2; k++) {
+		memif_rig g;
+		rig_init(&g, pols[k]);
+		memif *m = &g.m;
+		memset(done_at, 0, sizeof done_at);
+		/* row:bank:col: bank = bits 13-14, row = bits 15+ */
+		uint64_t r1 = 1ull << 15, r2 = 2ull << 15;
+		memif_submit(m, 0, MEMIF_KD, r1, 8, 0, note, NULL, 0);      /* opens row 1 */
+		memif_submit(m, 0, MEMIF_KD, r2, 8, 0, note, NULL, 1);      /* older: conflict */
+		memif_submit(m, 0, MEMIF_KD, r1 + 64, 8, 0, note, NULL, 2); /* younger: hit */
+		eng_run(g.e, ENG_FOREVER);
+		conflict_done[k] = done_at[1];
+		hit_done[k] = done_at[2];
+		cr_assert_eq(g.s.s.reads, 3);
+		cr_assert_eq(g.s.s.row_hits, (uint64_t)k, "policy %d: %llu row hits", pols[k],
+		             (unsigned long long)g.s.s.row_hits);
+		rig_free(&g);
+	}
+	cr_assert_gt(hit_done[0], conflict_done[0], "fifo: the hit waits for the older conflict");
+	cr_assert_lt(hit_done[1], conflict_done[1], "frfcfs: the row hit goes first");
 }

@@ -2,7 +2,8 @@
  * test_vma.c: the hierarchy model behind the memory port, with and without
  * the VMA: every read is answered; a working set larger than on-board memory
  * moves lines over PCI, one that fits moves 0 bytes on its second pass;
- * disabling the tag cache raises meta-data SDRAM accesses; counters are
+ * disabling the tag cache raises meta-data SDRAM accesses; every fetched
+ * line is written on board with its meta-data record; counters are
  * consistent (hits + misses = accesses, bytes add up across levels); an
  * image too large for on-board memory without VMA is a clear error.
  */
@@ -210,4 +211,24 @@ Test(vma, no_tag_cache_more_meta_accesses)
 	             (unsigned long long)mo, (unsigned long long)mw);
 	cr_assert_eq(without.tag_cache.accesses, 0);
 	cr_assert_gt(with.tag_cache.hits, 0);
+}
+
+/* Mistake: a line fetched over PCI is not written into the on-board
+ * memory (the FILL write is dropped), or its meta-data record is not
+ * updated: later reads of it would find it missing. Every host fetch
+ * writes its line (FILL) and its set's record (META) through the memory
+ * interface. */
+Test(vma, fetched_lines_are_written_on_board)
+{
+	saar_config c;
+	setup(&c, 1, 1);
+	hier_stats s = vma_run(1, 1, 512 << 10, 2, NULL);
+	uint64_t f = s.vma.host_fetches;
+	cr_assert_gt(f, 0);
+	cr_assert_eq(s.memif.writes[MEMIF_FILL], f, "%llu FILL writes for %llu fetches",
+	             (unsigned long long)s.memif.writes[MEMIF_FILL], (unsigned long long)f);
+	cr_assert_eq(s.memif.bytes[MEMIF_FILL], f * (uint64_t)c.memory.vma.line);
+	cr_assert_eq(s.memif.writes[MEMIF_META], f, "%llu META writes for %llu fetches",
+	             (unsigned long long)s.memif.writes[MEMIF_META], (unsigned long long)f);
+	cr_assert_eq(s.vma.meta_writes, f);
 }
