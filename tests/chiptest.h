@@ -41,7 +41,8 @@ static inline chip *tu_run_chip(const world *w, const saar_config *c)
 	return ch;
 }
 
-/* The chip's frame is kernel-ref's, pixel for pixel. */
+/* The chip's frame is kernel-ref's, pixel for pixel, both the packet
+ * render's and the single-ray render's. */
 static inline void tu_assert_identical(chip *ch, const char *what)
 {
 	chip_check k;
@@ -49,6 +50,8 @@ static inline void tu_assert_identical(chip *ch, const char *what)
 	cr_assert_eq(chip_check_frame(ch, &k, &d), 0, "%s", d.msg);
 	cr_assert(k.cmp.identical, "%s: %llu pixels differ from kernel-ref", what,
 	          (unsigned long long)k.cmp.differing_pixels);
+	cr_assert(k.single.identical, "%s: %llu pixels differ from kernel-ref's single-ray render",
+	          what, (unsigned long long)k.single.differing_pixels);
 }
 
 #endif
