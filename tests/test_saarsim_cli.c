@@ -59,6 +59,7 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	                      "\"box_miss_packets\"",
 	                      "\"identical_8bit\": true",
 	                      "\"single_ray\"",
+	                      "\"invariants_failed\": []",
 	                      "\"sim_cycles_per_s\"",
 	                      "\"rtps\": 2"};
 	for (size_t k = 0; k < sizeof keys / sizeof *keys; k++)
@@ -486,6 +487,8 @@ Test(saarsim_cli, fifo_inputs_do_not_block, .timeout = 120)
 	snprintf(cmd, sizeof cmd, "timeout 20 %s/saarsim %s >/dev/null 2>%s/err", tu_bin_dir(), a,
 	         dir);
 	cr_assert_eq(tu_run(cmd), 0, "%s", slurp("err"));
+	snprintf(cmd, sizeof cmd, "%s/err", dir);
+	tu_no_invariant_failures(cmd);
 }
 
 /* Rows are appended under our header only: a CSV of other columns (another
@@ -557,6 +560,8 @@ Test(saarsim_cli, concurrent_csv_appends_keep_every_row, .timeout = 120)
 	cr_assert_eq(lines, 25, "header and 24 rows expected: %d lines; stderr: %s", lines,
 	             slurp("err"));
 	cr_assert_eq(tu_temps(dir, "c.csv"), 0);
+	snprintf(cmd, sizeof cmd, "%s/err", dir);
+	tu_no_invariant_failures(cmd);
 }
 
 /* The kd-tree flags are shorthands of --set kdtree.*: the config's ranges

@@ -131,6 +131,11 @@ Test(sweep, tiny_grid_csv_png_and_resume, .timeout = 120)
 	cr_assert(exists(path), "%s missing", path);
 	snprintf(path, sizeof path, "%s/points/0001.json", dir);
 	cr_assert(exists(path));
+	/* every point's report held its invariants */
+	for (int i = 1; i <= 2; i++) {
+		snprintf(path, sizeof path, "%s/points/%04d.json", dir, i);
+		cr_assert_eq(count_in(path, "\"invariants_failed\": []"), 1, "%s", path);
+	}
 	snprintf(path, sizeof path, "%s/run.log", dir);
 	cr_assert_eq(count_in(path, " done "), 2);
 
