@@ -150,6 +150,21 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
  * a leaf. */
 void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r);
 
+/* Mistakes made on purpose in pkt_trav_next, so a test can show that a
+ * check catches them (SQLite's fault injection; docs/TESTING.md "Checks
+ * that can fail"). Every program leaves pkt_trav_fault at PKT_FAULT_NONE;
+ * only tests set it, in their own process. The chip and kernel-ref's
+ * packet render both step through pkt_trav_next, so a fault changes both
+ * alike; the single-ray path (ray_trace) has its own traversal and does
+ * not see it.
+ *   PKT_FAULT_NO_FAR_PUSH: the far child is never pushed (rays that need
+ *     it lose their hits there: a wrong image).
+ *   PKT_FAULT_FAR_FIRST: the far child is visited first and the near one
+ *     pushed (back-to-front: more steps and triangle tests, the same
+ *     image by the hit rule). */
+enum pkt_fault { PKT_FAULT_NONE, PKT_FAULT_NO_FAR_PUSH, PKT_FAULT_FAR_FIRST };
+extern int pkt_trav_fault;
+
 /* Tests the rays in `mask` against the triangle at tri_addr; updates
  * closest hits (shadow packets: marks occlusion). Returns the mask of rays
  * whose result changed. */

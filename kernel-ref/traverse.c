@@ -32,6 +32,8 @@ _Static_assert(KD_DEPTH_MAX <= PKT_STACK_MAX, "kdtree.h KD_DEPTH_MAX fits packet
 
 #define NGROUPS (PKT_RAYS / SIMD_W)
 
+int pkt_trav_fault = PKT_FAULT_NONE;
+
 void pkt_precision_full(pkt_precision *pp)
 {
 	pp->trav = pp->isect = pp->shade = fpfmt_full();
@@ -304,6 +306,8 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 	 * stack slot (kept only if some ray needs it). A child also drops the
 	 * rays whose best hit lies before its entry. */
 	int near_below = !signbit(idv[__builtin_ctzll(s->cur.mask)]);
+	if (pkt_trav_fault == PKT_FAULT_FAR_FIRST)
+		near_below = !near_below;
 	trav_entry *far = s->sp < s->stack_max ? &s->stack[s->sp] : &s->spare;
 	uint64_t nmask = 0, fmask = 0;
 	iv nb = iv_set1(near_below ? -1 : 0);
@@ -363,7 +367,7 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 		memcpy(s->cur.tn, far->tn, sizeof s->cur.tn);
 		memcpy(s->cur.tf, far->tf, sizeof s->cur.tf);
 	} else {
-		if (fmask) {
+		if (fmask && pkt_trav_fault != PKT_FAULT_NO_FAR_PUSH) {
 			far->node = fnode;
 			far->mask = fmask;
 			s->sp++;

@@ -1530,6 +1530,14 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 		fb_to_rgb8(&c->fb, a, NULL);
 		out->cmp = img_compare(a, b, ro.width, ro.height);
 		out->ref_ms = out->ref.render_ms;
+		/* the second reference: the same frame traced ray by ray (its
+		 * own cache entry: the frame key holds single_ray) */
+		render_stats sst;
+		ro.single_ray = 1;
+		rc = world_reference_rgb8(c->w, &ro, b, &sst, &out->single_cached, d);
+	}
+	if (!rc) {
+		out->single = img_compare(a, b, ro.width, ro.height);
 		out->check_ms = now_ms() - t0;
 		out->done = 1;
 	}

@@ -34,14 +34,23 @@
 #include "world.h"
 #include "worldcache.h"
 
+/* The frame against two references (docs/report.md "Check"): kernel-ref's
+ * packet render, which runs the very functions the chip's units call
+ * (pkt_trav_next, pkt_isect_tri, shade_packet_fp), and its single-ray
+ * render, whose traversal, leaf walk and triangle test are its own
+ * (ray_trace): a mistake in the shared packet code changes the chip and
+ * the first reference alike, and only the second sees it. docs/design.md
+ * ("What the references share") lists what the three still share. */
 typedef struct chip_check {
 	int done;
-	img_cmp cmp;
-	render_stats ref; /* kernel-ref's counts for the same frame */
+	img_cmp cmp;      /* vs the packet render */
+	render_stats ref; /* kernel-ref's counts for the same frame (packets) */
 	double ref_ms;    /* host time of the reference render (when it was
 	                   * rendered: a cached frame keeps its own) */
 	double check_ms;  /* host time of the whole check */
 	int cached;       /* the reference frame came from the world cache */
+	img_cmp single;   /* vs the single-ray render */
+	int single_cached;
 } chip_check;
 
 /* Resources the busiest-resource bound looks at (chip_fidelity). */
@@ -210,8 +219,9 @@ int chip_estimates(const saar_config *cfg);
 int chip_census_check(const saar_config *cfg, diag *d);
 /* Simulates cfg.frame.frames frames (the frame buffer holds the last). */
 int chip_run(chip *c, diag *d);
-/* Renders the same frame with kernel-ref (render_frame, 1 host thread) and
- * compares the 8-bit images into c's check. */
+/* Renders the same frame with kernel-ref (render_frame, 1 host thread),
+ * with packets and with single rays (each from the world cache when it
+ * has it), and compares the 8-bit images into c's check. */
 int chip_check_frame(chip *c, chip_check *out, diag *d);
 
 /* Totals over frames, for reports. */

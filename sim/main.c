@@ -31,6 +31,7 @@
 #include "hostmem.h"
 #include "image.h"
 #include "report.h"
+#include "reportcheck.h"
 #include "world.h"
 
 static void usage(FILE *f)
@@ -319,6 +320,13 @@ int main(int argc, char **argv)
 	}
 	if (pr.shown)
 		fputc('\n', stderr);
+	/* the report checks itself: a counter that stopped counting shows */
+	static rc_list inv;
+	report_check(c, &inv);
+	for (int i = 0; i < inv.n && i < RC_MAX; i++)
+		fprintf(stderr, "warning: report invariant failed: %s\n", inv.msg[i]);
+	if (inv.n > RC_MAX)
+		fprintf(stderr, "warning: report invariant failed: %d more\n", inv.n - RC_MAX);
 	/* every output is written complete under a temporary name first and
 	 * all are renamed into place together once the last one (the CSV
 	 * with its new row) is done: a run that fails on any leaves the
@@ -333,7 +341,8 @@ int main(int argc, char **argv)
 	                  load_ms,
 	                  now_ms() - t_start,
 	                  &outs,
-	                  (double)mem.total / (1 << 20)};
+	                  (double)mem.total / (1 << 20),
+	                  &inv};
 	if (report && report_json(report, &ri, &d))
 		goto fail;
 	if (census && report_census(census, &ri, &d))

@@ -21,6 +21,7 @@
 #include "atomicfile.h"
 #include "hostmem.h"
 #include "infile.h"
+#include "reportcheck.h"
 
 static double ratio(double a, double b)
 {
@@ -32,17 +33,41 @@ static uint64_t get(const chip *c, const char *name)
 	return stats_get(&c->st, name);
 }
 
-/* Unit utilisation: issue cycles / (cycles x units of that kind on the chip). */
-static double util(const chip *c, int kind, uint64_t busy)
+/* Issue cycles of unit kind over the chip (rtp < 0) or one RTP. */
+static uint64_t unit_busy(const chip *c, int kind, int rtp)
 {
-	return ratio((double)busy,
-	             (double)chip_cycles(c) * chip_unit_cfg(&c->cfg, kind)->count * c->nrtp);
+	char name[64];
+	if (rtp >= 0) {
+		snprintf(name, sizeof name, "rtp%d.%s.busy_cycles", rtp, chip_unit_name(kind));
+		return get(c, name);
+	}
+	snprintf(name, sizeof name, "%s.busy_cycles", chip_unit_name(kind));
+	return chip_rtp_sum(c, name);
 }
 
-static double fps(const chip *c)
+double report_util(const chip *c, int kind, int rtp)
+{
+	int units = chip_unit_cfg(&c->cfg, kind)->count * (rtp < 0 ? c->nrtp : 1);
+	return ratio((double)unit_busy(c, kind, rtp), (double)chip_cycles(c) * units);
+}
+
+double report_fps(const chip *c)
 {
 	double cyc = ratio((double)chip_cycles(c), c->frames_done);
 	return ratio(c->cfg.chip.clock_mhz * 1e6, cyc);
+}
+
+int report_thread_shares(const chip *c, double share[THR_NSTATES])
+{
+	char name[64];
+	double tot = 0;
+	for (int s = 0; s < THR_NSTATES; s++) {
+		snprintf(name, sizeof name, "threads.%s_ps", chip_state_name(s));
+		tot += share[s] = (double)chip_rtp_sum(c, name);
+	}
+	for (int s = 0; s < THR_NSTATES; s++)
+		share[s] = tot > 0 ? share[s] / tot : 0;
+	return tot > 0;
 }
 
 /* ---- memory figures over a span of frames ---- */
@@ -65,8 +90,7 @@ static double span_hit_rate(const cache_stats *a, const cache_stats *b, int est,
 	return acc ? h / (double)acc : -1.0;
 }
 
-/* Frames f0..f1-1 (0-based). */
-static void memfig_span(const chip *c, int f0, int f1, memfig *m)
+void report_span(const chip *c, int f0, int f1, memfig *m)
 {
 	static const hier_stats zero_h;
 	static const mem_counts zero_p;
@@ -134,7 +158,7 @@ static void memfig_span(const chip *c, int f0, int f1, memfig *m)
 /* frames 2..N, or frame 1 alone (report.h) */
 void report_steady_state(const chip *c, memfig *m)
 {
-	memfig_span(c, c->frames_done > 1 ? 1 : 0, c->frames_done, m);
+	report_span(c, c->frames_done > 1 ? 1 : 0, c->frames_done, m);
 }
 
 /* ---- fidelity (docs/fidelity.md) ---- */
@@ -363,11 +387,19 @@ static void pct(FILE *f, const char *name, double r)
 		fprintf(f, " %s %.1f%%", name, 100 * r);
 }
 
+/* One reference's comparison, for the text's check line. */
+static void check_text(FILE *f, const char *ref, const img_cmp *m, int cached)
+{
+	fprintf(f, " %s %s (PSNR %.2f dB, %llu differing pixels%s)", ref,
+	        m->identical ? "identical" : "DIFFERENT", m->psnr,
+	        (unsigned long long)m->differing_pixels,
+	        cached ? ", its frame from the world cache" : "");
+}
+
 void report_text(FILE *f, const report_info *ri)
 {
 	const chip *c = ri->c;
 	const saar_config *g = &c->cfg;
-	char sfx[64];
 	uint64_t cyc = chip_cycles(c);
 	fprintf(f, "saarsim: %s, view %s, %dx%d, %d frame%s, config %s\n", ri->w->scene_label,
 	        ri->w->v.name, g->frame.width, g->frame.height, c->frames_done,
@@ -388,22 +420,16 @@ void report_text(FILE *f, const report_info *ri)
 		        g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz,
 		        g->memory.latency);
 	fprintf(f, "  cycles per frame %.0f = %.2f fps%s\n", ratio((double)cyc, c->frames_done),
-	        fps(c), c->fid.mode == CFG_FIDELITY_FUNCTIONAL ? " (bound)" : "");
+	        report_fps(c), c->fid.mode == CFG_FIDELITY_FUNCTIONAL ? " (bound)" : "");
 	fidelity_text(f, c);
 	fputs("  units:", f);
-	for (int k = 0; k < UNIT_NKINDS; k++) {
-		snprintf(sfx, sizeof sfx, "%s.busy_cycles", chip_unit_name(k));
-		fprintf(f, " %s %.1f%%", chip_unit_name(k), 100 * util(c, k, chip_rtp_sum(c, sfx)));
-	}
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		fprintf(f, " %s %.1f%%", chip_unit_name(k), 100 * report_util(c, k, -1));
 	fputs("\n  threads:", f);
-	double tot = 0, occ[THR_NSTATES];
-	for (int s = 0; s < THR_NSTATES; s++) {
-		snprintf(sfx, sizeof sfx, "threads.%s_ps", chip_state_name(s));
-		tot += occ[s] = (double)chip_rtp_sum(c, sfx);
-	}
-	if (tot > 0)
+	double occ[THR_NSTATES];
+	if (report_thread_shares(c, occ))
 		for (int s = 0; s < THR_NSTATES; s++)
-			fprintf(f, " %s %.1f%%", chip_state_name(s), 100 * occ[s] / tot);
+			fprintf(f, " %s %.1f%%", chip_state_name(s), 100 * occ[s]);
 	else
 		fputs(" not timed (functional mode: no thread states)", f);
 	uint64_t steps = get(c, "trav.node_steps"), tests = get(c, "isect.tri_tests");
@@ -421,7 +447,7 @@ void report_text(FILE *f, const report_info *ri)
 	const char *mem_name = c->frame_mem ? "SDRAM" : "memory port";
 	if (c->frames_done > 1) {
 		for (int fr = 0; fr < c->frames_done; fr++) {
-			memfig_span(c, fr, fr + 1, &m);
+			report_span(c, fr, fr + 1, &m);
 			fprintf(
 			    f, "  frame %d: %.0f cycles = %.2f fps, %s %.2f MB, PCI %.2f MB, hits:",
 			    fr + 1, m.cycles, m.fps, mem_name, m.sdram_mb, m.pci_mb);
@@ -455,11 +481,13 @@ void report_text(FILE *f, const report_info *ri)
 			fprintf(f, " %s %.0f", chip_unit_name(k), stall_cycles(c, k));
 		fputs(chip_estimates(&c->cfg) ? " (estimated)\n" : "\n", f);
 	}
-	if (ri->check && ri->check->done)
-		fprintf(f, "  check vs kernel-ref: %s (PSNR %.2f dB, %llu differing pixels)%s\n",
-		        ri->check->cmp.identical ? "identical" : "DIFFERENT", ri->check->cmp.psnr,
-		        (unsigned long long)ri->check->cmp.differing_pixels,
-		        ri->check->cached ? ", its frame from the world cache" : "");
+	if (ri->check && ri->check->done) {
+		fputs("  check vs kernel-ref:", f);
+		check_text(f, "packets", &ri->check->cmp, ri->check->cached);
+		fputc(',', f);
+		check_text(f, "single rays", &ri->check->single, ri->check->single_cached);
+		fputc('\n', f);
+	}
 	fprintf(f, "  host: %.3f s simulating (%.3g cycles/s), %.3f s loading", c->sim_ms / 1e3,
 	        ratio((double)cyc, c->sim_ms / 1e3), ri->load_ms / 1e3);
 	if (ri->w->cache != WORLD_CACHE_OFF)
@@ -557,7 +585,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_arr_end(j);
 	kv(j, "cycles", cyc);
 	jsonw_knum(j, "clock_mhz", g->chip.clock_mhz);
-	jsonw_knum(j, "fps", fps(c));
+	jsonw_knum(j, "fps", report_fps(c));
 	kv(j, "events", c->events);
 	fidelity_json(j, c);
 
@@ -575,14 +603,11 @@ int report_json(const char *path, const report_info *ri, diag *d)
 		snprintf(name, sizeof name, "%s.busy_cycles", un);
 		uint64_t busy = chip_rtp_sum(c, name);
 		kv(j, "busy_cycles", busy);
-		jsonw_knum(j, "utilisation", util(c, k, busy));
+		jsonw_knum(j, "utilisation", report_util(c, k, -1));
 		jsonw_key(j, "per_rtp_utilisation");
 		jsonw_arr_begin(j);
-		for (int r = 0; r < c->nrtp; r++) {
-			snprintf(name, sizeof name, "rtp%d.%s.busy_cycles", r, un);
-			jsonw_num(j, ratio((double)get(c, name),
-			                   (double)cyc * chip_unit_cfg(g, k)->count));
-		}
+		for (int r = 0; r < c->nrtp; r++)
+			jsonw_num(j, report_util(c, k, r));
 		jsonw_arr_end(j);
 		jsonw_obj_end(j);
 	}
@@ -591,16 +616,13 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_key(j, "threads");
 	jsonw_obj_begin(j);
 	jsonw_kint(j, "contexts", (int64_t)c->nrtp * c->tpr);
-	double occ[THR_NSTATES], tot = 0;
-	for (int s = 0; s < THR_NSTATES; s++) {
-		snprintf(name, sizeof name, "threads.%s_ps", chip_state_name(s));
-		tot += occ[s] = (double)chip_rtp_sum(c, name);
-	}
+	double occ[THR_NSTATES];
+	int timed = report_thread_shares(c, occ);
 	for (int s = 0; s < THR_NSTATES; s++) {
 		/* no thread time at all (functional: nothing is timed): no
 		 * shares, rather than four zeros that do not add up to 1 */
-		if (tot > 0) {
-			jsonw_knum(j, chip_state_name(s), occ[s] / tot);
+		if (timed) {
+			jsonw_knum(j, chip_state_name(s), occ[s]);
 		} else {
 			jsonw_key(j, chip_state_name(s));
 			jsonw_null(j);
@@ -703,7 +725,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_key(j, "per_frame");
 	jsonw_arr_begin(j);
 	for (int f = 0; f < c->frames_done; f++) {
-		memfig_span(c, f, f + 1, &m);
+		report_span(c, f, f + 1, &m);
 		memfig_json(j, &m);
 	}
 	jsonw_arr_end(j);
@@ -728,10 +750,23 @@ int report_json(const char *path, const report_info *ri, diag *d)
 		jsonw_knum(j, "psnr", ri->check->cmp.psnr);
 		kv(j, "differing_pixels", ri->check->cmp.differing_pixels);
 		jsonw_kstr(j, "reference", ri->check->cached ? "cached" : "rendered");
+		jsonw_key(j, "single_ray");
+		jsonw_obj_begin(j);
+		jsonw_kbool(j, "identical_8bit", ri->check->single.identical);
+		jsonw_knum(j, "psnr", ri->check->single.psnr);
+		kv(j, "differing_pixels", ri->check->single.differing_pixels);
+		jsonw_kstr(j, "reference", ri->check->single_cached ? "cached" : "rendered");
+		jsonw_obj_end(j);
 		jsonw_obj_end(j);
 	} else {
 		jsonw_null(j);
 	}
+
+	jsonw_key(j, "invariants_failed");
+	jsonw_arr_begin(j);
+	for (int i = 0; ri->invariants && i < ri->invariants->n && i < RC_MAX; i++)
+		jsonw_str(j, ri->invariants->msg[i]);
+	jsonw_arr_end(j);
 
 	jsonw_key(j, "counters");
 	jsonw_obj_begin(j);
@@ -958,11 +993,8 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	        g->memory.l1.list.size_kb, g->memory.l1.tri.size_kb, g->memory.sdram.mb,
 	        g->memory.vma.enabled ? 1 : 0, cfg_enum_name(g, "memory.hostbus.preset"));
 	csv_num(f, m.fps);
-	char sfx[64];
-	for (int k = 0; k < UNIT_NKINDS; k++) {
-		snprintf(sfx, sizeof sfx, "%s.busy_cycles", chip_unit_name(k));
-		csv_num(f, util(c, k, chip_rtp_sum(c, sfx)));
-	}
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		csv_num(f, report_util(c, k, -1));
 	for (int k = 0; k < HR_N; k++)
 		csv_num(f, m.hit[k]);
 	csv_num(f, m.sdram_mb);
@@ -978,8 +1010,8 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	csv_num(f, x.fps_hi);
 	csv_num(f, x.fps_bound);
 	csv_str(f, x.bound_by, 0);
-	if (ri->check && ri->check->done)
-		fprintf(f, "%d,", ri->check->cmp.identical ? 1 : 0);
+	if (ri->check && ri->check->done) /* 1: the frame equals both references */
+		fprintf(f, "%d,", ri->check->cmp.identical && ri->check->single.identical ? 1 : 0);
 	else
 		fputc(',', f);
 	fprintf(f, "%.4f,%.4f\n", c->sim_ms / 1e3, ri->wall_ms / 1e3);

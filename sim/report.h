@@ -21,6 +21,7 @@ typedef struct report_info {
 	double wall_ms;          /* whole run so far */
 	af_group *group;         /* the files are renamed by af_group_commit; NULL: each at once */
 	double mem_estimate_mb;  /* hostmem.h's estimate before the run (0: none made) */
+	const struct rc_list *invariants; /* the violated ones (reportcheck.h); NULL: not checked */
 } report_info;
 
 /* Memory figures over a span of frames (the report's steady_state and
@@ -43,6 +44,16 @@ typedef struct memfig {
 /* The steady state: the mean of frames 2..N when there are several (the
  * first frame warms the caches and the VMA), else frame 1. */
 void report_steady_state(const chip *c, memfig *m);
+/* The figures of frames f0..f1-1 (0-based; per_frame is f, f + 1). */
+void report_span(const chip *c, int f0, int f1, memfig *m);
+/* The report's fps: clock / mean cycles per frame. */
+double report_fps(const chip *c);
+/* Utilisation of unit kind k (UNIT_*): issue cycles / (cycles x units of
+ * the kind), over the chip (rtp < 0) or one RTP. */
+double report_util(const chip *c, int kind, int rtp);
+/* The thread states' shares of threads x time (THR_NSTATES of them);
+ * returns 0 (shares all 0) when no thread time was timed (functional). */
+int report_thread_shares(const chip *c, double share[THR_NSTATES]);
 
 void report_text(FILE *f, const report_info *ri);
 /* Writes the JSON report atomically (tmp + rename). */

@@ -7,8 +7,17 @@
 #define SAAR_TESTS_CHIPTEST_H
 
 #include "chip.h"
+#include "reportcheck.h"
 #include "testutil.h"
 #include "world.h"
+
+/* Every invariant of the chip's report holds (sim/reportcheck.h). */
+static inline void tu_assert_report_ok(const chip *ch)
+{
+	static rc_list l;
+	if (report_check(ch, &l))
+		cr_assert_fail("%d report invariants failed; first: %s", l.n, l.msg[0]);
+}
 
 /* Loads the scene at path (NULL: the view's, else the embedded room) with view vname of
  * the views file (NULL: the default view), through a world cache in cache_dir (NULL:
@@ -31,17 +40,20 @@ static inline void tu_load_world(world *w, const char *path, const char *views, 
 	tu_load_world_cached(w, path, views, vname, NULL);
 }
 
-/* Builds a chip for c and runs every frame; the caller destroys it. */
+/* Builds a chip for c and runs every frame (its report's invariants
+ * must hold); the caller destroys it. */
 static inline chip *tu_run_chip(const world *w, const saar_config *c)
 {
 	diag d;
 	chip *ch = chip_create(c, w, &d);
 	cr_assert(ch, "%s", d.msg);
 	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
+	tu_assert_report_ok(ch);
 	return ch;
 }
 
-/* The chip's frame is kernel-ref's, pixel for pixel. */
+/* The chip's frame is kernel-ref's, pixel for pixel, both the packet
+ * render's and the single-ray render's. */
 static inline void tu_assert_identical(chip *ch, const char *what)
 {
 	chip_check k;
@@ -49,6 +61,8 @@ static inline void tu_assert_identical(chip *ch, const char *what)
 	cr_assert_eq(chip_check_frame(ch, &k, &d), 0, "%s", d.msg);
 	cr_assert(k.cmp.identical, "%s: %llu pixels differ from kernel-ref", what,
 	          (unsigned long long)k.cmp.differing_pixels);
+	cr_assert(k.single.identical, "%s: %llu pixels differ from kernel-ref's single-ray render",
+	          what, (unsigned long long)k.single.differing_pixels);
 }
 
 #endif

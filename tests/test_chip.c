@@ -328,6 +328,39 @@ Test(chip, stack_overflow_spills_and_keeps_the_image)
 	world_free(&w);
 }
 
+/* The mistake: a traversal that never pushes the far child (rays that
+ * need it lose their hits there). The chip and kernel-ref's packet render
+ * both step through pkt_trav_next, so they make it alike and the packet
+ * comparison still says identical; the single-ray render traverses on its
+ * own and must see it. Without the fault both say identical. */
+Test(chip, wrong_packet_traversal_is_caught_by_the_single_ray_reference)
+{
+	world w;
+	tu_load_world(&w, NULL, NULL, NULL);
+	saar_config c;
+	small_cfg(&c, 64);
+	for (int fault = 0; fault < 2; fault++) {
+		pkt_trav_fault = fault ? PKT_FAULT_NO_FAR_PUSH : PKT_FAULT_NONE;
+		chip *ch = tu_run_chip(&w, &c);
+		chip_check k;
+		diag d;
+		cr_assert_eq(chip_check_frame(ch, &k, &d), 0, "%s", d.msg);
+		cr_assert(k.cmp.identical, "fault %d: the packet render makes the same mistake",
+		          fault);
+		if (fault)
+			cr_assert_gt(k.single.differing_pixels, 100,
+			             "a lost far child went unseen (%llu pixels differ)",
+			             (unsigned long long)k.single.differing_pixels);
+		else
+			cr_assert(k.single.identical,
+			          "%llu pixels differ from the single-ray render",
+			          (unsigned long long)k.single.differing_pixels);
+		chip_destroy(ch);
+	}
+	pkt_trav_fault = PKT_FAULT_NONE;
+	world_free(&w);
+}
+
 Test(chip, deterministic_cycles_and_counters)
 {
 	world w;

@@ -6,7 +6,7 @@
  */
 #include <string.h>
 
-#include "chip.h"
+#include "chiptest.h"
 #include "testutil.h"
 
 static uint8_t *kref(const world *w, int size, const pkt_precision *pp)
@@ -36,6 +36,7 @@ static img_cmp chip_vs(const world *w, int size, int mant, const uint8_t *ref)
 	chip *ch = chip_create(&c, w, &d);
 	cr_assert(ch, "%s", d.msg);
 	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
+	tu_assert_report_ok(ch);
 	uint8_t *a = malloc((size_t)size * size * 3);
 	fb_to_rgb8(&ch->fb, a, NULL);
 	img_cmp r = img_compare(a, ref, size, size);

@@ -42,7 +42,9 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	cr_assert(exists("f.png") && exists("a.json"));
 	cr_assert_eq(tu_temps(dir, "f.png") + tu_temps(dir, "a.json"), 0);
 	char *out = slurp("out");
-	cr_assert(strstr(out, "identical"), "summary: %s", out);
+	cr_assert(strstr(out, "check vs kernel-ref: packets identical (PSNR inf dB, 0 differing "
+	                      "pixels), single rays identical (PSNR inf dB, 0 differing pixels)\n"),
+	          "summary: %s", out);
 	snprintf(args, sizeof args, "--size 64x48 --set chip.rtps=2 --report %s/b.json", dir);
 	cr_assert_eq(saarsim(args), 0);
 	char *a = slurp("a.json"), *b = slurp("b.json");
@@ -56,6 +58,8 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	                      "\"stack_overflows\"",
 	                      "\"box_miss_packets\"",
 	                      "\"identical_8bit\": true",
+	                      "\"single_ray\"",
+	                      "\"invariants_failed\": []",
 	                      "\"sim_cycles_per_s\"",
 	                      "\"rtps\": 2"};
 	for (size_t k = 0; k < sizeof keys / sizeof *keys; k++)
@@ -65,6 +69,11 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	cr_assert(ha && hb);
 	*ha = *hb = 0;
 	cr_assert_str_eq(a, b, "reports differ outside \"host\"");
+	/* the second reference, kernel-ref's single-ray render */
+	cr_assert(strstr(tu_squeeze_json(a),
+	                 "\"single_ray\":{\"identical_8bit\":true,\"psnr\":null,"
+	                 "\"differing_pixels\":0,\"reference\":\"rendered\"}"),
+	          "%s", a);
 }
 
 /* The report says what was rendered: the camera and lights are in the
@@ -478,6 +487,8 @@ Test(saarsim_cli, fifo_inputs_do_not_block, .timeout = 120)
 	snprintf(cmd, sizeof cmd, "timeout 20 %s/saarsim %s >/dev/null 2>%s/err", tu_bin_dir(), a,
 	         dir);
 	cr_assert_eq(tu_run(cmd), 0, "%s", slurp("err"));
+	snprintf(cmd, sizeof cmd, "%s/err", dir);
+	tu_no_invariant_failures(cmd);
 }
 
 /* Rows are appended under our header only: a CSV of other columns (another
@@ -549,6 +560,8 @@ Test(saarsim_cli, concurrent_csv_appends_keep_every_row, .timeout = 120)
 	cr_assert_eq(lines, 25, "header and 24 rows expected: %d lines; stderr: %s", lines,
 	             slurp("err"));
 	cr_assert_eq(tu_temps(dir, "c.csv"), 0);
+	snprintf(cmd, sizeof cmd, "%s/err", dir);
+	tu_no_invariant_failures(cmd);
 }
 
 /* The kd-tree flags are shorthands of --set kdtree.*: the config's ranges

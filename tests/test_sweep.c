@@ -131,6 +131,11 @@ Test(sweep, tiny_grid_csv_png_and_resume, .timeout = 120)
 	cr_assert(exists(path), "%s missing", path);
 	snprintf(path, sizeof path, "%s/points/0001.json", dir);
 	cr_assert(exists(path));
+	/* every point's report held its invariants */
+	for (int i = 1; i <= 2; i++) {
+		snprintf(path, sizeof path, "%s/points/%04d.json", dir, i);
+		cr_assert_eq(count_in(path, "\"invariants_failed\": []"), 1, "%s", path);
+	}
 	snprintf(path, sizeof path, "%s/run.log", dir);
 	cr_assert_eq(count_in(path, " done "), 2);
 
@@ -342,6 +347,10 @@ static void special_done(void)
 	char path[1024];
 	snprintf(path, sizeof path, "%s/results.csv", getenv("SW_OUT"));
 	cr_assert_eq(count_lines(path), 3, "results.csv: a header and two points");
+	for (int i = 1; i <= 2; i++) { /* their reports held every invariant */
+		snprintf(path, sizeof path, "%s/points/%04d.json", getenv("SW_OUT"), i);
+		cr_assert_eq(count_in(path, "\"invariants_failed\": []"), 1, "%s", path);
+	}
 }
 
 Test(sweep, special_paths_local_jobs_and_plots, .timeout = 120)

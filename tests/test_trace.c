@@ -1,7 +1,7 @@
 /*
  * test_trace.c: intersection and traversal: watertightness, edge and
- * vertex hits, packet path == single-ray path, thread-count determinism,
- * and the golden image of the embedded scene.
+ * vertex hits, packet path == single-ray path, thread-count determinism.
+ * What the pixels should be is tests/test_oracles.c's business.
  */
 #include <math.h>
 #include <string.h>
@@ -238,31 +238,6 @@ Test(trace, image_identical_for_any_thread_count)
 	fb_free(&a);
 	fb_free(&b);
 	fb_free(&c);
-}
-
-/* The golden image was written by `make golden` (rtref, embedded scene,
- * 128x128) and reviewed; any change to it must be a deliberate update. */
-Test(trace, golden_image_of_embedded_scene)
-{
-	framebuf fb;
-	render_stats st;
-	render_embedded(&fb, 2, 128, &st);
-	uint8_t *img = malloc(128 * 128 * 3);
-	fb_to_rgb8(&fb, img, NULL);
-	int w, h;
-	uint8_t *gold;
-	diag d;
-	cr_assert_eq(img_read_rgba8("tests/golden/embedded-128.png", &w, &h, &gold, &d), 0, "%s",
-	             d.msg);
-	cr_assert(w == 128 && h == 128);
-	uint64_t differ = 0;
-	for (int p = 0; p < 128 * 128; p++)
-		differ += memcmp(img + 3 * p, gold + 4 * p, 3) != 0;
-	cr_assert_eq(differ, 0, "%llu pixels differ from tests/golden/embedded-128.png",
-	             (unsigned long long)differ);
-	free(img);
-	free(gold);
-	fb_free(&fb);
 }
 
 Test(trace, skips_are_counted)

@@ -325,6 +325,11 @@ Test(worldcache_cli, second_run_takes_world_and_frame_from_the_cache)
 	cr_assert(strstr(cj, "\"reference\": \"cached\"") &&
 	          strstr(cj, "\"identical_8bit\": true"));
 	cr_assert(strstr(cj, "\"world_cache\": \"hit\""));
+	/* both references came from the cache (the single-ray frame has its own entry) */
+	cr_assert(strstr(tu_squeeze_json(cj), "\"reference\":\"cached\",\"single_ray\":{"
+	                                      "\"identical_8bit\":true,\"psnr\":null,"
+	                                      "\"differing_pixels\":0,\"reference\":\"cached\"}"),
+	          "%s", cj);
 	cr_assert_str_eq(a, c, "results differ with the cache");
 	free(a);
 	free(c);

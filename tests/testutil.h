@@ -157,13 +157,36 @@ static inline const char *tu_stderr_end(tu_capture c)
 
 /* ---- command-line programs (rtref, saarsim, saarsim-replay) ---- */
 
+/* A report checks itself (sim/reportcheck.h): saarsim prints one
+ * "warning: report invariant failed: ..." line per violated invariant.
+ * Fails the test when the file at path (a run's stderr) holds one; a
+ * missing file holds none. Reads the file itself, so the callers' tu_slurp
+ * buffers stay as they were. */
+static inline void tu_no_invariant_failures(const char *path)
+{
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return;
+	char line[1024];
+	while (fgets(line, sizeof line, f))
+		if (strstr(line, "report invariant failed")) {
+			fclose(f);
+			cr_assert_fail("%s: %s", path, line);
+		}
+	fclose(f);
+}
+
 /* Runs SAAR_BIN/prog with args; stdout into dir/out, stderr into dir/err.
- * Returns the exit status. */
+ * Returns the exit status. A run that reported a failed invariant fails
+ * the test. */
 static inline int tu_prog(const char *dir, const char *prog, const char *args)
 {
 	char cmd[8192];
 	snprintf(cmd, sizeof cmd, "%s/%s %s >%s/out 2>%s/err", tu_bin_dir(), prog, args, dir, dir);
-	return tu_run(cmd);
+	int rc = tu_run(cmd);
+	snprintf(cmd, sizeof cmd, "%s/err", dir);
+	tu_no_invariant_failures(cmd);
+	return rc;
 }
 
 /* tu_prog with an environment assignment ("NAME=value") before it. */
@@ -172,7 +195,10 @@ static inline int tu_run_env(const char *env, const char *dir, const char *prog,
 	char cmd[8192];
 	snprintf(cmd, sizeof cmd, "%s %s/%s %s >%s/out 2>%s/err", env, tu_bin_dir(), prog, args,
 	         dir, dir);
-	return tu_run(cmd);
+	int rc = tu_run(cmd);
+	snprintf(cmd, sizeof cmd, "%s/err", dir);
+	tu_no_invariant_failures(cmd);
+	return rc;
 }
 
 static inline int tu_exists(const char *dir, const char *name)
