@@ -173,12 +173,7 @@ static void build(world *w, scene *s)
 {
 	diag d;
 	cr_assert_eq(scene_finish(s, "oracle", &d), 0, "%s", d.msg);
-	memset(w, 0, sizeof *w);
-	w->s = *s;
-	kd_params kp;
-	kd_params_default(&kp);
-	cr_assert_eq(kd_build(&w->kd, &w->s, &kp, &d), 0, "%s", d.msg);
-	cr_assert_eq(mimg_build(&w->m, &w->s, &w->kd, &d), 0, "%s", d.msg);
+	tu_build_world(w, s);
 }
 
 #define BG_R 0.05

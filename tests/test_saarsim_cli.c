@@ -1125,13 +1125,13 @@ Test(saarsim_cli, census_adds_up_to_the_report)
 	               "--census: too many chunks");
 	/* refused from the config, before the scene loads: a scene that
 	 * does not exist is never opened */
-	char scene[600];
+	char args_s[600];
 	snprintf(
-	    scene, sizeof scene,
+	    args_s, sizeof args_s,
 	    "--scene %s/none.obj --size 256x192 --set chip.rtps=1 --set chip.threads_per_rtp=2 "
 	    "--fidelity sampled --sample-rate 0.1 --unit-tiles 8",
 	    dir);
-	census_refused(scene, "--census");
+	census_refused(args_s, "--census");
 }
 
 /* saarsim with environment assignments env (may be "") and a 60 s

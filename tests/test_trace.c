@@ -45,13 +45,7 @@ static void make_sphere(scene *s, vec3 c, float r, int nu, int nv)
 
 static void build(world *w, scene *s)
 {
-	diag d;
-	memset(w, 0, sizeof *w);
-	w->s = *s;
-	kd_params kp;
-	kd_params_default(&kp);
-	cr_assert_eq(kd_build(&w->kd, &w->s, &kp, &d), 0, "%s", d.msg);
-	cr_assert_eq(mimg_build(&w->m, &w->s, &w->kd, &d), 0, "%s", d.msg);
+	tu_build_world(w, s);
 }
 
 /* Traces a 512x512 frame of primary rays from eye towards c; for every hit,

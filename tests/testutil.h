@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "image.h"
+#include "world.h"
 
 /* 1 in a sanitizer build (make SANITIZE=1, which compiles the tests with
  * -fsanitize=address too): there a sanitizer's own report may come before
@@ -49,6 +50,19 @@ static inline const char *tu_bin_dir(void)
 		if (access((buf), R_OK) != 0)                                                      \
 			cr_skip_test("shared scene %s absent; skipping", (buf));                   \
 	} while (0)
+
+/* A world around the finished scene s (w takes it over): the kd-tree with
+ * default parameters and the memory image, for tests that build scenes. */
+static inline void tu_build_world(world *w, const scene *s)
+{
+	diag d;
+	memset(w, 0, sizeof *w);
+	w->s = *s;
+	kd_params kp;
+	kd_params_default(&kp);
+	cr_assert_eq(kd_build(&w->kd, &w->s, &kp, &d), 0, "%s", d.msg);
+	cr_assert_eq(mimg_build(&w->m, &w->s, &w->kd, &d), 0, "%s", d.msg);
+}
 
 /* A fresh temporary directory for a test's files (not removed: /tmp). */
 static inline void tu_tmpdir(char *buf, size_t n)
