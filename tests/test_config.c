@@ -516,3 +516,38 @@ Test(config, json_strings_are_always_utf8)
 	unlink(p);
 	rmdir(dir);
 }
+
+/* The shipped configs say what the fidelity key can be: they said
+ * "fidelity: cycle # the only mode so far" long after sampled and
+ * functional existed. Each config's fidelity line names all three modes
+ * the loader accepts. */
+Test(config, shipped_configs_name_every_fidelity_mode)
+{
+	const char *files[] = {"configs/saarcor-std.yaml", "configs/saarcor-vma.yaml",
+	                       "configs/fpga-2004.yaml"};
+	for (int i = 0; i < 3; i++) {
+		FILE *f = fopen(files[i], "r");
+		cr_assert(f, "cannot read %s", files[i]);
+		char line[512];
+		int found = 0;
+		while (fgets(line, sizeof line, f))
+			if (!strncmp(line, "fidelity:", 9)) {
+				found = 1;
+				cr_assert(strstr(line, "cycle") && strstr(line, "sampled") &&
+				              strstr(line, "functional") &&
+				              !strstr(line, "only mode"),
+				          "%s: %s", files[i], line);
+			}
+		fclose(f);
+		cr_assert(found, "%s has no fidelity line", files[i]);
+		for (int m = 0; m < 3; m++) {
+			static const char *const modes[] = {"cycle", "sampled", "functional"};
+			saar_config c;
+			diag d;
+			char kv[64];
+			cr_assert_eq(cfg_load(&c, files[i], &d), 0, "%s", d.msg);
+			snprintf(kv, sizeof kv, "fidelity=%s", modes[m]);
+			cr_assert_eq(cfg_set(&c, kv, &d), 0, "%s: %s", kv, d.msg);
+		}
+	}
+}

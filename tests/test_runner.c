@@ -32,3 +32,18 @@ Test(runner, skips_are_counted_and_named)
 	cr_assert(strstr(tu_slurp(dir, "out"), "1 tests skipped although the shared scenes are at"),
 	          "%s", tu_slurp(dir, "out"));
 }
+
+/* A test that provokes a library warning checks it instead of letting it
+ * land in `make test`'s output (a stray "warning: sampling.warming stored
+ * needs --world-cache" line sat among the results). */
+Test(runner, no_stray_warning_lines)
+{
+	char dir[256], cmd[4096];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cmd, sizeof cmd,
+	         "env -u BXFI_MAP -u IS_SANDBOX %s/saarsim-tests --filter "
+	         "'warming/without_a_world_cache_the_stretches_run' >%s/out 2>&1",
+	         tu_bin_dir(), dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", tu_slurp(dir, "out"));
+	cr_assert_not(strstr(tu_slurp(dir, "out"), "warning:"), "%s", tu_slurp(dir, "out"));
+}
