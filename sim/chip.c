@@ -517,7 +517,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	render_opts ro;
 	render_opts_default(&ro);
 	v->sc = (shade_ctx){&w->m,         w->v.lights, w->v.nlights, cfg->shading.max_depth,
-	                    ro.background, &c->fb};
+	                    ro.background, &c->fb,      NULL};
 	cam_setup(&v->cam, &w->v.cam, cfg->frame.width, cfg->frame.height);
 
 	/* counters */
