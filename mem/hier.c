@@ -450,6 +450,13 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 		h->fhb.bytes += wb;
 		h->fhb.busy_ticks += hbus_duration(&h->hb, (uint32_t)wb);
 	}
+	/* dirty lines written back: read out of SDRAM, over the host bus */
+	for (uint64_t i = a.writebacks; i < b->writebacks; i++) {
+		func_sdram(h, MEMIF_FILL, h->v.p.line, 0);
+		h->fhb.transfers++;
+		h->fhb.bytes += h->v.p.line;
+		h->fhb.busy_ticks += hbus_duration(&h->hb, h->v.p.line);
+	}
 }
 
 /* The functional twin of hier_access: the same L1 lookups, line by line,
@@ -930,6 +937,8 @@ void hier_write_json(const hier_stats *s, jsonw *w)
 		jsonw_kuint(w, "host_fetch_bytes", v->host_fetch_bytes);
 		jsonw_kuint(w, "host_writes", v->host_writes);
 		jsonw_kuint(w, "host_write_bytes", v->host_write_bytes);
+		jsonw_kuint(w, "writebacks", v->writebacks);
+		jsonw_kuint(w, "writeback_bytes", v->writeback_bytes);
 		jsonw_kuint(w, "mshr_stall_cycles", v->stall_ticks / s->core_period);
 		jsonw_obj_end(w);
 		const hbus_stats *b = &s->hostbus;

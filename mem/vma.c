@@ -125,12 +125,20 @@ static cache_params vma_tag_params(const vma_params *p)
 	    CACHE_HASH_NONE};
 }
 
+/* 64-bit words of the dirty bits of n on-board lines. */
+static size_t dirty_words(uint64_t n)
+{
+	return (size_t)((n + 63) / 64);
+}
+
 uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p, uint64_t lines)
 {
 	if (p->ways < 1 || p->line < 1)
 		return 0;
 	cache_params lp = vma_l2_params(sdram_bytes, p), tp = vma_tag_params(p);
-	return cache_host_bytes(&lp) + (lines ? cache_data_host_bytes(&lp, lines) : 0) +
+	uint64_t slots = lp.size_bytes / p->line;
+	return cache_host_bytes(&lp) + dirty_words(slots) * 8 +
+	       (lines ? cache_data_host_bytes(&lp, lines) : 0) +
 	       (p->tag_cache_enabled ? cache_host_bytes(&tp) : 0);
 }
 
@@ -165,7 +173,8 @@ int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram
 	v->pool = calloc(1, sizeof(vpool));
 	v->l2_wait = calloc(VMA_MSHRS, sizeof *v->l2_wait);
 	v->tag_wait = calloc(VMA_TAG_MSHRS, sizeof *v->tag_wait);
-	if (!v->pool || !v->l2_wait || !v->tag_wait || (ms && cache_data_on(&v->l2))) {
+	v->dirty = calloc(dirty_words(vma_capacity(v)), sizeof *v->dirty);
+	if (!v->pool || !v->l2_wait || !v->tag_wait || !v->dirty || (ms && cache_data_on(&v->l2))) {
 		vma_free(v);
 		return diag_set(d, "config", 0, 0, "memory.vma: out of memory");
 	}
@@ -185,8 +194,10 @@ void vma_free(vma *v)
 	free(P);
 	free(v->l2_wait);
 	free(v->tag_wait);
+	free(v->dirty);
 	v->pool = NULL;
 	v->l2_wait = v->tag_wait = NULL;
+	v->dirty = NULL;
 }
 
 uint64_t vma_capacity(const vma *v)
@@ -195,6 +206,19 @@ uint64_t vma_capacity(const vma *v)
 }
 
 /* ---- data ---- */
+
+static int is_dirty(const vma *v, uint32_t slot)
+{
+	return (int)(v->dirty[slot / 64] >> (slot % 64) & 1);
+}
+
+static void set_dirty(vma *v, uint32_t slot, int on)
+{
+	if (on)
+		v->dirty[slot / 64] |= 1ull << (slot % 64);
+	else
+		v->dirty[slot / 64] &= ~(1ull << (slot % 64));
+}
 
 /* The bytes of on-board line `slot` (allocated on its first fill); NULL
  * without data or out of memory. */
@@ -216,13 +240,24 @@ static void from_line(vma *v, uint32_t slot, uint64_t addr, uint32_t n, uint8_t 
 		memcpy(dst, d + addr % v->p.line, n);
 }
 
-/* Line `line` fills slot (evicting whatever was there: the scene is
- * read-only): its bytes come from host memory. */
-static void fill_slot(vma *v, uint32_t slot, uint64_t line)
+/* Line `line` fills slot, evicting `victim` (CACHE_INVALID: none): a
+ * dirty victim's bytes go back to host memory, then the new line's bytes
+ * come from host memory and it is clean. Returns whether the victim was
+ * written back (counted here; its timing is the caller's). */
+static int fill_slot(vma *v, uint32_t slot, uint64_t line, uint64_t victim)
 {
+	int wb = victim != CACHE_INVALID && is_dirty(v, slot);
 	uint8_t *d = line_data(v, slot);
+	if (wb) {
+		v->s.writebacks++;
+		v->s.writeback_bytes += v->p.line;
+		if (d && ms_write(v->ms, victim * v->p.line, v->p.line, d))
+			v->oom = 1;
+	}
+	set_dirty(v, slot, 0);
 	if (d)
 		ms_read(v->ms, line * v->p.line, v->p.line, d);
+	return wb;
 }
 
 void vma_peek(const vma *v, uint64_t addr, uint32_t bytes, void *dst)
@@ -254,6 +289,7 @@ void vma_reload(vma *v, const uint64_t *sets)
 	for (int s = bits_next(sets, ns, 0); s < ns; s = bits_next(sets, ns, s + 1))
 		for (uint32_t i = 0; i < W; i++) {
 			uint32_t slot = (uint32_t)s * W + i;
+			set_dirty(v, slot, 0);
 			uint64_t line = v->l2.way[slot].tag;
 			uint8_t *d = line == CACHE_INVALID ? NULL : line_data(v, slot);
 			if (d)
@@ -382,9 +418,15 @@ static void dma_done(eng *e, void *ctx, uint64_t line)
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
 	vma_piece *w = take_waiting(&v->l2, v->l2_wait, line);
-	uint32_t slot = cache_fill(&v->l2, line, NULL);
+	uint64_t victim;
+	uint32_t slot = cache_fill(&v->l2, line, &victim);
 	uint32_t set = cache_set_of(&v->l2, line);
-	fill_slot(v, slot, line);
+	if (fill_slot(v, slot, line, victim)) {
+		/* the dirty victim leaves SDRAM for host memory */
+		memif_submit(v->mi, now, MEMIF_FILL, (uint64_t)slot * v->p.line, v->p.line, 0, NULL,
+		             NULL, 0);
+		hbus_transfer(v->hb, now, v->p.line);
+	}
 	/* posted: the fetched line into its slot, its record into the meta-data
 	 * (the tag cache, if it holds the record, is written through) */
 	v->s.data_writes++;
@@ -467,11 +509,12 @@ int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, void *
 }
 
 /* The bytes [a, a + n) of a write (src at addr) into the on-board line
- * in slot, or around it into host memory. */
+ * in slot, which becomes dirty, or around it into host memory. */
 static void write_data(vma *v, uint32_t slot, int on_board, uint64_t a, uint32_t n,
                        const uint8_t *src)
 {
 	if (on_board) {
+		set_dirty(v, slot, 1);
 		uint8_t *d = src ? line_data(v, slot) : NULL;
 		if (d)
 			memcpy(d + a % v->p.line, src, n);
@@ -559,7 +602,7 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write, void *dat
 			v->s.data_bytes += v->p.line;
 			v->s.meta_writes++;
 			v->s.meta_bytes += v->meta_set_bytes;
-			fill_slot(v, slot, line);
+			fill_slot(v, slot, line, victim);
 			from_line(v, slot, at, n, pd);
 		}
 	}

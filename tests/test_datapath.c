@@ -235,8 +235,10 @@ Test(datapath, spoiled_on_board_lines_change_the_frame)
 
 /* (d) Stack spills: with one on-chip entry every deeper entry goes to
  * memory and comes back from it. Undamaged: kernel-ref's frame, through
- * SDRAM and through the VMA; damaged on their way (each entry's ray mask
- * zeroed as it is written): another frame. */
+ * SDRAM and through the VMA on a small board (where spilled lines are
+ * evicted dirty and written back: without the write-back they were
+ * lost); damaged on their way (each entry's ray mask zeroed as it is
+ * written): another frame. */
 static void drop_mask(void *ctx, mem_store *s, uint64_t addr, uint32_t bytes)
 {
 	(void)ctx;
@@ -251,18 +253,25 @@ Test(datapath, spills_travel_through_memory, .timeout = 300)
 {
 	world w;
 	tu_load_world(&w, NULL, NULL, NULL);
-	static const char *const sets[][3] = {{"chip.stack_depth=1"},
-	                                      {"chip.stack_depth=1", "memory.vma.enabled=true"}};
+	static const char *const sets[][3] = {
+	    {"chip.stack_depth=1"},
+	    {"chip.stack_depth=1", "memory.vma.enabled=true", "memory.sdram.mb=1"}};
 	char blind[128] = "";
 	for (int v = 0; v < 2; v++)
 		for (int m = 0; m < 3; m++) {
 			saar_config c;
-			cfg_for(&c, 128, modes[m], sets[v], v ? 2 : 1);
+			cfg_for(&c, 128, modes[m], sets[v], v ? 3 : 1);
 			c.chip.rtps = 4;
 			c.chip.threads_per_rtp = 16;
 			chip *ch = make_chip(&w, &c);
 			cr_assert(frame_identical(ch, &w), "%s, vma %d", modes[m], v);
 			cr_assert_gt(stats_get(&ch->st, "trav.stack_refills"), 0);
+			if (v) {
+				hier_stats h;
+				hier_get_stats(&ch->mem, &h);
+				cr_assert_gt(h.vma.writebacks, 0, "%s: no dirty line evicted",
+				             modes[m]);
+			}
 			chip_destroy(ch);
 			ch = make_chip(&w, &c);
 			ch->store.on_write = drop_mask;

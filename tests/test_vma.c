@@ -73,7 +73,9 @@ static void check_consistent(const hier_stats *s)
 	cr_assert_eq(s->sdram.row_hits + s->sdram.row_empty + s->sdram.row_conflicts > 0, 1);
 	if (s->vma_enabled) {
 		cr_assert_eq(s->l2.hits + s->l2.misses, s->l2.accesses);
-		cr_assert_eq(s->vma.host_fetch_bytes + s->vma.host_write_bytes, s->hostbus.bytes);
+		cr_assert_eq(s->vma.host_fetch_bytes + s->vma.host_write_bytes +
+		                 s->vma.writeback_bytes,
+		             s->hostbus.bytes);
 		cr_assert_eq(s->vma.meta_reads + s->vma.meta_writes,
 		             s->memif.reads[MEMIF_META] + s->memif.writes[MEMIF_META]);
 		cr_assert_eq(s->vma.meta_bytes, s->memif.bytes[MEMIF_META]);

@@ -304,11 +304,12 @@ int main(int argc, char **argv)
 			s.vma = v.s;
 			s.tag_cache = v.tag.s;
 			s.l2 = v.l2.s;
-			s.hostbus.bytes = v.s.host_fetch_bytes + v.s.host_write_bytes;
-			s.hostbus.transfers = v.s.host_fetches + v.s.host_writes;
+			s.hostbus.bytes =
+			    v.s.host_fetch_bytes + v.s.host_write_bytes + v.s.writeback_bytes;
+			s.hostbus.transfers = v.s.host_fetches + v.s.host_writes + v.s.writebacks;
 			/* SDRAM bytes with VMA: data (reads, fills, writes) plus meta-data;
 			 * the functional path does not split reads from writes */
-			sd_read = v.s.data_bytes + v.s.meta_bytes;
+			sd_read = v.s.data_bytes + v.s.meta_bytes + v.s.writeback_bytes;
 			s.memif.bytes[MEMIF_META] = v.s.meta_bytes;
 			s.memif.reads[MEMIF_META] = v.s.meta_reads;
 			s.memif.writes[MEMIF_META] = v.s.meta_writes;
