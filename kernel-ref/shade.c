@@ -10,6 +10,7 @@
  */
 #include "shade.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -91,6 +92,19 @@ static vec3 arr3(const float *f)
 	return v3(f[0], f[1], f[2]);
 }
 
+/* nextafterf(x, +-INFINITY), exactly, without a call into libm: the
+ * neighbouring float towards s > 0 (up) or s < 0 (down); x when s is 0.
+ * (A libm call from here cost as much as the rest of the shader where
+ * the caller left wide vector registers in use.) */
+static inline float next_toward(float x, float s)
+{
+	if (s > 0)
+		return x == -INFINITY ? -FLT_MAX : fp_next_up(x);
+	if (s < 0)
+		return x == INFINITY ? FLT_MAX : fp_next_down(x);
+	return x;
+}
+
 /* Robust origin for a ray leaving the surface in direction d. */
 static vec3 spawn_origin(vec3 p, vec3 err, vec3 ng, vec3 d)
 {
@@ -99,9 +113,9 @@ static vec3 spawn_origin(vec3 p, vec3 err, vec3 ng, vec3 d)
 	if (v3_dot(d, ng) < 0.0f)
 		o = v3_scale(o, -1.0f);
 	vec3 q = v3_add(p, o);
-	q.x = o.x > 0 ? nextafterf(q.x, INFINITY) : o.x < 0 ? nextafterf(q.x, -INFINITY) : q.x;
-	q.y = o.y > 0 ? nextafterf(q.y, INFINITY) : o.y < 0 ? nextafterf(q.y, -INFINITY) : q.y;
-	q.z = o.z > 0 ? nextafterf(q.z, INFINITY) : o.z < 0 ? nextafterf(q.z, -INFINITY) : q.z;
+	q.x = next_toward(q.x, o.x);
+	q.y = next_toward(q.y, o.y);
+	q.z = next_toward(q.z, o.z);
 	return q;
 }
 
