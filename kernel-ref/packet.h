@@ -165,10 +165,27 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r);
 enum pkt_fault { PKT_FAULT_NONE, PKT_FAULT_NO_FAR_PUSH, PKT_FAULT_FAR_FIRST };
 extern int pkt_trav_fault;
 
+/* pkt_trav_next in two halves, for a caller that reads the node itself
+ * (the chip model's traversal unit, through its memory). pkt_trav_pop pops
+ * finished work: 0 when none is left (r->op = TRAV_DONE), else 1 with
+ * r->node the node to visit (at mimg_node_addr) and r->mask its rays;
+ * pkt_trav_node then does the step on that node's 8 bytes n. The two are
+ * exactly pkt_trav_next. */
+int pkt_trav_pop(trav_state *s, packet *p, trav_result *r);
+void pkt_trav_node(trav_state *s, packet *p, kd_node n, trav_result *r);
+/* How many stack entries the next pkt_trav_pop pops (entries looked at
+ * from the top down to the first with live rays), without popping: the
+ * chip reads spilled entries back before it pops them. */
+int pkt_trav_pops(const trav_state *s, const packet *p);
+
 /* Tests the rays in `mask` against the triangle at tri_addr; updates
  * closest hits (shadow packets: marks occlusion). Returns the mask of rays
  * whose result changed. */
 uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, uint32_t tri_addr);
+/* The same on the triangle record's 36 bytes as fetched (tri_addr is
+ * only the hit's name). */
+uint64_t pkt_isect_tri_v(trav_state *s, packet *p, const mimg_tri *tri, uint64_t mask,
+                         uint32_t tri_addr);
 
 /* Convenience: the whole traversal in a loop (kernel-ref). Counts into the
  * optional counters; returns the mask of rays that entered the scene box. */

@@ -10,6 +10,7 @@
  */
 #include "shade.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -25,13 +26,36 @@ static void log_read(shade_log *log, uint64_t addr, uint32_t bytes, int region)
 		log->dropped++;
 }
 
-/* Nearest texel with repeat wrapping; returns RGB in [0,1] and logs it. */
-static vec3 texel(const mimg *m, int tex, vec2 uv, float du, float dv, shade_log *log,
-                  shade_counts *cnt)
+/* kernel-ref's reader: the memory image itself (addresses past it read
+ * as zero), every read logged. */
+typedef struct mimg_rd {
+	const mimg *m;
+	shade_log *log;
+} mimg_rd;
+
+static const void *mimg_read(void *ctx, uint64_t addr, uint32_t bytes, int region)
 {
-	const mimg_texhdr *th = mimg_texhdr_at(m, (uint32_t)tex);
+	static const uint8_t zero[MIMG_SHADE_BYTES];
+	const mimg_rd *r = ctx;
+	log_read(r->log, addr, bytes, region);
+	if (addr > r->m->size || bytes > r->m->size - addr || bytes > sizeof zero)
+		return zero;
+	return r->m->bytes + addr;
+}
+
+/* Reads `bytes` bytes at addr through the reader into out. */
+static void rd_get(const shade_reader *rd, uint64_t addr, uint32_t bytes, int region, void *out)
+{
+	memcpy(out, rd->read(rd->ctx, addr, bytes, region), bytes);
+}
+
+/* Nearest texel with repeat wrapping; returns RGB in [0,1]. Reads the
+ * texture header (into *th) and the texel. */
+static vec3 texel(const shade_reader *rdr, const mimg *m, int tex, vec2 uv, float du, float dv,
+                  shade_counts *cnt, mimg_texhdr *th)
+{
 	uint64_t hdr_addr = m->base[MIMG_TEXHDR] + (uint64_t)MIMG_TEXHDR_BYTES * (uint32_t)tex;
-	log_read(log, hdr_addr, MIMG_TEXHDR_BYTES, MIMG_TEXHDR);
+	rd_get(rdr, hdr_addr, MIMG_TEXHDR_BYTES, MIMG_TEXHDR, th);
 	float u = uv.u + du, v = uv.v + dv;
 	u -= floorf(u);
 	v -= floorf(v);
@@ -39,15 +63,46 @@ static vec3 texel(const mimg *m, int tex, vec2 uv, float du, float dv, shade_log
 	x = x < 0 ? 0 : x >= (int)th->w ? (int)th->w - 1 : x;
 	y = y < 0 ? 0 : y >= (int)th->h ? (int)th->h - 1 : y;
 	uint64_t a = th->texel_addr + 4ull * ((uint64_t)y * th->w + (uint64_t)x);
-	log_read(log, a, 4, MIMG_TEXELS);
+	uint8_t px[4];
+	rd_get(rdr, a, 4, MIMG_TEXELS, px);
 	cnt->texel_reads++;
-	const uint8_t *px = m->bytes + a;
 	return v3(px[0] / 255.0f, px[1] / 255.0f, px[2] / 255.0f);
+}
+
+/* A frame-buffer add, or kept for later (shade_ctx.defer). */
+static void add(const shade_ctx *c, uint32_t pixel, vec3 col)
+{
+	shade_adds *d = c->defer;
+	if (!d) {
+		fb_add(c->fb, pixel, col.x, col.y, col.z);
+		return;
+	}
+	if (d->n < PKT_RAYS)
+		d->e[d->n++] = (shade_add){pixel, col.x, col.y, col.z};
+}
+
+void shade_adds_apply(const shade_adds *d, framebuf *fb)
+{
+	for (uint32_t i = 0; i < d->n; i++)
+		fb_add(fb, d->e[i].pixel, d->e[i].r, d->e[i].g, d->e[i].b);
 }
 
 static vec3 arr3(const float *f)
 {
 	return v3(f[0], f[1], f[2]);
+}
+
+/* nextafterf(x, +-INFINITY), exactly, without a call into libm: the
+ * neighbouring float towards s > 0 (up) or s < 0 (down); x when s is 0.
+ * (A libm call from here cost as much as the rest of the shader where
+ * the caller left wide vector registers in use.) */
+static inline float next_toward(float x, float s)
+{
+	if (s > 0)
+		return x == -INFINITY ? -FLT_MAX : fp_next_up(x);
+	if (s < 0)
+		return x == INFINITY ? FLT_MAX : fp_next_down(x);
+	return x;
 }
 
 /* Robust origin for a ray leaving the surface in direction d. */
@@ -58,9 +113,9 @@ static vec3 spawn_origin(vec3 p, vec3 err, vec3 ng, vec3 d)
 	if (v3_dot(d, ng) < 0.0f)
 		o = v3_scale(o, -1.0f);
 	vec3 q = v3_add(p, o);
-	q.x = o.x > 0 ? nextafterf(q.x, INFINITY) : o.x < 0 ? nextafterf(q.x, -INFINITY) : q.x;
-	q.y = o.y > 0 ? nextafterf(q.y, INFINITY) : o.y < 0 ? nextafterf(q.y, -INFINITY) : q.y;
-	q.z = o.z > 0 ? nextafterf(q.z, INFINITY) : o.z < 0 ? nextafterf(q.z, -INFINITY) : q.z;
+	q.x = next_toward(q.x, o.x);
+	q.y = next_toward(q.y, o.y);
+	q.z = next_toward(q.z, o.z);
 	return q;
 }
 
@@ -99,7 +154,17 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet *out, int max_out,
                     shade_log *log, shade_counts *cnt)
 {
+	mimg_rd r = {c->m, log};
+	shade_reader rd = {mimg_read, &r};
+	return shade_packet_rd(c, fp, &rd, p, out, max_out, cnt);
+}
+
+int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr, const packet *p,
+                    packet *out, int max_out, shade_counts *cnt)
+{
 	const mimg *m = c->m;
+	if (c->defer)
+		c->defer->n = 0;
 	const fpfmt *fq = fp && !fp->full ? fp : NULL;
 	int nl = c->nlights < max_out - 2 ? c->nlights : max_out - 2;
 	packet *shadow = out, *refl = out + nl, *refr = out + nl + 1;
@@ -115,17 +180,21 @@ int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet
 		if (p->tri[i] == PKT_NOHIT) {
 			cnt->misses++;
 			vec3 bg = rnd3(fq, v3_mul(w, c->background));
-			fb_add(c->fb, p->pixel[i], bg.x, bg.y, bg.z);
+			add(c, p->pixel[i], bg);
 			continue;
 		}
 		cnt->hits++;
+		/* the hit's records, as the reader gives them */
 		uint32_t ta = p->tri[i], tri = mimg_tri_index(m, ta);
-		const mimg_tri *tr = mimg_tri_at(m, ta);
-		const mimg_shade *sh = mimg_shade_at(m, tri);
-		log_read(log, ta, MIMG_TRI_BYTES, MIMG_TRIS);
-		log_read(log, mimg_shade_addr(m, tri), MIMG_SHADE_BYTES, MIMG_SHADE);
-		const mimg_mat *mt = mimg_mat_at(m, sh->mat);
-		log_read(log, mimg_mat_addr(m, sh->mat), MIMG_MAT_BYTES, MIMG_MATS);
+		mimg_tri trd;
+		mimg_shade shd;
+		mimg_mat mtd;
+		rd_get(rdr, ta, MIMG_TRI_BYTES, MIMG_TRIS, &trd);
+		rd_get(rdr, mimg_shade_addr(m, tri), MIMG_SHADE_BYTES, MIMG_SHADE, &shd);
+		rd_get(rdr, mimg_mat_addr(m, shd.mat), MIMG_MAT_BYTES, MIMG_MATS, &mtd);
+		const mimg_tri *tr = &trd;
+		const mimg_shade *sh = &shd;
+		const mimg_mat *mt = &mtd;
 
 		/* hit point from barycentrics, with its error bound */
 		float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
@@ -150,17 +219,18 @@ int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet
 			ns = v3_scale(ns, -1.0f);
 
 		vec3 kd = arr3(mt->kd), ka = arr3(mt->ka);
+		mimg_texhdr th;
 		if (mt->tex_kd >= 0) {
-			vec3 tx = texel(m, mt->tex_kd, uv, 0, 0, log, cnt);
+			vec3 tx = texel(rdr, m, mt->tex_kd, uv, 0, 0, cnt, &th);
 			kd = v3_mul(kd, tx);
 			ka = v3_mul(ka, tx);
 		}
 		if (mt->tex_bump >= 0) {
-			const mimg_texhdr *th = mimg_texhdr_at(m, (uint32_t)mt->tex_bump);
-			float du = 1.0f / (float)th->w, dv = 1.0f / (float)th->h;
-			vec3 h0 = texel(m, mt->tex_bump, uv, 0, 0, log, cnt);
-			vec3 hu = texel(m, mt->tex_bump, uv, du, 0, log, cnt);
-			vec3 hv = texel(m, mt->tex_bump, uv, 0, dv, log, cnt);
+			/* the offsets are one texel of the header h0's read brings */
+			vec3 h0 = texel(rdr, m, mt->tex_bump, uv, 0, 0, cnt, &th);
+			float du = 1.0f / (float)th.w, dv = 1.0f / (float)th.h;
+			vec3 hu = texel(rdr, m, mt->tex_bump, uv, du, 0, cnt, &th);
+			vec3 hv = texel(rdr, m, mt->tex_bump, uv, 0, dv, cnt, &th);
 			float l0 = (h0.x + h0.y + h0.z) / 3, lu = (hu.x + hu.y + hu.z) / 3,
 			      lv = (hv.x + hv.y + hv.z) / 3;
 			/* tangent frame from the triangle's uv parametrisation */
@@ -190,7 +260,7 @@ int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet
 			kl = 0.0f;
 		vec3 wl = v3_scale(w, kl);
 		vec3 amb = rnd3(fq, v3_scale(v3_mul(wl, ka), SHADE_AMBIENT));
-		fb_add(c->fb, p->pixel[i], amb.x, amb.y, amb.z);
+		add(c, p->pixel[i], amb);
 
 		/* shadow rays: one per light the surface faces */
 		if (c->nlights == 0 && kl > 0.0f)

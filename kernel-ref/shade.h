@@ -17,9 +17,11 @@
  * and one refraction packet, each made only when it has a ray. What is
  * skipped is counted (shade_counts).
  *
- * All scene data is read from the memory image; with a non-NULL log every
- * read (address, bytes, region) is recorded so the chip model can send it
- * through its shading cache.
+ * Scene data is read through a reader (shade_reader): kernel-ref's reads
+ * the memory image (and with a non-NULL log records every read: address,
+ * bytes, region); the chip model's hands out the bytes its memory system
+ * returns for those addresses (units/rgs.c). Either way the shader decodes
+ * only what the reader gives it, in the same order.
  */
 #ifndef SAAR_KREF_SHADE_H
 #define SAAR_KREF_SHADE_H
@@ -32,14 +34,36 @@
 
 #define SHADE_AMBIENT 0.15f
 
+/* Frame-buffer adds kept instead of made (shade_ctx.defer): at most one
+ * per ray of a packet (its background or ambient term). */
+typedef struct shade_add {
+	uint32_t pixel;
+	float r, g, b;
+} shade_add;
+typedef struct shade_adds {
+	uint32_t n;
+	shade_add e[PKT_RAYS];
+} shade_adds;
+
 typedef struct shade_ctx {
-	const mimg *m;
+	const mimg *m; /* the region bases (the bytes come from the reader) */
 	const light *lights;
 	int nlights;
 	int max_depth; /* reflection/refraction generations after the primary hit */
 	vec3 background;
 	framebuf *fb;
+	/* non-NULL: shade_packet* keeps its frame-buffer adds here (emptied
+	 * first) instead of making them; shade_adds_apply makes them */
+	shade_adds *defer;
 } shade_ctx;
+
+/* Where the shader's scene data comes from: read(ctx, addr, bytes, region)
+ * returns the `bytes` (at most 64) bytes at addr, valid until the next
+ * call; region is the enum mimg_region the address lies in. */
+typedef struct shade_reader {
+	const void *(*read)(void *ctx, uint64_t addr, uint32_t bytes, int region);
+	void *ctx;
+} shade_reader;
 
 typedef struct shade_read {
 	uint64_t addr;
@@ -84,6 +108,16 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
  * correctness. */
 int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet *out, int max_out,
                     shade_log *log, shade_counts *cnt);
+
+/* The same with the scene's bytes from reader rd (the memory image's
+ * reader is what shade_packet_fp passes). The reads, in order, per hit:
+ * triangle record, shading record, material; per texture lookup its
+ * header and texel (map_Kd once, bump map three times). */
+int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rd, const packet *p,
+                    packet *out, int max_out, shade_counts *cnt);
+
+/* Makes the frame-buffer adds d kept. */
+void shade_adds_apply(const shade_adds *d, framebuf *fb);
 
 /* Finishes a traced shadow packet: unoccluded rays add their contribution. */
 void shade_shadow_done(const shade_ctx *c, const packet *p, shade_counts *cnt);

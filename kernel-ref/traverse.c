@@ -263,9 +263,27 @@ static uint64_t live_mask(const packet *p, const trav_entry *e)
 	return live;
 }
 
+int pkt_trav_pops(const trav_state *s, const packet *p)
+{
+	if (s->cur.mask)
+		return 0;
+	int k = 0;
+	for (int sp = s->sp; sp > 0; sp--) {
+		k++;
+		if (live_mask(p, &s->stack[sp - 1]))
+			break;
+	}
+	return k;
+}
+
 void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 {
-	const kd_node *nodes = mimg_nodes(m);
+	if (pkt_trav_pop(s, p, r))
+		pkt_trav_node(s, p, mimg_nodes(m)[r->node], r);
+}
+
+int pkt_trav_pop(trav_state *s, packet *p, trav_result *r)
+{
 	r->pushed = r->popped = 0;
 	/* cur is either fresh from a node step (its rays already filtered) or
 	 * empty after a leaf: then pop until an entry has live rays. */
@@ -274,7 +292,7 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 			r->op = TRAV_DONE;
 			r->mask = 0;
 			r->sp = 0;
-			return;
+			return 0;
 		}
 		s->sp--;
 		r->popped++;
@@ -285,9 +303,13 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 			memcpy(s->cur.tf, s->stack[s->sp].tf, sizeof s->cur.tf);
 		}
 	}
-	kd_node n = nodes[s->cur.node];
 	r->node = s->cur.node;
 	r->mask = s->cur.mask;
+	return 1;
+}
+
+void pkt_trav_node(trav_state *s, packet *p, kd_node n, trav_result *r)
+{
 	if (kd_is_leaf(n)) {
 		r->op = TRAV_LEAF;
 		r->leaf_first = kd_first(n);
@@ -367,7 +389,9 @@ void pkt_trav_next(trav_state *s, packet *p, const mimg *m, trav_result *r)
 		memcpy(s->cur.tn, far->tn, sizeof s->cur.tn);
 		memcpy(s->cur.tf, far->tf, sizeof s->cur.tf);
 	} else {
-		if (fmask && pkt_trav_fault != PKT_FAULT_NO_FAR_PUSH) {
+		/* the stack is full only for a tree deeper than kd_build makes
+		 * (damaged node data): the far child is dropped */
+		if (fmask && far != &s->spare && pkt_trav_fault != PKT_FAULT_NO_FAR_PUSH) {
 			far->node = fnode;
 			far->mask = fmask;
 			s->sp++;
@@ -430,7 +454,12 @@ static uint64_t isect_tri_fp_lanes(const trav_state *s, packet *p, const mimg_tr
 
 uint64_t pkt_isect_tri(trav_state *s, packet *p, const mimg *m, uint64_t mask, uint32_t tri_addr)
 {
-	const mimg_tri *tr = mimg_tri_at(m, tri_addr);
+	return pkt_isect_tri_v(s, p, mimg_tri_at(m, tri_addr), mask, tri_addr);
+}
+
+uint64_t pkt_isect_tri_v(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
+                         uint32_t tri_addr)
+{
 	const pkt_rayc *rc = &s->rc;
 	uint64_t changed = 0;
 	if (s->fpi)

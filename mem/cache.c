@@ -58,9 +58,58 @@ void cache_free(cache *c)
 	free(c->way);
 	free(c->mshr_line);
 	free(c->dirty);
+	free(c->didx);
+	for (uint32_t i = 0; i < c->dchunks; i++)
+		free(c->dchunk[i]);
+	free(c->dchunk);
 	c->way = NULL;
 	c->mshr_line = NULL;
 	c->dirty = NULL;
+	c->didx = NULL;
+	c->dchunk = NULL;
+	c->dchunks = c->dcap = c->dused = 0;
+}
+
+int cache_data_on(cache *c)
+{
+	if (!c->didx)
+		c->didx = calloc((size_t)c->nsets * c->p.ways, sizeof *c->didx);
+	return c->didx ? 0 : -1;
+}
+
+uint64_t cache_data_host_bytes(const cache_params *p, uint64_t lines)
+{
+	uint64_t per_set = (uint64_t)p->ways * p->line_bytes;
+	uint64_t slots = (per_set ? p->size_bytes / per_set : 0) * p->ways;
+	uint64_t used = lines * p->ways < slots ? lines * p->ways : slots;
+	uint64_t chunk = 1ull << CACHE_DCHUNK_BITS;
+	used = (used + chunk - 1) / chunk * chunk;
+	return slots * sizeof(uint32_t) + used * p->line_bytes;
+}
+
+uint8_t *cache_data(cache *c, uint32_t slot)
+{
+	uint8_t *d = cache_data_at(c, slot);
+	if (d)
+		return d;
+	uint32_t i = c->dused, k = i >> CACHE_DCHUNK_BITS;
+	if (k == c->dchunks) {
+		if (k == c->dcap) {
+			uint32_t cap = c->dcap ? 2 * c->dcap : 16;
+			uint8_t **n = realloc(c->dchunk, cap * sizeof *n);
+			if (!n)
+				return NULL;
+			c->dchunk = n;
+			c->dcap = cap;
+		}
+		c->dchunk[k] = calloc((size_t)1 << CACHE_DCHUNK_BITS, c->p.line_bytes);
+		if (!c->dchunk[k])
+			return NULL;
+		c->dchunks++;
+	}
+	c->dused++;
+	c->didx[slot] = i + 1;
+	return cache_data_at(c, slot);
 }
 
 int cache_track(cache *c)
@@ -246,27 +295,38 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 	return (uint32_t)(base + (size_t)w);
 }
 
-int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
+int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot, uint64_t *victim)
 {
 	uint32_t set = cache_set_of(c, line);
 	int w = find_way(c, set, line);
 	c->s.accesses++;
 	c->s.func_accesses++;
 	c->s.bytes += bytes;
+	*victim = CACHE_INVALID;
 	if (w >= 0) {
-		cache_use(c, set, &c->way[(size_t)set * c->p.ways + (size_t)w]);
+		size_t i = (size_t)set * c->p.ways + (size_t)w;
+		cache_use(c, set, &c->way[i]);
 		c->s.hits++;
 		c->s.func_hits++;
+		*slot = (uint32_t)i;
 		return 1;
 	}
 	c->s.misses++;
 	if (cache_mshr_find(c, line) >= 0) {
 		c->s.merges++;
 		c->s.func_merges++;
+		*slot = CACHE_NO_SLOT;
 		return 1;
 	}
-	cache_fill(c, line, NULL);
+	*slot = cache_fill(c, line, victim);
 	return 0;
+}
+
+int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes)
+{
+	uint32_t slot;
+	uint64_t victim;
+	return cache_lookup_func_at(c, line, bytes, &slot, &victim);
 }
 
 uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes)

@@ -90,7 +90,16 @@ typedef struct cache {
 	 * only the sets of the on-board cache that a region or the checkpoints
 	 * between changed: copying all of it took longer than the region */
 	uint64_t *dirty;
+	/* line data (cache_data_on; NULL: the cache holds tags only): per way
+	 * 1 + the index of its line's bytes in a pool of chunks, 0 before the
+	 * way first fills. The pool grows as ways fill, so a large cache of a
+	 * small scene holds only the lines it was given */
+	uint32_t *didx;
+	uint8_t **dchunk;
+	uint32_t dchunks, dcap, dused;
 } cache;
+
+#define CACHE_DCHUNK_BITS 10u /* lines per chunk of the data pool: 1024 */
 
 #define CACHE_INVALID UINT64_MAX
 
@@ -100,6 +109,27 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d);
 void cache_free(cache *c);
 /* Empties every line and MSHR; keeps the counters. */
 void cache_flush(cache *c);
+
+/* Gives the cache line data (docs/memory.md, "Data"): line_bytes per way,
+ * beside the tags. -1 when out of memory. */
+int cache_data_on(cache *c);
+/* Host bytes of the data of a cache of p whose fills bring at most
+ * `lines` distinct lines: the per-way index and the pool (each line can
+ * land in any way of its set). */
+uint64_t cache_data_host_bytes(const cache_params *p, uint64_t lines);
+/* The bytes of the line in way `slot` (set * ways + way), given a pool
+ * entry on its first fill; NULL when out of memory. Fillers write the
+ * line here. */
+uint8_t *cache_data(cache *c, uint32_t slot);
+/* The same without allocating: NULL when the way never held a line. */
+static inline uint8_t *cache_data_at(const cache *c, uint32_t slot)
+{
+	uint32_t i = c->didx[slot];
+	if (!i--)
+		return NULL;
+	return c->dchunk[i >> CACHE_DCHUNK_BITS] +
+	       (size_t)(i & ((1u << CACHE_DCHUNK_BITS) - 1)) * c->p.line_bytes;
+}
 
 /* Tracks the sets that change from now on (cache.dirty). -1 when out of
  * memory. */
@@ -182,6 +212,12 @@ static inline int cache_try_hit(cache *c, uint64_t line, uint32_t bytes)
  * otherwise the miss is counted and the line filled at once without an
  * MSHR, and the result is 0. Safe while timed misses are in flight. */
 int cache_lookup_func(cache *c, uint64_t line, uint32_t bytes);
+/* The same, telling where the line is: *slot its way when it is present
+ * after the call (a hit, or the way the miss filled; CACHE_NO_SLOT when
+ * only in flight in an MSHR), *victim the line the fill evicted
+ * (CACHE_INVALID if none). */
+int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot, uint64_t *victim);
+#define CACHE_NO_SLOT UINT32_MAX
 /* Functional access with an immediate fill (no time): what replay and the
  * reference tests use. Touches every line of [addr, addr+bytes); returns the
  * number of lines that missed (0 = hit). Never returns MSHR_FULL. */

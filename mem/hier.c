@@ -8,6 +8,14 @@
  * still waits for; the guard count of 1 held while its lines are looked up
  * keeps it alive until the walk is done. hreq and wait records come from
  * free lists that grow in chunks: the steady state never allocates.
+ *
+ * Data (docs/memory.md, "Data"): with a store, every L1 way holds its
+ * line's bytes (the cache's data). A read's bytes are copied from the line
+ * at its lookup on a hit, and when its line fills on a miss; a miss reads
+ * the whole line from below into its MSHR's buffer (SDRAM: the store;
+ * with the VMA, the on-board line or its DMA), and the fill copies it into
+ * the way. Bypass reads and writes move their bytes from and to the level
+ * below directly.
  */
 #include "hier.h"
 
@@ -21,6 +29,7 @@ struct hreq {
 	uint64_t arg;
 	uint64_t issue, ready, since;
 	uint64_t next_line, last_line, addr;
+	uint8_t *dst; /* where the bytes go; NULL: no data */
 	uint32_t bytes, pending;
 	uint8_t type;
 	hreq *next;
@@ -40,7 +49,8 @@ typedef struct hl1 {
 	cache c;
 	uint64_t port_cycle;
 	uint32_t port_used;
-	hwait **wait; /* per MSHR */
+	hwait **wait;  /* per MSHR */
+	uint8_t *mbuf; /* per MSHR: the line being fetched (with data) */
 	hreq *stall, *stall_tail;
 } hl1;
 
@@ -52,6 +62,8 @@ struct hier {
 	eng *e;
 	eng_clock core;
 	uint64_t image_bytes;
+	mem_store *ms; /* the board's bytes (host memory's with the VMA); NULL: no data */
+	int oom;       /* a line found no memory for its bytes */
 	hl1 l1[MEM_NTYPES];
 	sdram sd;
 	memif mi;
@@ -126,13 +138,55 @@ static hwait *wait_alloc(hier *h)
 
 /* ---- below the L1s ---- */
 
-static void lower_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_handler cb,
-                       void *ctx, uint64_t arg)
+/* A read below the L1s into dst (NULL: no data). Without the VMA the
+ * bytes are the store's at the address, taken when the read is issued:
+ * only the reading thread writes what it reads (its spill area) and its
+ * writes go in when issued, so they are the bytes SDRAM returns. */
+static void lower_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
+                       eng_handler cb, void *ctx, uint64_t arg)
+{
+	if (h->use_vma) {
+		vma_read(&h->v, t, type, addr, bytes, dst, cb, ctx, arg);
+		return;
+	}
+	if (dst)
+		ms_read(h->ms, addr, bytes, dst);
+	memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
+}
+
+/* The bytes below the L1s now, without any change (hier_peek). */
+static void lower_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
 {
 	if (h->use_vma)
-		vma_read(&h->v, t, type, addr, bytes, cb, ctx, arg);
+		vma_peek(&h->v, addr, bytes, dst);
+	else if (h->ms)
+		ms_read(h->ms, addr, bytes, dst);
 	else
-		memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
+		memset(dst, 0, bytes);
+}
+
+/* The bytes of L1 way `slot` (given on its first fill); NULL without data
+ * or out of memory. */
+static uint8_t *l1_data(hier *h, hl1 *l, uint32_t slot)
+{
+	if (!h->ms)
+		return NULL;
+	uint8_t *d = cache_data(&l->c, slot);
+	if (!d)
+		h->oom = 1;
+	return d;
+}
+
+/* Copies q's bytes inside L1 line `line` (in way slot) to q's buffer. */
+static void deliver(hier *h, hl1 *l, hreq *q, uint64_t line, uint32_t slot)
+{
+	const uint8_t *d = cache_data_at(&l->c, slot);
+	if (!d && !(d = l1_data(h, l, slot)))
+		return;
+	uint32_t lb = l->c.p.line_bytes;
+	uint64_t lo = line * lb, end = q->addr + q->bytes;
+	uint64_t a = q->addr > lo ? q->addr : lo, b = end < lo + lb ? end : lo + lb;
+	memcpy(q->dst + (a - q->addr), d + (a - lo), (size_t)(b - a));
 }
 
 /* ---- reads ---- */
@@ -164,11 +218,16 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 		uint64_t lo = line * lb, hi = lo + lb, end = q->addr + q->bytes;
 		uint64_t a = q->addr > lo ? q->addr : lo, b = end < hi ? end : hi;
 		int m = -1;
-		switch (cache_lookup(&l->c, line, (uint32_t)(b - a), &m, NULL)) {
+		uint32_t slot = 0;
+		switch (cache_lookup(&l->c, line, (uint32_t)(b - a), &m, &slot)) {
 		case CACHE_HIT:
+			/* the bytes leave the array at the tag check */
+			if (q->dst)
+				deliver(h, l, q, line, slot);
 			break;
 		case CACHE_MISS_NEW:
-			lower_read(h, t, l->type, lo, lb, l1_filled, l, line);
+			lower_read(h, t, l->type, lo, lb, h->ms ? l->mbuf + (size_t)m * lb : NULL,
+			           l1_filled, l, line);
 			/* fall through */
 		case CACHE_MISS_MERGED: {
 			hwait *w = wait_alloc(h);
@@ -194,10 +253,15 @@ static void l1_filled(eng *e, void *ctx, uint64_t line)
 	hwait *w = m >= 0 ? l->wait[m] : NULL;
 	if (m >= 0)
 		l->wait[m] = NULL;
-	cache_fill(&l->c, line, NULL);
+	uint32_t slot = cache_fill(&l->c, line, NULL);
+	uint8_t *d = m >= 0 ? l1_data(h, l, slot) : NULL;
+	if (d) /* the line arrived in the MSHR's buffer */
+		memcpy(d, l->mbuf + (size_t)m * l->c.p.line_bytes, l->c.p.line_bytes);
 	while (w) {
 		hwait *n = w->next;
 		hreq *q = w->r;
+		if (q->dst)
+			deliver(h, l, q, line, slot);
 		w->next = h->free_w;
 		h->free_w = w;
 		if (--q->pending == 0)
@@ -230,12 +294,18 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	uint64_t now = eng_now(h->e);
 	int type = r->type;
 	if (r->write) {
+		/* posted: the bytes go in now (write-around: the L1s never
+		 * hold the spill area) */
 		h->writes[type]++;
 		h->write_bytes[type] += r->bytes;
+		const void *src = h->ms ? r->data : NULL;
 		if (h->use_vma)
-			vma_write(&h->v, now, type, r->addr, r->bytes);
-		else
+			vma_write(&h->v, now, type, r->addr, r->bytes, src);
+		else {
+			if (src && ms_write(h->ms, r->addr, r->bytes, src))
+				h->oom = 1;
 			memif_submit(&h->mi, now, type, r->addr, r->bytes, 1, NULL, NULL, 0);
+		}
 		if (done) /* posted: a waiting caller gets its answer at once */
 			eng_schedule(h->e, eng_next_edge(h->core, now), done, ctx, arg);
 		return;
@@ -246,10 +316,21 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	if (!q)
 		return; /* out of memory: the unit never hears back (cannot happen in practice) */
 	uint32_t bytes = r->bytes ? r->bytes : 1;
-	*q = (hreq){done, ctx, arg, now, now, now, 0, 0, r->addr, bytes, 1, (uint8_t)type, NULL};
+	uint8_t *dst = h->ms && r->bytes ? r->data : NULL;
+	*q = (hreq){.done = done,
+	            .ctx = ctx,
+	            .arg = arg,
+	            .issue = now,
+	            .ready = now,
+	            .since = now,
+	            .addr = r->addr,
+	            .dst = dst,
+	            .bytes = bytes,
+	            .pending = 1,
+	            .type = (uint8_t)type};
 	if (r->addr >= h->image_bytes) {
 		h->bypass[type]++;
-		lower_read(h, now, type, r->addr, bytes, l1_bypass_done, h, (uintptr_t)q);
+		lower_read(h, now, type, r->addr, bytes, dst, l1_bypass_done, h, (uintptr_t)q);
 		return;
 	}
 	hl1 *l = &h->l1[type];
@@ -320,15 +401,21 @@ static double merge_share(const hier *h)
 }
 
 /* Below the L1s without time: SDRAM directly, or the VMA's functional walk
- * whose counter deltas become SDRAM and host-bus traffic. */
-static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int write)
+ * whose counter deltas become SDRAM and host-bus traffic. data: the bytes
+ * read into or written from (NULL: none). */
+static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
 {
 	if (!h->use_vma) {
 		func_sdram(h, type, bytes, write);
+		if (data && write) {
+			if (ms_write(h->ms, addr, bytes, data))
+				h->oom = 1;
+		} else if (data)
+			ms_read(h->ms, addr, bytes, data);
 		return;
 	}
 	vma_stats a = h->v.s;
-	vma_access_func(&h->v, addr, bytes, write);
+	vma_access_func(&h->v, addr, bytes, write, data);
 	const vma_stats *b = &h->v.s;
 	uint32_t mb = h->v.meta_set_bytes;
 	for (uint64_t i = a.meta_reads; i < b->meta_reads; i++)
@@ -363,6 +450,13 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 		h->fhb.bytes += wb;
 		h->fhb.busy_ticks += hbus_duration(&h->hb, (uint32_t)wb);
 	}
+	/* dirty lines written back: read out of SDRAM, over the host bus */
+	for (uint64_t i = a.writebacks; i < b->writebacks; i++) {
+		func_sdram(h, MEMIF_FILL, h->v.p.line, 0);
+		h->fhb.transfers++;
+		h->fhb.bytes += h->v.p.line;
+		h->fhb.busy_ticks += hbus_duration(&h->hb, h->v.p.line);
+	}
 }
 
 /* The functional twin of hier_access: the same L1 lookups, line by line,
@@ -374,11 +468,12 @@ static void hier_access_func(void *impl, const mem_req *r)
 {
 	hier *h = impl;
 	int type = r->type;
+	uint8_t *data = h->ms && r->bytes ? r->data : NULL;
 	h->freqs++;
 	if (r->write) {
 		h->writes[type]++;
 		h->write_bytes[type] += r->bytes;
-		func_lower(h, type, r->addr, r->bytes, 1);
+		func_lower(h, type, r->addr, r->bytes, 1, data);
 		return;
 	}
 	h->reads[type]++;
@@ -386,10 +481,11 @@ static void hier_access_func(void *impl, const mem_req *r)
 	uint32_t bytes = r->bytes ? r->bytes : 1;
 	if (r->addr >= h->image_bytes) {
 		h->bypass[type]++;
-		func_lower(h, type, r->addr, bytes, 0);
+		func_lower(h, type, r->addr, bytes, 0, data);
 		return;
 	}
-	cache *c = &h->l1[type].c;
+	hl1 *l = &h->l1[type];
+	cache *c = &l->c;
 	uint32_t lb = c->p.line_bytes;
 	uint64_t first = cache_line_of(c, r->addr), end = r->addr + bytes;
 	/* most reads fit one line: no second division (36-byte lines) */
@@ -397,9 +493,59 @@ static void hier_access_func(void *impl, const mem_req *r)
 	for (uint64_t line = first; line <= last; line++) {
 		uint64_t lo = line * lb, hi = lo + lb;
 		uint64_t a = r->addr > lo ? r->addr : lo, b = end < hi ? end : hi;
-		if (!cache_lookup_func(c, line, (uint32_t)(b - a)))
-			func_lower(h, type, lo, lb, 0);
+		uint32_t slot;
+		uint64_t victim;
+		int hit = cache_lookup_func_at(c, line, (uint32_t)(b - a), &slot, &victim);
+		if (!h->ms) {
+			if (!hit)
+				func_lower(h, type, lo, lb, 0, NULL);
+			continue;
+		}
+		if (slot == CACHE_NO_SLOT) {
+			/* a timed fill is on its way: the bytes it brings */
+			if (data)
+				lower_peek(h, a, (uint32_t)(b - a), data + (a - r->addr));
+			continue;
+		}
+		uint8_t *d = l1_data(h, l, slot);
+		if (!hit) /* the line fills from below at once */
+			func_lower(h, type, lo, lb, 0, d);
+		if (d && data)
+			memcpy(data + (a - r->addr), d + (a - lo), (size_t)(b - a));
 	}
+}
+
+/* The bytes a read would return now: the L1 line where present, else the
+ * level below; nothing changes. */
+static void hier_peek(void *impl, const mem_req *r, void *dst)
+{
+	const hier *h = impl;
+	uint8_t *o = dst;
+	if (r->addr >= h->image_bytes) {
+		lower_peek(h, r->addr, r->bytes, o);
+		return;
+	}
+	const cache *c = &h->l1[r->type].c;
+	uint32_t lb = c->p.line_bytes;
+	uint64_t end = r->addr + r->bytes;
+	for (uint64_t a = r->addr; a < end;) {
+		uint64_t line = cache_line_of(c, a), lo = line * lb;
+		uint32_t n = (uint32_t)((end < lo + lb ? end : lo + lb) - a), slot;
+		const uint8_t *d = NULL;
+		if (h->ms && cache_probe(c, line, &slot))
+			d = cache_data_at(c, slot);
+		if (d)
+			memcpy(o + (a - r->addr), d + (a - lo), n);
+		else
+			lower_peek(h, a, n, o + (a - r->addr));
+		a += n;
+	}
+}
+
+static int hier_failed(const void *impl)
+{
+	const hier *h = impl;
+	return h->oom || h->v.oom || (h->ms && h->ms->oom);
 }
 
 static void hier_destroy(void *impl)
@@ -408,6 +554,7 @@ static void hier_destroy(void *impl)
 	for (int t = 0; t < MEM_NTYPES; t++) {
 		cache_free(&h->l1[t].c);
 		free(h->l1[t].wait);
+		free(h->l1[t].mbuf);
 	}
 	if (h->use_vma)
 		vma_free(&h->v);
@@ -419,7 +566,8 @@ static void hier_destroy(void *impl)
 	free(h);
 }
 
-static const memport_model hier_model = {"hierarchy", hier_access, hier_destroy, hier_access_func};
+static const memport_model hier_model = {"hierarchy",      hier_access, hier_destroy,
+                                         hier_access_func, hier_peek,   hier_failed};
 
 /* ---- construction ---- */
 
@@ -473,7 +621,7 @@ void hier_hbus_params(const saar_config *cfg, hbus_params *hp)
 }
 
 int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
-                  diag *d)
+                  mem_store *store, diag *d)
 {
 	memset(p, 0, sizeof *p);
 	const __typeof__(cfg->memory) *M = &cfg->memory;
@@ -491,6 +639,7 @@ int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, ui
 	h->e = e;
 	h->core = core;
 	h->image_bytes = image_bytes;
+	h->ms = store;
 	for (int t = 0; t < MEM_NTYPES; t++) {
 		char what[32];
 		snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
@@ -500,7 +649,9 @@ int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, ui
 		if (cache_init(&h->l1[t].c, &cp, what, d))
 			goto fail;
 		h->l1[t].wait = calloc(cp.mshrs, sizeof *h->l1[t].wait);
-		if (!h->l1[t].wait) {
+		if (store)
+			h->l1[t].mbuf = malloc((size_t)cp.mshrs * cp.line_bytes);
+		if (!h->l1[t].wait || (store && (!h->l1[t].mbuf || cache_data_on(&h->l1[t].c)))) {
 			diag_set(d, "config", 0, 0, "out of memory");
 			goto fail;
 		}
@@ -531,7 +682,7 @@ int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, ui
 		if (hbus_init(&h->hb, &hp, d))
 			goto fail;
 		vma_params vp = hier_vma_params(cfg);
-		if (vma_init(&h->v, e, core, &h->mi, &h->hb, sd_bytes, &vp, d))
+		if (vma_init(&h->v, e, core, &h->mi, &h->hb, sd_bytes, &vp, store, d))
 			goto fail;
 		h->use_vma = 1;
 	}
@@ -606,6 +757,26 @@ void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2)
 		l1[t] = &h->l1[t].c;
 	*tag = h->use_vma && h->v.p.tag_cache_enabled ? &h->v.tag : NULL;
 	*l2 = h->use_vma ? &h->v.l2 : NULL;
+}
+
+void hier_reload(memport *p, const uint64_t *l2sets)
+{
+	hier *h = p->impl;
+	if (!h->ms)
+		return;
+	if (h->use_vma && l2sets)
+		vma_reload(&h->v, l2sets);
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		hl1 *l = &h->l1[t];
+		uint32_t lb = l->c.p.line_bytes;
+		size_t n = (size_t)l->c.nsets * l->c.p.ways;
+		for (size_t i = 0; i < n; i++) {
+			uint64_t line = l->c.way[i].tag;
+			uint8_t *d = line == CACHE_INVALID ? NULL : l1_data(h, l, (uint32_t)i);
+			if (d)
+				lower_peek(h, line * lb, lb, d);
+		}
+	}
 }
 
 /* Adds the n 64-bit counters of a stats struct to out (every field of
@@ -766,6 +937,8 @@ void hier_write_json(const hier_stats *s, jsonw *w)
 		jsonw_kuint(w, "host_fetch_bytes", v->host_fetch_bytes);
 		jsonw_kuint(w, "host_writes", v->host_writes);
 		jsonw_kuint(w, "host_write_bytes", v->host_write_bytes);
+		jsonw_kuint(w, "writebacks", v->writebacks);
+		jsonw_kuint(w, "writeback_bytes", v->writeback_bytes);
 		jsonw_kuint(w, "mshr_stall_cycles", v->stall_ticks / s->core_period);
 		jsonw_obj_end(w);
 		const hbus_stats *b = &s->hostbus;

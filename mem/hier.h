@@ -15,6 +15,11 @@
  * spilled entry is read back once). Reads at or above image_bytes (the
  * spill area the chip places after the memory image) bypass the L1s too.
  * A read is answered at max(hit time, arrival of its last missing line).
+ *
+ * With a store (mem/store.h) the bytes travel too: the store is SDRAM's
+ * contents (host memory's with the VMA), every L1 way and on-board line
+ * holds its line's bytes, and a read's bytes are those of the lines it
+ * found or filled (docs/memory.md, "Data").
  */
 #ifndef SAAR_MEM_HIER_H
 #define SAAR_MEM_HIER_H
@@ -31,6 +36,7 @@
 #include "memif.h"
 #include "memport.h"
 #include "sdram.h"
+#include "store.h"
 #include "vma.h"
 
 /* Every counter of the hierarchy, copied out by hier_get_stats. Ratios
@@ -71,9 +77,11 @@ typedef struct hier_stats {
 /* Builds the hierarchy from cfg->memory and installs it in p (as
  * mem_init_fixed does). core is the chip clock. image_bytes: size of the
  * memory image; without VMA it must fit in memory.sdram.mb, else a one-line
- * error suggesting configs/saarcor-vma.yaml. Returns 0, or -1 with d set. */
+ * error suggesting configs/saarcor-vma.yaml. store: the bytes (SDRAM's
+ * without the VMA, host memory's with it; NULL: addresses only, as trace
+ * replay). Returns 0, or -1 with d set. */
 int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
-                  diag *d);
+                  mem_store *store, diag *d);
 /* The parameters mem_init_hier derives from the config (trace replay
  * builds the same caches from them). hier_hbus_params applies the preset
  * and the overriding keys. */
@@ -92,6 +100,10 @@ int hier_get_stats(const memport *p, hier_stats *s);
  * functional SDRAM reads; and adding to the merged part of them
  * (hier_stats.func_sdram_merge_ticks). */
 void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2);
+/* After cache_load put lines in the caches (stored warming): their bytes
+ * from the level below, on-board lines of the sets l2sets marks (a
+ * bitset; NULL: none) from host memory, clean, then every L1 line. */
+void hier_reload(memport *p, const uint64_t *l2sets);
 size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap);
 uint64_t hier_l2hit_ticks(const memport *p);
 void hier_add_merge_ticks(memport *p, double ticks);

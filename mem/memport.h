@@ -7,6 +7,13 @@
  * Stack spills are writes (requester KD, write flag); a write without a
  * callback is posted: it is counted and charged but nobody waits for it.
  *
+ * The bytes travel with the requests (docs/memory.md, "Data"): a read
+ * names where its bytes go (mem_req.data), and by the time done runs they
+ * are there, as the memory system holds them at that address (the L1 line
+ * on a hit, the line a miss filled from below); a write names the bytes
+ * it stores. NULL: the request moves no data (trace and packet-record
+ * replays, which time requests without decoding anything).
+ *
  * What stands behind the port is a model behind a small vtable
  * (memport_model). This issue has one model, `fixed`: every access is ready
  * memory.latency core cycles after it is issued (no queueing, no bandwidth
@@ -30,6 +37,9 @@ typedef struct mem_req {
 	uint8_t type;  /* enum mem_req_type */
 	uint8_t write; /* stack spill */
 	uint16_t rtp;  /* requesting pipeline */
+	/* read: where the bytes go (valid until done runs); write: the bytes
+	 * stored (taken at once); NULL: no data */
+	void *data;
 } mem_req;
 
 typedef struct mem_counts {
@@ -48,6 +58,12 @@ typedef struct memport_model {
 	 * the counters move as the timed path would move them; nothing is
 	 * scheduled. NULL: the model has no state (fixed). */
 	void (*access_func)(void *impl, const mem_req *r);
+	/* The bytes a read of r would return now, into dst: no time, no
+	 * counter or state change (the shader finds the addresses of its
+	 * dependent reads with it, units/rgs.c). */
+	void (*peek)(void *impl, const mem_req *r, void *dst);
+	/* Nonzero once the model lost data for want of host memory. */
+	int (*failed)(const void *impl);
 } memport_model;
 
 typedef struct memport {
@@ -60,9 +76,11 @@ typedef struct memport {
 	void *tap_ctx;
 } memport;
 
+struct mem_store;
 /* The fixed-latency model: ready `latency` cycles of clk after the request
- * (at the next edge of clk if issued between edges). */
-int mem_init_fixed(memport *p, eng *e, eng_clock clk, int latency);
+ * (at the next edge of clk if issued between edges). Its bytes are the
+ * store's (mem/store.h; NULL: no data). */
+int mem_init_fixed(memport *p, eng *e, eng_clock clk, int latency, struct mem_store *store);
 void mem_free(memport *p);
 
 /* Counts one request and shows it to the trace tap: what every access,
@@ -95,6 +113,18 @@ static inline void mem_access_func(memport *p, const mem_req *r)
 	mem_count(p, r);
 	if (p->model->access_func)
 		p->model->access_func(p->impl, r);
+}
+
+/* Peeks at the bytes a read would return now (memport_model.peek). */
+static inline void mem_peek(memport *p, const mem_req *r, void *dst)
+{
+	p->model->peek(p->impl, r, dst);
+}
+
+/* Nonzero once the model lost data for want of host memory. */
+static inline int mem_failed(const memport *p)
+{
+	return p->model && p->model->failed && p->model->failed(p->impl);
 }
 
 const char *mem_type_name(int type); /* "shade", "kd", "list", "tri" */

@@ -26,6 +26,7 @@ struct vma_piece {
 	vma_piece *next;
 	vma_req *req;
 	uint64_t addr, line, since;
+	uint8_t *dst; /* where the piece's bytes go; NULL: no data */
 	uint32_t bytes;
 	uint8_t type;
 };
@@ -124,16 +125,25 @@ static cache_params vma_tag_params(const vma_params *p)
 	    CACHE_HASH_NONE};
 }
 
-uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p)
+/* 64-bit words of the dirty bits of n on-board lines. */
+static size_t dirty_words(uint64_t n)
+{
+	return (size_t)((n + 63) / 64);
+}
+
+uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p, uint64_t lines)
 {
 	if (p->ways < 1 || p->line < 1)
 		return 0;
 	cache_params lp = vma_l2_params(sdram_bytes, p), tp = vma_tag_params(p);
-	return cache_host_bytes(&lp) + (p->tag_cache_enabled ? cache_host_bytes(&tp) : 0);
+	uint64_t slots = lp.size_bytes / p->line;
+	return cache_host_bytes(&lp) + dirty_words(slots) * 8 +
+	       (lines ? cache_data_host_bytes(&lp, lines) : 0) +
+	       (p->tag_cache_enabled ? cache_host_bytes(&tp) : 0);
 }
 
 int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram_bytes,
-             const vma_params *p, diag *d)
+             const vma_params *p, mem_store *ms, diag *d)
 {
 	memset(v, 0, sizeof *v);
 	v->e = e;
@@ -159,10 +169,12 @@ int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram
 			return -1;
 		}
 	}
+	v->ms = ms;
 	v->pool = calloc(1, sizeof(vpool));
 	v->l2_wait = calloc(VMA_MSHRS, sizeof *v->l2_wait);
 	v->tag_wait = calloc(VMA_TAG_MSHRS, sizeof *v->tag_wait);
-	if (!v->pool || !v->l2_wait || !v->tag_wait) {
+	v->dirty = calloc(dirty_words(vma_capacity(v)), sizeof *v->dirty);
+	if (!v->pool || !v->l2_wait || !v->tag_wait || !v->dirty || (ms && cache_data_on(&v->l2))) {
 		vma_free(v);
 		return diag_set(d, "config", 0, 0, "memory.vma: out of memory");
 	}
@@ -182,13 +194,107 @@ void vma_free(vma *v)
 	free(P);
 	free(v->l2_wait);
 	free(v->tag_wait);
+	free(v->dirty);
 	v->pool = NULL;
 	v->l2_wait = v->tag_wait = NULL;
+	v->dirty = NULL;
 }
 
 uint64_t vma_capacity(const vma *v)
 {
 	return (uint64_t)v->l2.nsets * v->l2.p.ways;
+}
+
+/* ---- data ---- */
+
+static int is_dirty(const vma *v, uint32_t slot)
+{
+	return (int)(v->dirty[slot / 64] >> (slot % 64) & 1);
+}
+
+static void set_dirty(vma *v, uint32_t slot, int on)
+{
+	if (on)
+		v->dirty[slot / 64] |= 1ull << (slot % 64);
+	else
+		v->dirty[slot / 64] &= ~(1ull << (slot % 64));
+}
+
+/* The bytes of on-board line `slot` (allocated on its first fill); NULL
+ * without data or out of memory. */
+static uint8_t *line_data(vma *v, uint32_t slot)
+{
+	if (!v->ms)
+		return NULL;
+	uint8_t *d = cache_data(&v->l2, slot);
+	if (!d)
+		v->oom = 1;
+	return d;
+}
+
+/* Copies bytes [addr, addr + n) of the on-board line in slot to dst. */
+static void from_line(vma *v, uint32_t slot, uint64_t addr, uint32_t n, uint8_t *dst)
+{
+	const uint8_t *d = dst ? line_data(v, slot) : NULL;
+	if (d)
+		memcpy(dst, d + addr % v->p.line, n);
+}
+
+/* Line `line` fills slot, evicting `victim` (CACHE_INVALID: none): a
+ * dirty victim's bytes go back to host memory, then the new line's bytes
+ * come from host memory and it is clean. Returns whether the victim was
+ * written back (counted here; its timing is the caller's). */
+static int fill_slot(vma *v, uint32_t slot, uint64_t line, uint64_t victim)
+{
+	int wb = victim != CACHE_INVALID && is_dirty(v, slot);
+	uint8_t *d = line_data(v, slot);
+	if (wb) {
+		v->s.writebacks++;
+		v->s.writeback_bytes += v->p.line;
+		if (d && ms_write(v->ms, victim * v->p.line, v->p.line, d))
+			v->oom = 1;
+	}
+	set_dirty(v, slot, 0);
+	if (d)
+		ms_read(v->ms, line * v->p.line, v->p.line, d);
+	return wb;
+}
+
+void vma_peek(const vma *v, uint64_t addr, uint32_t bytes, void *dst)
+{
+	uint8_t *o = dst;
+	uint64_t end = addr + bytes;
+	for (uint64_t a = addr; a < end;) {
+		uint64_t line = a / v->p.line;
+		uint64_t lend = (line + 1) * v->p.line;
+		uint32_t n = (uint32_t)((end < lend ? end : lend) - a), slot;
+		const uint8_t *d = NULL;
+		if (v->ms && cache_probe(&v->l2, line, &slot))
+			d = cache_data_at(&v->l2, slot);
+		if (d)
+			memcpy(o, d + a % v->p.line, n);
+		else if (v->ms)
+			ms_read(v->ms, a, n, o);
+		else
+			memset(o, 0, n);
+		o += n;
+		a += n;
+	}
+}
+
+void vma_reload(vma *v, const uint64_t *sets)
+{
+	uint32_t W = v->l2.p.ways;
+	int ns = (int)v->l2.nsets;
+	for (int s = bits_next(sets, ns, 0); s < ns; s = bits_next(sets, ns, s + 1))
+		for (uint32_t i = 0; i < W; i++) {
+			uint32_t slot = (uint32_t)s * W + i;
+			set_dirty(v, slot, 0);
+			uint64_t line = v->l2.way[slot].tag;
+			uint8_t *d = line == CACHE_INVALID ? NULL : line_data(v, slot);
+			if (d)
+				ms_read(v->ms, line * v->p.line, v->p.line, d);
+		}
 }
 
 /* ---- the walk of one piece ---- */
@@ -312,8 +418,15 @@ static void dma_done(eng *e, void *ctx, uint64_t line)
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
 	vma_piece *w = take_waiting(&v->l2, v->l2_wait, line);
-	uint32_t slot = cache_fill(&v->l2, line, NULL);
+	uint64_t victim;
+	uint32_t slot = cache_fill(&v->l2, line, &victim);
 	uint32_t set = cache_set_of(&v->l2, line);
+	if (fill_slot(v, slot, line, victim)) {
+		/* the dirty victim leaves SDRAM for host memory */
+		memif_submit(v->mi, now, MEMIF_FILL, (uint64_t)slot * v->p.line, v->p.line, 0, NULL,
+		             NULL, 0);
+		hbus_transfer(v->hb, now, v->p.line);
+	}
 	/* posted: the fetched line into its slot, its record into the meta-data
 	 * (the tag cache, if it holds the record, is written through) */
 	v->s.data_writes++;
@@ -327,6 +440,7 @@ static void dma_done(eng *e, void *ctx, uint64_t line)
 	/* the requested bytes are forwarded from the DMA buffer */
 	while (w) {
 		vma_piece *n = w->next;
+		from_line(v, slot, w->addr, w->bytes, w->dst);
 		piece_finish(v, w);
 		w = n;
 	}
@@ -342,6 +456,7 @@ static void data_phase(vma *v, vma_piece *p, uint64_t t)
 	case CACHE_HIT:
 		v->s.data_reads++;
 		v->s.data_bytes += p->bytes;
+		from_line(v, slot, p->addr, p->bytes, p->dst);
 		memif_submit(v->mi, t, p->type, (uint64_t)slot * v->p.line + p->addr % v->p.line,
 		             p->bytes, 0, ev_piece_done, v, (uintptr_t)p);
 		break;
@@ -362,8 +477,8 @@ static void data_phase(vma *v, vma_piece *p, uint64_t t)
 
 /* ---- entry points ---- */
 
-int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_handler done,
-             void *ctx, uint64_t arg)
+int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, void *dst,
+             eng_handler done, void *ctx, uint64_t arg)
 {
 	vma_req *r = req_alloc(v);
 	if (!r)
@@ -379,7 +494,8 @@ int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_ha
 		vma_piece *p = piece_alloc(v);
 		if (!p)
 			return -1;
-		*p = (vma_piece){NULL, r, a, line, 0, n, (uint8_t)type};
+		uint8_t *pd = dst ? (uint8_t *)dst + (a - addr) : NULL;
+		*p = (vma_piece){NULL, r, a, line, 0, pd, n, (uint8_t)type};
 		r->pending++;
 		meta_phase(v, p, t);
 		a += n;
@@ -392,7 +508,21 @@ int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_ha
 	return 0;
 }
 
-int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes)
+/* The bytes [a, a + n) of a write (src at addr) into the on-board line
+ * in slot, which becomes dirty, or around it into host memory. */
+static void write_data(vma *v, uint32_t slot, int on_board, uint64_t a, uint32_t n,
+                       const uint8_t *src)
+{
+	if (on_board) {
+		set_dirty(v, slot, 1);
+		uint8_t *d = src ? line_data(v, slot) : NULL;
+		if (d)
+			memcpy(d + a % v->p.line, src, n);
+	} else if (src && v->ms && ms_write(v->ms, a, n, src))
+		v->oom = 1;
+}
+
+int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, const void *src)
 {
 	v->s.writes++;
 	v->s.write_bytes += bytes;
@@ -401,8 +531,10 @@ int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes)
 		uint64_t line = a / v->p.line;
 		uint64_t lend = (line + 1) * v->p.line;
 		uint32_t n = (uint32_t)((end < lend ? end : lend) - a);
-		uint32_t slot;
-		if (cache_probe(&v->l2, line, &slot)) {
+		uint32_t slot = 0;
+		int on = cache_probe(&v->l2, line, &slot);
+		write_data(v, slot, on, a, n, src ? (const uint8_t *)src + (a - addr) : NULL);
+		if (on) {
 			v->s.data_writes++;
 			v->s.data_bytes += n;
 			if (memif_submit(v->mi, t, type, (uint64_t)slot * v->p.line + a % v->p.line,
@@ -418,7 +550,7 @@ int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes)
 	return 0;
 }
 
-void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write)
+void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write, void *data)
 {
 	if (write) {
 		v->s.writes++;
@@ -432,9 +564,14 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write)
 		uint64_t line = a / v->p.line;
 		uint64_t lend = (line + 1) * v->p.line;
 		uint32_t n = (uint32_t)((end < lend ? end : lend) - a);
+		uint8_t *pd = data ? (uint8_t *)data + (a - addr) : NULL;
+		uint64_t at = a;
 		a += n;
 		if (write) {
-			if (cache_probe(&v->l2, line, NULL)) {
+			uint32_t slot = 0;
+			int on = cache_probe(&v->l2, line, &slot);
+			write_data(v, slot, on, at, n, pd);
+			if (on) {
 				v->s.data_writes++;
 				v->s.data_bytes += n;
 			} else {
@@ -449,9 +586,15 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write)
 			v->s.meta_reads++;
 			v->s.meta_bytes += v->meta_set_bytes;
 		}
-		if (cache_lookup_func(&v->l2, line, n)) {
+		uint32_t slot;
+		uint64_t victim;
+		if (cache_lookup_func_at(&v->l2, line, n, &slot, &victim)) {
 			v->s.data_reads++;
 			v->s.data_bytes += n;
+			if (pd && slot == CACHE_NO_SLOT) /* on its way: host memory's bytes */
+				vma_peek(v, at, n, pd);
+			else
+				from_line(v, slot, at, n, pd);
 		} else {
 			v->s.host_fetches++;
 			v->s.host_fetch_bytes += v->p.line;
@@ -459,6 +602,8 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write)
 			v->s.data_bytes += v->p.line;
 			v->s.meta_writes++;
 			v->s.meta_bytes += v->meta_set_bytes;
+			fill_slot(v, slot, line, victim);
+			from_line(v, slot, at, n, pd);
 		}
 	}
 }

@@ -22,9 +22,17 @@
  *      L2 miss: a DMA of the whole line over the host bus; the line is
  *      forwarded to the requester when the DMA completes and, posted, written
  *      into SDRAM (MEMIF_FILL) together with its updated record (META).
- * Misses to a line in flight merge (L2 MSHRs); scene data is read-only, so
- * evictions write nothing back. Writes (stack spills) go to SDRAM if the
- * line is on board, else around it over the host bus.
+ * Misses to a line in flight merge (L2 MSHRs). Writes (stack spills) go to
+ * SDRAM if the line is on board, which makes the line dirty, else around
+ * it over the host bus. Evicting a dirty line writes it back: an SDRAM read
+ * of the line (MEMIF_FILL) and a host-bus transfer; clean lines (the
+ * read-only scene) are dropped.
+ *
+ * Data (docs/memory.md, "Data"): host memory is a mem_store; each on-board
+ * line holds its bytes (the cache's data, mem/cache.h), copied from host
+ * memory when its DMA completes and written back to it when it is evicted
+ * dirty. A read's bytes come from the on-board line (taken at the tag
+ * check on a hit, when the DMA lands on a miss).
  */
 #ifndef SAAR_MEM_VMA_H
 #define SAAR_MEM_VMA_H
@@ -36,6 +44,7 @@
 #include "engine.h"
 #include "hostbus.h"
 #include "memif.h"
+#include "store.h"
 
 #define VMA_META_BYTES_PER_LINE 5u  /* 40 bits of tag + state per line, §4.2 */
 #define VMA_MSHRS               32u /* outstanding line fetches; assumed */
@@ -57,6 +66,7 @@ typedef struct vma_stats {
 	uint64_t host_fetches, host_fetch_bytes;      /* lines fetched over the host bus */
 	uint64_t host_writes, host_write_bytes;       /* write-around */
 	uint64_t stall_ticks;                         /* waited for a free MSHR */
+	uint64_t writebacks, writeback_bytes;         /* dirty lines written back to host memory */
 } vma_stats;
 
 typedef struct vma_piece vma_piece;
@@ -74,30 +84,44 @@ typedef struct vma {
 	uint64_t meta_base;              /* SDRAM address of the meta-data region */
 	vma_piece **tag_wait, **l2_wait; /* per MSHR: pieces waiting for its fill */
 	vma_piece *tag_stall, *tag_stall_tail, *l2_stall, *l2_stall_tail;
-	void *pool; /* allocator of pieces and requests (vma.c) */
+	void *pool;      /* allocator of pieces and requests (vma.c) */
+	uint64_t *dirty; /* per on-board line (set * ways + way): written since its fill */
+	mem_store *ms;   /* host memory's bytes; NULL: the VMA moves no data */
+	int oom;         /* an on-board line found no memory for its bytes */
 	vma_stats s;
 } vma;
 
-/* Sizes the L2 from sdram_bytes; errors name the memory.vma keys. */
+/* Sizes the L2 from sdram_bytes; errors name the memory.vma keys. ms:
+ * host memory's bytes (NULL: no data). */
 int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram_bytes,
-             const vma_params *p, diag *d);
+             const vma_params *p, mem_store *ms, diag *d);
 void vma_free(vma *v);
 /* Lines the L2 holds (capacity = lines * line bytes). */
 uint64_t vma_capacity(const vma *v);
 /* Host bytes vma_init allocates for on-board memory of sdram_bytes with
- * parameters p: the on-board cache's tags and the tag cache. */
-uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p);
+ * parameters p: the on-board cache's tags, dirty bits and tag cache, and
+ * with data the bytes of at most `lines` distinct host lines (0: no
+ * data). */
+uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p, uint64_t lines);
 
 /* A read of bytes at host address addr, issued at tick t (>= eng_now),
- * for requester type (MEM_*): done(e, ctx, arg) when all bytes are there.
- * Returns -1 only when out of memory. */
-int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, eng_handler done,
-             void *ctx, uint64_t arg);
-/* A posted write. */
-int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes);
+ * for requester type (MEM_*): done(e, ctx, arg) when all bytes are there,
+ * in dst (NULL: no data). Returns -1 only when out of memory. */
+int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, void *dst,
+             eng_handler done, void *ctx, uint64_t arg);
+/* A posted write of src (NULL: no data). */
+int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, const void *src);
 
 /* The same walk without time (immediate fills, no SDRAM or bus timing):
- * the counters move as in vma_read/vma_write. For trace replay. */
-void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write);
+ * the counters move as in vma_read/vma_write. data: the bytes read into,
+ * or written from (NULL: none). For functional processing and trace
+ * replay. */
+void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write, void *data);
+/* The bytes a read would return now (on board, else host memory), with
+ * no change to anything. */
+void vma_peek(const vma *v, uint64_t addr, uint32_t bytes, void *dst);
+/* The on-board lines of the sets `sets` marks (a bitset) were put there
+ * by cache_load (stored warming): their bytes from host memory, clean. */
+void vma_reload(vma *v, const uint64_t *sets);
 
 #endif

@@ -445,6 +445,7 @@ static void thread_free(thr_ctx *t)
 {
 	free(t->stack);
 	free(t->kids);
+	thr_free_buffers(t);
 }
 
 chip *chip_create(const saar_config *cfg, const world *w, diag *d)
@@ -472,16 +473,22 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	if (cfg->memory.model == CFG_MEM_HIERARCHY)
 		c->frame_mem = calloc(nf, sizeof *c->frame_mem);
 	c->spill_base = (w->m.size + 4095) & ~(uint64_t)4095;
+	c->regs = w->m;
+	c->regs.bytes = NULL;
+	/* the memory's bytes: the image, then every slot's spill area */
+	uint64_t space =
+	    c->spill_base + (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
 	if (!c->e || !c->frame_cycles || !c->frame_port ||
-	    (cfg->memory.model == CFG_MEM_HIERARCHY && !c->frame_mem))
+	    (cfg->memory.model == CFG_MEM_HIERARCHY && !c->frame_mem) ||
+	    ms_init(&c->store, w->m.bytes, w->m.size, space))
 		goto oom;
 	/* a memory model the config cannot build (an image too big for the
 	 * board without VMA, a bad cache geometry) is the user's error: keep
 	 * its message */
 	int mrc;
 	if (cfg->memory.model == CFG_MEM_HIERARCHY)
-		mrc = mem_init_hier(&c->mem, c->e, c->clk, cfg, c->spill_base, d);
-	else if ((mrc = mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency)))
+		mrc = mem_init_hier(&c->mem, c->e, c->clk, cfg, c->spill_base, &c->store, d);
+	else if ((mrc = mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency, &c->store)))
 		diag_set(d, "chip", 0, 0, "out of memory");
 	if (mrc) {
 		chip_destroy(c);
@@ -496,7 +503,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->e = c->e;
 	v->clk = c->clk;
 	v->mem = &c->mem;
-	v->m = &w->m;
+	v->m = &c->regs;
 	v->stack_depth = cfg->chip.stack_depth;
 	v->masked = cfg->chip.masked_packets;
 	/* the datapath formats; kernel-ref's check frame stays full precision */
@@ -516,8 +523,8 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->owner = c;
 	render_opts ro;
 	render_opts_default(&ro);
-	v->sc = (shade_ctx){&w->m,         w->v.lights, w->v.nlights, cfg->shading.max_depth,
-	                    ro.background, &c->fb};
+	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
+	                    ro.background, &c->fb,      NULL};
 	cam_setup(&v->cam, &w->v.cam, cfg->frame.width, cfg->frame.height);
 
 	/* counters */
@@ -632,6 +639,7 @@ void chip_destroy(chip *c)
 	wc_unmap(&c->warm_map);
 	free(c->warm_own);
 	mem_free(&c->mem);
+	ms_free(&c->store);
 	thr_env_free(&c->env);
 	if (c->e)
 		eng_destroy(c->e);
@@ -1468,7 +1476,7 @@ int chip_run(chip *c, diag *d)
 		if (c->env.rec_in)
 			rec_pixels(c);
 		rec_store(c);
-		if (c->oom)
+		if (c->oom || c->env.oom || mem_failed(&c->mem))
 			return diag_set(d, "chip", 0, 0, "out of memory during the frame");
 		c->frame_port[f] = c->mem.n;
 		if (c->frame_mem)

@@ -29,6 +29,7 @@
 #include "rgc.h"
 #include "sampling.h"
 #include "stats.h"
+#include "store.h"
 #include "thread.h"
 #include "warming.h"
 #include "world.h"
@@ -120,6 +121,12 @@ typedef struct chip {
 	eng *e;
 	eng_clock clk;
 	memport mem;
+	/* the bytes the memory holds (SDRAM's; host memory's with the VMA):
+	 * the memory image read in place, written pages copied (mem/store.h) */
+	mem_store store;
+	/* what the units know of the image: its region bases and scene box
+	 * (the registers the host sets), no bytes */
+	mimg regs;
 	stats st;
 	thr_env env;
 	thr_rtp *rtp;

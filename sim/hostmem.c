@@ -27,6 +27,7 @@
 #include "framebuf.h"
 #include "hier.h"
 #include "packet.h"
+#include "store.h"
 #include "thread.h"
 #include "vma.h"
 
@@ -76,19 +77,37 @@ void hm_estimate(const saar_config *cfg, const world *w, hm_est *e)
 	uint64_t idle_slot = sizeof(thr_ctx) + 4 * sizeof(void *) + 2 * 4096;
 	uint64_t busy_slot = depth * sizeof(trav_entry) + nkids * sizeof(packet) +
 	                     (1 + nkids) * (sizeof(packet) + sizeof(void *));
-	e->part[HM_THREADS] = slots * idle_slot + busy * busy_slot;
+	/* its data buffers: shading's (two copies of a packet's records,
+	 * about 8 KB each, and its list of reads) and, when the stack spills
+	 * (chip.stack_depth below the tree's depth), the spilled entries read
+	 * back and its spill area's pages in the memory's store */
+	busy_slot += sizeof(thr_shade) + 2 * 8192 + 64 * sizeof(thr_shread);
+	uint64_t image = (w->m.size + 4095) / 4096 * 4096;
+	uint64_t space = image + slots * PKT_STACK_MAX * THR_SPILL_STRIDE, spill_pages = 0;
+	if ((uint64_t)cfg->chip.stack_depth < depth) {
+		busy_slot += PKT_STACK_MAX * THR_STACK_ENTRY_BYTES;
+		spill_pages = busy * (PKT_STACK_MAX * THR_SPILL_STRIDE / MS_PAGE + 1);
+	}
+	e->part[HM_THREADS] =
+	    slots * idle_slot + busy * busy_slot + ms_host_bytes(space, spill_pages);
 	for (int k = 0; k < UNIT_NKINDS; k++)
 		e->part[HM_THREADS] +=
 		    (uint64_t)cfg->chip.rtps *
 		    thr_unit_host_bytes(chip_unit_cfg(cfg, k)->count, cfg->chip.threads_per_rtp);
 	if (cfg->memory.model == CFG_MEM_HIERARCHY) {
+		/* the lines' bytes: at most the image's lines are ever filled
+		 * into an L1; the on-board cache also takes spill lines */
 		for (int t = 0; t < MEM_NTYPES; t++) {
 			cache_params cp = hier_l1_params(cfg, t);
-			e->part[HM_L1] += cache_host_bytes(&cp);
+			e->part[HM_L1] += cache_host_bytes(&cp) +
+			                  (uint64_t)cp.mshrs * cp.line_bytes +
+			                  cache_data_host_bytes(&cp, w->m.size / cp.line_bytes + 1);
 		}
 		if (cfg->memory.vma.enabled) {
 			vma_params vp = hier_vma_params(cfg);
-			e->part[HM_VMA] = vma_host_bytes((uint64_t)cfg->memory.sdram.mb << 20, &vp);
+			uint64_t bytes = w->m.size + spill_pages * MS_PAGE;
+			e->part[HM_VMA] = vma_host_bytes((uint64_t)cfg->memory.sdram.mb << 20, &vp,
+			                                 bytes / vp.line + 1);
 		}
 	}
 	/* the chip's frame buffer, kernel-ref's for the check, and both

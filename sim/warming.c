@@ -586,7 +586,13 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		     s = bits_next(r->l2pend, ns, s + 1))
 			cache_load(l2, (uint32_t)s, 1, r->l2line + (size_t)s * W,
 			           r->l2rank + (size_t)s * W);
-		memset(r->l2pend, 0, (size_t)bits_words(ns) * sizeof *r->l2pend);
+	}
+	/* the loaded lines' bytes (every packet replays here, so nothing
+	 * decodes them; the lines stay true to their addresses all the same) */
+	if (hier_is(&c->mem))
+		hier_reload(&c->mem, l2 ? r->l2pend : NULL);
+	if (l2) {
+		memset(r->l2pend, 0, (size_t)bits_words((int)l2->nsets) * sizeof *r->l2pend);
 		cache_dirty_clear(l2);
 	}
 	c->g.next = tile;

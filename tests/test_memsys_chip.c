@@ -71,7 +71,7 @@ static void assert_consistent(const chip *ch)
 		cr_assert_eq(s.vma.meta_bytes, s.memif.bytes[MEMIF_META]);
 		cr_assert_eq(s.hostbus.bytes,
 		             s.vma.host_fetches * (uint64_t)ch->cfg.memory.vma.line +
-		                 s.vma.host_write_bytes);
+		                 s.vma.host_write_bytes + s.vma.writeback_bytes);
 	}
 	/* the last per-frame snapshot is the whole run */
 	const hier_stats *last = &ch->frame_mem[ch->frames_done - 1];

@@ -35,8 +35,8 @@ static void issue(eng *e, void *ctx, uint64_t arg)
 {
 	drv *d = ctx;
 	for (int k = 0; k < d->per_cycle && d->issued < d->n; k++, d->issued++) {
-		mem_req r = {d->base + (d->issued * d->stride) % d->span, d->bytes,
-		             (uint8_t)d->type, 0, 0};
+		uint64_t a = d->base + (d->issued * d->stride) % d->span;
+		mem_req r = {a, d->bytes, (uint8_t)d->type, 0, 0, NULL};
 		mem_access(d->mp, &r, answered, d, 0);
 	}
 	if (d->issued < d->n)
@@ -74,7 +74,9 @@ static void check_consistent(const hier_stats *s)
 	cr_assert_eq(s->sdram.row_hits + s->sdram.row_empty + s->sdram.row_conflicts > 0, 1);
 	if (s->vma_enabled) {
 		cr_assert_eq(s->l2.hits + s->l2.misses, s->l2.accesses);
-		cr_assert_eq(s->vma.host_fetch_bytes + s->vma.host_write_bytes, s->hostbus.bytes);
+		cr_assert_eq(s->vma.host_fetch_bytes + s->vma.host_write_bytes +
+		                 s->vma.writeback_bytes,
+		             s->hostbus.bytes);
 		cr_assert_eq(s->vma.meta_reads + s->vma.meta_writes,
 		             s->memif.reads[MEMIF_META] + s->memif.writes[MEMIF_META]);
 		cr_assert_eq(s->vma.meta_bytes, s->memif.bytes[MEMIF_META]);
@@ -90,7 +92,7 @@ Test(hier, no_vma_bytes_add_up)
 	eng_clock clk = eng_clock_mhz(533);
 	memport mp;
 	diag d;
-	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 8 << 20, &d), 0, "%s", d.msg);
+	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 8 << 20, NULL, &d), 0, "%s", d.msg);
 	drv v = {e, &mp, clk, 0, 0, 0, 0, 1 << 20, 36, 4, MEM_TRI, 36, 0};
 	run_pass(&v, 100000);
 	hier_stats s;
@@ -123,7 +125,7 @@ Test(hier, image_too_large_without_vma)
 	eng *e = eng_create(4);
 	memport mp;
 	diag d;
-	cr_assert_neq(mem_init_hier(&mp, e, eng_clock_mhz(533), &c, 3 << 20, &d), 0);
+	cr_assert_neq(mem_init_hier(&mp, e, eng_clock_mhz(533), &c, 3 << 20, NULL, &d), 0);
 	cr_assert(strstr(d.msg, "saarcor-vma.yaml"), "%s", d.msg);
 	eng_destroy(e);
 }
@@ -136,7 +138,7 @@ Test(hier, hit_latency_exact)
 	eng_clock clk = eng_clock_mhz(533);
 	memport mp;
 	diag d;
-	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 1 << 20, &d), 0, "%s", d.msg);
+	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 1 << 20, NULL, &d), 0, "%s", d.msg);
 	drv v = {e, &mp, clk, 0, 0, 0, 0, 64, 8, 1, MEM_KD, 8, 0};
 	run_pass(&v, 1); /* a miss */
 	uint64_t t0 = eng_now(e) + clk.period * 10;
@@ -162,7 +164,7 @@ static hier_stats vma_run(int tag_cache, int sdram_mb, uint64_t span, int passes
 	eng_clock clk = eng_clock_mhz(533);
 	memport mp;
 	diag d;
-	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 64 << 20, &d), 0, "%s", d.msg);
+	cr_assert_eq(mem_init_hier(&mp, e, clk, &c, 64 << 20, NULL, &d), 0, "%s", d.msg);
 	/* 64-byte shading records: each L1 miss is an 8-byte line */
 	drv v = {e, &mp, clk, 0, 0, 0, 4096, span, 64, 2, MEM_SHADE, 8, 0};
 	hier_stats s;

@@ -89,7 +89,7 @@ static void feed(eng *e, void *ctx, uint64_t arg)
 	feeder *f = ctx;
 	uint64_t cyc = eng_now(e) / f->clk.period;
 	while (f->have && f->next.cycle <= cyc) {
-		mem_req r = {f->next.addr, f->next.bytes, f->next.type, f->next.write, 0};
+		mem_req r = {f->next.addr, f->next.bytes, f->next.type, f->next.write, 0, NULL};
 		mem_access(f->mp, &r, r.write ? NULL : answered, f, 0);
 		f->issued++;
 		next_rec(f);
@@ -196,7 +196,7 @@ int main(int argc, char **argv)
 			diag_set(&d, trace, 0, 0, "out of memory");
 			goto out;
 		}
-		if (mem_init_hier(&mp, e, clk, &cfg, img, &d))
+		if (mem_init_hier(&mp, e, clk, &cfg, img, NULL, &d))
 			goto out;
 		have_mp = 1;
 		/* a quarter of the tick range: room for the hierarchy's latencies */
@@ -223,7 +223,7 @@ int main(int argc, char **argv)
 		if (use_vma) {
 			vma_params vp = hier_vma_params(&cfg);
 			if (vma_init(&v, NULL, eng_clock_mhz(cfg.chip.clock_mhz), NULL, NULL,
-			             (uint64_t)cfg.memory.sdram.mb << 20, &vp, &d))
+			             (uint64_t)cfg.memory.sdram.mb << 20, &vp, NULL, &d))
 				goto out;
 			have_vma = 1;
 		}
@@ -251,7 +251,7 @@ int main(int argc, char **argv)
 					s.writes[t]++;
 					s.write_bytes[t] += r->bytes;
 					if (use_vma)
-						vma_access_func(&v, addr, r->bytes, 1);
+						vma_access_func(&v, addr, r->bytes, 1, NULL);
 					else
 						sd_write += r->bytes;
 					continue;
@@ -261,7 +261,7 @@ int main(int argc, char **argv)
 				if (addr >= image_bytes) {
 					s.bypass_reads[t]++;
 					if (use_vma)
-						vma_access_func(&v, addr, r->bytes, 0);
+						vma_access_func(&v, addr, r->bytes, 0, NULL);
 					else
 						sd_read += r->bytes;
 					continue;
@@ -288,7 +288,7 @@ int main(int argc, char **argv)
 						continue;
 					cache_fill(c, l, NULL);
 					if (use_vma)
-						vma_access_func(&v, l * lb, lb, 0);
+						vma_access_func(&v, l * lb, lb, 0, NULL);
 					else
 						sd_read += lb;
 				}
@@ -304,11 +304,12 @@ int main(int argc, char **argv)
 			s.vma = v.s;
 			s.tag_cache = v.tag.s;
 			s.l2 = v.l2.s;
-			s.hostbus.bytes = v.s.host_fetch_bytes + v.s.host_write_bytes;
-			s.hostbus.transfers = v.s.host_fetches + v.s.host_writes;
+			s.hostbus.bytes =
+			    v.s.host_fetch_bytes + v.s.host_write_bytes + v.s.writeback_bytes;
+			s.hostbus.transfers = v.s.host_fetches + v.s.host_writes + v.s.writebacks;
 			/* SDRAM bytes with VMA: data (reads, fills, writes) plus meta-data;
 			 * the functional path does not split reads from writes */
-			sd_read = v.s.data_bytes + v.s.meta_bytes;
+			sd_read = v.s.data_bytes + v.s.meta_bytes + v.s.writeback_bytes;
 			s.memif.bytes[MEMIF_META] = v.s.meta_bytes;
 			s.memif.reads[MEMIF_META] = v.s.meta_reads;
 			s.memif.writes[MEMIF_META] = v.s.meta_writes;

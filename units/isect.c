@@ -10,12 +10,12 @@ static void done(eng *e, void *ctx, uint64_t arg)
 	(void)e;
 	(void)arg;
 	thr_ctx *t = ctx;
-	thr_env *v = t->env;
 	packet *p = t->p;
-	uint32_t ta = mimg_lists(v->m)[t->r.leaf_first + t->k];
+	/* the record as read, named by the list entry that addressed it */
+	uint32_t ta = t->list[t->k];
 	thr_count(t, C_TRI_TESTS, 1);
 	thr_count(t, C_RAY_TRI_TESTS, (uint64_t)thr_pop(t->mask));
-	pkt_isect_tri(&t->ts, p, v->m, t->mask, ta);
+	pkt_isect_tri_v(&t->ts, p, &t->tri, t->mask, ta);
 	if (t->ts.shadow)
 		for (uint64_t b = t->mask; b; b &= b - 1) {
 			int i = __builtin_ctzll(b);
@@ -37,6 +37,6 @@ void isu_next(thr_ctx *t)
 		tu_step(t);
 		return;
 	}
-	thr_read(t, MEM_TRI, mimg_lists(t->env->m)[t->r.leaf_first + t->k], MIMG_TRI_BYTES);
+	thr_read(t, MEM_TRI, t->list[t->k], MIMG_TRI_BYTES, &t->tri);
 	thr_wait_mem(t, fetched);
 }

@@ -3,6 +3,8 @@
  */
 #include "list.h"
 
+#include <stdlib.h>
+
 #include "isect.h"
 #include "traversal.h"
 
@@ -21,6 +23,23 @@ static void fetched(thr_ctx *t)
 	thr_use(t, UNIT_LIST, thr_pop(t->r.mask), done);
 }
 
+/* Room for n list entries in the thread's buffer (it grows to the
+ * largest leaf). */
+static int list_room(thr_ctx *t, uint32_t n)
+{
+	if (n <= t->list_cap)
+		return 0;
+	uint32_t cap = t->list_cap ? t->list_cap : 64;
+	while (cap < n)
+		cap = cap > UINT32_MAX / 2 ? n : 2 * cap;
+	uint32_t *l = realloc(t->list, (size_t)cap * sizeof *l);
+	if (!l)
+		return -1;
+	t->list = l;
+	t->list_cap = cap;
+	return 0;
+}
+
 void list_leaf(thr_ctx *t)
 {
 	thr_env *v = t->env;
@@ -30,8 +49,14 @@ void list_leaf(thr_ctx *t)
 		tu_step(t);
 		return;
 	}
+	if (list_room(t, t->r.leaf_count)) {
+		v->oom = 1; /* the frame fails */
+		tu_step(t);
+		return;
+	}
+	/* the entries (triangle addresses) as the read returns them */
 	thr_count(t, C_LIST_ENTRIES, t->r.leaf_count);
 	thr_read(t, MEM_LIST, mimg_list_addr(v->m, t->r.leaf_first),
-	         t->r.leaf_count * MIMG_LIST_BYTES);
+	         t->r.leaf_count * MIMG_LIST_BYTES, t->list);
 	thr_wait_mem(t, fetched);
 }

@@ -3,9 +3,10 @@
  * triangle addresses, which are then fetched by the list unit").
  *
  * One operation per non-empty leaf: the leaf's entries (4 bytes each, one
- * contiguous request through the LIST port), then ceil(rays/width) issue
- * cycles + latency; the intersection unit then tests the entries in list
- * order. An empty leaf goes straight back to traversal (counted).
+ * contiguous request through the LIST port, into the thread's list buffer),
+ * then ceil(rays/width) issue cycles + latency; the intersection unit then
+ * tests the entries in list order, the triangle addresses as the read
+ * returned them. An empty leaf goes straight back to traversal (counted).
  */
 #ifndef SAAR_UNITS_LIST_H
 #define SAAR_UNITS_LIST_H

@@ -56,13 +56,13 @@ static void run(thr_ctx *t)
 			a = t->raddr[type] += pr_unzigzag(pr_get(&p, end));
 			if (op < PR_READ_SAME)
 				t->rbytes[type] = (uint32_t)pr_get(&p, end);
-			thr_read(t, type, a, t->rbytes[type]);
+			thr_read(t, type, a, t->rbytes[type], NULL);
 			continue;
 		}
 		if (op < PR_USE) {
 			a = pr_get(&p, end);
 			b = pr_get(&p, end);
-			thr_write(t, op & 3, a, (uint32_t)b);
+			thr_write(t, op & 3, a, (uint32_t)b, NULL);
 			continue;
 		}
 		if (op < PR_SPILL_R) {
@@ -86,9 +86,9 @@ static void run(thr_ctx *t)
 		case PR_SPILL_W:
 			a = thr_spill_addr(t, pr_get(&p, end) % PKT_STACK_MAX);
 			if (op == PR_SPILL_W)
-				thr_write(t, MEM_KD, a, THR_STACK_ENTRY_BYTES);
+				thr_write(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
 			else
-				thr_read(t, MEM_KD, a, THR_STACK_ENTRY_BYTES);
+				thr_read(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
 			break;
 		case PR_WAIT:
 			if (wait_reads(t, p))

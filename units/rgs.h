@@ -6,12 +6,15 @@
  * latency):
  *  - primary rays: cam_primary_packet for a tile the RGC handed out, then
  *    the packet enters the ray-tracing core;
- *  - shading a traced primary/reflection/refraction packet: shade_packet()
- *    (kernel-ref) adds each ray's direct terms into the frame buffer and
- *    makes the child packets (one shadow packet per light, reflection,
- *    refraction); every scene read it logged goes through the SHADE memory
- *    port first, identical (address, size) reads of one packet coalesced
- *    into one request (a packet shares its data: seed 002 §4.1);
+ *  - shading a traced primary/reflection/refraction packet:
+ *    shade_packet_rd() (kernel-ref) adds each ray's direct terms into the
+ *    frame buffer and makes the child packets (one shadow packet per light,
+ *    reflection, refraction); every scene read it makes goes through the
+ *    SHADE memory port, identical (address, size) reads of one packet
+ *    coalesced into one request (a packet shares its data: seed 002 §4.1),
+ *    and its results are those of the bytes the reads returned (rgs.c:
+ *    the addresses are found first, the results made when the reads are
+ *    in);
  *  - finishing a shadow packet: shade_shadow_done() adds the unoccluded
  *    rays' contributions.
  * Child packets are self-contained; they queue per RTP (FIFO) for a thread

@@ -208,11 +208,10 @@ int thr_env_init(thr_env *v)
 {
 	memset(v, 0, sizeof *v);
 	pkt_precision_full(&v->prec);
-	v->log.cap = SHADE_LOG_CAP;
-	v->log.e = malloc(SHADE_LOG_CAP * sizeof *v->log.e);
 	v->hkey = malloc(THR_HASH_SLOTS * sizeof *v->hkey);
 	v->hgen = calloc(THR_HASH_SLOTS, sizeof *v->hgen);
-	return v->log.e && v->hkey && v->hgen ? 0 : -1;
+	v->hidx = malloc(THR_HASH_SLOTS * sizeof *v->hidx);
+	return v->hkey && v->hgen && v->hidx ? 0 : -1;
 }
 
 void thr_env_free(thr_env *v)
@@ -221,9 +220,9 @@ void thr_env_free(thr_env *v)
 		free(v->chunks[i]);
 	free(v->chunks);
 	free(v->freel);
-	free(v->log.e);
 	free(v->hkey);
 	free(v->hgen);
+	free(v->hidx);
 	memset(v, 0, sizeof *v);
 }
 
@@ -322,9 +321,24 @@ static void rec_req(thr_ctx *t, int write, int type, uint64_t addr, uint32_t byt
 	thr_rec(t, PR_READ + type, 2, z, bytes);
 }
 
-void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
+void thr_free_buffers(thr_ctx *t)
 {
-	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id};
+	free(t->list);
+	free(t->spill_in);
+	if (t->sh) {
+		free(t->sh->peek);
+		free(t->sh->got);
+		free(t->sh->rd);
+		free(t->sh);
+	}
+	t->list = NULL;
+	t->spill_in = NULL;
+	t->sh = NULL;
+}
+
+void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
+{
+	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst};
 	if (t->env->rec_out)
 		rec_req(t, 0, type, addr, bytes);
 	if (t->env->func) { /* the data is there at once: nothing to wait for */
@@ -335,9 +349,9 @@ void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
 	mem_access(t->env->mem, &r, mem_done, t, 0);
 }
 
-void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes)
+void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, const void *src)
 {
-	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id};
+	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id, (void *)src};
 	if (t->env->rec_out)
 		rec_req(t, 1, type, addr, bytes);
 	if (t->env->func)

@@ -20,7 +20,11 @@
  * is events: an idle unit schedules nothing.
  *
  * Timing lives here and in the unit files; the functional work is done by
- * kernel-ref calls (packet.h, shade.h) in exactly kernel-ref's order.
+ * kernel-ref calls (packet.h, shade.h) in exactly kernel-ref's order, on
+ * the bytes the thread's reads returned (kd-nodes, list entries, triangle
+ * records, spilled stack entries, shading records): a unit never looks at
+ * the host's copy of the scene (thr_env.m has the region bases and the
+ * scene box, the registers the host sets, and no bytes).
  */
 #ifndef SAAR_UNITS_THREAD_H
 #define SAAR_UNITS_THREAD_H
@@ -43,6 +47,13 @@ enum unit_kind { UNIT_RGS, UNIT_TRAV, UNIT_LIST, UNIT_ISECT, UNIT_NKINDS };
 #define THR_STACK_ENTRY_BYTES 524u
 #define THR_SPILL_STRIDE      1024u
 #define THR_HASH_SLOTS        2048u /* shading read de-duplication, > 2 x SHADE_LOG_CAP */
+
+/* Test hooks (thr_env.mutant): a unit that asks for the wrong address,
+ * which data-carrying memory must turn into a wrong image. */
+enum thr_mutant {
+	THR_MUT_NONE,
+	THR_MUT_KD_SIBLING, /* the traversal unit reads a node's sibling instead */
+};
 
 /* ---- pipelined units ---- */
 
@@ -122,11 +133,35 @@ _Static_assert(C_NCOUNTERS <= 32, "packet records (pktrec.h) hold 32 counters");
 struct thr_ctx;
 struct thr_rtp;
 
+/* One distinct shading read of a packet: its address, size and place in
+ * the thread's shading buffers. */
+typedef struct thr_shread {
+	uint64_t addr;
+	uint32_t bytes, off;
+} thr_shread;
+
+/* A thread's shading (units/rgs.c): the reads a pass of the shader made,
+ * the bytes it was given (peek: what memory held when it asked) and those
+ * the reads returned (got), its outputs until they are made. Allocated at
+ * the thread's first shading; the buffers grow to the largest packet. */
+typedef struct thr_shade {
+	uint8_t *peek, *got;
+	uint32_t used, cap;
+	thr_shread *rd;
+	uint32_t n, capn;
+	uint32_t issued;  /* reads [0, issued) are requested */
+	uint32_t reads;   /* reads of the pass before coalescing */
+	int delivered;    /* the pass reads the returned bytes */
+	int round;        /* passes so far */
+	shade_counts cnt; /* the pass's counts */
+	shade_adds adds;  /* the pass's frame-buffer adds */
+} thr_shade;
+
 typedef struct thr_env {
 	eng *e;
 	eng_clock clk;
 	memport *mem;
-	const mimg *m;
+	const mimg *m; /* region bases and scene box; bytes NULL (the chip's) */
 	shade_ctx sc;
 	cam_frame cam;
 	int stack_depth, masked, nlights;
@@ -148,10 +183,14 @@ typedef struct thr_env {
 	int nchunks;
 	packet **freel;
 	int nfree, capfree;
-	/* shading scratch: the read log and a de-duplication table */
-	shade_log log;
+	/* shading scratch: the de-duplication table of one pass's reads
+	 * (key, stamp, index of the read) */
 	uint64_t *hkey;
-	uint32_t *hgen, gen;
+	uint32_t *hgen, *hidx, gen;
+	int oom; /* a thread's buffer found no memory: the frame fails */
+	/* test hooks: enum thr_mutant; shading decoded again from the
+	 * delivered bytes even when they equal those it found (units/rgs.c) */
+	int mutant, shade_redecode;
 	/* the packet record (traces/pktrec.h): streams being recorded, or the
 	 * one threads replay (units/replay.h); at most one is set */
 	pktrec *rec_out;
@@ -181,6 +220,17 @@ typedef struct thr_ctx {
 	uint32_t k;        /* intersection: next leaf entry */
 	int pending;       /* outstanding memory reads */
 	void (*cont)(struct thr_ctx *t);
+	/* what the reads returned: the node, the leaf's list entries, the
+	 * triangle record, the spilled stack entries read back (packed,
+	 * THR_STACK_ENTRY_BYTES each by stack index; allocated at the first
+	 * refill), the shading records */
+	kd_node node;
+	mimg_tri tri;
+	uint32_t *list, list_cap;
+	uint8_t *spill_in;
+	int backed, rlo,
+	    rhi; /* stack entries [backed, sp) read back this step; [rlo, rhi) in flight */
+	thr_shade *sh;
 	packet *kids; /* shade_packet's output */
 	int nkids, made;
 	eng_handler fnext;       /* functional: the next step (see thr_env.func) */
@@ -217,10 +267,13 @@ typedef struct thr_rtp {
 void thr_set(thr_ctx *t, int state);
 /* Adds the time since the last change to the occupancy counters. */
 void thr_flush(thr_ctx *t);
-/* Issues a read for the thread; thr_wait_mem continues when all are in. */
-void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes);
-/* A posted write (stack spill). */
-void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes);
+/* Issues a read for the thread; thr_wait_mem continues when all are in,
+ * the bytes in dst (NULL: none wanted, a replayed read). */
+void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst);
+/* A posted write (stack spill) of src (NULL: no data, a replayed write). */
+void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, const void *src);
+/* Frees the thread's data buffers (chip_destroy). */
+void thr_free_buffers(thr_ctx *t);
 /* Calls cont(t) once every read issued so far has arrived (at once if none). */
 void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t));
 /* As thr_wait_mem, but with no read outstanding it returns 0 instead of

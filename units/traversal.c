@@ -1,7 +1,20 @@
 /*
  * traversal.c: the traversal unit (see traversal.h).
+ *
+ * A step: the stack entries the pop looks at that live in memory (index
+ * chip.stack_depth and up) are read back and decoded into the stack; then
+ * the pop; then the node is read and the step is done on its bytes; a far
+ * child pushed past the on-chip stack is written out. How many entries the
+ * pop looks at is known before they are read (pkt_trav_pops, on the
+ * copies the functional stack keeps: the read-back requests all go out at
+ * once, a prefetch); if the bytes read back change that count (a damaged
+ * spill area), the entries it then needs are read in a further round, so
+ * the pop only ever sees entries as memory returned them.
  */
 #include "traversal.h"
+
+#include <stdlib.h>
+#include <string.h>
 
 #include "list.h"
 #include "rgs.h"
@@ -20,6 +33,26 @@ void tu_begin(thr_ctx *t)
 	tu_step(t);
 }
 
+/* A stack entry in memory (THR_STACK_ENTRY_BYTES): node index (4), ray
+ * mask (8), entry and exit distances (64 floats each), little-endian as
+ * the host is. */
+static void spill_pack(const trav_entry *e, uint8_t *b)
+{
+	memcpy(b, &e->node, 4);
+	memcpy(b + 4, &e->mask, 8);
+	memcpy(b + 12, e->tn, sizeof e->tn);
+	memcpy(b + 12 + sizeof e->tn, e->tf, sizeof e->tf);
+}
+
+static void spill_unpack(const uint8_t *b, trav_entry *e)
+{
+	memcpy(&e->node, b, 4);
+	memcpy(&e->mask, b + 4, 8);
+	memcpy(e->tn, b + 12, sizeof e->tn);
+	memcpy(e->tf, b + 12 + sizeof e->tn, sizeof e->tf);
+}
+_Static_assert(12 + 2 * sizeof(float) * PKT_RAYS == THR_STACK_ENTRY_BYTES, "spill entry size");
+
 static void done(eng *e, void *ctx, uint64_t arg)
 {
 	(void)e;
@@ -31,44 +64,92 @@ static void done(eng *e, void *ctx, uint64_t arg)
 		tu_step(t);
 }
 
-static void fetched(thr_ctx *t)
+/* The node arrived: the step on its bytes, a spill of the far child if
+ * it went past the on-chip stack, then the unit's op. */
+static void node_fetched(thr_ctx *t)
 {
-	thr_use(t, UNIT_TRAV, thr_pop(t->r.mask), done);
+	thr_env *v = t->env;
+	trav_result *r = &t->r;
+	pkt_trav_node(&t->ts, t->p, t->node, r);
+	t->sp = r->sp;
+	thr_count(t, C_NODE_STEPS, 1);
+	thr_count_max(t, C_MAX_SP, (uint64_t)r->sp);
+	if (r->pushed && r->sp - 1 >= v->stack_depth) {
+		uint8_t b[THR_STACK_ENTRY_BYTES];
+		spill_pack(&t->stack[r->sp - 1], b);
+		thr_count(t, C_STACK_OVERFLOWS, 1);
+		thr_write(t, MEM_KD, thr_spill_addr(t, (uint64_t)(r->sp - 1)),
+		          THR_STACK_ENTRY_BYTES, b);
+	}
+	thr_use(t, UNIT_TRAV, thr_pop(r->mask), done);
 }
 
-static void fetch_node(thr_ctx *t)
+/* Every entry the pop looks at is as memory returned it: pop, then read
+ * the node (its address comes from the popped entry). */
+static void pop(thr_ctx *t)
 {
-	thr_read(t, MEM_KD, mimg_node_addr(t->env->m, t->r.node), MIMG_NODE_BYTES);
-	thr_wait_mem(t, fetched);
+	thr_env *v = t->env;
+	trav_result *r = &t->r;
+	if (!pkt_trav_pop(&t->ts, t->p, r)) {
+		t->sp = 0;
+		rgs_finish(t);
+		return;
+	}
+	uint32_t node = r->node;
+	if (v->mutant == THR_MUT_KD_SIBLING && node) /* test hook: the pair's other node */
+		node = node & 1 ? node + 1 : node - 1;
+	thr_read(t, MEM_KD, mimg_node_addr(v->m, node), MIMG_NODE_BYTES, &t->node);
+	thr_wait_mem(t, node_fetched);
+}
+
+static void refill(thr_ctx *t);
+
+/* Entries [rlo, rhi) came back: into the stack, then the pop may need
+ * more. */
+static void refilled(thr_ctx *t)
+{
+	for (int i = t->rlo; i < t->rhi; i++)
+		spill_unpack(t->spill_in + (size_t)i * THR_STACK_ENTRY_BYTES, &t->stack[i]);
+	refill(t);
+}
+
+/* Reads back the spilled entries the pop will look at that were not read
+ * this step (top down, all at once), or pops when there are none. */
+static void refill(thr_ctx *t)
+{
+	thr_env *v = t->env;
+	/* nothing spilled (the usual case): no entry to read back */
+	if (t->backed <= v->stack_depth) {
+		pop(t);
+		return;
+	}
+	int lo = t->ts.sp - pkt_trav_pops(&t->ts, t->p);
+	if (lo < v->stack_depth)
+		lo = v->stack_depth;
+	if (lo >= t->backed) {
+		pop(t);
+		return;
+	}
+	if (!t->spill_in &&
+	    !(t->spill_in = malloc((size_t)PKT_STACK_MAX * THR_STACK_ENTRY_BYTES))) {
+		v->oom = 1; /* the frame fails; the copies stand in */
+		t->backed = lo;
+		pop(t);
+		return;
+	}
+	t->rlo = lo;
+	t->rhi = t->backed;
+	for (int i = t->backed - 1; i >= lo; i--) {
+		thr_count(t, C_STACK_REFILLS, 1);
+		thr_read(t, MEM_KD, thr_spill_addr(t, (uint64_t)i), THR_STACK_ENTRY_BYTES,
+		         t->spill_in + (size_t)i * THR_STACK_ENTRY_BYTES);
+	}
+	t->backed = lo;
+	thr_wait_mem(t, refilled);
 }
 
 void tu_step(thr_ctx *t)
 {
-	thr_env *v = t->env;
-	trav_result *r = &t->r;
-	int sp0 = t->sp;
-	pkt_trav_next(&t->ts, t->p, v->m, r);
-	/* popped entries that lived in memory come back first */
-	for (int k = 0; k < r->popped; k++) {
-		int idx = sp0 - 1 - k;
-		if (idx >= v->stack_depth) {
-			thr_count(t, C_STACK_REFILLS, 1);
-			thr_read(t, MEM_KD, thr_spill_addr(t, (uint64_t)idx),
-			         THR_STACK_ENTRY_BYTES);
-		}
-	}
-	t->sp = r->sp;
-	if (r->op == TRAV_DONE) {
-		thr_wait_mem(t, rgs_finish);
-		return;
-	}
-	thr_count(t, C_NODE_STEPS, 1);
-	thr_count_max(t, C_MAX_SP, (uint64_t)r->sp);
-	if (r->pushed && r->sp - 1 >= v->stack_depth) {
-		thr_count(t, C_STACK_OVERFLOWS, 1);
-		thr_write(t, MEM_KD, thr_spill_addr(t, (uint64_t)(r->sp - 1)),
-		          THR_STACK_ENTRY_BYTES);
-	}
-	/* the node address comes from the refilled entry: read it after */
-	thr_wait_mem(t, fetch_node);
+	t->backed = t->ts.sp; /* nothing read back yet */
+	refill(t);
 }

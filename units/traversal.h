@@ -3,20 +3,24 @@
  * unit traverses the ray through the spatial index structure ... until a
  * leaf-node is reached").
  *
- * One operation = one pkt_trav_next() step for the whole packet: the kd-node
- * is read through the KD memory port (8 bytes), then the unit spends
- * ceil(rays/width) issue cycles + latency on it. A leaf goes to the list
- * unit; TRAV_DONE goes to the RGS for shading. pkt_trav_begin (the
- * scene-box clip) is part of ray set-up and costs no unit time; a packet
- * whose rays all miss the box skips the core (counted).
+ * One operation = one pkt_trav_next() step for the whole packet, in its
+ * two halves: pkt_trav_pop picks the node, the node's 8 bytes are read
+ * through the KD memory port, and pkt_trav_node steps on the bytes the
+ * read returned; then the unit spends ceil(rays/width) issue cycles +
+ * latency on it. A leaf goes to the list unit; TRAV_DONE goes to the RGS
+ * for shading. pkt_trav_begin (the scene-box clip against the box the
+ * host sets) is part of ray set-up and costs no unit time; a packet whose
+ * rays all miss the box skips the core (counted).
  *
  * Stack: the hardware stack holds chip.stack_depth entries. A push beyond
- * it spills the entry to memory (a posted KD write of
- * THR_STACK_ENTRY_BYTES, counted as a stack overflow); popping such an
- * entry reads it back (a KD read the step waits for, counted as a refill;
- * the node read follows it, since the entry names the node).
- * The functional stack (kernel-ref) always has PKT_STACK_MAX entries, so
- * the image never depends on the depth.
+ * it spills the entry to memory (a posted KD write of the entry's
+ * THR_STACK_ENTRY_BYTES, counted as a stack overflow), after the node read
+ * that made it; popping such an entry reads it back (a KD read the step
+ * waits for, counted as a refill; the node read follows it, since the
+ * entry names the node), and the pop works on the bytes it returned. The
+ * functional stack (kernel-ref's) has PKT_STACK_MAX entries; those past
+ * the depth are overwritten by what memory returns before they are
+ * popped, so a spill that does not come back intact changes the image.
  */
 #ifndef SAAR_UNITS_TRAVERSAL_H
 #define SAAR_UNITS_TRAVERSAL_H
