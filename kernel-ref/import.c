@@ -524,6 +524,12 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			return 0;
 		}
 		if (tok_is(t, n, "format")) {
+			/* Assimp and this scan must read the same header: a
+			 * second format line (the scan kept the last, Assimp
+			 * the first: a fuzzed file made Assimp read ASCII data
+			 * as binary and ask for gigabytes) is refused */
+			if (*fmt >= 0)
+				return diag_set(d, file, ln, COL, "a second PLY format line");
 			n = ply_tok(&s, eol, &t);
 			*fmt = tok_is(t, n, "ascii")                  ? 0
 			       : tok_is(t, n, "binary_little_endian") ? 1
@@ -534,6 +540,13 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 				                "unknown PLY format '%.*s' (ascii, "
 				                "binary_little_endian or binary_big_endian)",
 				                (int)(n > 40 ? 40 : n), t);
+			n = ply_tok(&s, eol, &t);
+			if (!tok_is(t, n, "1.0"))
+				return diag_set(d, file, ln, n ? COL : 0,
+				                "PLY version '%.*s': saarsim reads version 1.0",
+				                (int)(n > 40 ? 40 : n), t);
+			if (ply_tok(&s, eol, &t))
+				return diag_set(d, file, ln, COL, "text after the PLY version");
 		} else if (tok_is(t, n, "element")) {
 			if (*nel == PLY_MAX_ELEMS)
 				return diag_set(d, file, ln, 0, "more than %d PLY elements",

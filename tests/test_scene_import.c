@@ -757,6 +757,14 @@ Test(import, ply_header_is_strict, .timeout = 60)
 	     ":4:16: property name '9x' does not begin with a letter or underscore"},
 	    {"ply \nformat ascii 1.0\nelement vertex 3\nproperty float x\n",
 	     ":1: not a PLY file (it does not begin with a 'ply' line)"},
+	    /* found by fuzz-ply: the scan kept the last format line, Assimp
+	     * the first, and read the data as binary asking for gigabytes */
+	    {"ply\nformat ascii 1.0\nformat binary_little_endian 1.0\nelement vertex 3\n",
+	     ":3:1: a second PLY format line"},
+	    {"ply\nformat ascii y\nelement vertex 3\nproperty float x\n",
+	     ":2:14: PLY version 'y': saarsim reads version 1.0"},
+	    {"ply\nformat ascii 1.0 x\nelement vertex 3\nproperty float x\n",
+	     ":2:18: text after the PLY version"},
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
 		char name[32];
