@@ -398,7 +398,11 @@ static int obj_scan(const char *text, const char *file, diag *d)
 
 typedef struct ply_prop {
 	unsigned char list, csize, isize; /* list: count and item sizes; else isize */
+	unsigned char kind;               /* of the items: PLY_UINT, PLY_INT or PLY_FLOAT */
+	unsigned char vidx;               /* a face's vertex index list (ply_scan checks it) */
 } ply_prop;
+
+enum { PLY_UINT, PLY_INT, PLY_FLOAT };
 
 typedef struct ply_elem {
 	char name[32];
@@ -598,9 +602,14 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			pr->isize = (unsigned char)ply_type_size(t, n);
 			if (!pr->isize)
 				goto bad_type;
+			pr->kind = *t == 'u'                ? PLY_UINT
+			           : *t == 'f' || *t == 'd' ? PLY_FLOAT
+			                                    : PLY_INT;
 			n = ply_tok(&s, eol, &t);
 			if (!n)
 				return diag_set(d, file, ln, 0, "property without a name");
+			pr->vidx = list && !strcmp(e->name, "face") &&
+			           (tok_is(t, n, "vertex_indices") || tok_is(t, n, "vertex_index"));
 			if (!ply_name_ok(t, n))
 				return diag_set(
 				    d, file, ln, COL,
@@ -636,6 +645,40 @@ static int ply_short(const char *file, int line, const ply_elem *e, unsigned lon
 	                i + 1, e->count);
 }
 
+/* Assimp 5.2's PLY reader uses a face's vertex indices before anything
+ * checks them: a fuzzed binary face naming vertex 1793 of 4 made it write
+ * outside its buffers (AddressSanitizer's heap metadata was found
+ * corrupted). So the scan checks every vertex index against the vertex
+ * count; v is the item read from the file. */
+static int ply_vidx(long double v, unsigned long long nvert, const char *file, int line,
+                    const ply_elem *e, unsigned long long i, diag *d)
+{
+	if (v >= 0 && v < (long double)nvert && v == (long double)(unsigned long long)v)
+		return 0;
+	return diag_set(d, file, line, 0, "%s %llu refers to vertex %.0Lf of the %llu declared",
+	                e->name, i + 1, v, nvert);
+}
+
+/* A binary item of `size` bytes at p, of kind kind, in the file's order. */
+static long double ply_item(const unsigned char *p, int size, int kind, int big)
+{
+	unsigned long long u = ply_count(p, size, big);
+	if (kind == PLY_FLOAT) {
+		if (size == 4) {
+			uint32_t b = (uint32_t)u;
+			float f;
+			memcpy(&f, &b, 4);
+			return f;
+		}
+		double x;
+		memcpy(&x, &u, 8);
+		return x;
+	}
+	if (kind == PLY_INT && size < 8 && (u >> (8 * size - 1)) & 1)
+		return (long double)u - (long double)(1ull << (8 * size));
+	return (long double)u;
+}
+
 static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 {
 	ply_elem el[PLY_MAX_ELEMS];
@@ -646,6 +689,10 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 	if (fmt == 0 && text_check(buf + at, len - at, line + 1, file, "an ASCII PLY", d))
 		return -1;
 	const char *p = buf + at, *end = buf + len;
+	unsigned long long nvert = 0;
+	for (int k = 0; k < nel; k++)
+		if (!strcmp(el[k].name, "vertex"))
+			nvert = el[k].count;
 	for (int k = 0; k < nel; k++) {
 		const ply_elem *e = &el[k];
 		if (e->count && !e->nprops)
@@ -664,6 +711,13 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 					}
 					if (items > (unsigned long long)(end - p) / pr->isize)
 						return ply_short(file, 0, e, i, d);
+					for (unsigned long long m = 0; pr->vidx && m < items; m++)
+						if (ply_vidx(ply_item((const unsigned char *)p +
+						                          m * pr->isize,
+						                      pr->isize, pr->kind,
+						                      fmt == 2),
+						             nvert, file, 0, e, i, d))
+							return -1;
 					p += items * pr->isize;
 				}
 				continue;
@@ -695,12 +749,31 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 						                "%s %llu: expected a list length",
 						                e->name, i + 1);
 				}
-				for (unsigned long long m = 0; m < items; m++)
-					if (!ply_tok(&s, eol, &t))
+				for (unsigned long long m = 0; m < items; m++) {
+					size_t tn = ply_tok(&s, eol, &t);
+					if (!tn)
 						return diag_set(d, file, line, 0,
 						                "%s %llu has fewer values than its "
 						                "header declares",
 						                e->name, i + 1);
+					if (e->prop[j].vidx) {
+						char num[48];
+						char *cend = num;
+						long double v = -1;
+						if (tn < sizeof num) {
+							memcpy(num, t, tn);
+							num[tn] = '\0';
+							v = strtold(num, &cend);
+						}
+						if (tn >= sizeof num || *cend)
+							return diag_set(
+							    d, file, line, (int)(t - p) + 1,
+							    "%s %llu: malformed vertex index",
+							    e->name, i + 1);
+						if (ply_vidx(v, nvert, file, line, e, i, d))
+							return -1;
+					}
+				}
 			}
 			p = next;
 		}

@@ -505,6 +505,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->mem = &c->mem;
 	v->m = &c->regs;
 	v->stack_depth = cfg->chip.stack_depth;
+	v->max_steps = 2 * (uint64_t)w->m.nnodes + 64;
 	v->masked = cfg->chip.masked_packets;
 	/* the datapath formats; kernel-ref's check frame stays full precision */
 	if (fpfmt_init(&v->prec.trav, cfg->chip.fp.trav.exp, cfg->chip.fp.trav.mant,
@@ -1478,6 +1479,13 @@ int chip_run(chip *c, diag *d)
 		rec_store(c);
 		if (c->oom || c->env.oom || mem_failed(&c->mem))
 			return diag_set(d, "chip", 0, 0, "out of memory during the frame");
+		if (c->env.damaged)
+			return diag_set(
+			    d, "chip", 0, 0,
+			    "a packet took more than %llu kd-tree steps (twice the "
+			    "tree's nodes): the node data the traversal unit read loops "
+			    "(damaged board memory or a wrong node address)",
+			    (unsigned long long)c->env.max_steps);
 		c->frame_port[f] = c->mem.n;
 		if (c->frame_mem)
 			hier_get_stats(&c->mem, &c->frame_mem[f]);

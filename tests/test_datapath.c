@@ -174,6 +174,34 @@ Test(datapath, wrong_node_address_changes_the_frame, .timeout = 300)
 	world_free(&w);
 }
 
+/* Node data that loops (here the root's children made the root itself,
+ * in board memory) would keep a packet, and the frame, stepping for ever
+ * (a wrong node address did: make mutate hung on it): the traversal unit
+ * ends such a packet after twice the tree's nodes in steps and the frame
+ * fails with one message, in every mode. */
+Test(datapath, looping_node_data_fails_the_frame)
+{
+	world w;
+	tu_load_world(&w, NULL, NULL, NULL);
+	for (int m = 0; m < 3; m++) {
+		saar_config c;
+		cfg_for(&c, 64, modes[m], NULL, 0);
+		chip *ch = make_chip(&w, &c);
+		kd_node root;
+		uint64_t a = mimg_node_addr(&w.m, 0);
+		ms_read(&ch->store, a, sizeof root, &root);
+		cr_assert(!kd_is_leaf(root), "the root is a leaf");
+		root.b &= 3; /* left child 0: the root again, and so is its pair */
+		cr_assert_eq(ms_write(&ch->store, a, sizeof root, &root), 0);
+		diag d = {{0}};
+		cr_assert_eq(chip_run(ch, &d), -1, "%s: the frame ended", modes[m]);
+		cr_assert(strstr(d.msg, "kd-tree steps") && strstr(d.msg, "loops"), "%s: %s",
+		          modes[m], d.msg);
+		chip_destroy(ch);
+	}
+	world_free(&w);
+}
+
 /* Cache lines hold their bytes: once the first frame has filled them,
  * zeroing every line of the triangle cache (or, through the VMA, the
  * on-board lines of triangle records) in the middle of the second frame

@@ -1019,3 +1019,48 @@ Test(import, importer_process)
 	cr_assert(s.ntexs == 1 && s.texs[0].w == 4 && s.texs[0].h == 3);
 	scene_free(&s);
 }
+
+/* A face's vertex indices are checked before Assimp sees them: Assimp 5.2's
+ * PLY reader uses them unchecked, and a fuzzed binary face naming vertex
+ * 1793 of 4 made it write outside its buffers (fuzz-ply found AddressSanitizer's
+ * heap metadata corrupted). ASCII and binary, out of range and negative. */
+Test(import, ply_face_indices_are_checked)
+{
+	char dir[256], p[512], want[700];
+	tu_tmpdir(dir, sizeof dir);
+	static const char head[] = "ply\nformat %s 1.0\nelement vertex 3\nproperty float x\n"
+	                           "property float y\nproperty float z\nelement face 1\n"
+	                           "property list uchar %s vertex_indices\nend_header\n";
+	char text[512];
+	/* ASCII */
+	const char *bad[] = {"3 0 1 3\n", "3 0 -1 2\n", "3 0 1 2.5\n"};
+	for (int i = 0; i < 3; i++) {
+		int n = snprintf(text, sizeof text, head, "ascii", "int");
+		snprintf(text + n, sizeof text - (size_t)n, "0 0 0\n1 0 0\n0 1 0\n%s", bad[i]);
+		tu_write(p, sizeof p, dir, "a.ply", text);
+		diag d = {{0}};
+		load_fails(p, &d);
+		snprintf(want, sizeof want, "%s:13: face 1 refers to vertex", p);
+		cr_assert(strstr(d.msg, want), "case %d: %s", i, d.msg);
+	}
+	/* binary, little-endian int and big-endian uint indices */
+	for (int big = 0; big < 2; big++) {
+		int n = snprintf(text, sizeof text, head,
+		                 big ? "binary_big_endian" : "binary_little_endian",
+		                 big ? "uint" : "int");
+		memset(text + n, 0, 36); /* three vertices at the origin */
+		unsigned char *f = (unsigned char *)text + n + 36;
+		f[0] = 3;
+		const uint32_t idx[3] = {0, 1, big ? 7u : 0xffffffffu}; /* 7, or -1 */
+		for (int k = 0; k < 3; k++)
+			for (int b = 0; b < 4; b++)
+				f[1 + 4 * k + b] =
+				    (unsigned char)(idx[k] >> (8 * (big ? 3 - b : b)));
+		tu_write_bytes(p, sizeof p, dir, "b.ply", text, (size_t)n + 36 + 13);
+		diag d = {{0}};
+		load_fails(p, &d);
+		snprintf(want, sizeof want, "%s: face 1 refers to vertex %s of the 3 declared", p,
+		         big ? "7" : "-1");
+		cr_assert(strstr(d.msg, want), "%s endian: %s", big ? "big" : "little", d.msg);
+	}
+}

@@ -165,6 +165,11 @@ typedef struct thr_env {
 	shade_ctx sc;
 	cam_frame cam;
 	int stack_depth, masked, nlights;
+	/* a packet that takes more traversal steps than this has looped on
+	 * damaged node data (a correct walk visits each node at most once):
+	 * it is ended and the frame fails (damaged) */
+	uint64_t max_steps;
+	int damaged;
 	/* functional (fidelity functional, or the unsampled stretches of
 	 * sampled; docs/fidelity.md): memory goes through mem_access_func, a
 	 * unit op is counted but takes no time and its done handler becomes the
@@ -244,6 +249,7 @@ typedef struct thr_ctx {
 	/* recording: a read since the last wait or op; a wait after reads
 	 * not yet recorded (it goes in before the next request: PR_WAIT) */
 	uint8_t rread, rwait;
+	uint64_t steps; /* traversal steps of the current packet (thr_env.max_steps) */
 } thr_ctx;
 
 /* A queued secondary packet: the packet, or (p NULL) a replayed stream. */

@@ -24,6 +24,7 @@ void tu_begin(thr_ctx *t)
 	thr_env *v = t->env;
 	uint64_t enter = pkt_trav_begin_fp(&t->ts, t->p, v->m, t->stack, PKT_STACK_MAX, &v->prec);
 	t->sp = 0;
+	t->steps = 0;
 	thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
 	if (!enter) {
 		thr_count(t, C_BOX_MISS_PACKETS, 1);
@@ -70,6 +71,15 @@ static void node_fetched(thr_ctx *t)
 {
 	thr_env *v = t->env;
 	trav_result *r = &t->r;
+	/* node data that loops (damaged memory, a wrong address) would keep
+	 * the packet, and the frame, going for ever: end it and fail the
+	 * frame instead */
+	if (++t->steps > v->max_steps) {
+		v->damaged = 1;
+		t->sp = 0;
+		rgs_finish(t);
+		return;
+	}
 	pkt_trav_node(&t->ts, t->p, t->node, r);
 	t->sp = r->sp;
 	thr_count(t, C_NODE_STEPS, 1);
