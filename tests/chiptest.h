@@ -40,6 +40,27 @@ static inline void tu_load_world(world *w, const char *path, const char *views, 
 	tu_load_world_cached(w, path, views, vname, NULL);
 }
 
+/* kernel-ref's packet render of config c's frame on w: its 8-bit pixels
+ * (malloc'd) and, with st, its stats. */
+static inline uint8_t *tu_reference(const world *w, const saar_config *c, render_stats *st)
+{
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = c->frame.width;
+	ro.height = c->frame.height;
+	ro.max_depth = c->shading.max_depth;
+	framebuf fb;
+	cr_assert_eq(fb_init(&fb, ro.width, ro.height), 0);
+	render_stats own;
+	diag d;
+	cr_assert_eq(render_frame(&w->m, &w->v, &ro, &fb, st ? st : &own, &d), 0, "%s", d.msg);
+	uint8_t *rgb = malloc((size_t)ro.width * ro.height * 3);
+	cr_assert(rgb, "out of memory");
+	fb_to_rgb8(&fb, rgb, NULL);
+	fb_free(&fb);
+	return rgb;
+}
+
 /* Builds a chip for c and runs every frame (its report's invariants
  * must hold); the caller destroys it. */
 static inline chip *tu_run_chip(const world *w, const saar_config *c)

@@ -186,19 +186,7 @@ static void small_cfg(saar_config *c, int size)
 /* kernel-ref's 8-bit frame and stats */
 static uint8_t *reference(const world *w, const saar_config *c, render_stats *st)
 {
-	render_opts ro;
-	render_opts_default(&ro);
-	ro.width = c->frame.width;
-	ro.height = c->frame.height;
-	ro.max_depth = c->shading.max_depth;
-	framebuf fb;
-	cr_assert_eq(fb_init(&fb, ro.width, ro.height), 0);
-	diag d;
-	cr_assert_eq(render_frame(&w->m, &w->v, &ro, &fb, st, &d), 0, "%s", d.msg);
-	uint8_t *rgb = malloc((size_t)ro.width * ro.height * 3);
-	fb_to_rgb8(&fb, rgb, NULL);
-	fb_free(&fb);
-	return rgb;
+	return tu_reference(w, c, st);
 }
 
 static void assert_same_image(const chip *ch, const uint8_t *ref, const char *what)

@@ -195,17 +195,8 @@ Test(properties, smaller_l1s_never_raise_their_hit_rates, .timeout = 600)
  * traversal fault as the chip). */
 static uint64_t kref_steps(const world *w, const saar_config *c)
 {
-	render_opts ro;
-	render_opts_default(&ro);
-	ro.width = c->frame.width;
-	ro.height = c->frame.height;
-	ro.max_depth = c->shading.max_depth;
-	framebuf fb;
-	cr_assert_eq(fb_init(&fb, ro.width, ro.height), 0);
 	render_stats st;
-	diag d;
-	cr_assert_eq(render_frame(&w->m, &w->v, &ro, &fb, &st, &d), 0, "%s", d.msg);
-	fb_free(&fb);
+	free(tu_reference(w, c, &st));
 	return st.trav.node_steps;
 }
 
