@@ -756,25 +756,31 @@ static int ply_scan(const char *buf, size_t len, const char *file, diag *d)
 						                "%s %llu has fewer values than its "
 						                "header declares",
 						                e->name, i + 1);
-					if (e->prop[j].vidx) {
-						char num[48];
-						char *cend = num;
-						long double v = -1;
-						if (tn < sizeof num) {
-							memcpy(num, t, tn);
-							num[tn] = '\0';
-							v = strtold(num, &cend);
-						}
-						if (tn >= sizeof num || *cend)
-							return diag_set(
-							    d, file, line, (int)(t - p) + 1,
-							    "%s %llu: malformed vertex index",
-							    e->name, i + 1);
-						if (ply_vidx(v, nvert, file, line, e, i, d))
-							return -1;
+					/* every value a finite number: Assimp's
+					 * ASCII reader corrupted its heap on a
+					 * fuzzed line of other bytes */
+					char num[48];
+					char *cend = num;
+					long double v = -1;
+					if (tn < sizeof num) {
+						memcpy(num, t, tn);
+						num[tn] = '\0';
+						v = strtold(num, &cend);
 					}
+					if (tn >= sizeof num || *cend || !isfinite(v))
+						return diag_set(
+						    d, file, line, (int)(t - p) + 1,
+						    "%s %llu: '%.*s' is not a finite number",
+						    e->name, i + 1, (int)(tn > 40 ? 40 : tn), t);
+					if (e->prop[j].vidx &&
+					    ply_vidx(v, nvert, file, line, e, i, d))
+						return -1;
 				}
 			}
+			if (ply_tok(&s, eol, &t))
+				return diag_set(d, file, line, (int)(t - p) + 1,
+				                "%s %llu has more values than its header declares",
+				                e->name, i + 1);
 			p = next;
 		}
 	}

@@ -1043,6 +1043,26 @@ Test(import, ply_face_indices_are_checked)
 		snprintf(want, sizeof want, "%s:13: face 1 refers to vertex", p);
 		cr_assert(strstr(d.msg, want), "case %d: %s", i, d.msg);
 	}
+	/* every ASCII value a finite number, and no more of them than the
+	 * header declares (fuzz-ply's third finding: Assimp's ASCII reader
+	 * corrupted its heap on a line of other bytes) */
+	const char *lines[][2] = {
+	    {"0 0 0\n1 0 0\n0 1 nglinet\n3 0 1 2\n",
+	     ":12:5: vertex 3: 'nglinet' is not a finite number"},
+	    {"0 0 0\n1 0 0 7\n0 1 0\n3 0 1 2\n",
+	     ":11:7: vertex 2 has more values than its header declares"},
+	    {"0 0 0\n1 0 0\n0 1 0\n3 0 1 2 5\n",
+	     ":13:9: face 1 has more values than its header declares"},
+	    {"0 0 inf\n1 0 0\n0 1 0\n3 0 1 2\n", ":10:5: vertex 1: 'inf' is not a finite number"}};
+	for (int i = 0; i < 4; i++) {
+		int n = snprintf(text, sizeof text, head, "ascii", "int");
+		snprintf(text + n, sizeof text - (size_t)n, "%s", lines[i][0]);
+		tu_write(p, sizeof p, dir, "v.ply", text);
+		diag d = {{0}};
+		load_fails(p, &d);
+		snprintf(want, sizeof want, "%s%s", p, lines[i][1]);
+		cr_assert(strstr(d.msg, want), "line case %d: '%s' lacks '%s'", i, d.msg, want);
+	}
 	/* binary, little-endian int and big-endian uint indices */
 	for (int big = 0; big < 2; big++) {
 		int n = snprintf(text, sizeof text, head,
