@@ -566,6 +566,19 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 				    "element name '%.*s' does not begin with a letter or "
 				    "underscore",
 				    (int)(n > 40 ? 40 : n), t);
+			/* Assimp matches elements by name: one declared twice
+			 * (fuzz-ply's fourth finding, with a property line
+			 * carrying a second header's words) made it free what
+			 * it had not allocated */
+			if (n >= sizeof e->name)
+				return diag_set(d, file, ln, COL,
+				                "element name longer than %d bytes",
+				                (int)sizeof e->name - 1);
+			for (int k = 0; k + 1 < *nel; k++)
+				if (tok_is(t, n, el[k].name))
+					return diag_set(d, file, ln, COL,
+					                "element '%s' declared a second time",
+					                el[k].name);
 			snprintf(e->name, sizeof e->name, "%.*s", (int)n, t);
 			n = ply_tok(&s, eol, &t);
 			char *cend;
@@ -580,6 +593,8 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			if (*cend || errno)
 				return diag_set(d, file, ln, COL, "element %s: bad count '%s'",
 				                e->name, num);
+			if (ply_tok(&s, eol, &t))
+				return diag_set(d, file, ln, COL, "text after the element count");
 		} else if (tok_is(t, n, "property")) {
 			if (!*nel)
 				return diag_set(d, file, ln, COL, "property before any element");
@@ -616,6 +631,8 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 				    "property name '%.*s' does not begin with a letter or "
 				    "underscore",
 				    (int)(n > 40 ? 40 : n), t);
+			if (ply_tok(&s, eol, &t))
+				return diag_set(d, file, ln, COL, "text after the property name");
 			continue;
 		bad_type:
 			return diag_set(d, file, ln, n ? COL : 0, "unknown PLY type '%.*s'",

@@ -677,7 +677,11 @@ Test(import, ply_header_and_data_are_checked)
 	     ": element edge has no properties"},
 	    {"property float w\n", "1", "end_header", "3 0 1 2\n",
 	     ":3:1: property before any element"},
-	    {"", "1 extra", "end_header", "3 0 1 2\n", NULL},
+	    /* words after a header line's last field are refused: fuzz-ply
+	     * found a property line carrying a second header's words */
+	    {"", "1 extra", "end_header", "3 0 1 2\n", ":7:16: text after the element count"},
+	    {"element vertex 3\n", "1", "end_header", "3 0 1 2\n",
+	     ":4:9: element 'vertex' declared a second time"},
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
 		snprintf(text, sizeof text, head, cases[i].extra, cases[i].faces, cases[i].endh,
@@ -765,6 +769,8 @@ Test(import, ply_header_is_strict, .timeout = 60)
 	     ":2:14: PLY version 'y': saarsim reads version 1.0"},
 	    {"ply\nformat ascii 1.0 x\nelement vertex 3\nproperty float x\n",
 	     ":2:18: text after the PLY version"},
+	    {"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x format ascii 1.0\n",
+	     ":4:18: text after the property name"},
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
 		char name[32];
