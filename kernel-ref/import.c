@@ -521,6 +521,11 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 		if (tok_is(t, n, "end_header")) {
 			if (ply_tok(&s, eol, &t))
 				return diag_set(d, file, ln, COL, "text after end_header");
+			/* a file ending right after the word: Assimp 5.2 never
+			 * returns (fuzz-ply's fifth finding) */
+			if (eol >= end)
+				return diag_set(d, file, ln, 0,
+				                "end_header is not followed by a line end");
 			if (*fmt < 0)
 				return diag_set(d, file, ln, 0, "PLY header has no format line");
 			*data = (size_t)(p - buf);

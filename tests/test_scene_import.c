@@ -771,6 +771,9 @@ Test(import, ply_header_is_strict, .timeout = 60)
 	     ":2:18: text after the PLY version"},
 	    {"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x format ascii 1.0\n",
 	     ":4:18: text after the property name"},
+	    /* fuzz-ply's fifth finding: Assimp never returns on it */
+	    {"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nend_header",
+	     ":5: end_header is not followed by a line end"},
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
 		char name[32];
