@@ -442,7 +442,11 @@ if has_view conference; then
 	best_sim "$TMP/cf.json" --views "$VIEWS" --view conference --size 1024x768
 	cf_sim=$SIM_S
 	cf_wall=$WALL_S
-	cf_ref=$(jget "$TMP/cf.json" check_s)
+	# kernel-ref's packet render alone: host.check_s also holds the
+	# single-ray reference and the comparisons; sim_to_ref_ratio is
+	# sim_s over the packet render's time
+	cf_ref=$(awk -v s="$(jget "$TMP/cf.json" sim_s)" -v r="$(jget "$TMP/cf.json" sim_to_ref_ratio)" \
+	    'BEGIN { printf "%.6f", (r > 0 ? s / r : 0) }')
 	cf_cyc=$(jget "$TMP/cf.json" cycles)
 	cf_fps=$(jget "$TMP/cf.json" fps)
 	say "saarsim: conference 1024x768, fixed-latency model"
