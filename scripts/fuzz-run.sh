@@ -25,6 +25,16 @@ for name in "$@"; do
 	obj) for f in "$SCENES"/cornell_box/*.obj "$SCENES"/utah_teapot/*.obj; do
 		[ -f "$f" ] && cp "$f" "$corpus"/
 	done ;;
+	ply) # no PLY among the shared scenes: two small ones made here, one
+		# ASCII triangle and one binary quad (the repository holds no
+		# mesh files; the fuzzer's findings are test cases in
+		# tests/test_scene_import.c)
+		hdr='ply\nformat %s 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\nelement face %d\nproperty list uchar int vertex_indices\nend_header\n'
+		# shellcheck disable=SC2059
+		{ printf "$hdr" ascii 3 1; printf '0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n'; } >"$corpus/tri-ascii.ply"
+		{ printf "$hdr" binary_little_endian 4 2
+		  python3 -c 'import struct,sys; sys.stdout.buffer.write(b"".join(struct.pack("<3f",*p) for p in [(0,0,0),(1,0,0),(0,1,0),(1,1,0)]) + struct.pack("<B3i",3,0,1,2) + struct.pack("<B3i",3,1,3,2))'
+		} >"$corpus/quad-binary.ply" ;;
 	trace) [ -f "$corpus/seed.gz" ] || "$BUILD/saarsim" --size 16x16 --no-check \
 		--trace-mem "$corpus/seed.gz" >/dev/null ;;
 	esac
