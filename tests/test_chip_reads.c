@@ -208,19 +208,26 @@ static void assert_same_reads(rdlist *want, rdlist *got, int type)
 	               b ? b->bytes : 0u);
 }
 
+/* The embedded room at 48x48 walked both ways: kernel-ref's reads and
+ * packets into want, the chip's into got; the chip is returned. */
+static chip *both_walks(world *w, saar_config *c, walk *want, walk *got, uint64_t *spills)
+{
+	tu_load_world(w, NULL, NULL, NULL);
+	cfg_defaults(c);
+	c->frame.width = c->frame.height = 48;
+	walk_frame(want, w, c);
+	return chip_reads(got, w, c, spills);
+}
+
 /* The reads of one type of a frame of the embedded room (mirror and glass
  * spheres: reflection, refraction and shadow packets) at 48x48, both ways. */
 static void frame_reads(int type)
 {
 	world w;
-	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
-	cfg_defaults(&c);
-	c.frame.width = c.frame.height = 48;
 	walk want, got;
-	walk_frame(&want, &w, &c);
 	uint64_t spills;
-	chip *ch = chip_reads(&got, &w, &c, &spills);
+	chip *ch = both_walks(&w, &c, &want, &got, &spills);
 	cr_assert_eq(spills, 0, "a 64-entry stack spilled");
 	cr_assert_gt(want.r[type].n, 100, "the frame reads little of type %s", mem_type_name(type));
 	assert_same_reads(&want.r[type], &got.r[type], type);
@@ -263,14 +270,10 @@ Test(chip_reads, shading_reads_are_the_logged_reads)
 Test(chip_reads, children_are_spawned_as_kernel_ref)
 {
 	world w;
-	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
-	cfg_defaults(&c);
-	c.frame.width = c.frame.height = 48;
 	walk want, got;
-	walk_frame(&want, &w, &c);
 	uint64_t spills;
-	chip *ch = chip_reads(&got, &w, &c, &spills);
+	chip *ch = both_walks(&w, &c, &want, &got, &spills);
 	uint64_t secondary = 0;
 	for (int t = 0; t < PKT_NTYPES; t++) {
 		cr_assert_eq(got.packets[t], want.packets[t],
