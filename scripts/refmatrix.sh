@@ -1,0 +1,163 @@
+#!/bin/sh
+# refmatrix.sh: a fixed matrix of saarsim runs whose reports must not change
+# when the code is restructured (issue 30: "behaviour unchanged").
+#
+#   scripts/refmatrix.sh record SAARSIM OUT_DIR   run the matrix, keep the reports
+#   scripts/refmatrix.sh compare OLD_DIR NEW_DIR  compare two recordings
+#   scripts/refmatrix.sh check [REV]              build REV (default: the commit
+#                                                 that recorded the baseline) in a
+#                                                 temporary worktree, record both
+#                                                 it and ./build/saarsim, compare
+#
+# The matrix (about 70 runs, a few minutes on 2 cores): every config in
+# configs/ on four views (the embedded room, Cornell, Sponza, Conference) in
+# cycle, functional and sampled mode with full and with stored warming; 1, 16
+# and 64 threads per RTP; two frames; the VMA off and on (and on a 16 MB
+# board, so that the on-board cache evicts); round robin and oldest-first;
+# both tile orders. Reports are compared by scripts/report-diff.py: every
+# figure but the host's (times, memory) must be equal exactly, and every
+# frame must match kernel-ref's. Exit 0 when identical, 1 when not, 2 on
+# bad use.
+set -u
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/.." && pwd)
+SCENES=${SAAR_SCENES:-$root/../shared/scenes}
+VIEWS=$SCENES/views.yaml
+SIZE=${SIZE:-96x96}
+# The commit the baseline was recorded from (before issue 30's redesign).
+BASE_REV=a40ac76
+
+usage() {
+	echo "usage: refmatrix.sh record SAARSIM OUT_DIR | compare OLD_DIR NEW_DIR | check [REV]" >&2
+	exit 2
+}
+
+# One run: name, then saarsim arguments.
+run() {
+	name=$1
+	shift
+	if ! "$BIN" --size "$SIZE" --world-cache "$OUT/wc" "$@" --report "$OUT/$name.json" \
+		>"$OUT/$name.txt" 2>&1; then
+		echo "refmatrix: $name failed (see $OUT/$name.txt)" >&2
+		FAIL=1
+		return
+	fi
+	if ! grep -q "check vs kernel-ref: packets identical" "$OUT/$name.txt"; then
+		echo "refmatrix: $name: the frame differs from kernel-ref's" >&2
+		FAIL=1
+	fi
+}
+
+record() {
+	BIN=$1
+	OUT=$2
+	mkdir -p "$OUT/wc" || exit 2
+	FAIL=0
+	for cfg in saarcor-std saarcor-vma fpga-2004; do
+		c="--config $root/configs/$cfg.yaml"
+		for v in default cornell sponza conference; do
+			if [ "$v" = default ]; then vw=""; else vw="--views $VIEWS --view $v"; fi
+			for m in cycle functional sampled-full sampled-stored; do
+				case $m in
+				sampled-full) f="--fidelity sampled --sample-rate 0.2" ;;
+				sampled-stored) f="--fidelity sampled --sample-rate 0.2 --set sampling.warming=stored" ;;
+				*) f="--fidelity $m" ;;
+				esac
+				# shellcheck disable=SC2086
+				run "$cfg-$v-$m" $c $vw $f
+			done
+		done
+	done
+	vw="--views $VIEWS --view sponza"
+	for th in 1 16 64; do
+		for vma in false true; do
+			# shellcheck disable=SC2086
+			run "threads$th-vma$vma" $vw --set chip.threads_per_rtp=$th \
+				--set memory.vma.enabled=$vma --set memory.sdram.mb=16
+		done
+	done
+	for m in cycle functional sampled-stored; do
+		case $m in
+		sampled-stored) f="--fidelity sampled --sample-rate 0.25 --set sampling.warming=stored" ;;
+		*) f="--fidelity $m" ;;
+		esac
+		for cfg in saarcor-std saarcor-vma; do
+			# shellcheck disable=SC2086
+			run "frames2-$cfg-$m" --config "$root/configs/$cfg.yaml" \
+				--views "$VIEWS" --view conference --frames 2 $f
+		done
+	done
+	# shellcheck disable=SC2086
+	run "oldest-morton" $vw --set chip.thread_sched=oldest_first --set chip.tile_order=morton
+	# shellcheck disable=SC2086
+	run "unmasked-shallow" $vw --set chip.masked_packets=false --set chip.stack_depth=4
+	# shellcheck disable=SC2086
+	run "vma16-functional" $vw --fidelity functional --set memory.vma.enabled=true \
+		--set memory.sdram.mb=16
+	# memory traces, census and the CSV row are reports too
+	# shellcheck disable=SC2086
+	run "traced" $vw --set memory.vma.enabled=true --trace-mem "$OUT/traced.trace.gz" \
+		--census "$OUT/traced.census.csv" --csv "$OUT/traced.csv"
+	return $FAIL
+}
+
+compare() {
+	a=$1
+	b=$2
+	pairs=""
+	fail=0
+	for f in "$a"/*.json; do
+		n=$(basename "$f")
+		if [ ! -f "$b/$n" ]; then
+			echo "refmatrix: $n missing in $b" >&2
+			fail=1
+			continue
+		fi
+		pairs="$pairs $f $b/$n"
+	done
+	[ -n "$pairs" ] || { echo "refmatrix: no reports in $a" >&2; exit 2; }
+	# shellcheck disable=SC2086
+	python3 "$here/report-diff.py" $pairs >"$b/diff.txt" || fail=1
+	# the census and the trace are compared whole (the census has no host column)
+	for f in traced.census.csv; do
+		cmp -s "$a/$f" "$b/$f" || { echo "refmatrix: $f differs" >&2; fail=1; }
+	done
+	if ! gzip -dc "$a/traced.trace.gz" | cmp -s - "$b/traced.trace.raw" 2>/dev/null; then
+		gzip -dc "$b/traced.trace.gz" >"$b/traced.trace.raw" &&
+			gzip -dc "$a/traced.trace.gz" | cmp -s - "$b/traced.trace.raw" ||
+			{ echo "refmatrix: the memory trace differs" >&2; fail=1; }
+	fi
+	n=$(echo "$pairs" | wc -w)
+	if [ $fail = 0 ]; then
+		echo "refmatrix: $((n / 2)) reports identical (host figures left out)"
+	else
+		grep -v ": identical$" "$b/diff.txt" | head -40 >&2
+		echo "refmatrix: DIFFERENT (full list: $b/diff.txt)" >&2
+	fi
+	return $fail
+}
+
+case ${1-} in
+record)
+	[ $# = 3 ] || usage
+	record "$2" "$3"
+	;;
+compare)
+	[ $# = 3 ] || usage
+	compare "$2" "$3"
+	;;
+check)
+	rev=${2:-$BASE_REV}
+	work=$(mktemp -d) || exit 2
+	trap 'git -C "$root" worktree remove --force "$work/src" >/dev/null 2>&1; rm -rf "$work"' EXIT
+	git -C "$root" worktree add --detach "$work/src" "$rev" >/dev/null 2>&1 ||
+		{ echo "refmatrix: cannot check out $rev" >&2; exit 2; }
+	make -C "$work/src" -j2 build/saarsim >"$work/build.log" 2>&1 ||
+		{ echo "refmatrix: $rev does not build (see $work/build.log)" >&2; exit 2; }
+	make -C "$root" -j2 build/saarsim >/dev/null || exit 2
+	record "$work/src/build/saarsim" "$work/old" || echo "refmatrix: $rev: some runs failed" >&2
+	record "$root/build/saarsim" "$work/new" || echo "refmatrix: HEAD: some runs failed" >&2
+	compare "$work/old" "$work/new"
+	;;
+*) usage ;;
+esac
