@@ -42,9 +42,9 @@ ARCH     ?= $(shell $(CC) -march=native -E -x c /dev/null >/dev/null 2>&1 && ech
 WARN     := -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter -Wno-psabi
 # Our flags first; the user's CFLAGS/CXXFLAGS (make CFLAGS=...) add to them.
 XCFLAGS  := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) $(ARCH) -ffp-contract=off \
-            $(WARN) $(SANFLAGS) -MMD -MP -I. -Ikernel-ref -Isim -Iunits -Imem -Itraces $(CFLAGS)
+            $(WARN) $(SANFLAGS) -MMD -MP -I. $(CFLAGS)
 XCXXFLAGS := -std=c++17 $(OPT) $(ARCH) -ffp-contract=off -Wall -Wextra -Werror $(SANFLAGS) -MMD -MP \
-            -I. -Ikernel-ref $(CXXFLAGS)
+            -I. $(CXXFLAGS)
 LDLIBS   := -pthread -lm -ldl
 
 # Dependency check runs once per build dir; pkg-config must exist to ask.
@@ -73,7 +73,7 @@ IMG_LIBS   = $(shell pkg-config --libs $(IMGPKGS) 2>/dev/null)
 TEST_LIBS  = $(shell pkg-config --libs $(TESTPKGS) 2>/dev/null)
 
 MAINS    := kernel-ref/rtref.c kernel-ref/stress_main.c sim/main.c traces/replay.c
-LIB_C    := $(filter-out $(MAINS),$(wildcard kernel-ref/*.c sim/*.c units/*.c mem/*.c traces/*.c))
+LIB_C    := $(filter-out $(MAINS),$(wildcard kernel-ref/*.c sim/*.c sim/core/*.c units/*.c mem/*.c traces/*.c))
 LIB_OBJ  := $(LIB_C:%.c=$(B)/%.o)
 PLUGIN   := $(B)/libsaar-oiio.so
 TEST_C   := $(wildcard tests/*.c)
@@ -159,7 +159,7 @@ FZ_CXX    ?= clang++
 FZ_SAN    := -fsanitize=address,undefined -fno-sanitize-recover=undefined
 FZ_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -O1 -g -ffp-contract=off \
              -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter $(FZ_SAN) \
-             -I. -Ikernel-ref -Isim -Iunits -Imem -Itraces -Itests/fuzz
+             -I. -Itests/fuzz
 FZ_OBJ    := $(LIB_C:%.c=$(FZ_B)/%.o)
 FZ_NAMES  := config views trace obj ply
 FZ_BINS   := $(FZ_NAMES:%=$(FZ_B)/fuzz-%)

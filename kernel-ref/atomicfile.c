@@ -1,7 +1,7 @@
 /*
  * atomicfile.c: temporary-then-rename output files (see atomicfile.h).
  */
-#include "atomicfile.h"
+#include "kernel-ref/atomicfile.h"
 
 #include <errno.h>
 #include <pthread.h>

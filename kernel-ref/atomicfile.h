@@ -13,7 +13,7 @@
 #include <limits.h>
 #include <stdio.h>
 
-#include "diag.h"
+#include "kernel-ref/diag.h"
 
 typedef struct afile {
 	FILE *f; /* the temporary, open for writing; NULL when a library writes it by name */

@@ -1,7 +1,7 @@
 /*
  * camera.c: primary rays for tiles (see camera.h).
  */
-#include "camera.h"
+#include "kernel-ref/camera.h"
 
 #include <string.h>
 

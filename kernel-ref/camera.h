@@ -8,8 +8,8 @@
 #ifndef SAAR_KREF_CAMERA_H
 #define SAAR_KREF_CAMERA_H
 
-#include "packet.h"
-#include "view.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/view.h"
 
 #define TILE_W 8
 #define TILE_H 8

@@ -7,8 +7,8 @@
  * triangles share bit-identical vertices and rays cannot slip through
  * cracks; nothing is random, so the scene is the same on every run.
  */
-#include "scene.h"
-#include "view.h"
+#include "kernel-ref/scene.h"
+#include "kernel-ref/view.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,7 +1,7 @@
 /*
  * diag.c: formatting of one-line input errors (see diag.h).
  */
-#include "diag.h"
+#include "kernel-ref/diag.h"
 
 #include <fcntl.h>
 #include <stdarg.h>

@@ -3,7 +3,7 @@
  * error bounds. The rounding itself is inline in the header because the
  * emulated datapaths call it after every operation.
  */
-#include "fpfmt.h"
+#include "kernel-ref/fpfmt.h"
 
 #include <errno.h>
 #include <stdio.h>

@@ -28,7 +28,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "diag.h"
+#include "kernel-ref/diag.h"
 
 enum fp_rmode { FPR_NEAREST, FPR_ZERO, FPR_UP, FPR_DOWN, FPR_NMODES };
 

@@ -2,7 +2,7 @@
  * framebuf.c: fixed-point frame buffer, conversion, comparison (see
  * framebuf.h).
  */
-#include "framebuf.h"
+#include "kernel-ref/framebuf.h"
 
 #include <sys/mman.h>
 
@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "image.h"
+#include "kernel-ref/image.h"
 
 #define FB_HUGE ((uintptr_t)2 << 20)
 

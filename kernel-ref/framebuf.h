@@ -14,8 +14,8 @@
 
 #include <stdint.h>
 
-#include "atomicfile.h"
-#include "diag.h"
+#include "kernel-ref/atomicfile.h"
+#include "kernel-ref/diag.h"
 
 #define FB_FRAC_BITS   20
 #define FB_MAX_CONTRIB 1024.0f /* per-ray clamp: keeps sums far from overflow */

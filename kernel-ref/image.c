@@ -7,7 +7,7 @@
  * folder), else in ../lib/saarsim/ from it (make install), else where
  * SAAR_IMAGE_PLUGIN points, and opened on the first image read or write.
  */
-#include "image.h"
+#include "kernel-ref/image.h"
 
 #include <dlfcn.h>
 #include <errno.h>
@@ -18,9 +18,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "atomicfile.h"
-#include "image_plugin.h"
-#include "infile.h"
+#include "kernel-ref/atomicfile.h"
+#include "kernel-ref/image_plugin.h"
+#include "kernel-ref/infile.h"
 
 /* Opens the plugin. RTLD_NODELETE keeps it mapped after dlclose, so the next
  * call's dlopen is a lookup, not a second 0.3 s load, and no handle has to

@@ -11,8 +11,8 @@
 
 #include <stdint.h>
 
-#include "atomicfile.h"
-#include "diag.h"
+#include "kernel-ref/atomicfile.h"
+#include "kernel-ref/diag.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -4,7 +4,7 @@
  * temporary names, renames and diagnostics are image.c's. No exception
  * leaves this file: the C side only sees -1 and one line of text.
  */
-#include "image_plugin.h"
+#include "kernel-ref/image_plugin.h"
 
 #include <OpenImageIO/imageio.h>
 #include <cstdio>

@@ -11,10 +11,10 @@
  * turns Assimp crashing on a malformed file into an error. The rules are
  * documented in docs/views.md ("Scene files").
  */
-#include "import.h"
-#include "image.h"
-#include "infile.h"
-#include "scene.h"
+#include "kernel-ref/import.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/infile.h"
+#include "kernel-ref/scene.h"
 
 #include <assimp/ObjMaterial.h>
 #include <assimp/cfileio.h>

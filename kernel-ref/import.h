@@ -6,7 +6,7 @@
 #ifndef SAAR_KREF_IMPORT_H
 #define SAAR_KREF_IMPORT_H
 
-#include "scene.h"
+#include "kernel-ref/scene.h"
 
 /* scene_import_inproc, and on failure *oom set when the cause was a failed
  * allocation (Assimp's std::bad_alloc, ours, a texture's): the importer

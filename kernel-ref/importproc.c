@@ -20,7 +20,7 @@
  * where the deadline is kept.
  */
 #define _GNU_SOURCE /* pipe2, F_SETPIPE_SZ */
-#include "import.h"
+#include "kernel-ref/import.h"
 
 #include <ctype.h>
 #include <errno.h>

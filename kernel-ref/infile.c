@@ -2,7 +2,7 @@
  * infile.c: input files that must be regular files (infile.h says why),
  * and reading one whole (scenes, CSVs appended to).
  */
-#include "infile.h"
+#include "kernel-ref/infile.h"
 
 #include <errno.h>
 #include <fcntl.h>

@@ -17,8 +17,8 @@
 #ifndef SAAR_KREF_ISECT_H
 #define SAAR_KREF_ISECT_H
 
-#include "fpfmt.h"
-#include "vecmath.h"
+#include "kernel-ref/fpfmt.h"
+#include "kernel-ref/vecmath.h"
 
 /* gamma(n) = n u / (1 - n u), u = 2^-24: the relative error bound of n
  * chained float roundings (pbrt, "Floating-Point Error"). */

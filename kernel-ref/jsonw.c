@@ -2,7 +2,7 @@
  * jsonw.c: streaming JSON writer (see jsonw.h). Indents two spaces per
  * level so reports are readable and diff well.
  */
-#include "jsonw.h"
+#include "kernel-ref/jsonw.h"
 
 #include <errno.h>
 #include <inttypes.h>

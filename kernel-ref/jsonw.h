@@ -12,9 +12,9 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "atomicfile.h"
+#include "kernel-ref/atomicfile.h"
 
-#include "diag.h"
+#include "kernel-ref/diag.h"
 
 #define JSONW_MAX_DEPTH 32
 #define JSONW_MAX_KEYS  2048 /* keys of the open objects checked for repeats */

@@ -38,7 +38,7 @@
  * work stack of at most max_depth + 2 entries. A NULL params pointer means
  * kd_params_default.
  */
-#include "kdtree.h"
+#include "kernel-ref/kdtree.h"
 
 #include <math.h>
 #include <stdlib.h>

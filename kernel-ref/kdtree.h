@@ -24,8 +24,8 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "diag.h"
-#include "scene.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/scene.h"
 
 typedef struct kd_params {
 	float cost_trav;   /* SAH cost of one traversal step (K_T) */

@@ -14,7 +14,7 @@
  * magic, version, base and length of every region, the record counts and
  * the scene box, so an image dumped to a file describes itself.
  */
-#include "memimage.h"
+#include "kernel-ref/memimage.h"
 
 #include <stdlib.h>
 #include <string.h>

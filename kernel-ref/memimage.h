@@ -17,9 +17,9 @@
 
 #include <stdint.h>
 
-#include "diag.h"
-#include "kdtree.h"
-#include "scene.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/kdtree.h"
+#include "kernel-ref/scene.h"
 
 enum mimg_region {
 	MIMG_HEADER,

@@ -37,8 +37,8 @@
 
 #include <stdint.h>
 
-#include "fpfmt.h"
-#include "memimage.h"
+#include "kernel-ref/fpfmt.h"
+#include "kernel-ref/memimage.h"
 
 #define PKT_RAYS      64
 #define PKT_NOHIT     UINT32_MAX

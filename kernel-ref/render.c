@@ -1,7 +1,7 @@
 /*
  * render.c: the reference packet tracer's frame loop (see render.h).
  */
-#include "render.h"
+#include "kernel-ref/render.h"
 
 #include <pthread.h>
 #include <stdatomic.h>

@@ -11,12 +11,12 @@
 #ifndef SAAR_KREF_RENDER_H
 #define SAAR_KREF_RENDER_H
 
-#include "camera.h"
-#include "framebuf.h"
-#include "memimage.h"
-#include "packet.h"
-#include "shade.h"
-#include "view.h"
+#include "kernel-ref/camera.h"
+#include "kernel-ref/framebuf.h"
+#include "kernel-ref/memimage.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/shade.h"
+#include "kernel-ref/view.h"
 
 typedef struct render_opts {
 	int width, height;

@@ -14,10 +14,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "image.h"
-#include "jsonw.h"
-#include "render.h"
-#include "world.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/jsonw.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/world.h"
 
 static void usage(FILE *f)
 {

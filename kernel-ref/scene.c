@@ -6,7 +6,7 @@
  * place the invariants are established, so every source of scenes gets the
  * same checks and the same error messages.
  */
-#include "scene.h"
+#include "kernel-ref/scene.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -19,8 +19,8 @@
 
 #include <stdint.h>
 
-#include "diag.h"
-#include "vecmath.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/vecmath.h"
 
 typedef struct material {
 	char name[64];

@@ -8,7 +8,7 @@
  * away. No magic epsilon: the origin is provably on the right side of the
  * triangle's plane, so a secondary ray cannot hit its own surface.
  */
-#include "shade.h"
+#include "kernel-ref/shade.h"
 
 #include <float.h>
 #include <math.h>

@@ -26,11 +26,11 @@
 #ifndef SAAR_KREF_SHADE_H
 #define SAAR_KREF_SHADE_H
 
-#include "fpfmt.h"
-#include "framebuf.h"
-#include "memimage.h"
-#include "packet.h"
-#include "view.h"
+#include "kernel-ref/fpfmt.h"
+#include "kernel-ref/framebuf.h"
+#include "kernel-ref/memimage.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/view.h"
 
 #define SHADE_AMBIENT 0.15f
 

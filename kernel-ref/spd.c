@@ -10,7 +10,7 @@
  * term depends only on the point), so the mesh is the same whatever order
  * it is built in.
  */
-#include "spd.h"
+#include "kernel-ref/spd.h"
 
 #include <errno.h>
 #include <stdio.h>

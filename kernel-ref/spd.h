@@ -17,9 +17,9 @@
 
 #include <stdint.h>
 
-#include "diag.h"
-#include "scene.h"
-#include "view.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/scene.h"
+#include "kernel-ref/view.h"
 
 #define SPD_PREFIX "spd:"
 

@@ -5,7 +5,7 @@
  * same everywhere; the counts it returns are the ones docs/NUMERICS.md
  * reports and tests/test_stress.c requires to be zero.
  */
-#include "stress.h"
+#include "kernel-ref/stress.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -13,11 +13,11 @@
 #include <string.h>
 #include <time.h>
 
-#include "camera.h"
-#include "isect.h"
-#include "render.h"
-#include "spd.h"
-#include "world.h"
+#include "kernel-ref/camera.h"
+#include "kernel-ref/isect.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/spd.h"
+#include "kernel-ref/world.h"
 
 static double now_ms(void)
 {

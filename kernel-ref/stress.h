@@ -18,7 +18,7 @@
 
 #include <stdint.h>
 
-#include "packet.h"
+#include "kernel-ref/packet.h"
 
 /* which counts a case measures (the table shows the others as "-") */
 enum { ST_LEAK = 1, ST_ACNE = 2, ST_DISAGREE = 4, ST_MISMATCH = 8 };

@@ -25,11 +25,11 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "atomicfile.h"
-#include "infile.h"
-#include "render.h"
-#include "stress.h"
-#include "world.h"
+#include "kernel-ref/atomicfile.h"
+#include "kernel-ref/infile.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/stress.h"
+#include "kernel-ref/world.h"
 
 #define MAXR 64
 

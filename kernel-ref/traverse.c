@@ -17,10 +17,10 @@
 #include <math.h>
 #include <string.h>
 
-#include "isect.h"
-#include "kdtree.h"
-#include "packet.h"
-#include "simd.h"
+#include "kernel-ref/isect.h"
+#include "kernel-ref/kdtree.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/simd.h"
 
 /* a tree kd_build accepts fits the traversal stack */
 _Static_assert(KD_DEPTH_MAX <= PKT_STACK_MAX, "kdtree.h KD_DEPTH_MAX fits packet.h PKT_STACK_MAX");

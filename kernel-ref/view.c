@@ -10,11 +10,11 @@
  * node it is about as "file:line:col: message". The format is described in
  * docs/views.md.
  */
-#include "view.h"
+#include "kernel-ref/view.h"
 
-#include "infile.h"
-#include "jsonw.h"
-#include "yload.h"
+#include "kernel-ref/infile.h"
+#include "kernel-ref/jsonw.h"
+#include "kernel-ref/yload.h"
 
 #include <errno.h>
 #include <float.h>

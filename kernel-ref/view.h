@@ -19,9 +19,9 @@
 #ifndef SAAR_KREF_VIEW_H
 #define SAAR_KREF_VIEW_H
 
-#include "diag.h"
-#include "scene.h"
-#include "vecmath.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/scene.h"
+#include "kernel-ref/vecmath.h"
 
 #define VIEW_MAX_LIGHTS 16
 #define VIEW_NAME_MAX   64

@@ -1,11 +1,11 @@
 /*
  * world.c: scene + view + kd-tree + memory image set-up (see world.h).
  */
-#include "world.h"
+#include "kernel-ref/world.h"
 
-#include "image.h"
-#include "spd.h"
-#include "worldcache.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/spd.h"
+#include "kernel-ref/worldcache.h"
 
 #include <errno.h>
 #include <limits.h>

@@ -9,12 +9,12 @@
 #ifndef SAAR_KREF_WORLD_H
 #define SAAR_KREF_WORLD_H
 
-#include "diag.h"
-#include "kdtree.h"
-#include "memimage.h"
-#include "render.h"
-#include "scene.h"
-#include "view.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/kdtree.h"
+#include "kernel-ref/memimage.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/scene.h"
+#include "kernel-ref/view.h"
 
 typedef struct world_opts {
 	const char *scene; /* path, or NULL: from the view, else embedded default */

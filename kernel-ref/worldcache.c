@@ -35,10 +35,10 @@
  * runs' profiles (host.packet_record_s reports the load).
  */
 #define _GNU_SOURCE /* asprintf */
-#include "worldcache.h"
+#include "kernel-ref/worldcache.h"
 
-#include "atomicfile.h"
-#include "spd.h"
+#include "kernel-ref/atomicfile.h"
+#include "kernel-ref/spd.h"
 
 #include <errno.h>
 #include <fcntl.h>

@@ -8,11 +8,11 @@
 #ifndef SAAR_KREF_WORLDCACHE_H
 #define SAAR_KREF_WORLDCACHE_H
 
-#include "diag.h"
-#include "kdtree.h"
-#include "memimage.h"
-#include "render.h"
-#include "view.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/kdtree.h"
+#include "kernel-ref/memimage.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/view.h"
 
 #include <stddef.h>
 #include <stdint.h>

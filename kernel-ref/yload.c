@@ -2,7 +2,7 @@
  * yload.c: a YAML document built from libyaml's events, with limits
  * enforced as they stream (yload.h says which and why).
  */
-#include "yload.h"
+#include "kernel-ref/yload.h"
 
 #include <stdarg.h>
 #include <stdint.h>

@@ -30,7 +30,7 @@
 #ifndef SAAR_KREF_YLOAD_H
 #define SAAR_KREF_YLOAD_H
 
-#include "diag.h"
+#include "kernel-ref/diag.h"
 
 #include <stdio.h>
 #include <yaml.h>

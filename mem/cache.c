@@ -7,7 +7,7 @@
  * smallest stamp (empty ways first), which is exact LRU and needs no list
  * manipulation; 2^64 accesses never wrap.
  */
-#include "cache.h"
+#include "mem/cache.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -26,8 +26,8 @@
 
 #include <stdint.h>
 
-#include "bitset.h"
-#include "diag.h"
+#include "kernel-ref/bitset.h"
+#include "kernel-ref/diag.h"
 
 enum cache_hash { CACHE_HASH_NONE, CACHE_HASH_XOR };
 

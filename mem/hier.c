@@ -17,7 +17,7 @@
  * the way. Bypass reads and writes move their bytes from and to the level
  * below directly.
  */
-#include "hier.h"
+#include "mem/hier.h"
 
 #include <stdlib.h>
 #include <string.h>

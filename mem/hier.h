@@ -27,17 +27,17 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "cache.h"
-#include "config.h"
-#include "diag.h"
-#include "engine.h"
-#include "hostbus.h"
-#include "jsonw.h"
-#include "memif.h"
-#include "memport.h"
-#include "sdram.h"
-#include "store.h"
-#include "vma.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/jsonw.h"
+#include "mem/cache.h"
+#include "mem/hostbus.h"
+#include "mem/memif.h"
+#include "mem/memport.h"
+#include "mem/sdram.h"
+#include "mem/store.h"
+#include "mem/vma.h"
+#include "sim/config.h"
+#include "sim/core/engine.h"
 
 /* Every counter of the hierarchy, copied out by hier_get_stats. Ratios
  * (hit rates, utilisation) are derived by hier_write_json, not counted. */

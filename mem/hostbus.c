@@ -1,7 +1,7 @@
 /*
  * hostbus.c: host-bus DMA timing and contention (see hostbus.h).
  */
-#include "hostbus.h"
+#include "mem/hostbus.h"
 
 #include <math.h>
 #include <string.h>

@@ -14,8 +14,8 @@
 
 #include <stdint.h>
 
-#include "diag.h"
-#include "engine.h"
+#include "kernel-ref/diag.h"
+#include "sim/core/engine.h"
 
 typedef struct hbus_params {
 	uint32_t width_bits;

@@ -5,7 +5,7 @@
  * (SDRAM look-ahead permitting, one pick per iteration by policy), then
  * re-arms for the earliest tick something can go next.
  */
-#include "memif.h"
+#include "mem/memif.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -20,9 +20,9 @@
 
 #include <stdint.h>
 
-#include "engine.h"
-#include "memport.h"
-#include "sdram.h"
+#include "mem/memport.h"
+#include "mem/sdram.h"
+#include "sim/core/engine.h"
 
 enum memif_requester {
 	MEMIF_SHADE = MEM_SHADE,

@@ -1,12 +1,12 @@
 /*
  * memport.c: request counting and the fixed-latency model (see memport.h).
  */
-#include "memport.h"
+#include "mem/memport.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "store.h"
+#include "mem/store.h"
 
 typedef struct fixed_mem {
 	eng *e;

@@ -27,7 +27,7 @@
 
 #include <stdint.h>
 
-#include "engine.h"
+#include "sim/core/engine.h"
 
 enum mem_req_type { MEM_SHADE, MEM_KD, MEM_LIST, MEM_TRI, MEM_NTYPES };
 

@@ -4,7 +4,7 @@
  * sdram_derive is the only place parameters become delays; sdram_access
  * only walks bank state. All times are engine ticks (ps) on SDRAM edges.
  */
-#include "sdram.h"
+#include "mem/sdram.h"
 
 #include <string.h>
 

@@ -34,8 +34,8 @@
 
 #include <stdint.h>
 
-#include "diag.h"
-#include "engine.h"
+#include "kernel-ref/diag.h"
+#include "sim/core/engine.h"
 
 #define SDRAM_MAX_BANKS 64
 

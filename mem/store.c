@@ -1,7 +1,7 @@
 /*
  * store.c: the bytes behind the memory system (see store.h).
  */
-#include "store.h"
+#include "mem/store.h"
 
 #include <stdlib.h>
 #include <string.h>

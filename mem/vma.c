@@ -8,7 +8,7 @@
  * Pieces and requests come from free lists that grow in chunks, so the
  * steady state never allocates.
  */
-#include "vma.h"
+#include "mem/vma.h"
 
 #include <stdlib.h>
 #include <string.h>

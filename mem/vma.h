@@ -39,12 +39,12 @@
 
 #include <stdint.h>
 
-#include "cache.h"
-#include "diag.h"
-#include "engine.h"
-#include "hostbus.h"
-#include "memif.h"
-#include "store.h"
+#include "kernel-ref/diag.h"
+#include "mem/cache.h"
+#include "mem/hostbus.h"
+#include "mem/memif.h"
+#include "mem/store.h"
+#include "sim/core/engine.h"
 
 #define VMA_META_BYTES_PER_LINE 5u  /* 40 bits of tag + state per line, §4.2 */
 #define VMA_MSHRS               32u /* outstanding line fetches; assumed */

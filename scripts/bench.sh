@@ -195,7 +195,7 @@ if printf '#include <embree3/rtcore.h>\n' | $CC -E -x c - >/dev/null 2>&1; then
 	# The harness is C11; Embree is C++ inside, so link with $CXX.
 	# shellcheck disable=SC2086
 	if $CC -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -O2 -Wall -Wextra \
-		-I. -Ikernel-ref $ECFLAGS -c scripts/embree_bench.c -o "$B/embree_bench.o" \
+		-I. $ECFLAGS -c scripts/embree_bench.c -o "$B/embree_bench.o" \
 		>"$TMP/embree_build.log" 2>&1 &&
 		$CXX -o "$B/embree_bench" "$B/embree_bench.o" "$B/libsaar.a" $PKG_LIBS $ELIBS \
 			-lpthread -lm -ldl >>"$TMP/embree_build.log" 2>&1; then

@@ -28,9 +28,9 @@
 #include <string.h>
 #include <time.h>
 
-#include "camera.h"
-#include "packet.h"
-#include "world.h"
+#include "kernel-ref/camera.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/world.h"
 
 #define QUAD 4 /* Embree packet: QUAD x QUAD = 16 rays */
 

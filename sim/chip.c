@@ -14,9 +14,9 @@
  * then on everything happens in event handlers, and the frame ends when the event queue runs dry.
  */
 #define _GNU_SOURCE /* asprintf */
-#include "chip.h"
+#include "sim/chip.h"
 
-#include "bitset.h"
+#include "kernel-ref/bitset.h"
 
 #include <limits.h>
 #include <math.h>
@@ -26,9 +26,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "replay.h"
-#include "rgs.h"
-#include "worldcache.h"
+#include "kernel-ref/worldcache.h"
+#include "units/pktreplay.h"
+#include "units/rgs.h"
 
 static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
@@ -704,7 +704,7 @@ static uint64_t run_region(chip *c, int end)
 	c->fid.region_end = end;
 	c->env.func = 0;
 	/* packets a functional stretch left in flight go on cycle by cycle
-	 * from where they stopped (replayed ones too: units/replay.h): the
+	 * from where they stopped (replayed ones too: units/pktreplay.h): the
 	 * region starts with a full chip, not with every thread taking a tile
 	 * at once; slot by slot, RTP by RTP (the turn order) */
 	int n = c->nrtp * c->tpr;
@@ -835,7 +835,7 @@ static void unpark_rtp(chip *c, int r)
  * at a time, the L1s and SDRAM saw far fewer misses than the cycle model
  * at 16-64 threads: docs/fidelity.md). A slot that finishes takes a secondary packet of
  * its RTP, else the next tile. With a packet record, packets replay their
- * streams instead of running their math (units/replay.h). Memory goes
+ * streams instead of running their math (units/pktreplay.h). Memory goes
  * through the hierarchy's functional path: the data is there at once, and
  * a line a region left in flight counts as on its way (hier.c). FR_DRAIN
  * ends the range with every slot free; FR_STOP as soon as its last tile

@@ -19,21 +19,21 @@
 
 #include <stdint.h>
 
-#include "config.h"
-#include "engine.h"
-#include "framebuf.h"
-#include "hier.h"
-#include "memport.h"
-#include "memtrace.h"
-#include "render.h"
-#include "rgc.h"
-#include "sampling.h"
-#include "stats.h"
-#include "store.h"
-#include "thread.h"
-#include "warming.h"
-#include "world.h"
-#include "worldcache.h"
+#include "kernel-ref/framebuf.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/world.h"
+#include "kernel-ref/worldcache.h"
+#include "mem/hier.h"
+#include "mem/memport.h"
+#include "mem/store.h"
+#include "sim/config.h"
+#include "sim/core/engine.h"
+#include "sim/core/stats.h"
+#include "sim/sampling.h"
+#include "sim/warming.h"
+#include "traces/memtrace.h"
+#include "units/rgc.h"
+#include "units/thread.h"
 
 /* The frame against two references (docs/report.md "Check"): kernel-ref's
  * packet render, which runs the very functions the chip's units call

@@ -9,11 +9,11 @@
  * section once; tests check this). Provenance: "published" values cite the
  * seed paper (Wald et al., EG 2003 STAR, seed 002 §4); "assumed" ones say why.
  */
-#include "config.h"
-#include "infile.h"
-#include "kdtree.h"
-#include "warming.h"
-#include "yload.h"
+#include "sim/config.h"
+#include "kernel-ref/infile.h"
+#include "kernel-ref/kdtree.h"
+#include "kernel-ref/yload.h"
+#include "sim/warming.h"
 
 #include <errno.h>
 #include <math.h>
@@ -167,7 +167,7 @@ static const cfg_key keys[] = {
              "shows (unit windows ran slightly faster than a full cycle run at the same "
              "places, docs/fidelity.md)"},
     {FLT("chip.clock_mhz", chip.clock_mhz, 533, 1, 10000, "MHz"), PUB "§4.7",
-     .desc = "core clock; rounded to a whole-picosecond period (sim/engine.h)"},
+     .desc = "core clock; rounded to a whole-picosecond period (sim/core/engine.h)"},
     {INT("chip.rtps", chip.rtps, 4, 1, 1024, ""), PUB "§4.7",
      .desc = "ray-tracing pipelines (RTPs) on the chip"},
     {INT("chip.threads_per_rtp", chip.threads_per_rtp, 16, 1, 1024, ""), PUB "§4.4, §4.7",

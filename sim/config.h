@@ -19,8 +19,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "diag.h"
-#include "jsonw.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/jsonw.h"
 
 /* Enum values; the names in the YAML are in config.c's tables, same order. */
 typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;

@@ -13,7 +13,7 @@
  * stack and pool parts are reserved in full although a frame rarely
  * touches them all.
  */
-#include "hostmem.h"
+#include "sim/hostmem.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -22,14 +22,14 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include "cache.h"
-#include "chip.h"
-#include "framebuf.h"
-#include "hier.h"
-#include "packet.h"
-#include "store.h"
-#include "thread.h"
-#include "vma.h"
+#include "kernel-ref/framebuf.h"
+#include "kernel-ref/packet.h"
+#include "mem/cache.h"
+#include "mem/hier.h"
+#include "mem/store.h"
+#include "mem/vma.h"
+#include "sim/chip.h"
+#include "units/thread.h"
 
 /* Resident bytes of this process now (/proc/self/statm), 0 if unknown. */
 static uint64_t resident_bytes(void)

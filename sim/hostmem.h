@@ -11,9 +11,9 @@
 
 #include <stdint.h>
 
-#include "config.h"
-#include "diag.h"
-#include "world.h"
+#include "kernel-ref/diag.h"
+#include "kernel-ref/world.h"
+#include "sim/config.h"
 
 /* The parts of an estimate, bytes. */
 enum hm_part { HM_LOADED, HM_THREADS, HM_L1, HM_VMA, HM_FRAME, HM_NPARTS };

@@ -25,14 +25,14 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "atomicfile.h"
-#include "chip.h"
-#include "config.h"
-#include "hostmem.h"
-#include "image.h"
-#include "report.h"
-#include "reportcheck.h"
-#include "world.h"
+#include "kernel-ref/atomicfile.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/world.h"
+#include "sim/chip.h"
+#include "sim/config.h"
+#include "sim/hostmem.h"
+#include "sim/report.h"
+#include "sim/reportcheck.h"
 
 static void usage(FILE *f)
 {

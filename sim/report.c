@@ -7,7 +7,7 @@
  * the difference of two snapshots, so per-frame, steady-state and whole-run
  * figures are computed the same way and always add up.
  */
-#include "report.h"
+#include "sim/report.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -18,10 +18,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "atomicfile.h"
-#include "hostmem.h"
-#include "infile.h"
-#include "reportcheck.h"
+#include "kernel-ref/atomicfile.h"
+#include "kernel-ref/infile.h"
+#include "sim/hostmem.h"
+#include "sim/reportcheck.h"
 
 static double ratio(double a, double b)
 {

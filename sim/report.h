@@ -10,8 +10,8 @@
 
 #include <stdio.h>
 
-#include "chip.h"
-#include "world.h"
+#include "kernel-ref/world.h"
+#include "sim/chip.h"
 
 typedef struct report_info {
 	const chip *c;

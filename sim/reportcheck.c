@@ -6,14 +6,14 @@
  * are compared with a relative tolerance of 1e-9, far below any rounding
  * a report prints and far above double rounding.
  */
-#include "reportcheck.h"
+#include "sim/reportcheck.h"
 
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "thread.h"
+#include "units/thread.h"
 
 #define MB   (1024.0 * 1024.0)
 #define U(x) ((unsigned long long)(x))

@@ -23,8 +23,8 @@
 #ifndef SAAR_SIM_REPORTCHECK_H
 #define SAAR_SIM_REPORTCHECK_H
 
-#include "chip.h"
-#include "report.h"
+#include "sim/chip.h"
+#include "sim/report.h"
 
 #define RC_MAX 64 /* violations kept (rc_list.n counts all of them) */
 

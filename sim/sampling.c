@@ -4,7 +4,7 @@
  * and its variance. Statistics on what the chip measured; sim/chip.c runs
  * the regions and collects the pieces.
  */
-#include "sampling.h"
+#include "sim/sampling.h"
 
 #include <math.h>
 #include <string.h>

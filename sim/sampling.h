@@ -9,7 +9,7 @@
 #ifndef SAAR_SIM_SAMPLING_H
 #define SAAR_SIM_SAMPLING_H
 
-#include "config.h"
+#include "sim/config.h"
 
 /* The demand of a stretch of tiles in core cycles: its busiest compute
  * resource (unit issue cycles per instance, L1 requests per port), SDRAM

@@ -15,15 +15,15 @@
  *              then ranks), the on-board cache's changed sets (their
  *              count, indices, lines, ranks)
  */
-#include "warming.h"
+#include "sim/warming.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "bitset.h"
-#include "chip.h"
-#include "replay.h"
-#include "rgs.h"
+#include "kernel-ref/bitset.h"
+#include "sim/chip.h"
+#include "units/pktreplay.h"
+#include "units/rgs.h"
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
 

@@ -6,10 +6,10 @@
 #ifndef SAAR_TESTS_CHIPTEST_H
 #define SAAR_TESTS_CHIPTEST_H
 
-#include "chip.h"
-#include "reportcheck.h"
-#include "testutil.h"
-#include "world.h"
+#include "kernel-ref/world.h"
+#include "sim/chip.h"
+#include "sim/reportcheck.h"
+#include "tests/testutil.h"
 
 /* Every invariant of the chip's report holds (sim/reportcheck.h). */
 static inline void tu_assert_report_ok(const chip *ch)

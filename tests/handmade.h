@@ -11,8 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "testutil.h"
-#include "world.h"
+#include "kernel-ref/world.h"
+#include "tests/testutil.h"
 
 /* An empty world with one grey material (material_default). */
 static inline void hm_begin(world *w)

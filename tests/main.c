@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <sys/stat.h>
 
-#include "testutil.h"
+#include "tests/testutil.h"
 
 static size_t nskipped;
 

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <zlib.h>
 
-#include "scene.h"
+#include "kernel-ref/scene.h"
 
 /* Loads path into s (scene_init'ed here); 0 on success. */
 static inline int objmini_load(scene *s, const char *path)

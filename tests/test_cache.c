@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cache.h"
-#include "testutil.h"
+#include "mem/cache.h"
+#include "tests/testutil.h"
 
 /* The reference: per set, a plain array of lines in MRU-first order. */
 typedef struct ref {

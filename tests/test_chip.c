@@ -8,10 +8,10 @@
  */
 #include <string.h>
 
-#include "chiptest.h"
-#include "memport.h"
-#include "thread.h"
-#include "view.h"
+#include "kernel-ref/view.h"
+#include "mem/memport.h"
+#include "tests/chiptest.h"
+#include "units/thread.h"
 
 /* ---- unit timing ---- */
 

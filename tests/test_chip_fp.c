@@ -6,8 +6,8 @@
  */
 #include <string.h>
 
-#include "chiptest.h"
-#include "testutil.h"
+#include "tests/chiptest.h"
+#include "tests/testutil.h"
 
 static uint8_t *kref(const world *w, int size, const pkt_precision *pp)
 {

@@ -14,11 +14,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "chiptest.h"
-#include "handmade.h"
-#include "memtrace.h"
-#include "packet.h"
-#include "render.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/render.h"
+#include "tests/chiptest.h"
+#include "tests/handmade.h"
+#include "traces/memtrace.h"
 
 typedef struct rd {
 	uint64_t addr;

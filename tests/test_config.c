@@ -6,10 +6,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "config.h"
-#include "jsonw.h"
-#include "testutil.h"
-#include "yload.h"
+#include "kernel-ref/jsonw.h"
+#include "kernel-ref/yload.h"
+#include "sim/config.h"
+#include "tests/testutil.h"
 
 /* Loads text from a fresh temporary file; returns cfg_load's result and
  * leaves the file path in path. */

@@ -11,9 +11,9 @@
  */
 #include <string.h>
 
-#include "camera.h"
-#include "chiptest.h"
-#include "report.h"
+#include "kernel-ref/camera.h"
+#include "sim/report.h"
+#include "tests/chiptest.h"
 
 static const char *const modes[] = {"cycle", "functional", "sampled"};
 

@@ -1,5 +1,5 @@
 /*
- * test_engine.c: the event engine (sim/engine.h): order, FIFO ties,
+ * test_engine.c: the event engine (sim/core/engine.h): order, FIFO ties,
  * determinism, cancellation, same-tick scheduling, clock domains, pool
  * growth, run limits and stop.
  */
@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine.h"
-#include "testutil.h"
+#include "sim/core/engine.h"
+#include "tests/testutil.h"
 
 /* What handlers record: (tick, arg) of every dispatch, in order. */
 typedef struct rec {

@@ -17,9 +17,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "chiptest.h"
-#include "hier.h"
-#include "report.h"
+#include "mem/hier.h"
+#include "sim/report.h"
+#include "tests/chiptest.h"
 
 static void cfg_mode(saar_config *c, int size, int mode)
 {

@@ -9,11 +9,11 @@
 #include <math.h>
 #include <string.h>
 
-#include "chiptest.h"
-#include "handmade.h"
-#include "isect.h"
-#include "packet.h"
-#include "render.h"
+#include "kernel-ref/isect.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/render.h"
+#include "tests/chiptest.h"
+#include "tests/handmade.h"
 
 /* Closest hit of one ray over every triangle of m, no tree: the scalar
  * triangle test and the hit rule (smallest t, then smaller address). */

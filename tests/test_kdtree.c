@@ -17,9 +17,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "kdtree.h"
-#include "objmini.h"
-#include "testutil.h"
+#include "kernel-ref/kdtree.h"
+#include "tests/objmini.h"
+#include "tests/testutil.h"
 
 static uint32_t rng(uint64_t *st)
 {

@@ -11,9 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "memimage.h"
-#include "objmini.h"
-#include "testutil.h"
+#include "kernel-ref/memimage.h"
+#include "tests/objmini.h"
+#include "tests/testutil.h"
 
 static uint32_t rd32(const mimg *m, uint64_t at)
 {

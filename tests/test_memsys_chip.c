@@ -12,8 +12,8 @@
  */
 #include <string.h>
 
-#include "chiptest.h"
-#include "hier.h"
+#include "mem/hier.h"
+#include "tests/chiptest.h"
 
 static void cfg_small(saar_config *c, int size)
 {

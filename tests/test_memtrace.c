@@ -8,9 +8,9 @@
 #include <string.h>
 #include <zlib.h>
 
-#include "cache.h"
-#include "memtrace.h"
-#include "testutil.h"
+#include "mem/cache.h"
+#include "tests/testutil.h"
+#include "traces/memtrace.h"
 
 static void write_trace(const char *path, uint64_t n)
 {

@@ -28,10 +28,10 @@
 #include <math.h>
 #include <string.h>
 
-#include "kdtree.h"
-#include "render.h"
-#include "testutil.h"
-#include "world.h"
+#include "kernel-ref/kdtree.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/world.h"
+#include "tests/testutil.h"
 
 /* ---- double-precision vectors ---- */
 

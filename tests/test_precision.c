@@ -8,11 +8,11 @@
  */
 #include <math.h>
 
-#include "fpfmt.h"
-#include "render.h"
-#include "stress.h"
-#include "testutil.h"
-#include "world.h"
+#include "kernel-ref/fpfmt.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/stress.h"
+#include "kernel-ref/world.h"
+#include "tests/testutil.h"
 
 static uint64_t rng(uint64_t *s)
 {

@@ -19,8 +19,8 @@
  */
 #include <string.h>
 
-#include "chiptest.h"
-#include "hier.h"
+#include "mem/hier.h"
+#include "tests/chiptest.h"
 
 #define SIZE  256
 #define NOISE 0.03 /* scheduling noise allowed on "never faster" */

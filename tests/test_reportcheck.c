@@ -8,8 +8,8 @@
  */
 #include <string.h>
 
-#include "chiptest.h"
-#include "reportcheck.h"
+#include "sim/reportcheck.h"
+#include "tests/chiptest.h"
 
 static void cfg_small(saar_config *c, int size)
 {

@@ -3,7 +3,7 @@
  * JSON stats file; every kind of bad input gives one line on stderr, exit
  * status 2 and no output file.
  */
-#include "testutil.h"
+#include "tests/testutil.h"
 
 static char dir[256];
 

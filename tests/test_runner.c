@@ -6,7 +6,7 @@
  * absent (a missing folder: the skip is counted and named, the run passes)
  * and with a scenes folder that lacks the file (the skip fails the run).
  */
-#include "testutil.h"
+#include "tests/testutil.h"
 
 Test(runner, skips_are_counted_and_named)
 {

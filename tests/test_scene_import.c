@@ -2,9 +2,9 @@
  * test_scene_import.c: scene_load (Assimp + zlib), the material rules,
  * textures through image_oiio.cpp, and the embedded default scene.
  */
-#include "image.h"
-#include "scene.h"
-#include "testutil.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/scene.h"
+#include "tests/testutil.h"
 
 #include <signal.h>
 #include <string.h>

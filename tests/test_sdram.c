@@ -6,10 +6,10 @@
  */
 #include <string.h>
 
-#include "hostbus.h"
-#include "memif.h"
-#include "sdram.h"
-#include "testutil.h"
+#include "mem/hostbus.h"
+#include "mem/memif.h"
+#include "mem/sdram.h"
+#include "tests/testutil.h"
 
 static sdram_params std_params(void)
 {

@@ -4,9 +4,9 @@
  */
 #include <string.h>
 
-#include "spd.h"
-#include "testutil.h"
-#include "world.h"
+#include "kernel-ref/spd.h"
+#include "kernel-ref/world.h"
+#include "tests/testutil.h"
 
 typedef struct edge {
 	uint32_t a[3], b[3];

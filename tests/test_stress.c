@@ -3,8 +3,8 @@
  * `make stress` runs larger versions and writes docs/NUMERICS.md. Every
  * count asserted zero here is one that must stay zero.
  */
-#include "stress.h"
-#include "testutil.h"
+#include "kernel-ref/stress.h"
+#include "tests/testutil.h"
 
 static void zero(stress_result r)
 {

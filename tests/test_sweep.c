@@ -10,7 +10,7 @@
  * point, and the plots' axes (fps from 0, x margins). The scripts are found
  * beside the tests (SAAR_ROOT, else the current folder: `make test` runs from the repo).
  */
-#include "testutil.h"
+#include "tests/testutil.h"
 
 #include <string.h>
 #include <sys/stat.h>

@@ -6,13 +6,13 @@
 #include <math.h>
 #include <string.h>
 
-#include "camera.h"
-#include "framebuf.h"
-#include "image.h"
-#include "isect.h"
-#include "render.h"
-#include "testutil.h"
-#include "world.h"
+#include "kernel-ref/camera.h"
+#include "kernel-ref/framebuf.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/isect.h"
+#include "kernel-ref/render.h"
+#include "kernel-ref/world.h"
+#include "tests/testutil.h"
 
 /* A closed UV sphere whose triangles share exact vertex values. */
 static void make_sphere(scene *s, vec3 c, float r, int nu, int nv)

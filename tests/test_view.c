@@ -3,11 +3,11 @@
  * default light. Every error must read "FILE:LINE:COL: ..." and point at
  * the offending node.
  */
-#include "camera.h"
-#include "testutil.h"
-#include "view.h"
-#include "world.h"
-#include "yload.h"
+#include "kernel-ref/camera.h"
+#include "kernel-ref/view.h"
+#include "kernel-ref/world.h"
+#include "kernel-ref/yload.h"
+#include "tests/testutil.h"
 
 #include <math.h>
 #include <string.h>

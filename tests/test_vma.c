@@ -9,9 +9,9 @@
  */
 #include <string.h>
 
-#include "config.h"
-#include "hier.h"
-#include "testutil.h"
+#include "mem/hier.h"
+#include "sim/config.h"
+#include "tests/testutil.h"
 
 typedef struct drv {
 	eng *e;

@@ -24,8 +24,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "chiptest.h"
-#include "warming.h"
+#include "sim/warming.h"
+#include "tests/chiptest.h"
 
 /* A sampled config (through a 1 MB VMA with onboard)
  * at size x size with stored warming. */

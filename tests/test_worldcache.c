@@ -11,11 +11,11 @@
 #include <sys/stat.h>
 #include <time.h>
 
-#include "image.h"
-#include "image_plugin.h"
-#include "testutil.h"
-#include "world.h"
-#include "worldcache.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/image_plugin.h"
+#include "kernel-ref/world.h"
+#include "kernel-ref/worldcache.h"
+#include "tests/testutil.h"
 
 /* A textured quad: OBJ + MTL + a 2x2 PNG, in dir. */
 static void write_scene(const char *dir, const char *kd, char *obj, size_t n)

@@ -19,8 +19,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "image.h"
-#include "world.h"
+#include "kernel-ref/image.h"
+#include "kernel-ref/world.h"
 
 /* 1 in a sanitizer build (make SANITIZE=1, which compiles the tests with
  * -fsanitize=address too): there a sanitizer's own report may come before

@@ -12,8 +12,8 @@
  * payload is an error. Fixed-size fields are (de)serialized byte by byte in
  * little-endian order, independent of the host.
  */
-#include "memtrace.h"
-#include "pktrec.h"
+#include "traces/memtrace.h"
+#include "traces/pktrec.h"
 
 #include <errno.h>
 #include <stdio.h>

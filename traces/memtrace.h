@@ -47,7 +47,7 @@
 
 #include <stdint.h>
 
-#include "diag.h"
+#include "kernel-ref/diag.h"
 
 #define MTR_MAGIC       "SAARMTRC"
 #define MTR_VERSION     2u

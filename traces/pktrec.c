@@ -13,7 +13,7 @@
  *   u8  blob[blob bytes], padded to 8 bytes
  *   u32 or u64 acc[w * h * 3]
  */
-#include "pktrec.h"
+#include "traces/pktrec.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -20,9 +20,9 @@
 #include <string.h>
 #include <time.h>
 
-#include "config.h"
-#include "hier.h"
-#include "memtrace.h"
+#include "mem/hier.h"
+#include "sim/config.h"
+#include "traces/memtrace.h"
 
 static double now_s(void)
 {

@@ -1,12 +1,12 @@
 /*
  * list.c: the list unit (see list.h).
  */
-#include "list.h"
+#include "units/list.h"
 
 #include <stdlib.h>
 
-#include "isect.h"
-#include "traversal.h"
+#include "units/intersection.h"
+#include "units/traversal.h"
 
 static void done(eng *e, void *ctx, uint64_t arg)
 {

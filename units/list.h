@@ -11,7 +11,7 @@
 #ifndef SAAR_UNITS_LIST_H
 #define SAAR_UNITS_LIST_H
 
-#include "thread.h"
+#include "units/thread.h"
 
 /* The thread's last traversal step reached a leaf (t->r). */
 void list_leaf(thr_ctx *t);

@@ -1,13 +1,13 @@
 /*
  * rgc.c: tile order and hand-out (see rgc.h).
  */
-#include "rgc.h"
+#include "units/rgc.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "camera.h"
-#include "config.h"
+#include "kernel-ref/camera.h"
+#include "sim/config.h"
 
 static uint64_t spread(uint32_t x)
 {

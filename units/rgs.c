@@ -1,12 +1,12 @@
 /*
  * rgs.c: ray generation and shading (see rgs.h).
  */
-#include "rgs.h"
+#include "units/rgs.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "traversal.h"
+#include "units/traversal.h"
 
 void rgs_enter_count(thr_ctx *t, int type, uint64_t rays)
 {

@@ -24,7 +24,7 @@
 #ifndef SAAR_UNITS_RGS_H
 #define SAAR_UNITS_RGS_H
 
-#include "thread.h"
+#include "units/thread.h"
 
 /* Generates the primary packet of tile (tx, ty) on thread t; -1 if out of
  * memory. */

@@ -2,9 +2,9 @@
  * thread.c: pipelined units with waiting queues, thread state accounting,
  * memory waits and the packet pool (see thread.h).
  */
-#include "thread.h"
+#include "units/thread.h"
 
-#include "bitset.h"
+#include "kernel-ref/bitset.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -31,13 +31,13 @@
 
 #include <stdint.h>
 
-#include "camera.h"
-#include "config.h"
-#include "engine.h"
-#include "memport.h"
-#include "packet.h"
-#include "pktrec.h"
-#include "shade.h"
+#include "kernel-ref/camera.h"
+#include "kernel-ref/packet.h"
+#include "kernel-ref/shade.h"
+#include "mem/memport.h"
+#include "sim/config.h"
+#include "sim/core/engine.h"
+#include "traces/pktrec.h"
 
 enum thr_state { THR_IDLE, THR_RUN, THR_WAIT_MEM, THR_WAIT_UNIT, THR_NSTATES };
 enum unit_kind { UNIT_RGS, UNIT_TRAV, UNIT_LIST, UNIT_ISECT, UNIT_NKINDS };
@@ -197,7 +197,7 @@ typedef struct thr_env {
 	 * delivered bytes even when they equal those it found (units/rgs.c) */
 	int mutant, shade_redecode;
 	/* the packet record (traces/pktrec.h): streams being recorded, or the
-	 * one threads replay (units/replay.h); at most one is set */
+	 * one threads replay (units/pktreplay.h); at most one is set */
 	pktrec *rec_out;
 	const pktrec *rec_in;
 } thr_env;

@@ -11,13 +11,13 @@
  * spill area), the entries it then needs are read in a further round, so
  * the pop only ever sees entries as memory returned them.
  */
-#include "traversal.h"
+#include "units/traversal.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "list.h"
-#include "rgs.h"
+#include "units/list.h"
+#include "units/rgs.h"
 
 void tu_begin(thr_ctx *t)
 {

@@ -25,7 +25,7 @@
 #ifndef SAAR_UNITS_TRAVERSAL_H
 #define SAAR_UNITS_TRAVERSAL_H
 
-#include "thread.h"
+#include "units/thread.h"
 
 /* The thread's packet enters the ray-tracing core. */
 void tu_begin(thr_ctx *t);

@@ -17,7 +17,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "diag.h"
+#include "kernel-ref/diag.h"
 
 /* The input's bytes in a file named fuzz-PID + suffix; its path. */
 static inline const char *fz_file(const uint8_t *data, size_t n, const char *suffix)

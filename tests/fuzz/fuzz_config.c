@@ -1,6 +1,6 @@
 /* fuzz_config.c: the YAML hardware config (cfg_load, then cfg_validate). */
-#include "config.h"
-#include "fuzz.h"
+#include "sim/config.h"
+#include "tests/fuzz/fuzz.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t n)
 {

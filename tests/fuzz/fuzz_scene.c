@@ -3,8 +3,8 @@
  * the child's limits are not in play here, so a hang or a bomb shows as
  * libFuzzer's timeout or memory limit). Built once per format: FUZZ_EXT is
  * ".obj" or ".ply" (the importer is picked by the extension). */
-#include "fuzz.h"
-#include "scene.h"
+#include "kernel-ref/scene.h"
+#include "tests/fuzz/fuzz.h"
 
 #ifndef FUZZ_EXT
 #error "define FUZZ_EXT"

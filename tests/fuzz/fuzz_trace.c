@@ -1,7 +1,7 @@
 /* fuzz_trace.c: memory traces (mtr_open_read, every record, close); gzip
  * streams and, through zlib's transparent mode, plain bytes. */
-#include "fuzz.h"
-#include "memtrace.h"
+#include "tests/fuzz/fuzz.h"
+#include "traces/memtrace.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t n)
 {

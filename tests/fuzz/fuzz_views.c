@@ -1,6 +1,6 @@
 /* fuzz_views.c: the views file (view_list, then view_load of each name). */
-#include "fuzz.h"
-#include "view.h"
+#include "kernel-ref/view.h"
+#include "tests/fuzz/fuzz.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t n)
 {

@@ -1,5 +1,5 @@
 /*
- * isect.h: the intersection unit (SaarCOR seed 002 §4.1: "the intersection
+ * intersection.h: the intersection unit (SaarCOR seed 002 §4.1: "the intersection
  * unit then loads the data of a triangle and performs the intersection
  * computation").
  *
@@ -10,10 +10,10 @@
  * the record's bytes as the read returned them. Shadow packets drop occluded rays after each
  * triangle and stop testing the leaf once none is left, exactly as pkt_trace does.
  */
-#ifndef SAAR_UNITS_ISECT_H
-#define SAAR_UNITS_ISECT_H
+#ifndef SAAR_UNITS_INTERSECTION_H
+#define SAAR_UNITS_INTERSECTION_H
 
-#include "thread.h"
+#include "units/thread.h"
 
 /* Tests the next triangle of the current leaf, or resumes traversal. */
 void isu_next(thr_ctx *t);

@@ -1,16 +1,16 @@
 /*
- * replay.c: a thread running a recorded packet stream (see replay.h).
+ * pktreplay.c: a thread running a recorded packet stream (see pktreplay.h).
  * Each op calls what the unit code that recorded it called (thread.c
  * thr_read / thr_write / thr_use / thr_count, rgs.c rgs_enter_count /
  * rgs_spawn / rgs_dispatch), in the same order and, timed, at the same
  * ticks, so the caches, SDRAM, VMA, units and counters end up exactly as
  * after the math.
  */
-#include "replay.h"
+#include "units/pktreplay.h"
 
 #include <string.h>
 
-#include "rgs.h"
+#include "units/rgs.h"
 
 /* The children a packet's shading queued, in its stream as their ids. */
 static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)

@@ -1,5 +1,5 @@
 /*
- * replay.h: threads replaying packets from a packet record
+ * pktreplay.h: threads replaying packets from a packet record
  * (traces/pktrec.h) instead of running their math: the same memory
  * requests, the same unit ops, the same counters, the same children
  * queued, in the same order; the chip gives replayed tiles the record's
@@ -10,10 +10,10 @@
  * same events at the same ticks as one running its math, and takes over
  * a packet a functional stretch left in flight as it is.
  */
-#ifndef SAAR_UNITS_REPLAY_H
-#define SAAR_UNITS_REPLAY_H
+#ifndef SAAR_UNITS_PKTREPLAY_H
+#define SAAR_UNITS_PKTREPLAY_H
 
-#include "thread.h"
+#include "units/thread.h"
 
 /* Thread t (free) takes packet id of env.rec_in and runs its stream up to
  * its first unit op, as rgs_primary / rgs_secondary do. Its later steps

@@ -1,9 +1,9 @@
 /*
- * isect.c: the intersection unit (see isect.h).
+ * intersection.c: the intersection unit (see intersection.h).
  */
-#include "isect.h"
+#include "units/intersection.h"
 
-#include "traversal.h"
+#include "units/traversal.h"
 
 static void done(eng *e, void *ctx, uint64_t arg)
 {

@@ -2,7 +2,7 @@
  * stats.c: the stats registry (see stats.h). Linear name search: names are
  * looked up only when registering and reporting.
  */
-#include "stats.h"
+#include "sim/core/stats.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -11,7 +11,7 @@
  * LIVE or CANCELLED exactly while one heap entry names it, and FREE
  * otherwise; `live` counts LIVE records.
  */
-#include "engine.h"
+#include "sim/core/engine.h"
 
 #include <assert.h>
 #include <math.h>
