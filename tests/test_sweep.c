@@ -62,6 +62,16 @@ static char *slurp(const char *path)
 	return s;
 }
 
+/* Runs cmd, whose stderr goes to errfile; on failure the message shows
+ * what the sweep printed there (a CI log then says why, not only that). */
+static void run_ok(const char *cmd, const char *errfile)
+{
+	if (tu_run(cmd) == 0)
+		return;
+	char *err = slurp(errfile);
+	cr_assert_fail("%s\nits stderr:\n%s", cmd, err ? err : "(none)");
+}
+
 static int count_lines(const char *path)
 {
 	char *s = slurp(path);
@@ -359,7 +369,11 @@ Test(sweep, special_paths_local_jobs_and_plots, .timeout = 120)
 	special_paths(dir, sizeof dir);
 	env_prefix(env, sizeof env);
 	snprintf(cmd, sizeof cmd, "%s " SPECIAL_SWEEP " -j 2 --plot 2>%s/err", env, dir);
-	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	{
+		char ef[300];
+		snprintf(ef, sizeof ef, "%s/err", dir);
+		run_ok(cmd, ef);
+	}
 	special_done();
 	/* gnuplot reads the paths in its own quotes */
 	snprintf(path, sizeof path, "%s/plots/threads.png", getenv("SW_OUT"));
@@ -375,7 +389,11 @@ Test(sweep, special_paths_slurm_script, .timeout = 120)
 	special_paths(dir, sizeof dir);
 	env_prefix(env, sizeof env);
 	snprintf(cmd, sizeof cmd, "%s " SPECIAL_SWEEP " --slurm 2>%s/err", env, dir);
-	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	{
+		char ef[300];
+		snprintf(ef, sizeof ef, "%s/err", dir);
+		run_ok(cmd, ef);
+	}
 	snprintf(cmd, sizeof cmd,
 	         "cd / && env -i PATH=\"$PATH\" SLURM_ARRAY_TASK_ID=2 sh \"$SW_OUT/sweep.slurm\" "
 	         "2>%s/task.err",
@@ -425,7 +443,11 @@ Test(sweep, special_paths_over_ssh, .timeout = 120)
 	tu_write(logins, sizeof logins, dir, "logins", text);
 	snprintf(cmd, sizeof cmd, "%s " SPECIAL_SWEEP " --sshloginfile %s 2>%s/err", env, logins,
 	         dir);
-	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	{
+		char ef[300];
+		snprintf(ef, sizeof ef, "%s/err", dir);
+		run_ok(cmd, ef);
+	}
 	special_done();
 	/* both points ran through the fake ssh */
 	snprintf(path, sizeof path, "%s/ssh.log", dir);
