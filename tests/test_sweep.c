@@ -412,8 +412,11 @@ Test(sweep, special_paths_slurm_script, .timeout = 120)
 
 /* The ssh back end with a fake ssh (no sshd here): GNU parallel takes a
  * login "COMMAND HOST"; the fake runs what it is sent the way sshd does,
- * the words after the host joined by spaces for sh -c, in $HOME. rsync
- * (--basefile, --return) goes through it too. */
+ * the words after the host joined by spaces for sh -c, in $HOME, with
+ * SHELL set (GNU parallel's remote worker execs $SHELL; with it unset the
+ * jobs silently did nothing, as on CI, whose environment has no SHELL:
+ * the sweep runs with it unset here so that every machine tests that).
+ * rsync (--basefile, --return) goes through it too. */
 Test(sweep, special_paths_over_ssh, .timeout = 120)
 {
 	if (tu_run("command -v rsync >/dev/null") != 0)
@@ -434,6 +437,7 @@ Test(sweep, special_paths_over_ssh, .timeout = 120)
 	         "done\n"
 	         "[ \"${1-}\" != -- ] || shift\n"
 	         "printf '%%s\\n' \"$*\" >> %s/ssh.log\n"
+	         "SHELL=/bin/sh; export SHELL\n" /* sshd sets it; GNU parallel's worker execs it */
 	         "cd \"${HOME:-/}\" && exec sh -c \"$*\"\n",
 	         dir);
 	tu_write(ssh, sizeof ssh, dir, "fakessh", text);
@@ -441,8 +445,8 @@ Test(sweep, special_paths_over_ssh, .timeout = 120)
 	char logins[1024];
 	snprintf(text, sizeof text, "%s localhost\n", ssh);
 	tu_write(logins, sizeof logins, dir, "logins", text);
-	snprintf(cmd, sizeof cmd, "%s " SPECIAL_SWEEP " --sshloginfile %s 2>%s/err", env, logins,
-	         dir);
+	snprintf(cmd, sizeof cmd, "unset SHELL; %s " SPECIAL_SWEEP " --sshloginfile %s 2>%s/err",
+	         env, logins, dir);
 	{
 		char ef[300];
 		snprintf(ef, sizeof ef, "%s/err", dir);
