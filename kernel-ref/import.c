@@ -485,6 +485,147 @@ static int tok_is(const char *t, size_t n, const char *word)
 	return strlen(word) == n && !memcmp(t, word, n);
 }
 
+/* One header line being read: the cursor s in it, its end, its start and
+ * number (for the messages' line and column) and the file's name. */
+typedef struct ply_hline {
+	const char *s, *eol, *ls, *file;
+	int ln;
+} ply_hline;
+
+/* The column of the token at t (1-based). */
+#define COL ((int)(t - h->ls) + 1)
+
+/* "format ascii|binary_little_endian|binary_big_endian 1.0" into *fmt. */
+static int ply_hdr_format(ply_hline *h, const char *t, int *fmt, diag *d)
+{
+	const char *file = h->file;
+	int ln = h->ln;
+	/* Assimp and this scan must read the same header: a second format
+	 * line (the scan kept the last, Assimp the first: a fuzzed file made
+	 * Assimp read ASCII data as binary and ask for gigabytes) is refused */
+	if (*fmt >= 0)
+		return diag_set(d, file, ln, COL, "a second PLY format line");
+	size_t n = ply_tok(&h->s, h->eol, &t);
+	*fmt = tok_is(t, n, "ascii")                  ? 0
+	       : tok_is(t, n, "binary_little_endian") ? 1
+	       : tok_is(t, n, "binary_big_endian")    ? 2
+	                                              : -1;
+	if (*fmt < 0)
+		return diag_set(d, file, ln, COL,
+		                "unknown PLY format '%.*s' (ascii, binary_little_endian or "
+		                "binary_big_endian)",
+		                (int)(n > 40 ? 40 : n), t);
+	n = ply_tok(&h->s, h->eol, &t);
+	if (!tok_is(t, n, "1.0"))
+		return diag_set(d, file, ln, n ? COL : 0,
+		                "PLY version '%.*s': saarsim reads version 1.0",
+		                (int)(n > 40 ? 40 : n), t);
+	if (ply_tok(&h->s, h->eol, &t))
+		return diag_set(d, file, ln, COL, "text after the PLY version");
+	return 0;
+}
+
+/* "element NAME COUNT": a new element el[(*nel)++]. */
+static int ply_hdr_element(ply_hline *h, const char *t, ply_elem *el, int *nel, diag *d)
+{
+	const char *file = h->file;
+	int ln = h->ln;
+	if (*nel == PLY_MAX_ELEMS)
+		return diag_set(d, file, ln, 0, "more than %d PLY elements", PLY_MAX_ELEMS);
+	ply_elem *e = &el[(*nel)++];
+	memset(e, 0, sizeof *e);
+	size_t n = ply_tok(&h->s, h->eol, &t);
+	if (!n)
+		return diag_set(d, file, ln, 0, "element without a name");
+	if (!ply_name_ok(t, n))
+		return diag_set(d, file, ln, COL,
+		                "element name '%.*s' does not begin with a letter or underscore",
+		                (int)(n > 40 ? 40 : n), t);
+	/* Assimp matches elements by name: one declared twice (fuzz-ply's
+	 * fourth finding, with a property line carrying a second header's
+	 * words) made it free what it had not allocated */
+	if (n >= sizeof e->name)
+		return diag_set(d, file, ln, COL, "element name longer than %d bytes",
+		                (int)sizeof e->name - 1);
+	for (int k = 0; k + 1 < *nel; k++)
+		if (tok_is(t, n, el[k].name))
+			return diag_set(d, file, ln, COL, "element '%s' declared a second time",
+			                el[k].name);
+	snprintf(e->name, sizeof e->name, "%.*s", (int)n, t);
+	n = ply_tok(&h->s, h->eol, &t);
+	char *cend;
+	char num[24];
+	if (n == 0 || n >= sizeof num || !isdigit((unsigned char)*t))
+		return diag_set(d, file, ln, n ? COL : 0, "element %s: expected a count", e->name);
+	memcpy(num, t, n);
+	num[n] = '\0';
+	errno = 0;
+	e->count = strtoull(num, &cend, 10);
+	if (*cend || errno)
+		return diag_set(d, file, ln, COL, "element %s: bad count '%s'", e->name, num);
+	if (ply_tok(&h->s, h->eol, &t))
+		return diag_set(d, file, ln, COL, "text after the element count");
+	return 0;
+}
+
+/* "property [list CTYPE] TYPE NAME": a property of the last element. */
+static int ply_hdr_property(ply_hline *h, const char *t, ply_elem *el, int nel, diag *d)
+{
+	const char *file = h->file;
+	int ln = h->ln;
+	if (!nel)
+		return diag_set(d, file, ln, COL, "property before any element");
+	ply_elem *e = &el[nel - 1];
+	if (e->nprops == PLY_MAX_PROPS)
+		return diag_set(d, file, ln, 0, "element %s has more than %d properties", e->name,
+		                PLY_MAX_PROPS);
+	ply_prop *pr = &e->prop[e->nprops++];
+	size_t n = ply_tok(&h->s, h->eol, &t);
+	int list = tok_is(t, n, "list");
+	if (list) {
+		pr->list = 1;
+		n = ply_tok(&h->s, h->eol, &t);
+		pr->csize = (unsigned char)ply_type_size(t, n);
+		if (!pr->csize)
+			goto bad_type;
+		n = ply_tok(&h->s, h->eol, &t);
+	}
+	pr->isize = (unsigned char)ply_type_size(t, n);
+	if (!pr->isize)
+		goto bad_type;
+	pr->kind = *t == 'u' ? PLY_UINT : *t == 'f' || *t == 'd' ? PLY_FLOAT : PLY_INT;
+	n = ply_tok(&h->s, h->eol, &t);
+	if (!n)
+		return diag_set(d, file, ln, 0, "property without a name");
+	pr->vidx = list && !strcmp(e->name, "face") &&
+	           (tok_is(t, n, "vertex_indices") || tok_is(t, n, "vertex_index"));
+	if (!ply_name_ok(t, n))
+		return diag_set(d, file, ln, COL,
+		                "property name '%.*s' does not begin with a letter or underscore",
+		                (int)(n > 40 ? 40 : n), t);
+	if (ply_tok(&h->s, h->eol, &t))
+		return diag_set(d, file, ln, COL, "text after the property name");
+	return 0;
+bad_type:
+	return diag_set(d, file, ln, n ? COL : 0, "unknown PLY type '%.*s'", (int)(n > 40 ? 40 : n),
+	                t);
+}
+
+/* The first line: exactly "ply", before anything else is read; p moves
+ * past it. */
+static int ply_magic(const char **p, const char *end, const char *file, diag *d)
+{
+	const char *nl = memchr(*p, '\n', (size_t)(end - *p));
+	size_t k = nl ? (size_t)(nl - *p) : (size_t)(end - *p);
+	if (k && (*p)[k - 1] == '\r')
+		k--;
+	if (k != 3 || memcmp(*p, "ply", 3) != 0)
+		return diag_set(d, file, 1, 0,
+		                "not a PLY file (it does not begin with a 'ply' line)");
+	*p = nl ? nl + 1 : end;
+	return 0;
+}
+
 /* The header of the PLY in [buf, buf + len): fills el[0, *nel), *fmt (0
  * ascii, 1 binary little-endian, 2 big-endian) and *data (the first byte
  * after the end_header line) and *line (that line's number). */
@@ -497,29 +638,22 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 	for (int ln = 1;; ln++) {
 		if (p >= end)
 			return diag_set(d, file, 0, 0, "PLY header has no end_header line");
-		const char *eol, *next, *ls = p;
-		if (ln == 1) { /* exactly "ply", before anything else is read */
-			const char *nl = memchr(p, '\n', (size_t)(end - p));
-			size_t k = nl ? (size_t)(nl - p) : (size_t)(end - p);
-			if (k && p[k - 1] == '\r')
-				k--;
-			if (k != 3 || memcmp(p, "ply", 3) != 0)
-				return diag_set(
-				    d, file, 1, 0,
-				    "not a PLY file (it does not begin with a 'ply' line)");
-			p = nl ? nl + 1 : end;
+		if (ln == 1) {
+			if (ply_magic(&p, end, file, d))
+				return -1;
 			continue;
 		}
+		const char *eol, *next;
 		if (ply_line(p, end, &eol, &next, file, ln, "header", d))
 			return -1;
-		const char *s = p, *t;
-		size_t n = ply_tok(&s, eol, &t);
+		ply_hline hl = {p, eol, p, file, ln}, *h = &hl;
+		const char *t;
+		size_t n = ply_tok(&h->s, eol, &t);
 		p = next;
-#define COL ((int)(t - ls) + 1)
 		if (n == 0 || tok_is(t, n, "comment") || tok_is(t, n, "obj_info"))
 			continue;
 		if (tok_is(t, n, "end_header")) {
-			if (ply_tok(&s, eol, &t))
+			if (ply_tok(&h->s, eol, &t))
 				return diag_set(d, file, ln, COL, "text after end_header");
 			/* a file ending right after the word: Assimp 5.2 never
 			 * returns (fuzz-ply's fifth finding) */
@@ -532,123 +666,17 @@ static int ply_header(const char *buf, size_t len, const char *file, ply_elem *e
 			*line = ln;
 			return 0;
 		}
-		if (tok_is(t, n, "format")) {
-			/* Assimp and this scan must read the same header: a
-			 * second format line (the scan kept the last, Assimp
-			 * the first: a fuzzed file made Assimp read ASCII data
-			 * as binary and ask for gigabytes) is refused */
-			if (*fmt >= 0)
-				return diag_set(d, file, ln, COL, "a second PLY format line");
-			n = ply_tok(&s, eol, &t);
-			*fmt = tok_is(t, n, "ascii")                  ? 0
-			       : tok_is(t, n, "binary_little_endian") ? 1
-			       : tok_is(t, n, "binary_big_endian")    ? 2
-			                                              : -1;
-			if (*fmt < 0)
-				return diag_set(d, file, ln, COL,
-				                "unknown PLY format '%.*s' (ascii, "
-				                "binary_little_endian or binary_big_endian)",
-				                (int)(n > 40 ? 40 : n), t);
-			n = ply_tok(&s, eol, &t);
-			if (!tok_is(t, n, "1.0"))
-				return diag_set(d, file, ln, n ? COL : 0,
-				                "PLY version '%.*s': saarsim reads version 1.0",
-				                (int)(n > 40 ? 40 : n), t);
-			if (ply_tok(&s, eol, &t))
-				return diag_set(d, file, ln, COL, "text after the PLY version");
-		} else if (tok_is(t, n, "element")) {
-			if (*nel == PLY_MAX_ELEMS)
-				return diag_set(d, file, ln, 0, "more than %d PLY elements",
-				                PLY_MAX_ELEMS);
-			ply_elem *e = &el[(*nel)++];
-			memset(e, 0, sizeof *e);
-			n = ply_tok(&s, eol, &t);
-			if (!n)
-				return diag_set(d, file, ln, 0, "element without a name");
-			if (!ply_name_ok(t, n))
-				return diag_set(
-				    d, file, ln, COL,
-				    "element name '%.*s' does not begin with a letter or "
-				    "underscore",
-				    (int)(n > 40 ? 40 : n), t);
-			/* Assimp matches elements by name: one declared twice
-			 * (fuzz-ply's fourth finding, with a property line
-			 * carrying a second header's words) made it free what
-			 * it had not allocated */
-			if (n >= sizeof e->name)
-				return diag_set(d, file, ln, COL,
-				                "element name longer than %d bytes",
-				                (int)sizeof e->name - 1);
-			for (int k = 0; k + 1 < *nel; k++)
-				if (tok_is(t, n, el[k].name))
-					return diag_set(d, file, ln, COL,
-					                "element '%s' declared a second time",
-					                el[k].name);
-			snprintf(e->name, sizeof e->name, "%.*s", (int)n, t);
-			n = ply_tok(&s, eol, &t);
-			char *cend;
-			char num[24];
-			if (n == 0 || n >= sizeof num || !isdigit((unsigned char)*t))
-				return diag_set(d, file, ln, n ? COL : 0,
-				                "element %s: expected a count", e->name);
-			memcpy(num, t, n);
-			num[n] = '\0';
-			errno = 0;
-			e->count = strtoull(num, &cend, 10);
-			if (*cend || errno)
-				return diag_set(d, file, ln, COL, "element %s: bad count '%s'",
-				                e->name, num);
-			if (ply_tok(&s, eol, &t))
-				return diag_set(d, file, ln, COL, "text after the element count");
-		} else if (tok_is(t, n, "property")) {
-			if (!*nel)
-				return diag_set(d, file, ln, COL, "property before any element");
-			ply_elem *e = &el[*nel - 1];
-			if (e->nprops == PLY_MAX_PROPS)
-				return diag_set(d, file, ln, 0,
-				                "element %s has more than %d properties", e->name,
-				                PLY_MAX_PROPS);
-			ply_prop *pr = &e->prop[e->nprops++];
-			n = ply_tok(&s, eol, &t);
-			int list = tok_is(t, n, "list");
-			if (list) {
-				pr->list = 1;
-				n = ply_tok(&s, eol, &t);
-				pr->csize = (unsigned char)ply_type_size(t, n);
-				if (!pr->csize)
-					goto bad_type;
-				n = ply_tok(&s, eol, &t);
-			}
-			pr->isize = (unsigned char)ply_type_size(t, n);
-			if (!pr->isize)
-				goto bad_type;
-			pr->kind = *t == 'u'                ? PLY_UINT
-			           : *t == 'f' || *t == 'd' ? PLY_FLOAT
-			                                    : PLY_INT;
-			n = ply_tok(&s, eol, &t);
-			if (!n)
-				return diag_set(d, file, ln, 0, "property without a name");
-			pr->vidx = list && !strcmp(e->name, "face") &&
-			           (tok_is(t, n, "vertex_indices") || tok_is(t, n, "vertex_index"));
-			if (!ply_name_ok(t, n))
-				return diag_set(
-				    d, file, ln, COL,
-				    "property name '%.*s' does not begin with a letter or "
-				    "underscore",
-				    (int)(n > 40 ? 40 : n), t);
-			if (ply_tok(&s, eol, &t))
-				return diag_set(d, file, ln, COL, "text after the property name");
-			continue;
-		bad_type:
-			return diag_set(d, file, ln, n ? COL : 0, "unknown PLY type '%.*s'",
-			                (int)(n > 40 ? 40 : n), t);
-		} else {
-			return diag_set(d, file, ln, COL, "unknown PLY header line '%.*s'",
-			                (int)(n > 40 ? 40 : n), t);
-		}
-#undef COL
+		int rc = tok_is(t, n, "format")    ? ply_hdr_format(h, t, fmt, d)
+		         : tok_is(t, n, "element") ? ply_hdr_element(h, t, el, nel, d)
+		         : tok_is(t, n, "property")
+		             ? ply_hdr_property(h, t, el, *nel, d)
+		             : diag_set(d, file, ln, COL, "unknown PLY header line '%.*s'",
+		                        (int)(n > 40 ? 40 : n), t);
+		if (rc)
+			return rc;
 	}
 }
+#undef COL
 
 /* An unsigned list count of `size` bytes at p in the file's byte order
  * (a negative signed count reads as huge, which no file holds). */

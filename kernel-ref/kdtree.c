@@ -374,15 +374,14 @@ static int make_leaf(builder *b, const work *w, const event *ev)
 	return 0;
 }
 
-/* Splits w at (k, p): pushes the right then the left child onto the stack.
- * Returns -1 when out of memory. */
-static int split(builder *b, const work *w, int k, float p, work *stack, int *sp)
+/* Classifies w's triangles against the plane (k, p) into b->cls, on the
+ * split axis; each triangle's last event there (END or PLANAR) sees its
+ * final class. Counts per class into cnt, the straddlers into b->strad;
+ * returns how many straddle. */
+static uint32_t classify(builder *b, const work *w, int k, float p, uint32_t cnt[5])
 {
-	event *ev = b->arena + w->off;
-	const event *ek = ev + (k > 0 ? w->n[0] : 0) + (k > 1 ? w->n[1] : 0);
-	uint32_t nstrad = 0, cnt[5] = {0};
-	/* Classify on the split axis; each triangle's last event there
-	 * (END or PLANAR) sees its final class. */
+	const event *ek = b->arena + w->off + (k > 0 ? w->n[0] : 0) + (k > 1 ? w->n[1] : 0);
+	uint32_t nstrad = 0;
 	for (uint32_t i = 0; i < w->n[k]; i++) {
 		uint32_t tri = ek[i].v >> 2, ty = ek[i].v & 3;
 		float x = ek[i].pos;
@@ -398,6 +397,36 @@ static int split(builder *b, const work *w, int k, float p, work *stack, int *sp
 			b->strad[nstrad++] = tri;
 		cnt[b->cls[tri]]++;
 	}
+	return nstrad;
+}
+
+/* Makes w's node an inner node at (k, p) with the children L and R (a
+ * pair, right = left + 1) and pushes R, then L. */
+static int push_children(builder *b, const work *w, int k, float p, work *L, work *R, work *stack,
+                         int *sp)
+{
+	if (b->nnodes > MAX_NODES - 2 ||
+	    grow((void **)&b->nodes, &b->nodes_cap, b->nnodes + 2, sizeof(kd_node)))
+		return -1;
+	uint32_t left = b->nnodes;
+	b->nnodes += 2;
+	b->nodes[w->node] = kd_make_inner(k, p, left);
+	b->t->sah_cost += b->p.cost_trav * half_area(&w->box) * b->inv_root_area;
+	L->node = left;
+	R->node = left + 1;
+	L->depth = R->depth = w->depth + 1;
+	stack[(*sp)++] = *R;
+	stack[(*sp)++] = *L;
+	return 0;
+}
+
+/* Splits w at (k, p): pushes the right then the left child onto the stack.
+ * Returns -1 when out of memory. */
+static int split(builder *b, const work *w, int k, float p, work *stack, int *sp)
+{
+	event *ev = b->arena + w->off;
+	uint32_t cnt[5] = {0};
+	uint32_t nstrad = classify(b, w, k, p, cnt);
 	/* Scratch: SL[3], SR[3] (at most n[a] each), NL[3], NR[3] (at most
 	 * 2 nstrad each), radix buffer (2 nstrad). */
 	size_t ntot = (size_t)w->n[0] + w->n[1] + w->n[2];
@@ -475,22 +504,9 @@ static int split(builder *b, const work *w, int k, float p, work *stack, int *sp
 		out += merge(out, sr[a], csr[a], nr[a], cnr[a]);
 	for (int a = 0; a < 3; a++)
 		out += merge(out, sl[a], csl[a], nl[a], cnl[a]);
-	/* Children are allocated as a pair, right = left + 1. */
-	if (b->nnodes > MAX_NODES - 2 ||
-	    grow((void **)&b->nodes, &b->nodes_cap, b->nnodes + 2, sizeof(kd_node)))
-		return -1;
-	uint32_t left = b->nnodes;
-	b->nnodes += 2;
-	b->nodes[w->node] = kd_make_inner(k, p, left);
-	b->t->sah_cost += b->p.cost_trav * half_area(&w->box) * b->inv_root_area;
-	L.node = left;
-	R.node = left + 1;
-	L.depth = R.depth = w->depth + 1;
 	L.ntris = cnt[C_LEFT] + cnt[C_BOTH] + nstrad;
 	R.ntris = cnt[C_RIGHT] + cnt[C_BOTH] + nstrad;
-	stack[(*sp)++] = R;
-	stack[(*sp)++] = L;
-	return 0;
+	return push_children(b, w, k, p, &L, &R, stack, sp);
 }
 
 static int build(builder *b, const scene *s)

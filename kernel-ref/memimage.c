@@ -54,17 +54,12 @@ static uint64_t align_up(uint64_t x)
 	return (x + MIMG_ALIGN - 1) / MIMG_ALIGN * MIMG_ALIGN;
 }
 
-int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
+/* The regions' bases and lengths into m from the scene's and the tree's
+ * sizes; the image's size into *size. Checks only sizes, so an oversized
+ * scene fails without allocating. */
+static int layout(mimg *m, const scene *s, const kdtree *t, const char *file, uint64_t *size,
+                  diag *d)
 {
-	memset(m, 0, sizeof *m);
-	const char *file = s->name[0] ? s->name : "(scene)";
-	if (!t || !t->nodes || t->nnodes == 0)
-		return diag_set(d, file, 0, 0, "memory image needs a built kd-tree");
-	if (s->ntexs > INT16_MAX)
-		return diag_set(d, file, 0, 0, "%u textures; the material record holds at most %d",
-		                s->ntexs, INT16_MAX);
-	/* Sizes first, before touching any data, so an oversized scene fails
-	 * without allocating. */
 	uint64_t texel_bytes = 0;
 	for (uint32_t i = 0; i < s->ntexs; i++) {
 		const texture *x = &s->texs[i];
@@ -97,6 +92,14 @@ int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
 		                "memory image would need %llu bytes; chip addresses are 32 bits (4 "
 		                "GiB)",
 		                (unsigned long long)at);
+	*size = at;
+	return 0;
+}
+
+/* Every texture a material names and every triangle a list entry names
+ * exists. */
+static int check_refs(const scene *s, const kdtree *t, const char *file, diag *d)
+{
 	for (uint32_t i = 0; i < s->nmats; i++) {
 		const material *x = &s->mats[i];
 		if (x->tex_kd < -1 || x->tex_kd >= (int32_t)s->ntexs || x->tex_bump < -1 ||
@@ -109,18 +112,11 @@ int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
 			return diag_set(d, file, 0, 0,
 			                "kd-tree list entry %u names triangle %u of %u", k,
 			                t->list[k], s->ntris);
-	m->bytes = calloc(1, (size_t)at);
-	if (!m->bytes)
-		return diag_set(d, file, 0, 0, "out of memory for a %llu-byte memory image",
-		                (unsigned long long)at);
-	m->size = at;
-	m->nnodes = t->nnodes;
-	m->nlist = t->nlist;
-	m->ntris = s->ntris;
-	m->nmats = s->nmats;
-	m->ntexs = s->ntexs;
-	m->bounds = t->bounds;
+	return 0;
+}
 
+static void write_header(mimg *m, const kdtree *t)
+{
 	mimg_header h;
 	memset(&h, 0, sizeof h);
 	memcpy(h.magic, "SAARMIMG", 8);
@@ -137,8 +133,13 @@ int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
 	              t->bounds.hi.x, t->bounds.hi.y, t->bounds.hi.z};
 	memcpy(h.bounds, b, sizeof b);
 	memcpy(m->bytes, &h, sizeof h);
+}
 
-	memcpy(m->bytes + m->base[MIMG_NODES], t->nodes, len[MIMG_NODES]);
+/* The kd-tree's nodes and lists (as triangle addresses), the triangle and
+ * shading records. */
+static void write_geometry(mimg *m, const scene *s, const kdtree *t)
+{
+	memcpy(m->bytes + m->base[MIMG_NODES], t->nodes, m->len[MIMG_NODES]);
 	uint8_t *p = m->bytes + m->base[MIMG_LISTS];
 	for (uint32_t k = 0; k < t->nlist; k++, p += MIMG_LIST_BYTES) {
 		uint32_t addr = (uint32_t)mimg_tri_addr(m, t->list[k]);
@@ -163,6 +164,11 @@ int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
 		memcpy(m->bytes + mimg_tri_addr(m, i), &tr, sizeof tr);
 		memcpy(m->bytes + mimg_shade_addr(m, i), &sh, sizeof sh);
 	}
+}
+
+/* The material records, the texture headers and the texels. */
+static void write_materials(mimg *m, const scene *s)
+{
 	for (uint32_t i = 0; i < s->nmats; i++) {
 		const material *x = &s->mats[i];
 		mimg_mat mm = {
@@ -173,7 +179,7 @@ int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
 		    .ni = x->ni,
 		    .transmit = x->transmit,
 		    .reflect = x->reflect,
-		    /* checked above: -1 or < ntexs <= INT16_MAX */
+		    /* checked in check_refs: -1 or < ntexs <= INT16_MAX */
 		    .tex_kd = (int16_t)x->tex_kd,
 		    .tex_bump = (int16_t)x->tex_bump,
 		    .bump_scale = x->bump_scale,
@@ -192,6 +198,34 @@ int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
 			memcpy(m->bytes + texel, x->rgba, (size_t)bytes);
 		texel += bytes;
 	}
+}
+
+int mimg_build(mimg *m, const scene *s, const kdtree *t, diag *d)
+{
+	memset(m, 0, sizeof *m);
+	const char *file = s->name[0] ? s->name : "(scene)";
+	if (!t || !t->nodes || t->nnodes == 0)
+		return diag_set(d, file, 0, 0, "memory image needs a built kd-tree");
+	if (s->ntexs > INT16_MAX)
+		return diag_set(d, file, 0, 0, "%u textures; the material record holds at most %d",
+		                s->ntexs, INT16_MAX);
+	uint64_t at = 0;
+	if (layout(m, s, t, file, &at, d) || check_refs(s, t, file, d))
+		return -1;
+	m->bytes = calloc(1, (size_t)at);
+	if (!m->bytes)
+		return diag_set(d, file, 0, 0, "out of memory for a %llu-byte memory image",
+		                (unsigned long long)at);
+	m->size = at;
+	m->nnodes = t->nnodes;
+	m->nlist = t->nlist;
+	m->ntris = s->ntris;
+	m->nmats = s->nmats;
+	m->ntexs = s->ntexs;
+	m->bounds = t->bounds;
+	write_header(m, t);
+	write_geometry(m, s, t);
+	write_materials(m, s);
 	return 0;
 }
 

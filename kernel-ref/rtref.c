@@ -122,144 +122,175 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_obj_end(j);
 }
 
-int main(int argc, char **argv)
-{
+/* The command line. */
+typedef struct cli {
 	world_opts wo;
-	world_opts_default(&wo);
 	render_opts ro;
-	render_opts_default(&ro);
-	const char *out = NULL, *stats = NULL;
-	const char *fp_arg[3] = {NULL, NULL, NULL}; /* traversal, intersection, shading */
-	int fp_mode = FPR_NEAREST;
-	pkt_precision prec;
-	pkt_precision_full(&prec);
-	diag d = {{0}};
+	const char *out, *stats;
+	const char *fp_arg[3]; /* traversal, intersection, shading */
+	int fp_mode;
+	pkt_precision prec; /* ro.prec points here when a format is given */
+} cli;
+
+/* The value flags; 0, or the exit status after the message. */
+static int value_flag(cli *a, const char *f, const char *v, diag *d)
+{
+	long n;
+	if (!strcmp(f, "--size")) {
+		if (cli_parse_size(v, &a->ro.width, &a->ro.height, d))
+			return cli_bad("rtref", d->msg);
+	} else if (!strcmp(f, "--threads")) {
+		if (cli_parse_int(f, v, 1, 1024, &n, d))
+			return cli_bad("rtref", d->msg);
+		a->ro.threads = (int)n;
+	} else if (!strcmp(f, "--depth")) {
+		if (cli_parse_int(f, v, 0, 16, &n, d))
+			return cli_bad("rtref", d->msg);
+		a->ro.max_depth = (int)n;
+	} else if (!strcmp(f, "--out")) {
+		a->out = v;
+	} else if (!strcmp(f, "--stats")) {
+		a->stats = v;
+	} else if (!strcmp(f, "--fp-trav") || !strcmp(f, "--fp-isect") ||
+	           !strcmp(f, "--fp-shade")) {
+		a->fp_arg[f[5] == 't' ? 0 : f[5] == 'i' ? 1 : 2] = v;
+	} else if (!strcmp(f, "--fp-round")) {
+		a->fp_mode = fp_rmode_parse(v);
+		if (a->fp_mode < 0) {
+			fprintf(stderr,
+			        "rtref: --fp-round: expected nearest, zero, up or down, got '%s'\n",
+			        v);
+			return DIAG_EXIT;
+		}
+	} else {
+		fprintf(stderr, "rtref: %s: unknown option (see --help)\n", f);
+		return DIAG_EXIT;
+	}
+	return 0;
+}
+
+/* Reads the arguments into a, the number formats last (--fp-round may
+ * come after them). Returns -1 to go on, else the exit status (0 after
+ * --help). */
+static int parse_args(int argc, char **argv, cli *a, diag *d)
+{
+	memset(a, 0, sizeof *a);
+	world_opts_default(&a->wo);
+	render_opts_default(&a->ro);
+	a->fp_mode = FPR_NEAREST;
+	pkt_precision_full(&a->prec);
 	for (int i = 1; i < argc;) {
-		int r = world_parse_arg(&wo, argc, argv, &i, &d);
+		int r = world_parse_arg(&a->wo, argc, argv, &i, d);
 		if (r < 0)
-			return cli_bad("rtref", d.msg);
+			return cli_bad("rtref", d->msg);
 		if (r > 0)
 			continue;
-		const char *a = argv[i];
-		if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+		const char *f = argv[i];
+		if (!strcmp(f, "-h") || !strcmp(f, "--help")) {
 			usage(stdout);
 			return 0;
 		}
-		if (!strcmp(a, "--no-shadows") || !strcmp(a, "--single-ray")) {
-			*(a[2] == 'n' ? &ro.shadows : &ro.single_ray) = a[2] == 'n' ? 0 : 1;
+		if (!strcmp(f, "--no-shadows") || !strcmp(f, "--single-ray")) {
+			*(f[2] == 'n' ? &a->ro.shadows : &a->ro.single_ray) = f[2] == 'n' ? 0 : 1;
 			i++;
 			continue;
 		}
 		if (i + 1 >= argc) {
 			fprintf(stderr, "rtref: %s: unknown option or missing value (see --help)\n",
-			        a);
+			        f);
 			return DIAG_EXIT;
 		}
-		const char *v = argv[i + 1];
-		long n;
-		if (!strcmp(a, "--size")) {
-			if (cli_parse_size(v, &ro.width, &ro.height, &d))
-				return cli_bad("rtref", d.msg);
-		} else if (!strcmp(a, "--threads")) {
-			if (cli_parse_int(a, v, 1, 1024, &n, &d))
-				return cli_bad("rtref", d.msg);
-			ro.threads = (int)n;
-		} else if (!strcmp(a, "--depth")) {
-			if (cli_parse_int(a, v, 0, 16, &n, &d))
-				return cli_bad("rtref", d.msg);
-			ro.max_depth = (int)n;
-		} else if (!strcmp(a, "--out")) {
-			out = v;
-		} else if (!strcmp(a, "--stats")) {
-			stats = v;
-		} else if (!strcmp(a, "--fp-trav") || !strcmp(a, "--fp-isect") ||
-		           !strcmp(a, "--fp-shade")) {
-			fp_arg[a[5] == 't' ? 0 : a[5] == 'i' ? 1 : 2] = v;
-		} else if (!strcmp(a, "--fp-round")) {
-			fp_mode = fp_rmode_parse(v);
-			if (fp_mode < 0) {
-				fprintf(
-				    stderr,
-				    "rtref: --fp-round: expected nearest, zero, up or down, got "
-				    "'%s'\n",
-				    v);
-				return DIAG_EXIT;
-			}
-		} else {
-			fprintf(stderr, "rtref: %s: unknown option (see --help)\n", a);
-			return DIAG_EXIT;
-		}
+		int rc = value_flag(a, f, argv[i + 1], d);
+		if (rc)
+			return rc;
 		i += 2;
 	}
-	/* formats are parsed last: --fp-round may come after them */
 	static const char *const fp_flag[3] = {"--fp-trav", "--fp-isect", "--fp-shade"};
-	fpfmt *fp_dst[3] = {&prec.trav, &prec.isect, &prec.shade};
+	fpfmt *fp_dst[3] = {&a->prec.trav, &a->prec.isect, &a->prec.shade};
 	for (int k = 0; k < 3; k++)
-		if (fp_arg[k] && fpfmt_parse(fp_dst[k], fp_flag[k], fp_arg[k], fp_mode, &d))
-			return cli_bad("rtref", d.msg);
-	if (fp_arg[0] || fp_arg[1] || fp_arg[2])
-		ro.prec = &prec;
+		if (a->fp_arg[k] && fpfmt_parse(fp_dst[k], fp_flag[k], a->fp_arg[k], a->fp_mode, d))
+			return cli_bad("rtref", d->msg);
+	if (a->fp_arg[0] || a->fp_arg[1] || a->fp_arg[2])
+		a->ro.prec = &a->prec;
+	return -1;
+}
+
+/* The image and the statistics appear together or not at all. Returns
+ * the exit status. */
+static int write_outputs(const cli *a, const world *w, const framebuf *fb, const render_stats *st,
+                         diag *d)
+{
+	af_group outs = {0};
+	if (a->out && fb_write(fb, a->out, &outs, d))
+		return cli_bad("rtref", d->msg);
+	if (a->stats) {
+		jsonw j;
+		if (jsonw_open(&j, a->stats, d)) {
+			af_group_abort(&outs);
+			return cli_bad("rtref", d->msg);
+		}
+		j.group = &outs;
+		write_stats(&j, w, &a->ro, st);
+		if (jsonw_close(&j, d)) {
+			af_group_abort(&outs);
+			return cli_bad("rtref", d->msg);
+		}
+	}
+	if (af_group_commit(&outs, d))
+		return cli_bad("rtref", d->msg);
+	return 0;
+}
+
+/* The one summary line on stdout. */
+static void print_summary(const cli *a, const world *w, const render_stats *st)
+{
+	const render_opts *ro = &a->ro;
+	uint64_t total = 0;
+	for (int t = 0; t < PKT_NTYPES; t++)
+		total += st->rays[t];
+	char kd[96];
+	if (w->cache == WORLD_CACHE_HIT)
+		snprintf(kd, sizeof kd, "kd-tree %u nodes from the world cache", w->kd.nnodes);
+	else
+		snprintf(kd, sizeof kd, "kd-tree %u nodes built in %.1f ms", w->kd.nnodes,
+		         w->kd_ms);
+	printf("rtref: %s, view %s, %dx%d, %d thread%s: %llu rays (%llu primary, %llu shadow, %llu "
+	       "reflection, %llu refraction) in %.1f ms = %.2f Mrays/s; %s%s%s\n",
+	       w->scene_label, w->v.name, ro->width, ro->height, ro->threads,
+	       ro->threads == 1 ? "" : "s", (unsigned long long)total,
+	       (unsigned long long)st->rays[PKT_PRIMARY], (unsigned long long)st->rays[PKT_SHADOW],
+	       (unsigned long long)st->rays[PKT_REFLECT], (unsigned long long)st->rays[PKT_REFRACT],
+	       st->render_ms, st->render_ms > 0 ? (double)total / (st->render_ms * 1e3) : 0.0, kd,
+	       a->out ? "; wrote " : "", a->out ? a->out : "");
+}
+
+int main(int argc, char **argv)
+{
+	static cli a;
+	diag d = {{0}};
+	int rc = parse_args(argc, argv, &a, &d);
+	if (rc >= 0)
+		return rc;
 	/* an unwritable --out format fails now, not after the run */
-	if (out && img_reserve(out, &d))
+	if (a.out && img_reserve(a.out, &d))
 		return cli_bad("rtref", d.msg);
-	if (stats && strcmp(stats, "-") && af_reserve(stats, "", &d))
+	if (a.stats && strcmp(a.stats, "-") && af_reserve(a.stats, "", &d))
 		return cli_bad("rtref", d.msg);
 	world w;
-	if (world_load(&w, &wo, &d))
+	if (world_load(&w, &a.wo, &d))
 		return cli_bad("rtref", d.msg);
 	framebuf fb;
-	if (fb_init(&fb, ro.width, ro.height)) {
+	if (fb_init(&fb, a.ro.width, a.ro.height)) {
 		world_free(&w);
 		return cli_bad("rtref", "out of memory for the frame buffer");
 	}
 	render_stats st;
-	int rc = 0;
-	if (render_frame(&w.m, &w.v, &ro, &fb, &st, &d)) {
+	if (render_frame(&w.m, &w.v, &a.ro, &fb, &st, &d))
 		rc = cli_bad("rtref", d.msg);
-		goto done;
-	}
-	/* the image and the statistics appear together or not at all */
-	af_group outs = {0};
-	if (out && fb_write(&fb, out, &outs, &d)) {
-		rc = cli_bad("rtref", d.msg);
-		goto done;
-	}
-	if (stats) {
-		jsonw j;
-		if (jsonw_open(&j, stats, &d)) {
-			af_group_abort(&outs);
-			rc = cli_bad("rtref", d.msg);
-			goto done;
-		}
-		j.group = &outs;
-		write_stats(&j, &w, &ro, &st);
-		if (jsonw_close(&j, &d)) {
-			af_group_abort(&outs);
-			rc = cli_bad("rtref", d.msg);
-			goto done;
-		}
-	}
-	if (af_group_commit(&outs, &d)) {
-		rc = cli_bad("rtref", d.msg);
-		goto done;
-	}
-	uint64_t total = 0;
-	for (int t = 0; t < PKT_NTYPES; t++)
-		total += st.rays[t];
-	char kd[96];
-	if (w.cache == WORLD_CACHE_HIT)
-		snprintf(kd, sizeof kd, "kd-tree %u nodes from the world cache", w.kd.nnodes);
 	else
-		snprintf(kd, sizeof kd, "kd-tree %u nodes built in %.1f ms", w.kd.nnodes, w.kd_ms);
-	printf("rtref: %s, view %s, %dx%d, %d thread%s: %llu rays (%llu primary, %llu shadow, %llu "
-	       "reflection, %llu refraction) in %.1f ms = %.2f Mrays/s; %s%s%s\n",
-	       w.scene_label, w.v.name, ro.width, ro.height, ro.threads, ro.threads == 1 ? "" : "s",
-	       (unsigned long long)total, (unsigned long long)st.rays[PKT_PRIMARY],
-	       (unsigned long long)st.rays[PKT_SHADOW], (unsigned long long)st.rays[PKT_REFLECT],
-	       (unsigned long long)st.rays[PKT_REFRACT], st.render_ms,
-	       st.render_ms > 0 ? (double)total / (st.render_ms * 1e3) : 0.0, kd,
-	       out ? "; wrote " : "", out ? out : "");
-done:
+		rc = write_outputs(&a, &w, &fb, &st, &d);
+	if (!rc)
+		print_summary(&a, &w, &st);
 	fb_free(&fb);
 	world_free(&w);
 	return rc;

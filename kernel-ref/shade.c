@@ -159,169 +159,231 @@ int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet
 	return shade_packet_rd(c, fp, &rd, p, out, max_out, cnt);
 }
 
+/* A hit's surface as the shader uses it: the records the reader gave, the
+ * triangle's corners, the hit point with its error bound, both normals
+ * (face-forwarded towards the viewer) and the texture coordinates. */
+typedef struct hit {
+	mimg_shade sh;
+	mimg_mat mt;
+	vec3 p0, p1, p2;
+	vec3 hp, err, ng, ns;
+	vec2 uv;
+	int entering;
+} hit;
+
+/* Where the rays spawned from one packet go: a shadow packet per light
+ * (nl of them), one reflection and one refraction packet. */
+typedef struct spawn {
+	packet *shadow, *refl, *refr;
+	int nl, can_recurse;
+} spawn;
+
+/* Reads lane i's records (triangle, shading, material, in that order)
+ * and computes its hit point, normals and texture coordinates. */
+static void hit_surface(const shade_reader *rdr, const mimg *m, const packet *p, int i, vec3 d,
+                        hit *h)
+{
+	uint32_t ta = p->tri[i], tri = mimg_tri_index(m, ta);
+	mimg_tri trd;
+	rd_get(rdr, ta, MIMG_TRI_BYTES, MIMG_TRIS, &trd);
+	rd_get(rdr, mimg_shade_addr(m, tri), MIMG_SHADE_BYTES, MIMG_SHADE, &h->sh);
+	rd_get(rdr, mimg_mat_addr(m, h->sh.mat), MIMG_MAT_BYTES, MIMG_MATS, &h->mt);
+	const mimg_tri *tr = &trd;
+	const mimg_shade *sh = &h->sh;
+
+	/* hit point from barycentrics, with its error bound */
+	float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
+	vec3 p0 = arr3(tr->v[0]), p1 = arr3(tr->v[1]), p2 = arr3(tr->v[2]);
+	h->p0 = p0;
+	h->p1 = p1;
+	h->p2 = p2;
+	h->hp = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
+	h->err = v3_scale(v3_add(v3_add(v3(fabsf(b0 * p0.x), fabsf(b0 * p0.y), fabsf(b0 * p0.z)),
+	                                v3(fabsf(b1 * p1.x), fabsf(b1 * p1.y), fabsf(b1 * p1.z))),
+	                         v3(fabsf(b2 * p2.x), fabsf(b2 * p2.y), fabsf(b2 * p2.z))),
+	                  GAMMA7);
+	vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+	vec3 ns = v3_norm(v3_add(v3_add(v3_scale(arr3(sh->n[0]), b0), v3_scale(arr3(sh->n[1]), b1)),
+	                         v3_scale(arr3(sh->n[2]), b2)));
+	h->uv = (vec2){b0 * sh->uv[0][0] + b1 * sh->uv[1][0] + b2 * sh->uv[2][0],
+	               b0 * sh->uv[0][1] + b1 * sh->uv[1][1] + b2 * sh->uv[2][1]};
+	h->entering = v3_dot(d, ng) < 0.0f;
+	/* face-forward both normals towards the viewer */
+	if (!h->entering)
+		ng = v3_scale(ng, -1.0f);
+	if (v3_dot(ns, ng) < 0.0f)
+		ns = v3_scale(ns, -1.0f);
+	h->ng = ng;
+	h->ns = ns;
+}
+
+/* Bump mapping: tilts h->ns by the height texture's slope along the
+ * triangle's uv tangent frame (three texel reads). */
+static void bump(const shade_reader *rdr, const mimg *m, hit *h, shade_counts *cnt)
+{
+	const mimg_shade *sh = &h->sh;
+	const mimg_mat *mt = &h->mt;
+	mimg_texhdr th;
+	/* the offsets are one texel of the header h0's read brings */
+	vec3 h0 = texel(rdr, m, mt->tex_bump, h->uv, 0, 0, cnt, &th);
+	float du = 1.0f / (float)th.w, dv = 1.0f / (float)th.h;
+	vec3 hu = texel(rdr, m, mt->tex_bump, h->uv, du, 0, cnt, &th);
+	vec3 hv = texel(rdr, m, mt->tex_bump, h->uv, 0, dv, cnt, &th);
+	float l0 = (h0.x + h0.y + h0.z) / 3, lu = (hu.x + hu.y + hu.z) / 3,
+	      lv = (hv.x + hv.y + hv.z) / 3;
+	/* tangent frame from the triangle's uv parametrisation */
+	vec3 e1 = v3_sub(h->p1, h->p0), e2 = v3_sub(h->p2, h->p0);
+	float u1 = sh->uv[1][0] - sh->uv[0][0], v1 = sh->uv[1][1] - sh->uv[0][1];
+	float u2 = sh->uv[2][0] - sh->uv[0][0], v2 = sh->uv[2][1] - sh->uv[0][1];
+	float det = u1 * v2 - v1 * u2;
+	if (det != 0.0f && isfinite(1.0f / det)) {
+		vec3 dpdu =
+		    v3_norm(v3_scale(v3_sub(v3_scale(e1, v2), v3_scale(e2, v1)), 1.0f / det));
+		vec3 dpdv =
+		    v3_norm(v3_scale(v3_sub(v3_scale(e2, u1), v3_scale(e1, u2)), 1.0f / det));
+		vec3 nb =
+		    v3_sub(h->ns, v3_scale(v3_add(v3_scale(dpdu, lu - l0), v3_scale(dpdv, lv - l0)),
+		                           mt->bump_scale));
+		if (v3_len(nb) > 0.0f && v3_dot(nb, h->ng) > 0.0f)
+			h->ns = v3_norm(nb);
+	}
+}
+
+/* The surface's diffuse and ambient colours (kd, ka) with its colour
+ * texture, and the bumped shading normal, rounded to the shading format. */
+static void textures(const shade_reader *rdr, const mimg *m, const fpfmt *fq, hit *h,
+                     shade_counts *cnt, vec3 *kd, vec3 *ka)
+{
+	const mimg_mat *mt = &h->mt;
+	*kd = arr3(mt->kd);
+	*ka = arr3(mt->ka);
+	if (mt->tex_kd >= 0) {
+		mimg_texhdr th;
+		vec3 tx = texel(rdr, m, mt->tex_kd, h->uv, 0, 0, cnt, &th);
+		*kd = v3_mul(*kd, tx);
+		*ka = v3_mul(*ka, tx);
+	}
+	if (mt->tex_bump >= 0)
+		bump(rdr, m, h, cnt);
+	if (mt->tex_kd < 0 && mt->tex_bump < 0)
+		cnt->untextured_hits++;
+	h->ns = rnd3(fq, h->ns);
+}
+
+/* Shadow rays from lane i: one per light the surface faces, carrying the
+ * light's diffuse and specular term (weight wl, diffuse colour kd). */
+static void shadow_rays(const shade_ctx *c, const fpfmt *fq, const hit *h, const spawn *sp, int i,
+                        uint32_t pixel, vec3 d, vec3 kd, vec3 wl, float kl, shade_counts *cnt)
+{
+	const mimg_mat *mt = &h->mt;
+	vec3 ns = h->ns, ng = h->ng;
+	if (c->nlights == 0 && kl > 0.0f)
+		cnt->shadow_skip_nolight++;
+	vec3 vdir = v3_scale(v3_norm(d), -1.0f);
+	for (int l = 0; l < sp->nl && kl > 0.0f; l++) {
+		vec3 lp = c->lights[l].pos;
+		vec3 L = v3_sub(lp, h->hp);
+		vec3 ld = v3_norm(L);
+		float ndl = rnd(fq, v3_dot(ns, ld));
+		if (ndl <= 0.0f || v3_dot(ng, L) <= 0.0f) {
+			cnt->shadow_skip_facing++;
+			continue;
+		}
+		vec3 r = v3_sub(v3_scale(ns, 2.0f * ndl), ld);
+		float rv = v3_dot(r, vdir);
+		float spec = rnd(fq, rv > 0.0f ? powf(rv, mt->ns > 0.0f ? mt->ns : 1.0f) : 0.0f);
+		vec3 col = v3_add(v3_scale(kd, ndl), v3_scale(arr3(mt->ks), spec));
+		col = rnd3(fq, v3_mul(v3_mul(col, wl), c->lights[l].color));
+		vec3 o = spawn_origin(h->hp, h->err, ng, L);
+		put_ray(&sp->shadow[l], i, o, v3_sub(lp, o), 1.0f, pixel, col);
+		cnt->shadow_rays_made++;
+	}
+}
+
+/* The reflection and refraction rays from lane i (weights w*kr, w*kt);
+ * a total internal reflection adds the refracted weight to the reflected. */
+static void secondary_rays(const fpfmt *fq, const hit *h, const spawn *sp, int i, uint32_t pixel,
+                           vec3 d, vec3 w, float kr, float kt)
+{
+	vec3 ns = h->ns, ng = h->ng;
+	vec3 rd = v3_sub(d, v3_scale(ns, 2.0f * v3_dot(d, ns)));
+	if (v3_dot(rd, ng) <= 0.0f) /* shading normal bent it under: use the true one */
+		rd = v3_sub(d, v3_scale(ng, 2.0f * v3_dot(d, ng)));
+	rd = rnd3(fq, rd); /* spawn_origin picks its side from the rounded rd */
+	vec3 wr = rnd3(fq, v3_scale(w, kr));
+	if (kt > 0.0f) {
+		float eta = h->entering ? 1.0f / h->mt.ni : h->mt.ni;
+		float ci = -v3_dot(v3_norm(d), ns);
+		float k = 1.0f - eta * eta * (1.0f - ci * ci);
+		vec3 td = k >= 0.0f
+		              ? v3_add(v3_scale(v3_norm(d), eta), v3_scale(ns, eta * ci - sqrtf(k)))
+		              : v3(0, 0, 0);
+		td = rnd3(fq, td);
+		if (k < 0.0f || v3_dot(td, ng) >= 0.0f) {
+			wr = rnd3(fq, v3_add(wr, v3_scale(w, kt))); /* total internal reflection */
+		} else {
+			vec3 o = spawn_origin(h->hp, h->err, ng, td);
+			put_ray(sp->refr, i, o, td, INFINITY, pixel, rnd3(fq, v3_scale(w, kt)));
+		}
+	}
+	if (wr.x > 0.0f || wr.y > 0.0f || wr.z > 0.0f) {
+		vec3 o = spawn_origin(h->hp, h->err, ng, rd);
+		put_ray(sp->refl, i, o, rd, INFINITY, pixel, wr);
+	}
+}
+
+/* Shades lane i of p: background on a miss; else the ambient term now and
+ * the shadow, reflection and refraction rays into sp. */
+static void shade_lane(const shade_ctx *c, const fpfmt *fq, const shade_reader *rdr,
+                       const packet *p, int i, const spawn *sp, shade_counts *cnt)
+{
+	vec3 w = v3(p->wr[i], p->wg[i], p->wb[i]);
+	vec3 d = v3(p->dx[i], p->dy[i], p->dz[i]);
+	if (p->tri[i] == PKT_NOHIT) {
+		cnt->misses++;
+		vec3 bg = rnd3(fq, v3_mul(w, c->background));
+		add(c, p->pixel[i], bg);
+		return;
+	}
+	cnt->hits++;
+	hit h;
+	hit_surface(rdr, c->m, p, i, d, &h);
+	vec3 kd, ka;
+	textures(rdr, c->m, fq, &h, cnt, &kd, &ka);
+
+	float kr = h.mt.reflect, kt = h.mt.transmit;
+	float kl = 1.0f - kr - kt;
+	if (kl < 0.0f)
+		kl = 0.0f;
+	vec3 wl = v3_scale(w, kl);
+	vec3 amb = rnd3(fq, v3_scale(v3_mul(wl, ka), SHADE_AMBIENT));
+	add(c, p->pixel[i], amb);
+	shadow_rays(c, fq, &h, sp, i, p->pixel[i], d, kd, wl, kl, cnt);
+
+	if (kr <= 0.0f && kt <= 0.0f)
+		return;
+	if (!sp->can_recurse) {
+		cnt->depth_cut += (kr > 0.0f) + (kt > 0.0f);
+		return;
+	}
+	secondary_rays(fq, &h, sp, i, p->pixel[i], d, w, kr, kt);
+}
+
 int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr, const packet *p,
                     packet *out, int max_out, shade_counts *cnt)
 {
-	const mimg *m = c->m;
 	if (c->defer)
 		c->defer->n = 0;
 	const fpfmt *fq = fp && !fp->full ? fp : NULL;
 	int nl = c->nlights < max_out - 2 ? c->nlights : max_out - 2;
-	packet *shadow = out, *refl = out + nl, *refr = out + nl + 1;
+	spawn sp = {out, out + nl, out + nl + 1, nl, p->depth < c->max_depth};
 	for (int l = 0; l < nl; l++)
-		pkt_clear(&shadow[l], PKT_SHADOW, p->depth);
-	pkt_clear(refl, PKT_REFLECT, p->depth + 1);
-	pkt_clear(refr, PKT_REFRACT, p->depth + 1);
-	int can_recurse = p->depth < c->max_depth;
-	for (uint64_t b = p->valid; b; b &= b - 1) {
-		int i = __builtin_ctzll(b);
-		vec3 w = v3(p->wr[i], p->wg[i], p->wb[i]);
-		vec3 d = v3(p->dx[i], p->dy[i], p->dz[i]);
-		if (p->tri[i] == PKT_NOHIT) {
-			cnt->misses++;
-			vec3 bg = rnd3(fq, v3_mul(w, c->background));
-			add(c, p->pixel[i], bg);
-			continue;
-		}
-		cnt->hits++;
-		/* the hit's records, as the reader gives them */
-		uint32_t ta = p->tri[i], tri = mimg_tri_index(m, ta);
-		mimg_tri trd;
-		mimg_shade shd;
-		mimg_mat mtd;
-		rd_get(rdr, ta, MIMG_TRI_BYTES, MIMG_TRIS, &trd);
-		rd_get(rdr, mimg_shade_addr(m, tri), MIMG_SHADE_BYTES, MIMG_SHADE, &shd);
-		rd_get(rdr, mimg_mat_addr(m, shd.mat), MIMG_MAT_BYTES, MIMG_MATS, &mtd);
-		const mimg_tri *tr = &trd;
-		const mimg_shade *sh = &shd;
-		const mimg_mat *mt = &mtd;
-
-		/* hit point from barycentrics, with its error bound */
-		float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
-		vec3 p0 = arr3(tr->v[0]), p1 = arr3(tr->v[1]), p2 = arr3(tr->v[2]);
-		vec3 hp = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
-		vec3 err = v3_scale(
-		    v3_add(v3_add(v3(fabsf(b0 * p0.x), fabsf(b0 * p0.y), fabsf(b0 * p0.z)),
-		                  v3(fabsf(b1 * p1.x), fabsf(b1 * p1.y), fabsf(b1 * p1.z))),
-		           v3(fabsf(b2 * p2.x), fabsf(b2 * p2.y), fabsf(b2 * p2.z))),
-		    GAMMA7);
-		vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
-		vec3 ns = v3_norm(
-		    v3_add(v3_add(v3_scale(arr3(sh->n[0]), b0), v3_scale(arr3(sh->n[1]), b1)),
-		           v3_scale(arr3(sh->n[2]), b2)));
-		vec2 uv = {b0 * sh->uv[0][0] + b1 * sh->uv[1][0] + b2 * sh->uv[2][0],
-		           b0 * sh->uv[0][1] + b1 * sh->uv[1][1] + b2 * sh->uv[2][1]};
-		int entering = v3_dot(d, ng) < 0.0f;
-		/* face-forward both normals towards the viewer */
-		if (!entering)
-			ng = v3_scale(ng, -1.0f);
-		if (v3_dot(ns, ng) < 0.0f)
-			ns = v3_scale(ns, -1.0f);
-
-		vec3 kd = arr3(mt->kd), ka = arr3(mt->ka);
-		mimg_texhdr th;
-		if (mt->tex_kd >= 0) {
-			vec3 tx = texel(rdr, m, mt->tex_kd, uv, 0, 0, cnt, &th);
-			kd = v3_mul(kd, tx);
-			ka = v3_mul(ka, tx);
-		}
-		if (mt->tex_bump >= 0) {
-			/* the offsets are one texel of the header h0's read brings */
-			vec3 h0 = texel(rdr, m, mt->tex_bump, uv, 0, 0, cnt, &th);
-			float du = 1.0f / (float)th.w, dv = 1.0f / (float)th.h;
-			vec3 hu = texel(rdr, m, mt->tex_bump, uv, du, 0, cnt, &th);
-			vec3 hv = texel(rdr, m, mt->tex_bump, uv, 0, dv, cnt, &th);
-			float l0 = (h0.x + h0.y + h0.z) / 3, lu = (hu.x + hu.y + hu.z) / 3,
-			      lv = (hv.x + hv.y + hv.z) / 3;
-			/* tangent frame from the triangle's uv parametrisation */
-			vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0);
-			float u1 = sh->uv[1][0] - sh->uv[0][0], v1 = sh->uv[1][1] - sh->uv[0][1];
-			float u2 = sh->uv[2][0] - sh->uv[0][0], v2 = sh->uv[2][1] - sh->uv[0][1];
-			float det = u1 * v2 - v1 * u2;
-			if (det != 0.0f && isfinite(1.0f / det)) {
-				vec3 dpdu = v3_norm(v3_scale(
-				    v3_sub(v3_scale(e1, v2), v3_scale(e2, v1)), 1.0f / det));
-				vec3 dpdv = v3_norm(v3_scale(
-				    v3_sub(v3_scale(e2, u1), v3_scale(e1, u2)), 1.0f / det));
-				vec3 nb = v3_sub(ns, v3_scale(v3_add(v3_scale(dpdu, lu - l0),
-				                                     v3_scale(dpdv, lv - l0)),
-				                              mt->bump_scale));
-				if (v3_len(nb) > 0.0f && v3_dot(nb, ng) > 0.0f)
-					ns = v3_norm(nb);
-			}
-		}
-		if (mt->tex_kd < 0 && mt->tex_bump < 0)
-			cnt->untextured_hits++;
-		ns = rnd3(fq, ns);
-
-		float kr = mt->reflect, kt = mt->transmit;
-		float kl = 1.0f - kr - kt;
-		if (kl < 0.0f)
-			kl = 0.0f;
-		vec3 wl = v3_scale(w, kl);
-		vec3 amb = rnd3(fq, v3_scale(v3_mul(wl, ka), SHADE_AMBIENT));
-		add(c, p->pixel[i], amb);
-
-		/* shadow rays: one per light the surface faces */
-		if (c->nlights == 0 && kl > 0.0f)
-			cnt->shadow_skip_nolight++;
-		vec3 vdir = v3_scale(v3_norm(d), -1.0f);
-		for (int l = 0; l < nl && kl > 0.0f; l++) {
-			vec3 lp = c->lights[l].pos;
-			vec3 L = v3_sub(lp, hp);
-			vec3 ld = v3_norm(L);
-			float ndl = rnd(fq, v3_dot(ns, ld));
-			if (ndl <= 0.0f || v3_dot(ng, L) <= 0.0f) {
-				cnt->shadow_skip_facing++;
-				continue;
-			}
-			vec3 r = v3_sub(v3_scale(ns, 2.0f * ndl), ld);
-			float rv = v3_dot(r, vdir);
-			float spec =
-			    rnd(fq, rv > 0.0f ? powf(rv, mt->ns > 0.0f ? mt->ns : 1.0f) : 0.0f);
-			vec3 col = v3_add(v3_scale(kd, ndl), v3_scale(arr3(mt->ks), spec));
-			col = rnd3(fq, v3_mul(v3_mul(col, wl), c->lights[l].color));
-			vec3 o = spawn_origin(hp, err, ng, L);
-			put_ray(&shadow[l], i, o, v3_sub(lp, o), 1.0f, p->pixel[i], col);
-			cnt->shadow_rays_made++;
-		}
-
-		/* reflection and refraction */
-		if (kr <= 0.0f && kt <= 0.0f)
-			continue;
-		if (!can_recurse) {
-			cnt->depth_cut += (kr > 0.0f) + (kt > 0.0f);
-			continue;
-		}
-		vec3 rd = v3_sub(d, v3_scale(ns, 2.0f * v3_dot(d, ns)));
-		if (v3_dot(rd, ng) <= 0.0f) /* shading normal bent it under: use the true one */
-			rd = v3_sub(d, v3_scale(ng, 2.0f * v3_dot(d, ng)));
-		rd = rnd3(fq, rd); /* spawn_origin picks its side from the rounded rd */
-		vec3 wr = rnd3(fq, v3_scale(w, kr));
-		if (kt > 0.0f) {
-			float eta = entering ? 1.0f / mt->ni : mt->ni;
-			float ci = -v3_dot(v3_norm(d), ns);
-			float k = 1.0f - eta * eta * (1.0f - ci * ci);
-			vec3 td = k >= 0.0f ? v3_add(v3_scale(v3_norm(d), eta),
-			                             v3_scale(ns, eta * ci - sqrtf(k)))
-			                    : v3(0, 0, 0);
-			td = rnd3(fq, td);
-			if (k < 0.0f || v3_dot(td, ng) >= 0.0f) {
-				wr = rnd3(
-				    fq,
-				    v3_add(wr, v3_scale(w, kt))); /* total internal reflection */
-			} else {
-				vec3 o = spawn_origin(hp, err, ng, td);
-				put_ray(refr, i, o, td, INFINITY, p->pixel[i],
-				        rnd3(fq, v3_scale(w, kt)));
-			}
-		}
-		if (wr.x > 0.0f || wr.y > 0.0f || wr.z > 0.0f) {
-			vec3 o = spawn_origin(hp, err, ng, rd);
-			put_ray(refl, i, o, rd, INFINITY, p->pixel[i], wr);
-		}
-	}
-	if (!refl->valid && !refr->valid && p->type != PKT_SHADOW)
+		pkt_clear(&sp.shadow[l], PKT_SHADOW, p->depth);
+	pkt_clear(sp.refl, PKT_REFLECT, p->depth + 1);
+	pkt_clear(sp.refr, PKT_REFRACT, p->depth + 1);
+	for (uint64_t b = p->valid; b; b &= b - 1)
+		shade_lane(c, fq, rdr, p, __builtin_ctzll(b), &sp, cnt);
+	if (!sp.refl->valid && !sp.refr->valid && p->type != PKT_SHADOW)
 		cnt->secondary_skip++;
 	/* compact: keep only packets that carry rays */
 	int k = 0;

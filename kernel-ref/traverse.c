@@ -128,6 +128,45 @@ static inline fv sel3(iv k0, iv k1, fv x, fv y, fv z)
 	return fv_sel(k0, x, fv_sel(k1, y, z));
 }
 
+/* One permutation for the whole packet? (each of the six lane masks mk of
+ * the axis selects all or nothing): then its axes and the origins in its
+ * order, for the triangle test's uniform path. */
+static void uniform_perm(pkt_rayc *rc, const packet *p, const uint64_t mk[6])
+{
+	rc->uniform = p->valid != 0;
+	for (int k = 0; k < 6; k++)
+		rc->uniform &= mk[k] == 0 || mk[k] == p->valid;
+	if (rc->uniform) {
+		rc->ukz = mk[0] ? 0 : mk[1] ? 1 : 2;
+		rc->ukx = mk[2] ? 0 : mk[3] ? 1 : 2;
+		rc->uky = mk[4] ? 0 : mk[5] ? 1 : 2;
+		const float *og[3] = {p->ox, p->oy, p->oz};
+		memcpy(rc->okx, og[rc->ukx], sizeof rc->okx);
+		memcpy(rc->oky, og[rc->uky], sizeof rc->oky);
+		memcpy(rc->okz, og[rc->ukz], sizeof rc->okz);
+	}
+}
+
+/* Reduced traversal: the clip to the scene box redone in the format, lane
+ * by lane; returns the lanes whose segment is not empty. */
+static uint64_t clip_fp(trav_state *s, const packet *p, const mimg *m)
+{
+	const pkt_rayc *rc = &s->rc;
+	float g = fp_gamma(s->fpt, 5);
+	uint64_t enter = 0;
+	for (uint64_t b = p->valid; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		const float o[3] = {p->ox[i], p->oy[i], p->oz[i]};
+		const float id[3] = {fp_round(s->fpt, rc->idx[i]), fp_round(s->fpt, rc->idy[i]),
+		                     fp_round(s->fpt, rc->idz[i])};
+		trav_clip_fp(s->fpt, g, &m->bounds, o, id, p->tmax[i], &s->cur.tn[i],
+		             &s->cur.tf[i]);
+		if (s->cur.tn[i] <= s->cur.tf[i])
+			enter |= 1ull << i;
+	}
+	return enter;
+}
+
 uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack, int stack_max)
 {
 	return pkt_trav_begin_fp(s, p, m, stack, stack_max, NULL);
@@ -212,35 +251,9 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		fv_store(s->cur.tf + o, tf);
 		enter |= (uint64_t)(iv_bits(tn <= tf) & gb) << o;
 	}
-	/* one permutation for the whole packet? (each mask all or nothing) */
-	rc->uniform = p->valid != 0;
-	for (int k = 0; k < 6; k++)
-		rc->uniform &= mk[k] == 0 || mk[k] == p->valid;
-	if (rc->uniform) {
-		rc->ukz = mk[0] ? 0 : mk[1] ? 1 : 2;
-		rc->ukx = mk[2] ? 0 : mk[3] ? 1 : 2;
-		rc->uky = mk[4] ? 0 : mk[5] ? 1 : 2;
-		const float *og[3] = {p->ox, p->oy, p->oz};
-		memcpy(rc->okx, og[rc->ukx], sizeof rc->okx);
-		memcpy(rc->oky, og[rc->uky], sizeof rc->oky);
-		memcpy(rc->okz, og[rc->ukz], sizeof rc->okz);
-	}
-	if (s->fpt) {
-		/* reduced traversal: redo the clip in the format, lane by lane */
-		float g = fp_gamma(s->fpt, 5);
-		enter = 0;
-		for (uint64_t b = p->valid; b; b &= b - 1) {
-			int i = __builtin_ctzll(b);
-			const float o[3] = {p->ox[i], p->oy[i], p->oz[i]};
-			const float id[3] = {fp_round(s->fpt, rc->idx[i]),
-			                     fp_round(s->fpt, rc->idy[i]),
-			                     fp_round(s->fpt, rc->idz[i])};
-			trav_clip_fp(s->fpt, g, &m->bounds, o, id, p->tmax[i], &s->cur.tn[i],
-			             &s->cur.tf[i]);
-			if (s->cur.tn[i] <= s->cur.tf[i])
-				enter |= 1ull << i;
-		}
-	}
+	uniform_perm(rc, p, mk);
+	if (s->fpt)
+		enter = clip_fp(s, p, m);
 	s->cur.node = 0;
 	s->cur.mask = enter;
 	return enter;

@@ -208,10 +208,9 @@ static void world_parts(wc_part p[WORLD_PARTS], scene *s, kdtree *kd, mimg *m, v
 	p[4] = (wc_part){crc, sizeof *crc};
 }
 
-int world_load(world *w, const world_opts *o, diag *d)
+/* The view: from --views/--view, else the default. */
+static int load_view(world *w, const world_opts *o, diag *d)
 {
-	memset(w, 0, sizeof *w);
-	double t0 = now_ms();
 	if (o->view && !o->views)
 		return diag_set(d, "--view", 0, 0, "needs --views FILE");
 	if (o->views) {
@@ -222,52 +221,41 @@ int world_load(world *w, const world_opts *o, diag *d)
 	} else {
 		view_default(&w->v);
 	}
-	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
-	int spd = spd_is(path);
-	wc_files files = {0};
-	char cfile[PATH_MAX], *ckey = NULL;
-	view sv;
-	memset(&sv, 0, sizeof sv);
-	wc_part parts[WORLD_PARTS];
-	world_parts(parts, &w->s, &w->kd, &w->m, &sv, &w->image_crc);
-	if (o->cache_dir) {
-		if (wc_prepare(o->cache_dir, w->cache_prog, sizeof w->cache_prog, d))
-			return -1;
-		if (!(ckey = wc_world_key(w->cache_prog, path, &o->kd)))
-			return diag_set(d, o->cache_dir, 0, 0, "--world-cache: out of memory");
-		if (wc_file(cfile, sizeof cfile, o->cache_dir, "world", ckey)) {
-			free(ckey);
-			return diag_set(d, o->cache_dir, 0, 0,
-			                "--world-cache: folder name too long");
-		}
-		w->cache_dir = o->cache_dir;
-		void *bytes;
-		size_t n;
-		if (wc_get(cfile, ckey, parts, WORLD_PARTS, &bytes, &n)) {
-			if (n == w->m.size) {
-				w->m.bytes = bytes;
-				w->cache = WORLD_CACHE_HIT;
-			} else {
-				free(bytes);
-				memset(&w->s, 0, sizeof w->s);
-				memset(&w->kd, 0, sizeof w->kd);
-				memset(&w->m, 0, sizeof w->m);
-			}
+	return 0;
+}
+
+/* The world cache's file (cfile) and key (*ckey, malloc'd) for the scene
+ * at path; the stored world into parts and w->m.bytes when there is one
+ * (w->cache = WORLD_CACHE_HIT). */
+static int cache_lookup(world *w, const world_opts *o, const char *path, wc_part *parts,
+                        char *cfile, size_t ncfile, char **ckey, diag *d)
+{
+	if (wc_prepare(o->cache_dir, w->cache_prog, sizeof w->cache_prog, d))
+		return -1;
+	if (!(*ckey = wc_world_key(w->cache_prog, path, &o->kd)))
+		return diag_set(d, o->cache_dir, 0, 0, "--world-cache: out of memory");
+	if (wc_file(cfile, ncfile, o->cache_dir, "world", *ckey))
+		return diag_set(d, o->cache_dir, 0, 0, "--world-cache: folder name too long");
+	w->cache_dir = o->cache_dir;
+	void *bytes;
+	size_t n;
+	if (wc_get(cfile, *ckey, parts, WORLD_PARTS, &bytes, &n)) {
+		if (n == w->m.size) {
+			w->m.bytes = bytes;
+			w->cache = WORLD_CACHE_HIT;
+		} else {
+			free(bytes);
+			memset(&w->s, 0, sizeof w->s);
+			memset(&w->kd, 0, sizeof w->kd);
+			memset(&w->m, 0, sizeof w->m);
 		}
 	}
-	if (!w->cache && load_scene(w, path, &sv, o->cache_dir ? &files : NULL, d))
-		goto fail;
-	/* a procedural scene brings its standard view unless a views file
-	 * gave one */
-	if (spd && !o->views)
-		w->v = sv;
-	/* a scene file without a view: framed by its bounding box (the
-	 * embedded room's camera showed a model as a few pixels) */
-	if (path && !spd && !o->views)
-		view_frame_bbox(&w->v, w->s.bounds);
-	snprintf(w->scene_label, sizeof w->scene_label, "%s", path ? path : w->s.name);
-	w->load_ms = now_ms() - t0;
-	/* flags override the view */
+	return 0;
+}
+
+/* The camera and light flags override the view. */
+static int apply_view_flags(world *w, const world_opts *o, diag *d)
+{
 	if (o->have_eye)
 		w->v.cam.eye = o->cam.eye;
 	if (o->have_lookat)
@@ -278,7 +266,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 		w->v.cam.fov_deg = o->cam.fov_deg;
 	if (o->have_eye || o->have_lookat || o->have_up || o->have_fov) {
 		if (camera_validate(&w->v.cam, "--eye/--lookat/--up/--fov", d))
-			goto fail;
+			return -1;
 		snprintf(w->v.name, sizeof w->v.name, "%s", "custom");
 		w->view_changed = 1;
 	}
@@ -293,6 +281,70 @@ int world_load(world *w, const world_opts *o, diag *d)
 		w->v.nlights = 0;
 		w->view_changed = 1;
 	}
+	return 0;
+}
+
+/* Stores the built world in the cache (cfile, ckey; files: the scene's
+ * files it depends on). A cache that cannot be written costs the next run
+ * time, not this run its result: a warning, and on. */
+static void cache_store(world *w, view *sv, const char *cfile, const char *ckey,
+                        const wc_files *files)
+{
+	/* stored without the arrays: copies with them zeroed */
+	scene s0 = w->s;
+	s0.v = s0.n = NULL;
+	s0.uv = NULL;
+	s0.mat = NULL;
+	s0.mats = NULL;
+	s0.texs = NULL;
+	kdtree k0 = w->kd;
+	k0.nodes = NULL;
+	k0.list = NULL;
+	mimg m0 = w->m;
+	m0.bytes = NULL;
+	w->image_crc = wc_crc(w->m.bytes, w->m.size);
+	wc_part put[WORLD_PARTS];
+	world_parts(put, &s0, &k0, &m0, sv, &w->image_crc);
+	diag wd;
+	w->cache = WORLD_CACHE_STORED;
+	if (wc_put(cfile, ckey, files, put, WORLD_PARTS, w->m.bytes, (size_t)w->m.size, &wd)) {
+		fprintf(stderr, "warning: %s\n", wd.msg);
+		w->cache = WORLD_CACHE_UNSTORED;
+	}
+}
+
+int world_load(world *w, const world_opts *o, diag *d)
+{
+	memset(w, 0, sizeof *w);
+	double t0 = now_ms();
+	if (load_view(w, o, d))
+		return -1;
+	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
+	int spd = spd_is(path);
+	wc_files files = {0};
+	char cfile[PATH_MAX], *ckey = NULL;
+	view sv;
+	memset(&sv, 0, sizeof sv);
+	wc_part parts[WORLD_PARTS];
+	world_parts(parts, &w->s, &w->kd, &w->m, &sv, &w->image_crc);
+	if (o->cache_dir && cache_lookup(w, o, path, parts, cfile, sizeof cfile, &ckey, d)) {
+		free(ckey);
+		return -1;
+	}
+	if (!w->cache && load_scene(w, path, &sv, o->cache_dir ? &files : NULL, d))
+		goto fail;
+	/* a procedural scene brings its standard view unless a views file
+	 * gave one */
+	if (spd && !o->views)
+		w->v = sv;
+	/* a scene file without a view: framed by its bounding box (the
+	 * embedded room's camera showed a model as a few pixels) */
+	if (path && !spd && !o->views)
+		view_frame_bbox(&w->v, w->s.bounds);
+	snprintf(w->scene_label, sizeof w->scene_label, "%s", path ? path : w->s.name);
+	w->load_ms = now_ms() - t0;
+	if (apply_view_flags(w, o, d))
+		goto fail;
 	if (w->cache != WORLD_CACHE_HIT) {
 		t0 = now_ms();
 		if (kd_build(&w->kd, &w->s, &o->kd, d))
@@ -302,32 +354,8 @@ int world_load(world *w, const world_opts *o, diag *d)
 		if (mimg_build(&w->m, &w->s, &w->kd, d))
 			goto fail;
 		w->image_ms = now_ms() - t0;
-		if (o->cache_dir) {
-			/* stored without the arrays: copies with them zeroed */
-			scene s0 = w->s;
-			s0.v = s0.n = NULL;
-			s0.uv = NULL;
-			s0.mat = NULL;
-			s0.mats = NULL;
-			s0.texs = NULL;
-			kdtree k0 = w->kd;
-			k0.nodes = NULL;
-			k0.list = NULL;
-			mimg m0 = w->m;
-			m0.bytes = NULL;
-			w->image_crc = wc_crc(w->m.bytes, w->m.size);
-			wc_part put[WORLD_PARTS];
-			world_parts(put, &s0, &k0, &m0, &sv, &w->image_crc);
-			/* a cache that cannot be written costs the next run time,
-			 * not this run its result: say so and go on */
-			diag wd;
-			w->cache = WORLD_CACHE_STORED;
-			if (wc_put(cfile, ckey, &files, put, WORLD_PARTS, w->m.bytes,
-			           (size_t)w->m.size, &wd)) {
-				fprintf(stderr, "warning: %s\n", wd.msg);
-				w->cache = WORLD_CACHE_UNSTORED;
-			}
-		}
+		if (o->cache_dir)
+			cache_store(w, &sv, cfile, ckey, &files);
 	}
 	wc_files_free(&files);
 	free(ckey);

@@ -130,147 +130,267 @@ static int set_key(saar_config *cfg, const char *flag, const char *value, diag *
 	return rc;
 }
 
-int main(int argc, char **argv)
+/* The command line as the first pass reads it. */
+typedef struct cli {
+	world_opts wo; /* the world flags (rtref's) */
+	const char *config, *out, *report, *size, *frames;
+	const char *csv, *trace, *census, *mem_limit;
+	int check, list, doc, dry;
+} cli;
+
+/* The first pass: every argument checked, the world flags into a->wo, the
+ * files and bare flags into a; --set and the shorthand key flags wait for
+ * the config file (config_from_args). Returns -1 to go on, else the exit
+ * status (0 after --help). */
+static int parse_args(int argc, char **argv, cli *a, diag *d)
 {
-	double t_start = now_ms();
-	world_opts wo;
-	world_opts_default(&wo);
-	const char *config = NULL, *out = NULL, *report = NULL, *size = NULL, *frames = NULL;
-	const char *csv = NULL, *trace = NULL, *census = NULL, *mem_limit = NULL;
-	int check = 1, list = 0, doc = 0, dry = 0;
-	diag d = {{0}};
+	memset(a, 0, sizeof *a);
+	world_opts_default(&a->wo);
+	a->check = 1;
 	for (int i = 1; i < argc;) {
-		int r = key_flag(argv[i]) ? 0 : world_parse_arg(&wo, argc, argv, &i, &d);
+		int r = key_flag(argv[i]) ? 0 : world_parse_arg(&a->wo, argc, argv, &i, d);
 		if (r < 0)
-			return cli_bad("saarsim", d.msg);
+			return cli_bad("saarsim", d->msg);
 		if (r > 0)
 			continue;
-		const char *a = argv[i];
-		if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+		const char *f = argv[i];
+		if (!strcmp(f, "-h") || !strcmp(f, "--help")) {
 			usage(stdout);
 			return 0;
 		}
-		int b = bare_flag(a);
+		int b = bare_flag(f);
 		if (b >= 0) {
-			int *set[] = {&check, &list, &doc, &dry}; /* bare_flags' order */
+			int *set[] = {&a->check, &a->list, &a->doc,
+			              &a->dry}; /* bare_flags' order */
 			*set[b] = b != 0;
 			i++;
 			continue;
 		}
 		if (i + 1 >= argc) {
 			fprintf(stderr,
-			        "saarsim: %s: unknown option or missing value (see --help)\n", a);
+			        "saarsim: %s: unknown option or missing value (see --help)\n", f);
 			return DIAG_EXIT;
 		}
 		const char *v = argv[i + 1];
-		if (!strcmp(a, "--config"))
-			config = v;
-		else if (!strcmp(a, "--set") || key_flag(a))
+		if (!strcmp(f, "--config"))
+			a->config = v;
+		else if (!strcmp(f, "--set") || key_flag(f))
 			; /* applied below, in order, once the config file is read */
-		else if (!strcmp(a, "--size"))
-			size = v;
-		else if (!strcmp(a, "--out"))
-			out = v;
-		else if (!strcmp(a, "--report"))
-			report = v;
-		else if (!strcmp(a, "--frames"))
-			frames = v;
-		else if (!strcmp(a, "--csv"))
-			csv = v;
-		else if (!strcmp(a, "--trace-mem"))
-			trace = v;
-		else if (!strcmp(a, "--census"))
-			census = v;
-		else if (!strcmp(a, "--host-mem-limit"))
-			mem_limit = v;
+		else if (!strcmp(f, "--size"))
+			a->size = v;
+		else if (!strcmp(f, "--out"))
+			a->out = v;
+		else if (!strcmp(f, "--report"))
+			a->report = v;
+		else if (!strcmp(f, "--frames"))
+			a->frames = v;
+		else if (!strcmp(f, "--csv"))
+			a->csv = v;
+		else if (!strcmp(f, "--trace-mem"))
+			a->trace = v;
+		else if (!strcmp(f, "--census"))
+			a->census = v;
+		else if (!strcmp(f, "--host-mem-limit"))
+			a->mem_limit = v;
 		else {
-			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", a);
+			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
 			return DIAG_EXIT;
 		}
 		i += 2;
 	}
-	if (list || doc) {
-		if (list)
-			cfg_list(stdout);
-		if (doc)
-			cfg_write_markdown(stdout);
-		return 0;
-	}
+	return -1;
+}
 
-	/* the config: defaults, file, --set, --size, kd-tree flags */
-	saar_config cfg;
-	if (config ? cfg_load(&cfg, config, &d) : (cfg_defaults(&cfg), 0))
-		return cli_bad("saarsim", d.msg);
-	/* the first pass accepted every argument, so this walk sees the same
-	 * option/value pairs: world flags are skipped by the same parser */
+/* --set and the shorthand key flags, in their order on the command line;
+ * *sampling_flag: the last sampling one (--sample-rate, --unit-tiles, ...).
+ * The first pass accepted every argument, so this walk sees the same
+ * option/value pairs: world flags are skipped by the same parser. */
+static int set_flags(int argc, char **argv, saar_config *cfg, const char **sampling_flag, diag *d)
+{
 	world_opts skip;
 	world_opts_default(&skip);
-	const char *sampling_flag = NULL; /* the last --sample-rate, --unit-tiles, ... */
+	*sampling_flag = NULL;
 	for (int i = 1; i < argc;) {
-		if (!key_flag(argv[i]) && world_parse_arg(&skip, argc, argv, &i, &d) > 0)
+		if (!key_flag(argv[i]) && world_parse_arg(&skip, argc, argv, &i, d) > 0)
 			continue;
 		const char *a = argv[i];
 		if (bare_flag(a) >= 0) {
 			i++;
 			continue;
 		}
-		if (!strcmp(a, "--set") && cfg_set(&cfg, argv[i + 1], &d))
-			return cli_bad("saarsim", d.msg);
-		if (key_flag(a) && set_key(&cfg, a, argv[i + 1], &d))
-			return cli_bad("saarsim", d.msg);
+		if (!strcmp(a, "--set") && cfg_set(cfg, argv[i + 1], d))
+			return -1;
+		if (key_flag(a) && set_key(cfg, a, argv[i + 1], d))
+			return -1;
 		if (key_flag(a) && !strncmp(key_flag(a), "sampling.", 9))
-			sampling_flag = a;
+			*sampling_flag = a;
 		i += 2;
 	}
+	return 0;
+}
+
+/* The config: defaults, file, --set and the key flags, --size, --frames;
+ * validated; the host memory limit into *limit_mb and the kd-tree keys into
+ * a->wo. Returns -1 to go on, else the exit status. */
+static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uint64_t *limit_mb,
+                            diag *d)
+{
+	if (a->config ? cfg_load(cfg, a->config, d) : (cfg_defaults(cfg), 0))
+		return cli_bad("saarsim", d->msg);
+	const char *sampling_flag;
+	if (set_flags(argc, argv, cfg, &sampling_flag, d))
+		return cli_bad("saarsim", d->msg);
 	/* a sampling flag on a run that does not sample would be ignored
 	 * without a word */
-	if (sampling_flag && cfg.fidelity != CFG_FIDELITY_SAMPLED) {
+	if (sampling_flag && cfg->fidelity != CFG_FIDELITY_SAMPLED) {
 		fprintf(stderr,
 		        "saarsim: %s: applies only to sampled runs (--fidelity sampled); this "
 		        "run's fidelity is %s\n",
-		        sampling_flag, cfg.fidelity == CFG_FIDELITY_CYCLE ? "cycle" : "functional");
+		        sampling_flag,
+		        cfg->fidelity == CFG_FIDELITY_CYCLE ? "cycle" : "functional");
 		return DIAG_EXIT;
 	}
-	if (size && cli_parse_size(size, &cfg.frame.width, &cfg.frame.height, &d))
-		return cli_bad("saarsim", d.msg);
+	if (a->size && cli_parse_size(a->size, &cfg->frame.width, &cfg->frame.height, d))
+		return cli_bad("saarsim", d->msg);
 	long nframes;
-	if (frames) {
-		if (cli_parse_int("--frames", frames, 1, 1000000, &nframes, &d))
-			return cli_bad("saarsim", d.msg);
-		cfg.frame.frames = (int)nframes;
+	if (a->frames) {
+		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))
+			return cli_bad("saarsim", d->msg);
+		cfg->frame.frames = (int)nframes;
 	}
-	if (cfg_validate(&cfg, &d))
-		return cli_bad("saarsim", d.msg);
-	uint64_t limit_mb;
-	if (hm_limit_mb(mem_limit, &limit_mb, &d))
-		return cli_bad("saarsim", d.msg);
-	wo.kd.cost_trav = (float)cfg.kdtree.cost_trav;
-	wo.kd.cost_isect = (float)cfg.kdtree.cost_isect;
-	wo.kd.max_depth = cfg.kdtree.max_depth;
-	wo.kd.leaf_size = cfg.kdtree.leaf_size;
-	wo.kd.empty_bonus = (float)cfg.kdtree.empty_bonus;
+	if (cfg_validate(cfg, d))
+		return cli_bad("saarsim", d->msg);
+	if (hm_limit_mb(a->mem_limit, limit_mb, d))
+		return cli_bad("saarsim", d->msg);
+	a->wo.kd.cost_trav = (float)cfg->kdtree.cost_trav;
+	a->wo.kd.cost_isect = (float)cfg->kdtree.cost_isect;
+	a->wo.kd.max_depth = cfg->kdtree.max_depth;
+	a->wo.kd.leaf_size = cfg->kdtree.leaf_size;
+	a->wo.kd.empty_bonus = (float)cfg->kdtree.empty_bonus;
+	return -1;
+}
 
-	/* every output's temporary is made now, so an unwritable --out
-	 * format, a missing or read-only folder or a CSV of other columns
-	 * fails before the run, not after it (af_reserve) */
-	if (out && img_reserve(out, &d))
+/* Every output's temporary is made now, so an unwritable --out format, a
+ * missing or read-only folder or a CSV of other columns fails before the
+ * run, not after it (af_reserve); so does a census the run cannot keep,
+ * before the world loads. */
+static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
+{
+	if (a->out && img_reserve(a->out, d))
+		return -1;
+	if (a->csv && (report_csv_check(a->csv, d) || af_reserve(a->csv, "", d)))
+		return -1;
+	if (a->report && strcmp(a->report, "-") && af_reserve(a->report, "", d))
+		return -1;
+	if (a->census && af_reserve(a->census, "", d))
+		return -1;
+	if (a->trace && af_reserve(a->trace, "", d))
+		return -1;
+	if (a->census && chip_census_check(cfg, d))
+		return -1;
+	return 0;
+}
+
+/* Runs the chip with the memory trace (written under the temporary name
+ * trace_tmp, renamed once the run succeeded) and the census on, then
+ * checks the frame against kernel-ref unless --no-check. */
+static int simulate(chip *c, const cli *a, afile *trace_tmp, chip_check *chk, diag *d)
+{
+	if (a->trace) {
+		if (af_open(trace_tmp, a->trace, "", 0)) {
+			af_diag(d, a->trace);
+			return -1;
+		}
+		if (chip_trace_mem(c, trace_tmp->tmp, d))
+			return -1;
+	}
+	if (a->census && chip_census_on(c, d))
+		return -1;
+	if (chip_run(c, d) || chip_trace_close(c, d) || (a->check && chip_check_frame(c, chk, d)))
+		return -1;
+	return 0;
+}
+
+/* The report checks itself: a counter that stopped counting shows, one
+ * warning line per failed invariant. */
+static void check_report(const chip *c, rc_list *inv)
+{
+	report_check(c, inv);
+	for (int i = 0; i < inv->n && i < RC_MAX; i++)
+		fprintf(stderr, "warning: report invariant failed: %s\n", inv->msg[i]);
+	if (inv->n > RC_MAX)
+		fprintf(stderr, "warning: report invariant failed: %d more\n", inv->n - RC_MAX);
+}
+
+/* Every output is written complete under a temporary name first and all
+ * are renamed into place together once the last one (the CSV with its new
+ * row) is done: a run that fails on any leaves the files at all the output
+ * paths as they were. Then the summary on stdout. Returns the exit status. */
+static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, double t_start, diag *d)
+{
+	af_group outs = {0};
+	int csv_lock = -1;
+	ri->group = &outs;
+	if (a->out && fb_write(&ri->c->fb, a->out, &outs, d))
+		goto fail;
+	ri->wall_ms = now_ms() - t_start;
+	if (a->report && report_json(a->report, ri, d))
+		goto fail;
+	if (a->census && report_census(a->census, ri, d))
+		goto fail;
+	if (a->trace) {
+		int bad = af_commit_to(trace_tmp, &outs);
+		trace_tmp->tmp[0] = 0; /* in the group, or removed */
+		if (bad) {
+			af_diag(d, a->trace);
+			goto fail;
+		}
+	}
+	ri->wall_ms = now_ms() - t_start;
+	/* other runs appending to the same CSV wait from here until our
+	 * rename is done, so no row is lost */
+	if (a->csv)
+		csv_lock = report_csv_lock(a->csv);
+	if (a->csv && report_csv(a->csv, ri, d))
+		goto fail;
+	if (af_group_commit(&outs, d))
+		goto fail;
+	report_csv_unlock(csv_lock);
+	report_text(stdout, ri);
+	return 0;
+fail:
+	af_group_abort(&outs);
+	report_csv_unlock(csv_lock);
+	return cli_bad("saarsim", d->msg);
+}
+
+int main(int argc, char **argv)
+{
+	double t_start = now_ms();
+	static cli a;
+	diag d = {{0}};
+	int rc = parse_args(argc, argv, &a, &d);
+	if (rc >= 0)
+		return rc;
+	if (a.list || a.doc) {
+		if (a.list)
+			cfg_list(stdout);
+		if (a.doc)
+			cfg_write_markdown(stdout);
+		return 0;
+	}
+	saar_config cfg;
+	uint64_t limit_mb;
+	rc = config_from_args(argc, argv, &a, &cfg, &limit_mb, &d);
+	if (rc >= 0)
+		return rc;
+	if (reserve_outputs(&a, &cfg, &d))
 		return cli_bad("saarsim", d.msg);
-	if (csv && (report_csv_check(csv, &d) || af_reserve(csv, "", &d)))
-		return cli_bad("saarsim", d.msg);
-	if (report && strcmp(report, "-") && af_reserve(report, "", &d))
-		return cli_bad("saarsim", d.msg);
-	if (census && af_reserve(census, "", &d))
-		return cli_bad("saarsim", d.msg);
-	if (trace && af_reserve(trace, "", &d))
-		return cli_bad("saarsim", d.msg);
-	/* so does a census the run cannot keep, before the world loads */
-	if (census && chip_census_check(&cfg, &d))
-		return cli_bad("saarsim", d.msg);
-	if (dry)
+	if (a.dry)
 		return 0;
 	double t0 = now_ms();
 	world w;
-	if (world_load(&w, &wo, &d))
+	if (world_load(&w, &a.wo, &d))
 		return cli_bad("saarsim", d.msg);
 	double load_ms = now_ms() - t0;
 	/* a config inside every key's range can still want more memory than
@@ -291,87 +411,21 @@ int main(int argc, char **argv)
 		c->progress = show_progress;
 		c->progress_ctx = &pr;
 	}
-	int rc = 0;
 	chip_check chk;
 	memset(&chk, 0, sizeof chk);
-	/* the trace is written under a temporary name, renamed once the run
-	 * succeeded (trace_tmp.tmp is "" while none is open) */
 	afile trace_tmp;
-	trace_tmp.tmp[0] = 0;
-	if (trace) {
-		if (af_open(&trace_tmp, trace, "", 0)) {
-			af_diag(&d, trace);
-			rc = cli_bad("saarsim", d.msg);
-			goto done;
-		}
-		if (chip_trace_mem(c, trace_tmp.tmp, &d)) {
-			rc = cli_bad("saarsim", d.msg);
-			goto done;
-		}
-	}
-	if (census && chip_census_on(c, &d)) {
+	trace_tmp.tmp[0] = 0; /* "" while none is open */
+	if (simulate(c, &a, &trace_tmp, &chk, &d)) {
 		rc = cli_bad("saarsim", d.msg);
-		goto done;
+	} else {
+		if (pr.shown)
+			fputc('\n', stderr);
+		static rc_list inv;
+		check_report(c, &inv);
+		report_info ri = {c, &w,   a.check ? &chk : NULL,         load_ms,
+		                  0, NULL, (double)mem.total / (1 << 20), &inv};
+		rc = write_outputs(&a, &ri, &trace_tmp, t_start, &d);
 	}
-	if (chip_run(c, &d) || chip_trace_close(c, &d) ||
-	    (check && chip_check_frame(c, &chk, &d))) {
-		rc = cli_bad("saarsim", d.msg);
-		goto done;
-	}
-	if (pr.shown)
-		fputc('\n', stderr);
-	/* the report checks itself: a counter that stopped counting shows */
-	static rc_list inv;
-	report_check(c, &inv);
-	for (int i = 0; i < inv.n && i < RC_MAX; i++)
-		fprintf(stderr, "warning: report invariant failed: %s\n", inv.msg[i]);
-	if (inv.n > RC_MAX)
-		fprintf(stderr, "warning: report invariant failed: %d more\n", inv.n - RC_MAX);
-	/* every output is written complete under a temporary name first and
-	 * all are renamed into place together once the last one (the CSV
-	 * with its new row) is done: a run that fails on any leaves the
-	 * files at all the output paths as they were */
-	af_group outs = {0};
-	int csv_lock = -1;
-	if (out && fb_write(&c->fb, out, &outs, &d))
-		goto fail;
-	report_info ri = {c,
-	                  &w,
-	                  check ? &chk : NULL,
-	                  load_ms,
-	                  now_ms() - t_start,
-	                  &outs,
-	                  (double)mem.total / (1 << 20),
-	                  &inv};
-	if (report && report_json(report, &ri, &d))
-		goto fail;
-	if (census && report_census(census, &ri, &d))
-		goto fail;
-	if (trace) {
-		int bad = af_commit_to(&trace_tmp, &outs);
-		trace_tmp.tmp[0] = 0; /* in the group, or removed */
-		if (bad) {
-			af_diag(&d, trace);
-			goto fail;
-		}
-	}
-	ri.wall_ms = now_ms() - t_start;
-	/* other runs appending to the same CSV wait from here until our
-	 * rename is done, so no row is lost */
-	if (csv)
-		csv_lock = report_csv_lock(csv);
-	if (csv && report_csv(csv, &ri, &d))
-		goto fail;
-	if (af_group_commit(&outs, &d))
-		goto fail;
-	report_csv_unlock(csv_lock);
-	report_text(stdout, &ri);
-	goto done;
-fail:
-	af_group_abort(&outs);
-	report_csv_unlock(csv_lock);
-	rc = cli_bad("saarsim", d.msg);
-done:
 	chip_destroy(c);
 	if (trace_tmp.tmp[0])
 		af_abort(&trace_tmp);

@@ -542,18 +542,12 @@ static const kv_map shading_map[] = {
     {"max_queue", "rgs.max_queue"},
 };
 
-int report_json(const char *path, const report_info *ri, diag *d)
+/* The run: config, scene, view, sizes, frames, cycles and fidelity. */
+static void json_run(jsonw *j, const report_info *ri)
 {
 	const chip *c = ri->c;
 	const world *w = ri->w;
 	const saar_config *g = &c->cfg;
-	uint64_t cyc = chip_cycles(c);
-	char name[96];
-	jsonw jw, *j = &jw;
-	if (jsonw_open(j, path, d))
-		return -1;
-	j->group = ri->group;
-	jsonw_obj_begin(j);
 	jsonw_kstr(j, "program", "saarsim");
 	jsonw_key(j, "config");
 	cfg_write_json(g, j);
@@ -583,19 +577,24 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	for (int f = 0; f < c->frames_done; f++)
 		jsonw_uint(j, c->frame_cycles[f]);
 	jsonw_arr_end(j);
-	kv(j, "cycles", cyc);
+	kv(j, "cycles", chip_cycles(c));
 	jsonw_knum(j, "clock_mhz", g->chip.clock_mhz);
 	jsonw_knum(j, "fps", report_fps(c));
 	kv(j, "events", c->events);
 	fidelity_json(j, c);
+}
 
+/* Per unit kind: count, operations, rays, busy cycles, utilisation. */
+static void json_units(jsonw *j, const chip *c)
+{
+	char name[96];
 	jsonw_key(j, "units");
 	jsonw_obj_begin(j);
 	for (int k = 0; k < UNIT_NKINDS; k++) {
 		const char *un = chip_unit_name(k);
 		jsonw_key(j, un);
 		jsonw_obj_begin(j);
-		jsonw_kint(j, "units", (int64_t)chip_unit_cfg(g, k)->count * c->nrtp);
+		jsonw_kint(j, "units", (int64_t)chip_unit_cfg(&c->cfg, k)->count * c->nrtp);
 		snprintf(name, sizeof name, "%s.ops", un);
 		kv(j, "ops", chip_rtp_sum(c, name));
 		snprintf(name, sizeof name, "%s.rays", un);
@@ -612,7 +611,11 @@ int report_json(const char *path, const report_info *ri, diag *d)
 		jsonw_obj_end(j);
 	}
 	jsonw_obj_end(j);
+}
 
+/* Thread contexts and the shares of their time in each state. */
+static void json_threads(jsonw *j, const chip *c)
+{
 	jsonw_key(j, "threads");
 	jsonw_obj_begin(j);
 	jsonw_kint(j, "contexts", (int64_t)c->nrtp * c->tpr);
@@ -629,7 +632,12 @@ int report_json(const char *path, const report_info *ri, diag *d)
 		}
 	}
 	jsonw_obj_end(j);
+}
 
+/* Packets and rays per type; traversal and intersection work. */
+static void json_rays(jsonw *j, const chip *c)
+{
+	char name[96];
 	static const char *const tn[PKT_NTYPES] = {"primary", "shadow", "reflection", "refraction"};
 	for (int pass = 0; pass < 2; pass++) {
 		jsonw_key(j, pass ? "rays" : "packets");
@@ -659,10 +667,14 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	kv(j, "stack_overflows", get(c, "trav.stack_overflows"));
 	kv(j, "stack_refills", get(c, "trav.stack_refills"));
 	jsonw_obj_end(j);
+}
 
-	kv_object(j, c, "skipped", skipped_map, sizeof skipped_map / sizeof *skipped_map);
-	kv_object(j, c, "shading", shading_map, sizeof shading_map / sizeof *shading_map);
-
+/* The memory object: requests per requester type, stall cycles per unit
+ * kind and the hierarchy's figures (hs, have_h: whether it has any). */
+static void json_memory(jsonw *j, const chip *c, const hier_stats *hs, int have_h)
+{
+	const saar_config *g = &c->cfg;
+	char name[96];
 	jsonw_key(j, "memory");
 	jsonw_obj_begin(j);
 	jsonw_kstr(j, "model", cfg_enum_name(g, "memory.model"));
@@ -700,18 +712,18 @@ int report_json(const char *path, const report_info *ri, diag *d)
 			jsonw_uint(j, (uint64_t)wait);
 	}
 	jsonw_obj_end(j);
-	hier_stats hs;
-	int have_h = !hier_get_stats(&c->mem, &hs);
-	if (have_h && hs.func_requests) /* the bytes of untimed stretches too */
-		hs.run_ticks = chip_cycles(c) * hs.core_period;
 	jsonw_key(j, "hierarchy");
 	if (have_h)
-		hier_write_json(&hs, j);
+		hier_write_json(hs, j);
 	else
 		jsonw_null(j);
 	jsonw_obj_end(j);
+}
 
-	/* the published SaarCOR table's columns (seed 002 Table 5), steady state */
+/* The published SaarCOR table's columns (seed 002 Table 5), steady state;
+ * the steady state's and each frame's memory figures. */
+static void json_frames(jsonw *j, const chip *c)
+{
 	memfig m;
 	report_steady_state(c, &m);
 	jsonw_key(j, "table");
@@ -729,39 +741,52 @@ int report_json(const char *path, const report_info *ri, diag *d)
 		memfig_json(j, &m);
 	}
 	jsonw_arr_end(j);
+}
+
+static void json_caches(jsonw *j, const hier_stats *hs, int have_h)
+{
 	jsonw_key(j, "caches");
-	if (have_h) {
-		jsonw_obj_begin(j);
-		for (int t = 0; t < MEM_NTYPES; t++)
-			cache_fields(j, mem_type_name(t), &hs.l1[t]);
-		if (hs.vma_enabled) {
-			cache_fields(j, "tag_cache", &hs.tag_cache);
-			cache_fields(j, "l2", &hs.l2);
-		}
-		jsonw_obj_end(j);
-	} else {
+	if (!have_h) {
 		jsonw_null(j);
+		return;
 	}
+	jsonw_obj_begin(j);
+	for (int t = 0; t < MEM_NTYPES; t++)
+		cache_fields(j, mem_type_name(t), &hs->l1[t]);
+	if (hs->vma_enabled) {
+		cache_fields(j, "tag_cache", &hs->tag_cache);
+		cache_fields(j, "l2", &hs->l2);
+	}
+	jsonw_obj_end(j);
+}
 
+/* The frame against kernel-ref (packet and single-ray), null without. */
+static void json_check(jsonw *j, const report_info *ri)
+{
 	jsonw_key(j, "check");
-	if (ri->check && ri->check->done) {
-		jsonw_obj_begin(j);
-		jsonw_kbool(j, "identical_8bit", ri->check->cmp.identical);
-		jsonw_knum(j, "psnr", ri->check->cmp.psnr);
-		kv(j, "differing_pixels", ri->check->cmp.differing_pixels);
-		jsonw_kstr(j, "reference", ri->check->cached ? "cached" : "rendered");
-		jsonw_key(j, "single_ray");
-		jsonw_obj_begin(j);
-		jsonw_kbool(j, "identical_8bit", ri->check->single.identical);
-		jsonw_knum(j, "psnr", ri->check->single.psnr);
-		kv(j, "differing_pixels", ri->check->single.differing_pixels);
-		jsonw_kstr(j, "reference", ri->check->single_cached ? "cached" : "rendered");
-		jsonw_obj_end(j);
-		jsonw_obj_end(j);
-	} else {
+	if (!ri->check || !ri->check->done) {
 		jsonw_null(j);
+		return;
 	}
+	jsonw_obj_begin(j);
+	jsonw_kbool(j, "identical_8bit", ri->check->cmp.identical);
+	jsonw_knum(j, "psnr", ri->check->cmp.psnr);
+	kv(j, "differing_pixels", ri->check->cmp.differing_pixels);
+	jsonw_kstr(j, "reference", ri->check->cached ? "cached" : "rendered");
+	jsonw_key(j, "single_ray");
+	jsonw_obj_begin(j);
+	jsonw_kbool(j, "identical_8bit", ri->check->single.identical);
+	jsonw_knum(j, "psnr", ri->check->single.psnr);
+	kv(j, "differing_pixels", ri->check->single.differing_pixels);
+	jsonw_kstr(j, "reference", ri->check->single_cached ? "cached" : "rendered");
+	jsonw_obj_end(j);
+	jsonw_obj_end(j);
+}
 
+/* The failed invariants and every registry counter. */
+static void json_counters(jsonw *j, const report_info *ri)
+{
+	const chip *c = ri->c;
 	jsonw_key(j, "invariants_failed");
 	jsonw_arr_begin(j);
 	for (int i = 0; ri->invariants && i < ri->invariants->n && i < RC_MAX; i++)
@@ -773,12 +798,18 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	for (size_t i = 0; i < c->st.n; i++)
 		kv(j, c->st.e[i].name, *c->st.e[i].value);
 	jsonw_obj_end(j);
+}
 
+/* The host's figures: times, caches used, memory. */
+static void json_host(jsonw *j, const report_info *ri)
+{
+	const chip *c = ri->c;
+	int checked = ri->check && ri->check->done;
 	jsonw_key(j, "host");
 	jsonw_obj_begin(j);
 	jsonw_knum(j, "load_s", ri->load_ms / 1e3);
 	jsonw_knum(j, "sim_s", c->sim_ms / 1e3);
-	jsonw_knum(j, "check_s", ri->check && ri->check->done ? ri->check->check_ms / 1e3 : 0.0);
+	jsonw_knum(j, "check_s", checked ? ri->check->check_ms / 1e3 : 0.0);
 	jsonw_knum(j, "wall_s", ri->wall_ms / 1e3);
 	jsonw_kstr(j, "world_cache", world_cache_name(ri->w->cache));
 	jsonw_kstr(j, "packet_record", chip_rec_name(c->rec_state));
@@ -787,10 +818,35 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	jsonw_knum(j, "stored_warming_s", c->warm_ms / 1e3);
 	jsonw_knum(j, "mem_estimate_mb", ri->mem_estimate_mb);
 	jsonw_knum(j, "peak_rss_mb", (double)hm_peak_rss() / (1 << 20));
-	jsonw_knum(j, "sim_cycles_per_s", ratio((double)cyc, c->sim_ms / 1e3));
-	jsonw_knum(j, "sim_to_ref_ratio",
-	           ri->check && ri->check->done ? ratio(c->sim_ms, ri->check->ref_ms) : 0.0);
+	jsonw_knum(j, "sim_cycles_per_s", ratio((double)chip_cycles(c), c->sim_ms / 1e3));
+	jsonw_knum(j, "sim_to_ref_ratio", checked ? ratio(c->sim_ms, ri->check->ref_ms) : 0.0);
 	jsonw_obj_end(j);
+}
+
+int report_json(const char *path, const report_info *ri, diag *d)
+{
+	const chip *c = ri->c;
+	jsonw jw, *j = &jw;
+	if (jsonw_open(j, path, d))
+		return -1;
+	j->group = ri->group;
+	jsonw_obj_begin(j);
+	json_run(j, ri);
+	json_units(j, c);
+	json_threads(j, c);
+	json_rays(j, c);
+	kv_object(j, c, "skipped", skipped_map, sizeof skipped_map / sizeof *skipped_map);
+	kv_object(j, c, "shading", shading_map, sizeof shading_map / sizeof *shading_map);
+	hier_stats hs;
+	int have_h = !hier_get_stats(&c->mem, &hs);
+	if (have_h && hs.func_requests) /* the bytes of untimed stretches too */
+		hs.run_ticks = chip_cycles(c) * hs.core_period;
+	json_memory(j, c, &hs, have_h);
+	json_frames(j, c);
+	json_caches(j, &hs, have_h);
+	json_check(j, ri);
+	json_counters(j, ri);
+	json_host(j, ri);
 	jsonw_obj_end(j);
 	return jsonw_close(j, d);
 }

@@ -98,14 +98,39 @@ static void feed(eng *e, void *ctx, uint64_t arg)
 		eng_schedule(e, eng_cycles_to_ticks(f->clk, f->next.cycle), feed, f, 0);
 }
 
-int main(int argc, char **argv)
-{
+/* ---- the command line ---- */
+
+typedef struct opts {
 	saar_config cfg;
-	diag d = {{0}};
-	cfg_defaults(&cfg);
-	const char *trace = NULL, *json = NULL;
-	int timing = 0;
-	uint64_t image_bytes = UINT64_MAX;
+	const char *trace, *json;
+	int timing;
+	uint64_t image_bytes; /* reads at or above it bypass the L1s */
+} opts;
+
+/* --image-bytes' value: digits only (strtoull takes "", "-1" and " 7"), at
+ * most 2^48 (no memory image is larger). 0, or -1 after the message. */
+static int parse_image_bytes(const char *v, uint64_t *out)
+{
+	char *end;
+	errno = 0;
+	*out = strtoull(v, &end, 10);
+	if (!*v || strspn(v, "0123456789") != strlen(v) || errno || *out > (1ull << 48)) {
+		fprintf(stderr,
+		        "saarsim-replay: --image-bytes: expected a byte count 0..2^48, got '%s'\n",
+		        v);
+		return -1;
+	}
+	return 0;
+}
+
+/* Reads the arguments into o (the config loaded, set and validated).
+ * Returns -1 to go on, else the exit status (0 after --help). */
+static int parse_args(int argc, char **argv, opts *o, diag *d)
+{
+	cfg_defaults(&o->cfg);
+	o->trace = o->json = NULL;
+	o->timing = 0;
+	o->image_bytes = UINT64_MAX;
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i];
 		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -120,264 +145,318 @@ int main(int argc, char **argv)
 			return 0;
 		}
 		if (!strcmp(a, "--config") && i + 1 < argc) {
-			if (cfg_load(&cfg, argv[++i], &d))
-				return fail(&d);
+			if (cfg_load(&o->cfg, argv[++i], d))
+				return fail(d);
 		} else if (!strcmp(a, "--set") && i + 1 < argc) {
-			if (cfg_set(&cfg, argv[++i], &d))
-				return fail(&d);
+			if (cfg_set(&o->cfg, argv[++i], d))
+				return fail(d);
 		} else if (!strcmp(a, "--timing")) {
-			timing = 1;
+			o->timing = 1;
 		} else if (!strcmp(a, "--image-bytes") && i + 1 < argc) {
-			/* a byte count: digits only (strtoull takes "", "-1" and
-			 * " 7"), at most 2^48 (no memory image is larger) */
-			const char *v = argv[++i];
-			char *end;
-			errno = 0;
-			image_bytes = strtoull(v, &end, 10);
-			if (!*v || strspn(v, "0123456789") != strlen(v) || errno ||
-			    image_bytes > (1ull << 48)) {
-				fprintf(
-				    stderr,
-				    "saarsim-replay: --image-bytes: expected a byte count 0..2^48, "
-				    "got '%s'\n",
-				    v);
+			if (parse_image_bytes(argv[++i], &o->image_bytes))
 				return DIAG_EXIT;
-			}
 		} else if (!strcmp(a, "--json") && i + 1 < argc) {
-			json = argv[++i];
+			o->json = argv[++i];
 		} else if (a[0] == '-' && a[1]) {
 			char what[256];
 			snprintf(what, sizeof what, "%s: unknown option or missing value", a);
 			return usage(what);
-		} else if (!trace) {
-			trace = a;
+		} else if (!o->trace) {
+			o->trace = a;
 		} else {
 			return usage("more than one trace");
 		}
 	}
-	if (!trace)
+	if (!o->trace)
 		return usage("no trace given");
-	if (cfg_validate(&cfg, &d))
-		return fail(&d);
+	if (cfg_validate(&o->cfg, d))
+		return fail(d);
+	return -1;
+}
+
+/* ---- the two replays: the figures into s, requests into *n, the last
+ * cycle into *cycles; 0, or -1 with d set ---- */
+
+/* Timed: each request issued at its trace cycle into the full hierarchy. */
+static int replay_timed(const opts *o, mtr_reader *rdp, hier_stats *s, uint64_t *n,
+                        uint64_t *cycles, diag *d)
+{
+	const saar_config *cfg = &o->cfg;
+	eng *e = eng_create(1024);
+	eng_clock clk = eng_clock_mhz(cfg->chip.clock_mhz);
+	/* The trace carries no image size. Without --image-bytes: with the VMA
+	 * every address is image; without it, whatever fits on board is
+	 * (reads above it take the spill-area path past the L1s). */
+	uint64_t img = o->image_bytes;
+	if (img == UINT64_MAX && !cfg->memory.vma.enabled)
+		img = (uint64_t)cfg->memory.sdram.mb << 20;
+	if (!e)
+		return diag_set(d, o->trace, 0, 0, "out of memory");
+	memport mp;
+	if (mem_init_hier(&mp, e, clk, cfg, img, NULL, d)) {
+		eng_destroy(e);
+		return -1;
+	}
+	/* a quarter of the tick range: room for the hierarchy's latencies */
+	feeder f = {e, clk, &mp, rdp, {0}, (UINT64_MAX >> 2) / clk.period, 0, 0, 0, 0, d};
+	int rc = next_rec(&f) < 0 ? -1 : 0;
+	if (!rc) {
+		if (f.have)
+			eng_schedule(e, eng_cycles_to_ticks(clk, f.next.cycle), feed, &f, 0);
+		eng_run(e, ENG_FOREVER);
+		rc = f.err ? -1 : 0;
+	}
+	if (!rc) {
+		*n = f.issued;
+		*cycles = eng_now(e) / clk.period;
+		hier_get_stats(&mp, s);
+	}
+	mem_free(&mp);
+	eng_destroy(e);
+	return rc;
+}
+
+/* The functional replay's state: the L1s with immediate fills, the VMA's
+ * functional path or plain SDRAM byte counts behind them. */
+typedef struct func_replay {
+	cache l1[MEM_NTYPES];
+	int nl1; /* L1s made */
+	vma v;
+	int use_vma, have_vma;
+	/* per type, hoisted: line size (and its log2 when a power of two);
+	 * all addresses below 4 GiB (the usual case) divide in 32 bits */
+	uint32_t lbs[MEM_NTYPES];
+	int lsh[MEM_NTYPES];
+	uint64_t image_bytes, sd_read, sd_write;
+} func_replay;
+
+static int func_init(func_replay *fr, const saar_config *cfg, diag *d)
+{
+	for (; fr->nl1 < MEM_NTYPES; fr->nl1++) {
+		cache_params cp = hier_l1_params(cfg, fr->nl1);
+		char what[32];
+		snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(fr->nl1));
+		if (cache_init(&fr->l1[fr->nl1], &cp, what, d))
+			return -1;
+	}
+	fr->use_vma = cfg->memory.vma.enabled;
+	if (fr->use_vma) {
+		vma_params vp = hier_vma_params(cfg);
+		if (vma_init(&fr->v, NULL, eng_clock_mhz(cfg->chip.clock_mhz), NULL, NULL,
+		             (uint64_t)cfg->memory.sdram.mb << 20, &vp, NULL, d))
+			return -1;
+		fr->have_vma = 1;
+	}
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		fr->lbs[t] = fr->l1[t].p.line_bytes;
+		fr->lsh[t] = -1;
+		for (int b = 0; b < 32; b++)
+			if (fr->lbs[t] == 1u << b)
+				fr->lsh[t] = b;
+	}
+	return 0;
+}
+
+static void func_free(func_replay *fr)
+{
+	while (fr->nl1 > 0)
+		cache_free(&fr->l1[--fr->nl1]);
+	if (fr->have_vma)
+		vma_free(&fr->v);
+}
+
+/* One request: a write or a spill-area read goes past the L1s; a read
+ * looks up every line it touches and fills the missing ones. */
+static inline void func_request(func_replay *fr, const mtr_rec *r, hier_stats *s)
+{
+	int t = r->type;
+	uint64_t addr = r->addr;
+	if (r->write) {
+		s->writes[t]++;
+		s->write_bytes[t] += r->bytes;
+		if (fr->use_vma)
+			vma_access_func(&fr->v, addr, r->bytes, 1, NULL);
+		else
+			fr->sd_write += r->bytes;
+		return;
+	}
+	s->reads[t]++;
+	s->read_bytes[t] += r->bytes;
+	if (addr >= fr->image_bytes) {
+		s->bypass_reads[t]++;
+		if (fr->use_vma)
+			vma_access_func(&fr->v, addr, r->bytes, 0, NULL);
+		else
+			fr->sd_read += r->bytes;
+		return;
+	}
+	cache *c = &fr->l1[t];
+	uint32_t lb = fr->lbs[t], bytes = r->bytes ? r->bytes : 1;
+	uint64_t first, end = addr + bytes - 1, last;
+	if (fr->lsh[t] >= 0) {
+		first = addr >> fr->lsh[t];
+		last = end >> fr->lsh[t];
+	} else if (end <= UINT32_MAX) {
+		first = (uint32_t)addr / lb;
+		last = (uint32_t)end / lb;
+	} else {
+		first = addr / lb;
+		last = end / lb;
+	}
+	/* one line (the common case): bytes counted as asked;
+	 * several: a whole line each, as before */
+	uint32_t per = first == last ? bytes : lb;
+	for (uint64_t l = first; l <= last; l++) {
+		if (cache_try_hit(c, l, per) || cache_lookup(c, l, per, NULL, NULL) == CACHE_HIT)
+			continue;
+		cache_fill(c, l, NULL);
+		if (fr->use_vma)
+			vma_access_func(&fr->v, l * lb, lb, 0, NULL);
+		else
+			fr->sd_read += lb;
+	}
+}
+
+/* The functional replay's figures into s, in the timed replay's form. */
+static void func_stats(const func_replay *fr, const saar_config *cfg, hier_stats *s)
+{
+	uint64_t sd_read = fr->sd_read;
+	const vma *v = &fr->v;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		s->l1[t] = fr->l1[t].s;
+	s->core_period = eng_clock_mhz(cfg->chip.clock_mhz).period;
+	if (fr->use_vma) {
+		s->vma_enabled = 1;
+		s->vma = v->s;
+		s->tag_cache = v->tag.s;
+		s->l2 = v->l2.s;
+		s->hostbus.bytes =
+		    v->s.host_fetch_bytes + v->s.host_write_bytes + v->s.writeback_bytes;
+		s->hostbus.transfers = v->s.host_fetches + v->s.host_writes + v->s.writebacks;
+		/* SDRAM bytes with VMA: data (reads, fills, writes) plus meta-data;
+		 * the functional path does not split reads from writes */
+		sd_read = v->s.data_bytes + v->s.meta_bytes + v->s.writeback_bytes;
+		s->memif.bytes[MEMIF_META] = v->s.meta_bytes;
+		s->memif.reads[MEMIF_META] = v->s.meta_reads;
+		s->memif.writes[MEMIF_META] = v->s.meta_writes;
+	}
+	s->sdram.read_bytes = sd_read;
+	s->sdram.write_bytes = fr->sd_write;
+}
+
+/* Functional: every request through its L1 with immediate fills. */
+static int replay_functional(const opts *o, mtr_reader *rdp, hier_stats *s, uint64_t *n,
+                             uint64_t *cycles, diag *d)
+{
+	/* the L1s' and the VMA's state is large: on the heap */
+	func_replay *fr = calloc(1, sizeof *fr);
+	if (!fr)
+		return diag_set(d, o->trace, 0, 0, "out of memory");
+	fr->image_bytes = o->image_bytes;
+	int rc = func_init(fr, &o->cfg, d);
+	const mtr_rec *blk;
+	int got = 0;
+	while (!rc && (got = mtr_read_block(rdp, &blk, d)) > 0) {
+		*n += (uint64_t)got;
+		*cycles = blk[got - 1].cycle;
+		for (const mtr_rec *r = blk, *rend = blk + got; r < rend; r++)
+			func_request(fr, r, s);
+	}
+	if (!rc && got < 0)
+		rc = -1;
+	if (!rc)
+		func_stats(fr, &o->cfg, s);
+	func_free(fr);
+	free(fr);
+	return rc;
+}
+
+/* ---- the figures ---- */
+
+static double pct_of(uint64_t part, uint64_t whole)
+{
+	return whole ? 100.0 * (double)part / (double)whole : 0.0;
+}
+
+static void print_summary(const opts *o, const hier_stats *s, uint64_t n, uint64_t cycles,
+                          double secs)
+{
+	printf("trace %s: %llu requests, last cycle %llu, %s replay\n", o->trace,
+	       (unsigned long long)n, (unsigned long long)cycles,
+	       o->timing ? "timed" : "functional");
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		const cache_stats *c = &s->l1[t];
+		printf("  l1.%-5s accesses %12llu  hits %12llu  misses %10llu  hit rate %6.2f%%  "
+		       "merges %8llu  fill bytes %12llu\n",
+		       mem_type_name(t), (unsigned long long)c->accesses,
+		       (unsigned long long)c->hits, (unsigned long long)c->misses,
+		       pct_of(c->hits, c->accesses), (unsigned long long)c->merges,
+		       (unsigned long long)c->fill_bytes);
+	}
+	if (s->vma_enabled) {
+		const vma_stats *v = &s->vma;
+		printf("  tag cache hit rate %6.2f%%   L2 hit rate %6.2f%%   meta-data SDRAM "
+		       "accesses %llu (%.1f%% of SDRAM accesses)\n",
+		       pct_of(s->tag_cache.hits, s->tag_cache.accesses),
+		       pct_of(s->l2.hits, s->l2.accesses),
+		       (unsigned long long)(v->meta_reads + v->meta_writes),
+		       100.0 * (double)(v->meta_reads + v->meta_writes) /
+		           (double)(v->meta_reads + v->meta_writes + v->data_reads +
+		                    v->data_writes + (v->meta_reads + v->data_reads == 0)));
+		printf("  host bus: %llu bytes in %llu transfers\n",
+		       (unsigned long long)s->hostbus.bytes,
+		       (unsigned long long)s->hostbus.transfers);
+	}
+	printf("  SDRAM bytes %llu (read %llu, write %llu)\n",
+	       (unsigned long long)(s->sdram.read_bytes + s->sdram.write_bytes),
+	       (unsigned long long)s->sdram.read_bytes, (unsigned long long)s->sdram.write_bytes);
+	if (o->timing)
+		printf("  SDRAM row hits %llu, row misses %llu, busy %.1f%%; %llu core cycles\n",
+		       (unsigned long long)s->sdram.row_hits,
+		       (unsigned long long)(s->sdram.row_empty + s->sdram.row_conflicts),
+		       pct_of(s->sdram.busy_ticks, s->now_ticks), (unsigned long long)cycles);
+	printf("  replay speed: %.1f million requests per host second (%.3f s)\n",
+	       secs > 0 ? (double)n / secs / 1e6 : 0.0, secs);
+}
+
+static int write_json(const char *path, const hier_stats *s, diag *d)
+{
+	jsonw w;
+	if (jsonw_open(&w, path, d))
+		return -1;
+	hier_write_json(s, &w);
+	return jsonw_close(&w, d);
+}
+
+int main(int argc, char **argv)
+{
+	static opts o;
+	diag d = {{0}};
+	int ret = parse_args(argc, argv, &o, &d);
+	if (ret >= 0)
+		return ret;
 
 	/* the clock includes opening the trace (its first read) */
 	double t0 = now_s();
 	/* the reader holds a block buffer of hundreds of KB: on the heap */
 	mtr_reader *rdp = calloc(1, sizeof *rdp);
 	if (!rdp) {
-		diag_set(&d, trace, 0, 0, "out of memory");
+		diag_set(&d, o.trace, 0, 0, "out of memory");
 		return fail(&d);
 	}
-	if (mtr_open_read(rdp, trace, &d)) {
+	if (mtr_open_read(rdp, o.trace, &d)) {
 		free(rdp);
 		return fail(&d);
 	}
-	/* from here every way out (goto out) frees what it holds */
-	int ret = DIAG_EXIT;
-	eng *e = NULL;
-	memport mp;
-	int have_mp = 0, nl1 = 0, have_vma = 0;
-	cache l1[MEM_NTYPES];
-	vma v;
-
 	hier_stats s;
 	memset(&s, 0, sizeof s);
 	uint64_t n = 0, cycles = 0;
-	if (timing) {
-		e = eng_create(1024);
-		eng_clock clk = eng_clock_mhz(cfg.chip.clock_mhz);
-		/* The trace carries no image size. Without --image-bytes: with the VMA
-		 * every address is image; without it, whatever fits on board is
-		 * (reads above it take the spill-area path past the L1s). */
-		uint64_t img = image_bytes;
-		if (img == UINT64_MAX && !cfg.memory.vma.enabled)
-			img = (uint64_t)cfg.memory.sdram.mb << 20;
-		if (!e) {
-			diag_set(&d, trace, 0, 0, "out of memory");
-			goto out;
-		}
-		if (mem_init_hier(&mp, e, clk, &cfg, img, NULL, &d))
-			goto out;
-		have_mp = 1;
-		/* a quarter of the tick range: room for the hierarchy's latencies */
-		feeder f = {e, clk, &mp, rdp, {0}, (UINT64_MAX >> 2) / clk.period, 0, 0, 0, 0, &d};
-		if (next_rec(&f) < 0)
-			goto out;
-		if (f.have)
-			eng_schedule(e, eng_cycles_to_ticks(clk, f.next.cycle), feed, &f, 0);
-		eng_run(e, ENG_FOREVER);
-		if (f.err)
-			goto out;
-		n = f.issued;
-		cycles = eng_now(e) / clk.period;
-		hier_get_stats(&mp, &s);
-	} else {
-		for (; nl1 < MEM_NTYPES; nl1++) {
-			cache_params cp = hier_l1_params(&cfg, nl1);
-			char what[32];
-			snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(nl1));
-			if (cache_init(&l1[nl1], &cp, what, &d))
-				goto out;
-		}
-		int use_vma = cfg.memory.vma.enabled;
-		if (use_vma) {
-			vma_params vp = hier_vma_params(&cfg);
-			if (vma_init(&v, NULL, eng_clock_mhz(cfg.chip.clock_mhz), NULL, NULL,
-			             (uint64_t)cfg.memory.sdram.mb << 20, &vp, NULL, &d))
-				goto out;
-			have_vma = 1;
-		}
-		uint64_t sd_read = 0, sd_write = 0;
-		/* per type, hoisted: line size (and its log2 when a power of two);
-		 * all addresses below 4 GiB (the usual case) divide in 32 bits */
-		uint32_t lbs[MEM_NTYPES];
-		int lsh[MEM_NTYPES];
-		for (int t = 0; t < MEM_NTYPES; t++) {
-			lbs[t] = l1[t].p.line_bytes;
-			lsh[t] = -1;
-			for (int b = 0; b < 32; b++)
-				if (lbs[t] == 1u << b)
-					lsh[t] = b;
-		}
-		const mtr_rec *blk;
-		int rc;
-		while ((rc = mtr_read_block(rdp, &blk, &d)) > 0) {
-			n += (uint64_t)rc;
-			cycles = blk[rc - 1].cycle;
-			for (const mtr_rec *r = blk, *rend = blk + rc; r < rend; r++) {
-				int t = r->type;
-				uint64_t addr = r->addr;
-				if (r->write) {
-					s.writes[t]++;
-					s.write_bytes[t] += r->bytes;
-					if (use_vma)
-						vma_access_func(&v, addr, r->bytes, 1, NULL);
-					else
-						sd_write += r->bytes;
-					continue;
-				}
-				s.reads[t]++;
-				s.read_bytes[t] += r->bytes;
-				if (addr >= image_bytes) {
-					s.bypass_reads[t]++;
-					if (use_vma)
-						vma_access_func(&v, addr, r->bytes, 0, NULL);
-					else
-						sd_read += r->bytes;
-					continue;
-				}
-				cache *c = &l1[t];
-				uint32_t lb = lbs[t], bytes = r->bytes ? r->bytes : 1;
-				uint64_t first, end = addr + bytes - 1, last;
-				if (lsh[t] >= 0) {
-					first = addr >> lsh[t];
-					last = end >> lsh[t];
-				} else if (end <= UINT32_MAX) {
-					first = (uint32_t)addr / lb;
-					last = (uint32_t)end / lb;
-				} else {
-					first = addr / lb;
-					last = end / lb;
-				}
-				/* one line (the common case): bytes counted as asked;
-				 * several: a whole line each, as before */
-				uint32_t per = first == last ? bytes : lb;
-				for (uint64_t l = first; l <= last; l++) {
-					if (cache_try_hit(c, l, per) ||
-					    cache_lookup(c, l, per, NULL, NULL) == CACHE_HIT)
-						continue;
-					cache_fill(c, l, NULL);
-					if (use_vma)
-						vma_access_func(&v, l * lb, lb, 0, NULL);
-					else
-						sd_read += lb;
-				}
-			}
-		}
-		if (rc < 0)
-			goto out;
-		for (int t = 0; t < MEM_NTYPES; t++)
-			s.l1[t] = l1[t].s;
-		s.core_period = eng_clock_mhz(cfg.chip.clock_mhz).period;
-		if (use_vma) {
-			s.vma_enabled = 1;
-			s.vma = v.s;
-			s.tag_cache = v.tag.s;
-			s.l2 = v.l2.s;
-			s.hostbus.bytes =
-			    v.s.host_fetch_bytes + v.s.host_write_bytes + v.s.writeback_bytes;
-			s.hostbus.transfers = v.s.host_fetches + v.s.host_writes + v.s.writebacks;
-			/* SDRAM bytes with VMA: data (reads, fills, writes) plus meta-data;
-			 * the functional path does not split reads from writes */
-			sd_read = v.s.data_bytes + v.s.meta_bytes + v.s.writeback_bytes;
-			s.memif.bytes[MEMIF_META] = v.s.meta_bytes;
-			s.memif.reads[MEMIF_META] = v.s.meta_reads;
-			s.memif.writes[MEMIF_META] = v.s.meta_writes;
-		}
-		s.sdram.read_bytes = sd_read;
-		s.sdram.write_bytes = sd_write;
-	}
-	double secs = now_s() - t0;
-
-	printf("trace %s: %llu requests, last cycle %llu, %s replay\n", trace,
-	       (unsigned long long)n, (unsigned long long)cycles, timing ? "timed" : "functional");
-	for (int t = 0; t < MEM_NTYPES; t++) {
-		const cache_stats *c = &s.l1[t];
-		printf("  l1.%-5s accesses %12llu  hits %12llu  misses %10llu  hit rate %6.2f%%  "
-		       "merges %8llu  fill bytes %12llu\n",
-		       mem_type_name(t), (unsigned long long)c->accesses,
-		       (unsigned long long)c->hits, (unsigned long long)c->misses,
-		       c->accesses ? 100.0 * (double)c->hits / (double)c->accesses : 0.0,
-		       (unsigned long long)c->merges, (unsigned long long)c->fill_bytes);
-	}
-	if (s.vma_enabled) {
-		printf(
-		    "  tag cache hit rate %6.2f%%   L2 hit rate %6.2f%%   meta-data SDRAM accesses "
-		    "%llu (%.1f%% of SDRAM accesses)\n",
-		    s.tag_cache.accesses
-		        ? 100.0 * (double)s.tag_cache.hits / (double)s.tag_cache.accesses
-		        : 0.0,
-		    s.l2.accesses ? 100.0 * (double)s.l2.hits / (double)s.l2.accesses : 0.0,
-		    (unsigned long long)(s.vma.meta_reads + s.vma.meta_writes),
-		    100.0 * (double)(s.vma.meta_reads + s.vma.meta_writes) /
-		        (double)(s.vma.meta_reads + s.vma.meta_writes + s.vma.data_reads +
-		                 s.vma.data_writes + (s.vma.meta_reads + s.vma.data_reads == 0)));
-		printf("  host bus: %llu bytes in %llu transfers\n",
-		       (unsigned long long)s.hostbus.bytes,
-		       (unsigned long long)s.hostbus.transfers);
-	}
-	printf("  SDRAM bytes %llu (read %llu, write %llu)\n",
-	       (unsigned long long)(s.sdram.read_bytes + s.sdram.write_bytes),
-	       (unsigned long long)s.sdram.read_bytes, (unsigned long long)s.sdram.write_bytes);
-	if (timing)
-		printf("  SDRAM row hits %llu, row misses %llu, busy %.1f%%; %llu core cycles\n",
-		       (unsigned long long)s.sdram.row_hits,
-		       (unsigned long long)(s.sdram.row_empty + s.sdram.row_conflicts),
-		       s.now_ticks ? 100.0 * (double)s.sdram.busy_ticks / (double)s.now_ticks : 0.0,
-		       (unsigned long long)cycles);
-	printf("  replay speed: %.1f million requests per host second (%.3f s)\n",
-	       secs > 0 ? (double)n / secs / 1e6 : 0.0, secs);
-	if (json) {
-		jsonw w;
-		if (jsonw_open(&w, json, &d))
-			goto out;
-		hier_write_json(&s, &w);
-		if (jsonw_close(&w, &d))
-			goto out;
-	}
-	ret = 0;
-out:
-	if (ret)
-		fail(&d);
-	if (have_mp)
-		mem_free(&mp);
-	if (e)
-		eng_destroy(e);
-	while (nl1 > 0)
-		cache_free(&l1[--nl1]);
-	if (have_vma)
-		vma_free(&v);
+	ret = (o.timing ? replay_timed : replay_functional)(&o, rdp, &s, &n, &cycles, &d);
+	if (!ret)
+		print_summary(&o, &s, n, cycles, now_s() - t0);
+	if (!ret && o.json)
+		ret = write_json(o.json, &s, &d);
 	mtr_close_read(rdp);
 	free(rdp);
-	return ret;
+	return ret ? fail(&d) : 0;
 }
