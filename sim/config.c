@@ -4,7 +4,8 @@
  * file streams), --set overrides, cross-key checks, the JSON dump,
  * --list-config and docs/config.md.
  *
- * Adding a key is one line in `keys` plus the field in saar_config. Keys of
+ * Adding a key is one line in `keys_src` plus the field in saar_config (the
+ * unit kinds' keys come from units/unit_table.h: UNIT_KEYS). Keys of
  * one section must stay contiguous in the table (the JSON writer opens each
  * section once; tests check this). Provenance: "published" values cite the
  * seed paper (Wald et al., EG 2003 STAR, seed 002 §4); "assumed" ones say why.
