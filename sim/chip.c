@@ -27,23 +27,51 @@
 #include <unistd.h>
 
 #include "kernel-ref/worldcache.h"
+#include "units/intersection.h"
+#include "units/list.h"
 #include "units/pktreplay.h"
 #include "units/rgs.h"
+#include "units/traversal.h"
 
-static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
+/* ---- the unit kinds (units/unit_table.h) and the pipeline ----
+ *
+ * Every per-kind list here derives from unit_table: names, config,
+ * counters, resources. The pipeline's order (seed 002 §4.1) is this
+ * route, set in every thread's environment when the chip is wired: a
+ * packet (after ray generation, or a queued secondary one) enters
+ * traversal; a leaf goes to the list unit, its entries to intersection,
+ * which resumes traversal; a finished traversal goes to the RGS for
+ * shading. */
+static const unit_route pipeline = {
+    .enter = tu_begin,
+    .leaf = list_leaf,
+    .triangles = isu_next,
+    .traverse = tu_step,
+    .finish = rgs_finish,
+};
+
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
                                                      "waiting_unit"};
 
 const cfg_unit *chip_unit_cfg(const saar_config *cfg, int kind)
 {
-	const cfg_unit *u[UNIT_NKINDS] = {&cfg->chip.rgs, &cfg->chip.trav, &cfg->chip.list,
-	                                  &cfg->chip.isect};
-	return u[kind];
+	return &cfg->chip.unit[kind];
 }
 
 const char *chip_unit_name(int kind)
 {
-	return kind >= 0 && kind < UNIT_NKINDS ? unit_names[kind] : "?";
+	return unit_name(kind);
+}
+
+/* The parameters of unit kind k's instances from the config: the builder's
+ * part, so that units/ reads no config schema. */
+static unit_params unit_params_of(const saar_config *cfg, int k)
+{
+	const cfg_unit *u = &cfg->chip.unit[k];
+	return (unit_params){u->count, u->width, u->latency, cfg->chip.masked_packets,
+	                     cfg->chip.thread_sched == CFG_SCHED_OLDEST_FIRST
+	                         ? UNIT_SCHED_OLDEST_FIRST
+	                         : UNIT_SCHED_ROUND_ROBIN};
 }
 
 const char *chip_state_name(int state)
@@ -113,12 +141,12 @@ static void chip_demand(const chip *c, double d[RES_N])
 {
 	memset(d, 0, RES_N * sizeof *d);
 	for (int k = 0; k < UNIT_NKINDS; k++)
-		d[RES_RGS + k] = chip_work(c, k) / c->nrtp;
+		d[RES_UNIT + k] = chip_work(c, k) / c->nrtp;
 	hier_stats h;
 	if (hier_get_stats(&c->mem, &h))
 		return;
 	for (int t = 0; t < MEM_NTYPES; t++)
-		d[RES_L1_SHADE + t] =
+		d[RES_L1 + t] =
 		    (double)(h.reads[t] - h.bypass_reads[t]) / hier_l1_params(&c->cfg, t).ports;
 	double per = (double)c->clk.period;
 	d[RES_SDRAM] =
@@ -449,18 +477,10 @@ static void thread_free(thr_ctx *t)
 	thr_free_buffers(t);
 }
 
-chip *chip_create(const saar_config *cfg, const world *w, diag *d)
+/* The chip's frame, engine, per-frame figures and the memory's bytes (the
+ * image, then every slot's spill area); -1 when out of memory. */
+static int chip_base(chip *c, const saar_config *cfg, const world *w)
 {
-	if (cfg->chip.packet_w != TILE_W || cfg->chip.packet_h != TILE_H) {
-		diag_set(d, "config", 0, 0,
-		         "chip.packet_w x chip.packet_h = %d x %d: only %d x %d packets are "
-		         "supported (kernel-ref tiles)",
-		         cfg->chip.packet_w, cfg->chip.packet_h, TILE_W, TILE_H);
-		return NULL;
-	}
-	chip *c = calloc(1, sizeof *c);
-	if (!c)
-		goto oom;
 	c->cfg = *cfg;
 	c->w = w;
 	c->nrtp = cfg->chip.rtps;
@@ -476,30 +496,36 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	c->spill_base = (w->m.size + 4095) & ~(uint64_t)4095;
 	c->regs = w->m;
 	c->regs.bytes = NULL;
-	/* the memory's bytes: the image, then every slot's spill area */
 	uint64_t space =
 	    c->spill_base + (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
 	if (!c->e || !c->frame_cycles || !c->frame_port ||
 	    (cfg->memory.model == CFG_MEM_HIERARCHY && !c->frame_mem) ||
 	    ms_init(&c->store, w->m.bytes, w->m.size, space))
-		goto oom;
-	/* a memory model the config cannot build (an image too big for the
-	 * board without VMA, a bad cache geometry) is the user's error: keep
-	 * its message */
+		return -1;
+	return 0;
+}
+
+/* The memory model of memory.model behind the port. A model the config
+ * cannot build (an image too big for the board without VMA, a bad cache
+ * geometry) is the user's error: its message is kept. */
+static int chip_memory(chip *c, diag *d)
+{
+	const saar_config *cfg = &c->cfg;
 	int mrc;
 	if (cfg->memory.model == CFG_MEM_HIERARCHY)
 		mrc = mem_init_hier(&c->mem, c->e, c->clk, cfg, c->spill_base, &c->store, d);
 	else if ((mrc = mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency, &c->store)))
 		diag_set(d, "chip", 0, 0, "out of memory");
-	if (mrc) {
-		chip_destroy(c);
-		return NULL;
-	}
-	if (thr_env_init(&c->env) || fb_init(&c->fb, cfg->frame.width, cfg->frame.height) ||
-	    rgc_init(&c->g, cfg->frame.width, cfg->frame.height, cfg->chip.tile_order) ||
-	    !(c->replayed = calloc((size_t)c->g.ntiles, 1)))
-		goto oom;
+	return mrc;
+}
 
+/* The units' shared environment: memory, registers, datapath formats,
+ * shading, camera and the pipeline's route. -1 (diag) on an unsupported
+ * floating-point format. */
+static int chip_env(chip *c, diag *d)
+{
+	const saar_config *cfg = &c->cfg;
+	const world *w = c->w;
 	thr_env *v = &c->env;
 	v->e = c->e;
 	v->clk = c->clk;
@@ -514,13 +540,11 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	    fpfmt_init(&v->prec.isect, cfg->chip.fp.isect.exp, cfg->chip.fp.isect.mant,
 	               cfg->chip.fp.round) ||
 	    fpfmt_init(&v->prec.shade, cfg->chip.fp.shade.exp, cfg->chip.fp.shade.mant,
-	               cfg->chip.fp.round)) {
-		diag_set(d, "config", 0, 0, "chip.fp: unsupported floating-point format");
-		chip_destroy(c);
-		return NULL;
-	}
+	               cfg->chip.fp.round))
+		return diag_set(d, "config", 0, 0, "chip.fp: unsupported floating-point format");
 	v->nlights = w->v.nlights;
 	v->spill_base = c->spill_base;
+	v->route = pipeline;
 	v->on_free = on_free;
 	v->owner = c;
 	render_opts ro;
@@ -528,8 +552,14 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
 	                    ro.background, &c->fb,      NULL};
 	cam_setup(&v->cam, &w->v.cam, cfg->frame.width, cfg->frame.height);
+	return 0;
+}
 
-	/* counters */
+/* The chip-wide counters: packets and rays by type, the units' counters
+ * (enum thr_counter), shade_counts and the memory port's traffic. */
+static void chip_counters_reg(chip *c)
+{
+	thr_env *v = &c->env;
 	char name[64];
 	for (int t = 0; t < PKT_NTYPES; t++) {
 		snprintf(name, sizeof name, "packets.%s", pkt_type_name(t));
@@ -549,48 +579,71 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 			c->memc[t][k] = reg(c, name, k & 1 ? "bytes" : "requests",
 			                    "memory-port traffic of this requester type");
 		}
+}
 
-	/* RTPs, units and threads */
+/* RTP r's units, one group per kind of unit_table, with their counters
+ * rtp<r>.<name>.ops/busy_cycles/rays. -1 when out of memory. */
+static int rtp_units(chip *c, thr_rtp *rp)
+{
+	char name[64];
+	for (int k = 0; k < UNIT_NKINDS; k++) {
+		thr_unit *u = &rp->u[k];
+		unit_params p = unit_params_of(&c->cfg, k);
+		if (thr_unit_init(u, c->e, c->clk, &p, c->tpr))
+			return -1;
+		u->on_start = thr_on_start;
+		const char *un = unit_table[k].name;
+		snprintf(name, sizeof name, "rtp%d.%s.ops", rp->id, un);
+		u->ops_n = reg(c, name, "ops", "operations issued");
+		snprintf(name, sizeof name, "rtp%d.%s.busy_cycles", rp->id, un);
+		u->busy = reg(c, name, "cycles", "issue cycles (summed over the units)");
+		snprintf(name, sizeof name, "rtp%d.%s.rays", rp->id, un);
+		u->rays = reg(c, name, "rays", "active rays of those operations");
+		if (c->oom)
+			return -1;
+	}
+	return 0;
+}
+
+/* The RTPs: units, thread-state counters and thread contexts. -1 when out
+ * of memory. */
+static int chip_rtps(chip *c)
+{
+	char name[64];
 	c->rtp = calloc((size_t)c->nrtp, sizeof *c->rtp);
 	if (!c->rtp)
-		goto oom;
-	int nkids = w->v.nlights + 2;
+		return -1;
+	int nkids = c->w->v.nlights + 2;
 	for (int r = 0; r < c->nrtp; r++) {
 		thr_rtp *rp = &c->rtp[r];
-		rp->env = v;
+		rp->env = &c->env;
 		rp->id = r;
-		for (int k = 0; k < UNIT_NKINDS; k++) {
-			thr_unit *u = &rp->u[k];
-			if (thr_unit_init(u, c->e, c->clk, chip_unit_cfg(cfg, k),
-			                  cfg->chip.masked_packets, cfg->chip.thread_sched, c->tpr))
-				goto oom;
-			u->on_start = thr_on_start;
-			snprintf(name, sizeof name, "rtp%d.%s.ops", r, unit_names[k]);
-			u->ops_n = reg(c, name, "ops", "operations issued");
-			snprintf(name, sizeof name, "rtp%d.%s.busy_cycles", r, unit_names[k]);
-			u->busy = reg(c, name, "cycles", "issue cycles (summed over the units)");
-			snprintf(name, sizeof name, "rtp%d.%s.rays", r, unit_names[k]);
-			u->rays = reg(c, name, "rays", "active rays of those operations");
-			if (c->oom)
-				goto oom;
-		}
+		if (rtp_units(c, rp))
+			return -1;
 		for (int s = 0; s < THR_NSTATES; s++) {
 			snprintf(name, sizeof name, "rtp%d.threads.%s_ps", r, state_names[s]);
 			rp->occ[s] = reg(c, name, "ps", "thread time in this state, summed");
 		}
 		rp->t = alloc64((size_t)c->tpr * sizeof(thr_ctx));
 		if (!rp->t)
-			goto oom;
+			return -1;
 		memset(rp->t, 0, (size_t)c->tpr * sizeof(thr_ctx));
 		rp->nt = c->tpr;
 		rp->nidle = c->tpr;
 		for (int i = 0; i < c->tpr; i++)
 			if (thread_init(&rp->t[i], rp, i, r * c->tpr + i, nkids))
-				goto oom;
+				return -1;
 	}
+	return 0;
+}
+
+/* Functional processing's turn order (slot 0 of each RTP, then slot 1,
+ * ...) and its live and parked sets. -1 when out of memory. */
+static int chip_turns(chip *c)
+{
 	c->turn = malloc((size_t)c->nrtp * (size_t)c->tpr * sizeof *c->turn);
 	if (!c->turn)
-		goto oom;
+		return -1;
 	for (int s = 0; s < c->tpr; s++)
 		for (int r = 0; r < c->nrtp; r++)
 			c->turn[s * c->nrtp + r] = &c->rtp[r].t[s];
@@ -599,9 +652,36 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	c->park = malloc(nslots * sizeof *c->park);
 	c->park_n = malloc((size_t)c->nrtp * sizeof *c->park_n);
 	c->relax_n = malloc(nslots * sizeof *c->relax_n);
-	if (!c->live || !c->park || !c->park_n || !c->relax_n)
+	return c->live && c->park && c->park_n && c->relax_n ? 0 : -1;
+}
+
+chip *chip_create(const saar_config *cfg, const world *w, diag *d)
+{
+	if (cfg->chip.packet_w != TILE_W || cfg->chip.packet_h != TILE_H) {
+		diag_set(d, "config", 0, 0,
+		         "chip.packet_w x chip.packet_h = %d x %d: only %d x %d packets are "
+		         "supported (kernel-ref tiles)",
+		         cfg->chip.packet_w, cfg->chip.packet_h, TILE_W, TILE_H);
+		return NULL;
+	}
+	chip *c = calloc(1, sizeof *c);
+	if (!c || chip_base(c, cfg, w))
 		goto oom;
-	if (c->oom || fid_init(c))
+	if (chip_memory(c, d)) {
+		chip_destroy(c);
+		return NULL;
+	}
+	int order = cfg->chip.tile_order == CFG_TILES_MORTON ? RGC_MORTON : RGC_SCANLINE;
+	if (thr_env_init(&c->env) || fb_init(&c->fb, cfg->frame.width, cfg->frame.height) ||
+	    rgc_init(&c->g, cfg->frame.width, cfg->frame.height, order) ||
+	    !(c->replayed = calloc((size_t)c->g.ntiles, 1)))
+		goto oom;
+	if (chip_env(c, d)) {
+		chip_destroy(c);
+		return NULL;
+	}
+	chip_counters_reg(c);
+	if (chip_rtps(c) || chip_turns(c) || c->oom || fid_init(c))
 		goto oom;
 	return c;
 oom:
@@ -720,13 +800,17 @@ static uint64_t run_region(chip *c, int end)
 	return eng_now(c->e) - t0;
 }
 
-/* The resource behind each regressor of the linear demand model. */
-static const int lin_res[SMP_LIN] = {RES_RGS,   RES_TRAV,  RES_LIST,
-                                     RES_ISECT, RES_SDRAM, RES_HOSTBUS};
+/* The resource behind regressor i of the linear demand model: every unit
+ * kind, then SDRAM and host bus. */
+_Static_assert(SMP_LIN == UNIT_NKINDS + 2, "sampling.h SMP_LIN: the unit kinds, SDRAM, host bus");
+static int lin_res(int i)
+{
+	return i < UNIT_NKINDS ? RES_UNIT + i : i == UNIT_NKINDS ? RES_SDRAM : RES_HOSTBUS;
+}
 
 const char *chip_lin_name(int i)
 {
-	return i >= 0 && i < SMP_LIN ? chip_res_name(lin_res[i]) : "?";
+	return i >= 0 && i < SMP_LIN ? chip_res_name(lin_res(i)) : "?";
 }
 
 /* The demand of a stretch between two chip_demand snapshots, and whether
@@ -746,7 +830,7 @@ static smp_piece piece(const chip *c, const double *a, const double *b)
 			p.comp = d;
 	}
 	for (int i = 0; i < SMP_LIN; i++)
-		p.lin[i] = b[lin_res[i]] - a[lin_res[i]];
+		p.lin[i] = b[lin_res(i)] - a[lin_res(i)];
 	double hs = c->cfg.sampling.hard_share, mem = p.sdram > p.hbus ? p.sdram : p.hbus;
 	p.hard = hs > 0 && mem > hs * p.comp;
 	return p;
@@ -1137,12 +1221,15 @@ static void sampled_estimate(chip *c, int f, int nr, uint64_t t0)
 	                 : INFINITY;
 }
 
-static const char *const res_names[RES_N] = {"rgs",   "trav",    "list",   "isect", "l1_shade",
-                                             "l1_kd", "l1_list", "l1_tri", "sdram", "hostbus"};
+/* The resources after the unit kinds' (whose names are the kinds'). */
+static const char *const res_names[RES_N - RES_L1] = {"l1_shade", "l1_kd", "l1_list",
+                                                      "l1_tri",   "sdram", "hostbus"};
 
 const char *chip_res_name(int res)
 {
-	return res >= 0 && res < RES_N ? res_names[res] : "?";
+	if (res >= RES_UNIT && res < RES_L1)
+		return unit_name(res - RES_UNIT);
+	return res >= RES_L1 && res < RES_N ? res_names[res - RES_L1] : "?";
 }
 
 const char *chip_rec_name(int state)
@@ -1429,7 +1516,7 @@ static void resource_bound(chip *c)
 				most = w - *prev;
 			*prev = w;
 		}
-		F->res_cycles[RES_RGS + k] = most;
+		F->res_cycles[RES_UNIT + k] = most;
 	}
 	F->bound_by = 0;
 	for (int r = 1; r < RES_N; r++)

@@ -54,17 +54,12 @@ typedef struct chip_check {
 	int single_cached;
 } chip_check;
 
-/* Resources the busiest-resource bound looks at (chip_fidelity). */
+/* Resources the busiest-resource bound looks at (chip_fidelity): every
+ * unit kind of units/unit_table.h, every L1, SDRAM and host bus. */
 enum chip_res {
-	RES_RGS,
-	RES_TRAV,
-	RES_LIST,
-	RES_ISECT, /* unit issue cycles / (count x rtps) */
-	RES_L1_SHADE,
-	RES_L1_KD,
-	RES_L1_LIST,
-	RES_L1_TRI, /* L1 requests / ports */
-	RES_SDRAM,  /* SDRAM data-bus time */
+	RES_UNIT,                        /* + enum unit_kind: issue cycles / (count x rtps) */
+	RES_L1 = RES_UNIT + UNIT_NKINDS, /* + enum mem_req_type: L1 requests / ports */
+	RES_SDRAM = RES_L1 + MEM_NTYPES, /* SDRAM data-bus time */
 	RES_HOSTBUS,
 	RES_N
 };
@@ -241,8 +236,9 @@ const char *chip_res_name(int res);
 /* Name of the linear demand model's regressor i (sampling.h SMP_LIN): the
  * chip resource it is ("rgs", ..., "sdram", "hostbus"). */
 const char *chip_lin_name(int i);
-const char *chip_unit_name(int kind); /* "rgs", "trav", "list", "isect" */
-/* The config of unit kind `kind` (enum unit_kind): chip.rgs, ... */
+/* unit_table[kind].name: "rgs", "trav", "list", "isect" */
+const char *chip_unit_name(int kind);
+/* The config of unit kind `kind` (enum unit_kind): chip.<name>.* */
 const cfg_unit *chip_unit_cfg(const saar_config *cfg, int kind);
 const char *chip_state_name(int state); /* "idle", "running", "waiting_memory", "waiting_unit" */
 

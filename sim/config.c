@@ -4,7 +4,8 @@
  * file streams), --set overrides, cross-key checks, the JSON dump,
  * --list-config and docs/config.md.
  *
- * Adding a key is one line in `keys` plus the field in saar_config. Keys of
+ * Adding a key is one line in `keys_src` plus the field in saar_config (the
+ * unit kinds' keys come from units/unit_table.h: UNIT_KEYS). Keys of
  * one section must stay contiguous in the table (the JSON writer opens each
  * section once; tests check this). Provenance: "published" values cite the
  * seed paper (Wald et al., EG 2003 STAR, seed 002 §4); "assumed" ones say why.
@@ -17,6 +18,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -50,18 +52,10 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 #define BOOL(p, f, d)           KEY(p, CFG_BOOL, f, d, 0, 1, "")
 #define ENUM(p, f, nm)          KEY(p, CFG_ENUM, f, 0, 0, 0, ""), .names = nm
 
-/* A 64-ray packet op takes ceil(64/width) cycles to issue. The seed gives no
- * unit widths; it says the chip "is designed for 4:1 ratio" of traversal to
- * intersection operations (§4.7), so traversal is 4x as wide as intersection. */
 /* clang-format off */
-#define UNIT(u, what, w, l, why)                                                                   \
-	{INT("chip." #u ".count", chip.u.count, 1, 1, 64, ""), PUB "§4.1 (one per RTP)",           \
-	 .desc = "number of " what " units per RTP"},                                              \
-	{INT("chip." #u ".width", chip.u.width, w, 1, 64, "rays/cycle"), .source = why,            \
-	 .desc = "rays one " what " unit accepts per cycle"},                                        \
-	{INT("chip." #u ".latency", chip.u.latency, l, 1, 10000, "core cycles"), TIMING,           \
-	 .source = "pipeline depth not published; a few cycles per stage group",                   \
-	 .desc = "pipeline latency of one " what " unit"}
+/* The unit keys chip.<name>.count/width/latency of every kind in
+ * units/unit_table.h stand where this entry is (keys_init). */
+#define UNIT_KEYS {.path = NULL}
 /* One first-level cache: sizes and line sizes are published (seed 002 §4.1,
  * §4.7); the timing-side parameters are ours. */
 #define L1(c, what, kb)                                                                            \
@@ -95,7 +89,7 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 #define L1LINE_tri   36
 /* clang-format on */
 
-static const cfg_key keys[] = {
+static const cfg_key keys_src[] = {
     {KEY("name", CFG_STR, name, 0, 0, 0, ""), .sdef = "saarcor-std",
      .source = "a label, not hardware",
      .desc = "name of this configuration, copied into reports; a config file without it is "
@@ -196,10 +190,7 @@ static const cfg_key keys[] = {
      .source = "IEEE default; SaarCOR's rounding is not published",
      .desc = "rounding of the reduced formats; traversal and intersection bounds stay "
              "conservative in every mode"},
-    UNIT(rgs, "ray-generation and shading", 4, 24, "not published; shading is the costliest op"),
-    UNIT(trav, "traversal", 16, 8, "not published; 4x isect width (§4.7: designed for 4:1)"),
-    UNIT(list, "list", 64, 2, "not published; one list entry serves the whole packet"),
-    UNIT(isect, "intersection", 4, 20, "not published; 1/4 of trav width (§4.7: 4:1)"),
+    UNIT_KEYS,
     {INT("frame.width", frame.width, 1024, 1, 16384, "pixels"),
      .source = "a common benchmark size; seed 002 Table 5 does not state it",
      .desc = "image width"},
@@ -302,16 +293,76 @@ static const cfg_key keys[] = {
      .desc = "setup latency per transaction; negative = the preset's"},
 };
 
-#define NKEYS (sizeof keys / sizeof keys[0])
+/* The table: keys_src with UNIT_KEYS replaced by three keys per unit kind
+ * (units/unit_table.h), built once (keys_init) before any use. */
+#define NSRC  (sizeof keys_src / sizeof keys_src[0])
+#define NKEYS (NSRC - 1 + 3 * UNIT_NKINDS)
+static cfg_key keys[NKEYS];
+/* the unit keys' paths and descriptions */
+static char unit_text[UNIT_NKINDS][3][2][96];
+static pthread_once_t keys_once = PTHREAD_ONCE_INIT;
+
+/* Key p of unit kind k: chip.<name>.<leaf>, described as `fmt` with the
+ * kind's `what`, from the table's default, range and provenance. */
+static cfg_key unit_key(int k, int p, const char *leaf, const char *unit, const char *fmt,
+                        const unit_param_desc *u, size_t off)
+{
+	const unit_desc *d = &unit_table[k];
+	char *path = unit_text[k][p][0], *desc = unit_text[k][p][1];
+	snprintf(path, sizeof unit_text[k][p][0], "chip.%s.%s", d->name, leaf);
+	snprintf(desc, sizeof unit_text[k][p][1], fmt, d->what);
+	return (cfg_key){.path = path,
+	                 .type = CFG_INT,
+	                 .off =
+	                     offsetof(saar_config, chip.unit) + (size_t)k * sizeof(cfg_unit) + off,
+	                 .size = sizeof(int),
+	                 .def = u->def,
+	                 .min = u->min,
+	                 .max = u->max,
+	                 .unit = unit,
+	                 .published = u->published,
+	                 .timing_only = u->timing,
+	                 .source = u->source,
+	                 .desc = desc};
+}
+
+static void keys_build(void)
+{
+	size_t n = 0;
+	for (size_t i = 0; i < NSRC; i++) {
+		if (keys_src[i].path) {
+			keys[n++] = keys_src[i];
+			continue;
+		}
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			const unit_desc *d = &unit_table[k];
+			keys[n++] = unit_key(k, 0, "count", "", "number of %s units per RTP",
+			                     &d->count, offsetof(cfg_unit, count));
+			keys[n++] = unit_key(k, 1, "width", "rays/cycle",
+			                     "rays one %s unit accepts per cycle", &d->width,
+			                     offsetof(cfg_unit, width));
+			keys[n++] = unit_key(k, 2, "latency", "core cycles",
+			                     "pipeline latency of one %s unit", &d->latency,
+			                     offsetof(cfg_unit, latency));
+		}
+	}
+}
+
+static void keys_init(void)
+{
+	pthread_once(&keys_once, keys_build);
+}
 
 const cfg_key *cfg_keys(size_t *n)
 {
+	keys_init();
 	*n = NKEYS;
 	return keys;
 }
 
 const cfg_key *cfg_find(const char *path)
 {
+	keys_init();
 	for (size_t i = 0; i < NKEYS; i++)
 		if (!strcmp(keys[i].path, path))
 			return &keys[i];
@@ -347,6 +398,7 @@ static void fmt_num(char *buf, size_t n, const cfg_key *k, double v)
 
 void cfg_defaults(saar_config *c)
 {
+	keys_init();
 	memset(c, 0, sizeof *c);
 	for (size_t i = 0; i < NKEYS; i++) {
 		const cfg_key *k = &keys[i];
@@ -717,6 +769,7 @@ static bool is_prefix(const char *a, size_t n, const char *b, size_t bn)
 
 void cfg_write_json(const saar_config *c, jsonw *w)
 {
+	keys_init();
 	char open[256] = ""; /* path of the innermost open section, "" = top */
 	size_t ol = 0;
 	jsonw_obj_begin(w);
@@ -804,6 +857,7 @@ static void fmt_range(char *buf, size_t n, const cfg_key *k)
 
 void cfg_list(FILE *f)
 {
+	keys_init();
 	char def[64], range[128];
 	fprintf(f, "%-24s %-6s %-12s %-24s %-12s %s\n", "KEY", "TYPE", "DEFAULT", "RANGE", "UNIT",
 	        "PROVENANCE");
@@ -819,6 +873,7 @@ void cfg_list(FILE *f)
 
 void cfg_write_markdown(FILE *f)
 {
+	keys_init();
 	char def[64], range[128];
 	fputs("# Hardware configuration reference\n\n"
 	      "Generated by `saarsim --config-doc` from the schema table in `sim/config.c`;\n"

@@ -21,6 +21,7 @@
 
 #include "kernel-ref/diag.h"
 #include "kernel-ref/jsonw.h"
+#include "units/unit_table.h"
 
 /* Enum values; the names in the YAML are in config.c's tables, same order. */
 typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
@@ -56,7 +57,8 @@ typedef struct cfg_fp {
 	int exp, mant; /* exponent and mantissa bits; 8, 23 = float */
 } cfg_fp;
 
-/* One kind of functional unit inside a ray-tracing pipeline (RTP). */
+/* One kind of functional unit inside a ray-tracing pipeline (RTP); the
+ * kinds, their keys' defaults and ranges: units/unit_table.h. */
 typedef struct cfg_unit {
 	int count;   /* units of this kind per RTP */
 	int width;   /* rays accepted per cycle: a 64-ray op takes 64/width cycles */
@@ -72,7 +74,7 @@ typedef struct saar_config {
 		bool masked_packets;
 		cfg_thread_sched thread_sched;
 		cfg_tile_order tile_order;
-		cfg_unit rgs, trav, list, isect;
+		cfg_unit unit[UNIT_NKINDS]; /* by enum unit_kind: chip.<name>.* */
 		struct {
 			cfg_fp trav, isect, shade;
 			int round; /* enum fp_rmode: nearest, zero, up, down */

@@ -323,6 +323,8 @@ static void fidelity_json(jsonw *j, const chip *c)
 static double stall_cycles(const chip *c, int type)
 {
 	const chip_fidelity *F = &c->fid;
+	if (type < 0) /* a unit kind without reads of its own (units/unit_table.h) */
+		return -1;
 	hier_stats h;
 	if (hier_get_stats(&c->mem, &h))
 		return (double)(c->mem.n.reads[type] * (uint64_t)c->cfg.memory.latency);
@@ -477,8 +479,13 @@ void report_text(FILE *f, const report_info *ri)
 	}
 	if (stall_cycles(c, 0) >= 0) {
 		fputs("  read cycles waiting for memory:", f);
-		for (int k = 0; k < UNIT_NKINDS; k++)
-			fprintf(f, " %s %.0f", chip_unit_name(k), stall_cycles(c, k));
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			double wait = stall_cycles(c, unit_table[k].mem);
+			if (wait < 0) /* a kind without reads of its own */
+				fprintf(f, " %s -", chip_unit_name(k));
+			else
+				fprintf(f, " %s %.0f", chip_unit_name(k), wait);
+		}
 		fputs(chip_estimates(&c->cfg) ? " (estimated)\n" : "\n", f);
 	}
 	if (ri->check && ri->check->done) {
@@ -697,14 +704,10 @@ static void json_memory(jsonw *j, const chip *c, const hier_stats *hs, int have_
 	kv(j, "reads", tot_rd);
 	kv(j, "read_bytes", tot_b);
 	jsonw_knum(j, "read_bytes_per_frame", ratio((double)tot_b, c->frames_done));
-	/* unit kinds and requester types are in the same order (rgs = shade...) */
-	_Static_assert((int)UNIT_RGS == (int)MEM_SHADE && (int)UNIT_TRAV == (int)MEM_KD &&
-	                   (int)UNIT_LIST == (int)MEM_LIST && (int)UNIT_ISECT == (int)MEM_TRI,
-	               "unit kinds and memory requester types must line up");
 	jsonw_key(j, "stall_cycles");
 	jsonw_obj_begin(j);
 	for (int k = 0; k < UNIT_NKINDS; k++) {
-		double wait = stall_cycles(c, k);
+		double wait = stall_cycles(c, unit_table[k].mem); /* its reads' type */
 		jsonw_key(j, chip_unit_name(k));
 		if (wait < 0)
 			jsonw_null(j);
@@ -878,21 +881,37 @@ static void csv_num(FILE *f, double v)
 		fprintf(f, "%.6g,", v);
 }
 
-static const char csv_header[] =
+/* The header: these, util_<name> of every unit kind (units/unit_table.h),
+ * then the rest. */
+static const char csv_head[] =
     "config,scene,view,width,height,frames,memory_model,chip.rtps,chip.threads_per_rtp,"
     "memory.l1.shade.size_kb,memory.l1.kd.size_kb,memory.l1.list.size_kb,"
     "memory.l1.tri.size_kb,memory.sdram.mb,memory.vma.enabled,memory.hostbus.preset,"
-    "fps,util_rgs,util_trav,util_list,util_isect,hit_shade,hit_kd,hit_list,hit_tri,"
+    "fps,";
+static const char csv_tail[] =
+    "hit_shade,hit_kd,hit_list,hit_tri,"
     "hit_tag_cache,hit_l2,sdram_mb_per_frame,pci_mb_per_frame,meta_share,"
     "sdram_row_hit_rate,sdram_utilisation,pci_utilisation,fidelity,fps_ci_lo,fps_ci_hi,"
     "fps_bound,bound_by,identical_8bit,host_sim_s,host_wall_s\n";
+
+static const char *csv_header(void)
+{
+	static char h[sizeof csv_head + sizeof csv_tail + UNIT_NKINDS * 32];
+	if (!*h) {
+		int n = snprintf(h, sizeof h, "%s", csv_head);
+		for (int k = 0; k < UNIT_NKINDS; k++)
+			n += snprintf(h + n, sizeof h - (size_t)n, "util_%s,", unit_table[k].name);
+		snprintf(h + n, sizeof h - (size_t)n, "%s", csv_tail);
+	}
+	return h;
+}
 
 /* Rows go under our header only: a file from another program, or from a
  * saarsim with other columns, would get rows its header misnames. */
 static int csv_header_ok(const char *old, size_t nold)
 {
-	size_t nh = sizeof csv_header - 1;
-	return !nold || (nold >= nh && !memcmp(old, csv_header, nh));
+	size_t nh = strlen(csv_header());
+	return !nold || (nold >= nh && !memcmp(old, csv_header(), nh));
 }
 
 static int csv_not_ours(const char *path, diag *d)
@@ -913,9 +932,9 @@ static int csv_old_ok(const char *path, const char *old, size_t nold, diag *d)
 	if (!csv_header_ok(old, nold))
 		return csv_not_ours(path, d);
 	int want = 1;
-	for (const char *h = csv_header; *h; h++)
+	for (const char *h = csv_header(); *h; h++)
 		want += *h == ',';
-	size_t i = sizeof csv_header - 1;
+	size_t i = strlen(csv_header());
 	int line = 2;
 	while (i < nold) {
 		if (old[i] == '\n' || (old[i] == '\r' && i + 1 < nold && old[i + 1] == '\n')) {
@@ -1034,7 +1053,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 		if (old[nold - 1] != '\n')
 			fputc('\n', f);
 	} else {
-		fputs(csv_header, f);
+		fputs(csv_header(), f);
 	}
 	free(old);
 

@@ -10,14 +10,15 @@
 #define SAAR_SIM_SAMPLING_H
 
 #include "sim/config.h"
+#include "units/unit_table.h"
 
 /* The demand of a stretch of tiles in core cycles: its busiest compute
  * resource (unit issue cycles per instance, L1 requests per port), SDRAM
  * data-bus time and host-bus time, and the linear model's regressors
- * (SMP_LIN: the four unit kinds' issue cycles, SDRAM, host bus; the chip
+ * (SMP_LIN: every unit kind's issue cycles, SDRAM, host bus; the chip
  * names them, chip_lin_name); hard: memory bound (sampling.hard_share),
  * its stratum. */
-enum { SMP_LIN = 6 };
+enum { SMP_LIN = UNIT_NKINDS + 2 };
 typedef struct smp_piece {
 	double comp, sdram, hbus;
 	double lin[SMP_LIN];

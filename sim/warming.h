@@ -41,14 +41,18 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "mem/memport.h"
+#include "units/unit_table.h"
+
 struct chip;
 
 /* Full checkpoints per frame (about: one in each 1/WM_FULL_PER_FRAME of
  * it, rounded to the light grid). */
 #define WM_FULL_PER_FRAME 64
 
-/* Resource demands per light checkpoint (chip.h RES_N). */
-#define WM_NDEM 10
+/* Resource demands per light checkpoint (chip.h RES_N: the unit kinds,
+ * the L1s, SDRAM and host bus). */
+#define WM_NDEM (UNIT_NKINDS + MEM_NTYPES + 2)
 
 /* The tile of full checkpoint k (below the tile count or not): k x g_full
  * plus its jitter, a multiple of g_light below g_full (g_full a multiple

@@ -29,8 +29,8 @@ static void one_unit(int count, int width, int latency, int masked, int n, int r
 {
 	eng *e = eng_create(0);
 	thr_unit u;
-	cfg_unit cu = {count, width, latency};
-	cr_assert_eq(thr_unit_init(&u, e, clk, &cu, masked, CFG_SCHED_ROUND_ROBIN, 64), 0);
+	unit_params up = {count, width, latency, masked, UNIT_SCHED_ROUND_ROBIN};
+	cr_assert_eq(thr_unit_init(&u, e, clk, &up, 64), 0);
 	ndone = 0;
 	for (int k = 0; k < n; k++)
 		thr_unit_request(&u, k, (uint64_t)k, rays, on_done, NULL, (uint64_t)k);
@@ -112,12 +112,12 @@ Test(chip, waiting_policies_serve_in_their_order)
 		ids[j] = t;
 	}
 	eng_clock clk = eng_clock_mhz(500);
-	cfg_unit cu = {1, 64, 0};
 	for (int sched = 0; sched < 2; sched++) {
 		eng *e = eng_create(0);
 		thr_unit u;
-		int pol = sched ? CFG_SCHED_OLDEST_FIRST : CFG_SCHED_ROUND_ROBIN;
-		cr_assert_eq(thr_unit_init(&u, e, clk, &cu, 1, pol, N), 0);
+		unit_params up = {1, 64, 0, 1,
+		                  sched ? UNIT_SCHED_OLDEST_FIRST : UNIT_SCHED_ROUND_ROBIN};
+		cr_assert_eq(thr_unit_init(&u, e, clk, &up, N), 0);
 		/* two batches on the same unit: the second, smaller, finds the
 		 * waiter set the first emptied (its first request starts at
 		 * once and sets the round-robin position itself) */

@@ -44,7 +44,8 @@ Test(config, defaults_resolve_and_validate)
 	cr_assert(c.chip.masked_packets);
 	cr_assert_eq(c.chip.thread_sched, CFG_SCHED_ROUND_ROBIN);
 	cr_assert_eq(c.chip.tile_order, CFG_TILES_SCANLINE);
-	cr_assert_eq(c.chip.trav.width, 4 * c.chip.isect.width, "designed for 4:1 (seed 002 §4.7)");
+	cr_assert_eq(c.chip.unit[UNIT_TRAV].width, 4 * c.chip.unit[UNIT_ISECT].width,
+	             "designed for 4:1 (seed 002 §4.7)");
 	cr_assert_eq(c.frame.width, 1024);
 	cr_assert_eq(c.frame.height, 768);
 	cr_assert_float_eq(c.kdtree.cost_isect, 1.5, 1e-9);
@@ -109,13 +110,13 @@ Test(config, nested_and_dotted_keys)
 	                   "name: \"my chip\"\n",
 	                   &d, path, sizeof path);
 	cr_assert_eq(rc, 0, "%s", d.msg);
-	cr_assert_eq(c.chip.trav.width, 8);
-	cr_assert_eq(c.chip.trav.latency, 3);
-	cr_assert_eq(c.chip.trav.count, 1, "untouched keys keep defaults");
+	cr_assert_eq(c.chip.unit[UNIT_TRAV].width, 8);
+	cr_assert_eq(c.chip.unit[UNIT_TRAV].latency, 3);
+	cr_assert_eq(c.chip.unit[UNIT_TRAV].count, 1, "untouched keys keep defaults");
 	cr_assert_not(c.chip.masked_packets);
 	cr_assert_eq(c.chip.thread_sched, CFG_SCHED_OLDEST_FIRST);
 	cr_assert_str_eq(cfg_enum_name(&c, "chip.thread_sched"), "oldest_first");
-	cr_assert_eq(c.chip.isect.count, 2);
+	cr_assert_eq(c.chip.unit[UNIT_ISECT].count, 2);
 	cr_assert_float_eq(c.kdtree.cost_isect, 2.25, 1e-12);
 	cr_assert_str_eq(c.name, "my chip");
 }
@@ -304,7 +305,7 @@ Test(config, set_overrides)
 	cr_assert_eq(cfg_set(&c, "chip.tile_order=morton", &d), 0, "%s", d.msg);
 	cr_assert_eq(cfg_set(&c, "kdtree.cost_trav=0.5", &d), 0, "%s", d.msg);
 	cr_assert_eq(cfg_set(&c, "name=a=b", &d), 0, "%s", d.msg);
-	cr_assert_eq(c.chip.trav.width, 8);
+	cr_assert_eq(c.chip.unit[UNIT_TRAV].width, 8);
 	cr_assert_eq(c.chip.rtps, 2);
 	cr_assert_not(c.chip.masked_packets);
 	cr_assert_eq(c.chip.tile_order, CFG_TILES_MORTON);

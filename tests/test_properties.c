@@ -218,8 +218,8 @@ Test(properties, traversal_bound_frame_time_follows_kd_steps, .timeout = 300)
 	tu_load_world(&w, NULL, NULL, NULL);
 	saar_config c;
 	base_cfg(&c);
-	c.chip.trav.width = 1;
-	c.chip.isect.width = 64;
+	c.chip.unit[UNIT_TRAV].width = 1;
+	c.chip.unit[UNIT_ISECT].width = 64;
 	c.memory.model = CFG_MEM_FIXED;
 	c.memory.latency = 4;
 	result r[2];

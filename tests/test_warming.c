@@ -128,7 +128,7 @@ Test(warming, timing_keys_reuse_it_l1_sizes_do_not)
 	 * label: a config file without one is named after the file): the same
 	 * warming run */
 	snprintf(c.name, sizeof c.name, "another-label");
-	c.chip.isect.latency += 7;
+	c.chip.unit[UNIT_ISECT].latency += 7;
 	c.memory.sdram.trcd += 2;
 	c.memory.l1.kd.mshrs = 2;
 	c.sampling.offset = 0.2;

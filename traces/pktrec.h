@@ -22,24 +22,30 @@
 #include <stdint.h>
 
 #include "kernel-ref/framebuf.h"
+#include "units/unit_table.h"
 
+/* The codes after PR_USE's range follow it: one PR_USE code per unit kind
+ * of units/unit_table.h, so a kind added there can collide with no other
+ * op (the format changes with the table; records are keyed by the program
+ * that wrote them, kernel-ref/worldcache.h). */
 enum pr_op {
 	PR_READ = 0,      /* + memory type (0-3): address delta, bytes */
 	PR_READ_SAME = 4, /* + memory type: address delta; bytes as the type's last read */
 	PR_WRITE = 8,     /* + memory type: address, bytes */
-	PR_USE = 12,      /* + unit kind (0-3): rays; ends a functional step */
-	PR_SPILL_R = 16,  /* stack entry index: the read of a spilled entry */
-	PR_SPILL_W,       /* stack entry index: a spill */
-	PR_MAXSP,         /* stack depth reached (trav.max_stack_depth) */
-	PR_SHADE,         /* shade_counts field, amount */
-	PR_ENTER,         /* packet type, rays: the packet enters a thread */
-	PR_SPAWN,         /* n, then n packet ids: children queued */
-	PR_END,           /* the packet is done */
+	PR_USE = 12,      /* + unit kind (< UNIT_NKINDS): rays; ends a functional step */
+	PR_SPILL_R = PR_USE + UNIT_NKINDS, /* stack entry index: the read of a spilled entry */
+	PR_SPILL_W,                        /* stack entry index: a spill */
+	PR_MAXSP,                          /* stack depth reached (trav.max_stack_depth) */
+	PR_SHADE,                          /* shade_counts field, amount */
+	PR_ENTER,                          /* packet type, rays: the packet enters a thread */
+	PR_SPAWN,                          /* n, then n packet ids: children queued */
+	PR_END,                            /* the packet is done */
 	PR_WAIT,        /* wait for the reads so far before the next request (a use waits anyway) */
 	PR_COUNT1 = 32, /* + counter (enum thr_counter, < 32): counter += 1 */
 	PR_COUNT = 64,  /* + counter: amount; counter += amount */
 	PR_NOPS = 96
 };
+_Static_assert(PR_WAIT < PR_COUNT1, "too many unit kinds for the packet record's op codes");
 /* A read's address is the zigzag-mapped difference to the packet's
  * previous read of the same memory type (0 before its first). */
 

@@ -3,8 +3,6 @@
  */
 #include "units/intersection.h"
 
-#include "units/traversal.h"
-
 static void done(eng *e, void *ctx, uint64_t arg)
 {
 	(void)e;
@@ -34,7 +32,7 @@ static void fetched(thr_ctx *t)
 void isu_next(thr_ctx *t)
 {
 	if (t->k >= t->r.leaf_count || !t->mask) {
-		tu_step(t);
+		t->env->route.traverse(t);
 		return;
 	}
 	thr_read(t, MEM_TRI, t->list[t->k], MIMG_TRI_BYTES, &t->tri);

@@ -15,7 +15,8 @@
 
 #include "units/thread.h"
 
-/* Tests the next triangle of the current leaf, or resumes traversal. */
+/* Tests the next triangle of the current leaf, or resumes traversal
+ * (route.traverse). */
 void isu_next(thr_ctx *t);
 
 #endif

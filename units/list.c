@@ -5,9 +5,6 @@
 
 #include <stdlib.h>
 
-#include "units/intersection.h"
-#include "units/traversal.h"
-
 static void done(eng *e, void *ctx, uint64_t arg)
 {
 	(void)e;
@@ -15,7 +12,7 @@ static void done(eng *e, void *ctx, uint64_t arg)
 	thr_ctx *t = ctx;
 	t->k = 0;
 	t->mask = t->r.mask;
-	isu_next(t);
+	t->env->route.triangles(t);
 }
 
 static void fetched(thr_ctx *t)
@@ -46,12 +43,12 @@ void list_leaf(thr_ctx *t)
 	thr_count(t, C_LEAF_VISITS, 1);
 	if (t->r.leaf_count == 0) {
 		thr_count(t, C_EMPTY_LEAVES, 1);
-		tu_step(t);
+		v->route.traverse(t);
 		return;
 	}
 	if (list_room(t, t->r.leaf_count)) {
 		v->oom = 1; /* the frame fails */
-		tu_step(t);
+		v->route.traverse(t);
 		return;
 	}
 	/* the entries (triangle addresses) as the read returns them */

@@ -6,7 +6,8 @@
  * contiguous request through the LIST port, into the thread's list buffer),
  * then ceil(rays/width) issue cycles + latency; the intersection unit then
  * tests the entries in list order, the triangle addresses as the read
- * returned them. An empty leaf goes straight back to traversal (counted).
+ * returned them (route.triangles). An empty leaf goes straight back to
+ * traversal (route.traverse; counted).
  */
 #ifndef SAAR_UNITS_LIST_H
 #define SAAR_UNITS_LIST_H

@@ -7,7 +7,6 @@
 #include <string.h>
 
 #include "kernel-ref/camera.h"
-#include "sim/config.h"
 
 static uint64_t spread(uint32_t x)
 {
@@ -45,7 +44,7 @@ int rgc_init(rgc *g, int width, int height, int order)
 	g->order = malloc((size_t)g->ntiles * sizeof *g->order);
 	if (!g->order)
 		return -1;
-	if (order != CFG_TILES_MORTON) {
+	if (order != RGC_MORTON) {
 		for (int i = 0; i < g->ntiles; i++)
 			g->order[i] = (uint32_t)i;
 		return 0;

@@ -20,7 +20,10 @@ typedef struct rgc {
 /* Tiles of a width x height frame (partial tiles at the edges count):
  * what rgc_init cuts, for callers that plan before there is an RGC. */
 int rgc_tiles(int width, int height);
-/* order: enum cfg_tile_order. -1 when out of memory. */
+/* Hand-out orders (chip.tile_order). */
+enum rgc_order { RGC_SCANLINE, RGC_MORTON };
+
+/* order: enum rgc_order. -1 when out of memory. */
 int rgc_init(rgc *g, int width, int height, int order);
 void rgc_free(rgc *g);
 /* Starts a new frame. */

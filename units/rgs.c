@@ -6,8 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "units/traversal.h"
-
 void rgs_enter_count(thr_ctx *t, int type, uint64_t rays)
 {
 	thr_env *v = t->env;
@@ -29,7 +27,8 @@ static void gen_done(eng *e, void *ctx, uint64_t arg)
 {
 	(void)e;
 	(void)arg;
-	tu_begin(ctx);
+	thr_ctx *t = ctx;
+	t->env->route.enter(t);
 }
 
 int rgs_primary(thr_ctx *t, int tx, int ty)
@@ -46,7 +45,7 @@ int rgs_primary(thr_ctx *t, int tx, int ty)
 void rgs_secondary(thr_ctx *t, packet *p)
 {
 	enter(t, p);
-	tu_begin(t);
+	t->env->route.enter(t);
 }
 
 static void shadow_done(eng *e, void *ctx, uint64_t arg)

@@ -11,17 +11,16 @@
 
 /* ======================== pipelined units ======================== */
 
-int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int masked, int sched,
-                  int max_waiters)
+int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const unit_params *p, int max_waiters)
 {
 	memset(u, 0, sizeof *u);
 	u->e = e;
 	u->clk = clk;
-	u->count = cfg->count > 0 ? cfg->count : 1;
-	u->width = cfg->width > 0 ? cfg->width : 1;
-	u->latency = cfg->latency > 0 ? cfg->latency : 0;
-	u->masked = masked;
-	u->sched = sched;
+	u->count = p->count > 0 ? p->count : 1;
+	u->width = p->width > 0 ? p->width : 1;
+	u->latency = p->latency > 0 ? p->latency : 0;
+	u->masked = p->masked;
+	u->sched = p->sched;
 	u->maxw = max_waiters;
 	u->rr = max_waiters - 1;
 	u->ops_n = &u->own[0];
@@ -153,7 +152,7 @@ static int rr_pop(thr_unit *u)
 /* Removes and returns the waiter the policy serves next. */
 static int pick(thr_unit *u)
 {
-	return u->sched == CFG_SCHED_OLDEST_FIRST ? heap_pop(u) : rr_pop(u);
+	return u->sched == UNIT_SCHED_OLDEST_FIRST ? heap_pop(u) : rr_pop(u);
 }
 
 static void wake(eng *e, void *ctx, uint64_t arg)
@@ -191,7 +190,7 @@ void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler d
 		}
 	}
 	u->ops[id] = op;
-	if (u->sched == CFG_SCHED_OLDEST_FIRST)
+	if (u->sched == UNIT_SCHED_OLDEST_FIRST)
 		heap_push(u, id);
 	else
 		bits_set(u->wbits, id);

@@ -35,12 +35,12 @@
 #include "kernel-ref/packet.h"
 #include "kernel-ref/shade.h"
 #include "mem/memport.h"
-#include "sim/config.h"
 #include "sim/core/engine.h"
 #include "traces/pktrec.h"
+#include "units/unit_table.h"
 
+/* Unit kinds (enum unit_kind), their parameters and routing: unit_table.h. */
 enum thr_state { THR_IDLE, THR_RUN, THR_WAIT_MEM, THR_WAIT_UNIT, THR_NSTATES };
-enum unit_kind { UNIT_RGS, UNIT_TRAV, UNIT_LIST, UNIT_ISECT, UNIT_NKINDS };
 
 /* Bytes of one hardware traversal stack entry: node index (4), ray mask
  * (8), per-ray entry and exit distance (64 x 2 x 4). Spills move this much. */
@@ -85,10 +85,9 @@ typedef struct thr_unit {
 	uint32_t issue[PKT_RAYS + 1];
 } thr_unit;
 
-/* count/width/latency from cfg; masked: charge 64 rays per op; sched: enum
- * cfg_thread_sched; max_waiters: requester ids are 0..max_waiters-1. */
-int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const cfg_unit *cfg, int masked, int sched,
-                  int max_waiters);
+/* count/width/latency, masked (charge 64 rays per op) and sched (enum
+ * unit_sched) from p; max_waiters: requester ids are 0..max_waiters-1. */
+int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const unit_params *p, int max_waiters);
 void thr_unit_free(thr_unit *u);
 /* Host bytes thr_unit_init allocates for count instances and max_waiters
  * requesters (the run's memory estimate, sim/hostmem.c). */
@@ -180,6 +179,9 @@ typedef struct thr_env {
 	uint64_t next_age;
 	uint64_t *c[C_NCOUNTERS];
 	shade_counts sh;
+	/* the pipeline's order: where a unit hands a thread on (set by the
+	 * chip's wiring, unit_table.h) */
+	unit_route route;
 	/* a thread became free: give it work (set by the chip) */
 	void (*on_free)(struct thr_ctx *t);
 	void *owner;

@@ -16,9 +16,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "units/list.h"
-#include "units/rgs.h"
-
 void tu_begin(thr_ctx *t)
 {
 	thr_env *v = t->env;
@@ -28,7 +25,7 @@ void tu_begin(thr_ctx *t)
 	thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
 	if (!enter) {
 		thr_count(t, C_BOX_MISS_PACKETS, 1);
-		rgs_finish(t);
+		t->env->route.finish(t);
 		return;
 	}
 	tu_step(t);
@@ -60,7 +57,7 @@ static void done(eng *e, void *ctx, uint64_t arg)
 	(void)arg;
 	thr_ctx *t = ctx;
 	if (t->r.op == TRAV_LEAF)
-		list_leaf(t);
+		t->env->route.leaf(t);
 	else
 		tu_step(t);
 }
@@ -77,7 +74,7 @@ static void node_fetched(thr_ctx *t)
 	if (++t->steps > v->max_steps) {
 		v->damaged = 1;
 		t->sp = 0;
-		rgs_finish(t);
+		t->env->route.finish(t);
 		return;
 	}
 	pkt_trav_node(&t->ts, t->p, t->node, r);
@@ -102,7 +99,7 @@ static void pop(thr_ctx *t)
 	trav_result *r = &t->r;
 	if (!pkt_trav_pop(&t->ts, t->p, r)) {
 		t->sp = 0;
-		rgs_finish(t);
+		t->env->route.finish(t);
 		return;
 	}
 	uint32_t node = r->node;

@@ -7,8 +7,9 @@
  * two halves: pkt_trav_pop picks the node, the node's 8 bytes are read
  * through the KD memory port, and pkt_trav_node steps on the bytes the
  * read returned; then the unit spends ceil(rays/width) issue cycles +
- * latency on it. A leaf goes to the list unit; TRAV_DONE goes to the RGS
- * for shading. pkt_trav_begin (the scene-box clip against the box the
+ * latency on it. A leaf goes to the list unit (route.leaf); TRAV_DONE
+ * goes to the RGS for shading (route.finish): the route the chip wires,
+ * units/unit_table.h. pkt_trav_begin (the scene-box clip against the box the
  * host sets) is part of ray set-up and costs no unit time; a packet whose
  * rays all miss the box skips the core (counted).
  *

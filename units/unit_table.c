@@ -1,0 +1,56 @@
+/*
+ * unit_table.c: the unit kinds of one RTP (see unit_table.h).
+ *
+ * The seed gives no unit widths; it says the chip "is designed for 4:1
+ * ratio" of traversal to intersection operations (§4.7), so traversal is
+ * 4x as wide as intersection. A 64-ray packet op takes ceil(64/width)
+ * cycles to issue.
+ */
+#include "units/unit_table.h"
+
+#include <string.h>
+
+#include "mem/memport.h"
+
+/* Every kind: one unit per RTP (published), and a pipeline latency of its
+ * own (assumed, timing only). */
+#define COUNT                                                                                      \
+	{                                                                                          \
+		1, 1, 64, 1, 0, "seed 002 §4.1 (one per RTP)"                                     \
+	}
+#define WIDTH(w, why)                                                                              \
+	{                                                                                          \
+		w, 1, 64, 0, 0, why                                                                \
+	}
+#define LATENCY(l)                                                                                 \
+	{                                                                                          \
+		l, 1, 10000, 0, 1, "pipeline depth not published; a few cycles per stage group"    \
+	}
+
+/* clang-format off */
+const unit_desc unit_table[UNIT_NKINDS] = {
+    [UNIT_RGS] = {"rgs", "ray-generation and shading", COUNT,
+                  WIDTH(4, "not published; shading is the costliest op"), LATENCY(24), MEM_SHADE},
+    [UNIT_TRAV] = {"trav", "traversal", COUNT,
+                   WIDTH(16, "not published; 4x isect width (§4.7: designed for 4:1)"), LATENCY(8),
+                   MEM_KD},
+    [UNIT_LIST] = {"list", "list", COUNT,
+                   WIDTH(64, "not published; one list entry serves the whole packet"), LATENCY(2),
+                   MEM_LIST},
+    [UNIT_ISECT] = {"isect", "intersection", COUNT,
+                    WIDTH(4, "not published; 1/4 of trav width (§4.7: 4:1)"), LATENCY(20), MEM_TRI},
+};
+/* clang-format on */
+
+const char *unit_name(int kind)
+{
+	return kind >= 0 && kind < UNIT_NKINDS ? unit_table[kind].name : "?";
+}
+
+int unit_find(const char *name)
+{
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		if (!strcmp(unit_table[k].name, name))
+			return k;
+	return -1;
+}
