@@ -21,7 +21,7 @@
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
-SCENES=${SAAR_SCENES:-$root/../shared/scenes}
+SCENES=$(cd "${SAAR_SCENES:-$root/../shared/scenes}" && pwd) || exit 2
 VIEWS=$SCENES/views.yaml
 SIZE=${SIZE:-96x96}
 # The commit the baseline was recorded from (before issue 30's redesign).
