@@ -27,7 +27,8 @@
 #include <unistd.h>
 
 #include "kernel-ref/worldcache.h"
-#include "units/pktreplay.h"
+#include "sim/modes/functional.h"
+#include "sim/modes/replay.h"
 #include "units/rgs.h"
 
 static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
@@ -192,17 +193,20 @@ static int take_tile(chip *c, thr_ctx *t)
 	c->tiles_given++;
 	if (c->progress && c->tiles_given % 64 == 0)
 		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
-	thr_env *v = &c->env;
 	int tile = ty * c->g.tiles_x + tx;
 	/* with a packet record the tile's packets replay their streams, in
 	 * functional stretches and detailed regions alike */
-	if (v->rec_in && v->rec_in->tile_pk[tile] >= 0) {
+	const pktrec *in = c->md.in;
+	if (in && in->tile_pk[tile] >= 0) {
 		c->replayed[tile] = 1;
 		c->fid.replayed_tiles++;
-		thr_replay_begin(t, v->rec_in->tile_pk[tile]);
+		mode_replay_begin(in, t, in->tile_pk[tile]);
 		return 1;
 	}
-	t->rec = v->rec_out ? pr_new(v->rec_out, tile) : -1;
+	if (c->md.rec.out)
+		mode_rec_tile(&c->md.rec, t, tile);
+	else
+		t->rec = -1;
 	if (rgs_primary(t, tx, ty)) {
 		c->oom = 1;
 		return 0;
@@ -215,7 +219,7 @@ static int take_tile(chip *c, thr_ctx *t)
 static void start_queued(thr_ctx *t, thr_qitem it)
 {
 	if (!it.p) {
-		thr_replay_begin(t, it.rec);
+		mode_replay_begin(((chip *)t->env->owner)->md.in, t, it.rec);
 		return;
 	}
 	t->rec = it.rec;
@@ -225,7 +229,7 @@ static void start_queued(thr_ctx *t, thr_qitem it)
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
-	if (c->env.func) /* func_range hands out the work itself */
+	if (c->md.func_on) /* func_range hands out the work itself */
 		return;
 	thr_qitem it;
 	if (rgs_dequeue(t->rtp, &it)) {
@@ -245,7 +249,7 @@ static void on_free(thr_ctx *t)
 		 * functionally (each thread's next step, as its pending memory
 		 * and unit events fire) instead of draining cycle by cycle */
 		if (F->region_end < c->g.ntiles)
-			c->env.func = 1;
+			mode_set_func(&c->md, 1);
 		return;
 	}
 	if (F->us_next < F->unit_cap && F->unit_s[F->us_next] == next) {
@@ -523,6 +527,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->spill_base = c->spill_base;
 	v->on_free = on_free;
 	v->owner = c;
+	mode_sinks_init(&c->md, v);
 	render_opts ro;
 	render_opts_default(&ro);
 	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
@@ -702,19 +707,19 @@ static uint64_t run_region(chip *c, int end)
 	uint64_t t0 = eng_now(c->e);
 	int first = c->g.next;
 	c->fid.region_end = end;
-	c->env.func = 0;
+	mode_set_func(&c->md, 0);
 	/* packets a functional stretch left in flight go on cycle by cycle
-	 * from where they stopped (replayed ones too: units/pktreplay.h): the
+	 * from where they stopped (replayed ones too: sim/modes/replay.h): the
 	 * region starts with a full chip, not with every thread taking a tile
 	 * at once; slot by slot, RTP by RTP (the turn order) */
 	int n = c->nrtp * c->tpr;
 	for (int i = 0; i < n; i++)
-		thr_func_to_timed(c->turn[i]);
+		mode_func_to_timed(c->turn[i]);
 	for (int i = 0; i < n; i++)
 		if (c->turn[i]->state == THR_IDLE)
 			on_free(c->turn[i]);
 	eng_run(c->e, ENG_FOREVER);
-	c->env.func = 0;
+	mode_set_func(&c->md, 0);
 	c->fid.detailed_tiles += (uint64_t)(end - first);
 	c->fid.detailed_cycles += eng_ticks_to_cycles(c->clk, eng_now(c->e) - t0);
 	return eng_now(c->e) - t0;
@@ -827,7 +832,7 @@ static void unpark_rtp(chip *c, int r)
 }
 
 /* Functional processing of tiles from the RGC's position up to `end`, with
- * the same unit code in functional mode (thr_env.func) and every thread
+ * the same unit code emitting into the functional sink (sim/modes/functional.h) and every thread
  * slot in use, as the detailed chip has them: each slot holds a packet, and
  * the slots take one step each in turn (a step: one unit operation and the
  * memory reads before the next), so the caches see the packets' accesses
@@ -835,7 +840,7 @@ static void unpark_rtp(chip *c, int r)
  * at a time, the L1s and SDRAM saw far fewer misses than the cycle model
  * at 16-64 threads: docs/fidelity.md). A slot that finishes takes a secondary packet of
  * its RTP, else the next tile. With a packet record, packets replay their
- * streams instead of running their math (units/pktreplay.h). Memory goes
+ * streams instead of running their math (sim/modes/replay.h). Memory goes
  * through the hierarchy's functional path: the data is there at once, and
  * a line a region left in flight counts as on its way (hier.c). FR_DRAIN
  * ends the range with every slot free; FR_STOP as soon as its last tile
@@ -877,7 +882,7 @@ static int func_range(chip *c, int end, int mode)
 	int relaxed = 0, stop = 0;
 	if (mode == FR_RELAX)
 		memset(c->relax_n, 0, (size_t)n * sizeof *c->relax_n);
-	c->env.func = 1;
+	mode_set_func(&c->md, 1);
 	for (int busy = 1; busy && !stop && !c->oom;) {
 		/* before a region: stop once the tiles are handed out and leave
 		 * the packets in flight for the region to take over */
@@ -934,7 +939,7 @@ static int func_range(chip *c, int end, int mode)
 					__builtin_prefetch(c->turn[k]->rp + 32);
 				}
 			}
-			busy |= thr_step_func(t);
+			busy |= mode_func_step(t);
 			/* packets it queued (functional: only a step of its
 			 * RTP's slots queues) bring that RTP's parked slots
 			 * back: those ahead of i in this pass, the others in
@@ -943,7 +948,7 @@ static int func_range(chip *c, int end, int mode)
 				unpark_rtp(c, r);
 		}
 	}
-	c->env.func = 0;
+	mode_set_func(&c->md, 0);
 	if (chunked) {
 		chip_demand(c, d1);
 		account(F, piece(c, d0, d1), 1);
@@ -1201,12 +1206,12 @@ static void rec_open(chip *c)
 	/* replayed where it lies in the file: no copy */
 	if (wc_get_mapped(c->rec_file, c->rec_key, NULL, 0, &tail, &n, &c->rec_map) == 1 &&
 	    !pr_load(&c->rec, tail, n, 0, W, H, c->g.ntiles)) {
-		c->env.rec_in = &c->rec;
+		c->md.in = &c->rec;
 		c->rec_state = REC_REPLAYED;
 	} else {
 		wc_unmap(&c->rec_map);
 		if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
-			c->env.rec_out = &c->rec;
+			mode_record(&c->md, &c->rec);
 			c->rec_state = REC_UNSTORED;
 		}
 	}
@@ -1217,10 +1222,10 @@ static void rec_open(chip *c)
  * and the frames after it replay it. */
 static void rec_store(chip *c)
 {
-	if (!c->env.rec_out)
+	if (!c->md.rec.out)
 		return;
 	double t0 = now_ms();
-	c->env.rec_out = NULL;
+	mode_record(&c->md, NULL);
 	void *b;
 	size_t n;
 	int rc = pr_serialize(&c->rec, &c->fb, &b, &n);
@@ -1233,7 +1238,7 @@ static void rec_store(chip *c)
 	else
 		c->rec_state = REC_STORED;
 	if (!pr_load(&c->rec, b, n, 1, c->cfg.frame.width, c->cfg.frame.height, c->g.ntiles))
-		c->env.rec_in = &c->rec;
+		c->md.in = &c->rec;
 	c->rec_ms += now_ms() - t0;
 }
 
@@ -1350,7 +1355,7 @@ static void warm_open(chip *c)
 		diag d;
 		int ok = h && !chip_run(h, &d) && h->rec_state == REC_STORED;
 		chip_destroy(h);
-		c->env.rec_out = NULL;
+		mode_record(&c->md, NULL);
 		pr_free(&c->rec);
 		free(c->rec_key);
 		c->rec_key = NULL;
@@ -1363,7 +1368,7 @@ static void warm_open(chip *c)
 	}
 	int gl, gf;
 	warm_grid(c, &gl, &gf);
-	char *key = c->env.rec_in ? warm_key(c, gl, gf) : NULL;
+	char *key = c->md.in ? warm_key(c, gl, gf) : NULL;
 	if (!key || wc_file(c->warm_file, sizeof c->warm_file, c->w->cache_dir, "warming", key)) {
 		free(key);
 		fprintf(stderr, "warning: sampling.warming stored needs --world-cache and a packet "
@@ -1475,7 +1480,7 @@ int chip_run(chip *c, diag *d)
 			chip_demand(c, dem);
 			wm_put_light(c->wcap, c, f, c->g.ntiles, dem);
 		}
-		if (c->env.rec_in)
+		if (c->md.in)
 			rec_pixels(c);
 		rec_store(c);
 		if (c->oom || c->env.oom || mem_failed(&c->mem))

@@ -29,6 +29,7 @@
 #include "sim/config.h"
 #include "sim/core/engine.h"
 #include "sim/core/stats.h"
+#include "sim/modes/modes.h"
 #include "sim/sampling.h"
 #include "sim/warming.h"
 #include "traces/memtrace.h"
@@ -129,6 +130,7 @@ typedef struct chip {
 	mimg regs;
 	stats st;
 	thr_env env;
+	mode_sinks md; /* the sinks the units emit into (sim/modes/modes.h) */
 	thr_rtp *rtp;
 	int nrtp, tpr;
 	rgc g;

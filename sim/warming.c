@@ -9,7 +9,7 @@
  *   light      frames x nlight records: demand (WM_NDEM doubles), the
  *              on-board-cache hit ticks, the counters (ncnt uint64)
  *   offsets    frames x nfull uint64: each full checkpoint's offset
- *   full       per full checkpoint: wm_fhead, the slots (thr_replay_state, turn
+ *   full       per full checkpoint: wm_fhead, the slots (mode_replay_state, turn
  *              order), per RTP its queue length then the queued packet
  *              ids, the L1s and tag cache whole (cache_save form: lines
  *              then ranks), the on-board cache's changed sets (their
@@ -22,7 +22,7 @@
 
 #include "kernel-ref/bitset.h"
 #include "sim/chip.h"
-#include "units/pktreplay.h"
+#include "sim/modes/replay.h"
 #include "units/rgs.h"
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
@@ -219,8 +219,8 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 		return;
 	memcpy(p, &fh, sizeof fh);
 	for (int i = 0; i < ns; i++) {
-		thr_replay_state s;
-		if (thr_replay_save(c->turn[i], &s)) {
+		mode_replay_state s;
+		if (mode_replay_save(c->turn[i], &s)) {
 			w->failed = 1;
 			return;
 		}
@@ -463,7 +463,7 @@ static rd full_reader(const wm *r, int gi)
 static void skip_threads(rd *d, int nslots, int nrtp)
 {
 	take(d, sizeof(wm_fhead));
-	take(d, sizeof(thr_replay_state) * (size_t)nslots);
+	take(d, sizeof(mode_replay_state) * (size_t)nslots);
 	for (int q = 0; q < nrtp && !d->bad; q++) {
 		int32_t qn;
 		const uint8_t *p = d->p;
@@ -532,11 +532,11 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		return -1;
 	/* the slots, in turn order */
 	for (int i = 0; i < h->nslots; i++) {
-		thr_replay_state s;
+		mode_replay_state s;
 		if (!(p = take(&d, sizeof s)))
 			return -1;
 		memcpy(&s, p, sizeof s);
-		if (thr_replay_restore(c->turn[i], &s))
+		if (mode_replay_restore(c->md.in, c->turn[i], &s))
 			return -1;
 	}
 	for (int q = 0; q < h->nrtp; q++) {
@@ -556,7 +556,7 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		for (int i = 0; i < qn; i++) {
 			int32_t id;
 			memcpy(&id, p + 4 + 4 * (size_t)i, 4);
-			if ((uint32_t)id >= c->env.rec_in->npk)
+			if ((uint32_t)id >= c->md.in->npk)
 				return -1;
 			r->q[i] = (thr_qitem){NULL, id};
 		}

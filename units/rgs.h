@@ -44,10 +44,8 @@ int rgs_dequeue(thr_rtp *r, thr_qitem *it);
  * (stored warming restores a checkpoint's queue, sim/warming.h). -1 when
  * out of memory (the queue is then empty). */
 int rgs_queue_set(thr_rtp *r, const thr_qitem *it, int n);
-/* A packet of `type` with `rays` valid rays enters thread t: its age, the
- * packet and ray counters (the math and a replayed stream alike). */
-void rgs_enter_count(thr_ctx *t, int type, uint64_t rays);
-/* Gives queued packets to idle threads of RTP r. */
+/* Gives queued packets to idle threads of RTP r (the timed sink, after
+ * a shading op: functional drivers hand out work themselves). */
 void rgs_dispatch(thr_rtp *r);
 
 #endif

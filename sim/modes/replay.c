@@ -1,16 +1,17 @@
 /*
- * pktreplay.c: a thread running a recorded packet stream (see pktreplay.h).
- * Each op calls what the unit code that recorded it called (thread.c
- * thr_read / thr_write / thr_use / thr_count, rgs.c rgs_enter_count /
- * rgs_spawn / rgs_dispatch), in the same order and, timed, at the same
+ * replay.c: a thread running a recorded packet stream (see replay.h). The
+ * decoder turns each stored op back into the sink operation the unit code
+ * emitted when it was recorded (units/sink.h: thr_read, thr_write,
+ * thr_use, thr_count, ...), in the same order and, timed, at the same
  * ticks, so the caches, SDRAM, VMA, units and counters end up exactly as
- * after the math.
+ * after the math. It is no second pipeline: what an op costs is the
+ * sink's.
  */
-#include "units/pktreplay.h"
+#include "sim/modes/replay.h"
 
 #include <string.h>
 
-#include "units/rgs.h"
+#include "sim/modes/functional.h"
 
 /* The children a packet's shading queued, in its stream as their ids. */
 static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
@@ -18,10 +19,11 @@ static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 	for (uint64_t k = 0; k < n; k++) {
 		uint64_t id = pr_get(p, end);
 		/* out of memory: the packet is lost and the image check says so */
-		if (id < t->env->rec_in->npk)
-			rgs_spawn(t->rtp, (thr_qitem){NULL, (int32_t)id});
+		if (id < t->src->npk) {
+			int32_t i = (int32_t)id;
+			thr_spawn(t, 1, NULL, &i);
+		}
 	}
-	rgs_spawned(t->rtp);
 }
 
 static void run(thr_ctx *t);
@@ -38,34 +40,70 @@ static int wait_reads(thr_ctx *t, const uint8_t *p)
 
 static void op_done(eng *e, void *ctx, uint64_t arg);
 
+/* A read or write op (below PR_USE). */
+static void access(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
+{
+	if (op >= PR_WRITE) {
+		uint64_t a = pr_get(p, end), b = pr_get(p, end);
+		thr_write(t, op & 3, a, (uint32_t)b, NULL);
+		return;
+	}
+	int type = op & 3;
+	uint64_t a = t->raddr[type] += pr_unzigzag(pr_get(p, end));
+	if (op < PR_READ_SAME)
+		t->rbytes[type] = (uint32_t)pr_get(p, end);
+	thr_read(t, type, a, t->rbytes[type], NULL);
+}
+
+/* A shading count or a packet entering: the ops between PR_SPILL_R and
+ * PR_SPAWN that neither wait nor end. */
+static void other(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
+{
+	uint64_t a, b;
+	switch (op) {
+	case PR_SPILL_R:
+	case PR_SPILL_W:
+		a = thr_spill_addr(t, pr_get(p, end) % PKT_STACK_MAX);
+		if (op == PR_SPILL_W)
+			thr_write(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
+		else
+			thr_read(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
+		break;
+	case PR_MAXSP:
+		thr_count_max(t, C_MAX_SP, pr_get(p, end));
+		break;
+	case PR_SHADE:
+		a = pr_get(p, end);
+		b = pr_get(p, end);
+		if (a < sizeof(shade_counts) / sizeof(uint64_t)) {
+			shade_counts add;
+			memset(&add, 0, sizeof add);
+			((uint64_t *)&add)[a] = b;
+			thr_shade_count(t, &add);
+		}
+		break;
+	case PR_ENTER:
+		a = pr_get(p, end) % PKT_NTYPES;
+		memset(t->raddr, 0, sizeof t->raddr);
+		memset(t->rbytes, 0, sizeof t->rbytes);
+		thr_enter(t, (int)a, pr_get(p, end));
+		break;
+	}
+}
+
 /* Runs ops up to and including the next PR_USE (its unit op requested,
  * timed, or counted with op_done as the next step, functional), up to a
  * wait for reads in flight, or up to the end. */
 static void run(thr_ctx *t)
 {
-	thr_env *v = t->env;
 	const uint8_t *p = t->rp, *end = t->rpe;
-	uint64_t *sh = (uint64_t *)&v->sh;
 	int spawned = 0;
 	while (p < end) {
 		const uint8_t *at = p;
 		int op = *p++;
-		uint64_t a, b;
-		if (op < PR_WRITE) { /* a read: type in the low bits */
-			int type = op & 3;
-			a = t->raddr[type] += pr_unzigzag(pr_get(&p, end));
-			if (op < PR_READ_SAME)
-				t->rbytes[type] = (uint32_t)pr_get(&p, end);
-			thr_read(t, type, a, t->rbytes[type], NULL);
-			continue;
-		}
 		if (op < PR_USE) {
-			a = pr_get(&p, end);
-			b = pr_get(&p, end);
-			thr_write(t, op & 3, a, (uint32_t)b, NULL);
-			continue;
-		}
-		if (op < PR_SPILL_R) {
+			access(t, op, &p, end);
+		} else if (op < PR_SPILL_R) {
 			/* the op starts once its reads are in (thr_wait_mem
 			 * before every thr_use) */
 			if (wait_reads(t, at))
@@ -73,58 +111,33 @@ static void run(thr_ctx *t)
 			thr_use(t, op - PR_USE, (int)pr_get(&p, end), op_done);
 			t->rp = p;
 			return;
-		}
-		if (op >= PR_COUNT1 && op < PR_NOPS) {
+		} else if (op >= PR_COUNT1 && op < PR_NOPS) {
 			int id = op & 31;
-			a = op < PR_COUNT ? 1 : pr_get(&p, end);
+			uint64_t a = op < PR_COUNT ? 1 : pr_get(&p, end);
 			if (id < C_NCOUNTERS)
 				thr_count(t, id, a);
-			continue;
-		}
-		switch (op) {
-		case PR_SPILL_R:
-		case PR_SPILL_W:
-			a = thr_spill_addr(t, pr_get(&p, end) % PKT_STACK_MAX);
-			if (op == PR_SPILL_W)
-				thr_write(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
-			else
-				thr_read(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
-			break;
-		case PR_WAIT:
+		} else if (op == PR_WAIT) {
 			if (wait_reads(t, p))
 				return;
-			break;
-		case PR_MAXSP:
-			thr_count_max(t, C_MAX_SP, pr_get(&p, end));
-			break;
-		case PR_SHADE:
-			a = pr_get(&p, end);
-			b = pr_get(&p, end);
-			if (a < sizeof(shade_counts) / sizeof(uint64_t))
-				sh[a] += b;
-			break;
-		case PR_ENTER:
-			a = pr_get(&p, end) % PKT_NTYPES;
-			rgs_enter_count(t, (int)a, pr_get(&p, end));
-			break;
-		case PR_SPAWN:
+		} else if (op == PR_SPAWN) {
 			spawn(t, pr_get(&p, end), &p, end);
 			spawned = 1;
-			break;
-		default: /* PR_END, or a damaged stream: the packet is done */
+		} else if (op < PR_END) {
+			other(t, op, &p, end);
+		} else { /* PR_END, or a damaged stream: the packet is done */
 			p = end;
-			break;
 		}
 	}
 	/* as shade_done and shadow_done: the slot is free, and after a
 	 * shading op the RTP's idle slots get the children it queued */
-	thr_release(t);
 	if (spawned)
-		rgs_dispatch(t->rtp);
+		thr_release_shaded(t);
+	else
+		thr_release(t);
 }
 
 /* A unit op is done (timed), or functional processing takes the step
- * after it (thr_step_func). */
+ * after it (mode_func_step). */
 static void op_done(eng *e, void *ctx, uint64_t arg)
 {
 	(void)e;
@@ -132,15 +145,15 @@ static void op_done(eng *e, void *ctx, uint64_t arg)
 	run(ctx);
 }
 
-void thr_replay_begin(thr_ctx *t, int32_t id)
+void mode_replay_begin(const pktrec *r, thr_ctx *t, int32_t id)
 {
-	const pktrec *r = t->env->rec_in;
 	t->rec = id;
+	t->src = r;
 	t->rp = pr_stream(r, (uint32_t)id, &t->rpe);
 	run(t);
 }
 
-int thr_replay_save(const thr_ctx *t, thr_replay_state *s)
+int mode_replay_save(const thr_ctx *t, mode_replay_state *s)
 {
 	memset(s, 0, sizeof *s);
 	s->rec = -1;
@@ -148,7 +161,7 @@ int thr_replay_save(const thr_ctx *t, thr_replay_state *s)
 		return -1;
 	if (!t->rp)
 		return 0;
-	const uint8_t *end, *st = pr_stream(t->env->rec_in, (uint32_t)t->rec, &end);
+	const uint8_t *end, *st = pr_stream(t->src, (uint32_t)t->rec, &end);
 	s->rec = t->rec;
 	s->kind = (int16_t)t->fkind;
 	s->rays = (int16_t)t->frays;
@@ -159,9 +172,8 @@ int thr_replay_save(const thr_ctx *t, thr_replay_state *s)
 	return 0;
 }
 
-int thr_replay_restore(thr_ctx *t, const thr_replay_state *s)
+int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
 {
-	const pktrec *r = t->env->rec_in;
 	if (t->p) { /* its math: stored warming replays every packet */
 		thr_pkt_free(t->env, t->p);
 		t->p = NULL;
@@ -183,6 +195,7 @@ int thr_replay_restore(thr_ctx *t, const thr_replay_state *s)
 		return ok ? 0 : -1;
 	}
 	t->rec = s->rec;
+	t->src = r;
 	t->rp = st + s->off;
 	t->rpe = end;
 	t->fnext = op_done;

@@ -1,0 +1,34 @@
+/*
+ * modes.h: the chip's sinks and which of them the units emit into
+ * (units/sink.h; docs/design-modes.md). The base sink is the timed one
+ * (cycle-level simulation, a sampled frame's detailed regions) or the
+ * functional one (fidelity functional, the stretches between regions,
+ * stored warming's relax); while a packet record is made, the recording
+ * sink wraps the base and thr_env.sink points at it. Replay needs no sink
+ * of its own: it feeds the record's streams into the one that runs
+ * (replay.h).
+ */
+#ifndef SAAR_SIM_MODES_MODES_H
+#define SAAR_SIM_MODES_MODES_H
+
+#include "sim/modes/record.h"
+#include "traces/pktrec.h"
+#include "units/thread.h"
+
+typedef struct mode_sinks {
+	thr_env *env;
+	thr_sink timed, func; /* the base sinks */
+	mode_rec rec;         /* wraps the base while rec.out is set */
+	const pktrec *in;     /* the record whose streams replay, NULL */
+	int func_on;          /* the base sink is the functional one */
+} mode_sinks;
+
+/* Sinks for env v; the timed one runs, nothing is recorded. */
+void mode_sinks_init(mode_sinks *m, thr_env *v);
+/* The base sink becomes the functional (on) or the timed one; a record
+ * being made goes on through the new base. */
+void mode_set_func(mode_sinks *m, int on);
+/* Records into out from now on (out NULL: stops recording). */
+void mode_record(mode_sinks *m, pktrec *out);
+
+#endif
