@@ -226,12 +226,41 @@ int chip_estimates(const saar_config *cfg);
 /* The census's condition from the config alone (before the world loads):
  * fails (diag) when the run would estimate its cycles. */
 int chip_census_check(const saar_config *cfg, diag *d);
-/* Simulates cfg.frame.frames frames (the frame buffer holds the last). */
+/* Simulates cfg.frame.frames frames (the frame buffer holds the last;
+ * sim/modes/frame.c). */
 int chip_run(chip *c, diag *d);
 /* Renders the same frame with kernel-ref (render_frame, 1 host thread),
  * with packets and with single rays (each from the world cache when it
  * has it), and compares the 8-bit images into c's check. */
 int chip_check_frame(chip *c, chip_check *out, diag *d);
+
+/* ---- for the mode drivers (sim/modes/) ---- */
+
+/* Cumulative demand of every resource (enum chip_res) in core cycles. */
+void chip_demand(const chip *c, double d[RES_N]);
+/* The demand of a stretch between two chip_demand snapshots, and whether
+ * it is memory bound (sampling.h). */
+smp_piece chip_piece(const chip *c, const double *a, const double *b);
+/* The timed dispatcher: cycle-level simulation of the tiles from the
+ * RGC's position up to `end` (exclusive) until every packet they made is
+ * done; packets a functional stretch left in flight go on from where they
+ * stopped. Returns the ticks it took. */
+uint64_t chip_run_region(chip *c, int end);
+/* Gives thread t the RGC's next tile (its primary packet, or its stream
+ * in the replayed record); 0 when none is left or out of memory. */
+int chip_take_tile(chip *c, thr_ctx *t);
+/* Free thread t takes a queued secondary packet (or its stream). */
+void chip_start_queued(thr_ctx *t, thr_qitem it);
+/* A census mark at hand-out index tile of the current frame. */
+void chip_census_mark(chip *c, int tile);
+/* The frame's busiest-resource bound into fid.res_cycles / bound_by. */
+void chip_resource_bound(chip *c);
+/* Copies counts kept outside the registry into it. */
+void chip_sync_counters(chip *c);
+/* Stored warming's grids: light checkpoints every *gl tiles, full ones
+ * about every *gf. */
+void chip_warm_grid(const chip *c, int *gl, int *gf);
+double chip_now_ms(void); /* host time, ms */
 
 /* Totals over frames, for reports. */
 uint64_t chip_cycles(const chip *c);
