@@ -215,6 +215,13 @@ int chip_take_tile(chip *c, thr_ctx *t)
 	return 1;
 }
 
+void chip_resume_at(chip *c, int tile, uint64_t next_age)
+{
+	c->g.next = tile;
+	c->tiles_given = tile;
+	c->env.next_age = next_age;
+}
+
 /* Free thread t takes a queued secondary packet: the packet, or its
  * stream in the packet record. */
 void chip_start_queued(thr_ctx *t, thr_qitem it)

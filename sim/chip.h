@@ -261,6 +261,9 @@ void chip_sync_counters(chip *c);
  * about every *gf. */
 void chip_warm_grid(const chip *c, int *gl, int *gf);
 double chip_now_ms(void); /* host time, ms */
+/* The frame goes on from hand-out index tile, the next packet entering a
+ * thread taking age next_age (stored warming's restore). */
+void chip_resume_at(chip *c, int tile, uint64_t next_age);
 
 /* Totals over frames, for reports. */
 uint64_t chip_cycles(const chip *c);

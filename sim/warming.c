@@ -229,18 +229,13 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 		memcpy(p, &s, sizeof s);
 	}
 	for (int r = 0; r < c->nrtp; r++) {
-		const thr_rtp *rp = &c->rtp[r];
-		if (!(p = full_room(w, 4 + 4 * (size_t)rp->qn)))
+		int32_t n = rgs_queue_len(&c->rtp[r]);
+		if (!(p = full_room(w, 4 + 4 * (size_t)n)))
 			return;
-		int32_t n = rp->qn;
 		memcpy(p, &n, 4);
-		for (int i = 0; i < rp->qn; i++) {
-			thr_qitem it = rp->q[(rp->qhead + i) % rp->qcap];
-			if (it.p) {
-				w->failed = 1;
-				return;
-			}
-			memcpy(p + 4 + 4 * (size_t)i, &it.rec, 4);
+		if (mode_queue_save(&c->rtp[r], p + 4)) {
+			w->failed = 1;
+			return;
 		}
 	}
 	cache *k[WM_NCACHES], *l2;
@@ -329,7 +324,6 @@ void wm_close(wm *r)
 	free(r->l2line);
 	free(r->l2rank);
 	free(r->l2pend);
-	free(r->q);
 	memset(r, 0, sizeof *r);
 }
 
@@ -546,21 +540,7 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		memcpy(&qn, d.p, 4);
 		if (qn < 0 || !(p = take(&d, 4 + 4 * (size_t)qn)))
 			return -1;
-		if (qn > r->nq) {
-			thr_qitem *nq = realloc(r->q, (size_t)qn * sizeof *nq);
-			if (!nq)
-				return -1;
-			r->q = nq;
-			r->nq = qn;
-		}
-		for (int i = 0; i < qn; i++) {
-			int32_t id;
-			memcpy(&id, p + 4 + 4 * (size_t)i, 4);
-			if ((uint32_t)id >= c->md.in->npk)
-				return -1;
-			r->q[i] = (thr_qitem){NULL, id};
-		}
-		if (rgs_queue_set(&c->rtp[q], r->q, qn))
+		if (mode_queue_restore(c->md.in, &c->rtp[q], p + 4, qn))
 			return -1;
 	}
 	/* the caches stored whole */
@@ -595,9 +575,7 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		memset(r->l2pend, 0, (size_t)bits_words((int)l2->nsets) * sizeof *r->l2pend);
 		cache_dirty_clear(l2);
 	}
-	c->g.next = tile;
-	c->tiles_given = tile;
-	c->env.next_age = fh.next_age;
+	chip_resume_at(c, tile, fh.next_age);
 	/* the counters: what the warming run counted since the last region's
 	 * end; maxima take the larger */
 	const uint8_t *lp = light_at(r, frame, tile) + sizeof(double) * WM_NDEM;

@@ -67,9 +67,8 @@ static int queue_room(thr_rtp *r, int n)
 
 int rgs_spawn(thr_rtp *r, thr_qitem it)
 {
-	if (queue_room(r, r->qn + 1))
+	if (rgs_queue_put(r, it))
 		return -1;
-	r->q[(r->qhead + r->qn++) % r->qcap] = it;
 	thr_env *v = r->env;
 	++*v->c[C_SPAWNED];
 	if ((uint64_t)r->qn > *v->c[C_MAX_QUEUE])
@@ -77,15 +76,27 @@ int rgs_spawn(thr_rtp *r, thr_qitem it)
 	return 0;
 }
 
-int rgs_queue_set(thr_rtp *r, const thr_qitem *it, int n)
+int rgs_queue_len(const thr_rtp *r)
+{
+	return r->qn;
+}
+
+thr_qitem rgs_queue_at(const thr_rtp *r, int i)
+{
+	return r->q[(r->qhead + i) % r->qcap];
+}
+
+void rgs_queue_clear(thr_rtp *r)
 {
 	r->qn = 0;
 	r->qhead = 0;
-	if (queue_room(r, n))
+}
+
+int rgs_queue_put(thr_rtp *r, thr_qitem it)
+{
+	if (queue_room(r, r->qn + 1))
 		return -1;
-	for (int i = 0; i < n; i++)
-		r->q[i] = it[i];
-	r->qn = n;
+	r->q[(r->qhead + r->qn++) % r->qcap] = it;
 	return 0;
 }
 

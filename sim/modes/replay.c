@@ -208,3 +208,32 @@ int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
 		thr_set(t, THR_RUN);
 	return 0;
 }
+
+int mode_queue_save(const thr_rtp *r, void *out)
+{
+	int n = rgs_queue_len(r);
+	for (int i = 0; i < n; i++) {
+		thr_qitem it = rgs_queue_at(r, i);
+		if (it.p)
+			return -1;
+		memcpy((uint8_t *)out + 4 * (size_t)i, &it.rec, 4);
+	}
+	return 0;
+}
+
+int mode_queue_restore(const pktrec *rec, thr_rtp *r, const void *ids, int n)
+{
+	int32_t id;
+	for (int i = 0; i < n; i++) {
+		memcpy(&id, (const uint8_t *)ids + 4 * (size_t)i, 4);
+		if (!rec || (uint32_t)id >= rec->npk)
+			return -1;
+	}
+	rgs_queue_clear(r);
+	for (int i = 0; i < n; i++) {
+		memcpy(&id, (const uint8_t *)ids + 4 * (size_t)i, 4);
+		if (rgs_queue_put(r, (thr_qitem){NULL, id}))
+			return -1;
+	}
+	return 0;
+}

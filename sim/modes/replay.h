@@ -14,6 +14,7 @@
 #define SAAR_SIM_MODES_REPLAY_H
 
 #include "traces/pktrec.h"
+#include "units/rgs.h"
 #include "units/thread.h"
 
 /* Thread t (free) takes packet id of record r and runs its stream up to
@@ -41,5 +42,14 @@ int mode_replay_save(const thr_ctx *t, mode_replay_state *s);
 /* Thread t (no read outstanding, no event pending) takes state s of
  * record r; -1 when s does not fit r (t is then left idle). */
 int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s);
+
+/* RTP r's queue of secondary packets as checkpoints keep it: the streams'
+ * ids, oldest first, 4 bytes each into out (room for rgs_queue_len); -1
+ * when an item is a packet running its math, not a stream. */
+int mode_queue_save(const thr_rtp *r, void *out);
+/* RTP r's queue becomes the n streams ids (4 bytes each) of record rec,
+ * counting nothing; -1 when one is not in rec (the queue is left as it
+ * was) or out of memory. */
+int mode_queue_restore(const pktrec *rec, thr_rtp *r, const void *ids, int n);
 
 #endif
