@@ -6,12 +6,19 @@
 #include "sim/modes/functional.h"
 #include "sim/modes/timed.h"
 
-/* thr_env.sink: the recording sink around the base, or the base. */
+/* thr_env.sink: the observer around the recording sink around the base,
+ * each when set. */
 static void wire(mode_sinks *m)
 {
-	thr_sink *base = m->func_on ? &m->func : &m->timed;
-	m->rec.s.inner = base;
-	m->env->sink = m->rec.out ? &m->rec.s : base;
+	thr_sink *s = m->func_on ? &m->func : &m->timed;
+	m->rec.s.inner = s;
+	if (m->rec.out)
+		s = &m->rec.s;
+	if (m->obs) {
+		m->obs->inner = s;
+		s = m->obs;
+	}
+	m->env->sink = s;
 }
 
 void mode_sinks_init(mode_sinks *m, thr_env *v)
@@ -32,5 +39,11 @@ void mode_set_func(mode_sinks *m, int on)
 void mode_record(mode_sinks *m, pktrec *out)
 {
 	m->rec.out = out;
+	wire(m);
+}
+
+void mode_observe(mode_sinks *m, thr_sink *obs)
+{
+	m->obs = obs;
 	wire(m);
 }

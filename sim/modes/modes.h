@@ -6,7 +6,8 @@
  * stored warming's relax); while a packet record is made, the recording
  * sink wraps the base and thr_env.sink points at it. Replay needs no sink
  * of its own: it feeds the record's streams into the one that runs
- * (replay.h).
+ * (replay.h). An observer sink, when set, wraps whatever runs: units ->
+ * observer -> recording -> base.
  */
 #ifndef SAAR_SIM_MODES_MODES_H
 #define SAAR_SIM_MODES_MODES_H
@@ -19,6 +20,7 @@ typedef struct mode_sinks {
 	thr_env *env;
 	thr_sink timed, func; /* the base sinks */
 	mode_rec rec;         /* wraps the base while rec.out is set */
+	thr_sink *obs;        /* an observer outside them all, NULL */
 	const pktrec *in;     /* the record whose streams replay, NULL */
 	int func_on;          /* the base sink is the functional one */
 } mode_sinks;
@@ -30,5 +32,9 @@ void mode_sinks_init(mode_sinks *m, thr_env *v);
 void mode_set_func(mode_sinks *m, int on);
 /* Records into out from now on (out NULL: stops recording). */
 void mode_record(mode_sinks *m, pktrec *out);
+/* Puts obs (a wrapping sink: it passes every operation on to obs->inner,
+ * which this sets) outside the others from now on; NULL removes it. For
+ * tracing, checks and tests (docs/extending-modes.md). */
+void mode_observe(mode_sinks *m, thr_sink *obs);
 
 #endif
