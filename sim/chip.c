@@ -30,6 +30,7 @@
 #include "kernel-ref/worldcache.h"
 #include "sim/modes/functional.h"
 #include "sim/modes/replay.h"
+#include "sim/modes/slot.h"
 #include "units/rgs.h"
 
 static const char *const unit_names[UNIT_NKINDS] = {"rgs", "trav", "list", "isect"};
@@ -207,7 +208,7 @@ int chip_take_tile(chip *c, thr_ctx *t)
 	if (c->md.rec.out)
 		mode_rec_tile(&c->md.rec, t, tile);
 	else
-		t->rec = -1;
+		mode_slot(t)->rec = -1;
 	if (rgs_primary(t, tx, ty)) {
 		c->oom = 1;
 		return 0;
@@ -230,7 +231,7 @@ void chip_start_queued(thr_ctx *t, thr_qitem it)
 		mode_replay_begin(((chip *)t->env->owner)->md.in, t, it.rec);
 		return;
 	}
-	t->rec = it.rec;
+	mode_slot(t)->rec = it.rec;
 	rgs_secondary(t, it.p);
 }
 
@@ -442,13 +443,8 @@ static int fid_init(chip *c)
  * caller frees what was allocated). */
 static int thread_init(thr_ctx *t, thr_rtp *rp, int id, int gid, int nkids)
 {
-	*t = (thr_ctx){.rtp = rp,
-	               .env = rp->env,
-	               .id = id,
-	               .gid = gid,
-	               .rec = -1,
-	               .state = THR_IDLE,
-	               .nkids = nkids};
+	*t = (thr_ctx){
+	    .rtp = rp, .env = rp->env, .id = id, .gid = gid, .state = THR_IDLE, .nkids = nkids};
 	t->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
 	t->kids = alloc64((size_t)nkids * sizeof(packet));
 	return t->stack && t->kids ? 0 : -1;
@@ -535,7 +531,8 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	v->spill_base = c->spill_base;
 	v->on_free = on_free;
 	v->owner = c;
-	mode_sinks_init(&c->md, v);
+	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr))
+		goto oom;
 	render_opts ro;
 	render_opts_default(&ro);
 	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
@@ -655,6 +652,7 @@ void chip_destroy(chip *c)
 	free(c->warm_own);
 	mem_free(&c->mem);
 	ms_free(&c->store);
+	mode_sinks_free(&c->md);
 	thr_env_free(&c->env);
 	if (c->e)
 		eng_destroy(c->e);

@@ -177,6 +177,9 @@ typedef struct thr_env {
 	/* where the units' operations go (units/sink.h): the mode's sink, set
 	 * by the driver (sim/modes/); the units never ask which mode runs */
 	thr_sink *sink;
+	/* what the mode drivers and sinks keep per thread slot (sim/modes/
+	 * slot.h), opaque to the units */
+	void *modes;
 	pkt_precision prec; /* datapath formats (chip.fp); full = the SIMD path */
 	uint64_t spill_base;
 	uint64_t next_age;
@@ -236,23 +239,6 @@ typedef struct thr_ctx {
 	thr_shade *sh;
 	packet *kids; /* shade_packet's output */
 	int nkids, made;
-	/* the functional sink's: the thread's next step (the done handler of
-	 * the unit op it stopped at), and that op (sim/modes/functional.c) */
-	eng_handler fnext;
-	int fkind, frays;
-	/* the packet's stream in the packet record (traces/pktrec.h), kept by
-	 * the recording sink and by replay (sim/modes/record.c, replay.c):
-	 * its id (-1: none); replay: the record, the rest of the stream (p is
-	 * then NULL); the packet's last read address and size per memory type
-	 * (reads are stored as differences); recording: a read since the last
-	 * wait or op, and a wait after reads not yet recorded (it goes in
-	 * before the next request: PR_WAIT) */
-	int32_t rec;
-	const struct pktrec *src;
-	const uint8_t *rp, *rpe;
-	uint64_t raddr[MEM_NTYPES];
-	uint32_t rbytes[MEM_NTYPES];
-	uint8_t rread, rwait;
 	uint64_t steps; /* traversal steps of the current packet (thr_env.max_steps) */
 } thr_ctx;
 

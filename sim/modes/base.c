@@ -6,6 +6,7 @@
 
 #include <string.h>
 
+#include "sim/modes/slot.h"
 #include "units/rgs.h"
 
 void mode_base_count(thr_sink *s, thr_ctx *t, int id, uint64_t n)
@@ -73,10 +74,11 @@ void mode_base_end(thr_ctx *t, int shaded)
 {
 	if (shaded)
 		rgs_spawned(t->rtp);
-	t->rec = -1;
+	mode_slot_state *m = mode_slot(t);
+	m->rec = -1;
 	if (t->p) /* a replayed packet has none */
 		thr_pkt_free(t->env, t->p);
 	t->p = NULL;
-	t->rp = t->rpe = NULL;
+	m->rp = m->rpe = NULL;
 	thr_set(t, THR_IDLE);
 }

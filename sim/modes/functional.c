@@ -4,6 +4,7 @@
 #include "sim/modes/functional.h"
 
 #include "sim/modes/base.h"
+#include "sim/modes/slot.h"
 
 static void func_read(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
 {
@@ -29,9 +30,10 @@ static void func_use(thr_sink *s, thr_ctx *t, int kind, int rays, eng_handler do
 	++*u->ops_n;
 	*u->busy += thr_unit_issue(u, rays);
 	*u->rays += (uint64_t)rays;
-	t->fnext = done;
-	t->fkind = kind;
-	t->frays = rays;
+	mode_slot_state *m = mode_slot(t);
+	m->fnext = done;
+	m->fkind = kind;
+	m->frays = rays;
 }
 
 /* The driver gives the free thread its next packet. */
@@ -56,24 +58,26 @@ const thr_sink_ops mode_func_ops = {
 
 void mode_func_to_timed(thr_ctx *t)
 {
-	eng_handler done = t->fnext;
+	mode_slot_state *m = mode_slot(t);
+	eng_handler done = m->fnext;
 	if (!done)
 		return;
-	t->fnext = NULL;
-	thr_unit *u = &t->rtp->u[t->fkind];
+	m->fnext = NULL;
+	thr_unit *u = &t->rtp->u[m->fkind];
 	--*u->ops_n;
-	*u->busy -= thr_unit_issue(u, t->frays);
-	*u->rays -= (uint64_t)t->frays;
+	*u->busy -= thr_unit_issue(u, m->frays);
+	*u->rays -= (uint64_t)m->frays;
 	thr_set(t, THR_WAIT_UNIT);
-	thr_unit_request(u, t->id, t->age, t->frays, done, t, 0);
+	thr_unit_request(u, t->id, t->age, m->frays, done, t, 0);
 }
 
 int mode_func_step(thr_ctx *t)
 {
-	eng_handler h = t->fnext;
+	mode_slot_state *m = mode_slot(t);
+	eng_handler h = m->fnext;
 	if (!h)
 		return 0;
-	t->fnext = NULL;
+	m->fnext = NULL;
 	h(t->env->e, t, 0);
 	return 1;
 }

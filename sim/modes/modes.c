@@ -3,6 +3,8 @@
  */
 #include "sim/modes/modes.h"
 
+#include <stdlib.h>
+
 #include "sim/modes/functional.h"
 #include "sim/modes/timed.h"
 
@@ -21,13 +23,26 @@ static void wire(mode_sinks *m)
 	m->env->sink = s;
 }
 
-void mode_sinks_init(mode_sinks *m, thr_env *v)
+int mode_sinks_init(mode_sinks *m, thr_env *v, int nslots)
 {
 	*m = (mode_sinks){.env = v};
+	m->slot = calloc((size_t)(nslots > 0 ? nslots : 1), sizeof *m->slot);
+	if (!m->slot)
+		return -1;
+	for (int i = 0; i < nslots; i++)
+		m->slot[i].rec = -1;
+	v->modes = m->slot;
 	m->timed.op = &mode_timed_ops;
 	m->func.op = &mode_func_ops;
 	m->rec.s.op = &mode_rec_ops;
 	wire(m);
+	return 0;
+}
+
+void mode_sinks_free(mode_sinks *m)
+{
+	free(m->slot);
+	m->slot = NULL;
 }
 
 void mode_set_func(mode_sinks *m, int on)

@@ -13,20 +13,24 @@
 #define SAAR_SIM_MODES_MODES_H
 
 #include "sim/modes/record.h"
+#include "sim/modes/slot.h"
 #include "traces/pktrec.h"
 #include "units/thread.h"
 
 typedef struct mode_sinks {
 	thr_env *env;
-	thr_sink timed, func; /* the base sinks */
-	mode_rec rec;         /* wraps the base while rec.out is set */
-	thr_sink *obs;        /* an observer outside them all, NULL */
-	const pktrec *in;     /* the record whose streams replay, NULL */
-	int func_on;          /* the base sink is the functional one */
+	mode_slot_state *slot; /* per thread slot (thr_env.modes) */
+	thr_sink timed, func;  /* the base sinks */
+	mode_rec rec;          /* wraps the base while rec.out is set */
+	thr_sink *obs;         /* an observer outside them all, NULL */
+	const pktrec *in;      /* the record whose streams replay, NULL */
+	int func_on;           /* the base sink is the functional one */
 } mode_sinks;
 
-/* Sinks for env v; the timed one runs, nothing is recorded. */
-void mode_sinks_init(mode_sinks *m, thr_env *v);
+/* Sinks for env v and its nslots thread slots; the timed one runs,
+ * nothing is recorded. -1 when out of memory. */
+int mode_sinks_init(mode_sinks *m, thr_env *v, int nslots);
+void mode_sinks_free(mode_sinks *m);
 /* The base sink becomes the functional (on) or the timed one; a record
  * being made goes on through the new base. */
 void mode_set_func(mode_sinks *m, int on);

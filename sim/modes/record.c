@@ -5,9 +5,11 @@
 
 #include <string.h>
 
+#include "sim/modes/slot.h"
+
 static void put(thr_sink *s, thr_ctx *t, int op, int n, uint64_t a, uint64_t b)
 {
-	pr_put(((mode_rec *)s)->out, t->rec, op, n, a, b);
+	pr_put(((mode_rec *)s)->out, mode_slot(t)->rec, op, n, a, b);
 }
 
 /* Records a request: stack spills by entry index, since their address
@@ -15,13 +17,14 @@ static void put(thr_sink *s, thr_ctx *t, int op, int n, uint64_t a, uint64_t b)
  * are. */
 static void rec_req(thr_sink *s, thr_ctx *t, int write, int type, uint64_t addr, uint32_t bytes)
 {
+	mode_slot_state *m = mode_slot(t);
 	/* a wait between requests (the node read after stack refills, the
 	 * shading reads after them): a timed replay must make it too */
-	if (t->rwait) {
+	if (m->rwait) {
 		put(s, t, PR_WAIT, 0, 0, 0);
-		t->rwait = 0;
+		m->rwait = 0;
 	}
-	t->rread |= !write;
+	m->rread |= !write;
 	if (addr >= t->env->spill_base) {
 		uint64_t idx = (addr - thr_spill_addr(t, 0)) / THR_SPILL_STRIDE;
 		put(s, t, write ? PR_SPILL_W : PR_SPILL_R, 1, idx, 0);
@@ -31,13 +34,13 @@ static void rec_req(thr_sink *s, thr_ctx *t, int write, int type, uint64_t addr,
 		put(s, t, PR_WRITE + type, 2, addr, bytes);
 		return;
 	}
-	uint64_t z = pr_zigzag(addr - t->raddr[type]);
-	t->raddr[type] = addr;
-	if (bytes == t->rbytes[type]) {
+	uint64_t z = pr_zigzag(addr - m->raddr[type]);
+	m->raddr[type] = addr;
+	if (bytes == m->rbytes[type]) {
 		put(s, t, PR_READ_SAME + type, 1, z, 0);
 		return;
 	}
-	t->rbytes[type] = bytes;
+	m->rbytes[type] = bytes;
 	put(s, t, PR_READ + type, 2, z, bytes);
 }
 
@@ -56,9 +59,10 @@ static void rec_write(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_t
 
 static int rec_wait(thr_sink *s, thr_ctx *t, void (*cont)(thr_ctx *t))
 {
-	if (t->rread) { /* recorded before the next request (rec_req) */
-		t->rwait = 1;
-		t->rread = 0;
+	mode_slot_state *m = mode_slot(t);
+	if (m->rread) { /* recorded before the next request (rec_req) */
+		m->rwait = 1;
+		m->rread = 0;
 	}
 	return s->inner->op->wait(s->inner, t, cont);
 }
@@ -66,7 +70,7 @@ static int rec_wait(thr_sink *s, thr_ctx *t, void (*cont)(thr_ctx *t))
 static void rec_use(thr_sink *s, thr_ctx *t, int kind, int rays, eng_handler done)
 {
 	/* an op starts after every read so far: its wait is implied */
-	t->rread = t->rwait = 0;
+	mode_slot(t)->rread = mode_slot(t)->rwait = 0;
 	put(s, t, PR_USE + kind, 1, (uint64_t)rays, 0);
 	s->inner->op->use(s->inner, t, kind, rays, done);
 }
@@ -100,8 +104,9 @@ static void rec_shade(thr_sink *s, thr_ctx *t, const shade_counts *add)
 
 static void rec_enter(thr_sink *s, thr_ctx *t, int type, uint64_t rays)
 {
-	memset(t->raddr, 0, sizeof t->raddr);
-	memset(t->rbytes, 0, sizeof t->rbytes);
+	mode_slot_state *m = mode_slot(t);
+	memset(m->raddr, 0, sizeof m->raddr);
+	memset(m->rbytes, 0, sizeof m->rbytes);
 	put(s, t, PR_ENTER, 2, (uint64_t)type, rays);
 	s->inner->op->enter(s->inner, t, type, rays);
 }
@@ -115,8 +120,8 @@ static int rec_spawn(thr_sink *s, thr_ctx *t, int n, const packet *kids, const i
 	put(s, t, PR_SPAWN, 1, (uint64_t)n, 0);
 	int lost = 0;
 	for (int k = 0; k < n; k++) {
-		int32_t id = pr_new_kid(out, t->rec, k);
-		pr_put_u(out, t->rec, (uint64_t)(id < 0 ? 0 : id));
+		int32_t id = pr_new_kid(out, mode_slot(t)->rec, k);
+		pr_put_u(out, mode_slot(t)->rec, (uint64_t)(id < 0 ? 0 : id));
 		if (s->inner->op->spawn(s->inner, t, 1, kids ? &kids[k] : NULL, &id)) {
 			out->failed = 1; /* a lost child: the record is not stored */
 			lost = 1;
@@ -128,7 +133,7 @@ static int rec_spawn(thr_sink *s, thr_ctx *t, int n, const packet *kids, const i
 static void rec_release(thr_sink *s, thr_ctx *t, int shaded)
 {
 	put(s, t, PR_END, 0, 0, 0);
-	t->rec = -1;
+	mode_slot(t)->rec = -1;
 	s->inner->op->release(s->inner, t, shaded);
 }
 
@@ -147,5 +152,5 @@ const thr_sink_ops mode_rec_ops = {
 
 void mode_rec_tile(mode_rec *m, thr_ctx *t, int tile)
 {
-	t->rec = pr_new(m->out, tile);
+	mode_slot(t)->rec = pr_new(m->out, tile);
 }

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "sim/modes/functional.h"
+#include "sim/modes/slot.h"
 
 /* The children a packet's shading queued, in its stream as their ids. */
 static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
@@ -19,7 +20,7 @@ static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 	for (uint64_t k = 0; k < n; k++) {
 		uint64_t id = pr_get(p, end);
 		/* out of memory: the packet is lost and the image check says so */
-		if (id < t->src->npk) {
+		if (id < mode_slot(t)->src->npk) {
 			int32_t i = (int32_t)id;
 			thr_spawn(t, 1, NULL, &i);
 		}
@@ -34,7 +35,7 @@ static int wait_reads(thr_ctx *t, const uint8_t *p)
 {
 	if (!thr_park_mem(t, run))
 		return 0;
-	t->rp = p;
+	mode_slot(t)->rp = p;
 	return 1;
 }
 
@@ -48,11 +49,12 @@ static void access(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
 		thr_write(t, op & 3, a, (uint32_t)b, NULL);
 		return;
 	}
+	mode_slot_state *m = mode_slot(t);
 	int type = op & 3;
-	uint64_t a = t->raddr[type] += pr_unzigzag(pr_get(p, end));
+	uint64_t a = m->raddr[type] += pr_unzigzag(pr_get(p, end));
 	if (op < PR_READ_SAME)
-		t->rbytes[type] = (uint32_t)pr_get(p, end);
-	thr_read(t, type, a, t->rbytes[type], NULL);
+		m->rbytes[type] = (uint32_t)pr_get(p, end);
+	thr_read(t, type, a, m->rbytes[type], NULL);
 }
 
 /* A shading count or a packet entering: the ops between PR_SPILL_R and
@@ -84,8 +86,8 @@ static void other(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
 		break;
 	case PR_ENTER:
 		a = pr_get(p, end) % PKT_NTYPES;
-		memset(t->raddr, 0, sizeof t->raddr);
-		memset(t->rbytes, 0, sizeof t->rbytes);
+		memset(mode_slot(t)->raddr, 0, sizeof mode_slot(t)->raddr);
+		memset(mode_slot(t)->rbytes, 0, sizeof mode_slot(t)->rbytes);
 		thr_enter(t, (int)a, pr_get(p, end));
 		break;
 	}
@@ -96,7 +98,7 @@ static void other(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
  * wait for reads in flight, or up to the end. */
 static void run(thr_ctx *t)
 {
-	const uint8_t *p = t->rp, *end = t->rpe;
+	const uint8_t *p = mode_slot(t)->rp, *end = mode_slot(t)->rpe;
 	int spawned = 0;
 	while (p < end) {
 		const uint8_t *at = p;
@@ -109,7 +111,7 @@ static void run(thr_ctx *t)
 			if (wait_reads(t, at))
 				return;
 			thr_use(t, op - PR_USE, (int)pr_get(&p, end), op_done);
-			t->rp = p;
+			mode_slot(t)->rp = p;
 			return;
 		} else if (op >= PR_COUNT1 && op < PR_NOPS) {
 			int id = op & 31;
@@ -147,42 +149,45 @@ static void op_done(eng *e, void *ctx, uint64_t arg)
 
 void mode_replay_begin(const pktrec *r, thr_ctx *t, int32_t id)
 {
-	t->rec = id;
-	t->src = r;
-	t->rp = pr_stream(r, (uint32_t)id, &t->rpe);
+	mode_slot_state *m = mode_slot(t);
+	m->rec = id;
+	m->src = r;
+	m->rp = pr_stream(r, (uint32_t)id, &m->rpe);
 	run(t);
 }
 
 int mode_replay_save(const thr_ctx *t, mode_replay_state *s)
 {
+	const mode_slot_state *m = mode_slot(t);
 	memset(s, 0, sizeof *s);
 	s->rec = -1;
-	if (t->p || (t->rp && !t->fnext))
+	if (t->p || (m->rp && !m->fnext))
 		return -1;
-	if (!t->rp)
+	if (!m->rp)
 		return 0;
-	const uint8_t *end, *st = pr_stream(t->src, (uint32_t)t->rec, &end);
-	s->rec = t->rec;
-	s->kind = (int16_t)t->fkind;
-	s->rays = (int16_t)t->frays;
-	s->off = (uint64_t)(t->rp - st);
+	const uint8_t *end, *st = pr_stream(m->src, (uint32_t)m->rec, &end);
+	s->rec = m->rec;
+	s->kind = (int16_t)m->fkind;
+	s->rays = (int16_t)m->frays;
+	s->off = (uint64_t)(m->rp - st);
 	s->age = t->age;
-	memcpy(s->raddr, t->raddr, sizeof s->raddr);
-	memcpy(s->rbytes, t->rbytes, sizeof s->rbytes);
+	memcpy(s->raddr, m->raddr, sizeof s->raddr);
+	memcpy(s->rbytes, m->rbytes, sizeof s->rbytes);
 	return 0;
 }
 
 int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
 {
+	mode_slot_state *m = mode_slot(t);
 	if (t->p) { /* its math: stored warming replays every packet */
 		thr_pkt_free(t->env, t->p);
 		t->p = NULL;
 	}
 	t->pending = 0;
 	t->cont = NULL;
-	t->rec = -1;
-	t->rp = t->rpe = NULL;
-	t->fnext = NULL;
+	m->rec = -1;
+	m->rp = m->rpe = NULL;
+	m->fnext = NULL;
 	const uint8_t *end = NULL, *st = NULL;
 	int ok = s->rec < 0;
 	if (!ok && r && (uint32_t)s->rec < r->npk && s->kind >= 0 && s->kind < UNIT_NKINDS) {
@@ -194,16 +199,16 @@ int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
 			thr_set(t, THR_IDLE);
 		return ok ? 0 : -1;
 	}
-	t->rec = s->rec;
-	t->src = r;
-	t->rp = st + s->off;
-	t->rpe = end;
-	t->fnext = op_done;
-	t->fkind = s->kind;
-	t->frays = s->rays;
+	m->rec = s->rec;
+	m->src = r;
+	m->rp = st + s->off;
+	m->rpe = end;
+	m->fnext = op_done;
+	m->fkind = s->kind;
+	m->frays = s->rays;
 	t->age = s->age;
-	memcpy(t->raddr, s->raddr, sizeof t->raddr);
-	memcpy(t->rbytes, s->rbytes, sizeof t->rbytes);
+	memcpy(m->raddr, s->raddr, sizeof m->raddr);
+	memcpy(m->rbytes, s->rbytes, sizeof m->rbytes);
 	if (t->state == THR_IDLE)
 		thr_set(t, THR_RUN);
 	return 0;

@@ -146,7 +146,7 @@ int mode_func_range(chip *c, int end, int mode)
 		     i = bits_next(c->live, n, i + 1)) {
 			thr_ctx *t = c->turn[i];
 			int r = (int)(t->rtp - c->rtp);
-			if (!t->p && !t->rp) {
+			if (!t->p && !mode_slot(t)->rp) {
 				if (chunked && given == F->unit_tiles) {
 					chip_demand(c, d1);
 					int hard = account(F, chip_piece(c, d0, d1), 1);
@@ -179,7 +179,7 @@ int mode_func_range(chip *c, int end, int mode)
 				    ++c->relax_n[i] == RELAX_TILES)
 					relaxed++;
 			}
-			if (t->rp) {
+			if (mode_slot(t)->rp) {
 				/* the stream of the slot a few turns on is elsewhere
 				 * in the record: start fetching it now (one turn
 				 * ahead was too late to hide the host's memory
@@ -187,9 +187,10 @@ int mode_func_range(chip *c, int end, int mode)
 				 * host line: fetch that too */
 				int k = i + PREFETCH_TURNS < n ? i + PREFETCH_TURNS
 				                               : i + PREFETCH_TURNS - n;
-				if (k < n && c->turn[k]->rp) {
-					__builtin_prefetch(c->turn[k]->rp);
-					__builtin_prefetch(c->turn[k]->rp + 32);
+				const uint8_t *rp = k < n ? mode_slot(c->turn[k])->rp : NULL;
+				if (rp) {
+					__builtin_prefetch(rp);
+					__builtin_prefetch(rp + 32);
 				}
 			}
 			busy |= mode_func_step(t);
