@@ -238,7 +238,7 @@ void chip_start_queued(thr_ctx *t, thr_qitem it)
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
-	if (c->md.func_on) /* func_range hands out the work itself */
+	if (c->md.func_on) /* the functional driver (mode_func_range) hands out the work itself */
 		return;
 	thr_qitem it;
 	if (rgs_dequeue(t->rtp, &it)) {

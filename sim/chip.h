@@ -163,15 +163,15 @@ typedef struct chip {
 	int rec_state;
 	uint8_t *replayed; /* per tile, this frame: its packets were replayed */
 	/* every thread slot in functional turn order: slot 0 of each RTP,
-	 * then slot 1, ... (func_range, run_region) */
+	 * then slot 1, ... (mode_func_range, chip_run_region) */
 	thr_ctx **turn;
-	/* func_range's passes visit the slots whose `live` bit is set. An idle
+	/* mode_func_range's passes visit the slots whose `live` bit is set. An idle
 	 * slot that found no tile left and an empty RTP queue is parked until
 	 * its RTP queues a packet: bit clear, its turn index in
 	 * park[r * tpr ..], park_n[r] of them for RTP r. */
 	uint64_t *live;
 	int *park, *park_n;
-	/* stored warming's relax (func_range FR_RELAX): tiles each slot took
+	/* stored warming's relax (mode_func_range FR_RELAX): tiles each slot took
 	 * since it began */
 	int *relax_n;
 	char *rec_key, rec_file[1200];
@@ -180,7 +180,7 @@ typedef struct chip {
 	 * checkpoints (mapped from the world cache, or built by this run and
 	 * held in warm_own), warm_state: enum chip_warm */
 	wm warm;
-	wm_writer *wcap; /* a warming run's checkpoints are taken (take_tile) */
+	wm_writer *wcap; /* a warming run's checkpoints are taken (chip_take_tile) */
 	wc_map warm_map;
 	void *warm_own;
 	int warm_state;
