@@ -73,7 +73,7 @@ IMG_LIBS   = $(shell pkg-config --libs $(IMGPKGS) 2>/dev/null)
 TEST_LIBS  = $(shell pkg-config --libs $(TESTPKGS) 2>/dev/null)
 
 MAINS    := kernel-ref/rtref.c kernel-ref/stress_main.c sim/main.c traces/replay.c
-LIB_C    := $(filter-out $(MAINS),$(wildcard kernel-ref/*.c sim/*.c sim/core/*.c units/*.c mem/*.c traces/*.c))
+LIB_C    := $(filter-out $(MAINS),$(wildcard kernel-ref/*.c sim/*.c sim/core/*.c sim/modes/*.c units/*.c mem/*.c traces/*.c))
 LIB_OBJ  := $(LIB_C:%.c=$(B)/%.o)
 PLUGIN   := $(B)/libsaar-oiio.so
 TEST_C   := $(wildcard tests/*.c)

@@ -1,6 +1,8 @@
 /*
- * chip.c: wiring and the frame loop of the chip model (see chip.h and
- * docs/design.md, "Chip model").
+ * chip.c: wiring and the timed dispatcher of the chip model (see chip.h
+ * and docs/design.md, "Chip model"). The frame loop and the functional
+ * and sampled drivers are in sim/modes/ (frame.c, sampled.c, stored.c),
+ * and so are the sinks the units emit into (docs/design-modes.md).
  *
  * The chip holds rtps RTPs; each has threads_per_rtp thread contexts, one
  * unit group per kind (RGS, traversal, list, intersection) and a FIFO of
@@ -13,7 +15,6 @@
  * thread slot a tile (slot by slot, RTP by RTP, so consecutive tiles go to different RTPs); from
  * then on everything happens in event handlers, and the frame ends when the event queue runs dry.
  */
-#define _GNU_SOURCE /* asprintf */
 #include "sim/chip.h"
 
 #include "kernel-ref/bitset.h"
@@ -27,9 +28,11 @@
 #include <unistd.h>
 
 #include "kernel-ref/worldcache.h"
+#include "sim/modes/functional.h"
+#include "sim/modes/replay.h"
+#include "sim/modes/slot.h"
 #include "units/intersection.h"
 #include "units/list.h"
-#include "units/pktreplay.h"
 #include "units/rgs.h"
 #include "units/traversal.h"
 
@@ -137,7 +140,7 @@ static double chip_work(const chip *c, int k)
  * unit issue cycles per instance, L1 requests per port, SDRAM and host-bus
  * data-bus time (detailed and functional). Functional and detailed tiles
  * count it alike, so it is known for the whole frame. */
-static void chip_demand(const chip *c, double d[RES_N])
+void chip_demand(const chip *c, double d[RES_N])
 {
 	memset(d, 0, RES_N * sizeof *d);
 	for (int k = 0; k < UNIT_NKINDS; k++)
@@ -157,7 +160,7 @@ static void chip_demand(const chip *c, double d[RES_N])
 
 /* A census mark at hand-out index tile of the current frame (the room
  * for every mark is made by chip_census_on). */
-static void census_mark(chip *c, int tile)
+void chip_census_mark(chip *c, int tile)
 {
 	if (c->ncensus >= c->census_cap)
 		return;
@@ -208,29 +211,32 @@ int chip_census_on(chip *c, diag *d)
 /* Gives thread t the RGC's next tile (its primary packet); 0 when the
  * frame has none left or the packet pool is out of memory. Timed and
  * functional processing both take tiles here. */
-static int take_tile(chip *c, thr_ctx *t)
+int chip_take_tile(chip *c, thr_ctx *t)
 {
 	int tx, ty;
 	if (!rgc_next(&c->g, &tx, &ty))
 		return 0;
 	if (c->census && c->tiles_given % c->fid.unit_tiles == 0)
-		census_mark(c, c->tiles_given);
+		chip_census_mark(c, c->tiles_given);
 	if (c->wcap && c->tiles_given % c->wcap->g_light == 0)
 		warm_mark(c, c->tiles_given);
 	c->tiles_given++;
 	if (c->progress && c->tiles_given % 64 == 0)
 		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
-	thr_env *v = &c->env;
 	int tile = ty * c->g.tiles_x + tx;
 	/* with a packet record the tile's packets replay their streams, in
 	 * functional stretches and detailed regions alike */
-	if (v->rec_in && v->rec_in->tile_pk[tile] >= 0) {
+	const pktrec *in = c->md.in;
+	if (in && in->tile_pk[tile] >= 0) {
 		c->replayed[tile] = 1;
 		c->fid.replayed_tiles++;
-		thr_replay_begin(t, v->rec_in->tile_pk[tile]);
+		mode_replay_begin(in, t, in->tile_pk[tile]);
 		return 1;
 	}
-	t->rec = v->rec_out ? pr_new(v->rec_out, tile) : -1;
+	if (c->md.rec.out)
+		mode_rec_tile(&c->md.rec, t, tile);
+	else
+		mode_slot(t)->rec = -1;
 	if (rgs_primary(t, tx, ty)) {
 		c->oom = 1;
 		return 0;
@@ -238,26 +244,33 @@ static int take_tile(chip *c, thr_ctx *t)
 	return 1;
 }
 
+void chip_resume_at(chip *c, int tile, uint64_t next_age)
+{
+	c->g.next = tile;
+	c->tiles_given = tile;
+	c->env.next_age = next_age;
+}
+
 /* Free thread t takes a queued secondary packet: the packet, or its
  * stream in the packet record. */
-static void start_queued(thr_ctx *t, thr_qitem it)
+void chip_start_queued(thr_ctx *t, thr_qitem it)
 {
 	if (!it.p) {
-		thr_replay_begin(t, it.rec);
+		mode_replay_begin(((chip *)t->env->owner)->md.in, t, it.rec);
 		return;
 	}
-	t->rec = it.rec;
+	mode_slot(t)->rec = it.rec;
 	rgs_secondary(t, it.p);
 }
 
 static void on_free(thr_ctx *t)
 {
 	chip *c = t->env->owner;
-	if (c->env.func) /* func_range hands out the work itself */
+	if (c->md.func_on) /* the functional driver (mode_func_range) hands out the work itself */
 		return;
 	thr_qitem it;
 	if (rgs_dequeue(t->rtp, &it)) {
-		start_queued(t, it);
+		chip_start_queued(t, it);
 		return;
 	}
 	/* sampled: the marks that time a measured unit are the moments its
@@ -273,14 +286,14 @@ static void on_free(thr_ctx *t)
 		 * functionally (each thread's next step, as its pending memory
 		 * and unit events fire) instead of draining cycle by cycle */
 		if (F->region_end < c->g.ntiles)
-			c->env.func = 1;
+			mode_set_func(&c->md, 1);
 		return;
 	}
 	if (F->us_next < F->unit_cap && F->unit_s[F->us_next] == next) {
 		chip_demand(c, &F->dem_s[F->us_next * RES_N]);
 		F->mark_s[F->us_next++] = eng_now(c->e);
 	}
-	take_tile(c, t);
+	chip_take_tile(c, t);
 }
 
 /* posix_memalign takes any size, but the rounding keeps these blocks
@@ -458,13 +471,8 @@ static int fid_init(chip *c)
  * caller frees what was allocated). */
 static int thread_init(thr_ctx *t, thr_rtp *rp, int id, int gid, int nkids)
 {
-	*t = (thr_ctx){.rtp = rp,
-	               .env = rp->env,
-	               .id = id,
-	               .gid = gid,
-	               .rec = -1,
-	               .state = THR_IDLE,
-	               .nkids = nkids};
+	*t = (thr_ctx){
+	    .rtp = rp, .env = rp->env, .id = id, .gid = gid, .state = THR_IDLE, .nkids = nkids};
 	t->stack = alloc64(PKT_STACK_MAX * sizeof(trav_entry));
 	t->kids = alloc64((size_t)nkids * sizeof(packet));
 	return t->stack && t->kids ? 0 : -1;
@@ -547,6 +555,9 @@ static int chip_env(chip *c, diag *d)
 	v->route = pipeline;
 	v->on_free = on_free;
 	v->owner = c;
+	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr))
+		return diag_set(d, "chip", 0, 0, "out of memory for %d RTPs x %d threads",
+		                cfg->chip.rtps, cfg->chip.threads_per_rtp);
 	render_opts ro;
 	render_opts_default(&ro);
 	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
@@ -722,6 +733,7 @@ void chip_destroy(chip *c)
 	free(c->warm_own);
 	mem_free(&c->mem);
 	ms_free(&c->store);
+	mode_sinks_free(&c->md);
 	thr_env_free(&c->env);
 	if (c->e)
 		eng_destroy(c->e);
@@ -751,7 +763,7 @@ void chip_destroy(chip *c)
 	free(c);
 }
 
-static double now_ms(void)
+double chip_now_ms(void)
 {
 	struct timespec ts;
 	clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -759,7 +771,7 @@ static double now_ms(void)
 }
 
 /* Copies counts kept outside the registry (memory port, shade_counts). */
-static void sync_counters(chip *c)
+void chip_sync_counters(chip *c)
 {
 	const uint64_t *sc = (const uint64_t *)&c->env.sh;
 	_Static_assert(sizeof(shade_counts) == 11 * sizeof(uint64_t), "shade_counts changed");
@@ -777,24 +789,24 @@ static void sync_counters(chip *c)
  * (exclusive), until every packet they made is done: a frame starts by
  * offering every thread slot a tile, slot by slot and RTP by RTP. Returns
  * the ticks it took. */
-static uint64_t run_region(chip *c, int end)
+uint64_t chip_run_region(chip *c, int end)
 {
 	uint64_t t0 = eng_now(c->e);
 	int first = c->g.next;
 	c->fid.region_end = end;
-	c->env.func = 0;
+	mode_set_func(&c->md, 0);
 	/* packets a functional stretch left in flight go on cycle by cycle
-	 * from where they stopped (replayed ones too: units/pktreplay.h): the
+	 * from where they stopped (replayed ones too: sim/modes/replay.h): the
 	 * region starts with a full chip, not with every thread taking a tile
 	 * at once; slot by slot, RTP by RTP (the turn order) */
 	int n = c->nrtp * c->tpr;
 	for (int i = 0; i < n; i++)
-		thr_func_to_timed(c->turn[i]);
+		mode_func_to_timed(c->turn[i]);
 	for (int i = 0; i < n; i++)
 		if (c->turn[i]->state == THR_IDLE)
 			on_free(c->turn[i]);
 	eng_run(c->e, ENG_FOREVER);
-	c->env.func = 0;
+	mode_set_func(&c->md, 0);
 	c->fid.detailed_tiles += (uint64_t)(end - first);
 	c->fid.detailed_cycles += eng_ticks_to_cycles(c->clk, eng_now(c->e) - t0);
 	return eng_now(c->e) - t0;
@@ -816,7 +828,7 @@ const char *chip_lin_name(int i)
 /* The demand of a stretch between two chip_demand snapshots, and whether
  * it is memory bound: its SDRAM or host-bus time above
  * sampling.hard_share of its busiest compute resource. */
-static smp_piece piece(const chip *c, const double *a, const double *b)
+smp_piece chip_piece(const chip *c, const double *a, const double *b)
 {
 	smp_piece p;
 	memset(&p, 0, sizeof p);
@@ -836,391 +848,6 @@ static smp_piece piece(const chip *c, const double *a, const double *b)
 	return p;
 }
 
-/* Keeps a piece of the estimated middle of the frame (chunk or region
- * piece) for the estimator; returns its stratum. */
-static int account(chip_fidelity *F, smp_piece p, int middle)
-{
-	if (middle && smp_busiest(&p) > 0) {
-		if (F->npc < F->pc_cap)
-			F->pc[F->npc++] = p;
-		else { /* cannot happen (pc_cap counts every piece); keep the sum */
-			smp_piece *q = &F->pc[F->pc_cap - 1];
-			q->comp += p.comp;
-			q->sdram += p.sdram;
-			q->hbus += p.hbus;
-			for (int i = 0; i < SMP_LIN; i++)
-				q->lin[i] += p.lin[i];
-		}
-	}
-	return p.hard;
-}
-
-/* Gives a free thread its next packet in functional processing: a
- * secondary packet of its RTP first (as on_free does), else the next tile
- * below `end`. Returns 0 when there is nothing to give. */
-static int func_give(chip *c, thr_ctx *t, int end, int *given)
-{
-	thr_qitem it;
-	if (rgs_dequeue(t->rtp, &it)) {
-		start_queued(t, it);
-		return 1;
-	}
-	if (c->g.next >= end || !take_tile(c, t))
-		return 0;
-	c->fid.functional_tiles++;
-	++*given;
-	return 1;
-}
-
-/* Sampled: does a memory-bound chunk (hard) that ended at tile `from`
- * bring an extra region starting at `start`, before the next planned one
- * at `next`? When one is left, the last region ended at least `gap` tiles
- * before `from`, and a warm-up and unit fit before `next`. Functional
- * stretches (func_range) and stored warming's gaps alike. */
-static int extra_due(const chip_fidelity *F, int hard, int from, int start, int next)
-{
-	return hard && F->extra_left > 0 && from - F->last_end >= F->gap &&
-	       next - start >= F->warmup_tiles + F->unit_tiles;
-}
-
-/* A sampled frame's bookkeeping at its start. */
-static void sampled_begin(chip_fidelity *F)
-{
-	F->us_next = F->ue_next = 0;
-	F->npc = 0;
-	F->extra_left = F->unit_cap - F->nunits;
-	F->last_end = 0;
-}
-
-/* Thread slots ahead whose packet streams func_range prefetches. */
-#define PREFETCH_TURNS 4
-
-/* Takes idle slot i (turn order) of RTP r off func_range's passes. */
-static void park_slot(chip *c, int i, int r)
-{
-	bits_clear(c->live, i);
-	c->park[r * c->tpr + c->park_n[r]++] = i;
-}
-
-/* Puts RTP r's parked slots back on the passes. */
-static void unpark_rtp(chip *c, int r)
-{
-	for (int k = 0; k < c->park_n[r]; k++)
-		bits_set(c->live, c->park[r * c->tpr + k]);
-	c->park_n[r] = 0;
-}
-
-/* Functional processing of tiles from the RGC's position up to `end`, with
- * the same unit code in functional mode (thr_env.func) and every thread
- * slot in use, as the detailed chip has them: each slot holds a packet, and
- * the slots take one step each in turn (a step: one unit operation and the
- * memory reads before the next), so the caches see the packets' accesses
- * interleaved as a busy chip makes them, not one packet after another (one
- * at a time, the L1s and SDRAM saw far fewer misses than the cycle model
- * at 16-64 threads: docs/fidelity.md). A slot that finishes takes a secondary packet of
- * its RTP, else the next tile. With a packet record, packets replay their
- * streams instead of running their math (units/pktreplay.h). Memory goes
- * through the hierarchy's functional path: the data is there at once, and
- * a line a region left in flight counts as on its way (hier.c). FR_DRAIN
- * ends the range with every slot free; FR_STOP as soon as its last tile
- * is handed out, packets still in flight, or earlier for an extra region
- * (returning 1). FR_RELAX (stored warming, after a region) ends when a
- * slot wants a tile on the light-checkpoint grid (its RTP's queue empty)
- * once every slot has taken RELAX_TILES tiles since the range began: the
- * moment at which the warming run takes its checkpoints (warm_mark), with
- * the packets in flight about as far along as the warming run's are
- * (docs/fidelity.md "Stored warming"); or when the tile wanted is `end`,
- * or earlier for an extra region (returning 1), as FR_STOP. */
-enum fr_mode { FR_DRAIN, FR_STOP, FR_RELAX };
-
-/* Tiles every slot takes in a relax. One leaves the slot that finished
- * last holding a packet just begun where the warming run's slots are part
- * way through theirs, and the frame's counts come out low; two do not
- * (docs/fidelity.md "Stored warming", tests/test_warming.c
- * sponza_one_thread_pci_as_cycle). */
-#define RELAX_TILES 2
-
-static int func_range(chip *c, int end, int mode)
-{
-	chip_fidelity *F = &c->fid;
-	/* sampled: the demand of each chunk of unit_tiles tiles (the units'
-	 * size) adds to its stratum's; the chunk's busiest resource is its
-	 * demand. A memory-bound chunk stops the stretch early for an extra
-	 * region, when one is left, the last region ended at least `gap`
-	 * tiles ago, and there is room before the next planned one. */
-	int chunked = F->mode == CFG_FIDELITY_SAMPLED, given = 0, extra = 0;
-	int n = c->nrtp * c->tpr;
-	double d0[RES_N], d1[RES_N];
-	if (chunked)
-		chip_demand(c, d0);
-	/* every slot on the passes; the drain parks idle ones (below) */
-	memset(c->live, 0xff, (size_t)bits_words(n) * sizeof *c->live);
-	if (n % 64)
-		c->live[n / 64] = (1ull << (n % 64)) - 1;
-	memset(c->park_n, 0, (size_t)c->nrtp * sizeof *c->park_n);
-	int relaxed = 0, stop = 0;
-	if (mode == FR_RELAX)
-		memset(c->relax_n, 0, (size_t)n * sizeof *c->relax_n);
-	c->env.func = 1;
-	for (int busy = 1; busy && !stop && !c->oom;) {
-		/* before a region: stop once the tiles are handed out and leave
-		 * the packets in flight for the region to take over */
-		if (mode == FR_STOP && c->g.next >= end)
-			break;
-		busy = 0;
-		for (int i = bits_next(c->live, n, 0); i < n && !stop;
-		     i = bits_next(c->live, n, i + 1)) {
-			thr_ctx *t = c->turn[i];
-			int r = (int)(t->rtp - c->rtp);
-			if (!t->p && !t->rp) {
-				if (chunked && given == F->unit_tiles) {
-					chip_demand(c, d1);
-					int hard = account(F, piece(c, d0, d1), 1);
-					memcpy(d0, d1, sizeof d0);
-					given = 0;
-					if (mode != FR_DRAIN &&
-					    extra_due(F, hard, c->g.next, c->g.next, end)) {
-						end = c->g.next;
-						extra = 1;
-					}
-				}
-				if (mode == FR_RELAX && t->rtp->qn == 0 &&
-				    ((relaxed == n && c->g.next % c->warm.g_light == 0) ||
-				     c->g.next >= end)) {
-					stop = 1;
-					break;
-				}
-				int had = given;
-				if (!func_give(c, t, end, &given)) {
-					/* no tile is left (`end` only comes closer) and
-					 * its RTP's queue is empty: until the RTP queues
-					 * a packet, every visit would do nothing, so the
-					 * drain's passes skip it (a 1024-thread drain
-					 * spent most of its time visiting idle slots) */
-					if (c->g.next >= end)
-						park_slot(c, i, r);
-					continue;
-				}
-				if (mode == FR_RELAX && given != had &&
-				    ++c->relax_n[i] == RELAX_TILES)
-					relaxed++;
-			}
-			if (t->rp) {
-				/* the stream of the slot a few turns on is elsewhere
-				 * in the record: start fetching it now (one turn
-				 * ahead was too late to hide the host's memory
-				 * latency); a step's bytes often run into the next
-				 * host line: fetch that too */
-				int k = i + PREFETCH_TURNS < n ? i + PREFETCH_TURNS
-				                               : i + PREFETCH_TURNS - n;
-				if (k < n && c->turn[k]->rp) {
-					__builtin_prefetch(c->turn[k]->rp);
-					__builtin_prefetch(c->turn[k]->rp + 32);
-				}
-			}
-			busy |= thr_step_func(t);
-			/* packets it queued (functional: only a step of its
-			 * RTP's slots queues) bring that RTP's parked slots
-			 * back: those ahead of i in this pass, the others in
-			 * the next, as when every slot was visited */
-			if (c->park_n[r] && t->rtp->qn > 0)
-				unpark_rtp(c, r);
-		}
-	}
-	c->env.func = 0;
-	if (chunked) {
-		chip_demand(c, d1);
-		account(F, piece(c, d0, d1), 1);
-	}
-	return extra;
-}
-
-/* Sampled frame: detailed regions (warm-up, then one measured unit) with
- * functional stretches between them; a region takes over the packets the
- * stretch before it left in flight, and hands its own to the stretch after
- * it. The first region is the frame's start and the last its end (a chip
- * starting empty, and the final drain), both measured, not estimated.
- * Everything between is estimated (sampling.c) from the units' cycles and
- * the resource demands of every piece of it, taken per chunk of
- * unit_tiles tiles (func_range) and per region piece (warm-up, unit, what
- * finished after the unit), detailed or functional alike. The interval
- * adds sampling.bias_bound. A memory-bound functional chunk brings an
- * extra region (func_range). docs/fidelity.md. */
-static void sampled_estimate(chip *c, int f, int nr, uint64_t t0);
-static void sampled_region(chip *c, int j, int tail);
-
-static void sampled_frame(chip *c, int f)
-{
-	chip_fidelity *F = &c->fid;
-	int W = F->warmup_tiles, n = F->nunits;
-	uint64_t t0 = eng_now(c->e);
-	sampled_begin(F);
-	int j = 0;
-	for (int b = 0; b < n; j++) {
-		int rs = F->base_s[b] - W;
-		if (rs < c->g.next)
-			rs = c->g.next;
-		/* the stretch before the next planned region may stop early at a
-		 * memory-bound chunk: an extra region starts there */
-		int extra = c->g.next < rs && func_range(c, rs, FR_STOP);
-		if (extra) {
-			F->extra_left--;
-			F->unit_s[j] = c->g.next + W;
-		} else {
-			F->unit_s[j] = F->base_s[b++];
-		}
-		sampled_region(c, j, b == n && !extra);
-	}
-	sampled_estimate(c, f, j, t0);
-}
-
-/* Region j of a sampled frame (its unit_s set): runs it and keeps its
- * pieces in order: warm-up, unit, what finished after the unit; the
- * head's first two and the tail are measured, not estimated. */
-static void sampled_region(chip *c, int j, int tail)
-{
-	chip_fidelity *F = &c->fid;
-	double r0[RES_N], r1[RES_N];
-	chip_demand(c, r0);
-	F->mark_r0[j] = eng_now(c->e);
-	run_region(c, tail ? c->g.ntiles : F->unit_s[j] + F->unit_tiles);
-	F->last_end = c->g.next;
-	chip_demand(c, r1);
-	const double *ds = &F->dem_s[j * RES_N], *de = &F->dem_e[j * RES_N];
-	F->unit_pc[j] = piece(c, ds, de);
-	F->unit_cyc[j] = (double)(F->mark_e[j] - F->mark_s[j]) / (double)c->clk.period;
-	account(F, piece(c, r0, ds), j > 0 && !tail);
-	account(F, F->unit_pc[j], j > 0 && !tail);
-	account(F, piece(c, de, r1), !tail);
-}
-
-/* A piece of the warming run between two light checkpoints, its SDRAM
- * demand less the share m of on-board-cache hits a timed chip merges. */
-static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
-{
-	double d0[RES_N], d1[RES_N], per = (double)c->clk.period;
-	uint64_t h0, h1;
-	memcpy(d0, wm_demand(&c->warm, f, a, &h0), sizeof d0);
-	memcpy(d1, wm_demand(&c->warm, f, b, &h1), sizeof d1);
-	d0[RES_SDRAM] -= m * (double)h0 / per;
-	d1[RES_SDRAM] -= m * (double)h1 / per;
-	return piece(c, d0, d1);
-}
-
-/* A sampled frame with stored warming (docs/fidelity.md "Stored
- * warming"): as sampled_frame, but a gap between regions is not run: its
- * chunks' demands come from the warming run's light checkpoints and the
- * next region starts from the full checkpoint at its start
- * (wm_restore), which also adds the gap's counts. Region starts snap
- * down to the last full checkpoint (wm_full_below); a region whose start
- * falls at or before the last one's end follows it without a gap. */
-static void sampled_frame_stored(chip *c, int f)
-{
-	chip_fidelity *F = &c->fid;
-	wm *r = &c->warm;
-	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits;
-	uint64_t t0 = eng_now(c->e);
-	sampled_begin(F);
-	int j = 0, at = 0, room = W + U;
-	for (int b = 0; b < n; j++) {
-		int tail = b == n - 1, rs = wm_full_below(r, F->base_s[b] - W), extra = 0;
-		if (!tail && (rs > at ? rs : at) + room > wm_full_below(r, F->base_s[n - 1] - W)) {
-			b++; /* no room before the tail: left out */
-			j--;
-			continue;
-		}
-		if (rs > at && j > 0) {
-			/* the last region's packets in flight go on functionally
-			 * until none is left in a slot and those in flight are as
-			 * far along as the warming run's when it takes a
-			 * checkpoint (FR_RELAX): the work the chip leaves undone
-			 * at the jump is then what the gap's counts hold. A
-			 * timed chip holds more work in flight when a tile is
-			 * wanted than the warming run does (slow packets stay
-			 * longer), and jumping at once lost that work (the
-			 * frame's PCI bytes came out low; docs/fidelity.md). A
-			 * memory-bound chunk on the way brings an extra region
-			 * there and then, as in full warming: a relax takes
-			 * RELAX_TILES tiles per slot, and with many threads the
-			 * gaps after it were too short for the extra regions,
-			 * and the estimate lost its memory-bound units. */
-			extra = func_range(c, rs, FR_RELAX);
-			at = c->g.next;
-		}
-		if (extra) /* it stopped at a memory-bound chunk: a region follows */
-			rs = at;
-		else if (rs > at) {
-			/* the gap [at, rs): the warming run's chunks of U tiles; a
-			 * memory-bound one brings an extra region at the next full
-			 * checkpoint after it, as func_range does */
-			double m = hier_merge_share(&c->mem);
-			wm_region_end(r, f, at);
-			for (int a = at; a < rs;) {
-				int e = a + U < rs ? a + U : rs;
-				int hard = account(F, warm_piece(c, f, a, e, m), 1);
-				int xs = wm_full_above(r, e);
-				if (e - a == U && extra_due(F, hard, e, xs, rs)) {
-					if (xs > e)
-						account(F, warm_piece(c, f, e, xs, m), 1);
-					rs = xs;
-					extra = 1;
-					break;
-				}
-				a = e;
-			}
-			F->functional_tiles += (uint64_t)(rs - at);
-			F->replayed_tiles += (uint64_t)(rs - at);
-			if (wm_restore(r, c, f, rs, m))
-				c->warm_err = 1;
-		} else
-			rs = at;
-		if (extra) {
-			F->extra_left--;
-			tail = 0;
-		} else
-			b++;
-		int us = rs + W;
-		if (tail && us > N - U)
-			us = N - U > rs ? N - U : rs;
-		F->unit_s[j] = us;
-		sampled_region(c, j, tail);
-		at = c->g.next;
-		if (c->warm_err)
-			break;
-	}
-	/* every tile's packets were replayed, here or in the warming run */
-	memset(c->replayed, 1, (size_t)N);
-	sampled_estimate(c, f, j, t0);
-}
-
-/* The estimate of a sampled frame of nr regions that started at t0 from
- * its units and pieces (sampling.c): the head and tail measured, the
- * middle estimated, plus sampling.bias_bound. */
-static void sampled_estimate(chip *c, int f, int nr, uint64_t t0)
-{
-	chip_fidelity *F = &c->fid;
-	double per = (double)c->clk.period, *cyc = F->unit_cyc;
-	F->nreg = nr;
-	F->region_end = c->g.ntiles;
-	uint64_t t1 = eng_now(c->e);
-	double ch = (double)(F->mark_e[0] - t0) / per, ct = (double)(t1 - F->mark_r0[nr - 1]) / per;
-	smp_est r;
-	smp_estimate(F->unit_pc + 1, cyc + 1, nr - 1, F->pc, F->npc, c->cfg.sampling.sdram_factor,
-	             c->cfg.sampling.demand_model, &r);
-	F->model = r.model;
-	for (int u = 0; u < nr; u++) {
-		double x = smp_demand(&F->unit_pc[u], &r.model);
-		F->unit_rate[u] = x > 0 ? cyc[u] / x : 0;
-	}
-	double est = r.est, var = r.var, df = r.df;
-	F->est[f] = ch + est + ct;
-	/* plus a bound on the units' systematic error (sampling.bias_bound),
-	 * which no spread between units shows */
-	F->half[f] = isfinite(var)
-	                 ? smp_t975((int)df) * sqrt(var) + c->cfg.sampling.bias_bound * est
-	                 : INFINITY;
-}
-
 /* The resources after the unit kinds' (whose names are the kinds'). */
 static const char *const res_names[RES_N - RES_L1] = {"l1_shade", "l1_kd", "l1_list",
                                                       "l1_tri",   "sdram", "hostbus"};
@@ -1238,104 +865,6 @@ const char *chip_rec_name(int state)
 	return state >= 0 && state <= REC_UNSTORED ? n[state] : "?";
 }
 
-/* The packet record's key: kernel-ref's frame key for this view and size
- * (the memory image by its CRC, camera, lights, shading depth) and what
- * else changes a packet's work on the chip: the datapath formats and the
- * stack depth (spills). Thread counts, units and memory do not. */
-static char *rec_key(const chip *c)
-{
-	const saar_config *g = &c->cfg;
-	render_opts ro;
-	render_opts_default(&ro);
-	ro.width = g->frame.width;
-	ro.height = g->frame.height;
-	ro.max_depth = g->shading.max_depth;
-	char *fk = wc_frame_key(c->w->cache_prog, c->w->image_crc, c->w->m.size, &c->w->v, &ro),
-	     *key;
-	if (!fk)
-		return NULL;
-	int n =
-	    asprintf(&key,
-	             "saarsim packet record 1\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
-	             "counters %d shade %zu\n",
-	             fk, g->chip.fp.trav.exp, g->chip.fp.trav.mant, g->chip.fp.isect.exp,
-	             g->chip.fp.isect.mant, g->chip.fp.shade.exp, g->chip.fp.shade.mant,
-	             g->chip.fp.round, g->chip.stack_depth, (int)C_NCOUNTERS, sizeof(shade_counts));
-	free(fk);
-	return n < 0 ? NULL : key;
-}
-
-/* Functional and sampled runs with a world cache: replay the stored
- * record of this frame, else record the first frame (rec_store). */
-static void rec_open(chip *c)
-{
-	const world *w = c->w;
-	chip_fidelity *F = &c->fid;
-	if (!w->cache_dir || F->mode == CFG_FIDELITY_CYCLE ||
-	    (F->mode == CFG_FIDELITY_SAMPLED && F->exact))
-		return;
-	double t0 = now_ms();
-	c->rec_key = rec_key(c);
-	if (!c->rec_key ||
-	    wc_file(c->rec_file, sizeof c->rec_file, w->cache_dir, "packets", c->rec_key)) {
-		free(c->rec_key);
-		c->rec_key = NULL;
-		return;
-	}
-	const void *tail;
-	size_t n;
-	int W = c->cfg.frame.width, H = c->cfg.frame.height;
-	/* replayed where it lies in the file: no copy */
-	if (wc_get_mapped(c->rec_file, c->rec_key, NULL, 0, &tail, &n, &c->rec_map) == 1 &&
-	    !pr_load(&c->rec, tail, n, 0, W, H, c->g.ntiles)) {
-		c->env.rec_in = &c->rec;
-		c->rec_state = REC_REPLAYED;
-	} else {
-		wc_unmap(&c->rec_map);
-		if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
-			c->env.rec_out = &c->rec;
-			c->rec_state = REC_UNSTORED;
-		}
-	}
-	c->rec_ms += now_ms() - t0;
-}
-
-/* After the recorded frame: stores the record (a failure is a warning),
- * and the frames after it replay it. */
-static void rec_store(chip *c)
-{
-	if (!c->env.rec_out)
-		return;
-	double t0 = now_ms();
-	c->env.rec_out = NULL;
-	void *b;
-	size_t n;
-	int rc = pr_serialize(&c->rec, &c->fb, &b, &n);
-	pr_free(&c->rec);
-	if (rc)
-		return;
-	diag d;
-	if (wc_put(c->rec_file, c->rec_key, NULL, NULL, 0, b, n, &d))
-		fprintf(stderr, "warning: %s\n", d.msg);
-	else
-		c->rec_state = REC_STORED;
-	if (!pr_load(&c->rec, b, n, 1, c->cfg.frame.width, c->cfg.frame.height, c->g.ntiles))
-		c->env.rec_in = &c->rec;
-	c->rec_ms += now_ms() - t0;
-}
-
-/* Replayed tiles take the recorded frame's pixels (a replayed packet
- * draws nothing). */
-static void rec_pixels(chip *c)
-{
-	for (int i = 0; i < c->g.ntiles; i++)
-		if (c->replayed[i]) {
-			c->replayed[i] = 0;
-			pr_put_tile(&c->rec, &c->fb, i % c->g.tiles_x, i / c->g.tiles_x, TILE_W,
-			            TILE_H);
-		}
-}
-
 const char *chip_warm_name(int state)
 {
 	static const char *const n[] = {"off", "loaded", "built", "not stored", "unavailable"};
@@ -1351,145 +880,12 @@ int chip_warm_stored(const chip *c)
 /* Stored warming's grids: the light one (warm_light_grid), and one full
  * checkpoint in every 1/WM_FULL_PER_FRAME of the frame, rounded to the
  * light grid. */
-static void warm_grid(const chip *c, int *gl, int *gf)
+void chip_warm_grid(const chip *c, int *gl, int *gf)
 {
 	*gl = warm_light_grid(&c->cfg);
 	*gf = c->g.ntiles / WM_FULL_PER_FRAME / *gl * *gl;
 	if (*gf < *gl)
 		*gf = *gl;
-}
-
-/* The warming run's key: the packet record's (the frame) and every config
- * key functional processing reads. Left out (at their defaults): the name
- * (a label; a config file without one is named after the file), fidelity,
- * sampling and the keys only timing reads (cfg_key.timing_only), so a
- * sweep over those reuses one warming run. */
-static char *warm_key(const chip *c, int gl, int gf)
-{
-	saar_config k = c->cfg, d;
-	cfg_defaults(&d);
-	memcpy(k.name, d.name, sizeof k.name);
-	k.fidelity = d.fidelity;
-	k.sampling = d.sampling;
-	size_t nk;
-	const cfg_key *keys = cfg_keys(&nk);
-	for (size_t i = 0; i < nk; i++)
-		if (keys[i].timing_only)
-			memcpy((char *)&k + keys[i].off, (const char *)&d + keys[i].off,
-			       keys[i].size);
-	char *js = NULL, *key = NULL;
-	size_t n = 0;
-	FILE *f = open_memstream(&js, &n);
-	if (!f)
-		return NULL;
-	jsonw w;
-	jsonw_init_file(&w, f);
-	cfg_write_json(&k, &w);
-	if (fclose(f) || asprintf(&key, "saarsim warming 1\n%sgrid %d %d\nconfig %s\n", c->rec_key,
-	                          gl, gf, js) < 0)
-		key = NULL;
-	free(js);
-	return key;
-}
-
-/* The warming run of chip h (functional, replaying the packet record):
- * chip_run with checkpoints on the grids (sim/warming.h). take_tile takes
- * them (warm_mark) and chip_run the last of each frame, so the run steps
- * as functional mode does: stopping it at each checkpoint left slots idle
- * until the next and missed fewer L1 lines. */
-static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
-{
-	wm_writer w;
-	if (wm_writer_init(&w, h, gl, gf))
-		return -1;
-	h->wcap = &w;
-	diag d;
-	int rc =
-	    chip_run(h, &d) || h->rec_state != REC_REPLAYED ? -1 : wm_writer_finish(&w, h, out, n);
-	h->wcap = NULL;
-	wm_writer_free(&w);
-	return rc;
-}
-
-/* A functional chip like c for the record and warming runs. */
-static chip *helper_chip(const chip *c, int frames)
-{
-	saar_config k = c->cfg;
-	k.fidelity = CFG_FIDELITY_FUNCTIONAL;
-	k.frame.frames = frames;
-	diag d;
-	return chip_create(&k, c->w, &d);
-}
-
-/* Stored warming: the checkpoints of this frame and config from the world
- * cache, else a warming run now (stored for the next run). Needs the
- * packet record; without one this run records it first, with a
- * functional chip of one frame. When impossible, full warming runs. */
-static void warm_open(chip *c)
-{
-	if (c->cfg.sampling.warming != CFG_WARMING_STORED || !chip_estimates(&c->cfg))
-		return;
-	double t0 = now_ms();
-	c->warm_state = WARM_UNAVAILABLE;
-	if (c->rec_state == REC_UNSTORED) {
-		/* make the record now: a warming run replays it */
-		chip *h = helper_chip(c, 1);
-		diag d;
-		int ok = h && !chip_run(h, &d) && h->rec_state == REC_STORED;
-		chip_destroy(h);
-		c->env.rec_out = NULL;
-		pr_free(&c->rec);
-		free(c->rec_key);
-		c->rec_key = NULL;
-		c->rec_state = REC_OFF;
-		c->rec_ms += now_ms() - t0;
-		rec_open(c);
-		if (ok && c->rec_state == REC_REPLAYED)
-			c->rec_state = REC_STORED;
-		t0 = now_ms();
-	}
-	int gl, gf;
-	warm_grid(c, &gl, &gf);
-	char *key = c->env.rec_in ? warm_key(c, gl, gf) : NULL;
-	if (!key || wc_file(c->warm_file, sizeof c->warm_file, c->w->cache_dir, "warming", key)) {
-		free(key);
-		fprintf(stderr, "warning: sampling.warming stored needs --world-cache and a packet "
-		                "record; the functional stretches run instead\n");
-		return;
-	}
-	const void *tail;
-	size_t n;
-	if (wc_get_mapped(c->warm_file, key, NULL, 0, &tail, &n, &c->warm_map) == 1 &&
-	    !wm_open(&c->warm, tail, n, c)) {
-		c->warm_state = WARM_LOADED;
-	} else {
-		wc_unmap(&c->warm_map);
-		chip *h = helper_chip(c, c->cfg.frame.frames);
-		void *b = NULL;
-		if (h && !warm_build(h, gl, gf, &b, &n)) {
-			diag d;
-			c->warm_state = WARM_UNSTORED;
-			if (wc_put(c->warm_file, key, NULL, NULL, 0, b, n, &d))
-				fprintf(stderr, "warning: %s\n", d.msg);
-			else
-				c->warm_state = WARM_BUILT;
-			if (wm_open(&c->warm, b, n, c)) {
-				free(b);
-				b = NULL;
-				c->warm_state = WARM_UNAVAILABLE;
-			} else
-				c->warm_own = b;
-		} else {
-			free(b);
-			b = NULL;
-		}
-		if (!b) /* out of memory, or a cache line index past what is stored */
-			fprintf(stderr, "warning: sampling.warming stored: the warming run failed; "
-			                "the functional stretches run instead\n");
-		chip_destroy(h);
-	}
-	free(key);
-	c->warm_ms += now_ms() - t0;
 }
 
 /* The busiest-resource bound of frame f: the core cycles each resource
@@ -1499,7 +895,7 @@ static void warm_open(chip *c)
  * cannot be faster than the largest. Needs the frame's snapshot.
  * (chip_demand, the sampled estimator's demand, takes the RTPs' mean
  * instead: it is summed chunk by chunk, which a maximum is not.) */
-static void resource_bound(chip *c)
+void chip_resource_bound(chip *c)
 {
 	chip_fidelity *F = &c->fid;
 	double d[RES_N];
@@ -1524,79 +920,6 @@ static void resource_bound(chip *c)
 			F->bound_by = r;
 }
 
-int chip_run(chip *c, diag *d)
-{
-	double t0 = now_ms();
-	chip_fidelity *F = &c->fid;
-	rec_open(c);
-	warm_open(c);
-	int stored = chip_warm_stored(c);
-	for (int f = 0; f < c->cfg.frame.frames; f++) {
-		if (f > 0) /* fb_init cleared it */
-			fb_clear(&c->fb);
-		rgc_reset(&c->g);
-		c->tiles_given = 0;
-		if (F->mode == CFG_FIDELITY_FUNCTIONAL)
-			func_range(c, c->g.ntiles, FR_DRAIN);
-		else if (stored)
-			sampled_frame_stored(c, f);
-		else if (chip_estimates(&c->cfg))
-			sampled_frame(c, f);
-		else /* cycle, and sampled at rate 1: the same event sequence */
-			F->est[f] = (double)eng_ticks_to_cycles(c->clk, run_region(c, c->g.ntiles));
-		if (c->warm_err)
-			return diag_set(
-			    d, c->warm_file, 0, 0,
-			    "stored warming: a checkpoint is damaged (delete the file)");
-		for (int r = 0; r < c->nrtp; r++) {
-			for (int i = 0; i < c->tpr; i++)
-				thr_flush(&c->rtp[r].t[i]);
-			if (c->rtp[r].nidle != c->tpr || c->rtp[r].qn)
-				return diag_set(d, "chip", 0, 0,
-				                "internal error: frame ended with busy threads");
-		}
-		if (c->census)
-			census_mark(c, c->g.ntiles);
-		if (c->wcap) { /* a warming run: the frame's last light checkpoint */
-			double dem[RES_N];
-			chip_demand(c, dem);
-			wm_put_light(c->wcap, c, f, c->g.ntiles, dem);
-		}
-		if (c->env.rec_in)
-			rec_pixels(c);
-		rec_store(c);
-		if (c->oom || c->env.oom || mem_failed(&c->mem))
-			return diag_set(d, "chip", 0, 0, "out of memory during the frame");
-		if (c->env.damaged)
-			return diag_set(
-			    d, "chip", 0, 0,
-			    "a packet took more than %llu kd-tree steps (twice the "
-			    "tree's nodes): the node data the traversal unit read loops "
-			    "(damaged board memory or a wrong node address)",
-			    (unsigned long long)c->env.max_steps);
-		c->frame_port[f] = c->mem.n;
-		if (c->frame_mem)
-			hier_get_stats(&c->mem, &c->frame_mem[f]);
-		resource_bound(c);
-		F->floor[f] = F->res_cycles[F->bound_by];
-		if (F->mode == CFG_FIDELITY_FUNCTIONAL) {
-			/* no timing: the frame's cycles are the bound */
-			F->est[f] = F->floor[f];
-			c->frame_cycles[f] = (uint64_t)ceil(F->est[f]);
-		} else {
-			/* an estimate below the bound is impossible */
-			if (F->est[f] < F->floor[f])
-				F->est[f] = F->floor[f];
-			c->frame_cycles[f] = (uint64_t)llround(F->est[f]);
-		}
-		c->frames_done = f + 1;
-	}
-	c->events = eng_events(c->e);
-	sync_counters(c);
-	c->sim_ms = now_ms() - t0;
-	return 0;
-}
-
 uint64_t chip_cycles(const chip *c)
 {
 	uint64_t s = 0;
@@ -1619,7 +942,7 @@ uint64_t chip_rtp_sum(const chip *c, const char *suffix)
 int chip_check_frame(chip *c, chip_check *out, diag *d)
 {
 	memset(out, 0, sizeof *out);
-	double t0 = now_ms();
+	double t0 = chip_now_ms();
 	render_opts ro;
 	render_opts_default(&ro);
 	ro.width = c->cfg.frame.width;
@@ -1648,7 +971,7 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	}
 	if (!rc) {
 		out->single = img_compare(a, b, ro.width, ro.height);
-		out->check_ms = now_ms() - t0;
+		out->check_ms = chip_now_ms() - t0;
 		out->done = 1;
 	}
 	free(a);

@@ -29,6 +29,7 @@
 #include "sim/config.h"
 #include "sim/core/engine.h"
 #include "sim/core/stats.h"
+#include "sim/modes/modes.h"
 #include "sim/sampling.h"
 #include "sim/warming.h"
 #include "traces/memtrace.h"
@@ -124,6 +125,7 @@ typedef struct chip {
 	mimg regs;
 	stats st;
 	thr_env env;
+	mode_sinks md; /* the sinks the units emit into (sim/modes/modes.h) */
 	thr_rtp *rtp;
 	int nrtp, tpr;
 	rgc g;
@@ -156,15 +158,15 @@ typedef struct chip {
 	int rec_state;
 	uint8_t *replayed; /* per tile, this frame: its packets were replayed */
 	/* every thread slot in functional turn order: slot 0 of each RTP,
-	 * then slot 1, ... (func_range, run_region) */
+	 * then slot 1, ... (mode_func_range, chip_run_region) */
 	thr_ctx **turn;
-	/* func_range's passes visit the slots whose `live` bit is set. An idle
+	/* mode_func_range's passes visit the slots whose `live` bit is set. An idle
 	 * slot that found no tile left and an empty RTP queue is parked until
 	 * its RTP queues a packet: bit clear, its turn index in
 	 * park[r * tpr ..], park_n[r] of them for RTP r. */
 	uint64_t *live;
 	int *park, *park_n;
-	/* stored warming's relax (func_range FR_RELAX): tiles each slot took
+	/* stored warming's relax (mode_func_range FR_RELAX): tiles each slot took
 	 * since it began */
 	int *relax_n;
 	char *rec_key, rec_file[1200];
@@ -173,7 +175,7 @@ typedef struct chip {
 	 * checkpoints (mapped from the world cache, or built by this run and
 	 * held in warm_own), warm_state: enum chip_warm */
 	wm warm;
-	wm_writer *wcap; /* a warming run's checkpoints are taken (take_tile) */
+	wm_writer *wcap; /* a warming run's checkpoints are taken (chip_take_tile) */
 	wc_map warm_map;
 	void *warm_own;
 	int warm_state;
@@ -219,12 +221,44 @@ int chip_estimates(const saar_config *cfg);
 /* The census's condition from the config alone (before the world loads):
  * fails (diag) when the run would estimate its cycles. */
 int chip_census_check(const saar_config *cfg, diag *d);
-/* Simulates cfg.frame.frames frames (the frame buffer holds the last). */
+/* Simulates cfg.frame.frames frames (the frame buffer holds the last;
+ * sim/modes/frame.c). */
 int chip_run(chip *c, diag *d);
 /* Renders the same frame with kernel-ref (render_frame, 1 host thread),
  * with packets and with single rays (each from the world cache when it
  * has it), and compares the 8-bit images into c's check. */
 int chip_check_frame(chip *c, chip_check *out, diag *d);
+
+/* ---- for the mode drivers (sim/modes/) ---- */
+
+/* Cumulative demand of every resource (enum chip_res) in core cycles. */
+void chip_demand(const chip *c, double d[RES_N]);
+/* The demand of a stretch between two chip_demand snapshots, and whether
+ * it is memory bound (sampling.h). */
+smp_piece chip_piece(const chip *c, const double *a, const double *b);
+/* The timed dispatcher: cycle-level simulation of the tiles from the
+ * RGC's position up to `end` (exclusive) until every packet they made is
+ * done; packets a functional stretch left in flight go on from where they
+ * stopped. Returns the ticks it took. */
+uint64_t chip_run_region(chip *c, int end);
+/* Gives thread t the RGC's next tile (its primary packet, or its stream
+ * in the replayed record); 0 when none is left or out of memory. */
+int chip_take_tile(chip *c, thr_ctx *t);
+/* Free thread t takes a queued secondary packet (or its stream). */
+void chip_start_queued(thr_ctx *t, thr_qitem it);
+/* A census mark at hand-out index tile of the current frame. */
+void chip_census_mark(chip *c, int tile);
+/* The frame's busiest-resource bound into fid.res_cycles / bound_by. */
+void chip_resource_bound(chip *c);
+/* Copies counts kept outside the registry into it. */
+void chip_sync_counters(chip *c);
+/* Stored warming's grids: light checkpoints every *gl tiles, full ones
+ * about every *gf. */
+void chip_warm_grid(const chip *c, int *gl, int *gf);
+double chip_now_ms(void); /* host time, ms */
+/* The frame goes on from hand-out index tile, the next packet entering a
+ * thread taking age next_age (stored warming's restore). */
+void chip_resume_at(chip *c, int tile, uint64_t next_age);
 
 /* Totals over frames, for reports. */
 uint64_t chip_cycles(const chip *c);

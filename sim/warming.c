@@ -9,7 +9,7 @@
  *   light      frames x nlight records: demand (WM_NDEM doubles), the
  *              on-board-cache hit ticks, the counters (ncnt uint64)
  *   offsets    frames x nfull uint64: each full checkpoint's offset
- *   full       per full checkpoint: wm_fhead, the slots (thr_replay_state, turn
+ *   full       per full checkpoint: wm_fhead, the slots (mode_replay_state, turn
  *              order), per RTP its queue length then the queued packet
  *              ids, the L1s and tag cache whole (cache_save form: lines
  *              then ranks), the on-board cache's changed sets (their
@@ -22,7 +22,7 @@
 
 #include "kernel-ref/bitset.h"
 #include "sim/chip.h"
-#include "units/pktreplay.h"
+#include "sim/modes/replay.h"
 #include "units/rgs.h"
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
@@ -219,8 +219,8 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 		return;
 	memcpy(p, &fh, sizeof fh);
 	for (int i = 0; i < ns; i++) {
-		thr_replay_state s;
-		if (thr_replay_save(c->turn[i], &s)) {
+		mode_replay_state s;
+		if (mode_replay_save(c->turn[i], &s)) {
 			w->failed = 1;
 			return;
 		}
@@ -229,18 +229,13 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 		memcpy(p, &s, sizeof s);
 	}
 	for (int r = 0; r < c->nrtp; r++) {
-		const thr_rtp *rp = &c->rtp[r];
-		if (!(p = full_room(w, 4 + 4 * (size_t)rp->qn)))
+		int32_t n = rgs_queue_len(&c->rtp[r]);
+		if (!(p = full_room(w, 4 + 4 * (size_t)n)))
 			return;
-		int32_t n = rp->qn;
 		memcpy(p, &n, 4);
-		for (int i = 0; i < rp->qn; i++) {
-			thr_qitem it = rp->q[(rp->qhead + i) % rp->qcap];
-			if (it.p) {
-				w->failed = 1;
-				return;
-			}
-			memcpy(p + 4 + 4 * (size_t)i, &it.rec, 4);
+		if (mode_queue_save(&c->rtp[r], p + 4)) {
+			w->failed = 1;
+			return;
 		}
 	}
 	cache *k[WM_NCACHES], *l2;
@@ -329,7 +324,6 @@ void wm_close(wm *r)
 	free(r->l2line);
 	free(r->l2rank);
 	free(r->l2pend);
-	free(r->q);
 	memset(r, 0, sizeof *r);
 }
 
@@ -463,7 +457,7 @@ static rd full_reader(const wm *r, int gi)
 static void skip_threads(rd *d, int nslots, int nrtp)
 {
 	take(d, sizeof(wm_fhead));
-	take(d, sizeof(thr_replay_state) * (size_t)nslots);
+	take(d, sizeof(mode_replay_state) * (size_t)nslots);
 	for (int q = 0; q < nrtp && !d->bad; q++) {
 		int32_t qn;
 		const uint8_t *p = d->p;
@@ -532,11 +526,11 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		return -1;
 	/* the slots, in turn order */
 	for (int i = 0; i < h->nslots; i++) {
-		thr_replay_state s;
+		mode_replay_state s;
 		if (!(p = take(&d, sizeof s)))
 			return -1;
 		memcpy(&s, p, sizeof s);
-		if (thr_replay_restore(c->turn[i], &s))
+		if (mode_replay_restore(c->md.in, c->turn[i], &s))
 			return -1;
 	}
 	for (int q = 0; q < h->nrtp; q++) {
@@ -546,21 +540,7 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		memcpy(&qn, d.p, 4);
 		if (qn < 0 || !(p = take(&d, 4 + 4 * (size_t)qn)))
 			return -1;
-		if (qn > r->nq) {
-			thr_qitem *nq = realloc(r->q, (size_t)qn * sizeof *nq);
-			if (!nq)
-				return -1;
-			r->q = nq;
-			r->nq = qn;
-		}
-		for (int i = 0; i < qn; i++) {
-			int32_t id;
-			memcpy(&id, p + 4 + 4 * (size_t)i, 4);
-			if ((uint32_t)id >= c->env.rec_in->npk)
-				return -1;
-			r->q[i] = (thr_qitem){NULL, id};
-		}
-		if (rgs_queue_set(&c->rtp[q], r->q, qn))
+		if (mode_queue_restore(c->md.in, &c->rtp[q], p + 4, qn))
 			return -1;
 	}
 	/* the caches stored whole */
@@ -595,9 +575,7 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		memset(r->l2pend, 0, (size_t)bits_words((int)l2->nsets) * sizeof *r->l2pend);
 		cache_dirty_clear(l2);
 	}
-	c->g.next = tile;
-	c->tiles_given = tile;
-	c->env.next_age = fh.next_age;
+	chip_resume_at(c, tile, fh.next_age);
 	/* the counters: what the warming run counted since the last region's
 	 * end; maxima take the larger */
 	const uint8_t *lp = light_at(r, frame, tile) + sizeof(double) * WM_NDEM;

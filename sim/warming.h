@@ -106,8 +106,6 @@ typedef struct wm {
 	uint8_t *l2rank;
 	uint64_t *l2pend;
 	int next_full;
-	struct thr_qitem *q; /* room for a checkpoint's RTP queue */
-	int nq;
 } wm;
 
 /* Takes a stored block for chip c (kept by the caller until wm_close).

@@ -1,5 +1,5 @@
 /*
- * test_pktrec.c: the packet record (traces/pktrec.h, units/pktreplay.h). A
+ * test_pktrec.c: the packet record (traces/pktrec.h, sim/modes/replay.h). A
  * functional or sampled run with a world cache records its frame; the
  * next run with the cache replays it and must be the run without a
  * record, figure for figure: every counter, the memory and cache counts,
@@ -13,7 +13,7 @@
 #include <unistd.h>
 
 #include "tests/chiptest.h"
-#include "units/pktreplay.h"
+#include "sim/modes/replay.h"
 
 /* Loads the scene (NULL: the embedded room) with a world cache in dir
  * (NULL: none). */

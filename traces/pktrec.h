@@ -3,7 +3,7 @@
  * its math, recorded once per scene, view and datapath: its memory
  * requests, unit operations, counter updates and the packets it spawned,
  * as one byte stream per packet, with the frame it drew. Replaying a
- * stream (units/pktreplay.c) does to the memory model, the
+ * stream (sim/modes/replay.c) does to the memory model, the
  * units' counts and the counters exactly what running the packet does,
  * without tracing a ray, so functional and sampled modes warm the caches
  * far faster on every point of a sweep after the first. None of it

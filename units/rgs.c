@@ -6,21 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-void rgs_enter_count(thr_ctx *t, int type, uint64_t rays)
-{
-	thr_env *v = t->env;
-	t->age = v->next_age++;
-	++*v->c[C_PKT_PRIMARY + type];
-	*v->c[C_RAYS_PRIMARY + type] += rays;
-	memset(t->raddr, 0, sizeof t->raddr);
-	memset(t->rbytes, 0, sizeof t->rbytes);
-	thr_rec(t, PR_ENTER, 2, (uint64_t)type, rays);
-}
 
 static void enter(thr_ctx *t, packet *p)
 {
 	t->p = p;
-	rgs_enter_count(t, p->type, thr_rays(p));
+	thr_enter(t, p->type, thr_rays(p));
 }
 
 static void gen_done(eng *e, void *ctx, uint64_t arg)
@@ -77,9 +67,8 @@ static int queue_room(thr_rtp *r, int n)
 
 int rgs_spawn(thr_rtp *r, thr_qitem it)
 {
-	if (queue_room(r, r->qn + 1))
+	if (rgs_queue_put(r, it))
 		return -1;
-	r->q[(r->qhead + r->qn++) % r->qcap] = it;
 	thr_env *v = r->env;
 	++*v->c[C_SPAWNED];
 	if ((uint64_t)r->qn > *v->c[C_MAX_QUEUE])
@@ -87,15 +76,27 @@ int rgs_spawn(thr_rtp *r, thr_qitem it)
 	return 0;
 }
 
-int rgs_queue_set(thr_rtp *r, const thr_qitem *it, int n)
+int rgs_queue_len(const thr_rtp *r)
+{
+	return r->qn;
+}
+
+thr_qitem rgs_queue_at(const thr_rtp *r, int i)
+{
+	return r->q[(r->qhead + i) % r->qcap];
+}
+
+void rgs_queue_clear(thr_rtp *r)
 {
 	r->qn = 0;
 	r->qhead = 0;
-	if (queue_room(r, n))
+}
+
+int rgs_queue_put(thr_rtp *r, thr_qitem it)
+{
+	if (queue_room(r, r->qn + 1))
 		return -1;
-	for (int i = 0; i < n; i++)
-		r->q[i] = it[i];
-	r->qn = n;
+	r->q[(r->qhead + r->qn++) % r->qcap] = it;
 	return 0;
 }
 
@@ -117,8 +118,6 @@ int rgs_dequeue(thr_rtp *r, thr_qitem *it)
 
 void rgs_dispatch(thr_rtp *r)
 {
-	if (r->env->func) /* functional processing hands out work itself */
-		return;
 	for (int i = 0; i < r->nt && r->qn > 0 && r->nidle > 0; i++)
 		if (r->t[i].state == THR_IDLE)
 			r->env->on_free(&r->t[i]);
@@ -129,27 +128,9 @@ static void shade_done(eng *e, void *ctx, uint64_t arg)
 	(void)e;
 	(void)arg;
 	thr_ctx *t = ctx;
-	thr_env *v = t->env;
-	thr_rtp *r = t->rtp;
-	thr_rec(t, PR_SPAWN, 1, (uint64_t)t->made, 0);
-	for (int k = 0; k < t->made; k++) {
-		packet *p = thr_pkt_alloc(v);
-		int32_t id = v->rec_out ? pr_new_kid(v->rec_out, t->rec, k) : -1;
-		if (v->rec_out)
-			pr_put_u(v->rec_out, t->rec, (uint64_t)(id < 0 ? 0 : id));
-		/* out of memory: the packet is lost and the image check says so */
-		if (!p || rgs_spawn(r, (thr_qitem){p, id})) {
-			if (p)
-				thr_pkt_free(v, p);
-			if (v->rec_out)
-				v->rec_out->failed = 1;
-			continue;
-		}
-		memcpy(p, &t->kids[k], sizeof *p);
-	}
-	rgs_spawned(r);
-	thr_release(t);
-	rgs_dispatch(r);
+	/* out of memory: a child is lost and the image check says so */
+	thr_spawn(t, t->made, t->kids, NULL);
+	thr_release_shaded(t);
 }
 
 /* ---- shading through the memory ----
@@ -293,15 +274,6 @@ static void issue_reads(thr_ctx *t)
 	S->issued = S->n;
 }
 
-/* Records what shading added to the shade counts since `before`. */
-static void rec_shade(thr_ctx *t, const shade_counts *before)
-{
-	const uint64_t *a = (const uint64_t *)before, *b = (const uint64_t *)&t->env->sh;
-	for (size_t i = 0; i < sizeof(shade_counts) / sizeof(uint64_t); i++)
-		if (b[i] != a[i])
-			thr_rec(t, PR_SHADE, 2, (uint64_t)i, b[i] - a[i]);
-}
-
 static void shade_fetched(thr_ctx *t)
 {
 	thr_env *v = t->env;
@@ -320,13 +292,7 @@ static void shade_fetched(thr_ctx *t)
 	}
 	/* the pass's results are made */
 	shade_adds_apply(&S->adds, v->sc.fb);
-	shade_counts before = v->sh;
-	uint64_t *a = (uint64_t *)&v->sh;
-	const uint64_t *b = (const uint64_t *)&S->cnt;
-	for (size_t i = 0; i < sizeof(shade_counts) / sizeof(uint64_t); i++)
-		a[i] += b[i];
-	if (v->rec_out)
-		rec_shade(t, &before);
+	thr_shade_count(t, &S->cnt);
 	thr_use(t, UNIT_RGS, (int)thr_rays(t->p), shade_done);
 }
 
@@ -335,13 +301,10 @@ void rgs_finish(thr_ctx *t)
 	thr_env *v = t->env;
 	packet *p = t->p;
 	if (p->type == PKT_SHADOW) {
-		/* recording: what shading adds to the shade counts goes in the stream */
-		shade_counts before;
-		if (v->rec_out)
-			before = v->sh;
-		shade_shadow_done(&v->sc, p, &v->sh);
-		if (v->rec_out)
-			rec_shade(t, &before);
+		shade_counts add;
+		memset(&add, 0, sizeof add);
+		shade_shadow_done(&v->sc, p, &add);
+		thr_shade_count(t, &add);
 		thr_use(t, UNIT_RGS, (int)thr_rays(p), shadow_done);
 		return;
 	}

@@ -40,14 +40,16 @@ void rgs_finish(thr_ctx *t);
 int rgs_spawn(thr_rtp *r, thr_qitem it);
 void rgs_spawned(thr_rtp *r);
 int rgs_dequeue(thr_rtp *r, thr_qitem *it);
-/* The queue becomes the n packets it[] in that order, counting nothing
- * (stored warming restores a checkpoint's queue, sim/warming.h). -1 when
- * out of memory (the queue is then empty). */
-int rgs_queue_set(thr_rtp *r, const thr_qitem *it, int n);
-/* A packet of `type` with `rays` valid rays enters thread t: its age, the
- * packet and ray counters (the math and a replayed stream alike). */
-void rgs_enter_count(thr_ctx *t, int type, uint64_t rays);
-/* Gives queued packets to idle threads of RTP r. */
+/* The queue's length and its i-th oldest item (i < rgs_queue_len). */
+int rgs_queue_len(const thr_rtp *r);
+thr_qitem rgs_queue_at(const thr_rtp *r, int i);
+/* Empties the queue, and appends an item to it, counting nothing (stored
+ * warming restores a checkpoint's queue, sim/modes/replay.h). -1 when
+ * out of memory. */
+void rgs_queue_clear(thr_rtp *r);
+int rgs_queue_put(thr_rtp *r, thr_qitem it);
+/* Gives queued packets to idle threads of RTP r (the timed sink, after
+ * a shading op: functional drivers hand out work themselves). */
 void rgs_dispatch(thr_rtp *r);
 
 #endif

@@ -1,6 +1,7 @@
 /*
- * thread.c: pipelined units with waiting queues, thread state accounting,
- * memory waits and the packet pool (see thread.h).
+ * thread.c: pipelined units with waiting queues, thread state accounting
+ * and the packet pool (see thread.h). What a thread's operations do is
+ * its sink's (units/sink.h, sim/modes/).
  */
 #include "units/thread.h"
 
@@ -277,49 +278,6 @@ void thr_set(thr_ctx *t, int state)
 	t->state = state;
 }
 
-static void mem_done(eng *e, void *ctx, uint64_t arg)
-{
-	(void)e;
-	(void)arg;
-	thr_ctx *t = ctx;
-	if (--t->pending == 0 && t->cont) {
-		void (*c)(thr_ctx *) = t->cont;
-		t->cont = NULL;
-		c(t);
-	}
-}
-
-/* Records a request: stack spills by entry index, since their address
- * belongs to the thread slot (thr_spill_addr), other requests as they
- * are. */
-static void rec_req(thr_ctx *t, int write, int type, uint64_t addr, uint32_t bytes)
-{
-	/* a wait between requests (the node read after stack refills, the
-	 * shading reads after them): a timed replay must make it too */
-	if (t->rwait) {
-		thr_rec(t, PR_WAIT, 0, 0, 0);
-		t->rwait = 0;
-	}
-	t->rread |= !write;
-	if (addr >= t->env->spill_base) {
-		uint64_t idx = (addr - thr_spill_addr(t, 0)) / THR_SPILL_STRIDE;
-		thr_rec(t, write ? PR_SPILL_W : PR_SPILL_R, 1, idx, 0);
-		return;
-	}
-	if (write) {
-		thr_rec(t, PR_WRITE + type, 2, addr, bytes);
-		return;
-	}
-	uint64_t z = pr_zigzag(addr - t->raddr[type]);
-	t->raddr[type] = addr;
-	if (bytes == t->rbytes[type]) {
-		thr_rec(t, PR_READ_SAME + type, 1, z, 0);
-		return;
-	}
-	t->rbytes[type] = bytes;
-	thr_rec(t, PR_READ + type, 2, z, bytes);
-}
-
 void thr_free_buffers(thr_ctx *t)
 {
 	free(t->list);
@@ -333,105 +291,6 @@ void thr_free_buffers(thr_ctx *t)
 	t->list = NULL;
 	t->spill_in = NULL;
 	t->sh = NULL;
-}
-
-void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
-{
-	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst};
-	if (t->env->rec_out)
-		rec_req(t, 0, type, addr, bytes);
-	if (t->env->func) { /* the data is there at once: nothing to wait for */
-		mem_access_func(t->env->mem, &r);
-		return;
-	}
-	t->pending++;
-	mem_access(t->env->mem, &r, mem_done, t, 0);
-}
-
-void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, const void *src)
-{
-	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id, (void *)src};
-	if (t->env->rec_out)
-		rec_req(t, 1, type, addr, bytes);
-	if (t->env->func)
-		mem_access_func(t->env->mem, &r);
-	else
-		mem_access(t->env->mem, &r, NULL, NULL, 0);
-}
-
-int thr_park_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
-{
-	if (t->rread) { /* recording (rec_req) */
-		t->rwait = 1;
-		t->rread = 0;
-	}
-	if (t->pending == 0)
-		return 0;
-	t->cont = cont;
-	thr_set(t, THR_WAIT_MEM);
-	return 1;
-}
-
-void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
-{
-	if (!thr_park_mem(t, cont))
-		cont(t);
-}
-
-void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
-{
-	/* an op starts after every read so far: its wait is implied */
-	t->rread = t->rwait = 0;
-	thr_rec(t, PR_USE + kind, 1, (uint64_t)rays, 0);
-	if (t->env->func) {
-		/* the op's counts as start() makes them, without its time */
-		thr_unit *u = &t->rtp->u[kind];
-		++*u->ops_n;
-		*u->busy += thr_unit_issue(u, rays);
-		*u->rays += (uint64_t)rays;
-		t->fnext = done;
-		t->fkind = kind;
-		t->frays = rays;
-		return;
-	}
-	thr_set(t, THR_WAIT_UNIT);
-	thr_unit_request(&t->rtp->u[kind], t->id, t->age, rays, done, t, 0);
-}
-
-void thr_release(thr_ctx *t)
-{
-	thr_rec(t, PR_END, 0, 0, 0);
-	t->rec = -1;
-	if (t->p) /* a replayed packet has none */
-		thr_pkt_free(t->env, t->p);
-	t->p = NULL;
-	t->rp = t->rpe = NULL;
-	thr_set(t, THR_IDLE);
-	t->env->on_free(t);
-}
-
-void thr_func_to_timed(thr_ctx *t)
-{
-	eng_handler done = t->fnext;
-	if (!done)
-		return;
-	t->fnext = NULL;
-	thr_unit *u = &t->rtp->u[t->fkind];
-	--*u->ops_n;
-	*u->busy -= thr_unit_issue(u, t->frays);
-	*u->rays -= (uint64_t)t->frays;
-	thr_set(t, THR_WAIT_UNIT);
-	thr_unit_request(u, t->id, t->age, t->frays, done, t, 0);
-}
-
-int thr_step_func(thr_ctx *t)
-{
-	eng_handler h = t->fnext;
-	if (!h)
-		return 0;
-	t->fnext = NULL;
-	h(t->env->e, t, 0);
-	return 1;
 }
 
 uint64_t thr_rays(const packet *p)

@@ -19,7 +19,11 @@
  * ids, or oldest packet first) chooses among the waiting threads. All of it
  * is events: an idle unit schedules nothing.
  *
- * Timing lives here and in the unit files; the functional work is done by
+ * What a unit's operations cost (memory reads, unit ops, the packet's
+ * end) is the environment's sink's (units/sink.h, sim/modes/): the unit
+ * files emit them through thr_read, thr_use, ... below and never ask which
+ * mode runs. The unit pipelines' timing (thr_unit) lives here; the
+ * functional work is done by
  * kernel-ref calls (packet.h, shade.h) in exactly kernel-ref's order, on
  * the bytes the thread's reads returned (kd-nodes, list entries, triangle
  * records, spilled stack entries, shading records): a unit never looks at
@@ -36,7 +40,7 @@
 #include "kernel-ref/shade.h"
 #include "mem/memport.h"
 #include "sim/core/engine.h"
-#include "traces/pktrec.h"
+#include "units/sink.h"
 #include "units/unit_table.h"
 
 /* Unit kinds (enum unit_kind), their parameters and routing: unit_table.h. */
@@ -169,11 +173,12 @@ typedef struct thr_env {
 	 * it is ended and the frame fails (damaged) */
 	uint64_t max_steps;
 	int damaged;
-	/* functional (fidelity functional, or the unsampled stretches of
-	 * sampled; docs/fidelity.md): memory goes through mem_access_func, a
-	 * unit op is counted but takes no time and its done handler becomes the
-	 * thread's fnext, which thr_step_func calls */
-	int func;
+	/* where the units' operations go (units/sink.h): the mode's sink, set
+	 * by the driver (sim/modes/); the units never ask which mode runs */
+	thr_sink *sink;
+	/* what the mode drivers and sinks keep per thread slot (sim/modes/
+	 * slot.h), opaque to the units */
+	void *modes;
 	pkt_precision prec; /* datapath formats (chip.fp); full = the SIMD path */
 	uint64_t spill_base;
 	uint64_t next_age;
@@ -198,10 +203,6 @@ typedef struct thr_env {
 	/* test hooks: enum thr_mutant; shading decoded again from the
 	 * delivered bytes even when they equal those it found (units/rgs.c) */
 	int mutant, shade_redecode;
-	/* the packet record (traces/pktrec.h): streams being recorded, or the
-	 * one threads replay (units/pktreplay.h); at most one is set */
-	pktrec *rec_out;
-	const pktrec *rec_in;
 } thr_env;
 
 int thr_env_init(thr_env *v);
@@ -240,17 +241,6 @@ typedef struct thr_ctx {
 	thr_shade *sh;
 	packet *kids; /* shade_packet's output */
 	int nkids, made;
-	eng_handler fnext;       /* functional: the next step (see thr_env.func) */
-	int fkind, frays;        /* functional: the unit op fnext completes */
-	int32_t rec;             /* the packet's stream in the record (recorded or replayed), -1 */
-	const uint8_t *rp, *rpe; /* replay: the rest of the packet's stream (p is NULL) */
-	/* recording and replay: the packet's last read address and size per
-	 * memory type (reads are recorded as differences; pktrec.h) */
-	uint64_t raddr[MEM_NTYPES];
-	uint32_t rbytes[MEM_NTYPES];
-	/* recording: a read since the last wait or op; a wait after reads
-	 * not yet recorded (it goes in before the next request: PR_WAIT) */
-	uint8_t rread, rwait;
 	uint64_t steps; /* traversal steps of the current packet (thr_env.max_steps) */
 } thr_ctx;
 
@@ -275,33 +265,8 @@ typedef struct thr_rtp {
 void thr_set(thr_ctx *t, int state);
 /* Adds the time since the last change to the occupancy counters. */
 void thr_flush(thr_ctx *t);
-/* Issues a read for the thread; thr_wait_mem continues when all are in,
- * the bytes in dst (NULL: none wanted, a replayed read). */
-void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst);
-/* A posted write (stack spill) of src (NULL: no data, a replayed write). */
-void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, const void *src);
 /* Frees the thread's data buffers (chip_destroy). */
 void thr_free_buffers(thr_ctx *t);
-/* Calls cont(t) once every read issued so far has arrived (at once if none). */
-void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t));
-/* As thr_wait_mem, but with no read outstanding it returns 0 instead of
- * calling cont (the caller goes on itself); 1: cont runs when they are in. */
-int thr_park_mem(thr_ctx *t, void (*cont)(thr_ctx *t));
-/* Queues an op of the thread's `rays` rays at unit kind `kind`. */
-void thr_use(thr_ctx *t, int kind, int rays, eng_handler done);
-/* The packet is done (a replayed one: its stream): back to the pool; the
- * thread is free for new work. */
-void thr_release(thr_ctx *t);
-/* Functional: runs the thread's next step (up to its next unit op); 0 if
- * it has none (its packet is done). The caller interleaves threads' steps
- * (sim/chip.c func_range), so a packet's thousands of steps never nest on
- * the C stack. */
-int thr_step_func(thr_ctx *t);
-/* A thread stopped in functional mode before its next unit op (fnext set)
- * requests that op from its unit for real: the op's functional counts are
- * taken back and the unit will count it when it issues. How a sampled
- * region takes over packets in flight without a cold start. */
-void thr_func_to_timed(thr_ctx *t);
 /* The valid rays of a packet. */
 uint64_t thr_rays(const packet *p);
 /* thr_unit.on_start for units used by threads: the thread runs. */
@@ -312,23 +277,6 @@ static inline int thr_pop(uint64_t m)
 	return __builtin_popcountll(m);
 }
 
-/* Records op into the thread's packet stream while a record is made. */
-static inline void thr_rec(thr_ctx *t, int op, int n, uint64_t a, uint64_t b)
-{
-	if (t->env->rec_out)
-		pr_put(t->env->rec_out, t->rec, op, n, a, b);
-}
-
-/* Raises counter id (a maximum: trav.max_stack_depth) to v. A record keeps
- * the values that raised it: replaying them all gives the same maximum. */
-static inline void thr_count_max(thr_ctx *t, int id, uint64_t v)
-{
-	if (v <= *t->env->c[id])
-		return;
-	*t->env->c[id] = v;
-	thr_rec(t, PR_MAXSP, 1, v, 0);
-}
-
 /* Where traversal stack entry `index` of thread t spills: every thread slot
  * has its own area after the memory image (chip.c). */
 static inline uint64_t thr_spill_addr(const thr_ctx *t, uint64_t index)
@@ -336,14 +284,93 @@ static inline uint64_t thr_spill_addr(const thr_ctx *t, uint64_t index)
 	return t->env->spill_base + ((uint64_t)t->gid * PKT_STACK_MAX + index) * THR_SPILL_STRIDE;
 }
 
+/* ---- the units' operations, into the environment's sink (units/sink.h) ---- */
+
+/* Issues a read for the thread; thr_wait_mem continues when all are in,
+ * the bytes in dst (NULL: none wanted, a replayed read). */
+static inline void thr_read(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
+{
+	thr_sink *s = t->env->sink;
+	s->op->read(s, t, type, addr, bytes, dst);
+}
+
+/* A posted write (stack spill) of src (NULL: no data, a replayed write). */
+static inline void thr_write(thr_ctx *t, int type, uint64_t addr, uint32_t bytes, const void *src)
+{
+	thr_sink *s = t->env->sink;
+	s->op->write(s, t, type, addr, bytes, src);
+}
+
+/* As thr_wait_mem, but with no read outstanding it returns 0 instead of
+ * calling cont (the caller goes on itself); 1: cont runs when they are in. */
+static inline int thr_park_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
+{
+	thr_sink *s = t->env->sink;
+	return s->op->wait(s, t, cont);
+}
+
+/* Calls cont(t) once every read issued so far has arrived (at once if none). */
+static inline void thr_wait_mem(thr_ctx *t, void (*cont)(thr_ctx *t))
+{
+	if (!thr_park_mem(t, cont))
+		cont(t);
+}
+
+/* Queues an op of the thread's `rays` rays at unit kind `kind`. */
+static inline void thr_use(thr_ctx *t, int kind, int rays, eng_handler done)
+{
+	thr_sink *s = t->env->sink;
+	s->op->use(s, t, kind, rays, done);
+}
+
 /* Adds n to counter id (enum thr_counter) for the thread's packet. */
 static inline void thr_count(thr_ctx *t, int id, uint64_t n)
 {
-	*t->env->c[id] += n;
-	if (n == 1)
-		thr_rec(t, PR_COUNT1 + id, 0, 0, 0);
-	else if (n)
-		thr_rec(t, PR_COUNT + id, 1, n, 0);
+	thr_sink *s = t->env->sink;
+	s->op->count(s, t, id, n);
+}
+
+/* Raises counter id (a maximum: trav.max_stack_depth) to v. */
+static inline void thr_count_max(thr_ctx *t, int id, uint64_t v)
+{
+	thr_sink *s = t->env->sink;
+	s->op->count_max(s, t, id, v);
+}
+
+/* Adds what shading counted (kernel-ref shade_counts). */
+static inline void thr_shade_count(thr_ctx *t, const shade_counts *add)
+{
+	thr_sink *s = t->env->sink;
+	s->op->shade(s, t, add);
+}
+
+/* A packet of `type` with `rays` valid rays enters thread t. */
+static inline void thr_enter(thr_ctx *t, int type, uint64_t rays)
+{
+	thr_sink *s = t->env->sink;
+	s->op->enter(s, t, type, rays);
+}
+
+/* Queues n children at the thread's RTP (units/sink.h spawn). */
+static inline int thr_spawn(thr_ctx *t, int n, const packet *kids, const int32_t *ids)
+{
+	thr_sink *s = t->env->sink;
+	return s->op->spawn(s, t, n, kids, ids);
+}
+
+/* The packet is done (a replayed one: its stream): back to the pool; the
+ * thread is free for new work. */
+static inline void thr_release(thr_ctx *t)
+{
+	thr_sink *s = t->env->sink;
+	s->op->release(s, t, 0);
+}
+
+/* As thr_release after a shading op whose children thr_spawn queued. */
+static inline void thr_release_shaded(thr_ctx *t)
+{
+	thr_sink *s = t->env->sink;
+	s->op->release(s, t, 1);
 }
 
 #endif

@@ -1,0 +1,23 @@
+/*
+ * base.h: what the timed and the functional sink do alike (units/sink.h):
+ * counters, shading's counts, a packet entering a thread, children joining
+ * the RTP queue, the wait for reads, and the packet's end. The two differ
+ * only in the time things take (timed.c, functional.c).
+ */
+#ifndef SAAR_SIM_MODES_BASE_H
+#define SAAR_SIM_MODES_BASE_H
+
+#include "units/thread.h"
+
+void mode_base_count(thr_sink *s, thr_ctx *t, int id, uint64_t n);
+void mode_base_count_max(thr_sink *s, thr_ctx *t, int id, uint64_t v);
+void mode_base_shade(thr_sink *s, thr_ctx *t, const shade_counts *add);
+void mode_base_enter(thr_sink *s, thr_ctx *t, int type, uint64_t rays);
+int mode_base_spawn(thr_sink *s, thr_ctx *t, int n, const packet *kids, const int32_t *ids);
+int mode_base_wait(thr_sink *s, thr_ctx *t, void (*cont)(thr_ctx *t));
+/* The packet's end without handing out new work: after a shading op the
+ * RTP queue is sampled (C_QUEUED); the packet goes back to the pool and
+ * the thread is idle. */
+void mode_base_end(thr_ctx *t, int shaded);
+
+#endif

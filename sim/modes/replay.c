@@ -1,0 +1,244 @@
+/*
+ * replay.c: a thread running a recorded packet stream (see replay.h). The
+ * decoder turns each stored op back into the sink operation the unit code
+ * emitted when it was recorded (units/sink.h: thr_read, thr_write,
+ * thr_use, thr_count, ...), in the same order and, timed, at the same
+ * ticks, so the caches, SDRAM, VMA, units and counters end up exactly as
+ * after the math. It is no second pipeline: what an op costs is the
+ * sink's.
+ */
+#include "sim/modes/replay.h"
+
+#include <string.h>
+
+#include "sim/modes/functional.h"
+#include "sim/modes/slot.h"
+
+/* The children a packet's shading queued, in its stream as their ids. */
+static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
+{
+	for (uint64_t k = 0; k < n; k++) {
+		uint64_t id = pr_get(p, end);
+		/* out of memory: the packet is lost and the image check says so */
+		if (id < mode_slot(t)->src->npk) {
+			int32_t i = (int32_t)id;
+			thr_spawn(t, 1, NULL, &i);
+		}
+	}
+}
+
+static void run(thr_ctx *t);
+
+/* The reads so far are still on their way (timed): the stream goes on
+ * from p when they are in, as thr_wait_mem's continuation does. */
+static int wait_reads(thr_ctx *t, const uint8_t *p)
+{
+	if (!thr_park_mem(t, run))
+		return 0;
+	mode_slot(t)->rp = p;
+	return 1;
+}
+
+static void op_done(eng *e, void *ctx, uint64_t arg);
+
+/* A read or write op (below PR_USE). */
+static void access(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
+{
+	if (op >= PR_WRITE) {
+		uint64_t a = pr_get(p, end), b = pr_get(p, end);
+		thr_write(t, op & 3, a, (uint32_t)b, NULL);
+		return;
+	}
+	mode_slot_state *m = mode_slot(t);
+	int type = op & 3;
+	uint64_t a = m->raddr[type] += pr_unzigzag(pr_get(p, end));
+	if (op < PR_READ_SAME)
+		m->rbytes[type] = (uint32_t)pr_get(p, end);
+	thr_read(t, type, a, m->rbytes[type], NULL);
+}
+
+/* A shading count or a packet entering: the ops between PR_SPILL_R and
+ * PR_SPAWN that neither wait nor end. */
+static void other(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
+{
+	uint64_t a, b;
+	switch (op) {
+	case PR_SPILL_R:
+	case PR_SPILL_W:
+		a = thr_spill_addr(t, pr_get(p, end) % PKT_STACK_MAX);
+		if (op == PR_SPILL_W)
+			thr_write(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
+		else
+			thr_read(t, MEM_KD, a, THR_STACK_ENTRY_BYTES, NULL);
+		break;
+	case PR_MAXSP:
+		thr_count_max(t, C_MAX_SP, pr_get(p, end));
+		break;
+	case PR_SHADE:
+		a = pr_get(p, end);
+		b = pr_get(p, end);
+		if (a < sizeof(shade_counts) / sizeof(uint64_t)) {
+			shade_counts add;
+			memset(&add, 0, sizeof add);
+			((uint64_t *)&add)[a] = b;
+			thr_shade_count(t, &add);
+		}
+		break;
+	case PR_ENTER:
+		a = pr_get(p, end) % PKT_NTYPES;
+		memset(mode_slot(t)->raddr, 0, sizeof mode_slot(t)->raddr);
+		memset(mode_slot(t)->rbytes, 0, sizeof mode_slot(t)->rbytes);
+		thr_enter(t, (int)a, pr_get(p, end));
+		break;
+	}
+}
+
+/* Runs ops up to and including the next PR_USE (its unit op requested,
+ * timed, or counted with op_done as the next step, functional), up to a
+ * wait for reads in flight, or up to the end. */
+static void run(thr_ctx *t)
+{
+	const uint8_t *p = mode_slot(t)->rp, *end = mode_slot(t)->rpe;
+	int spawned = 0;
+	while (p < end) {
+		const uint8_t *at = p;
+		int op = *p++;
+		if (op < PR_USE) {
+			access(t, op, &p, end);
+		} else if (op < PR_SPILL_R) {
+			/* the op starts once its reads are in (thr_wait_mem
+			 * before every thr_use) */
+			if (wait_reads(t, at))
+				return;
+			thr_use(t, op - PR_USE, (int)pr_get(&p, end), op_done);
+			mode_slot(t)->rp = p;
+			return;
+		} else if (op >= PR_COUNT1 && op < PR_NOPS) {
+			int id = op & 31;
+			uint64_t a = op < PR_COUNT ? 1 : pr_get(&p, end);
+			if (id < C_NCOUNTERS)
+				thr_count(t, id, a);
+		} else if (op == PR_WAIT) {
+			if (wait_reads(t, p))
+				return;
+		} else if (op == PR_SPAWN) {
+			spawn(t, pr_get(&p, end), &p, end);
+			spawned = 1;
+		} else if (op < PR_END) {
+			other(t, op, &p, end);
+		} else { /* PR_END, or a damaged stream: the packet is done */
+			p = end;
+		}
+	}
+	/* as shade_done and shadow_done: the slot is free, and after a
+	 * shading op the RTP's idle slots get the children it queued */
+	if (spawned)
+		thr_release_shaded(t);
+	else
+		thr_release(t);
+}
+
+/* A unit op is done (timed), or functional processing takes the step
+ * after it (mode_func_step). */
+static void op_done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	run(ctx);
+}
+
+void mode_replay_begin(const pktrec *r, thr_ctx *t, int32_t id)
+{
+	mode_slot_state *m = mode_slot(t);
+	m->rec = id;
+	m->src = r;
+	m->rp = pr_stream(r, (uint32_t)id, &m->rpe);
+	run(t);
+}
+
+int mode_replay_save(const thr_ctx *t, mode_replay_state *s)
+{
+	const mode_slot_state *m = mode_slot(t);
+	memset(s, 0, sizeof *s);
+	s->rec = -1;
+	if (t->p || (m->rp && !m->fnext))
+		return -1;
+	if (!m->rp)
+		return 0;
+	const uint8_t *end, *st = pr_stream(m->src, (uint32_t)m->rec, &end);
+	s->rec = m->rec;
+	s->kind = (int16_t)m->fkind;
+	s->rays = (int16_t)m->frays;
+	s->off = (uint64_t)(m->rp - st);
+	s->age = t->age;
+	memcpy(s->raddr, m->raddr, sizeof s->raddr);
+	memcpy(s->rbytes, m->rbytes, sizeof s->rbytes);
+	return 0;
+}
+
+int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
+{
+	mode_slot_state *m = mode_slot(t);
+	if (t->p) { /* its math: stored warming replays every packet */
+		thr_pkt_free(t->env, t->p);
+		t->p = NULL;
+	}
+	t->pending = 0;
+	t->cont = NULL;
+	m->rec = -1;
+	m->rp = m->rpe = NULL;
+	m->fnext = NULL;
+	const uint8_t *end = NULL, *st = NULL;
+	int ok = s->rec < 0;
+	if (!ok && r && (uint32_t)s->rec < r->npk && s->kind >= 0 && s->kind < UNIT_NKINDS) {
+		st = pr_stream(r, (uint32_t)s->rec, &end);
+		ok = s->off <= (uint64_t)(end - st);
+	}
+	if (s->rec < 0 || !ok) {
+		if (t->state != THR_IDLE)
+			thr_set(t, THR_IDLE);
+		return ok ? 0 : -1;
+	}
+	m->rec = s->rec;
+	m->src = r;
+	m->rp = st + s->off;
+	m->rpe = end;
+	m->fnext = op_done;
+	m->fkind = s->kind;
+	m->frays = s->rays;
+	t->age = s->age;
+	memcpy(m->raddr, s->raddr, sizeof m->raddr);
+	memcpy(m->rbytes, s->rbytes, sizeof m->rbytes);
+	if (t->state == THR_IDLE)
+		thr_set(t, THR_RUN);
+	return 0;
+}
+
+int mode_queue_save(const thr_rtp *r, void *out)
+{
+	int n = rgs_queue_len(r);
+	for (int i = 0; i < n; i++) {
+		thr_qitem it = rgs_queue_at(r, i);
+		if (it.p)
+			return -1;
+		memcpy((uint8_t *)out + 4 * (size_t)i, &it.rec, 4);
+	}
+	return 0;
+}
+
+int mode_queue_restore(const pktrec *rec, thr_rtp *r, const void *ids, int n)
+{
+	int32_t id;
+	for (int i = 0; i < n; i++) {
+		memcpy(&id, (const uint8_t *)ids + 4 * (size_t)i, 4);
+		if (!rec || (uint32_t)id >= rec->npk)
+			return -1;
+	}
+	rgs_queue_clear(r);
+	for (int i = 0; i < n; i++) {
+		memcpy(&id, (const uint8_t *)ids + 4 * (size_t)i, 4);
+		if (rgs_queue_put(r, (thr_qitem){NULL, id}))
+			return -1;
+	}
+	return 0;
+}

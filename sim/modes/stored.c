@@ -1,0 +1,244 @@
+/*
+ * stored.c: what functional and sampled runs keep in the world cache
+ * (see stored.h): the packet record and stored warming's checkpoints.
+ */
+#define _GNU_SOURCE /* asprintf, open_memstream */
+#include "sim/modes/stored.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "kernel-ref/jsonw.h"
+#include "kernel-ref/worldcache.h"
+
+/* The packet record's key: kernel-ref's frame key for this view and size
+ * (the memory image by its CRC, camera, lights, shading depth) and what
+ * else changes a packet's work on the chip: the datapath formats and the
+ * stack depth (spills). Thread counts, units and memory do not. */
+static char *rec_key(const chip *c)
+{
+	const saar_config *g = &c->cfg;
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = g->frame.width;
+	ro.height = g->frame.height;
+	ro.max_depth = g->shading.max_depth;
+	char *fk = wc_frame_key(c->w->cache_prog, c->w->image_crc, c->w->m.size, &c->w->v, &ro),
+	     *key;
+	if (!fk)
+		return NULL;
+	int n =
+	    asprintf(&key,
+	             "saarsim packet record 1\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
+	             "counters %d shade %zu\n",
+	             fk, g->chip.fp.trav.exp, g->chip.fp.trav.mant, g->chip.fp.isect.exp,
+	             g->chip.fp.isect.mant, g->chip.fp.shade.exp, g->chip.fp.shade.mant,
+	             g->chip.fp.round, g->chip.stack_depth, (int)C_NCOUNTERS, sizeof(shade_counts));
+	free(fk);
+	return n < 0 ? NULL : key;
+}
+
+/* Functional and sampled runs with a world cache: replay the stored
+ * record of this frame, else record the first frame (mode_rec_store). */
+void mode_rec_open(chip *c)
+{
+	const world *w = c->w;
+	chip_fidelity *F = &c->fid;
+	if (!w->cache_dir || F->mode == CFG_FIDELITY_CYCLE ||
+	    (F->mode == CFG_FIDELITY_SAMPLED && F->exact))
+		return;
+	double t0 = chip_now_ms();
+	c->rec_key = rec_key(c);
+	if (!c->rec_key ||
+	    wc_file(c->rec_file, sizeof c->rec_file, w->cache_dir, "packets", c->rec_key)) {
+		free(c->rec_key);
+		c->rec_key = NULL;
+		return;
+	}
+	const void *tail;
+	size_t n;
+	int W = c->cfg.frame.width, H = c->cfg.frame.height;
+	/* replayed where it lies in the file: no copy */
+	if (wc_get_mapped(c->rec_file, c->rec_key, NULL, 0, &tail, &n, &c->rec_map) == 1 &&
+	    !pr_load(&c->rec, tail, n, 0, W, H, c->g.ntiles)) {
+		c->md.in = &c->rec;
+		c->rec_state = REC_REPLAYED;
+	} else {
+		wc_unmap(&c->rec_map);
+		if (!pr_init(&c->rec, W, H, c->g.ntiles)) {
+			mode_record(&c->md, &c->rec);
+			c->rec_state = REC_UNSTORED;
+		}
+	}
+	c->rec_ms += chip_now_ms() - t0;
+}
+
+/* After the recorded frame: stores the record (a failure is a warning),
+ * and the frames after it replay it. */
+void mode_rec_store(chip *c)
+{
+	if (!c->md.rec.out)
+		return;
+	double t0 = chip_now_ms();
+	mode_record(&c->md, NULL);
+	void *b;
+	size_t n;
+	int rc = pr_serialize(&c->rec, &c->fb, &b, &n);
+	pr_free(&c->rec);
+	if (rc)
+		return;
+	diag d;
+	if (wc_put(c->rec_file, c->rec_key, NULL, NULL, 0, b, n, &d))
+		fprintf(stderr, "warning: %s\n", d.msg);
+	else
+		c->rec_state = REC_STORED;
+	if (!pr_load(&c->rec, b, n, 1, c->cfg.frame.width, c->cfg.frame.height, c->g.ntiles))
+		c->md.in = &c->rec;
+	c->rec_ms += chip_now_ms() - t0;
+}
+
+/* Replayed tiles take the recorded frame's pixels (a replayed packet
+ * draws nothing). */
+void mode_rec_pixels(chip *c)
+{
+	for (int i = 0; i < c->g.ntiles; i++)
+		if (c->replayed[i]) {
+			c->replayed[i] = 0;
+			pr_put_tile(&c->rec, &c->fb, i % c->g.tiles_x, i / c->g.tiles_x, TILE_W,
+			            TILE_H);
+		}
+}
+
+/* The warming run's key: the packet record's (the frame) and every config
+ * key functional processing reads. Left out (at their defaults): the name
+ * (a label; a config file without one is named after the file), fidelity,
+ * sampling and the keys only timing reads (cfg_key.timing_only), so a
+ * sweep over those reuses one warming run. */
+static char *warm_key(const chip *c, int gl, int gf)
+{
+	saar_config k = c->cfg, d;
+	cfg_defaults(&d);
+	memcpy(k.name, d.name, sizeof k.name);
+	k.fidelity = d.fidelity;
+	k.sampling = d.sampling;
+	size_t nk;
+	const cfg_key *keys = cfg_keys(&nk);
+	for (size_t i = 0; i < nk; i++)
+		if (keys[i].timing_only)
+			memcpy((char *)&k + keys[i].off, (const char *)&d + keys[i].off,
+			       keys[i].size);
+	char *js = NULL, *key = NULL;
+	size_t n = 0;
+	FILE *f = open_memstream(&js, &n);
+	if (!f)
+		return NULL;
+	jsonw w;
+	jsonw_init_file(&w, f);
+	cfg_write_json(&k, &w);
+	if (fclose(f) || asprintf(&key, "saarsim warming 1\n%sgrid %d %d\nconfig %s\n", c->rec_key,
+	                          gl, gf, js) < 0)
+		key = NULL;
+	free(js);
+	return key;
+}
+
+/* The warming run of chip h (functional, replaying the packet record):
+ * chip_run with checkpoints on the grids (sim/warming.h). chip_take_tile takes
+ * them (warm_mark) and chip_run the last of each frame, so the run steps
+ * as functional mode does: stopping it at each checkpoint left slots idle
+ * until the next and missed fewer L1 lines. */
+static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
+{
+	wm_writer w;
+	if (wm_writer_init(&w, h, gl, gf))
+		return -1;
+	h->wcap = &w;
+	diag d;
+	int rc =
+	    chip_run(h, &d) || h->rec_state != REC_REPLAYED ? -1 : wm_writer_finish(&w, h, out, n);
+	h->wcap = NULL;
+	wm_writer_free(&w);
+	return rc;
+}
+
+/* A functional chip like c for the record and warming runs. */
+static chip *helper_chip(const chip *c, int frames)
+{
+	saar_config k = c->cfg;
+	k.fidelity = CFG_FIDELITY_FUNCTIONAL;
+	k.frame.frames = frames;
+	diag d;
+	return chip_create(&k, c->w, &d);
+}
+
+/* Stored warming: the checkpoints of this frame and config from the world
+ * cache, else a warming run now (stored for the next run). Needs the
+ * packet record; without one this run records it first, with a
+ * functional chip of one frame. When impossible, full warming runs. */
+void mode_warm_open(chip *c)
+{
+	if (c->cfg.sampling.warming != CFG_WARMING_STORED || !chip_estimates(&c->cfg))
+		return;
+	double t0 = chip_now_ms();
+	c->warm_state = WARM_UNAVAILABLE;
+	if (c->rec_state == REC_UNSTORED) {
+		/* make the record now: a warming run replays it */
+		chip *h = helper_chip(c, 1);
+		diag d;
+		int ok = h && !chip_run(h, &d) && h->rec_state == REC_STORED;
+		chip_destroy(h);
+		mode_record(&c->md, NULL);
+		pr_free(&c->rec);
+		free(c->rec_key);
+		c->rec_key = NULL;
+		c->rec_state = REC_OFF;
+		c->rec_ms += chip_now_ms() - t0;
+		mode_rec_open(c);
+		if (ok && c->rec_state == REC_REPLAYED)
+			c->rec_state = REC_STORED;
+		t0 = chip_now_ms();
+	}
+	int gl, gf;
+	chip_warm_grid(c, &gl, &gf);
+	char *key = c->md.in ? warm_key(c, gl, gf) : NULL;
+	if (!key || wc_file(c->warm_file, sizeof c->warm_file, c->w->cache_dir, "warming", key)) {
+		free(key);
+		fprintf(stderr, "warning: sampling.warming stored needs --world-cache and a packet "
+		                "record; the functional stretches run instead\n");
+		return;
+	}
+	const void *tail;
+	size_t n;
+	if (wc_get_mapped(c->warm_file, key, NULL, 0, &tail, &n, &c->warm_map) == 1 &&
+	    !wm_open(&c->warm, tail, n, c)) {
+		c->warm_state = WARM_LOADED;
+	} else {
+		wc_unmap(&c->warm_map);
+		chip *h = helper_chip(c, c->cfg.frame.frames);
+		void *b = NULL;
+		if (h && !warm_build(h, gl, gf, &b, &n)) {
+			diag d;
+			c->warm_state = WARM_UNSTORED;
+			if (wc_put(c->warm_file, key, NULL, NULL, 0, b, n, &d))
+				fprintf(stderr, "warning: %s\n", d.msg);
+			else
+				c->warm_state = WARM_BUILT;
+			if (wm_open(&c->warm, b, n, c)) {
+				free(b);
+				b = NULL;
+				c->warm_state = WARM_UNAVAILABLE;
+			} else
+				c->warm_own = b;
+		} else {
+			free(b);
+			b = NULL;
+		}
+		if (!b) /* out of memory, or a cache line index past what is stored */
+			fprintf(stderr, "warning: sampling.warming stored: the warming run failed; "
+			                "the functional stretches run instead\n");
+		chip_destroy(h);
+	}
+	free(key);
+	c->warm_ms += chip_now_ms() - t0;
+}
