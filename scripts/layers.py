@@ -39,8 +39,8 @@ LAYERS = [
      "the memory hierarchy knows no units, config schema, CLI or reports"),
     ("units/", ["kernel-ref/", "sim/core/", "mem/memport.h", "units/"],
      "units reach memory only through its port and know no config schema, CLI or reports"),
-    ("traces/", ["kernel-ref/", "sim/core/", "mem/", "traces/"],
-     "the trace formats are library code below sim/"),
+    ("traces/", ["kernel-ref/", "sim/core/", "mem/", "units/", "traces/"],
+     "the trace formats record memory requests and unit ops: above mem/ and units/, below sim/"),
     ("sim/", ["kernel-ref/", "sim/core/", "mem/", "units/", "traces/", "sim/"],
      "the chip's wiring, modes, config, reports and CLI: the top layer"),
 ]

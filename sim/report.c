@@ -33,134 +33,6 @@ static uint64_t get(const chip *c, const char *name)
 	return stats_get(&c->st, name);
 }
 
-/* Issue cycles of unit kind over the chip (rtp < 0) or one RTP. */
-static uint64_t unit_busy(const chip *c, int kind, int rtp)
-{
-	char name[64];
-	if (rtp >= 0) {
-		snprintf(name, sizeof name, "rtp%d.%s.busy_cycles", rtp, chip_unit_name(kind));
-		return get(c, name);
-	}
-	snprintf(name, sizeof name, "%s.busy_cycles", chip_unit_name(kind));
-	return chip_rtp_sum(c, name);
-}
-
-double report_util(const chip *c, int kind, int rtp)
-{
-	int units = chip_unit_cfg(&c->cfg, kind)->count * (rtp < 0 ? c->nrtp : 1);
-	return ratio((double)unit_busy(c, kind, rtp), (double)chip_cycles(c) * units);
-}
-
-double report_fps(const chip *c)
-{
-	double cyc = ratio((double)chip_cycles(c), c->frames_done);
-	return ratio(c->cfg.chip.clock_mhz * 1e6, cyc);
-}
-
-int report_thread_shares(const chip *c, double share[THR_NSTATES])
-{
-	char name[64];
-	double tot = 0;
-	for (int s = 0; s < THR_NSTATES; s++) {
-		snprintf(name, sizeof name, "threads.%s_ps", chip_state_name(s));
-		tot += share[s] = (double)chip_rtp_sum(c, name);
-	}
-	for (int s = 0; s < THR_NSTATES; s++)
-		share[s] = tot > 0 ? share[s] / tot : 0;
-	return tot > 0;
-}
-
-/* ---- memory figures over a span of frames ---- */
-
-#define MB (1024.0 * 1024.0) /* MB = 2^20 bytes, as memory.sdram.mb */
-
-static const char *const hr_names[HR_N] = {"shade", "kd", "list", "tri", "tag_cache", "l2"};
-
-/* A cache's hit rate between snapshots a and b; with est (a sampled
- * frame) its hits as a timed cache would count them (cache_timed_hits;
- * *share: the merge share used). -1 without accesses. */
-static double span_hit_rate(const cache_stats *a, const cache_stats *b, int est, double *share)
-{
-	double h = (double)(b->hits - a->hits), r = 0;
-	if (est)
-		h = cache_timed_hits(a, b, &r);
-	if (share)
-		*share = r;
-	uint64_t acc = b->accesses - a->accesses;
-	return acc ? h / (double)acc : -1.0;
-}
-
-void report_span(const chip *c, int f0, int f1, memfig *m)
-{
-	static const hier_stats zero_h;
-	static const mem_counts zero_p;
-	memset(m, 0, sizeof *m);
-	int n = f1 - f0;
-	m->first = f0 + 1;
-	m->last = f1;
-	uint64_t cyc = 0;
-	for (int f = f0; f < f1; f++)
-		cyc += c->frame_cycles[f];
-	m->cycles = ratio((double)cyc, n);
-	m->fps = ratio(c->cfg.chip.clock_mhz * 1e6, m->cycles);
-	for (int k = 0; k < HR_N; k++)
-		m->hit[k] = -1.0;
-	if (!c->frame_mem) {
-		const mem_counts *a = f0 ? &c->frame_port[f0 - 1] : &zero_p,
-		                 *b = &c->frame_port[f1 - 1];
-		uint64_t bytes = 0;
-		for (int t = 0; t < MEM_NTYPES; t++)
-			bytes += b->read_bytes[t] - a->read_bytes[t] + b->write_bytes[t] -
-			         a->write_bytes[t];
-		m->sdram_mb = (double)bytes / MB / n;
-		return;
-	}
-	const hier_stats *a = f0 ? &c->frame_mem[f0 - 1] : &zero_h, *b = &c->frame_mem[f1 - 1];
-	uint64_t sd =
-	    b->sdram.read_bytes + b->sdram.write_bytes - a->sdram.read_bytes - a->sdram.write_bytes;
-	m->sdram_mb = (double)sd / MB / n;
-	m->pci_mb = (double)(b->hostbus.bytes - a->hostbus.bytes) / MB / n;
-	int est = chip_estimates(&c->cfg);
-	for (int t = 0; t < MEM_NTYPES; t++)
-		m->hit[t] = span_hit_rate(&a->l1[t], &b->l1[t], est, NULL);
-	if (b->vma_enabled) {
-		double share;
-		m->hit[HR_TAG] = span_hit_rate(&a->tag_cache, &b->tag_cache, est, NULL);
-		m->hit[HR_L2] = span_hit_rate(&a->l2, &b->l2, est, &share);
-		/* an on-board cache hit reads SDRAM; the accesses a timed chip
-		 * merges into a PCI fetch in flight do not (sampled) */
-		double acc = (double)(b->l2.accesses - a->l2.accesses);
-		double fh = (double)(b->l2.func_hits - a->l2.func_hits);
-		if (est && acc > 0)
-			m->sdram_mb -=
-			    fh * share * (double)(b->l2.bytes - a->l2.bytes) / acc / MB / n;
-	}
-	uint64_t meta = 0, all = 0;
-	for (int r = 0; r < MEMIF_NREQ; r++) {
-		uint64_t x =
-		    b->memif.reads[r] + b->memif.writes[r] - a->memif.reads[r] - a->memif.writes[r];
-		all += x;
-		if (r == MEMIF_META)
-			meta = x;
-	}
-	/* -1 (null, an empty CSV field) when no access was made: a share of
-	 * nothing is not 0% */
-	m->meta_share = all ? (double)meta / (double)all : -1;
-	uint64_t rh = b->sdram.row_hits - a->sdram.row_hits;
-	uint64_t rows = rh + b->sdram.row_empty - a->sdram.row_empty + b->sdram.row_conflicts -
-	                a->sdram.row_conflicts;
-	m->row_hit_rate = rows ? (double)rh / (double)rows : -1;
-	double ticks = (double)(b->now_ticks - a->now_ticks);
-	m->sdram_util = ratio((double)(b->sdram.busy_ticks - a->sdram.busy_ticks), ticks);
-	m->pci_util = ratio((double)(b->hostbus.busy_ticks - a->hostbus.busy_ticks), ticks);
-}
-
-/* frames 2..N, or frame 1 alone (report.h) */
-void report_steady_state(const chip *c, memfig *m)
-{
-	report_span(c, c->frames_done > 1 ? 1 : 0, c->frames_done, m);
-}
-
 /* ---- fidelity (docs/fidelity.md) ---- */
 
 typedef struct fidfig {
@@ -358,7 +230,7 @@ static void memfig_json(jsonw *j, const memfig *m)
 	jsonw_key(j, "hit_rate");
 	jsonw_obj_begin(j);
 	for (int k = 0; k < HR_N; k++)
-		knum_or_null(j, hr_names[k], m->hit[k]);
+		knum_or_null(j, fig_hit_name(k), m->hit[k]);
 	jsonw_obj_end(j);
 	knum_or_null(j, "meta_share", m->meta_share);
 	knum_or_null(j, "sdram_row_hit_rate", m->row_hit_rate);
@@ -422,14 +294,14 @@ void report_text(FILE *f, const report_info *ri)
 		        g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz,
 		        g->memory.latency);
 	fprintf(f, "  cycles per frame %.0f = %.2f fps%s\n", ratio((double)cyc, c->frames_done),
-	        report_fps(c), c->fid.mode == CFG_FIDELITY_FUNCTIONAL ? " (bound)" : "");
+	        fig_fps(c), c->fid.mode == CFG_FIDELITY_FUNCTIONAL ? " (bound)" : "");
 	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++)
-		fprintf(f, " %s %.1f%%", chip_unit_name(k), 100 * report_util(c, k, -1));
+		fprintf(f, " %s %.1f%%", chip_unit_name(k), 100 * fig_util(c, k, -1));
 	fputs("\n  threads:", f);
 	double occ[THR_NSTATES];
-	if (report_thread_shares(c, occ))
+	if (fig_thread_shares(c, occ))
 		for (int s = 0; s < THR_NSTATES; s++)
 			fprintf(f, " %s %.1f%%", chip_state_name(s), 100 * occ[s]);
 	else
@@ -449,17 +321,17 @@ void report_text(FILE *f, const report_info *ri)
 	const char *mem_name = c->frame_mem ? "SDRAM" : "memory port";
 	if (c->frames_done > 1) {
 		for (int fr = 0; fr < c->frames_done; fr++) {
-			report_span(c, fr, fr + 1, &m);
+			fig_span(c, fr, fr + 1, &m);
 			fprintf(
 			    f, "  frame %d: %.0f cycles = %.2f fps, %s %.2f MB, PCI %.2f MB, hits:",
 			    fr + 1, m.cycles, m.fps, mem_name, m.sdram_mb, m.pci_mb);
 			for (int k = 0; k < HR_N; k++)
 				if (k < MEM_NTYPES || g->memory.vma.enabled)
-					pct(f, hr_names[k], m.hit[k]);
+					pct(f, fig_hit_name(k), m.hit[k]);
 			fputc('\n', f);
 		}
 	}
-	report_steady_state(c, &m);
+	fig_steady_state(c, &m);
 	fprintf(f, "  %s: %.2f fps, %s %.2f MB/frame, PCI %.2f MB/frame\n",
 	        c->frames_done > 1 ? "steady state (mean of frames 2..N)" : "frame", m.fps,
 	        mem_name, m.sdram_mb, m.pci_mb);
@@ -467,7 +339,7 @@ void report_text(FILE *f, const report_info *ri)
 		fputs("  hit rates:", f);
 		for (int k = 0; k < HR_N; k++)
 			if (k < MEM_NTYPES || g->memory.vma.enabled)
-				pct(f, hr_names[k], m.hit[k]);
+				pct(f, fig_hit_name(k), m.hit[k]);
 		fputs("\n  SDRAM:", f);
 		pct(f, "row hits", m.row_hit_rate);
 		fprintf(f, ", bus busy %.1f%%,", 100 * m.sdram_util);
@@ -586,7 +458,7 @@ static void json_run(jsonw *j, const report_info *ri)
 	jsonw_arr_end(j);
 	kv(j, "cycles", chip_cycles(c));
 	jsonw_knum(j, "clock_mhz", g->chip.clock_mhz);
-	jsonw_knum(j, "fps", report_fps(c));
+	jsonw_knum(j, "fps", fig_fps(c));
 	kv(j, "events", c->events);
 	fidelity_json(j, c);
 }
@@ -609,11 +481,11 @@ static void json_units(jsonw *j, const chip *c)
 		snprintf(name, sizeof name, "%s.busy_cycles", un);
 		uint64_t busy = chip_rtp_sum(c, name);
 		kv(j, "busy_cycles", busy);
-		jsonw_knum(j, "utilisation", report_util(c, k, -1));
+		jsonw_knum(j, "utilisation", fig_util(c, k, -1));
 		jsonw_key(j, "per_rtp_utilisation");
 		jsonw_arr_begin(j);
 		for (int r = 0; r < c->nrtp; r++)
-			jsonw_num(j, report_util(c, k, r));
+			jsonw_num(j, fig_util(c, k, r));
 		jsonw_arr_end(j);
 		jsonw_obj_end(j);
 	}
@@ -627,7 +499,7 @@ static void json_threads(jsonw *j, const chip *c)
 	jsonw_obj_begin(j);
 	jsonw_kint(j, "contexts", (int64_t)c->nrtp * c->tpr);
 	double occ[THR_NSTATES];
-	int timed = report_thread_shares(c, occ);
+	int timed = fig_thread_shares(c, occ);
 	for (int s = 0; s < THR_NSTATES; s++) {
 		/* no thread time at all (functional: nothing is timed): no
 		 * shares, rather than four zeros that do not add up to 1 */
@@ -728,7 +600,7 @@ static void json_memory(jsonw *j, const chip *c, const hier_stats *hs, int have_
 static void json_frames(jsonw *j, const chip *c)
 {
 	memfig m;
-	report_steady_state(c, &m);
+	fig_steady_state(c, &m);
 	jsonw_key(j, "table");
 	jsonw_obj_begin(j);
 	jsonw_knum(j, "fps", m.fps);
@@ -740,7 +612,7 @@ static void json_frames(jsonw *j, const chip *c)
 	jsonw_key(j, "per_frame");
 	jsonw_arr_begin(j);
 	for (int f = 0; f < c->frames_done; f++) {
-		report_span(c, f, f + 1, &m);
+		fig_span(c, f, f + 1, &m);
 		memfig_json(j, &m);
 	}
 	jsonw_arr_end(j);
@@ -1058,7 +930,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	free(old);
 
 	memfig m;
-	report_steady_state(c, &m);
+	fig_steady_state(c, &m);
 	csv_str(f, g->name, 0);
 	csv_str(f, ri->w->scene_label, 0);
 	csv_str(f, ri->w->v.name, 0);
@@ -1069,7 +941,7 @@ int report_csv(const char *path, const report_info *ri, diag *d)
 	        g->memory.vma.enabled ? 1 : 0, cfg_enum_name(g, "memory.hostbus.preset"));
 	csv_num(f, m.fps);
 	for (int k = 0; k < UNIT_NKINDS; k++)
-		csv_num(f, report_util(c, k, -1));
+		csv_num(f, fig_util(c, k, -1));
 	for (int k = 0; k < HR_N; k++)
 		csv_num(f, m.hit[k]);
 	csv_num(f, m.sdram_mb);

@@ -12,6 +12,7 @@
 
 #include "kernel-ref/world.h"
 #include "sim/chip.h"
+#include "sim/figures.h"
 
 typedef struct report_info {
 	const chip *c;
@@ -23,37 +24,6 @@ typedef struct report_info {
 	double mem_estimate_mb;  /* hostmem.h's estimate before the run (0: none made) */
 	const struct rc_list *invariants; /* the violated ones (reportcheck.h); NULL: not checked */
 } report_info;
-
-/* Memory figures over a span of frames (the report's steady_state and
- * per_frame fields; docs/report.md). In a sampled frame the hit rates
- * and SDRAM MB are estimates (docs/fidelity.md "Sampled"). */
-enum { HR_TAG = MEM_NTYPES, HR_L2, HR_N }; /* hit-rate slots: the four L1s, tag cache, L2 */
-
-typedef struct memfig {
-	int first, last;     /* frames first..last (1-based, inclusive) */
-	double cycles, fps;  /* mean core cycles per frame, fps at the clock */
-	double sdram_mb;     /* per frame; fixed model: bytes through the memory port */
-	double pci_mb;       /* per frame; 0 without VMA */
-	double hit[HR_N];    /* hits / accesses over the span; -1: no such cache or no access */
-	double meta_share;   /* meta-data share of SDRAM accesses */
-	double row_hit_rate; /* SDRAM row hits / (hits + empty + conflicts) */
-	double sdram_util;   /* SDRAM data bus busy / elapsed time */
-	double pci_util;     /* host bus busy / elapsed time */
-} memfig;
-
-/* The steady state: the mean of frames 2..N when there are several (the
- * first frame warms the caches and the VMA), else frame 1. */
-void report_steady_state(const chip *c, memfig *m);
-/* The figures of frames f0..f1-1 (0-based; per_frame is f, f + 1). */
-void report_span(const chip *c, int f0, int f1, memfig *m);
-/* The report's fps: clock / mean cycles per frame. */
-double report_fps(const chip *c);
-/* Utilisation of unit kind k (UNIT_*): issue cycles / (cycles x units of
- * the kind), over the chip (rtp < 0) or one RTP. */
-double report_util(const chip *c, int kind, int rtp);
-/* The thread states' shares of threads x time (THR_NSTATES of them);
- * returns 0 (shares all 0) when no thread time was timed (functional). */
-int report_thread_shares(const chip *c, double share[THR_NSTATES]);
 
 void report_text(FILE *f, const report_info *ri);
 /* Writes the JSON report atomically (tmp + rename). */

@@ -267,13 +267,13 @@ int rc_figs_get(const chip *c, rc_figs *f)
 	f->estimated = chip_estimates(&c->cfg);
 	f->exact_fills = c->warm_state == WARM_OFF;
 	f->clock_mhz = c->cfg.chip.clock_mhz;
-	f->fps = report_fps(c);
+	f->fps = fig_fps(c);
 	f->cycles = chip_cycles(c);
 	for (int i = 0; i < f->frames; i++) {
 		f->frame_cycles[i] = c->frame_cycles[i];
-		report_span(c, i, i + 1, &f->per_frame[i]);
+		fig_span(c, i, i + 1, &f->per_frame[i]);
 	}
-	report_steady_state(c, &f->steady);
+	fig_steady_state(c, &f->steady);
 	f->port = c->mem.n;
 	for (int t = 0; t < MEM_NTYPES; t++)
 		f->line[t] = hier_l1_params(&c->cfg, t).line_bytes;
@@ -283,11 +283,11 @@ int rc_figs_get(const chip *c, rc_figs *f)
 		f->line[HR_L2] = vp.line;
 	}
 	for (int k = 0; k < UNIT_NKINDS; k++) {
-		f->util[k] = report_util(c, k, -1);
+		f->util[k] = fig_util(c, k, -1);
 		for (int r = 0; r < f->nrtp; r++)
-			f->rtp_util[k * f->nrtp + r] = report_util(c, k, r);
+			f->rtp_util[k * f->nrtp + r] = fig_util(c, k, r);
 	}
-	f->threads_timed = report_thread_shares(c, f->share);
+	f->threads_timed = fig_thread_shares(c, f->share);
 	return 0;
 }
 

@@ -17,18 +17,18 @@
  * chip asserts there are none.
  *
  * The figures are first copied into an rc_figs by the functions that write
- * the report (report_span, report_util, ...), so what is checked is what
+ * the report (fig_span, fig_util, ...), so what is checked is what
  * is reported, and a test can spoil one figure and see its invariant fail.
  */
 #ifndef SAAR_SIM_REPORTCHECK_H
 #define SAAR_SIM_REPORTCHECK_H
 
 #include "sim/chip.h"
-#include "sim/report.h"
+#include "sim/figures.h"
 
 #define RC_MAX 64 /* violations kept (rc_list.n counts all of them) */
 
-typedef struct rc_list {
+    typedef struct rc_list {
 	int n;                 /* violations found */
 	char msg[RC_MAX][256]; /* the first RC_MAX: "what: rule (the numbers)" */
 } rc_list;

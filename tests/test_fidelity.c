@@ -628,8 +628,8 @@ Test(fidelity, sampled_hit_rates_count_merges_as_cycle_does)
 	chip *y = tu_run_chip(&w, &c);
 	cr_assert(!y->fid.exact);
 	memfig mx, my;
-	report_steady_state(x, &mx);
-	report_steady_state(y, &my);
+	fig_steady_state(x, &mx);
+	fig_steady_state(y, &my);
 	hier_stats hy;
 	hier_get_stats(&y->mem, &hy);
 	const cache_stats *raw[2] = {&hy.tag_cache, &hy.l2};

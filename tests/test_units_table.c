@@ -170,7 +170,7 @@ Test(units_table, report_has_every_kind_with_utilisation)
 		cr_assert(u, "report lacks units.%s", unit_table[k].name);
 		const char *ut = strstr(u, "\"utilisation\":"), *end = strchr(u + strlen(key), '}');
 		cr_assert(ut && ut < end, "units.%s has no utilisation", unit_table[k].name);
-		cr_assert_gt(report_util(ch, k, -1), 0, "%s idle", unit_table[k].name);
+		cr_assert_gt(fig_util(ch, k, -1), 0, "%s idle", unit_table[k].name);
 	}
 
 	chip_destroy(ch);

@@ -6,7 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-
 static void enter(thr_ctx *t, packet *p)
 {
 	t->p = p;
