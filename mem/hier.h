@@ -28,7 +28,6 @@
 #include <stdint.h>
 
 #include "kernel-ref/diag.h"
-#include "kernel-ref/jsonw.h"
 #include "mem/cache.h"
 #include "mem/hostbus.h"
 #include "mem/memif.h"
@@ -36,11 +35,11 @@
 #include "mem/sdram.h"
 #include "mem/store.h"
 #include "mem/vma.h"
-#include "sim/config.h"
 #include "sim/core/engine.h"
 
 /* Every counter of the hierarchy, copied out by hier_get_stats. Ratios
- * (hit rates, utilisation) are derived by hier_write_json, not counted. */
+ * (hit rates, utilisation) are derived by the report (sim/report_mem.h
+ * hier_write_json), not counted. */
 typedef struct hier_stats {
 	int vma_enabled;
 	uint64_t now_ticks; /* engine time when the stats were taken */
@@ -74,20 +73,25 @@ typedef struct hier_stats {
 	double func_sdram_merge_ticks;
 } hier_stats;
 
-/* Builds the hierarchy from cfg->memory and installs it in p (as
- * mem_init_fixed does). core is the chip clock. image_bytes: size of the
- * memory image; without VMA it must fit in memory.sdram.mb, else a one-line
- * error suggesting configs/saarcor-vma.yaml. store: the bytes (SDRAM's
- * without the VMA, host memory's with it; NULL: addresses only, as trace
- * replay). Returns 0, or -1 with d set. */
-int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
-                  mem_store *store, diag *d);
-/* The parameters mem_init_hier derives from the config (trace replay
- * builds the same caches from them). hier_hbus_params applies the preset
- * and the overriding keys. */
-cache_params hier_l1_params(const saar_config *cfg, int type);
-vma_params hier_vma_params(const saar_config *cfg);
-void hier_hbus_params(const saar_config *cfg, hbus_params *p);
+/* Everything the hierarchy is built from (sim/memconfig.h derives it from
+ * the config's memory.* keys). */
+typedef struct hier_params {
+	cache_params l1[MEM_NTYPES]; /* the L1s, by request type */
+	sdram_params sdram;
+	int memif_policy; /* enum memif_policy */
+	int vma_enabled;
+	vma_params vma;
+	hbus_params hbus;
+} hier_params;
+
+/* Builds the hierarchy from hp and installs it in p (as mem_init_fixed
+ * does). core is the chip clock. image_bytes: size of the memory image;
+ * without VMA it must fit in on-board memory, else a one-line error
+ * suggesting configs/saarcor-vma.yaml. store: the bytes (SDRAM's without
+ * the VMA, host memory's with it; NULL: addresses only, as trace replay).
+ * Returns 0, or -1 with d set. */
+int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_t image_bytes,
+              mem_store *store, diag *d);
 /* Is p a hierarchy model? */
 int hier_is(const memport *p);
 /* Copies every counter; -1 if p is not a hierarchy. */
@@ -111,7 +115,5 @@ void hier_add_merge_ticks(memport *p, double ticks);
  * their way, from the on-board cache's counts so far (the factor on
  * func_sdram_merge_ticks); 0 without the VMA or without a hierarchy. */
 double hier_merge_share(const memport *p);
-/* Writes the stats as one JSON object (a value: the caller writes the key). */
-void hier_write_json(const hier_stats *s, jsonw *w);
 
 #endif

@@ -81,7 +81,11 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 	 .desc = "accesses the " what " cache accepts per core cycle (all RTPs together)"},        \
 	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, 16, 1, 4096, "lines"), TIMING,           \
 	 .source = "not published; one per thread of an RTP",                                      \
-	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"}
+	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"},      \
+	{KEY("memory.l1." #c ".replacement", CFG_STR, memory.l1.c.replacement, 0, 0, 0, ""),       \
+	 .sdef = "lru", .source = "not published; LRU assumed (exact; the seed names no policy)",  \
+	 .desc = "replacement policy of the " what " cache: lru, plru (tree pseudo-LRU), fifo, "   \
+	         "or one registered by name (docs/extending-mem.md)"}
 #define FP(st, what)                                                                               \
 	{INT("chip.fp." #st ".exp", chip.fp.st.exp, 8, 2, 8, "bits"),                              \
 	 .source = "§4.6: SaarCOR cut each stage's floats to the precision it needs; 8 = float",   \
@@ -285,6 +289,13 @@ static const cfg_key keys[] = {
      TIMING, .source = "not published; as the L1 caches", .desc = "tag cache hit latency"},
     {BOOL("memory.vma.tag_cache_enabled", memory.vma.tag_cache_enabled, 1), PUB "§4.2",
      .desc = "false: every meta-data lookup reads SDRAM (for studies)"},
+    {KEY("memory.vma.replacement", CFG_STR, memory.vma.replacement, 0, 0, 0, ""), .sdef = "lru",
+     .source = "not published; LRU assumed (the seed names no policy)",
+     .desc = "replacement policy of the on-board L2 cache: lru, plru, fifo (mem/repl.h)"},
+    {KEY("memory.vma.tag_cache_replacement", CFG_STR, memory.vma.tag_cache_replacement, 0, 0, 0,
+         ""),
+     .sdef = "lru", .source = "not published; LRU assumed (as the L1 caches)",
+     .desc = "replacement policy of the tag cache: lru, plru, fifo (mem/repl.h)"},
     {ENUM("memory.hostbus.preset", memory.hostbus.preset, hostbus_preset_names),
      PUB "§4.7 (standard PCI)",
      .desc = "host bus: pci = 32 bit/33 MHz, pci66 = 64 bit/66 MHz, agp = 32 bit at 266 MT/s "

@@ -20,7 +20,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "mem/hier.h"
+#include "sim/memconfig.h"
+#include "sim/report_mem.h"
 #include "sim/config.h"
 #include "traces/memtrace.h"
 
