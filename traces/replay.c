@@ -303,8 +303,8 @@ int main(int argc, char **argv)
 		if (use_vma) {
 			s.vma_enabled = 1;
 			s.vma = v.s;
-			s.tag_cache = v.tag.s;
-			s.l2 = v.l2.s;
+			s.tag_cache = v.tag.c.s;
+			s.l2 = v.l2.c.s;
 			s.hostbus.bytes =
 			    v.s.host_fetch_bytes + v.s.host_write_bytes + v.s.writeback_bytes;
 			s.hostbus.transfers = v.s.host_fetches + v.s.host_writes + v.s.writebacks;
