@@ -185,6 +185,42 @@ void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const
 	}
 }
 
+static size_t pad8(size_t n)
+{
+	return (n + 7) & ~(size_t)7;
+}
+
+size_t cache_ckpt_bytes(const cache *c, uint32_t n)
+{
+	size_t nw = (size_t)n * c->p.ways;
+	return pad8(nw * 4) + pad8(nw);
+}
+
+void cache_ckpt_empty(const cache *c, uint32_t n, void *buf)
+{
+	size_t nw = (size_t)n * c->p.ways;
+	memset(buf, 0, cache_ckpt_bytes(c, n));
+	memset(buf, 0xff, nw * 4); /* UINT32_MAX: no line */
+}
+
+int cache_ckpt_save(const cache *c, uint32_t set0, uint32_t n, void *buf)
+{
+	size_t nw = (size_t)n * c->p.ways;
+	uint8_t *b = buf;
+	memset(b, 0, cache_ckpt_bytes(c, n));
+	return cache_save(c, set0, n, (uint32_t *)(void *)b, b + pad8(nw * 4));
+}
+
+int cache_ckpt_load(cache *c, uint32_t set0, uint32_t n, const void *buf)
+{
+	if (c->mshr_used)
+		return -1;
+	size_t nw = (size_t)n * c->p.ways;
+	const uint8_t *b = buf;
+	cache_load(c, set0, n, (const uint32_t *)(const void *)b, b + pad8(nw * 4));
+	return 0;
+}
+
 void cache_flush(cache *c)
 {
 	size_t n = (size_t)c->nsets * c->p.ways;

@@ -27,6 +27,7 @@
 #ifndef SAAR_MEM_CACHE_H
 #define SAAR_MEM_CACHE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "kernel-ref/bitset.h"
@@ -170,6 +171,17 @@ int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_
  * free); hits and fills after it see the same policy decisions. */
 void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const uint8_t *st);
 
+/* The cache's own checkpoint form of n sets (stored warming saves and
+ * restores caches through it, never through their fields): the
+ * cache_save form, lines then policy bytes, each part padded to 8 bytes.
+ * cache_ckpt_bytes: its size; cache_ckpt_empty: the form of n empty sets;
+ * save: -1 as cache_save; load: -1 (nothing changed) while a miss is in
+ * flight (an MSHR is busy). */
+size_t cache_ckpt_bytes(const cache *c, uint32_t n);
+void cache_ckpt_empty(const cache *c, uint32_t n, void *buf);
+int cache_ckpt_save(const cache *c, uint32_t set0, uint32_t n, void *buf);
+int cache_ckpt_load(cache *c, uint32_t set0, uint32_t n, const void *buf);
+
 static inline uint64_t cache_line_of(const cache *c, uint64_t addr)
 {
 	return c->line_shift >= 0 ? addr >> c->line_shift : addr / c->p.line_bytes;
@@ -199,6 +211,11 @@ int cache_mshr_find(const cache *c, uint64_t line);
 static inline int cache_mshr_free(const cache *c)
 {
 	return c->mshr_used < c->p.mshrs;
+}
+/* Is a miss in flight (an MSHR busy)? */
+static inline int cache_busy(const cache *c)
+{
+	return c->mshr_used > 0;
 }
 
 /* The hit half of cache_lookup, inline, for functional fast paths (replay):

@@ -633,6 +633,65 @@ void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2)
 	*l2 = h->use_vma ? &h->v.l2.c : NULL;
 }
 
+/* The caches a checkpoint holds whole, in order; returns how many. */
+static int whole_caches(const hier *h, cache **k)
+{
+	int n = 0;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		k[n++] = (cache *)&h->l1[t].t.c;
+	if (h->use_vma && h->v.p.tag_cache_enabled)
+		k[n++] = (cache *)&h->v.tag.c;
+	return n;
+}
+
+size_t hier_ckpt_bytes(const memport *p)
+{
+	if (!hier_is(p))
+		return 0;
+	cache *k[MEM_NTYPES + 1];
+	size_t b = 0;
+	for (int i = 0, n = whole_caches(p->impl, k); i < n; i++)
+		b += cache_ckpt_bytes(k[i], k[i]->nsets);
+	return b;
+}
+
+int hier_ckpt_save(const memport *p, void *buf)
+{
+	if (!hier_is(p))
+		return -1;
+	cache *k[MEM_NTYPES + 1];
+	uint8_t *b = buf;
+	for (int i = 0, n = whole_caches(p->impl, k); i < n; i++) {
+		if (cache_ckpt_save(k[i], 0, k[i]->nsets, b))
+			return -1;
+		b += cache_ckpt_bytes(k[i], k[i]->nsets);
+	}
+	return 0;
+}
+
+int hier_ckpt_load(memport *p, const void *buf)
+{
+	if (!hier_is(p))
+		return -1;
+	cache *k[MEM_NTYPES + 1];
+	int n = whole_caches(p->impl, k);
+	for (int i = 0; i < n; i++)
+		if (cache_busy(k[i]))
+			return -1;
+	const uint8_t *b = buf;
+	for (int i = 0; i < n; i++) {
+		cache_ckpt_load(k[i], 0, k[i]->nsets, b);
+		b += cache_ckpt_bytes(k[i], k[i]->nsets);
+	}
+	return 0;
+}
+
+cache *hier_onboard(memport *p)
+{
+	hier *h = hier_is(p) ? p->impl : NULL;
+	return h && h->use_vma ? &h->v.l2.c : NULL;
+}
+
 void hier_reload(memport *p, const uint64_t *l2sets)
 {
 	hier *h = p->impl;

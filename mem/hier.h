@@ -96,9 +96,21 @@ int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_
 int hier_is(const memport *p);
 /* Copies every counter; -1 if p is not a hierarchy. */
 int hier_get_stats(const memport *p, hier_stats *s);
-/* Stored warming (sim/warming.h): the caches whose state functional
- * processing moves (the four L1s; with the VMA its tag cache, NULL when
- * disabled, and on-board cache, else both NULL); pointers to every counter
+/* Checkpoints (stored warming, sim/warming.h): the hierarchy saves and
+ * restores its caches itself, each in its own form (cache_ckpt_save; the
+ * replacement policy saves its per-set state). hier_ckpt_bytes: the bytes
+ * of the caches a checkpoint holds whole (the four L1s, the tag cache if
+ * enabled; 0 without a hierarchy); save them to buf, or load them from it
+ * (-1: a miss in flight, or not a hierarchy). The on-board cache is too
+ * large to store whole: hier_onboard gives it (NULL without the VMA), and
+ * checkpoints store its changed sets by cache_ckpt_save. */
+size_t hier_ckpt_bytes(const memport *p);
+int hier_ckpt_save(const memport *p, void *buf);
+int hier_ckpt_load(memport *p, const void *buf);
+cache *hier_onboard(memport *p);
+/* The caches whose state functional processing moves (the four L1s; with
+ * the VMA its tag cache, NULL when disabled, and on-board cache, else
+ * both NULL; for tests); pointers to every counter
  * functional processing moves (out may be NULL; returns how many there
  * are, at most cap written); the ticks of on-board-cache hits among
  * functional SDRAM reads; and adding to the merged part of them

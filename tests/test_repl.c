@@ -380,3 +380,72 @@ Test(repl, unknown_policy_name_is_an_error)
 	          "%s", d.msg);
 	eng_destroy(e);
 }
+
+/* ---- the hierarchy saves and restores its caches itself ---- */
+
+/* n functional reads of random kd and triangle addresses below 256 KB. */
+static void random_reads(memport *mp, int n)
+{
+	for (int i = 0; i < n; i++) {
+		int t = i % 2 ? MEM_KD : MEM_TRI;
+		mem_req q = {xr() % (256 << 10), t == MEM_KD ? 8 : 36, (uint8_t)t, 0, 0, NULL};
+		mem_access_func(mp, &q);
+	}
+}
+
+/* Two hierarchies with policy `name` in every L1: b does other work,
+ * then loads a's checkpoint; the same reads after it hit alike. Catches a
+ * level that leaves a cache or a policy's state out of its checkpoint. */
+static void hier_round_trip(const char *name)
+{
+	saar_config cfg;
+	cfg_defaults(&cfg);
+	diag d;
+	static const char *const l1[] = {"shade", "kd", "list", "tri"};
+	for (int t = 0; t < 4; t++) {
+		char set[96];
+		snprintf(set, sizeof set, "memory.l1.%s.replacement=%s", l1[t], name);
+		cr_assert_eq(cfg_set(&cfg, set, &d), 0, "%s", d.msg);
+	}
+	eng *e = eng_create(16);
+	memport a, b;
+	cr_assert_eq(mem_init_hier(&a, e, eng_clock_mhz(533), &cfg, 4 << 20, NULL, &d), 0, "%s",
+	             d.msg);
+	cr_assert_eq(mem_init_hier(&b, e, eng_clock_mhz(533), &cfg, 4 << 20, NULL, &d), 0, "%s",
+	             d.msg);
+	random_reads(&a, 200000);
+	random_reads(&b, 100000);
+	size_t n = hier_ckpt_bytes(&a);
+	cr_assert_eq(n, hier_ckpt_bytes(&b));
+	cr_assert_gt(n, 0);
+	void *buf = malloc(n);
+	cr_assert_eq(hier_ckpt_save(&a, buf), 0);
+	cr_assert_eq(hier_ckpt_load(&b, buf), 0);
+	hier_stats sa0, sb0, sa, sb;
+	hier_get_stats(&a, &sa0);
+	hier_get_stats(&b, &sb0);
+	uint64_t seed = rng;
+	random_reads(&a, 100000);
+	rng = seed;
+	random_reads(&b, 100000);
+	hier_get_stats(&a, &sa);
+	hier_get_stats(&b, &sb);
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		cr_assert_eq(sa.l1[t].hits - sa0.l1[t].hits, sb.l1[t].hits - sb0.l1[t].hits,
+		             "%s: L1 %d hits differ after the load", name, t);
+		cr_assert_eq(sa.l1[t].evictions - sa0.l1[t].evictions,
+		             sb.l1[t].evictions - sb0.l1[t].evictions);
+	}
+	cr_assert_gt(sa.l1[MEM_KD].evictions - sa0.l1[MEM_KD].evictions, 0);
+	free(buf);
+	mem_free(&a);
+	mem_free(&b);
+	eng_destroy(e);
+}
+
+Test(repl, hierarchy_checkpoint_round_trip)
+{
+	hier_round_trip("lru");
+	hier_round_trip("plru");
+	hier_round_trip("fifo");
+}
