@@ -56,6 +56,8 @@ struct hier {
 	mem_store *ms; /* the board's bytes (host memory's with the VMA); NULL: no data */
 	int oom;       /* a line found no memory for its bytes */
 	hl1 l1[MEM_NTYPES];
+	int use_l1;                 /* "l1" tops the stack */
+	const struct hlevel *below; /* the level below the L1s ("vma", "sdram") */
 	sdram sd;
 	memif mi;
 	int use_vma;
@@ -107,33 +109,80 @@ static hreq *req_alloc(hier *h)
 	return r;
 }
 
-/* ---- below the L1s ---- */
+/* ---- below the L1s: the levels, by name ---- */
 
-/* A read below the L1s into dst (NULL: no data). Without the VMA the
- * bytes are the store's at the address, taken when the read is issued:
- * only the reading thread writes what it reads (its spill area) and its
- * writes go in when issued, so they are the bytes SDRAM returns. */
+/* A level below the L1s (memory.levels names the stack, top first; the
+ * L1s, "l1", are the hierarchy's own top). Each answers the four ways in:
+ * a timed read into dst (NULL: no data) calling cb when the bytes are
+ * there, a posted write of src, a functional access (no time; its traffic
+ * joins the functional counters), and a peek that changes nothing. */
+typedef struct hlevel {
+	const char *name;
+	void (*read)(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
+	             eng_handler cb, void *ctx, uint64_t arg);
+	void (*write)(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes,
+	              const void *src);
+	void (*func)(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data);
+	void (*peek)(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst);
+} hlevel;
+
 static void lower_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
                        eng_handler cb, void *ctx, uint64_t arg)
 {
-	if (h->use_vma) {
-		vma_read(&h->v, t, type, addr, bytes, dst, cb, ctx, arg);
-		return;
-	}
-	if (dst)
-		ms_read(h->ms, addr, bytes, dst);
-	memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
+	h->below->read(h, t, type, addr, bytes, dst, cb, ctx, arg);
 }
 
 /* The bytes below the L1s now, without any change (hier_peek). */
 static void lower_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
 {
-	if (h->use_vma)
-		vma_peek(&h->v, addr, bytes, dst);
-	else if (h->ms)
+	h->below->peek(h, addr, bytes, dst);
+}
+
+/* "sdram": the memory interface and SDRAM at the same address. A read's
+ * bytes are the store's, taken when the read is issued: only the reading
+ * thread writes what it reads (its spill area) and its writes go in when
+ * issued, so they are the bytes SDRAM returns. */
+static void sdram_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
+                       eng_handler cb, void *ctx, uint64_t arg)
+{
+	if (dst)
+		ms_read(h->ms, addr, bytes, dst);
+	memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
+}
+
+static void sdram_write(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes,
+                        const void *src)
+{
+	if (src && ms_write(h->ms, addr, bytes, src))
+		h->oom = 1;
+	memif_submit(&h->mi, t, type, addr, bytes, 1, NULL, NULL, 0);
+}
+
+static void sdram_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
+{
+	if (h->ms)
 		ms_read(h->ms, addr, bytes, dst);
 	else
 		memset(dst, 0, bytes);
+}
+
+/* "vma": the virtual memory architecture over the memory interface and
+ * the host bus (mem/vma.h). */
+static void vmal_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
+                      eng_handler cb, void *ctx, uint64_t arg)
+{
+	vma_read(&h->v, t, type, addr, bytes, dst, cb, ctx, arg);
+}
+
+static void vmal_write(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes,
+                       const void *src)
+{
+	vma_write(&h->v, t, type, addr, bytes, src);
+}
+
+static void vmal_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
+{
+	vma_peek(&h->v, addr, bytes, dst);
 }
 
 /* The bytes of L1 way `slot` (given on its first fill); NULL without data
@@ -260,14 +309,7 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 		 * hold the spill area) */
 		h->writes[type]++;
 		h->write_bytes[type] += r->bytes;
-		const void *src = h->ms ? r->data : NULL;
-		if (h->use_vma)
-			vma_write(&h->v, now, type, r->addr, r->bytes, src);
-		else {
-			if (src && ms_write(h->ms, r->addr, r->bytes, src))
-				h->oom = 1;
-			memif_submit(&h->mi, now, type, r->addr, r->bytes, 1, NULL, NULL, 0);
-		}
+		h->below->write(h, now, type, r->addr, r->bytes, h->ms ? r->data : NULL);
 		if (done) /* posted: a waiting caller gets its answer at once */
 			eng_schedule(h->e, eng_next_edge(h->core, now), done, ctx, arg);
 		return;
@@ -289,7 +331,7 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	            .bytes = bytes,
 	            .pending = 1,
 	            .type = (uint8_t)type};
-	if (r->addr >= h->image_bytes) {
+	if (!h->use_l1 || r->addr >= h->image_bytes) {
 		h->bypass[type]++;
 		lower_read(h, now, type, r->addr, bytes, dst, l1_bypass_done, h, (uintptr_t)q);
 		return;
@@ -345,20 +387,28 @@ static double merge_share(const hier *h)
 	return h->use_vma ? cache_timed_merge_share(NULL, &h->v.l2.c.s) : 0;
 }
 
-/* Below the L1s without time: SDRAM directly, or the VMA's functional walk
- * whose counter deltas become SDRAM and host-bus traffic. data: the bytes
- * read into or written from (NULL: none). */
+/* Below the L1s without time (data: the bytes read into or written from;
+ * NULL: none). */
 static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
 {
-	if (!h->use_vma) {
-		func_sdram(h, type, bytes, write);
-		if (data && write) {
-			if (ms_write(h->ms, addr, bytes, data))
-				h->oom = 1;
-		} else if (data)
-			ms_read(h->ms, addr, bytes, data);
-		return;
-	}
+	h->below->func(h, type, addr, bytes, write, data);
+}
+
+/* "sdram" without time: SDRAM directly. */
+static void sdram_func(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
+{
+	func_sdram(h, type, bytes, write);
+	if (data && write) {
+		if (ms_write(h->ms, addr, bytes, data))
+			h->oom = 1;
+	} else if (data)
+		ms_read(h->ms, addr, bytes, data);
+}
+
+/* "vma" without time: the VMA's functional walk, whose counter deltas
+ * become SDRAM and host-bus traffic. */
+static void vmal_func(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
+{
 	vma_stats a = h->v.s;
 	vma_access_func(&h->v, addr, bytes, write, data);
 	const vma_stats *b = &h->v.s;
@@ -404,6 +454,20 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 	}
 }
 
+/* The levels below the L1s, by name. */
+static const hlevel hlevels[] = {
+    {"sdram", sdram_read, sdram_write, sdram_func, sdram_peek},
+    {"vma", vmal_read, vmal_write, vmal_func, vmal_peek},
+};
+
+static const hlevel *hlevel_find(const char *name, size_t n)
+{
+	for (size_t i = 0; i < sizeof hlevels / sizeof *hlevels; i++)
+		if (strlen(hlevels[i].name) == n && !strncmp(hlevels[i].name, name, n))
+			return &hlevels[i];
+	return NULL;
+}
+
 /* The functional twin of hier_access: the same L1 lookups, line by line,
  * with the fill applied at once. Timed misses may still be in flight (a
  * sampled region hands its packets to a functional stretch without
@@ -424,7 +488,7 @@ static void hier_access_func(void *impl, const mem_req *r)
 	h->reads[type]++;
 	h->read_bytes[type] += r->bytes;
 	uint32_t bytes = r->bytes ? r->bytes : 1;
-	if (r->addr >= h->image_bytes) {
+	if (!h->use_l1 || r->addr >= h->image_bytes) {
 		h->bypass[type]++;
 		func_lower(h, type, r->addr, bytes, 0, data);
 		return;
@@ -466,7 +530,7 @@ static void hier_peek(void *impl, const mem_req *r, void *dst)
 {
 	const hier *h = impl;
 	uint8_t *o = dst;
-	if (r->addr >= h->image_bytes) {
+	if (!h->use_l1 || r->addr >= h->image_bytes) {
 		lower_peek(h, r->addr, r->bytes, o);
 		return;
 	}
@@ -519,12 +583,54 @@ static const memport_model hier_model = {"hierarchy",      hier_access, hier_des
 
 /* ---- construction ---- */
 
+/* The stack, top first ("l1,vma,sdram"): the L1s on top or not, and the
+ * level below them (which stands on "sdram" if it is not "sdram"). -1
+ * with d set when the names do not stack. */
+static int parse_stack(const char *spec, int *use_l1, const hlevel **below, diag *d)
+{
+	const hlevel *seq[4];
+	int n = 0;
+	*use_l1 = 0;
+	for (const char *p = spec; *p;) {
+		while (*p == ' ' || *p == ',')
+			p++;
+		size_t k = strcspn(p, ", ");
+		if (!k)
+			break;
+		if (k == 2 && !strncmp(p, "l1", 2) && !n && !*use_l1)
+			*use_l1 = 1;
+		else if (n < 4 && (seq[n] = hlevel_find(p, k)))
+			n++;
+		else
+			return diag_set(
+			    d, "config", 0, 0,
+			    "memory.levels: '%.*s' is no memory level here (the stack is "
+			    "[l1,] [vma,] sdram, top first)",
+			    (int)k, p);
+		p += k;
+	}
+	/* sdram at the bottom; the vma, if any, directly on it */
+	int ok = n >= 1 && !strcmp(seq[n - 1]->name, "sdram") &&
+	         (n == 1 || (n == 2 && !strcmp(seq[0]->name, "vma")));
+	if (!ok)
+		return diag_set(d, "config", 0, 0,
+		                "memory.levels '%s': the stack is [l1,] [vma,] sdram, top first",
+		                spec);
+	*below = seq[0];
+	return 0;
+}
+
 int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_t image_bytes,
               mem_store *store, diag *d)
 {
 	memset(p, 0, sizeof *p);
+	int use_l1;
+	const hlevel *below = NULL;
+	if (parse_stack(hp->levels, &use_l1, &below, d))
+		return -1;
+	int use_vma = !strcmp(below->name, "vma");
 	uint64_t sd_bytes = hp->sdram.bytes;
-	if (!hp->vma_enabled && image_bytes > sd_bytes)
+	if (!use_vma && image_bytes > sd_bytes)
 		return diag_set(d, "config", 0, 0,
 		                "the memory image (%.1f MB) does not fit in on-board memory "
 		                "(memory.sdram.mb = %d); enable the virtual memory architecture "
@@ -538,6 +644,8 @@ int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_
 	h->core = core;
 	h->image_bytes = image_bytes;
 	h->ms = store;
+	h->use_l1 = use_l1;
+	h->below = below;
 	for (int t = 0; t < MEM_NTYPES; t++) {
 		char what[32];
 		snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
@@ -553,7 +661,7 @@ int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_
 		diag_set(d, "config", 0, 0, "out of memory");
 		goto fail;
 	}
-	if (hp->vma_enabled) {
+	if (use_vma) {
 		if (hbus_init(&h->hb, &hp->hbus, d))
 			goto fail;
 		if (vma_init(&h->v, e, core, &h->mi, &h->hb, sd_bytes, &hp->vma, store, d))

@@ -234,6 +234,11 @@ static const cfg_key keys[] = {
     {INT("memory.latency", memory.latency, 20, 0, 100000, "core cycles"), TIMING,
      .source = "placeholder; an L1 hit plus some misses",
      .desc = "latency of every memory access in the fixed model"},
+    {KEY("memory.levels", CFG_STR, memory.levels, 0, 0, 0, ""), .sdef = "",
+     .source = "a model setting (docs/memory.md, \"Levels\")",
+     .desc = "the memory stack by level names, top first: fixed, or [l1,] [vma,] sdram; "
+             "setting it sets memory.model and memory.vma.enabled; empty = as those keys say "
+             "(l1,sdram or l1,vma,sdram)"},
     L1(shade, "shading (RGS)", 64),
     L1(kd, "kd-node (traversal)", 64),
     L1(list, "triangle-address list", 64),
@@ -385,6 +390,35 @@ void cfg_defaults(saar_config *c)
 
 /* Parses text s into key k of c. On error writes a message (without the
  * location, which the caller knows) into err and returns -1. */
+/* Does the stack name `name` (a comma-separated list) hold level lv? */
+static bool levels_has(const char *name, const char *lv)
+{
+	size_t n = strlen(lv);
+	for (const char *p = name; *p;) {
+		p += strspn(p, ", ");
+		size_t k = strcspn(p, ", ");
+		if (k == n && !strncmp(p, lv, n))
+			return true;
+		p += k;
+	}
+	return false;
+}
+
+/* memory.levels was set: the two keys that name today's stacks follow it
+ * (the structure itself is checked where the stack is built). */
+static void levels_apply(saar_config *c)
+{
+	const char *l = c->memory.levels;
+	if (!*l)
+		return;
+	if (levels_has(l, "fixed")) {
+		c->memory.model = CFG_MEM_FIXED;
+		return;
+	}
+	c->memory.model = CFG_MEM_HIERARCHY;
+	c->memory.vma.enabled = levels_has(l, "vma");
+}
+
 static int set_value(saar_config *c, const cfg_key *k, const char *s, char *err, size_t n)
 {
 	char *end;
@@ -447,6 +481,8 @@ static int set_value(saar_config *c, const cfg_key *k, const char *s, char *err,
 			return -1;
 		}
 		snprintf(field(c, k), k->size, "%s", s);
+		if (field(c, k) == (void *)c->memory.levels)
+			levels_apply(c);
 		return 0;
 	}
 	if (v < k->min || v > k->max) {
@@ -691,9 +727,18 @@ int cfg_set(saar_config *c, const char *assignment, diag *d)
 
 int cfg_validate(const saar_config *c, diag *d)
 {
-	(void)c;
-	(void)d;
-	/* No key constrains another today. (A packet is an 8 x 8 tile: both
+	/* memory.levels set the model and the VMA; a later key must not
+	 * contradict it */
+	const char *l = c->memory.levels;
+	if (*l && (levels_has(l, "fixed") ? c->memory.model != CFG_MEM_FIXED
+	                                  : c->memory.model != CFG_MEM_HIERARCHY ||
+	                                        c->memory.vma.enabled != levels_has(l, "vma")))
+		return diag_set(
+		    d, "config", 0, 0,
+		    "memory.levels '%s' disagrees with memory.model or memory.vma.enabled "
+		    "set after it; set one or the other",
+		    l);
+	/* No other key constrains another today. (A packet is an 8 x 8 tile: both
 	 * packet keys' ranges are [8, 8].) chip.stack_depth may be below the
 	 * tree depth: the traversal unit spills the entries beyond it to
 	 * memory and reads them back (units/traversal.c, counted as

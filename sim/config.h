@@ -92,6 +92,9 @@ typedef struct saar_config {
 	struct {
 		cfg_mem_model model;
 		int latency;
+		/* the stack, top first ("fixed", "l1,vma,sdram"); "": from model
+		 * and vma.enabled. Setting it sets those two (docs/memory.md) */
+		char levels[48];
 		struct {
 			cfg_l1 shade, kd, list, tri;
 		} l1;

@@ -3,6 +3,7 @@
  */
 #include "sim/memconfig.h"
 
+#include <stdio.h>
 #include <string.h>
 
 #include "mem/repl.h"
@@ -73,6 +74,17 @@ static int known_policy(const char *key, const char *name, diag *d)
 	                key, name, repl_names(names, sizeof names));
 }
 
+const char *memcfg_levels(const saar_config *cfg, char *buf, size_t n)
+{
+	if (*cfg->memory.levels)
+		snprintf(buf, n, "%s", cfg->memory.levels);
+	else if (cfg->memory.model == CFG_MEM_FIXED)
+		snprintf(buf, n, "fixed");
+	else
+		snprintf(buf, n, "l1,%ssdram", cfg->memory.vma.enabled ? "vma," : "");
+	return buf;
+}
+
 int memcfg_hier(const saar_config *cfg, hier_params *hp, diag *d)
 {
 	const __typeof__(cfg->memory) *M = &cfg->memory;
@@ -104,7 +116,12 @@ int memcfg_hier(const saar_config *cfg, hier_params *hp, diag *d)
 	/* the config's policy names are memif's own */
 	int pol = memif_policy_parse(cfg_enum_name(cfg, "memory.memif.policy"));
 	hp->memif_policy = pol < 0 ? MEMIF_FIFO : pol;
-	hp->vma_enabled = M->vma.enabled;
+	/* the hierarchy's stack: memory.levels, else the one memory.vma.enabled
+	 * names (also under memory.model fixed: trace replay always builds one) */
+	if (*M->levels)
+		snprintf(hp->levels, sizeof hp->levels, "%s", M->levels);
+	else
+		snprintf(hp->levels, sizeof hp->levels, "l1,%ssdram", M->vma.enabled ? "vma," : "");
 	hp->vma = hier_vma_params(cfg);
 	hier_hbus_params(cfg, &hp->hbus);
 	return 0;

@@ -18,6 +18,10 @@
 cache_params hier_l1_params(const saar_config *cfg, int type);
 vma_params hier_vma_params(const saar_config *cfg);
 void hier_hbus_params(const saar_config *cfg, hbus_params *p);
+/* The memory stack the config names, top first, into buf: memory.levels,
+ * or from memory.model and memory.vma.enabled "fixed" (one latency for
+ * every access), "l1,sdram" or "l1,vma,sdram". */
+const char *memcfg_levels(const saar_config *cfg, char *buf, size_t n);
 /* All of the hierarchy's parameters; -1 with d set when a replacement
  * key names no registered policy. */
 int memcfg_hier(const saar_config *cfg, hier_params *hp, diag *d);
