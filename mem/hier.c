@@ -18,73 +18,11 @@
  * below directly.
  */
 #include "mem/hier.h"
-#include "mem/tcache.h"
+#include "mem/hier_level.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-typedef struct hreq hreq;
-struct hreq {
-	eng_handler done;
-	void *ctx;
-	uint64_t arg;
-	uint64_t issue, ready;
-	uint64_t next_line, last_line, addr;
-	uint8_t *dst; /* where the bytes go; NULL: no data */
-	uint32_t bytes, pending;
-	uint8_t type;
-	hreq *next;
-};
-
-typedef struct hier hier;
-
-typedef struct hl1 {
-	hier *h;
-	int type;
-	tcache t; /* the cache, its MSHRs' waiters, stall FIFO and port */
-} hl1;
-
-typedef struct hchunk {
-	struct hchunk *next;
-} hchunk;
-
-struct hier {
-	eng *e;
-	eng_clock core;
-	uint64_t image_bytes;
-	mem_store *ms; /* the board's bytes (host memory's with the VMA); NULL: no data */
-	int oom;       /* a line found no memory for its bytes */
-	hl1 l1[MEM_NTYPES];
-	int use_l1;                 /* "l1" tops the stack */
-	const struct hlevel *below; /* the level below the L1s ("vma", "sdram") */
-	sdram sd;
-	memif mi;
-	int use_vma;
-	vma v;
-	hbus hb;
-	hchunk *chunks;
-	hreq *free_r;
-	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
-	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
-	uint64_t bypass[MEM_NTYPES], wait_ticks[MEM_NTYPES], stall_ticks[MEM_NTYPES];
-	/* traffic of functional accesses (hier_access_func): what the timed
-	 * SDRAM, memory interface and host bus would have counted; busy_ticks
-	 * are data-bus occupancy without row or queueing overheads */
-	sdram_stats fsd;
-	memif_stats fmi;
-	hbus_stats fhb;
-	uint64_t freqs;
-	/* of fsd.busy_ticks: the expected part a timed chip would not spend,
-	 * on-board-cache hits it would merge into a PCI fetch in flight (each
-	 * such read's ticks times the share of merges among the timed
-	 * accesses that found their line present or arriving, so far) */
-	double fmerge_ticks;
-	/* of fsd.busy_ticks: all reads that were on-board-cache hits (what
-	 * fmerge_ticks takes its share of; stored warming applies the share
-	 * to the checkpoints' traffic after the fact, sim/warming.h) */
-	uint64_t fl2hit_ticks;
-};
 
 /* ---- free lists ---- */
 
@@ -111,78 +49,36 @@ static hreq *req_alloc(hier *h)
 
 /* ---- below the L1s: the levels, by name ---- */
 
-/* A level below the L1s (memory.levels names the stack, top first; the
- * L1s, "l1", are the hierarchy's own top). Each answers the four ways in:
- * a timed read into dst (NULL: no data) calling cb when the bytes are
- * there, a posted write of src, a functional access (no time; its traffic
- * joins the functional counters), and a peek that changes nothing. */
-typedef struct hlevel {
-	const char *name;
-	void (*read)(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
-	             eng_handler cb, void *ctx, uint64_t arg);
-	void (*write)(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes,
-	              const void *src);
-	void (*func)(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data);
-	void (*peek)(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst);
-} hlevel;
+/* The levels a stack may name below the L1s (mem/hier_level.h). */
+static const hlevel *const hier_levels[] = {&hier_sdram_level, &hier_vma_level};
 
+static const hlevel *hlevel_find(const char *name, size_t n)
+{
+	for (size_t i = 0; i < sizeof hier_levels / sizeof *hier_levels; i++)
+		if (strlen(hier_levels[i]->name) == n && !strncmp(hier_levels[i]->name, name, n))
+			return hier_levels[i];
+	return NULL;
+}
+
+const hlevel *hier_below(const hier *h, const hlevel *l)
+{
+	for (int i = 0; i + 1 < h->nstack; i++)
+		if (h->stack[i] == l)
+			return h->stack[i + 1];
+	return NULL;
+}
+
+/* A read below the L1s: the level under them. */
 static void lower_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
                        eng_handler cb, void *ctx, uint64_t arg)
 {
-	h->below->read(h, t, type, addr, bytes, dst, cb, ctx, arg);
+	h->stack[0]->read(h, t, type, addr, bytes, dst, cb, ctx, arg);
 }
 
 /* The bytes below the L1s now, without any change (hier_peek). */
 static void lower_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
 {
-	h->below->peek(h, addr, bytes, dst);
-}
-
-/* "sdram": the memory interface and SDRAM at the same address. A read's
- * bytes are the store's, taken when the read is issued: only the reading
- * thread writes what it reads (its spill area) and its writes go in when
- * issued, so they are the bytes SDRAM returns. */
-static void sdram_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
-                       eng_handler cb, void *ctx, uint64_t arg)
-{
-	if (dst)
-		ms_read(h->ms, addr, bytes, dst);
-	memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
-}
-
-static void sdram_write(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes,
-                        const void *src)
-{
-	if (src && ms_write(h->ms, addr, bytes, src))
-		h->oom = 1;
-	memif_submit(&h->mi, t, type, addr, bytes, 1, NULL, NULL, 0);
-}
-
-static void sdram_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
-{
-	if (h->ms)
-		ms_read(h->ms, addr, bytes, dst);
-	else
-		memset(dst, 0, bytes);
-}
-
-/* "vma": the virtual memory architecture over the memory interface and
- * the host bus (mem/vma.h). */
-static void vmal_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
-                      eng_handler cb, void *ctx, uint64_t arg)
-{
-	vma_read(&h->v, t, type, addr, bytes, dst, cb, ctx, arg);
-}
-
-static void vmal_write(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes,
-                       const void *src)
-{
-	vma_write(&h->v, t, type, addr, bytes, src);
-}
-
-static void vmal_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
-{
-	vma_peek(&h->v, addr, bytes, dst);
+	h->stack[0]->peek(h, addr, bytes, dst);
 }
 
 /* The bytes of L1 way `slot` (given on its first fill); NULL without data
@@ -309,7 +205,7 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 		 * hold the spill area) */
 		h->writes[type]++;
 		h->write_bytes[type] += r->bytes;
-		h->below->write(h, now, type, r->addr, r->bytes, h->ms ? r->data : NULL);
+		h->stack[0]->write(h, now, type, r->addr, r->bytes, h->ms ? r->data : NULL);
 		if (done) /* posted: a waiting caller gets its answer at once */
 			eng_schedule(h->e, eng_next_edge(h->core, now), done, ctx, arg);
 		return;
@@ -353,119 +249,11 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 
 /* ---- functional accesses (no time) ---- */
 
-/* One SDRAM access of bytes as the memory interface would submit it. */
-static void func_sdram(hier *h, int requester, uint32_t bytes, int write)
-{
-	if (write) {
-		h->fsd.writes++;
-		h->fsd.write_bytes += bytes;
-		h->fmi.writes[requester]++;
-	} else {
-		h->fsd.reads++;
-		h->fsd.read_bytes += bytes;
-		h->fmi.reads[requester]++;
-	}
-	h->fmi.bytes[requester] += bytes;
-	uint64_t beats = sdram_beats(&h->sd, bytes);
-	h->fsd.beats += beats;
-	h->fsd.busy_ticks += eng_cycles_to_ticks(h->sd.t.clk, beats);
-}
-
-/* n SDRAM accesses moving `bytes` together (the VMA counts sums only). */
-static void func_sdram_n(hier *h, int requester, uint64_t n, uint64_t bytes, int write)
-{
-	for (uint64_t i = 0; i < n; i++) {
-		uint64_t b = bytes / n + (i < bytes % n);
-		func_sdram(h, requester, (uint32_t)b, write);
-	}
-}
-
-/* The share of on-board-cache hits a timed chip merges into fetches on
- * their way, from the on-board cache's counts so far; 0 without the VMA. */
-static double merge_share(const hier *h)
-{
-	return h->use_vma ? cache_timed_merge_share(NULL, &h->v.l2.c.s) : 0;
-}
-
 /* Below the L1s without time (data: the bytes read into or written from;
  * NULL: none). */
 static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
 {
-	h->below->func(h, type, addr, bytes, write, data);
-}
-
-/* "sdram" without time: SDRAM directly. */
-static void sdram_func(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
-{
-	func_sdram(h, type, bytes, write);
-	if (data && write) {
-		if (ms_write(h->ms, addr, bytes, data))
-			h->oom = 1;
-	} else if (data)
-		ms_read(h->ms, addr, bytes, data);
-}
-
-/* "vma" without time: the VMA's functional walk, whose counter deltas
- * become SDRAM and host-bus traffic. */
-static void vmal_func(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
-{
-	vma_stats a = h->v.s;
-	vma_access_func(&h->v, addr, bytes, write, data);
-	const vma_stats *b = &h->v.s;
-	uint32_t mb = h->v.meta_set_bytes;
-	for (uint64_t i = a.meta_reads; i < b->meta_reads; i++)
-		func_sdram(h, MEMIF_META, mb, 0);
-	for (uint64_t i = a.meta_writes; i < b->meta_writes; i++)
-		func_sdram(h, MEMIF_META, mb, 1);
-	uint64_t fetches = b->host_fetches - a.host_fetches;
-	uint64_t hw = b->host_writes - a.host_writes;
-	/* a fetched line is written into SDRAM (FILL); the rest is data */
-	uint64_t fill_bytes = fetches * h->v.p.line;
-	uint64_t dr = b->data_reads - a.data_reads, dw = b->data_writes - a.data_writes - fetches;
-	uint64_t db = b->data_bytes - a.data_bytes - fill_bytes;
-	func_sdram_n(h, MEMIF_FILL, fetches, fill_bytes, 1);
-	if (dr + dw) {
-		uint64_t t0 = h->fsd.busy_ticks;
-		func_sdram_n(h, type, dr + dw, db, dw > 0);
-		if (!write && dr) {
-			/* the reads are on-board-cache hits; a timed chip merges a
-			 * share of them into fetches still on their way */
-			h->fl2hit_ticks += h->fsd.busy_ticks - t0;
-			h->fmerge_ticks += (double)(h->fsd.busy_ticks - t0) * merge_share(h);
-		}
-	}
-	for (uint64_t i = 0; i < fetches; i++) {
-		h->fhb.transfers++;
-		h->fhb.bytes += h->v.p.line;
-		h->fhb.busy_ticks += hbus_duration(&h->hb, h->v.p.line);
-	}
-	if (hw) {
-		uint64_t wb = b->host_write_bytes - a.host_write_bytes;
-		h->fhb.transfers += hw;
-		h->fhb.bytes += wb;
-		h->fhb.busy_ticks += hbus_duration(&h->hb, (uint32_t)wb);
-	}
-	/* dirty lines written back: read out of SDRAM, over the host bus */
-	for (uint64_t i = a.writebacks; i < b->writebacks; i++) {
-		func_sdram(h, MEMIF_FILL, h->v.p.line, 0);
-		h->fhb.transfers++;
-		h->fhb.bytes += h->v.p.line;
-		h->fhb.busy_ticks += hbus_duration(&h->hb, h->v.p.line);
-	}
-}
-
-/* The levels below the L1s, by name. */
-static const hlevel hlevels[] = {
-    {"sdram", sdram_read, sdram_write, sdram_func, sdram_peek},
-    {"vma", vmal_read, vmal_write, vmal_func, vmal_peek},
-};
-
-static const hlevel *hlevel_find(const char *name, size_t n)
-{
-	for (size_t i = 0; i < sizeof hlevels / sizeof *hlevels; i++)
-		if (strlen(hlevels[i].name) == n && !strncmp(hlevels[i].name, name, n))
-			return &hlevels[i];
-	return NULL;
+	h->stack[0]->func(h, type, addr, bytes, write, data);
 }
 
 /* The functional twin of hier_access: the same L1 lookups, line by line,
@@ -554,23 +342,23 @@ static void hier_peek(void *impl, const mem_req *r, void *dst)
 static int hier_failed(const void *impl)
 {
 	const hier *h = impl;
-	int oom = h->oom || h->v.oom || (h->ms && h->ms->oom);
+	int oom = h->oom || (h->ms && h->ms->oom);
 	for (int t = 0; t < MEM_NTYPES; t++)
 		oom |= h->l1[t].t.oom;
-	if (h->use_vma)
-		oom |= h->v.l2.oom | h->v.tag.oom;
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->failed)
+			oom |= h->stack[i]->failed(h);
 	return oom;
 }
 
 static void hier_destroy(void *impl)
 {
 	hier *h = impl;
-	for (int t = 0; t < MEM_NTYPES; t++) {
+	for (int t = 0; t < MEM_NTYPES; t++)
 		tcache_free(&h->l1[t].t);
-	}
-	if (h->use_vma)
-		vma_free(&h->v);
-	memif_free(&h->mi);
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->free)
+			h->stack[i]->free(h);
 	for (hchunk *c = h->chunks, *n; c; c = n) {
 		n = c->next;
 		free(c);
@@ -583,69 +371,70 @@ static const memport_model hier_model = {"hierarchy",      hier_access, hier_des
 
 /* ---- construction ---- */
 
-/* The stack, top first ("l1,vma,sdram"): the L1s on top or not, and the
- * level below them (which stands on "sdram" if it is not "sdram"). -1
- * with d set when the names do not stack. */
-static int parse_stack(const char *spec, int *use_l1, const hlevel **below, diag *d)
+/* The stack, top first ("l1,vma,sdram"): the L1s on top or not, then the
+ * levels below them, each standing on the one its `on` names, the last on
+ * nothing. -1 with d set when the names do not stack. */
+static int parse_stack(hier *h, const char *spec, diag *d)
 {
-	const hlevel *seq[4];
-	int n = 0;
-	*use_l1 = 0;
 	for (const char *p = spec; *p;) {
-		while (*p == ' ' || *p == ',')
-			p++;
+		p += strspn(p, ", ");
 		size_t k = strcspn(p, ", ");
 		if (!k)
 			break;
-		if (k == 2 && !strncmp(p, "l1", 2) && !n && !*use_l1)
-			*use_l1 = 1;
-		else if (n < 4 && (seq[n] = hlevel_find(p, k)))
-			n++;
+		const hlevel *l = NULL;
+		if (k == 2 && !strncmp(p, "l1", 2) && !h->nstack && !h->use_l1)
+			h->use_l1 = 1;
+		else if (h->nstack < HIER_MAXLEVELS && (l = hlevel_find(p, k)))
+			h->stack[h->nstack++] = l;
 		else
-			return diag_set(
-			    d, "config", 0, 0,
-			    "memory.levels: '%.*s' is no memory level here (the stack is "
-			    "[l1,] [vma,] sdram, top first)",
-			    (int)k, p);
+			return diag_set(d, "config", 0, 0,
+			                "memory.levels: '%.*s' is no memory level here (the stack "
+			                "is [l1,] [vma,] sdram, top first)",
+			                (int)k, p);
 		p += k;
 	}
-	/* sdram at the bottom; the vma, if any, directly on it */
-	int ok = n >= 1 && !strcmp(seq[n - 1]->name, "sdram") &&
-	         (n == 1 || (n == 2 && !strcmp(seq[0]->name, "vma")));
+	int ok = h->nstack > 0 && !h->stack[h->nstack - 1]->on;
+	for (int i = 0; ok && i + 1 < h->nstack; i++)
+		ok = h->stack[i]->on && !strcmp(h->stack[i]->on, h->stack[i + 1]->name);
 	if (!ok)
 		return diag_set(d, "config", 0, 0,
 		                "memory.levels '%s': the stack is [l1,] [vma,] sdram, top first",
 		                spec);
-	*below = seq[0];
 	return 0;
+}
+
+/* -1 with d set when the image cannot be addressed: no level of the
+ * stack addresses host memory and the image does not fit on board. */
+static int image_fits(const hier *h, const hier_params *hp, uint64_t image_bytes, diag *d)
+{
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->host_addressed)
+			return 0;
+	if (image_bytes <= hp->sdram.bytes)
+		return 0;
+	return diag_set(d, "config", 0, 0,
+	                "the memory image (%.1f MB) does not fit in on-board memory "
+	                "(memory.sdram.mb = %d); enable the virtual memory architecture "
+	                "(configs/saarcor-vma.yaml, memory.vma.enabled: true) or raise "
+	                "memory.sdram.mb",
+	                (double)image_bytes / (1 << 20), (int)(hp->sdram.bytes >> 20));
 }
 
 int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_t image_bytes,
               mem_store *store, diag *d)
 {
 	memset(p, 0, sizeof *p);
-	int use_l1;
-	const hlevel *below = NULL;
-	if (parse_stack(hp->levels, &use_l1, &below, d))
-		return -1;
-	int use_vma = !strcmp(below->name, "vma");
-	uint64_t sd_bytes = hp->sdram.bytes;
-	if (!use_vma && image_bytes > sd_bytes)
-		return diag_set(d, "config", 0, 0,
-		                "the memory image (%.1f MB) does not fit in on-board memory "
-		                "(memory.sdram.mb = %d); enable the virtual memory architecture "
-		                "(configs/saarcor-vma.yaml, memory.vma.enabled: true) or raise "
-		                "memory.sdram.mb",
-		                (double)image_bytes / (1 << 20), (int)(sd_bytes >> 20));
 	hier *h = calloc(1, sizeof *h);
 	if (!h)
 		return diag_set(d, "config", 0, 0, "out of memory");
+	if (parse_stack(h, hp->levels, d) || image_fits(h, hp, image_bytes, d)) {
+		free(h);
+		return -1;
+	}
 	h->e = e;
 	h->core = core;
 	h->image_bytes = image_bytes;
 	h->ms = store;
-	h->use_l1 = use_l1;
-	h->below = below;
 	for (int t = 0; t < MEM_NTYPES; t++) {
 		char what[32];
 		snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
@@ -655,19 +444,10 @@ int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_
 		if (tcache_init(&h->l1[t].t, &cp, store ? TC_DATA | TC_MBUF : 0, what, d))
 			goto fail;
 	}
-	if (sdram_init(&h->sd, &hp->sdram, d))
-		goto fail;
-	if (memif_init(&h->mi, e, &h->sd, hp->memif_policy)) {
-		diag_set(d, "config", 0, 0, "out of memory");
-		goto fail;
-	}
-	if (use_vma) {
-		if (hbus_init(&h->hb, &hp->hbus, d))
+	/* bottom up: each level stands on the ones below it */
+	for (int i = h->nstack - 1; i >= 0; i--)
+		if (h->stack[i]->init && h->stack[i]->init(h, hp, d))
 			goto fail;
-		if (vma_init(&h->v, e, core, &h->mi, &h->hb, sd_bytes, &hp->vma, store, d))
-			goto fail;
-		h->use_vma = 1;
-	}
 	p->model = &hier_model;
 	p->impl = h;
 	return 0;
@@ -687,7 +467,6 @@ int hier_get_stats(const memport *p, hier_stats *s)
 	if (!hier_is(p))
 		return -1;
 	const hier *h = p->impl;
-	s->vma_enabled = h->use_vma;
 	s->now_ticks = eng_now(h->e);
 	s->core_period = h->core.period;
 	for (int t = 0; t < MEM_NTYPES; t++) {
@@ -700,33 +479,12 @@ int hier_get_stats(const memport *p, hier_stats *s)
 		s->wait_cycles[t] = h->wait_ticks[t] / h->core.period;
 		s->mshr_stall_cycles[t] = h->stall_ticks[t] / h->core.period;
 	}
-	s->memif = h->mi.s;
-	s->sdram = h->sd.s;
-	/* functional traffic joins the counts; its busy time stays apart */
-	for (int r = 0; r < MEMIF_NREQ; r++) {
-		s->memif.reads[r] += h->fmi.reads[r];
-		s->memif.writes[r] += h->fmi.writes[r];
-		s->memif.bytes[r] += h->fmi.bytes[r];
-	}
-	s->sdram.reads += h->fsd.reads;
-	s->sdram.writes += h->fsd.writes;
-	s->sdram.read_bytes += h->fsd.read_bytes;
-	s->sdram.write_bytes += h->fsd.write_bytes;
-	s->sdram.beats += h->fsd.beats;
 	s->func_requests = h->freqs;
-	s->func_sdram_busy_ticks = h->fsd.busy_ticks;
 	s->func_sdram_merge_ticks = h->fmerge_ticks;
 	s->func_hostbus_busy_ticks = h->fhb.busy_ticks;
-	s->sdram_peak_bytes_per_s = sdram_peak_bw(&h->sd);
-	if (h->use_vma) {
-		s->tag_cache = h->v.tag.c.s;
-		s->l2 = h->v.l2.c.s;
-		s->vma = h->v.s;
-		s->hostbus = h->hb.s;
-		s->hostbus.transfers += h->fhb.transfers;
-		s->hostbus.bytes += h->fhb.bytes;
-		s->hostbus_peak_bytes_per_s = hbus_peak_bw(&h->hb);
-	}
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->stats)
+			h->stack[i]->stats(h, s);
 	return 0;
 }
 
@@ -741,14 +499,18 @@ void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2)
 	*l2 = h->use_vma ? &h->v.l2.c : NULL;
 }
 
-/* The caches a checkpoint holds whole, in order; returns how many. */
+#define HIER_MAXCACHES (MEM_NTYPES + 8)
+
+/* The caches a checkpoint holds whole, in order (the L1s, then each
+ * level's, top down); returns how many. */
 static int whole_caches(const hier *h, cache **k)
 {
 	int n = 0;
 	for (int t = 0; t < MEM_NTYPES; t++)
 		k[n++] = (cache *)&h->l1[t].t.c;
-	if (h->use_vma && h->v.p.tag_cache_enabled)
-		k[n++] = (cache *)&h->v.tag.c;
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->caches)
+			n += h->stack[i]->caches(h, k + n);
 	return n;
 }
 
@@ -756,7 +518,7 @@ size_t hier_ckpt_bytes(const memport *p)
 {
 	if (!hier_is(p))
 		return 0;
-	cache *k[MEM_NTYPES + 1];
+	cache *k[HIER_MAXCACHES];
 	size_t b = 0;
 	for (int i = 0, n = whole_caches(p->impl, k); i < n; i++)
 		b += cache_ckpt_bytes(k[i], k[i]->nsets);
@@ -767,7 +529,7 @@ int hier_ckpt_save(const memport *p, void *buf)
 {
 	if (!hier_is(p))
 		return -1;
-	cache *k[MEM_NTYPES + 1];
+	cache *k[HIER_MAXCACHES];
 	uint8_t *b = buf;
 	for (int i = 0, n = whole_caches(p->impl, k); i < n; i++) {
 		if (cache_ckpt_save(k[i], 0, k[i]->nsets, b))
@@ -781,7 +543,7 @@ int hier_ckpt_load(memport *p, const void *buf)
 {
 	if (!hier_is(p))
 		return -1;
-	cache *k[MEM_NTYPES + 1];
+	cache *k[HIER_MAXCACHES];
 	int n = whole_caches(p->impl, k);
 	for (int i = 0; i < n; i++)
 		if (cache_busy(k[i]))
@@ -797,7 +559,10 @@ int hier_ckpt_load(memport *p, const void *buf)
 cache *hier_onboard(memport *p)
 {
 	hier *h = hier_is(p) ? p->impl : NULL;
-	return h && h->use_vma ? &h->v.l2.c : NULL;
+	for (int i = 0; h && i < h->nstack; i++)
+		if (h->stack[i]->bysets)
+			return h->stack[i]->bysets(h);
+	return NULL;
 }
 
 void hier_reload(memport *p, const uint64_t *l2sets)
@@ -805,8 +570,10 @@ void hier_reload(memport *p, const uint64_t *l2sets)
 	hier *h = p->impl;
 	if (!h->ms)
 		return;
-	if (h->use_vma && l2sets)
-		vma_reload(&h->v, l2sets);
+	/* bottom up: each level's lines from the one below */
+	for (int i = h->nstack - 1; i >= 0; i--)
+		if (h->stack[i]->reload && l2sets)
+			h->stack[i]->reload(h, l2sets);
 	for (int t = 0; t < MEM_NTYPES; t++) {
 		hl1 *l = &h->l1[t];
 		uint32_t lb = l->t.c.p.line_bytes;
@@ -820,15 +587,12 @@ void hier_reload(memport *p, const uint64_t *l2sets)
 	}
 }
 
-/* Adds the n 64-bit counters of a stats struct to out (every field of
- * these structs is a uint64_t counter). */
-#define COUNTERS(st) (uint64_t *)&(st), sizeof(st) / sizeof(uint64_t)
 _Static_assert(sizeof(cache_stats) % 8 == 0 && sizeof(sdram_stats) % 8 == 0 &&
                    sizeof(memif_stats) % 8 == 0 && sizeof(hbus_stats) % 8 == 0 &&
                    sizeof(vma_stats) % 8 == 0,
                "stats structs hold uint64_t counters only");
 
-static size_t add_ptrs(uint64_t **out, size_t n, size_t cap, uint64_t *a, size_t k)
+size_t hier_add_ptrs(uint64_t **out, size_t n, size_t cap, uint64_t *a, size_t k)
 {
 	for (size_t i = 0; i < k; i++, n++)
 		if (out && n < cap)
@@ -843,19 +607,17 @@ size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap)
 	uint64_t *arr[] = {h->reads,  h->read_bytes, h->writes,     h->write_bytes,
 	                   h->bypass, h->wait_ticks, h->stall_ticks};
 	for (size_t i = 0; i < sizeof arr / sizeof *arr; i++)
-		n = add_ptrs(out, n, cap, arr[i], MEM_NTYPES);
+		n = hier_add_ptrs(out, n, cap, arr[i], MEM_NTYPES);
 	for (int t = 0; t < MEM_NTYPES; t++)
-		n = add_ptrs(out, n, cap, COUNTERS(h->l1[t].t.c.s));
-	n = add_ptrs(out, n, cap, COUNTERS(h->fsd));
-	n = add_ptrs(out, n, cap, COUNTERS(h->fmi));
-	n = add_ptrs(out, n, cap, COUNTERS(h->fhb));
-	n = add_ptrs(out, n, cap, &h->freqs, 1);
-	n = add_ptrs(out, n, cap, &h->fl2hit_ticks, 1);
-	if (h->use_vma) {
-		n = add_ptrs(out, n, cap, COUNTERS(h->v.s));
-		n = add_ptrs(out, n, cap, COUNTERS(h->v.tag.c.s));
-		n = add_ptrs(out, n, cap, COUNTERS(h->v.l2.c.s));
-	}
+		n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->l1[t].t.c.s));
+	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fsd));
+	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fmi));
+	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fhb));
+	n = hier_add_ptrs(out, n, cap, &h->freqs, 1);
+	n = hier_add_ptrs(out, n, cap, &h->fl2hit_ticks, 1);
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->counters)
+			n = h->stack[i]->counters(h, out, n, cap);
 	return n;
 }
 
@@ -871,5 +633,5 @@ void hier_add_merge_ticks(memport *p, double ticks)
 
 double hier_merge_share(const memport *p)
 {
-	return hier_is(p) ? merge_share(p->impl) : 0;
+	return hier_is(p) ? hier_vma_merge_share(p->impl) : 0;
 }
