@@ -449,3 +449,60 @@ Test(repl, hierarchy_checkpoint_round_trip)
 	hier_round_trip("plru");
 	hier_round_trip("fifo");
 }
+
+/* R rounds of 5 reads whose lines share one set of the on-board cache
+ * (onboard) or one set of the tag cache (else), on a 1 MB board with a 1 KB
+ * tag cache, every read past the L1s (image size 0); returns that cache's
+ * hits, with key set to name. */
+static uint64_t vma_hits_cyclic(const char *key, const char *name, int onboard, int rounds)
+{
+	saar_config cfg;
+	cfg_defaults(&cfg);
+	diag d;
+	static const char *const sets[] = {"memory.vma.enabled=true", "memory.sdram.mb=1",
+	                                   "memory.vma.hash=none", "memory.vma.tag_cache_kb=1"};
+	for (size_t i = 0; i < sizeof sets / sizeof *sets; i++)
+		cr_assert_eq(cfg_set(&cfg, sets[i], &d), 0, "%s", d.msg);
+	char set[96];
+	snprintf(set, sizeof set, "%s=%s", key, name);
+	cr_assert_eq(cfg_set(&cfg, set, &d), 0, "%s", d.msg);
+	eng *e = eng_create(16);
+	memport mp;
+	cr_assert_eq(mem_init_hier(&mp, e, eng_clock_mhz(533), &cfg, 0, NULL, &d), 0, "%s", d.msg);
+	cache *l2 = hier_onboard(&mp), *l1[MEM_NTYPES], *tag, *ob;
+	hier_caches(&mp, l1, &tag, &ob);
+	cr_assert(l2 && tag && l2 == ob);
+	/* the on-board set of line l is l mod its sets; the tag cache's line
+	 * is that set, its set the set mod the tag cache's sets */
+	uint64_t stride = onboard ? l2->nsets : tag->nsets;
+	for (int r = 0; r < rounds; r++)
+		for (uint64_t k = 0; k < 5; k++) {
+			mem_req q = {(onboard ? 3 * l2->nsets + k * stride : k * stride) * 128,
+			             8,
+			             MEM_KD,
+			             0,
+			             0,
+			             NULL};
+			mem_access_func(&mp, &q);
+		}
+	hier_stats s;
+	cr_assert_eq(hier_get_stats(&mp, &s), 0);
+	mem_free(&mp);
+	eng_destroy(e);
+	return onboard ? s.l2.hits : s.tag_cache.hits;
+}
+
+/* The VMA's keys reach its caches: five lines cycled through one 4-way set
+ * of the on-board cache (memory.vma.replacement) or of the tag cache
+ * (memory.vma.tag_cache_replacement) miss every time under LRU and hit 3
+ * times a round under the way-0 policy. Catches a key read into the wrong
+ * cache or not at all. */
+Test(repl, vma_keys_reach_their_caches)
+{
+	register_evict0();
+	const char *ob = "memory.vma.replacement", *tg = "memory.vma.tag_cache_replacement";
+	cr_assert_eq(vma_hits_cyclic(ob, "lru", 1, 8), 0);
+	cr_assert_eq(vma_hits_cyclic(ob, "test-evict0", 1, 8), 3 * 7);
+	cr_assert_eq(vma_hits_cyclic(tg, "lru", 0, 8), 0);
+	cr_assert_eq(vma_hits_cyclic(tg, "test-evict0", 0, 8), 3 * 7);
+}
