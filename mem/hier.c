@@ -227,7 +227,7 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	            .bytes = bytes,
 	            .pending = 1,
 	            .type = (uint8_t)type};
-	if (!h->use_l1 || r->addr >= h->image_bytes) {
+	if (r->addr >= h->image_bytes) {
 		h->bypass[type]++;
 		lower_read(h, now, type, r->addr, bytes, dst, l1_bypass_done, h, (uintptr_t)q);
 		return;
@@ -276,7 +276,7 @@ static void hier_access_func(void *impl, const mem_req *r)
 	h->reads[type]++;
 	h->read_bytes[type] += r->bytes;
 	uint32_t bytes = r->bytes ? r->bytes : 1;
-	if (!h->use_l1 || r->addr >= h->image_bytes) {
+	if (r->addr >= h->image_bytes) {
 		h->bypass[type]++;
 		func_lower(h, type, r->addr, bytes, 0, data);
 		return;
@@ -318,7 +318,7 @@ static void hier_peek(void *impl, const mem_req *r, void *dst)
 {
 	const hier *h = impl;
 	uint8_t *o = dst;
-	if (!h->use_l1 || r->addr >= h->image_bytes) {
+	if (r->addr >= h->image_bytes) {
 		lower_peek(h, r->addr, r->bytes, o);
 		return;
 	}
@@ -371,35 +371,50 @@ static const memport_model hier_model = {"hierarchy",      hier_access, hier_des
 
 /* ---- construction ---- */
 
-/* The stack, top first ("l1,vma,sdram"): the L1s on top or not, then the
- * levels below them, each standing on the one its `on` names, the last on
- * nothing. -1 with d set when the names do not stack. */
+/* The level names a stack may use, comma separated, into buf. */
+static const char *level_names(char *buf, size_t n)
+{
+	size_t at = (size_t)snprintf(buf, n, "l1");
+	for (size_t i = 0; i < sizeof hier_levels / sizeof *hier_levels && at < n; i++)
+		at += (size_t)snprintf(buf + at, n - at, ", %s", hier_levels[i]->name);
+	return buf;
+}
+
+/* The stack, top first ("l1,vma,sdram"): the L1s on top (the report's
+ * checks take every read past them for a stack refill, so a stack
+ * without them is refused), then the levels below them, each standing on
+ * the one its `on` names, the last on nothing. -1 with d set when the
+ * names do not stack. */
 static int parse_stack(hier *h, const char *spec, diag *d)
 {
+	char names[128];
+	int l1 = 0;
 	for (const char *p = spec; *p;) {
 		p += strspn(p, ", ");
 		size_t k = strcspn(p, ", ");
 		if (!k)
 			break;
 		const hlevel *l = NULL;
-		if (k == 2 && !strncmp(p, "l1", 2) && !h->nstack && !h->use_l1)
-			h->use_l1 = 1;
+		if (k == 2 && !strncmp(p, "l1", 2) && !h->nstack && !l1)
+			l1 = 1;
 		else if (h->nstack < HIER_MAXLEVELS && (l = hlevel_find(p, k)))
 			h->stack[h->nstack++] = l;
 		else
 			return diag_set(d, "config", 0, 0,
-			                "memory.levels: '%.*s' is no memory level here (the stack "
-			                "is [l1,] [vma,] sdram, top first)",
-			                (int)k, p);
+			                "memory.levels '%s': '%.*s' is no level here (levels: %s; "
+			                "l1 only on top)",
+			                spec, (int)k, p, level_names(names, sizeof names));
 		p += k;
 	}
-	int ok = h->nstack > 0 && !h->stack[h->nstack - 1]->on;
+	int ok = l1 && h->nstack > 0 && !h->stack[h->nstack - 1]->on;
 	for (int i = 0; ok && i + 1 < h->nstack; i++)
 		ok = h->stack[i]->on && !strcmp(h->stack[i]->on, h->stack[i + 1]->name);
 	if (!ok)
-		return diag_set(d, "config", 0, 0,
-		                "memory.levels '%s': the stack is [l1,] [vma,] sdram, top first",
-		                spec);
+		return diag_set(
+		    d, "config", 0, 0,
+		    "memory.levels '%s' does not stack: top first, l1, then levels each "
+		    "standing on the next (vma on sdram), the last on nothing (sdram)",
+		    spec);
 	return 0;
 }
 

@@ -79,7 +79,7 @@ typedef struct hier_params {
 	cache_params l1[MEM_NTYPES]; /* the L1s, by request type */
 	sdram_params sdram;
 	int memif_policy; /* enum memif_policy */
-	/* the levels, top first, by name: [l1,] [vma,] sdram (the L1s, the
+	/* the levels, top first, by name: l1, [vma,] sdram (the L1s, the
 	 * VMA's on-board cache of host memory, the memory interface and
 	 * SDRAM); sim/memconfig.c names the stack memory.model and
 	 * memory.vma.enabled give ("l1,sdram", "l1,vma,sdram") */

@@ -61,7 +61,6 @@ struct hier {
 	mem_store *ms; /* the board's bytes (host memory's with the VMA); NULL: no data */
 	int oom;       /* a line found no memory for its bytes */
 	hl1 l1[MEM_NTYPES];
-	int use_l1; /* "l1" tops the stack */
 	/* the levels below the L1s, top first (stack[0] serves L1 misses) */
 	const hlevel *stack[HIER_MAXLEVELS];
 	int nstack;

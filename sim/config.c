@@ -236,7 +236,7 @@ static const cfg_key keys[] = {
      .desc = "latency of every memory access in the fixed model"},
     {KEY("memory.levels", CFG_STR, memory.levels, 0, 0, 0, ""), .sdef = "",
      .source = "a model setting (docs/memory.md, \"Levels\")",
-     .desc = "the memory stack by level names, top first: fixed, or [l1,] [vma,] sdram; "
+     .desc = "the memory stack by level names, top first: fixed, or l1, [vma,] sdram; "
              "setting it sets memory.model and memory.vma.enabled; empty = as those keys say "
              "(l1,sdram or l1,vma,sdram)"},
     L1(shade, "shading (RGS)", 64),
