@@ -1,11 +1,13 @@
 /*
  * cache.c: the generic set-associative cache (see cache.h).
  *
- * Storage is one flat array of nsets*ways ways (tag and LRU stamp side by
- * side, set by set) and one of MSHR lines, allocated once in cache_init.
- * LRU keeps a 64-bit use stamp per way: the victim is the way with the
- * smallest stamp (empty ways first), which is exact LRU and needs no list
- * manipulation; 2^64 accesses never wrap.
+ * Storage is one flat array of nsets*ways ways (tag and replacement word
+ * side by side, set by set), the policy's per-set words if it has any, and
+ * one of MSHR lines, allocated once in cache_init. LRU keeps a 64-bit use
+ * stamp per way: the victim is the way with the smallest stamp (empty ways
+ * first), which is exact LRU and needs no list manipulation; 2^64 accesses
+ * never wrap. Stamp policies (LRU, FIFO) are updated inline; others
+ * through their hooks (mem/repl.h).
  */
 #include "mem/cache.h"
 
@@ -25,7 +27,14 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 		                what, (unsigned long long)p->size_bytes, p->ways, p->line_bytes);
 	if (p->size_bytes / per_set > UINT32_MAX)
 		return diag_set(d, "config", 0, 0, "%s: too many sets", what);
+	const repl_policy *rp = p->repl ? p->repl : &repl_lru;
+	if (rp->check && rp->check(p->ways))
+		return diag_set(d, "config", 0, 0, "%s: replacement %s cannot manage %u ways (%s)",
+		                what, rp->name, p->ways, rp->desc);
 	c->p = *p;
+	c->p.repl = c->rp = rp;
+	c->stamp_hit = rp->stamp_hit;
+	c->stamp_fill = rp->stamp_fill;
 	c->nsets = (uint32_t)(p->size_bytes / per_set);
 	while (c->hash_bits < 63 && (1ull << c->hash_bits) < c->nsets)
 		c->hash_bits++;
@@ -38,7 +47,9 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 	size_t bytes = (size_t)c->nsets * p->ways * sizeof(cache_way);
 	c->way = aligned_alloc(64, (bytes + 63) / 64 * 64);
 	c->mshr_line = malloc(p->mshrs * sizeof *c->mshr_line);
-	if (!c->way || !c->mshr_line) {
+	if (rp->set_words)
+		c->rst = malloc((size_t)c->nsets * rp->set_words * sizeof *c->rst);
+	if (!c->way || !c->mshr_line || (rp->set_words && !c->rst)) {
 		cache_free(c);
 		return diag_set(d, "config", 0, 0, "%s: out of memory", what);
 	}
@@ -50,13 +61,16 @@ uint64_t cache_host_bytes(const cache_params *p)
 {
 	uint64_t per_set = (uint64_t)p->ways * p->line_bytes;
 	uint64_t nsets = per_set ? p->size_bytes / per_set : 0;
-	return nsets * p->ways * sizeof(cache_way) + (uint64_t)p->mshrs * sizeof(uint64_t);
+	uint64_t words = p->repl ? p->repl->set_words : 0;
+	return nsets * p->ways * sizeof(cache_way) + nsets * words * sizeof(uint64_t) +
+	       (uint64_t)p->mshrs * sizeof(uint64_t);
 }
 
 void cache_free(cache *c)
 {
 	free(c->way);
 	free(c->mshr_line);
+	free(c->rst);
 	free(c->dirty);
 	free(c->didx);
 	for (uint32_t i = 0; i < c->dchunks; i++)
@@ -64,6 +78,7 @@ void cache_free(cache *c)
 	free(c->dchunk);
 	c->way = NULL;
 	c->mshr_line = NULL;
+	c->rst = NULL;
 	c->dirty = NULL;
 	c->didx = NULL;
 	c->dchunk = NULL;
@@ -125,40 +140,85 @@ void cache_dirty_clear(cache *c)
 		memset(c->dirty, 0, (size_t)bits_words((int)c->nsets) * sizeof *c->dirty);
 }
 
-int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *rank)
+/* The policy's view of set `set`. */
+static repl_set set_view(const cache *c, uint32_t set)
+{
+	uint32_t W = c->p.ways;
+	return (repl_set){c->way + (size_t)set * W,
+	                  c->rst ? c->rst + (size_t)set * c->rp->set_words : NULL, W,
+	                  (uint64_t *)&c->stamp};
+}
+
+void cache_repl_hit(cache *c, uint32_t set, uint32_t w)
+{
+	repl_set v = set_view(c, set);
+	c->rp->hit(&v, w);
+}
+
+int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *st)
 {
 	uint32_t W = c->p.ways;
 	for (uint32_t s = 0; s < n; s++) {
-		const cache_way *w = c->way + (size_t)(set0 + s) * W;
+		repl_set v = set_view(c, set0 + s);
 		for (uint32_t i = 0; i < W; i++) {
 			size_t k = (size_t)s * W + i;
-			if (w[i].tag != CACHE_INVALID && w[i].tag >= UINT32_MAX)
+			if (v.way[i].tag != CACHE_INVALID && v.way[i].tag >= UINT32_MAX)
 				return -1;
-			line[k] = w[i].tag == CACHE_INVALID ? UINT32_MAX : (uint32_t)w[i].tag;
-			/* rank: the ways used before it (ways <= 64) */
-			uint32_t r = 0;
-			for (uint32_t j = 0; j < W; j++)
-				r += w[j].use < w[i].use;
-			rank[k] = (uint8_t)r;
+			line[k] =
+			    v.way[i].tag == CACHE_INVALID ? UINT32_MAX : (uint32_t)v.way[i].tag;
 		}
+		(c->rp->save ? c->rp->save : repl_stamp_save)(&v, st + (size_t)s * W);
 	}
 	return 0;
 }
 
-void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const uint8_t *rank)
+void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const uint8_t *st)
 {
 	uint32_t W = c->p.ways;
 	for (uint32_t s = 0; s < n; s++) {
-		cache_way *w = c->way + (size_t)(set0 + s) * W;
+		repl_set v = set_view(c, set0 + s);
 		for (uint32_t i = 0; i < W; i++) {
 			size_t k = (size_t)s * W + i;
-			w[i].tag = line[k] == UINT32_MAX ? CACHE_INVALID : line[k];
-			w[i].use = rank[k];
+			v.way[i].tag = line[k] == UINT32_MAX ? CACHE_INVALID : line[k];
 		}
+		(c->rp->load ? c->rp->load : repl_stamp_load)(&v, st + (size_t)s * W);
 	}
-	/* later uses must be newer than every restored one */
-	if (c->stamp < W)
-		c->stamp = W;
+}
+
+static size_t pad8(size_t n)
+{
+	return (n + 7) & ~(size_t)7;
+}
+
+size_t cache_ckpt_bytes(const cache *c, uint32_t n)
+{
+	size_t nw = (size_t)n * c->p.ways;
+	return pad8(nw * 4) + pad8(nw);
+}
+
+void cache_ckpt_empty(const cache *c, uint32_t n, void *buf)
+{
+	size_t nw = (size_t)n * c->p.ways;
+	memset(buf, 0, cache_ckpt_bytes(c, n));
+	memset(buf, 0xff, nw * 4); /* UINT32_MAX: no line */
+}
+
+int cache_ckpt_save(const cache *c, uint32_t set0, uint32_t n, void *buf)
+{
+	size_t nw = (size_t)n * c->p.ways;
+	uint8_t *b = buf;
+	memset(b, 0, cache_ckpt_bytes(c, n));
+	return cache_save(c, set0, n, (uint32_t *)(void *)b, b + pad8(nw * 4));
+}
+
+int cache_ckpt_load(cache *c, uint32_t set0, uint32_t n, const void *buf)
+{
+	if (c->mshr_used)
+		return -1;
+	size_t nw = (size_t)n * c->p.ways;
+	const uint8_t *b = buf;
+	cache_load(c, set0, n, (const uint32_t *)(const void *)b, b + pad8(nw * 4));
+	return 0;
 }
 
 void cache_flush(cache *c)
@@ -166,6 +226,8 @@ void cache_flush(cache *c)
 	size_t n = (size_t)c->nsets * c->p.ways;
 	for (size_t i = 0; i < n; i++)
 		c->way[i] = (cache_way){CACHE_INVALID, 0};
+	if (c->rst)
+		memset(c->rst, 0, (size_t)c->nsets * c->rp->set_words * sizeof *c->rst);
 	for (uint32_t i = 0; i < c->p.mshrs; i++)
 		c->mshr_line[i] = CACHE_INVALID;
 	c->mshr_used = 0;
@@ -257,6 +319,27 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 	return CACHE_MSHR_FULL; /* unreachable: mshr_used < mshrs */
 }
 
+/* The way a fill of set (ways s) takes: an empty way first (the lowest),
+ * else the policy's victim (stamp policies: the smallest stamp). */
+static uint32_t pick_victim(const cache *c, uint32_t set, const cache_way *s)
+{
+	uint32_t best = 0;
+	if (!c->rp->victim) {
+		for (uint32_t i = 0; i < c->p.ways; i++) {
+			if (s[i].tag == CACHE_INVALID)
+				return i;
+			if (s[i].use < s[best].use)
+				best = i;
+		}
+		return best;
+	}
+	for (uint32_t i = 0; i < c->p.ways; i++)
+		if (s[i].tag == CACHE_INVALID)
+			return i;
+	repl_set v = set_view(c, set);
+	return c->rp->victim(&v);
+}
+
 uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 {
 	int m = cache_mshr_find(c, line);
@@ -270,29 +353,27 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 	size_t base = (size_t)set * c->p.ways;
 	cache_way *s = c->way + base;
 	int w = find_way(c, set, line);
-	if (w < 0) {
-		/* empty way first, else the least recently used */
-		uint32_t best = 0;
-		for (uint32_t i = 0; i < c->p.ways; i++) {
-			if (s[i].tag == CACHE_INVALID) {
-				best = i;
-				break;
-			}
-			if (s[i].use < s[best].use)
-				best = i;
-		}
-		if (s[best].tag != CACHE_INVALID) {
-			c->s.evictions++;
-			if (victim)
-				*victim = s[best].tag;
-		}
-		s[best].tag = line;
-		c->s.fills++;
-		c->s.fill_bytes += c->p.line_bytes;
-		w = (int)best;
+	if (w >= 0) { /* present: a hit for the policy */
+		cache_use(c, set, &s[w]);
+		return (uint32_t)(base + (size_t)w);
 	}
-	cache_use(c, set, &s[w]);
-	return (uint32_t)(base + (size_t)w);
+	uint32_t best = pick_victim(c, set, s);
+	if (s[best].tag != CACHE_INVALID) {
+		c->s.evictions++;
+		if (victim)
+			*victim = s[best].tag;
+	}
+	s[best].tag = line;
+	c->s.fills++;
+	c->s.fill_bytes += c->p.line_bytes;
+	if (c->stamp_fill)
+		s[best].use = ++c->stamp;
+	else if (c->rp->fill) {
+		repl_set v = set_view(c, set);
+		c->rp->fill(&v, best);
+	}
+	cache_touch(c, set);
+	return (uint32_t)(base + best);
 }
 
 int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot, uint64_t *victim)

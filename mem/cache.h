@@ -1,5 +1,6 @@
 /*
- * cache.h: one generic set-associative cache with LRU and MSHRs.
+ * cache.h: one generic set-associative cache with a replacement policy
+ * (mem/repl.h; LRU by default) and MSHRs.
  *
  * Every cache of the chip is an instance of this module: the four L1s
  * (shading, kd-nodes, lists, triangles; seed 002 §4.1), the VMA tag cache
@@ -9,8 +10,9 @@
  * not be a power of two.
  *
  * The module is the functional core only: which lines are present, which are
- * in flight and which way LRU evicts. Time lives in the users (mem/hier.c,
- * mem/vma.c): they call cache_lookup when an access reaches the cache and
+ * in flight and which way the policy evicts. Time lives in the timed cache
+ * (mem/tcache.h) and its users (mem/hier.c, mem/vma.c): they call
+ * cache_lookup when an access reaches the cache and
  * cache_fill when the line's data arrives from below. Between the two the
  * line occupies an MSHR; further misses to it merge; when all MSHRs are busy
  * a new miss gets CACHE_MSHR_FULL and changes nothing (the caller must retry
@@ -18,32 +20,36 @@
  * access by access (tests/test_cache.c).
  *
  * Invariant: a line is never both present and in an MSHR; each set holds at
- * most `ways` valid lines, no two equal. LRU is exact (per-way use stamps).
+ * most `ways` valid lines, no two equal. LRU is exact (per-way use stamps);
+ * other policies are chosen by cache_params.repl (mem/repl.h).
  * cache_lookup and cache_fill are O(ways + mshrs) and never allocate.
  */
 #ifndef SAAR_MEM_CACHE_H
 #define SAAR_MEM_CACHE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "kernel-ref/bitset.h"
 #include "kernel-ref/diag.h"
+#include "mem/repl.h"
 
 enum cache_hash { CACHE_HASH_NONE, CACHE_HASH_XOR };
 
 typedef struct cache_params {
-	uint64_t size_bytes;  /* capacity of the data array */
-	uint32_t ways;        /* associativity */
-	uint32_t line_bytes;  /* any size >= 1 (36 for triangles) */
-	uint32_t mshrs;       /* outstanding missed lines; 0 = unlimited in-flight is not
-	                         allowed: every miss needs one, so mshrs >= 1 */
-	uint32_t hit_latency; /* core cycles; used by the timing wrapper */
-	uint32_t ports;       /* accesses accepted per core cycle; timing wrapper */
-	int hash;             /* enum cache_hash: how a line index picks its set */
+	uint64_t size_bytes;     /* capacity of the data array */
+	uint32_t ways;           /* associativity */
+	uint32_t line_bytes;     /* any size >= 1 (36 for triangles) */
+	uint32_t mshrs;          /* outstanding missed lines; 0 = unlimited in-flight is not
+	                            allowed: every miss needs one, so mshrs >= 1 */
+	uint32_t hit_latency;    /* core cycles; used by the timing wrapper */
+	uint32_t ports;          /* accesses accepted per core cycle; timing wrapper */
+	int hash;                /* enum cache_hash: how a line index picks its set */
+	const repl_policy *repl; /* replacement (mem/repl.h); NULL: LRU */
 } cache_params;
 
 typedef enum cache_result {
-	CACHE_HIT,         /* present; LRU updated */
+	CACHE_HIT,         /* present; the policy saw the hit */
 	CACHE_MISS_NEW,    /* absent; an MSHR was allocated: fetch the line, then cache_fill */
 	CACHE_MISS_MERGED, /* absent but already in flight: wait for that fill */
 	CACHE_MSHR_FULL,   /* absent and every MSHR busy: nothing changed, retry later */
@@ -63,14 +69,12 @@ typedef struct cache_stats {
 	uint64_t func_accesses, func_hits, func_merges;
 } cache_stats;
 
-/* One way: its line and its LRU stamp side by side, so a 4-way set is one
- * 64-byte host cache line (two arrays made every lookup touch two). */
-typedef struct cache_way {
-	uint64_t tag; /* line index; CACHE_INVALID when empty */
-	uint64_t use; /* LRU stamp (larger = more recent) */
-} cache_way;
+/* cache_way (mem/repl.h): one way, its line and its replacement word side
+ * by side, so a 4-way set is one 64-byte host cache line (two arrays made
+ * every lookup touch two). */
 
-/* Host bytes cache_init allocates for p (its way array and MSHRs): what a
+/* Host bytes cache_init allocates for p (its way array, the policy's
+ * per-set state and MSHRs): what a
  * run's memory estimate counts before it builds anything (sim/hostmem). */
 uint64_t cache_host_bytes(const cache_params *p);
 
@@ -82,7 +86,10 @@ typedef struct cache {
 	int line_shift;     /* log2(line_bytes) when a power of two, else -1 */
 	cache_way *way;     /* nsets*ways, set by set, 64-byte aligned */
 	uint64_t stamp;
-	uint64_t *mshr_line; /* p.mshrs entries; CACHE_INVALID when free */
+	const repl_policy *rp;         /* p.repl, never NULL */
+	uint8_t stamp_hit, stamp_fill; /* rp's inline stamp rules */
+	uint64_t *rst;                 /* rp->set_words per set; NULL: none */
+	uint64_t *mshr_line;           /* p.mshrs entries; CACHE_INVALID when free */
 	uint32_t mshr_used;
 	cache_stats s;
 	/* sets changed since the last cache_dirty_clear, one bit each; NULL:
@@ -139,23 +146,41 @@ static inline void cache_touch(cache *c, uint32_t set)
 	if (c->dirty)
 		bits_set(c->dirty, (int)set);
 }
-/* Way w of set `set` is used now: the most recent in LRU order, and the
- * set changed (every LRU update goes through here, so tracking sees it). */
+/* The policy's hit hook for way w of set (out of line: rare policies). */
+void cache_repl_hit(cache *c, uint32_t set, uint32_t w);
+/* Way w of set `set` is hit now: the policy sees it (LRU: the most recent
+ * in LRU order, inline), and the set changed (every policy update goes
+ * through here or cache_fill, so tracking sees it). */
 static inline void cache_use(cache *c, uint32_t set, cache_way *w)
 {
-	w->use = ++c->stamp;
+	if (c->stamp_hit)
+		w->use = ++c->stamp;
+	else if (c->rp->hit)
+		cache_repl_hit(c, set, (uint32_t)(w - c->way - (size_t)set * c->p.ways));
 	cache_touch(c, set);
 }
 void cache_dirty_clear(cache *c);
 
 /* The state of sets [set0, set0 + n) in compact form, ways in order:
- * each way's line (UINT32_MAX when empty) and its LRU rank in its set
- * (0 = least recent), all LRU order needs. -1 when a line index is
+ * each way's line (UINT32_MAX when empty) and `ways` bytes per set of the
+ * policy's state (its save hook; LRU: each way's rank in its set, 0 =
+ * least recent), all its decisions need. -1 when a line index is
  * UINT32_MAX or more (nothing stored beyond it). */
-int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *rank);
+int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_t *st);
 /* Sets [set0, set0 + n) from cache_save's form (their MSHRs must be
- * free); hits and fills after it see the same LRU order. */
-void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const uint8_t *rank);
+ * free); hits and fills after it see the same policy decisions. */
+void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const uint8_t *st);
+
+/* The cache's own checkpoint form of n sets (stored warming saves and
+ * restores caches through it, never through their fields): the
+ * cache_save form, lines then policy bytes, each part padded to 8 bytes.
+ * cache_ckpt_bytes: its size; cache_ckpt_empty: the form of n empty sets;
+ * save: -1 as cache_save; load: -1 (nothing changed) while a miss is in
+ * flight (an MSHR is busy). */
+size_t cache_ckpt_bytes(const cache *c, uint32_t n);
+void cache_ckpt_empty(const cache *c, uint32_t n, void *buf);
+int cache_ckpt_save(const cache *c, uint32_t set0, uint32_t n, void *buf);
+int cache_ckpt_load(cache *c, uint32_t set0, uint32_t n, const void *buf);
 
 static inline uint64_t cache_line_of(const cache *c, uint64_t addr)
 {
@@ -174,11 +199,12 @@ static inline uint32_t cache_set_of(const cache *c, uint64_t line)
  * bytes is only counted. *mshr receives the MSHR index for MISS_NEW and
  * MISS_MERGED, *slot (set*ways+way) for HIT; either may be NULL. */
 cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, uint32_t *slot);
-/* Is the line present (no LRU or counter change)? */
+/* Is the line present (no policy or counter change)? */
 int cache_probe(const cache *c, uint64_t line, uint32_t *slot);
 /* The line's data arrived: frees its MSHR (if it had one), installs it in
- * the LRU (or an empty) way and returns its slot; *victim receives the
- * evicted line or CACHE_INVALID. Filling a present line only touches LRU. */
+ * an empty way (the lowest) or the policy's victim and returns its slot;
+ * *victim receives the evicted line or CACHE_INVALID. Filling a present
+ * line is a hit for the policy. */
 uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim);
 /* The in-flight MSHR holding line, or -1. */
 int cache_mshr_find(const cache *c, uint64_t line);
@@ -186,10 +212,15 @@ static inline int cache_mshr_free(const cache *c)
 {
 	return c->mshr_used < c->p.mshrs;
 }
+/* Is a miss in flight (an MSHR busy)? */
+static inline int cache_busy(const cache *c)
+{
+	return c->mshr_used > 0;
+}
 
 /* The hit half of cache_lookup, inline, for functional fast paths (replay):
- * if line is present it does exactly what cache_lookup does on a hit (LRU
- * stamp, counters) and returns 1; otherwise it changes nothing and returns
+ * if line is present it does exactly what cache_lookup does on a hit
+ * (policy update, counters) and returns 1; otherwise it changes nothing and returns
  * 0, and the caller goes on with cache_lookup (and cache_fill). */
 static inline int cache_try_hit(cache *c, uint64_t line, uint32_t bytes)
 {

@@ -1,13 +1,13 @@
 /*
  * hier.c: the "hierarchy" memport model (see hier.h).
  *
- * Each L1 is a cache (mem/cache.h) plus its timing wrapper here: a port
- * counter (ports accesses per core cycle), per-MSHR lists of the reads
- * waiting for that line, and a FIFO of reads refused for lack of an MSHR,
- * resumed in order when a fill frees one. A read (hreq) counts the lines it
- * still waits for; the guard count of 1 held while its lines are looked up
- * keeps it alive until the walk is done. hreq and wait records come from
- * free lists that grow in chunks: the steady state never allocates.
+ * Each L1 is a timed cache (mem/tcache.h): its port (ports accesses per
+ * core cycle), per-MSHR lists of the reads waiting for that line, and a
+ * FIFO of reads refused for lack of an MSHR, resumed in order when a fill
+ * frees one. A read (hreq) counts the lines it still waits for; the guard
+ * count of 1 held while its lines are looked up keeps it alive until the
+ * walk is done. hreq records come from a free list that grows in chunks:
+ * the steady state never allocates.
  *
  * Data (docs/memory.md, "Data"): with a store, every L1 way holds its
  * line's bytes (the cache's data). A read's bytes are copied from the line
@@ -18,81 +18,11 @@
  * below directly.
  */
 #include "mem/hier.h"
+#include "mem/hier_level.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-typedef struct hreq hreq;
-struct hreq {
-	eng_handler done;
-	void *ctx;
-	uint64_t arg;
-	uint64_t issue, ready, since;
-	uint64_t next_line, last_line, addr;
-	uint8_t *dst; /* where the bytes go; NULL: no data */
-	uint32_t bytes, pending;
-	uint8_t type;
-	hreq *next;
-};
-
-typedef struct hwait hwait;
-struct hwait {
-	hreq *r;
-	hwait *next;
-};
-
-typedef struct hier hier;
-
-typedef struct hl1 {
-	hier *h;
-	int type;
-	cache c;
-	uint64_t port_cycle;
-	uint32_t port_used;
-	hwait **wait;  /* per MSHR */
-	uint8_t *mbuf; /* per MSHR: the line being fetched (with data) */
-	hreq *stall, *stall_tail;
-} hl1;
-
-typedef struct hchunk {
-	struct hchunk *next;
-} hchunk;
-
-struct hier {
-	eng *e;
-	eng_clock core;
-	uint64_t image_bytes;
-	mem_store *ms; /* the board's bytes (host memory's with the VMA); NULL: no data */
-	int oom;       /* a line found no memory for its bytes */
-	hl1 l1[MEM_NTYPES];
-	sdram sd;
-	memif mi;
-	int use_vma;
-	vma v;
-	hbus hb;
-	hchunk *chunks;
-	hreq *free_r;
-	hwait *free_w;
-	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
-	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
-	uint64_t bypass[MEM_NTYPES], wait_ticks[MEM_NTYPES], stall_ticks[MEM_NTYPES];
-	/* traffic of functional accesses (hier_access_func): what the timed
-	 * SDRAM, memory interface and host bus would have counted; busy_ticks
-	 * are data-bus occupancy without row or queueing overheads */
-	sdram_stats fsd;
-	memif_stats fmi;
-	hbus_stats fhb;
-	uint64_t freqs;
-	/* of fsd.busy_ticks: the expected part a timed chip would not spend,
-	 * on-board-cache hits it would merge into a PCI fetch in flight (each
-	 * such read's ticks times the share of merges among the timed
-	 * accesses that found their line present or arriving, so far) */
-	double fmerge_ticks;
-	/* of fsd.busy_ticks: all reads that were on-board-cache hits (what
-	 * fmerge_ticks takes its share of; stored warming applies the share
-	 * to the checkpoints' traffic after the fact, sim/warming.h) */
-	uint64_t fl2hit_ticks;
-};
 
 /* ---- free lists ---- */
 
@@ -117,52 +47,38 @@ static hreq *req_alloc(hier *h)
 	return r;
 }
 
-static hwait *wait_alloc(hier *h)
+/* ---- below the L1s: the levels, by name ---- */
+
+/* The levels a stack may name below the L1s (mem/hier_level.h). */
+static const hlevel *const hier_levels[] = {&hier_sdram_level, &hier_vma_level};
+
+static const hlevel *hlevel_find(const char *name, size_t n)
 {
-	if (!h->free_w) {
-		hchunk *c = malloc(sizeof(hchunk) + HCHUNK * sizeof(hwait));
-		if (!c)
-			return NULL;
-		c->next = h->chunks;
-		h->chunks = c;
-		hwait *a = (hwait *)(c + 1);
-		for (int i = 0; i < HCHUNK; i++) {
-			a[i].next = h->free_w;
-			h->free_w = &a[i];
-		}
-	}
-	hwait *w = h->free_w;
-	h->free_w = w->next;
-	return w;
+	for (size_t i = 0; i < sizeof hier_levels / sizeof *hier_levels; i++)
+		if (strlen(hier_levels[i]->name) == n && !strncmp(hier_levels[i]->name, name, n))
+			return hier_levels[i];
+	return NULL;
 }
 
-/* ---- below the L1s ---- */
+const hlevel *hier_below(const hier *h, const hlevel *l)
+{
+	for (int i = 0; i + 1 < h->nstack; i++)
+		if (h->stack[i] == l)
+			return h->stack[i + 1];
+	return NULL;
+}
 
-/* A read below the L1s into dst (NULL: no data). Without the VMA the
- * bytes are the store's at the address, taken when the read is issued:
- * only the reading thread writes what it reads (its spill area) and its
- * writes go in when issued, so they are the bytes SDRAM returns. */
+/* A read below the L1s: the level under them. */
 static void lower_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
                        eng_handler cb, void *ctx, uint64_t arg)
 {
-	if (h->use_vma) {
-		vma_read(&h->v, t, type, addr, bytes, dst, cb, ctx, arg);
-		return;
-	}
-	if (dst)
-		ms_read(h->ms, addr, bytes, dst);
-	memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
+	h->stack[0]->read(h, t, type, addr, bytes, dst, cb, ctx, arg);
 }
 
 /* The bytes below the L1s now, without any change (hier_peek). */
 static void lower_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst)
 {
-	if (h->use_vma)
-		vma_peek(&h->v, addr, bytes, dst);
-	else if (h->ms)
-		ms_read(h->ms, addr, bytes, dst);
-	else
-		memset(dst, 0, bytes);
+	h->stack[0]->peek(h, addr, bytes, dst);
 }
 
 /* The bytes of L1 way `slot` (given on its first fill); NULL without data
@@ -171,7 +87,7 @@ static uint8_t *l1_data(hier *h, hl1 *l, uint32_t slot)
 {
 	if (!h->ms)
 		return NULL;
-	uint8_t *d = cache_data(&l->c, slot);
+	uint8_t *d = cache_data(&l->t.c, slot);
 	if (!d)
 		h->oom = 1;
 	return d;
@@ -180,10 +96,10 @@ static uint8_t *l1_data(hier *h, hl1 *l, uint32_t slot)
 /* Copies q's bytes inside L1 line `line` (in way slot) to q's buffer. */
 static void deliver(hier *h, hl1 *l, hreq *q, uint64_t line, uint32_t slot)
 {
-	const uint8_t *d = cache_data_at(&l->c, slot);
+	const uint8_t *d = cache_data_at(&l->t.c, slot);
 	if (!d && !(d = l1_data(h, l, slot)))
 		return;
-	uint32_t lb = l->c.p.line_bytes;
+	uint32_t lb = l->t.c.p.line_bytes;
 	uint64_t lo = line * lb, end = q->addr + q->bytes;
 	uint64_t a = q->addr > lo ? q->addr : lo, b = end < lo + lb ? end : lo + lb;
 	memcpy(q->dst + (a - q->addr), d + (a - lo), (size_t)(b - a));
@@ -212,35 +128,43 @@ static void l1_filled(eng *e, void *ctx, uint64_t line);
 static int walk(hl1 *l, hreq *q, uint64_t t)
 {
 	hier *h = l->h;
-	uint32_t lb = l->c.p.line_bytes;
+	uint32_t lb = l->t.c.p.line_bytes;
 	for (; q->next_line <= q->last_line; q->next_line++) {
 		uint64_t line = q->next_line;
 		uint64_t lo = line * lb, hi = lo + lb, end = q->addr + q->bytes;
 		uint64_t a = q->addr > lo ? q->addr : lo, b = end < hi ? end : hi;
 		int m = -1;
 		uint32_t slot = 0;
-		switch (cache_lookup(&l->c, line, (uint32_t)(b - a), &m, &slot)) {
+		switch (tcache_lookup(&l->t, line, (uint32_t)(b - a), q, &m, &slot)) {
 		case CACHE_HIT:
 			/* the bytes leave the array at the tag check */
 			if (q->dst)
 				deliver(h, l, q, line, slot);
 			break;
 		case CACHE_MISS_NEW:
-			lower_read(h, t, l->type, lo, lb, h->ms ? l->mbuf + (size_t)m * lb : NULL,
+			lower_read(h, t, l->type, lo, lb, h->ms ? l->t.mbuf + (size_t)m * lb : NULL,
 			           l1_filled, l, line);
 			/* fall through */
-		case CACHE_MISS_MERGED: {
-			hwait *w = wait_alloc(h);
-			w->r = q;
-			w->next = l->wait[m];
-			l->wait[m] = w;
+		case CACHE_MISS_MERGED: /* q waits on the MSHR */
 			q->pending++;
 			break;
-		}
 		case CACHE_MSHR_FULL:
 			return 1;
 		}
 	}
+	return 0;
+}
+
+/* A read refused for lack of an MSHR, retried after a fill (tc_retry). */
+static int l1_retry(void *ctx, void *who, uint64_t since, uint64_t now)
+{
+	hl1 *l = ctx;
+	hreq *q = who;
+	if (walk(l, q, now))
+		return 1; /* stays at the head */
+	l->h->stall_ticks[q->type] += now - since;
+	if (--q->pending == 0) /* the guard */
+		finish(l->h, q);
 	return 0;
 }
 
@@ -249,37 +173,20 @@ static void l1_filled(eng *e, void *ctx, uint64_t line)
 	hl1 *l = ctx;
 	hier *h = l->h;
 	uint64_t now = eng_now(e);
-	int m = cache_mshr_find(&l->c, line);
-	hwait *w = m >= 0 ? l->wait[m] : NULL;
-	if (m >= 0)
-		l->wait[m] = NULL;
-	uint32_t slot = cache_fill(&l->c, line, NULL);
+	int m;
+	tc_wait *w = tcache_take(&l->t, line, &m);
+	uint32_t slot = cache_fill(&l->t.c, line, NULL);
 	uint8_t *d = m >= 0 ? l1_data(h, l, slot) : NULL;
 	if (d) /* the line arrived in the MSHR's buffer */
-		memcpy(d, l->mbuf + (size_t)m * l->c.p.line_bytes, l->c.p.line_bytes);
-	while (w) {
-		hwait *n = w->next;
-		hreq *q = w->r;
+		memcpy(d, l->t.mbuf + (size_t)m * l->t.c.p.line_bytes, l->t.c.p.line_bytes);
+	for (hreq *q; (q = tcache_pop(&l->t, &w));) {
 		if (q->dst)
 			deliver(h, l, q, line, slot);
-		w->next = h->free_w;
-		h->free_w = w;
 		if (--q->pending == 0)
 			finish(h, q);
-		w = n;
 	}
 	/* resume refused reads in order while MSHRs are free */
-	while (l->stall && cache_mshr_free(&l->c)) {
-		hreq *q = l->stall;
-		if (walk(l, q, now))
-			break; /* stays at the head */
-		l->stall = q->next;
-		if (!l->stall)
-			l->stall_tail = NULL;
-		h->stall_ticks[q->type] += now - q->since;
-		if (--q->pending == 0) /* the guard */
-			finish(h, q);
-	}
+	tcache_resume(&l->t, now, l1_retry, l);
 }
 
 static void l1_bypass_done(eng *e, void *ctx, uint64_t arg)
@@ -298,14 +205,7 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 		 * hold the spill area) */
 		h->writes[type]++;
 		h->write_bytes[type] += r->bytes;
-		const void *src = h->ms ? r->data : NULL;
-		if (h->use_vma)
-			vma_write(&h->v, now, type, r->addr, r->bytes, src);
-		else {
-			if (src && ms_write(h->ms, r->addr, r->bytes, src))
-				h->oom = 1;
-			memif_submit(&h->mi, now, type, r->addr, r->bytes, 1, NULL, NULL, 0);
-		}
+		h->stack[0]->write(h, now, type, r->addr, r->bytes, h->ms ? r->data : NULL);
 		if (done) /* posted: a waiting caller gets its answer at once */
 			eng_schedule(h->e, eng_next_edge(h->core, now), done, ctx, arg);
 		return;
@@ -322,7 +222,6 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	            .arg = arg,
 	            .issue = now,
 	            .ready = now,
-	            .since = now,
 	            .addr = r->addr,
 	            .dst = dst,
 	            .bytes = bytes,
@@ -335,29 +234,13 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	}
 	hl1 *l = &h->l1[type];
 	/* the port: ports accesses per core cycle, in arrival order */
-	uint64_t cyc = (now + h->core.period - 1) / h->core.period;
-	if (cyc > l->port_cycle) {
-		l->port_cycle = cyc;
-		l->port_used = 0;
-	}
-	if (l->port_used == l->c.p.ports) {
-		l->port_cycle++;
-		l->port_used = 0;
-	}
-	l->port_used++;
-	uint64_t start = l->port_cycle * h->core.period;
-	q->ready = start + (uint64_t)l->c.p.hit_latency * h->core.period;
-	q->next_line = r->addr / l->c.p.line_bytes;
-	q->last_line = (r->addr + bytes - 1) / l->c.p.line_bytes;
+	uint64_t start = tcache_port(&l->t, now, h->core.period);
+	q->ready = start + (uint64_t)l->t.c.p.hit_latency * h->core.period;
+	q->next_line = r->addr / l->t.c.p.line_bytes;
+	q->last_line = (r->addr + bytes - 1) / l->t.c.p.line_bytes;
 	/* reads refused earlier go first: a new read never overtakes them */
-	if (l->stall || walk(l, q, start)) {
-		q->since = start;
-		q->next = NULL;
-		if (l->stall_tail)
-			l->stall_tail->next = q;
-		else
-			l->stall = q;
-		l->stall_tail = q;
+	if (l->t.stall || walk(l, q, start)) {
+		tcache_stall(&l->t, q, start);
 		return;
 	}
 	if (--q->pending == 0)
@@ -366,97 +249,11 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 
 /* ---- functional accesses (no time) ---- */
 
-/* One SDRAM access of bytes as the memory interface would submit it. */
-static void func_sdram(hier *h, int requester, uint32_t bytes, int write)
-{
-	if (write) {
-		h->fsd.writes++;
-		h->fsd.write_bytes += bytes;
-		h->fmi.writes[requester]++;
-	} else {
-		h->fsd.reads++;
-		h->fsd.read_bytes += bytes;
-		h->fmi.reads[requester]++;
-	}
-	h->fmi.bytes[requester] += bytes;
-	uint64_t beats = sdram_beats(&h->sd, bytes);
-	h->fsd.beats += beats;
-	h->fsd.busy_ticks += eng_cycles_to_ticks(h->sd.t.clk, beats);
-}
-
-/* n SDRAM accesses moving `bytes` together (the VMA counts sums only). */
-static void func_sdram_n(hier *h, int requester, uint64_t n, uint64_t bytes, int write)
-{
-	for (uint64_t i = 0; i < n; i++) {
-		uint64_t b = bytes / n + (i < bytes % n);
-		func_sdram(h, requester, (uint32_t)b, write);
-	}
-}
-
-/* The share of on-board-cache hits a timed chip merges into fetches on
- * their way, from the on-board cache's counts so far; 0 without the VMA. */
-static double merge_share(const hier *h)
-{
-	return h->use_vma ? cache_timed_merge_share(NULL, &h->v.l2.s) : 0;
-}
-
-/* Below the L1s without time: SDRAM directly, or the VMA's functional walk
- * whose counter deltas become SDRAM and host-bus traffic. data: the bytes
- * read into or written from (NULL: none). */
+/* Below the L1s without time (data: the bytes read into or written from;
+ * NULL: none). */
 static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int write, uint8_t *data)
 {
-	if (!h->use_vma) {
-		func_sdram(h, type, bytes, write);
-		if (data && write) {
-			if (ms_write(h->ms, addr, bytes, data))
-				h->oom = 1;
-		} else if (data)
-			ms_read(h->ms, addr, bytes, data);
-		return;
-	}
-	vma_stats a = h->v.s;
-	vma_access_func(&h->v, addr, bytes, write, data);
-	const vma_stats *b = &h->v.s;
-	uint32_t mb = h->v.meta_set_bytes;
-	for (uint64_t i = a.meta_reads; i < b->meta_reads; i++)
-		func_sdram(h, MEMIF_META, mb, 0);
-	for (uint64_t i = a.meta_writes; i < b->meta_writes; i++)
-		func_sdram(h, MEMIF_META, mb, 1);
-	uint64_t fetches = b->host_fetches - a.host_fetches;
-	uint64_t hw = b->host_writes - a.host_writes;
-	/* a fetched line is written into SDRAM (FILL); the rest is data */
-	uint64_t fill_bytes = fetches * h->v.p.line;
-	uint64_t dr = b->data_reads - a.data_reads, dw = b->data_writes - a.data_writes - fetches;
-	uint64_t db = b->data_bytes - a.data_bytes - fill_bytes;
-	func_sdram_n(h, MEMIF_FILL, fetches, fill_bytes, 1);
-	if (dr + dw) {
-		uint64_t t0 = h->fsd.busy_ticks;
-		func_sdram_n(h, type, dr + dw, db, dw > 0);
-		if (!write && dr) {
-			/* the reads are on-board-cache hits; a timed chip merges a
-			 * share of them into fetches still on their way */
-			h->fl2hit_ticks += h->fsd.busy_ticks - t0;
-			h->fmerge_ticks += (double)(h->fsd.busy_ticks - t0) * merge_share(h);
-		}
-	}
-	for (uint64_t i = 0; i < fetches; i++) {
-		h->fhb.transfers++;
-		h->fhb.bytes += h->v.p.line;
-		h->fhb.busy_ticks += hbus_duration(&h->hb, h->v.p.line);
-	}
-	if (hw) {
-		uint64_t wb = b->host_write_bytes - a.host_write_bytes;
-		h->fhb.transfers += hw;
-		h->fhb.bytes += wb;
-		h->fhb.busy_ticks += hbus_duration(&h->hb, (uint32_t)wb);
-	}
-	/* dirty lines written back: read out of SDRAM, over the host bus */
-	for (uint64_t i = a.writebacks; i < b->writebacks; i++) {
-		func_sdram(h, MEMIF_FILL, h->v.p.line, 0);
-		h->fhb.transfers++;
-		h->fhb.bytes += h->v.p.line;
-		h->fhb.busy_ticks += hbus_duration(&h->hb, h->v.p.line);
-	}
+	h->stack[0]->func(h, type, addr, bytes, write, data);
 }
 
 /* The functional twin of hier_access: the same L1 lookups, line by line,
@@ -485,7 +282,7 @@ static void hier_access_func(void *impl, const mem_req *r)
 		return;
 	}
 	hl1 *l = &h->l1[type];
-	cache *c = &l->c;
+	cache *c = &l->t.c;
 	uint32_t lb = c->p.line_bytes;
 	uint64_t first = cache_line_of(c, r->addr), end = r->addr + bytes;
 	/* most reads fit one line: no second division (36-byte lines) */
@@ -525,7 +322,7 @@ static void hier_peek(void *impl, const mem_req *r, void *dst)
 		lower_peek(h, r->addr, r->bytes, o);
 		return;
 	}
-	const cache *c = &h->l1[r->type].c;
+	const cache *c = &h->l1[r->type].t.c;
 	uint32_t lb = c->p.line_bytes;
 	uint64_t end = r->addr + r->bytes;
 	for (uint64_t a = r->addr; a < end;) {
@@ -545,20 +342,23 @@ static void hier_peek(void *impl, const mem_req *r, void *dst)
 static int hier_failed(const void *impl)
 {
 	const hier *h = impl;
-	return h->oom || h->v.oom || (h->ms && h->ms->oom);
+	int oom = h->oom || (h->ms && h->ms->oom);
+	for (int t = 0; t < MEM_NTYPES; t++)
+		oom |= h->l1[t].t.oom;
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->failed)
+			oom |= h->stack[i]->failed(h);
+	return oom;
 }
 
 static void hier_destroy(void *impl)
 {
 	hier *h = impl;
-	for (int t = 0; t < MEM_NTYPES; t++) {
-		cache_free(&h->l1[t].c);
-		free(h->l1[t].wait);
-		free(h->l1[t].mbuf);
-	}
-	if (h->use_vma)
-		vma_free(&h->v);
-	memif_free(&h->mi);
+	for (int t = 0; t < MEM_NTYPES; t++)
+		tcache_free(&h->l1[t].t);
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->free)
+			h->stack[i]->free(h);
 	for (hchunk *c = h->chunks, *n; c; c = n) {
 		n = c->next;
 		free(c);
@@ -571,71 +371,81 @@ static const memport_model hier_model = {"hierarchy",      hier_access, hier_des
 
 /* ---- construction ---- */
 
-static const cfg_l1 *l1_cfg(const saar_config *cfg, int t)
+/* The level names a stack may use, comma separated, into buf. */
+static const char *level_names(char *buf, size_t n)
 {
-	switch (t) {
-	case MEM_SHADE:
-		return &cfg->memory.l1.shade;
-	case MEM_KD:
-		return &cfg->memory.l1.kd;
-	case MEM_LIST:
-		return &cfg->memory.l1.list;
-	default:
-		return &cfg->memory.l1.tri;
+	size_t at = (size_t)snprintf(buf, n, "l1");
+	for (size_t i = 0; i < sizeof hier_levels / sizeof *hier_levels && at < n; i++)
+		at += (size_t)snprintf(buf + at, n - at, ", %s", hier_levels[i]->name);
+	return buf;
+}
+
+/* The stack, top first ("l1,vma,sdram"): the L1s on top (the report's
+ * checks take every read past them for a stack refill, so a stack
+ * without them is refused), then the levels below them, each standing on
+ * the one its `on` names, the last on nothing. -1 with d set when the
+ * names do not stack. */
+static int parse_stack(hier *h, const char *spec, diag *d)
+{
+	char names[128];
+	int l1 = 0;
+	for (const char *p = spec; *p;) {
+		p += strspn(p, ", ");
+		size_t k = strcspn(p, ", ");
+		if (!k)
+			break;
+		const hlevel *l = NULL;
+		if (k == 2 && !strncmp(p, "l1", 2) && !h->nstack && !l1)
+			l1 = 1;
+		else if (h->nstack < HIER_MAXLEVELS && (l = hlevel_find(p, k)))
+			h->stack[h->nstack++] = l;
+		else
+			return diag_set(d, "config", 0, 0,
+			                "memory.levels '%s': '%.*s' is no level here (levels: %s; "
+			                "l1 only on top)",
+			                spec, (int)k, p, level_names(names, sizeof names));
+		p += k;
 	}
+	int ok = l1 && h->nstack > 0 && !h->stack[h->nstack - 1]->on;
+	for (int i = 0; ok && i + 1 < h->nstack; i++)
+		ok = h->stack[i]->on && !strcmp(h->stack[i]->on, h->stack[i + 1]->name);
+	if (!ok)
+		return diag_set(
+		    d, "config", 0, 0,
+		    "memory.levels '%s' does not stack: top first, l1, then levels each "
+		    "standing on the next (vma on sdram), the last on nothing (sdram)",
+		    spec);
+	return 0;
 }
 
-cache_params hier_l1_params(const saar_config *cfg, int type)
+/* -1 with d set when the image cannot be addressed: no level of the
+ * stack addresses host memory and the image does not fit on board. */
+static int image_fits(const hier *h, const hier_params *hp, uint64_t image_bytes, diag *d)
 {
-	const cfg_l1 *c = l1_cfg(cfg, type);
-	return (cache_params){
-	    (uint64_t)c->size_kb << 10, (uint32_t)c->ways,  (uint32_t)c->line, (uint32_t)c->mshrs,
-	    (uint32_t)c->hit_latency,   (uint32_t)c->ports, CACHE_HASH_NONE};
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->host_addressed)
+			return 0;
+	if (image_bytes <= hp->sdram.bytes)
+		return 0;
+	return diag_set(d, "config", 0, 0,
+	                "the memory image (%.1f MB) does not fit in on-board memory "
+	                "(memory.sdram.mb = %d); enable the virtual memory architecture "
+	                "(configs/saarcor-vma.yaml, memory.vma.enabled: true) or raise "
+	                "memory.sdram.mb",
+	                (double)image_bytes / (1 << 20), (int)(hp->sdram.bytes >> 20));
 }
 
-vma_params hier_vma_params(const saar_config *cfg)
-{
-	const __typeof__(cfg->memory.vma) *v = &cfg->memory.vma;
-	return (vma_params){(uint32_t)v->ways,
-	                    (uint32_t)v->line,
-	                    v->hash == CFG_HASH_NONE ? CACHE_HASH_NONE : CACHE_HASH_XOR,
-	                    v->tag_cache_enabled,
-	                    (uint64_t)v->tag_cache_kb << 10,
-	                    (uint32_t)v->tag_cache_ways,
-	                    (uint32_t)v->tag_cache_latency};
-}
-
-void hier_hbus_params(const saar_config *cfg, hbus_params *hp)
-{
-	static const char *const pn[] = {"pci", "pci66", "agp"};
-	const __typeof__(cfg->memory.hostbus) *b = &cfg->memory.hostbus;
-	hbus_preset(pn[b->preset], hp);
-	if (b->width_bits > 0)
-		hp->width_bits = (uint32_t)b->width_bits;
-	if (b->clock_mhz > 0)
-		hp->clock_mhz = b->clock_mhz;
-	if (b->burst > 0)
-		hp->burst = (uint32_t)b->burst;
-	if (b->latency_ns >= 0)
-		hp->latency_ns = b->latency_ns;
-}
-
-int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
-                  mem_store *store, diag *d)
+int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_t image_bytes,
+              mem_store *store, diag *d)
 {
 	memset(p, 0, sizeof *p);
-	const __typeof__(cfg->memory) *M = &cfg->memory;
-	uint64_t sd_bytes = (uint64_t)M->sdram.mb << 20;
-	if (!M->vma.enabled && image_bytes > sd_bytes)
-		return diag_set(d, "config", 0, 0,
-		                "the memory image (%.1f MB) does not fit in on-board memory "
-		                "(memory.sdram.mb = %d); enable the virtual memory architecture "
-		                "(configs/saarcor-vma.yaml, memory.vma.enabled: true) or raise "
-		                "memory.sdram.mb",
-		                (double)image_bytes / (1 << 20), M->sdram.mb);
 	hier *h = calloc(1, sizeof *h);
 	if (!h)
 		return diag_set(d, "config", 0, 0, "out of memory");
+	if (parse_stack(h, hp->levels, d) || image_fits(h, hp, image_bytes, d)) {
+		free(h);
+		return -1;
+	}
 	h->e = e;
 	h->core = core;
 	h->image_bytes = image_bytes;
@@ -643,49 +453,16 @@ int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, ui
 	for (int t = 0; t < MEM_NTYPES; t++) {
 		char what[32];
 		snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
-		cache_params cp = hier_l1_params(cfg, t);
+		const cache_params cp = hp->l1[t];
 		h->l1[t].h = h;
 		h->l1[t].type = t;
-		if (cache_init(&h->l1[t].c, &cp, what, d))
+		if (tcache_init(&h->l1[t].t, &cp, store ? TC_DATA | TC_MBUF : 0, what, d))
 			goto fail;
-		h->l1[t].wait = calloc(cp.mshrs, sizeof *h->l1[t].wait);
-		if (store)
-			h->l1[t].mbuf = malloc((size_t)cp.mshrs * cp.line_bytes);
-		if (!h->l1[t].wait || (store && (!h->l1[t].mbuf || cache_data_on(&h->l1[t].c)))) {
-			diag_set(d, "config", 0, 0, "out of memory");
-			goto fail;
-		}
 	}
-	sdram_params sp = {sd_bytes,
-	                   M->sdram.clock_mhz,
-	                   (uint32_t)M->sdram.bus_bits,
-	                   (uint32_t)M->sdram.banks,
-	                   (uint32_t)M->sdram.row_bytes,
-	                   (uint32_t)M->sdram.cl,
-	                   (uint32_t)M->sdram.trcd,
-	                   (uint32_t)M->sdram.trp,
-	                   (uint32_t)M->sdram.tras,
-	                   (uint32_t)M->sdram.burst,
-	                   M->sdram.mapping == CFG_SDRAM_BANK_ROW_COL ? SDRAM_MAP_BANK_ROW_COL
-	                                                              : SDRAM_MAP_ROW_BANK_COL};
-	if (sdram_init(&h->sd, &sp, d))
-		goto fail;
-	/* the config's policy names are memif's own */
-	int pol = memif_policy_parse(cfg_enum_name(cfg, "memory.memif.policy"));
-	if (memif_init(&h->mi, e, &h->sd, pol < 0 ? MEMIF_FIFO : pol)) {
-		diag_set(d, "config", 0, 0, "out of memory");
-		goto fail;
-	}
-	if (M->vma.enabled) {
-		hbus_params hp;
-		hier_hbus_params(cfg, &hp);
-		if (hbus_init(&h->hb, &hp, d))
+	/* bottom up: each level stands on the ones below it */
+	for (int i = h->nstack - 1; i >= 0; i--)
+		if (h->stack[i]->init && h->stack[i]->init(h, hp, d))
 			goto fail;
-		vma_params vp = hier_vma_params(cfg);
-		if (vma_init(&h->v, e, core, &h->mi, &h->hb, sd_bytes, &vp, store, d))
-			goto fail;
-		h->use_vma = 1;
-	}
 	p->model = &hier_model;
 	p->impl = h;
 	return 0;
@@ -705,11 +482,10 @@ int hier_get_stats(const memport *p, hier_stats *s)
 	if (!hier_is(p))
 		return -1;
 	const hier *h = p->impl;
-	s->vma_enabled = h->use_vma;
 	s->now_ticks = eng_now(h->e);
 	s->core_period = h->core.period;
 	for (int t = 0; t < MEM_NTYPES; t++) {
-		s->l1[t] = h->l1[t].c.s;
+		s->l1[t] = h->l1[t].t.c.s;
 		s->reads[t] = h->reads[t];
 		s->read_bytes[t] = h->read_bytes[t];
 		s->writes[t] = h->writes[t];
@@ -718,33 +494,12 @@ int hier_get_stats(const memport *p, hier_stats *s)
 		s->wait_cycles[t] = h->wait_ticks[t] / h->core.period;
 		s->mshr_stall_cycles[t] = h->stall_ticks[t] / h->core.period;
 	}
-	s->memif = h->mi.s;
-	s->sdram = h->sd.s;
-	/* functional traffic joins the counts; its busy time stays apart */
-	for (int r = 0; r < MEMIF_NREQ; r++) {
-		s->memif.reads[r] += h->fmi.reads[r];
-		s->memif.writes[r] += h->fmi.writes[r];
-		s->memif.bytes[r] += h->fmi.bytes[r];
-	}
-	s->sdram.reads += h->fsd.reads;
-	s->sdram.writes += h->fsd.writes;
-	s->sdram.read_bytes += h->fsd.read_bytes;
-	s->sdram.write_bytes += h->fsd.write_bytes;
-	s->sdram.beats += h->fsd.beats;
 	s->func_requests = h->freqs;
-	s->func_sdram_busy_ticks = h->fsd.busy_ticks;
 	s->func_sdram_merge_ticks = h->fmerge_ticks;
 	s->func_hostbus_busy_ticks = h->fhb.busy_ticks;
-	s->sdram_peak_bytes_per_s = sdram_peak_bw(&h->sd);
-	if (h->use_vma) {
-		s->tag_cache = h->v.tag.s;
-		s->l2 = h->v.l2.s;
-		s->vma = h->v.s;
-		s->hostbus = h->hb.s;
-		s->hostbus.transfers += h->fhb.transfers;
-		s->hostbus.bytes += h->fhb.bytes;
-		s->hostbus_peak_bytes_per_s = hbus_peak_bw(&h->hb);
-	}
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->stats)
+			h->stack[i]->stats(h, s);
 	return 0;
 }
 
@@ -754,9 +509,75 @@ void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2)
 {
 	hier *h = p->impl;
 	for (int t = 0; t < MEM_NTYPES; t++)
-		l1[t] = &h->l1[t].c;
-	*tag = h->use_vma && h->v.p.tag_cache_enabled ? &h->v.tag : NULL;
-	*l2 = h->use_vma ? &h->v.l2 : NULL;
+		l1[t] = &h->l1[t].t.c;
+	*tag = h->use_vma && h->v.p.tag_cache_enabled ? &h->v.tag.c : NULL;
+	*l2 = h->use_vma ? &h->v.l2.c : NULL;
+}
+
+#define HIER_MAXCACHES (MEM_NTYPES + 8)
+
+/* The caches a checkpoint holds whole, in order (the L1s, then each
+ * level's, top down); returns how many. */
+static int whole_caches(const hier *h, cache **k)
+{
+	int n = 0;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		k[n++] = (cache *)&h->l1[t].t.c;
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->caches)
+			n += h->stack[i]->caches(h, k + n);
+	return n;
+}
+
+size_t hier_ckpt_bytes(const memport *p)
+{
+	if (!hier_is(p))
+		return 0;
+	cache *k[HIER_MAXCACHES];
+	size_t b = 0;
+	for (int i = 0, n = whole_caches(p->impl, k); i < n; i++)
+		b += cache_ckpt_bytes(k[i], k[i]->nsets);
+	return b;
+}
+
+int hier_ckpt_save(const memport *p, void *buf)
+{
+	if (!hier_is(p))
+		return -1;
+	cache *k[HIER_MAXCACHES];
+	uint8_t *b = buf;
+	for (int i = 0, n = whole_caches(p->impl, k); i < n; i++) {
+		if (cache_ckpt_save(k[i], 0, k[i]->nsets, b))
+			return -1;
+		b += cache_ckpt_bytes(k[i], k[i]->nsets);
+	}
+	return 0;
+}
+
+int hier_ckpt_load(memport *p, const void *buf)
+{
+	if (!hier_is(p))
+		return -1;
+	cache *k[HIER_MAXCACHES];
+	int n = whole_caches(p->impl, k);
+	for (int i = 0; i < n; i++)
+		if (cache_busy(k[i]))
+			return -1;
+	const uint8_t *b = buf;
+	for (int i = 0; i < n; i++) {
+		cache_ckpt_load(k[i], 0, k[i]->nsets, b);
+		b += cache_ckpt_bytes(k[i], k[i]->nsets);
+	}
+	return 0;
+}
+
+cache *hier_onboard(memport *p)
+{
+	hier *h = hier_is(p) ? p->impl : NULL;
+	for (int i = 0; h && i < h->nstack; i++)
+		if (h->stack[i]->bysets)
+			return h->stack[i]->bysets(h);
+	return NULL;
 }
 
 void hier_reload(memport *p, const uint64_t *l2sets)
@@ -764,14 +585,16 @@ void hier_reload(memport *p, const uint64_t *l2sets)
 	hier *h = p->impl;
 	if (!h->ms)
 		return;
-	if (h->use_vma && l2sets)
-		vma_reload(&h->v, l2sets);
+	/* bottom up: each level's lines from the one below */
+	for (int i = h->nstack - 1; i >= 0; i--)
+		if (h->stack[i]->reload && l2sets)
+			h->stack[i]->reload(h, l2sets);
 	for (int t = 0; t < MEM_NTYPES; t++) {
 		hl1 *l = &h->l1[t];
-		uint32_t lb = l->c.p.line_bytes;
-		size_t n = (size_t)l->c.nsets * l->c.p.ways;
+		uint32_t lb = l->t.c.p.line_bytes;
+		size_t n = (size_t)l->t.c.nsets * l->t.c.p.ways;
 		for (size_t i = 0; i < n; i++) {
-			uint64_t line = l->c.way[i].tag;
+			uint64_t line = l->t.c.way[i].tag;
 			uint8_t *d = line == CACHE_INVALID ? NULL : l1_data(h, l, (uint32_t)i);
 			if (d)
 				lower_peek(h, line * lb, lb, d);
@@ -779,15 +602,12 @@ void hier_reload(memport *p, const uint64_t *l2sets)
 	}
 }
 
-/* Adds the n 64-bit counters of a stats struct to out (every field of
- * these structs is a uint64_t counter). */
-#define COUNTERS(st) (uint64_t *)&(st), sizeof(st) / sizeof(uint64_t)
 _Static_assert(sizeof(cache_stats) % 8 == 0 && sizeof(sdram_stats) % 8 == 0 &&
                    sizeof(memif_stats) % 8 == 0 && sizeof(hbus_stats) % 8 == 0 &&
                    sizeof(vma_stats) % 8 == 0,
                "stats structs hold uint64_t counters only");
 
-static size_t add_ptrs(uint64_t **out, size_t n, size_t cap, uint64_t *a, size_t k)
+size_t hier_add_ptrs(uint64_t **out, size_t n, size_t cap, uint64_t *a, size_t k)
 {
 	for (size_t i = 0; i < k; i++, n++)
 		if (out && n < cap)
@@ -802,19 +622,17 @@ size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap)
 	uint64_t *arr[] = {h->reads,  h->read_bytes, h->writes,     h->write_bytes,
 	                   h->bypass, h->wait_ticks, h->stall_ticks};
 	for (size_t i = 0; i < sizeof arr / sizeof *arr; i++)
-		n = add_ptrs(out, n, cap, arr[i], MEM_NTYPES);
+		n = hier_add_ptrs(out, n, cap, arr[i], MEM_NTYPES);
 	for (int t = 0; t < MEM_NTYPES; t++)
-		n = add_ptrs(out, n, cap, COUNTERS(h->l1[t].c.s));
-	n = add_ptrs(out, n, cap, COUNTERS(h->fsd));
-	n = add_ptrs(out, n, cap, COUNTERS(h->fmi));
-	n = add_ptrs(out, n, cap, COUNTERS(h->fhb));
-	n = add_ptrs(out, n, cap, &h->freqs, 1);
-	n = add_ptrs(out, n, cap, &h->fl2hit_ticks, 1);
-	if (h->use_vma) {
-		n = add_ptrs(out, n, cap, COUNTERS(h->v.s));
-		n = add_ptrs(out, n, cap, COUNTERS(h->v.tag.s));
-		n = add_ptrs(out, n, cap, COUNTERS(h->v.l2.s));
-	}
+		n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->l1[t].t.c.s));
+	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fsd));
+	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fmi));
+	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fhb));
+	n = hier_add_ptrs(out, n, cap, &h->freqs, 1);
+	n = hier_add_ptrs(out, n, cap, &h->fl2hit_ticks, 1);
+	for (int i = 0; i < h->nstack; i++)
+		if (h->stack[i]->counters)
+			n = h->stack[i]->counters(h, out, n, cap);
 	return n;
 }
 
@@ -830,126 +648,5 @@ void hier_add_merge_ticks(memport *p, double ticks)
 
 double hier_merge_share(const memport *p)
 {
-	return hier_is(p) ? merge_share(p->impl) : 0;
-}
-
-/* ---- JSON ---- */
-
-static double ratio(uint64_t a, uint64_t b)
-{
-	return b ? (double)a / (double)b : 0.0;
-}
-
-static void cache_json(jsonw *w, const char *key, const cache_stats *c)
-{
-	jsonw_key(w, key);
-	jsonw_obj_begin(w);
-	jsonw_kuint(w, "accesses", c->accesses);
-	jsonw_kuint(w, "hits", c->hits);
-	jsonw_kuint(w, "misses", c->misses);
-	jsonw_knum(w, "hit_rate", ratio(c->hits, c->accesses));
-	jsonw_kuint(w, "mshr_merges", c->merges);
-	jsonw_kuint(w, "mshr_full", c->mshr_full);
-	jsonw_kuint(w, "bytes", c->bytes);
-	jsonw_kuint(w, "fills", c->fills);
-	jsonw_kuint(w, "fill_bytes", c->fill_bytes);
-	jsonw_kuint(w, "evictions", c->evictions);
-	jsonw_obj_end(w);
-}
-
-void hier_write_json(const hier_stats *s, jsonw *w)
-{
-	double secs = (double)s->now_ticks * 1e-12;
-	jsonw_obj_begin(w);
-	jsonw_kstr(w, "model", "hierarchy");
-	jsonw_kbool(w, "vma_enabled", s->vma_enabled);
-	jsonw_knum(w, "elapsed_s", secs);
-
-	jsonw_key(w, "l1");
-	jsonw_obj_begin(w);
-	for (int t = 0; t < MEM_NTYPES; t++) {
-		jsonw_key(w, mem_type_name(t));
-		jsonw_obj_begin(w);
-		jsonw_kuint(w, "reads", s->reads[t]);
-		jsonw_kuint(w, "read_bytes", s->read_bytes[t]);
-		jsonw_kuint(w, "writes", s->writes[t]);
-		jsonw_kuint(w, "write_bytes", s->write_bytes[t]);
-		jsonw_kuint(w, "bypass_reads", s->bypass_reads[t]);
-		jsonw_kuint(w, "wait_cycles", s->wait_cycles[t]);
-		jsonw_kuint(w, "mshr_stall_cycles", s->mshr_stall_cycles[t]);
-		cache_json(w, "cache", &s->l1[t]);
-		jsonw_obj_end(w);
-	}
-	jsonw_obj_end(w);
-
-	uint64_t meta = s->memif.reads[MEMIF_META] + s->memif.writes[MEMIF_META], all = 0;
-	jsonw_key(w, "memif");
-	jsonw_obj_begin(w);
-	for (int r = 0; r < MEMIF_NREQ; r++) {
-		all += s->memif.reads[r] + s->memif.writes[r];
-		jsonw_key(w, memif_requester_name(r));
-		jsonw_obj_begin(w);
-		jsonw_kuint(w, "reads", s->memif.reads[r]);
-		jsonw_kuint(w, "writes", s->memif.writes[r]);
-		jsonw_kuint(w, "bytes", s->memif.bytes[r]);
-		jsonw_kuint(w, "queue_cycles", s->memif.queue_ticks[r] / s->core_period);
-		jsonw_obj_end(w);
-	}
-	jsonw_obj_end(w);
-
-	const sdram_stats *d = &s->sdram;
-	uint64_t rows = d->row_hits + d->row_empty + d->row_conflicts;
-	jsonw_key(w, "sdram");
-	jsonw_obj_begin(w);
-	jsonw_kuint(w, "reads", d->reads);
-	jsonw_kuint(w, "writes", d->writes);
-	jsonw_kuint(w, "read_bytes", d->read_bytes);
-	jsonw_kuint(w, "write_bytes", d->write_bytes);
-	jsonw_kuint(w, "bytes", d->read_bytes + d->write_bytes);
-	jsonw_kuint(w, "meta_accesses", meta);
-	jsonw_kuint(w, "data_accesses", all - meta);
-	jsonw_knum(w, "meta_share", ratio(meta, all));
-	jsonw_kuint(w, "row_hits", d->row_hits);
-	jsonw_kuint(w, "row_empty", d->row_empty);
-	jsonw_kuint(w, "row_conflicts", d->row_conflicts);
-	jsonw_knum(w, "row_hit_rate", ratio(d->row_hits, rows));
-	jsonw_kuint(w, "busy_ns", d->busy_ticks / 1000);
-	jsonw_knum(w, "utilization", ratio(d->busy_ticks, s->now_ticks));
-	double run_s = s->run_ticks ? (double)s->run_ticks * 1e-12 : secs;
-	jsonw_knum(w, "bandwidth_gb_s",
-	           run_s > 0 ? (double)(d->read_bytes + d->write_bytes) / run_s / 1e9 : 0.0);
-	jsonw_knum(w, "peak_gb_s", s->sdram_peak_bytes_per_s / 1e9);
-	jsonw_obj_end(w);
-
-	if (s->vma_enabled) {
-		const vma_stats *v = &s->vma;
-		jsonw_key(w, "vma");
-		jsonw_obj_begin(w);
-		cache_json(w, "tag_cache", &s->tag_cache);
-		cache_json(w, "l2", &s->l2);
-		jsonw_kuint(w, "meta_reads", v->meta_reads);
-		jsonw_kuint(w, "meta_writes", v->meta_writes);
-		jsonw_kuint(w, "meta_bytes", v->meta_bytes);
-		jsonw_kuint(w, "data_reads", v->data_reads);
-		jsonw_kuint(w, "data_writes", v->data_writes);
-		jsonw_kuint(w, "data_bytes", v->data_bytes);
-		jsonw_kuint(w, "host_fetches", v->host_fetches);
-		jsonw_kuint(w, "host_fetch_bytes", v->host_fetch_bytes);
-		jsonw_kuint(w, "host_writes", v->host_writes);
-		jsonw_kuint(w, "host_write_bytes", v->host_write_bytes);
-		jsonw_kuint(w, "writebacks", v->writebacks);
-		jsonw_kuint(w, "writeback_bytes", v->writeback_bytes);
-		jsonw_kuint(w, "mshr_stall_cycles", v->stall_ticks / s->core_period);
-		jsonw_obj_end(w);
-		const hbus_stats *b = &s->hostbus;
-		jsonw_key(w, "hostbus");
-		jsonw_obj_begin(w);
-		jsonw_kuint(w, "transfers", b->transfers);
-		jsonw_kuint(w, "bytes", b->bytes);
-		jsonw_kuint(w, "busy_ns", b->busy_ticks / 1000);
-		jsonw_knum(w, "utilization", ratio(b->busy_ticks, s->now_ticks));
-		jsonw_knum(w, "peak_mb_s", s->hostbus_peak_bytes_per_s / 1e6);
-		jsonw_obj_end(w);
-	}
-	jsonw_obj_end(w);
+	return hier_is(p) ? hier_vma_merge_share(p->impl) : 0;
 }

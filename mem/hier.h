@@ -28,7 +28,6 @@
 #include <stdint.h>
 
 #include "kernel-ref/diag.h"
-#include "kernel-ref/jsonw.h"
 #include "mem/cache.h"
 #include "mem/hostbus.h"
 #include "mem/memif.h"
@@ -36,11 +35,11 @@
 #include "mem/sdram.h"
 #include "mem/store.h"
 #include "mem/vma.h"
-#include "sim/config.h"
 #include "sim/core/engine.h"
 
 /* Every counter of the hierarchy, copied out by hier_get_stats. Ratios
- * (hit rates, utilisation) are derived by hier_write_json, not counted. */
+ * (hit rates, utilisation) are derived by the report (sim/report_mem.h
+ * hier_write_json), not counted. */
 typedef struct hier_stats {
 	int vma_enabled;
 	uint64_t now_ticks; /* engine time when the stats were taken */
@@ -74,27 +73,48 @@ typedef struct hier_stats {
 	double func_sdram_merge_ticks;
 } hier_stats;
 
-/* Builds the hierarchy from cfg->memory and installs it in p (as
- * mem_init_fixed does). core is the chip clock. image_bytes: size of the
- * memory image; without VMA it must fit in memory.sdram.mb, else a one-line
- * error suggesting configs/saarcor-vma.yaml. store: the bytes (SDRAM's
- * without the VMA, host memory's with it; NULL: addresses only, as trace
- * replay). Returns 0, or -1 with d set. */
-int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
-                  mem_store *store, diag *d);
-/* The parameters mem_init_hier derives from the config (trace replay
- * builds the same caches from them). hier_hbus_params applies the preset
- * and the overriding keys. */
-cache_params hier_l1_params(const saar_config *cfg, int type);
-vma_params hier_vma_params(const saar_config *cfg);
-void hier_hbus_params(const saar_config *cfg, hbus_params *p);
+/* Everything the hierarchy is built from (sim/memconfig.h derives it from
+ * the config's memory.* keys). */
+typedef struct hier_params {
+	cache_params l1[MEM_NTYPES]; /* the L1s, by request type */
+	sdram_params sdram;
+	int memif_policy; /* enum memif_policy */
+	/* the levels, top first, by name: l1, [vma,] sdram (the L1s, the
+	 * VMA's on-board cache of host memory, the memory interface and
+	 * SDRAM); sim/memconfig.c names the stack memory.model and
+	 * memory.vma.enabled give ("l1,sdram", "l1,vma,sdram") */
+	char levels[48];
+	vma_params vma;
+	hbus_params hbus;
+} hier_params;
+
+/* Builds the hierarchy from hp and installs it in p (as mem_init_fixed
+ * does). core is the chip clock. image_bytes: size of the memory image;
+ * without VMA it must fit in on-board memory, else a one-line error
+ * suggesting configs/saarcor-vma.yaml. store: the bytes (SDRAM's without
+ * the VMA, host memory's with it; NULL: addresses only, as trace replay).
+ * Returns 0, or -1 with d set. */
+int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_t image_bytes,
+              mem_store *store, diag *d);
 /* Is p a hierarchy model? */
 int hier_is(const memport *p);
 /* Copies every counter; -1 if p is not a hierarchy. */
 int hier_get_stats(const memport *p, hier_stats *s);
-/* Stored warming (sim/warming.h): the caches whose state functional
- * processing moves (the four L1s; with the VMA its tag cache, NULL when
- * disabled, and on-board cache, else both NULL); pointers to every counter
+/* Checkpoints (stored warming, sim/warming.h): the hierarchy saves and
+ * restores its caches itself, each in its own form (cache_ckpt_save; the
+ * replacement policy saves its per-set state). hier_ckpt_bytes: the bytes
+ * of the caches a checkpoint holds whole (the four L1s, the tag cache if
+ * enabled; 0 without a hierarchy); save them to buf, or load them from it
+ * (-1: a miss in flight, or not a hierarchy). The on-board cache is too
+ * large to store whole: hier_onboard gives it (NULL without the VMA), and
+ * checkpoints store its changed sets by cache_ckpt_save. */
+size_t hier_ckpt_bytes(const memport *p);
+int hier_ckpt_save(const memport *p, void *buf);
+int hier_ckpt_load(memport *p, const void *buf);
+cache *hier_onboard(memport *p);
+/* The caches whose state functional processing moves (the four L1s; with
+ * the VMA its tag cache, NULL when disabled, and on-board cache, else
+ * both NULL; for tests); pointers to every counter
  * functional processing moves (out may be NULL; returns how many there
  * are, at most cap written); the ticks of on-board-cache hits among
  * functional SDRAM reads; and adding to the merged part of them
@@ -111,7 +131,5 @@ void hier_add_merge_ticks(memport *p, double ticks);
  * their way, from the on-board cache's counts so far (the factor on
  * func_sdram_merge_ticks); 0 without the VMA or without a hierarchy. */
 double hier_merge_share(const memport *p);
-/* Writes the stats as one JSON object (a value: the caller writes the key). */
-void hier_write_json(const hier_stats *s, jsonw *w);
 
 #endif

@@ -3,10 +3,11 @@
  *
  * A read is split into pieces, one per L2 line it touches; each piece walks
  * meta lookup -> L2 lookup -> SDRAM data read or host-bus DMA, as engine
- * events. Pieces waiting on an MSHR hang on a per-MSHR list; pieces refused
- * for lack of an MSHR wait in a FIFO and are retried when a fill frees one.
- * Pieces and requests come from free lists that grow in chunks, so the
- * steady state never allocates.
+ * events. The tag cache and the on-board cache are timed caches
+ * (mem/tcache.h): pieces waiting on an MSHR hang on its list; pieces
+ * refused for lack of an MSHR wait in its FIFO and are retried when a fill
+ * frees one. Pieces and requests come from free lists that grow in chunks,
+ * so the steady state never allocates.
  */
 #include "mem/vma.h"
 
@@ -25,7 +26,7 @@ struct vma_req {
 struct vma_piece {
 	vma_piece *next;
 	vma_req *req;
-	uint64_t addr, line, since;
+	uint64_t addr, line;
 	uint8_t *dst; /* where the piece's bytes go; NULL: no data */
 	uint32_t bytes;
 	uint8_t type;
@@ -114,7 +115,7 @@ static cache_params vma_l2_params(uint64_t sdram_bytes, const vma_params *p)
 	uint64_t meta = (uint64_t)p->ways * VMA_META_BYTES_PER_LINE;
 	uint64_t nsets = sdram_bytes / ((uint64_t)p->ways * p->line + meta);
 	return (cache_params){
-	    nsets * p->ways * p->line, p->ways, p->line, VMA_MSHRS, 0, 1, p->hash};
+	    nsets * p->ways * p->line, p->ways, p->line, VMA_MSHRS, 0, 1, p->hash, p->repl};
 }
 
 static cache_params vma_tag_params(const vma_params *p)
@@ -122,7 +123,7 @@ static cache_params vma_tag_params(const vma_params *p)
 	return (cache_params){
 	    p->tag_cache_bytes, p->tag_cache_ways,  p->ways * VMA_META_BYTES_PER_LINE,
 	    VMA_TAG_MSHRS,      p->tag_hit_latency, 1,
-	    CACHE_HASH_NONE};
+	    CACHE_HASH_NONE,    p->tag_repl};
 }
 
 /* 64-bit words of the dirty bits of n on-board lines. */
@@ -159,22 +160,20 @@ int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram
 	if (lp.size_bytes == 0)
 		return diag_set(d, "config", 0, 0,
 		                "memory.sdram.mb: on-board memory too small for one VMA set");
-	if (cache_init(&v->l2, &lp, "memory.vma", d))
+	if (tcache_init(&v->l2, &lp, ms ? TC_DATA : 0, "memory.vma", d))
 		return -1;
 	v->meta_base = lp.size_bytes;
 	if (p->tag_cache_enabled) {
 		cache_params tp = vma_tag_params(p);
-		if (cache_init(&v->tag, &tp, "memory.vma.tag_cache", d)) {
+		if (tcache_init(&v->tag, &tp, 0, "memory.vma.tag_cache", d)) {
 			vma_free(v);
 			return -1;
 		}
 	}
 	v->ms = ms;
 	v->pool = calloc(1, sizeof(vpool));
-	v->l2_wait = calloc(VMA_MSHRS, sizeof *v->l2_wait);
-	v->tag_wait = calloc(VMA_TAG_MSHRS, sizeof *v->tag_wait);
 	v->dirty = calloc(dirty_words(vma_capacity(v)), sizeof *v->dirty);
-	if (!v->pool || !v->l2_wait || !v->tag_wait || !v->dirty || (ms && cache_data_on(&v->l2))) {
+	if (!v->pool || !v->dirty) {
 		vma_free(v);
 		return diag_set(d, "config", 0, 0, "memory.vma: out of memory");
 	}
@@ -183,8 +182,8 @@ int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram
 
 void vma_free(vma *v)
 {
-	cache_free(&v->l2);
-	cache_free(&v->tag);
+	tcache_free(&v->l2);
+	tcache_free(&v->tag);
 	vpool *P = v->pool;
 	if (P)
 		for (vchunk *c = P->chunks, *n; c; c = n) {
@@ -192,17 +191,14 @@ void vma_free(vma *v)
 			free(c);
 		}
 	free(P);
-	free(v->l2_wait);
-	free(v->tag_wait);
 	free(v->dirty);
 	v->pool = NULL;
-	v->l2_wait = v->tag_wait = NULL;
 	v->dirty = NULL;
 }
 
 uint64_t vma_capacity(const vma *v)
 {
-	return (uint64_t)v->l2.nsets * v->l2.p.ways;
+	return (uint64_t)v->l2.c.nsets * v->l2.c.p.ways;
 }
 
 /* ---- data ---- */
@@ -226,7 +222,7 @@ static uint8_t *line_data(vma *v, uint32_t slot)
 {
 	if (!v->ms)
 		return NULL;
-	uint8_t *d = cache_data(&v->l2, slot);
+	uint8_t *d = cache_data(&v->l2.c, slot);
 	if (!d)
 		v->oom = 1;
 	return d;
@@ -269,8 +265,8 @@ void vma_peek(const vma *v, uint64_t addr, uint32_t bytes, void *dst)
 		uint64_t lend = (line + 1) * v->p.line;
 		uint32_t n = (uint32_t)((end < lend ? end : lend) - a), slot;
 		const uint8_t *d = NULL;
-		if (v->ms && cache_probe(&v->l2, line, &slot))
-			d = cache_data_at(&v->l2, slot);
+		if (v->ms && cache_probe(&v->l2.c, line, &slot))
+			d = cache_data_at(&v->l2.c, slot);
 		if (d)
 			memcpy(o, d + a % v->p.line, n);
 		else if (v->ms)
@@ -284,13 +280,13 @@ void vma_peek(const vma *v, uint64_t addr, uint32_t bytes, void *dst)
 
 void vma_reload(vma *v, const uint64_t *sets)
 {
-	uint32_t W = v->l2.p.ways;
-	int ns = (int)v->l2.nsets;
+	uint32_t W = v->l2.c.p.ways;
+	int ns = (int)v->l2.c.nsets;
 	for (int s = bits_next(sets, ns, 0); s < ns; s = bits_next(sets, ns, s + 1))
 		for (uint32_t i = 0; i < W; i++) {
 			uint32_t slot = (uint32_t)s * W + i;
 			set_dirty(v, slot, 0);
-			uint64_t line = v->l2.way[slot].tag;
+			uint64_t line = v->l2.c.way[slot].tag;
 			uint8_t *d = line == CACHE_INVALID ? NULL : line_data(v, slot);
 			if (d)
 				ms_read(v->ms, line * v->p.line, v->p.line, d);
@@ -331,58 +327,29 @@ static uint64_t meta_addr(const vma *v, uint32_t set)
 	return v->meta_base + (uint64_t)set * v->meta_set_bytes;
 }
 
-static void stall_push(vma_piece **head, vma_piece **tail, vma_piece *p, uint64_t t)
+/* A piece refused for lack of a tag-cache MSHR, retried (tc_retry). */
+static int meta_retry(void *ctx, void *who, uint64_t since, uint64_t now)
 {
-	p->since = t;
-	p->next = NULL;
-	if (*tail)
-		(*tail)->next = p;
-	else
-		*head = p;
-	*tail = p;
-}
-
-/* Takes the oldest stalled piece and charges its wait to stall_ticks. */
-static vma_piece *stall_pop(vma *v, vma_piece **head, vma_piece **tail, uint64_t now)
-{
-	vma_piece *p = *head;
-	*head = p->next;
-	if (!*head)
-		*tail = NULL;
-	v->s.stall_ticks += now - p->since;
-	return p;
-}
-
-/* The pieces waiting for line of cache c (wait: its per-MSHR lists),
- * taken off the MSHR before the fill frees it. */
-static vma_piece *take_waiting(cache *c, vma_piece **wait, uint64_t line)
-{
-	int m = cache_mshr_find(c, line);
-	if (m < 0)
-		return NULL;
-	vma_piece *w = wait[m];
-	wait[m] = NULL;
-	return w;
+	vma *v = ctx;
+	v->s.stall_ticks += now - since;
+	meta_phase(v, who, now);
+	return 0; /* an MSHR is free: it cannot be refused */
 }
 
 static void tag_filled(eng *e, void *ctx, uint64_t set)
 {
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
-	vma_piece *w = take_waiting(&v->tag, v->tag_wait, set);
-	cache_fill(&v->tag, set, NULL);
-	while (w) {
-		vma_piece *n = w->next;
-		data_phase(v, w, now);
-		w = n;
-	}
-	while (v->tag_stall && cache_mshr_free(&v->tag))
-		meta_phase(v, stall_pop(v, &v->tag_stall, &v->tag_stall_tail, now), now);
+	tc_wait *w = tcache_take(&v->tag, set, NULL);
+	cache_fill(&v->tag.c, set, NULL);
+	for (vma_piece *p; (p = tcache_pop(&v->tag, &w));)
+		data_phase(v, p, now);
+	tcache_resume(&v->tag, now, meta_retry, v);
 }
 
 static void meta_phase(vma *v, vma_piece *p, uint64_t t)
 {
-	uint32_t set = cache_set_of(&v->l2, p->line);
+	uint32_t set = cache_set_of(&v->l2.c, p->line);
 	if (!v->p.tag_cache_enabled) {
 		v->s.meta_reads++;
 		v->s.meta_bytes += v->meta_set_bytes;
@@ -390,37 +357,43 @@ static void meta_phase(vma *v, vma_piece *p, uint64_t t)
 		             ev_data_phase, v, (uintptr_t)p);
 		return;
 	}
-	int m = -1;
-	switch (cache_lookup(&v->tag, set, v->meta_set_bytes, &m, NULL)) {
+	switch (tcache_lookup(&v->tag, set, v->meta_set_bytes, p, NULL, NULL)) {
 	case CACHE_HIT:
 		eng_schedule(v->e,
 		             eng_next_edge(v->core, t) + v->p.tag_hit_latency * v->core.period,
 		             ev_data_phase, v, (uintptr_t)p);
 		break;
-	case CACHE_MISS_NEW:
+	case CACHE_MISS_NEW: /* p waits on the MSHR for the record */
 		v->s.meta_reads++;
 		v->s.meta_bytes += v->meta_set_bytes;
 		memif_submit(v->mi, t, MEMIF_META, meta_addr(v, set), v->meta_set_bytes, 0,
 		             tag_filled, v, set);
-		/* fall through */
+		break;
 	case CACHE_MISS_MERGED:
-		p->next = v->tag_wait[m];
-		v->tag_wait[m] = p;
 		break;
 	case CACHE_MSHR_FULL:
-		stall_push(&v->tag_stall, &v->tag_stall_tail, p, t);
+		tcache_stall(&v->tag, p, t);
 		break;
 	}
+}
+
+/* A piece refused for lack of an on-board-cache MSHR, retried. */
+static int data_retry(void *ctx, void *who, uint64_t since, uint64_t now)
+{
+	vma *v = ctx;
+	v->s.stall_ticks += now - since;
+	data_phase(v, who, now);
+	return 0; /* an MSHR is free: it cannot be refused */
 }
 
 static void dma_done(eng *e, void *ctx, uint64_t line)
 {
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
-	vma_piece *w = take_waiting(&v->l2, v->l2_wait, line);
+	tc_wait *w = tcache_take(&v->l2, line, NULL);
 	uint64_t victim;
-	uint32_t slot = cache_fill(&v->l2, line, &victim);
-	uint32_t set = cache_set_of(&v->l2, line);
+	uint32_t slot = cache_fill(&v->l2.c, line, &victim);
+	uint32_t set = cache_set_of(&v->l2.c, line);
 	if (fill_slot(v, slot, line, victim)) {
 		/* the dirty victim leaves SDRAM for host memory */
 		memif_submit(v->mi, now, MEMIF_FILL, (uint64_t)slot * v->p.line, v->p.line, 0, NULL,
@@ -438,21 +411,17 @@ static void dma_done(eng *e, void *ctx, uint64_t line)
 	memif_submit(v->mi, now, MEMIF_META, meta_addr(v, set), v->meta_set_bytes, 1, NULL, NULL,
 	             0);
 	/* the requested bytes are forwarded from the DMA buffer */
-	while (w) {
-		vma_piece *n = w->next;
-		from_line(v, slot, w->addr, w->bytes, w->dst);
-		piece_finish(v, w);
-		w = n;
+	for (vma_piece *p; (p = tcache_pop(&v->l2, &w));) {
+		from_line(v, slot, p->addr, p->bytes, p->dst);
+		piece_finish(v, p);
 	}
-	while (v->l2_stall && cache_mshr_free(&v->l2))
-		data_phase(v, stall_pop(v, &v->l2_stall, &v->l2_stall_tail, now), now);
+	tcache_resume(&v->l2, now, data_retry, v);
 }
 
 static void data_phase(vma *v, vma_piece *p, uint64_t t)
 {
-	int m = -1;
 	uint32_t slot = 0;
-	switch (cache_lookup(&v->l2, p->line, p->bytes, &m, &slot)) {
+	switch (tcache_lookup(&v->l2, p->line, p->bytes, p, NULL, &slot)) {
 	case CACHE_HIT:
 		v->s.data_reads++;
 		v->s.data_bytes += p->bytes;
@@ -460,17 +429,15 @@ static void data_phase(vma *v, vma_piece *p, uint64_t t)
 		memif_submit(v->mi, t, p->type, (uint64_t)slot * v->p.line + p->addr % v->p.line,
 		             p->bytes, 0, ev_piece_done, v, (uintptr_t)p);
 		break;
-	case CACHE_MISS_NEW:
+	case CACHE_MISS_NEW: /* p waits on the MSHR for the line */
 		v->s.host_fetches++;
 		v->s.host_fetch_bytes += v->p.line;
 		eng_schedule(v->e, hbus_transfer(v->hb, t, v->p.line), dma_done, v, p->line);
-		/* fall through */
+		break;
 	case CACHE_MISS_MERGED:
-		p->next = v->l2_wait[m];
-		v->l2_wait[m] = p;
 		break;
 	case CACHE_MSHR_FULL:
-		stall_push(&v->l2_stall, &v->l2_stall_tail, p, t);
+		tcache_stall(&v->l2, p, t);
 		break;
 	}
 }
@@ -495,7 +462,7 @@ int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, void *
 		if (!p)
 			return -1;
 		uint8_t *pd = dst ? (uint8_t *)dst + (a - addr) : NULL;
-		*p = (vma_piece){NULL, r, a, line, 0, pd, n, (uint8_t)type};
+		*p = (vma_piece){NULL, r, a, line, pd, n, (uint8_t)type};
 		r->pending++;
 		meta_phase(v, p, t);
 		a += n;
@@ -532,7 +499,7 @@ int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, const
 		uint64_t lend = (line + 1) * v->p.line;
 		uint32_t n = (uint32_t)((end < lend ? end : lend) - a);
 		uint32_t slot = 0;
-		int on = cache_probe(&v->l2, line, &slot);
+		int on = cache_probe(&v->l2.c, line, &slot);
 		write_data(v, slot, on, a, n, src ? (const uint8_t *)src + (a - addr) : NULL);
 		if (on) {
 			v->s.data_writes++;
@@ -569,7 +536,7 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write, void *dat
 		a += n;
 		if (write) {
 			uint32_t slot = 0;
-			int on = cache_probe(&v->l2, line, &slot);
+			int on = cache_probe(&v->l2.c, line, &slot);
 			write_data(v, slot, on, at, n, pd);
 			if (on) {
 				v->s.data_writes++;
@@ -580,15 +547,15 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write, void *dat
 			}
 			continue;
 		}
-		uint32_t set = cache_set_of(&v->l2, line);
+		uint32_t set = cache_set_of(&v->l2.c, line);
 		if (!v->p.tag_cache_enabled ||
-		    cache_access(&v->tag, (uint64_t)set * v->meta_set_bytes, v->meta_set_bytes)) {
+		    cache_access(&v->tag.c, (uint64_t)set * v->meta_set_bytes, v->meta_set_bytes)) {
 			v->s.meta_reads++;
 			v->s.meta_bytes += v->meta_set_bytes;
 		}
 		uint32_t slot;
 		uint64_t victim;
-		if (cache_lookup_func_at(&v->l2, line, n, &slot, &victim)) {
+		if (cache_lookup_func_at(&v->l2.c, line, n, &slot, &victim)) {
 			v->s.data_reads++;
 			v->s.data_bytes += n;
 			if (pd && slot == CACHE_NO_SLOT) /* on its way: host memory's bytes */

@@ -44,6 +44,7 @@
 #include "mem/hostbus.h"
 #include "mem/memif.h"
 #include "mem/store.h"
+#include "mem/tcache.h"
 #include "sim/core/engine.h"
 
 #define VMA_META_BYTES_PER_LINE 5u  /* 40 bits of tag + state per line, §4.2 */
@@ -57,6 +58,9 @@ typedef struct vma_params {
 	uint64_t tag_cache_bytes;
 	uint32_t tag_cache_ways;
 	uint32_t tag_hit_latency; /* core cycles */
+	/* replacement of the on-board cache and of the tag cache (mem/repl.h;
+	 * NULL: LRU) */
+	const repl_policy *repl, *tag_repl;
 } vma_params;
 
 typedef struct vma_stats {
@@ -78,16 +82,14 @@ typedef struct vma {
 	memif *mi;
 	hbus *hb;
 	vma_params p;
-	cache l2;  /* functional state of the on-board cache */
-	cache tag; /* the on-chip tag cache (valid if p.tag_cache_enabled) */
+	tcache l2;  /* the on-board cache (timed; its tags and state are in SDRAM) */
+	tcache tag; /* the on-chip tag cache (valid if p.tag_cache_enabled) */
 	uint32_t meta_set_bytes;
-	uint64_t meta_base;              /* SDRAM address of the meta-data region */
-	vma_piece **tag_wait, **l2_wait; /* per MSHR: pieces waiting for its fill */
-	vma_piece *tag_stall, *tag_stall_tail, *l2_stall, *l2_stall_tail;
-	void *pool;      /* allocator of pieces and requests (vma.c) */
-	uint64_t *dirty; /* per on-board line (set * ways + way): written since its fill */
-	mem_store *ms;   /* host memory's bytes; NULL: the VMA moves no data */
-	int oom;         /* an on-board line found no memory for its bytes */
+	uint64_t meta_base; /* SDRAM address of the meta-data region */
+	void *pool;         /* allocator of pieces and requests (vma.c) */
+	uint64_t *dirty;    /* per on-board line (set * ways + way): written since its fill */
+	mem_store *ms;      /* host memory's bytes; NULL: the VMA moves no data */
+	int oom;            /* an on-board line found no memory for its bytes */
 	vma_stats s;
 } vma;
 

@@ -23,7 +23,7 @@
 #include "kernel-ref/render.h"
 #include "kernel-ref/world.h"
 #include "kernel-ref/worldcache.h"
-#include "mem/hier.h"
+#include "sim/memconfig.h"
 #include "mem/memport.h"
 #include "mem/store.h"
 #include "sim/config.h"

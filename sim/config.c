@@ -75,7 +75,11 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 	 .desc = "accesses the " what " cache accepts per core cycle (all RTPs together)"},        \
 	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, 16, 1, 4096, "lines"), TIMING,           \
 	 .source = "not published; one per thread of an RTP",                                      \
-	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"}
+	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"},      \
+	{KEY("memory.l1." #c ".replacement", CFG_STR, memory.l1.c.replacement, 0, 0, 0, ""),       \
+	 .sdef = "lru", .source = "not published; LRU assumed (exact; the seed names no policy)",  \
+	 .desc = "replacement policy of the " what " cache: lru, plru (tree pseudo-LRU), fifo, "   \
+	         "or one registered by name (docs/extending-mem.md)"}
 #define FP(st, what)                                                                               \
 	{INT("chip.fp." #st ".exp", chip.fp.st.exp, 8, 2, 8, "bits"),                              \
 	 .source = "§4.6: SaarCOR cut each stage's floats to the precision it needs; 8 = float",   \
@@ -221,6 +225,11 @@ static const cfg_key keys_src[] = {
     {INT("memory.latency", memory.latency, 20, 0, 100000, "core cycles"), TIMING,
      .source = "placeholder; an L1 hit plus some misses",
      .desc = "latency of every memory access in the fixed model"},
+    {KEY("memory.levels", CFG_STR, memory.levels, 0, 0, 0, ""), .sdef = "",
+     .source = "a model setting (docs/memory.md, \"Levels\")",
+     .desc = "the memory stack by level names, top first: fixed, or l1, [vma,] sdram; "
+             "setting it sets memory.model and memory.vma.enabled; empty = as those keys say "
+             "(l1,sdram or l1,vma,sdram)"},
     L1(shade, "shading (RGS)", 64),
     L1(kd, "kd-node (traversal)", 64),
     L1(list, "triangle-address list", 64),
@@ -276,6 +285,13 @@ static const cfg_key keys_src[] = {
      TIMING, .source = "not published; as the L1 caches", .desc = "tag cache hit latency"},
     {BOOL("memory.vma.tag_cache_enabled", memory.vma.tag_cache_enabled, 1), PUB "§4.2",
      .desc = "false: every meta-data lookup reads SDRAM (for studies)"},
+    {KEY("memory.vma.replacement", CFG_STR, memory.vma.replacement, 0, 0, 0, ""), .sdef = "lru",
+     .source = "not published; LRU assumed (the seed names no policy)",
+     .desc = "replacement policy of the on-board L2 cache: lru, plru, fifo (mem/repl.h)"},
+    {KEY("memory.vma.tag_cache_replacement", CFG_STR, memory.vma.tag_cache_replacement, 0, 0, 0,
+         ""),
+     .sdef = "lru", .source = "not published; LRU assumed (as the L1 caches)",
+     .desc = "replacement policy of the tag cache: lru, plru, fifo (mem/repl.h)"},
     {ENUM("memory.hostbus.preset", memory.hostbus.preset, hostbus_preset_names),
      PUB "§4.7 (standard PCI)",
      .desc = "host bus: pci = 32 bit/33 MHz, pci66 = 64 bit/66 MHz, agp = 32 bit at 266 MT/s "
@@ -426,6 +442,35 @@ void cfg_defaults(saar_config *c)
 
 /* Parses text s into key k of c. On error writes a message (without the
  * location, which the caller knows) into err and returns -1. */
+/* Does the stack name `name` (a comma-separated list) hold level lv? */
+static bool levels_has(const char *name, const char *lv)
+{
+	size_t n = strlen(lv);
+	for (const char *p = name; *p;) {
+		p += strspn(p, ", ");
+		size_t k = strcspn(p, ", ");
+		if (k == n && !strncmp(p, lv, n))
+			return true;
+		p += k;
+	}
+	return false;
+}
+
+/* memory.levels was set: the two keys that name today's stacks follow it
+ * (the structure itself is checked where the stack is built). */
+static void levels_apply(saar_config *c)
+{
+	const char *l = c->memory.levels;
+	if (!*l)
+		return;
+	if (levels_has(l, "fixed")) {
+		c->memory.model = CFG_MEM_FIXED;
+		return;
+	}
+	c->memory.model = CFG_MEM_HIERARCHY;
+	c->memory.vma.enabled = levels_has(l, "vma");
+}
+
 static int set_value(saar_config *c, const cfg_key *k, const char *s, char *err, size_t n)
 {
 	char *end;
@@ -488,6 +533,8 @@ static int set_value(saar_config *c, const cfg_key *k, const char *s, char *err,
 			return -1;
 		}
 		snprintf(field(c, k), k->size, "%s", s);
+		if (field(c, k) == (void *)c->memory.levels)
+			levels_apply(c);
 		return 0;
 	}
 	if (v < k->min || v > k->max) {
@@ -732,9 +779,18 @@ int cfg_set(saar_config *c, const char *assignment, diag *d)
 
 int cfg_validate(const saar_config *c, diag *d)
 {
-	(void)c;
-	(void)d;
-	/* No key constrains another today. (A packet is an 8 x 8 tile: both
+	/* memory.levels set the model and the VMA; a later key must not
+	 * contradict it */
+	const char *l = c->memory.levels;
+	if (*l && (levels_has(l, "fixed") ? c->memory.model != CFG_MEM_FIXED
+	                                  : c->memory.model != CFG_MEM_HIERARCHY ||
+	                                        c->memory.vma.enabled != levels_has(l, "vma")))
+		return diag_set(
+		    d, "config", 0, 0,
+		    "memory.levels '%s' disagrees with memory.model or memory.vma.enabled "
+		    "set after it; set one or the other",
+		    l);
+	/* No other key constrains another today. (A packet is an 8 x 8 tile: both
 	 * packet keys' ranges are [8, 8].) chip.stack_depth may be below the
 	 * tree depth: the traversal unit spills the entries beyond it to
 	 * memory and reads them back (units/traversal.c, counted as

@@ -50,6 +50,7 @@ typedef struct cfg_l1 {
 	int size_kb, ways, line; /* capacity, associativity, line bytes (any size) */
 	int hit_latency, ports;  /* core cycles; accesses accepted per core cycle */
 	int mshrs;               /* outstanding missed lines */
+	char replacement[32];    /* policy name (mem/repl.h) */
 } cfg_l1;
 
 /* A floating-point format of one datapath stage (kernel-ref/fpfmt.h). */
@@ -93,6 +94,9 @@ typedef struct saar_config {
 	struct {
 		cfg_mem_model model;
 		int latency;
+		/* the stack, top first ("fixed", "l1,vma,sdram"); "": from model
+		 * and vma.enabled. Setting it sets those two (docs/memory.md) */
+		char levels[48];
 		struct {
 			cfg_l1 shade, kd, list, tri;
 		} l1;
@@ -111,6 +115,8 @@ typedef struct saar_config {
 			cfg_addr_hash hash;
 			int tag_cache_kb, tag_cache_ways, tag_cache_latency;
 			bool tag_cache_enabled;
+			/* policy names (mem/repl.h) of the on-board and tag caches */
+			char replacement[32], tag_cache_replacement[32];
 		} vma;
 		struct {
 			cfg_hostbus_preset preset;

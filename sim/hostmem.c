@@ -25,7 +25,7 @@
 #include "kernel-ref/framebuf.h"
 #include "kernel-ref/packet.h"
 #include "mem/cache.h"
-#include "mem/hier.h"
+#include "sim/memconfig.h"
 #include "mem/store.h"
 #include "mem/vma.h"
 #include "sim/chip.h"

@@ -21,6 +21,7 @@
 #include "kernel-ref/atomicfile.h"
 #include "kernel-ref/infile.h"
 #include "sim/hostmem.h"
+#include "sim/report_mem.h"
 #include "sim/reportcheck.h"
 
 static double ratio(double a, double b)

@@ -11,9 +11,10 @@
  *   offsets    frames x nfull uint64: each full checkpoint's offset
  *   full       per full checkpoint: wm_fhead, the slots (mode_replay_state, turn
  *              order), per RTP its queue length then the queued packet
- *              ids, the L1s and tag cache whole (cache_save form: lines
- *              then ranks), the on-board cache's changed sets (their
- *              count, indices, lines, ranks)
+ *              ids, the L1s and tag cache whole (hier_ckpt_save: each
+ *              cache in its own checkpoint form, lines then its policy's
+ *              state), the on-board cache's changed sets (their count,
+ *              indices, then each set's cache_ckpt_save form)
  */
 #include "sim/warming.h"
 
@@ -27,14 +28,13 @@
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
 
-#define WM_MAGIC   "saarwm02"
-#define WM_NCACHES 5 /* the four L1s and the VMA tag cache */
+#define WM_MAGIC "saarwm03"
 
 typedef struct wm_head {
 	char magic[8];
 	int32_t frames, ntiles, g_light, g_full, nlight, nfull, nslots, nrtp;
 	int32_t l2_sets, l2_ways;
-	uint32_t sets[WM_NCACHES], ways[WM_NCACHES];
+	uint64_t whole_bytes; /* hier_ckpt_bytes: the caches stored whole */
 	uint64_t ncnt, light_at, offs_at, full_at, full_bytes;
 } wm_head;
 
@@ -83,16 +83,10 @@ static uint64_t **counters_of(chip *c, size_t *n)
 	return p;
 }
 
-/* The caches stored whole (NULL entries: absent) and the on-board one. */
-static int caches_of(chip *c, cache *k[WM_NCACHES], cache **l2)
+/* The on-board cache (NULL: none), stored by set. */
+static cache *onboard(chip *c)
 {
-	if (!hier_is(&c->mem)) {
-		memset(k, 0, WM_NCACHES * sizeof *k);
-		*l2 = NULL;
-		return 0;
-	}
-	hier_caches(&c->mem, k, &k[4], l2);
-	return 1;
+	return hier_onboard(&c->mem);
 }
 
 static int nlight_of(int ntiles, int g)
@@ -139,8 +133,8 @@ int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full)
 	w->foff = malloc((size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
 	if (w->foff) /* a checkpoint jittered past the frame's end is never written */
 		memset(w->foff, 0xff, (size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
-	cache *k[WM_NCACHES], *l2;
-	if (caches_of(c, k, &l2) && l2 && cache_track(l2))
+	cache *l2 = onboard(c);
+	if (l2 && cache_track(l2))
 		w->failed = 1;
 	if (!w->cnt || !w->light || !w->foff || w->failed) {
 		wm_writer_free(w);
@@ -194,16 +188,11 @@ static uint8_t *full_room(wm_writer *w, size_t n)
 	return p;
 }
 
-/* Appends cache_save's form of n sets from set0 (lines, then ranks). */
-static void put_sets(wm_writer *w, const cache *k, uint32_t set0, uint32_t n)
+/* Appends set `set` of the on-board cache in its checkpoint form. */
+static void put_set(wm_writer *w, const cache *l2, uint32_t set)
 {
-	size_t nw = (size_t)n * k->p.ways;
-	size_t at = w->nfullb;
-	if (!full_room(w, nw * 4) || !full_room(w, nw))
-		return;
-	uint32_t *line = (uint32_t *)(void *)(w->full + at);
-	uint8_t *rank = w->full + at + pad8(nw * 4);
-	if (cache_save(k, set0, n, line, rank))
+	uint8_t *p = full_room(w, cache_ckpt_bytes(l2, 1));
+	if (p && cache_ckpt_save(l2, set, 1, p))
 		w->failed = 1;
 }
 
@@ -238,12 +227,17 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 			return;
 		}
 	}
-	cache *k[WM_NCACHES], *l2;
-	if (!caches_of(c, k, &l2))
+	if (!hier_is(&c->mem))
 		return;
-	for (int i = 0; i < WM_NCACHES; i++)
-		if (k[i])
-			put_sets(w, k[i], 0, k[i]->nsets);
+	/* the caches stored whole save themselves */
+	size_t wb = hier_ckpt_bytes(&c->mem);
+	if (!(p = full_room(w, wb)))
+		return;
+	if (hier_ckpt_save(&c->mem, p)) {
+		w->failed = 1;
+		return;
+	}
+	cache *l2 = onboard(c);
 	if (!l2)
 		return;
 	/* the on-board cache's sets changed since the last full checkpoint */
@@ -260,7 +254,7 @@ void wm_put_full(wm_writer *w, chip *c, int frame, int tile)
 	}
 	for (int s = bits_next(l2->dirty, (int)l2->nsets, 0); s < (int)l2->nsets;
 	     s = bits_next(l2->dirty, (int)l2->nsets, s + 1))
-		put_sets(w, l2, (uint32_t)s, 1);
+		put_set(w, l2, (uint32_t)s);
 	cache_dirty_clear(l2);
 }
 
@@ -304,12 +298,8 @@ static void geometry(chip *c, wm_head *h)
 {
 	h->nslots = c->nrtp * c->tpr;
 	h->nrtp = c->nrtp;
-	cache *k[WM_NCACHES], *l2;
-	caches_of(c, k, &l2);
-	for (int i = 0; i < WM_NCACHES; i++) {
-		h->sets[i] = k[i] ? k[i]->nsets : 0;
-		h->ways[i] = k[i] ? k[i]->p.ways : 0;
-	}
+	cache *l2 = onboard(c);
+	h->whole_bytes = hier_ckpt_bytes(&c->mem);
 	h->l2_sets = l2 ? (int32_t)l2->nsets : 0;
 	h->l2_ways = l2 ? (int32_t)l2->p.ways : 0;
 }
@@ -321,8 +311,7 @@ void wm_close(wm *r)
 	free(r->cnt);
 	free(r->is_max);
 	free(r->prev);
-	free(r->l2line);
-	free(r->l2rank);
+	free(r->l2img);
 	free(r->l2pend);
 	memset(r, 0, sizeof *r);
 }
@@ -366,16 +355,15 @@ int wm_open(wm *r, const void *b, size_t n, chip *c)
 	for (size_t i = 0; i < ncnt; i++)
 		r->is_max[i] =
 		    r->cnt[i] == c->env.c[C_MAX_SP] || r->cnt[i] == c->env.c[C_MAX_QUEUE];
-	cache *k[WM_NCACHES], *l2;
-	caches_of(c, k, &l2);
+	cache *l2 = onboard(c);
 	if (l2) {
-		size_t nw = (size_t)l2->nsets * l2->p.ways;
-		r->l2line = malloc(nw * sizeof *r->l2line);
-		r->l2rank = calloc(nw, 1);
+		r->l2set = cache_ckpt_bytes(l2, 1);
+		r->l2img = malloc(l2->nsets * r->l2set);
 		r->l2pend = calloc((size_t)bits_words((int)l2->nsets), sizeof *r->l2pend);
-		if (!r->l2line || !r->l2rank || !r->l2pend || cache_track(l2))
+		if (!r->l2img || !r->l2pend || cache_track(l2))
 			goto fail;
-		memset(r->l2line, 0xff, nw * sizeof *r->l2line);
+		for (uint32_t s = 0; s < l2->nsets; s++) /* empty at the start */
+			cache_ckpt_empty(l2, 1, r->l2img + s * r->l2set);
 	}
 	return 0;
 fail:
@@ -478,26 +466,19 @@ static void roll_l2(wm *r, chip *c, int gi, const cache *l2)
 	const wm_head *h = (const wm_head *)(const void *)r->b;
 	rd d = full_reader(r, gi);
 	skip_threads(&d, h->nslots, h->nrtp);
-	for (int i = 0; i < WM_NCACHES; i++)
-		if (h->sets[i]) {
-			size_t nw = (size_t)h->sets[i] * h->ways[i];
-			take(&d, nw * 4);
-			take(&d, nw);
-		}
+	take(&d, h->whole_bytes);
 	/* the count and the set indices are one block */
 	uint32_t nd = 0;
 	if (!d.bad && d.end - d.p >= 4)
 		memcpy(&nd, d.p, 4);
 	const uint8_t *p = take(&d, 4 + 4 * (size_t)nd), *sets = p ? p + 4 : NULL;
-	uint32_t W = l2->p.ways;
 	for (uint32_t j = 0; j < nd && !d.bad; j++) {
 		uint32_t s;
 		memcpy(&s, sets + 4 * (size_t)j, 4);
-		const uint8_t *line = take(&d, 4 * (size_t)W), *rank = take(&d, W);
-		if (!line || !rank || s >= l2->nsets)
+		const uint8_t *img = take(&d, r->l2set);
+		if (!img || s >= l2->nsets)
 			break;
-		memcpy(r->l2line + (size_t)s * W, line, 4 * (size_t)W);
-		memcpy(r->l2rank + (size_t)s * W, rank, W);
+		memcpy(r->l2img + s * r->l2set, img, r->l2set);
 		bits_set(r->l2pend, (int)s);
 	}
 	(void)c;
@@ -509,8 +490,7 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 	if (frame >= r->frames || tile >= r->ntiles || !wm_is_full(r->g_light, r->g_full, tile))
 		return -1;
 	int gi = frame * r->nfull + tile / r->g_full;
-	cache *k[WM_NCACHES], *l2;
-	caches_of(c, k, &l2);
+	cache *l2 = onboard(c);
 	if (gi < r->next_full - 1)
 		return -1;
 	for (; r->next_full <= gi; r->next_full++)
@@ -543,29 +523,23 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 		if (mode_queue_restore(c->md.in, &c->rtp[q], p + 4, qn))
 			return -1;
 	}
-	/* the caches stored whole */
-	for (int i = 0; i < WM_NCACHES; i++) {
-		if (!h->sets[i])
-			continue;
-		size_t nw = (size_t)h->sets[i] * h->ways[i];
-		const uint8_t *line = take(&d, nw * 4), *rank = take(&d, nw);
-		if (!line || !rank || !k[i] || k[i]->mshr_used)
+	/* the caches stored whole restore themselves */
+	if (h->whole_bytes) {
+		const uint8_t *wp = take(&d, h->whole_bytes);
+		if (!wp || hier_ckpt_load(&c->mem, wp))
 			return -1;
-		cache_load(k[i], 0, k[i]->nsets, (const uint32_t *)(const void *)line, rank);
 	}
 	/* the on-board cache: the sets the checkpoints since the last restore
 	 * or the region since it changed */
 	if (l2) {
-		if (l2->mshr_used)
+		if (cache_busy(l2))
 			return -1;
-		uint32_t W = l2->p.ways;
 		int ns = (int)l2->nsets;
 		for (int w = 0; w < bits_words(ns); w++)
 			r->l2pend[w] |= l2->dirty[w];
 		for (int s = bits_next(r->l2pend, ns, 0); s < ns;
 		     s = bits_next(r->l2pend, ns, s + 1))
-			cache_load(l2, (uint32_t)s, 1, r->l2line + (size_t)s * W,
-			           r->l2rank + (size_t)s * W);
+			cache_ckpt_load(l2, (uint32_t)s, 1, r->l2img + (size_t)s * r->l2set);
 	}
 	/* the loaded lines' bytes (every packet replays here, so nothing
 	 * decodes them; the lines stay true to their addresses all the same) */

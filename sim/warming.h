@@ -100,10 +100,11 @@ typedef struct wm {
 	uint8_t *is_max; /* per counter: a maximum, not a sum */
 	uint64_t *prev;  /* the counters at the last region's end */
 	uint64_t prev_l2hit;
-	/* the on-board cache at the last full checkpoint applied, sets to
-	 * copy into the chip at the next restore, and that checkpoint */
-	uint32_t *l2line;
-	uint8_t *l2rank;
+	/* the on-board cache at the last full checkpoint applied (each set
+	 * in its own checkpoint form, l2set bytes), sets to copy into the
+	 * chip at the next restore, and that checkpoint */
+	uint8_t *l2img;
+	size_t l2set;
 	uint64_t *l2pend;
 	int next_full;
 } wm;

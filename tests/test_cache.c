@@ -56,7 +56,7 @@ static void compare(const uint64_t *addr, const uint32_t *bytes, size_t n, uint6
 {
 	cache c;
 	diag d;
-	cache_params p = {size, ways, line, 4, 1, 1, CACHE_HASH_NONE};
+	cache_params p = {size, ways, line, 4, 1, 1, CACHE_HASH_NONE, NULL};
 	cr_assert_eq(cache_init(&c, &p, "test", &d), 0, "%s", d.msg);
 	ref r;
 	ref_init(&r, size, ways, line);
@@ -168,7 +168,7 @@ Test(cache, line_index_and_sets)
 {
 	cache c;
 	diag d;
-	cache_params p = {144 << 10, 4, 36, 2, 1, 1, CACHE_HASH_NONE};
+	cache_params p = {144 << 10, 4, 36, 2, 1, 1, CACHE_HASH_NONE, NULL};
 	cr_assert_eq(cache_init(&c, &p, "tri", &d), 0);
 	cr_assert_eq(c.nsets, 1024);
 	cr_assert_eq(cache_line_of(&c, 35), 0);
@@ -186,7 +186,7 @@ Test(cache, mshr_merge_and_full)
 {
 	cache c;
 	diag d;
-	cache_params p = {1024, 2, 16, 2, 1, 1, CACHE_HASH_NONE};
+	cache_params p = {1024, 2, 16, 2, 1, 1, CACHE_HASH_NONE, NULL};
 	cr_assert_eq(cache_init(&c, &p, "t", &d), 0);
 	int m1 = -1, m2 = -1, m3 = -1;
 	cr_assert_eq(cache_lookup(&c, 5, 16, &m1, NULL), CACHE_MISS_NEW);
@@ -218,7 +218,7 @@ Test(cache, functional_lookup_beside_timed_misses)
 {
 	cache c;
 	diag d;
-	cache_params p = {1024, 2, 16, 2, 1, 1, CACHE_HASH_NONE};
+	cache_params p = {1024, 2, 16, 2, 1, 1, CACHE_HASH_NONE, NULL};
 	cr_assert_eq(cache_init(&c, &p, "t", &d), 0);
 	int m1 = -1, m2 = -1;
 	cr_assert_eq(cache_lookup(&c, 5, 16, &m1, NULL), CACHE_MISS_NEW);
@@ -246,7 +246,7 @@ Test(cache, xor_hash_spreads_strides)
 {
 	cache c;
 	diag d;
-	cache_params p = {128 * 4 * 256, 4, 128, 1, 1, 1, CACHE_HASH_XOR};
+	cache_params p = {128 * 4 * 256, 4, 128, 1, 1, 1, CACHE_HASH_XOR, NULL};
 	cr_assert_eq(cache_init(&c, &p, "l2", &d), 0);
 	/* lines 256 apart all map to set 0 without hashing */
 	int used[256] = {0}, distinct = 0;
@@ -263,7 +263,7 @@ Test(cache, bad_params)
 {
 	cache c;
 	diag d;
-	cache_params p = {64, 4, 36, 1, 1, 1, CACHE_HASH_NONE};
+	cache_params p = {64, 4, 36, 1, 1, 1, CACHE_HASH_NONE, NULL};
 	cr_assert_neq(cache_init(&c, &p, "memory.l1.tri", &d), 0);
 	cr_assert(strstr(d.msg, "memory.l1.tri"), "%s", d.msg);
 }

@@ -348,9 +348,9 @@ Test(memtrace, reads_version_1)
  * hashes). */
 Test(memtrace, replay_hit_path_equals_lookup)
 {
-	cache_params ps[] = {{2048 * 32, 4, 8, 4, 1, 1, CACHE_HASH_NONE},
-	                     {711 * 4 * 36, 4, 36, 4, 1, 1, CACHE_HASH_NONE},
-	                     {64 * 2 * 16, 2, 16, 4, 1, 1, CACHE_HASH_XOR}};
+	cache_params ps[] = {{2048 * 32, 4, 8, 4, 1, 1, CACHE_HASH_NONE, NULL},
+	                     {711 * 4 * 36, 4, 36, 4, 1, 1, CACHE_HASH_NONE, NULL},
+	                     {64 * 2 * 16, 2, 16, 4, 1, 1, CACHE_HASH_XOR, NULL}};
 	for (size_t k = 0; k < sizeof ps / sizeof ps[0]; k++) {
 		cache a, b;
 		diag d;

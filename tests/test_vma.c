@@ -9,7 +9,8 @@
  */
 #include <string.h>
 
-#include "mem/hier.h"
+#include "sim/memconfig.h"
+#include "sim/report_mem.h"
 #include "sim/config.h"
 #include "tests/testutil.h"
 

@@ -20,8 +20,9 @@
 #include <string.h>
 #include <time.h>
 
-#include "mem/hier.h"
 #include "sim/config.h"
+#include "sim/memconfig.h"
+#include "sim/report_mem.h"
 #include "traces/memtrace.h"
 
 static double now_s(void)
@@ -328,8 +329,8 @@ static void func_stats(const func_replay *fr, const saar_config *cfg, hier_stats
 	if (fr->use_vma) {
 		s->vma_enabled = 1;
 		s->vma = v->s;
-		s->tag_cache = v->tag.s;
-		s->l2 = v->l2.s;
+		s->tag_cache = v->tag.c.s;
+		s->l2 = v->l2.c.s;
 		s->hostbus.bytes =
 		    v->s.host_fetch_bytes + v->s.host_write_bytes + v->s.writeback_bytes;
 		s->hostbus.transfers = v->s.host_fetches + v->s.host_writes + v->s.writebacks;

@@ -1,0 +1,121 @@
+/*
+ * tcache.c: the timed cache component (see tcache.h).
+ */
+#include "mem/tcache.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define TC_CHUNK 256
+
+typedef struct tc_chunk {
+	struct tc_chunk *next;
+	tc_wait w[TC_CHUNK];
+} tc_chunk;
+
+int tcache_init(tcache *t, const cache_params *p, int flags, const char *what, diag *d)
+{
+	memset(t, 0, sizeof *t);
+	if (cache_init(&t->c, p, what, d))
+		return -1;
+	t->wait = calloc(p->mshrs, sizeof *t->wait);
+	if (flags & TC_MBUF)
+		t->mbuf = malloc((size_t)p->mshrs * p->line_bytes);
+	if (!t->wait || ((flags & TC_MBUF) && !t->mbuf) ||
+	    ((flags & TC_DATA) && cache_data_on(&t->c))) {
+		tcache_free(t);
+		return diag_set(d, "config", 0, 0, "%s: out of memory", what);
+	}
+	return 0;
+}
+
+void tcache_free(tcache *t)
+{
+	cache_free(&t->c);
+	free(t->wait);
+	free(t->mbuf);
+	for (tc_chunk *c = t->chunks, *n; c; c = n) {
+		n = c->next;
+		free(c);
+	}
+	t->wait = NULL;
+	t->mbuf = NULL;
+	t->chunks = NULL;
+	t->free_w = NULL;
+}
+
+static tc_wait *wait_alloc(tcache *t)
+{
+	if (!t->free_w) {
+		tc_chunk *c = malloc(sizeof *c);
+		if (!c) {
+			t->oom = 1;
+			return NULL;
+		}
+		c->next = t->chunks;
+		t->chunks = c;
+		for (int i = 0; i < TC_CHUNK; i++) {
+			c->w[i].next = t->free_w;
+			t->free_w = &c->w[i];
+		}
+	}
+	tc_wait *w = t->free_w;
+	t->free_w = w->next;
+	return w;
+}
+
+cache_result tcache_lookup(tcache *t, uint64_t line, uint32_t bytes, void *who, int *mshr,
+                           uint32_t *slot)
+{
+	int m = -1;
+	cache_result r = cache_lookup(&t->c, line, bytes, &m, slot);
+	if (r == CACHE_MISS_NEW || r == CACHE_MISS_MERGED) {
+		tc_wait *w = wait_alloc(t);
+		if (w) {
+			*w = (tc_wait){who, 0, t->wait[m]};
+			t->wait[m] = w;
+		}
+		if (mshr)
+			*mshr = m;
+	}
+	return r;
+}
+
+void tcache_stall(tcache *t, void *who, uint64_t since)
+{
+	tc_wait *w = wait_alloc(t);
+	if (!w)
+		return;
+	*w = (tc_wait){who, since, NULL};
+	if (t->stall_tail)
+		t->stall_tail->next = w;
+	else
+		t->stall = w;
+	t->stall_tail = w;
+}
+
+tc_wait *tcache_take(tcache *t, uint64_t line, int *mshr)
+{
+	int m = cache_mshr_find(&t->c, line);
+	if (mshr)
+		*mshr = m;
+	if (m < 0)
+		return NULL;
+	tc_wait *w = t->wait[m];
+	t->wait[m] = NULL;
+	return w;
+}
+
+void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx)
+{
+	while (t->stall && cache_mshr_free(&t->c)) {
+		tc_wait *w = t->stall;
+		if (retry(ctx, w->who, w->since, now))
+			break; /* stays at the head */
+		t->stall = w->next;
+		if (!t->stall)
+			t->stall_tail = NULL;
+		w->next = t->free_w;
+		t->free_w = w;
+	}
+}

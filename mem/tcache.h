@@ -1,0 +1,108 @@
+/*
+ * tcache.h: the timed cache component: a cache (mem/cache.h) with its
+ * MSHRs' wait lists, the FIFO of requests refused for lack of an MSHR,
+ * the MSHRs' line buffers and an access port. One component serves every
+ * timed cache of the chip: the four L1s (mem/hier.c; seed 002 §4.1), the
+ * VMA's tag cache and its on-board L2 (mem/vma.c; §4.2).
+ *
+ * The component does not know what waits: a waiter is an opaque pointer
+ * (an L1 read, a VMA piece) the user gets back when the line fills or an
+ * MSHR frees. Time stays with the user, which fetches the line below and
+ * calls back:
+ *
+ *   tcache_lookup   hit, or a miss that hangs `who` on the line's MSHR
+ *                   (new: the user fetches the line; merged: it is on its
+ *                   way), or CACHE_MSHR_FULL (nothing changed: the user
+ *                   parks `who` with tcache_stall)
+ *   tcache_take     the line arrived: its waiters, taken off the MSHR
+ *                   before cache_fill frees it; tcache_pop hands them out
+ *                   (newest first, the order they were always served in)
+ *   tcache_resume   after a fill: the parked requests, oldest first, while
+ *                   MSHRs are free; the user's retry says whether the
+ *                   request got through (it leaves) or was refused again
+ *                   (it stays at the head, and resuming stops)
+ *
+ * Waiter records come from a free list that grows in chunks: the steady
+ * state never allocates.
+ */
+#ifndef SAAR_MEM_TCACHE_H
+#define SAAR_MEM_TCACHE_H
+
+#include <stdint.h>
+
+#include "kernel-ref/diag.h"
+#include "mem/cache.h"
+
+typedef struct tc_wait tc_wait;
+struct tc_wait {
+	void *who;      /* the user's request */
+	uint64_t since; /* stall FIFO: when it was parked */
+	tc_wait *next;
+};
+
+typedef struct tcache {
+	cache c;
+	tc_wait **wait;              /* per MSHR: its line's waiters, newest first */
+	tc_wait *stall, *stall_tail; /* refused for lack of an MSHR, oldest first */
+	uint8_t *mbuf;               /* per MSHR: the line on its way (TC_MBUF) */
+	uint64_t port_cycle;         /* tcache_port: the cycle being filled */
+	uint32_t port_used;          /* accesses accepted in it */
+	int oom;                     /* a waiter found no record (it is lost) */
+	tc_wait *free_w;
+	void *chunks;
+} tcache;
+
+enum {
+	TC_DATA = 1, /* the cache holds line data (cache_data_on) */
+	TC_MBUF = 2, /* a line buffer per MSHR (fills arriving with their bytes) */
+};
+
+/* cache_init(p) plus the lists; flags TC_*. Errors name `what`. */
+int tcache_init(tcache *t, const cache_params *p, int flags, const char *what, diag *d);
+void tcache_free(tcache *t);
+
+/* One access to one line: cache_lookup, and on a miss (new or merged) who
+ * joins the line's MSHR (*mshr its index; *slot the way on a hit). */
+cache_result tcache_lookup(tcache *t, uint64_t line, uint32_t bytes, void *who, int *mshr,
+                           uint32_t *slot);
+/* Parks who at the tail of the stall FIFO (since: when, for its wait). */
+void tcache_stall(tcache *t, void *who, uint64_t since);
+/* Detaches the waiters of line (NULL if it has no MSHR); *mshr gets the
+ * MSHR (-1: none) whose buffer holds the line. Call before cache_fill. */
+tc_wait *tcache_take(tcache *t, uint64_t line, int *mshr);
+/* The next waiter of a taken list (NULL at its end); frees its record. */
+static inline void *tcache_pop(tcache *t, tc_wait **list)
+{
+	tc_wait *w = *list;
+	if (!w)
+		return NULL;
+	*list = w->next;
+	w->next = t->free_w;
+	t->free_w = w;
+	return w->who;
+}
+/* Retries the parked requests while an MSHR is free: retry(ctx, who,
+ * since, now) returns 0 when who got through (it leaves the FIFO), 1 when
+ * refused again (it stays at the head; resuming stops). */
+typedef int (*tc_retry)(void *ctx, void *who, uint64_t since, uint64_t now);
+void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx);
+
+/* The access port: p.ports accesses per cycle of `period` ticks, in
+ * arrival order. Returns the tick at which an access arriving at `now`
+ * starts (the start of the first cycle with a free port). */
+static inline uint64_t tcache_port(tcache *t, uint64_t now, uint64_t period)
+{
+	uint64_t cyc = (now + period - 1) / period;
+	if (cyc > t->port_cycle) {
+		t->port_cycle = cyc;
+		t->port_used = 0;
+	}
+	if (t->port_used == t->c.p.ports) {
+		t->port_cycle++;
+		t->port_used = 0;
+	}
+	t->port_used++;
+	return t->port_cycle * period;
+}
+
+#endif
