@@ -23,7 +23,7 @@
 #ifndef SAAR_MEM_HIER_LEVEL_H
 #define SAAR_MEM_HIER_LEVEL_H
 
-#include "mem/hier.h"
+#include "mem/hier_params.h"
 #include "mem/tcache.h"
 
 typedef struct hreq hreq;
