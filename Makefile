@@ -127,9 +127,7 @@ run: all
 # The layering check (scripts/layers.py, docs/design-layers.md) runs first:
 # a forbidden include or an include circle fails `make test` at once.
 test: all $(B)/saarsim-tests $(PLUGIN)
-# enabled after the merge of issue 30's branches (the tree on h-layers
-# alone does not pass it yet; layers/repository_passes shows why):
-#	python3 scripts/layers.py
+	python3 scripts/layers.py
 	LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
 	SAAR_BIN=$(CURDIR)/$(B) SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) \
 	  ./$(B)/saarsim-tests --jobs 2

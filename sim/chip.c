@@ -171,17 +171,6 @@ void chip_census_mark(chip *c, int tile)
 	chip_demand(c, m->dem);
 }
 
-/* A warming run's checkpoint at hand-out index tile (sim/warming.h): the
- * slot taking it is idle, every other one between two steps. */
-static void warm_mark(chip *c, int tile)
-{
-	if (wm_is_full(c->wcap->g_light, c->wcap->g_full, tile))
-		wm_put_full(c->wcap, c, c->frames_done, tile);
-	double dem[RES_N];
-	chip_demand(c, dem);
-	wm_put_light(c->wcap, c, c->frames_done, tile, dem);
-}
-
 int chip_census_check(const saar_config *cfg, diag *d)
 {
 	if (chip_estimates(cfg))
@@ -218,8 +207,8 @@ int chip_take_tile(chip *c, thr_ctx *t)
 		return 0;
 	if (c->census && c->tiles_given % c->fid.unit_tiles == 0)
 		chip_census_mark(c, c->tiles_given);
-	if (c->wcap && c->tiles_given % c->wcap->g_light == 0)
-		warm_mark(c, c->tiles_given);
+	if (c->on_tile)
+		c->on_tile(c, c->tiles_given);
 	c->tiles_given++;
 	if (c->progress && c->tiles_given % 64 == 0)
 		c->progress(c->progress_ctx, c->frames_done, c->tiles_given, c->g.ntiles);
@@ -728,7 +717,8 @@ void chip_destroy(chip *c)
 	free(c->rec_key);
 	free(c->replayed);
 	free(c->census);
-	wm_close(&c->warm);
+	if (c->on_destroy)
+		c->on_destroy(c);
 	wc_unmap(&c->warm_map);
 	free(c->warm_own);
 	mem_free(&c->mem);
@@ -878,12 +868,12 @@ int chip_warm_stored(const chip *c)
 }
 
 /* Stored warming's grids: the light one (warm_light_grid), and one full
- * checkpoint in every 1/WM_FULL_PER_FRAME of the frame, rounded to the
+ * checkpoint in every 1/CFG_WARM_FULL_PER_FRAME of the frame, rounded to the
  * light grid. */
 void chip_warm_grid(const chip *c, int *gl, int *gf)
 {
 	*gl = warm_light_grid(&c->cfg);
-	*gf = c->g.ntiles / WM_FULL_PER_FRAME / *gl * *gl;
+	*gf = c->g.ntiles / CFG_WARM_FULL_PER_FRAME / *gl * *gl;
 	if (*gf < *gl)
 		*gf = *gl;
 }

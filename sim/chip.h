@@ -23,15 +23,14 @@
 #include "kernel-ref/render.h"
 #include "kernel-ref/world.h"
 #include "kernel-ref/worldcache.h"
-#include "sim/memconfig.h"
 #include "mem/memport.h"
 #include "mem/store.h"
 #include "sim/config.h"
 #include "sim/core/engine.h"
 #include "sim/core/stats.h"
+#include "sim/memconfig.h"
 #include "sim/modes/modes.h"
 #include "sim/sampling.h"
-#include "sim/warming.h"
 #include "traces/memtrace.h"
 #include "units/rgc.h"
 #include "units/thread.h"
@@ -174,8 +173,14 @@ typedef struct chip {
 	/* stored warming (sampling.warming: stored; sim/warming.h): the
 	 * checkpoints (mapped from the world cache, or built by this run and
 	 * held in warm_own), warm_state: enum chip_warm */
-	wm warm;
-	wm_writer *wcap; /* a warming run's checkpoints are taken (chip_take_tile) */
+	struct wm *warm;        /* the reader (sim/modes/stored.c makes it); NULL: none */
+	struct wm_writer *wcap; /* a warming run's checkpoints are taken (on_tile) */
+	/* observers a driver installs (sim/modes/stored.c), so that the chip
+	 * calls the code above it without including it: a tile is about to be
+	 * handed out (hand-out index tile); the chip is being destroyed.
+	 * NULL: none */
+	void (*on_tile)(struct chip *c, int tile);
+	void (*on_destroy)(struct chip *c);
 	wc_map warm_map;
 	void *warm_own;
 	int warm_state;

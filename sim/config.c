@@ -14,7 +14,6 @@
 #include "kernel-ref/infile.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/yload.h"
-#include "sim/warming.h"
 
 #include <errno.h>
 #include <math.h>
@@ -154,10 +153,11 @@ static const cfg_key keys_src[] = {
              "with checkpoints of the chip's state, and each region starts from the "
              "checkpoint at its start, so a run simulates only its regions (needs "
              "--world-cache; regions start at checkpoints, one in every "
-             "1/" NUM_STR(WM_FULL_PER_FRAME) " of the frame). A warming run is reused by every run "
-                                             "whose config differs only in its name, "
-                                             "timing (latencies, SDRAM timings, MSHRs, scheduling) "
-                                             "and sampling keys"},
+             "1/" NUM_STR(
+                 CFG_WARM_FULL_PER_FRAME) " of the frame). A warming run is reused by every run "
+                                          "whose config differs only in its name, "
+                                          "timing (latencies, SDRAM timings, MSHRs, scheduling) "
+                                          "and sampling keys"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

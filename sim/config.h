@@ -23,6 +23,11 @@
 #include "kernel-ref/jsonw.h"
 #include "units/unit_table.h"
 
+/* Stored warming's full checkpoints per frame (about: one in each
+ * 1/CFG_WARM_FULL_PER_FRAME of it, rounded to the light grid; sim/warming.h,
+ * the sampling.warming key's text). */
+#define CFG_WARM_FULL_PER_FRAME 64
+
 /* Enum values; the names in the YAML are in config.c's tables, same order. */
 typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
 /* sampling.demand_model (docs/fidelity.md "Demand models") */

@@ -42,13 +42,14 @@
 #include <stdint.h>
 
 #include "mem/memport.h"
+#include "sim/config.h"
 #include "units/unit_table.h"
 
 struct chip;
 
 /* Full checkpoints per frame (about: one in each 1/WM_FULL_PER_FRAME of
- * it, rounded to the light grid). */
-#define WM_FULL_PER_FRAME 64
+ * it, rounded to the light grid); the config's text states it. */
+#define WM_FULL_PER_FRAME CFG_WARM_FULL_PER_FRAME
 
 /* Resource demands per light checkpoint (chip.h RES_N: the unit kinds,
  * the L1s, SDRAM and host bus). */

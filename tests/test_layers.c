@@ -201,9 +201,7 @@ Test(layers, long_lists_functions_over_the_limit)
 }
 
 /* The repository itself passes. Catches: any forbidden include or circle
- * in the real tree. NOTE: on the branch h-layers alone this fails (the
- * units/, mem/ and sim/ restructuring of issue 30 is done by the other
- * helpers' branches); it passes once they are merged. */
+ * in the real tree (make test also runs the script before the suite). */
 Test(layers, repository_passes)
 {
 	char args[512];

@@ -9,6 +9,7 @@
 #include "sim/chip.h"
 #include "sim/modes/sampled.h"
 #include "sim/modes/stored.h"
+#include "sim/warming.h"
 
 int chip_run(chip *c, diag *d)
 {

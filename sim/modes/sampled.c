@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "sim/modes/functional.h"
+#include "sim/warming.h"
 #include "units/rgs.h"
 
 /* Keeps a piece of the estimated middle of the frame (chunk or region
@@ -159,7 +160,7 @@ int mode_func_range(chip *c, int end, int mode)
 					}
 				}
 				if (mode == FR_RELAX && t->rtp->qn == 0 &&
-				    ((relaxed == n && c->g.next % c->warm.g_light == 0) ||
+				    ((relaxed == n && c->g.next % c->warm->g_light == 0) ||
 				     c->g.next >= end)) {
 					stop = 1;
 					break;
@@ -275,8 +276,8 @@ static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
 {
 	double d0[RES_N], d1[RES_N], per = (double)c->clk.period;
 	uint64_t h0, h1;
-	memcpy(d0, wm_demand(&c->warm, f, a, &h0), sizeof d0);
-	memcpy(d1, wm_demand(&c->warm, f, b, &h1), sizeof d1);
+	memcpy(d0, wm_demand(c->warm, f, a, &h0), sizeof d0);
+	memcpy(d1, wm_demand(c->warm, f, b, &h1), sizeof d1);
 	d0[RES_SDRAM] -= m * (double)h0 / per;
 	d1[RES_SDRAM] -= m * (double)h1 / per;
 	return chip_piece(c, d0, d1);
@@ -292,7 +293,7 @@ static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
 void mode_sampled_frame_stored(chip *c, int f)
 {
 	chip_fidelity *F = &c->fid;
-	wm *r = &c->warm;
+	wm *r = c->warm;
 	int N = c->g.ntiles, U = F->unit_tiles, W = F->warmup_tiles, n = F->nunits;
 	uint64_t t0 = eng_now(c->e);
 	sampled_begin(F);

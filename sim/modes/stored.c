@@ -11,6 +11,7 @@
 
 #include "kernel-ref/jsonw.h"
 #include "kernel-ref/worldcache.h"
+#include "sim/warming.h"
 
 /* The packet record's key: kernel-ref's frame key for this view and size
  * (the memory image by its CRC, camera, lights, shading depth) and what
@@ -143,9 +144,32 @@ static char *warm_key(const chip *c, int gl, int gf)
 	return key;
 }
 
+/* chip.on_tile during a warming run: a checkpoint at every g_light
+ * tiles handed out (sim/warming.h); the slot taking the tile is idle,
+ * every other one between two steps. */
+static void warm_mark(chip *c, int tile)
+{
+	if (tile % c->wcap->g_light)
+		return;
+	if (wm_is_full(c->wcap->g_light, c->wcap->g_full, tile))
+		wm_put_full(c->wcap, c, c->frames_done, tile);
+	double dem[RES_N];
+	chip_demand(c, dem);
+	wm_put_light(c->wcap, c, c->frames_done, tile, dem);
+}
+
+/* chip.on_destroy once stored warming is asked for: the reader goes. */
+static void warm_close(chip *c)
+{
+	if (c->warm)
+		wm_close(c->warm);
+	free(c->warm);
+	c->warm = NULL;
+}
+
 /* The warming run of chip h (functional, replaying the packet record):
  * chip_run with checkpoints on the grids (sim/warming.h). chip_take_tile takes
- * them (warm_mark) and chip_run the last of each frame, so the run steps
+ * them (warm_mark, its on_tile observer) and chip_run the last of each frame, so the run steps
  * as functional mode does: stopping it at each checkpoint left slots idle
  * until the next and missed fewer L1 lines. */
 static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
@@ -154,10 +178,12 @@ static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
 	if (wm_writer_init(&w, h, gl, gf))
 		return -1;
 	h->wcap = &w;
+	h->on_tile = warm_mark;
 	diag d;
 	int rc =
 	    chip_run(h, &d) || h->rec_state != REC_REPLAYED ? -1 : wm_writer_finish(&w, h, out, n);
 	h->wcap = NULL;
+	h->on_tile = NULL;
 	wm_writer_free(&w);
 	return rc;
 }
@@ -182,6 +208,12 @@ void mode_warm_open(chip *c)
 		return;
 	double t0 = chip_now_ms();
 	c->warm_state = WARM_UNAVAILABLE;
+	if (!(c->warm = calloc(1, sizeof *c->warm))) {
+		fprintf(stderr, "warning: sampling.warming stored: out of memory; the functional "
+		                "stretches run instead\n");
+		return;
+	}
+	c->on_destroy = warm_close;
 	if (c->rec_state == REC_UNSTORED) {
 		/* make the record now: a warming run replays it */
 		chip *h = helper_chip(c, 1);
@@ -211,7 +243,7 @@ void mode_warm_open(chip *c)
 	const void *tail;
 	size_t n;
 	if (wc_get_mapped(c->warm_file, key, NULL, 0, &tail, &n, &c->warm_map) == 1 &&
-	    !wm_open(&c->warm, tail, n, c)) {
+	    !wm_open(c->warm, tail, n, c)) {
 		c->warm_state = WARM_LOADED;
 	} else {
 		wc_unmap(&c->warm_map);
@@ -224,7 +256,7 @@ void mode_warm_open(chip *c)
 				fprintf(stderr, "warning: %s\n", d.msg);
 			else
 				c->warm_state = WARM_BUILT;
-			if (wm_open(&c->warm, b, n, c)) {
+			if (wm_open(c->warm, b, n, c)) {
 				free(b);
 				b = NULL;
 				c->warm_state = WARM_UNAVAILABLE;
