@@ -18,7 +18,7 @@
  * peek; fills in its part of the stats and of the counters stored warming
  * carries; names the caches checkpoints hold (they save and restore
  * themselves, mem/cache.h cache_ckpt_*); and builds and frees itself.
- * Docs: docs/memory.md "Levels", docs/extending-mem.md.
+ * Docs: docs/memory.md "Levels", docs/extending.md.
  */
 #ifndef SAAR_MEM_HIER_LEVEL_H
 #define SAAR_MEM_HIER_LEVEL_H

@@ -25,7 +25,7 @@
  * decisions.
  *
  * More policies: fill a repl_policy and repl_register it before the cache
- * is built (docs/extending-mem.md); the config keys
+ * is built (docs/extending.md); the config keys
  * memory.l1.<type>.replacement, memory.vma.replacement and
  * memory.vma.tag_cache_replacement name it.
  */

@@ -78,7 +78,7 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 	{KEY("memory.l1." #c ".replacement", CFG_STR, memory.l1.c.replacement, 0, 0, 0, ""),       \
 	 .sdef = "lru", .source = "not published; LRU assumed (exact; the seed names no policy)",  \
 	 .desc = "replacement policy of the " what " cache: lru, plru (tree pseudo-LRU), fifo, "   \
-	         "or one registered by name (docs/extending-mem.md)"}
+	         "or one registered by name (docs/extending.md)"}
 #define FP(st, what)                                                                               \
 	{INT("chip.fp." #st ".exp", chip.fp.st.exp, 8, 2, 8, "bits"),                              \
 	 .source = "§4.6: SaarCOR cut each stage's floats to the precision it needs; 8 = float",   \

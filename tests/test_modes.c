@@ -1,7 +1,7 @@
 /*
  * test_modes.c: the simulation modes as sinks (units/sink.h,
  * sim/modes/; docs/design-modes.md). A test-only observer sink, put
- * outside the mode's sinks with mode_observe (as docs/extending-modes.md
+ * outside the mode's sinks with mode_observe (as docs/extending.md
  * shows), tallies every operation the units (or a replayed stream) emit;
  * the tallies and the chip's counters tell whether a sink dropped,
  * doubled or changed an operation.

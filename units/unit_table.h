@@ -9,7 +9,7 @@
  * the report's units.<name> (sim/chip.c, sim/report.c), the resources of
  * the busiest-resource bound and the sampled estimator's linear model
  * (sim/chip.h enum chip_res, sim/sampling.h SMP_LIN), the unit-op codes of
- * packet records (traces/pktrec.h PR_USE + kind). docs/extending-units.md
+ * packet records (traces/pktrec.h PR_USE + kind). docs/extending.md
  * walks through adding a kind.
  *
  * This header includes nothing but the C library: every layer may take it

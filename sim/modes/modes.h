@@ -38,7 +38,7 @@ void mode_set_func(mode_sinks *m, int on);
 void mode_record(mode_sinks *m, pktrec *out);
 /* Puts obs (a wrapping sink: it passes every operation on to obs->inner,
  * which this sets) outside the others from now on; NULL removes it. For
- * tracing, checks and tests (docs/extending-modes.md). */
+ * tracing, checks and tests (docs/extending.md). */
 void mode_observe(mode_sinks *m, thr_sink *obs);
 
 #endif
