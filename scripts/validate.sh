@@ -19,6 +19,8 @@
 #   threads  the thread sweep 1..64 on conference (plotted)
 #   cost-*   the linear cost law (§4.7): conference and spd:balls:3:8 with
 #            0..3 lights and shading.max_depth 0, 1, 3
+#   board    the VMA with 4, 8, 16 and 64 MB on board, conference and
+#            dragon2 (PCI traffic once the scene no longer fits)
 #   size-*   conference at half and twice the frame size (std 16/32, VMA
 #            16): the verdicts of F1-F3, H1-H3, H5 at three sizes
 #   asm-*    only if configs/saarcor-std-assumed.yaml exists: std, vma and
@@ -219,6 +221,11 @@ for l in 0 1 2 3; do
 	sw "cost-balls-l$l" --config "$STD" --scene "$BALLS" --size "$SIZE" \
 		--set shading.max_depth=0,1,3 -- --no-check $bl
 done
+# the board size (§4.7: "for most scenes even as little as 8 MB are
+# sufficient"): PCI traffic once the scene no longer fits on the board
+BOARD=$TV
+! has dragon2 || [ "$TV" = dragon2 ] || BOARD="$BOARD,dragon2"
+sw board --config "$VMA" --view "$BOARD" --size "$SIZE" --set memory.sdram.mb=4,8,16,64 -- --no-check
 for z in small:"$SMALL" large:"$LARGE"; do
 	sw "size-${z%%:*}-std" --config "$STD" --view "$TV" --size "${z#*:}" \
 		--set chip.threads_per_rtp=16,32 -- --no-check
