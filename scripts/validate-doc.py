@@ -936,7 +936,7 @@ if b0 and b1 and b0["work"] and b1["fps"]:
       "divides the frame rate by %.2f. A reflection packet (%.1f active rays of 64 on average) "
       "starts on a sphere of the flake and takes %.0f kd steps, against %.0f for a primary "
       "packet: the law's \"almost constant cost per ray\" (§4.5) does not hold for these rays "
-      "in our model, and it is the work per packet, not the ray count, that sets the frame "
+      "in our model: the work per packet and the SDRAM traffic it brings, not the ray count, set the frame "
       "rate." % (
           BALLS, 100.0 * b1["rays"]["reflection"] / b1["rays"]["primary"],
           100.0 * (b1["rays"]["total"] / b0["rays"]["total"] - 1),
