@@ -139,8 +139,10 @@ bench: all
 bench-fidelity: all
 	sh scripts/bench-fidelity.sh $(B)
 
-# Validation against the published SaarCOR results; writes docs/VALIDATION.md
-# and docs/validation-threads.png (VALIDATE_SIZE, VALIDATE_VIEWS: scripts/validate.sh).
+# Validation against the published SaarCOR results, like with like (seed 002
+# §4, Table 5; fit and held-out rows); writes docs/VALIDATION.md,
+# docs/validation-published.png and docs/validation-threads.png (VALIDATE_SIZE,
+# default 1024x768, VALIDATE_VIEWS: scripts/validate.sh; minutes on 2 cores).
 validate: all
 	sh scripts/validate.sh $(B)
 

@@ -294,8 +294,19 @@ void report_text(FILE *f, const report_info *ri)
 		fprintf(f, "  chip: %d RTPs x %d threads at %g MHz; memory fixed, %d cycles\n",
 		        g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz,
 		        g->memory.latency);
-	fprintf(f, "  cycles per frame %.0f = %.2f fps%s\n", ratio((double)cyc, c->frames_done),
+	fprintf(f, "  cycles per frame %.0f = %.2f fps%s", ratio((double)cyc, c->frames_done),
 	        fig_fps(c), c->fid.mode == CFG_FIDELITY_FUNCTIONAL ? " (bound)" : "");
+	if (c->frames_done > 1) {
+		/* The headline is the whole run's mean, cold first frame included;
+		 * name it so, with the steady state (the Table 5 figure) beside it. */
+		memfig ss;
+		fig_steady_state(c, &ss);
+		fprintf(f,
+		        " (mean of all %d frames, the cold first frame included); steady state "
+		        "(frames 2..%d): %.0f cycles per frame = %.2f fps",
+		        c->frames_done, c->frames_done, ss.cycles, ss.fps);
+	}
+	fputc('\n', f);
 	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++)

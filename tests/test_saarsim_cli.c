@@ -932,6 +932,43 @@ Test(saarsim_cli, shares_of_no_sdram_access_are_null)
 	}
 }
 
+/* Issue 31: a 2-frame VMA run's headline fps is the mean over the cold
+ * and the warm frame, several times below the steady state; the mistake
+ * caught is a headline that does not say so (the old "cycles per frame
+ * N = 6.45 fps" beside a 24.89 fps steady state). The headline must name
+ * itself a mean over all frames and carry the steady state, the same fps
+ * as the "steady state" line below it. */
+Test(saarsim_cli, multi_frame_headline_names_mean_and_steady_state)
+{
+	char args[1024];
+	snprintf(args, sizeof args,
+	         "--config configs/saarcor-vma.yaml --size 32x24 --frames 2 --no-check");
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *out = slurp("out");
+	const char *h = strstr(out, "  cycles per frame ");
+	cr_assert(h, "%s", out);
+	char line[512];
+	snprintf(line, sizeof line, "%.*s", (int)strcspn(h, "\n"), h);
+	double mean_fps = 0, ss_fps = 0, ss_line = 0;
+	cr_assert(strstr(line, "(mean of all 2 frames, the cold first frame included)"), "%s",
+	          line);
+	const char *st = strstr(line, "steady state (frames 2..2): ");
+	cr_assert(st, "%s", line);
+	cr_assert_eq(sscanf(strstr(line, " = ") + 3, "%lf fps", &mean_fps), 1, "%s", line);
+	cr_assert_eq(sscanf(strstr(st, " = ") + 3, "%lf fps", &ss_fps), 1, "%s", line);
+	const char *sl = strstr(out, "  steady state (mean of frames 2..N): ");
+	cr_assert(sl, "%s", out);
+	cr_assert_eq(sscanf(sl + strlen("  steady state (mean of frames 2..N): "), "%lf", &ss_line),
+	             1);
+	cr_assert_float_eq(ss_fps, ss_line, 0.006, "%s", out);
+	/* the cold frame drags the mean below the steady state */
+	cr_assert_lt(mean_fps, ss_fps, "%s", line);
+	/* one frame: no mean to explain */
+	cr_assert_eq(saarsim("--config configs/saarcor-vma.yaml --size 32x24 --no-check"), 0);
+	out = slurp("out");
+	cr_assert(!strstr(out, "mean of all"), "%s", out);
+}
+
 Test(saarsim_cli, frames_report_fields_and_csv_rows)
 {
 	char args[1024];
