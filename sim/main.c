@@ -31,6 +31,7 @@
 #include "sim/chip.h"
 #include "sim/config.h"
 #include "sim/hostmem.h"
+#include "sim/observe.h"
 #include "sim/report.h"
 #include "sim/reportcheck.h"
 
@@ -46,6 +47,10 @@ static void usage(FILE *f)
 	        "  --report FILE.json    write the JSON report (docs/report.md)\n"
 	        "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
 	        "  --trace-mem FILE.gz   record every memory request (traces/memtrace.h)\n"
+	        "  --timeline FILE.json  activity timeline, Chrome trace events for Perfetto\n"
+	        "                        (cycle fidelity; docs/observe.md)\n"
+	        "  --timeline-window C0:C1  only the events starting in cycles [C0, C1)\n"
+	        "  --timeline-max-events N  cap on the timeline's events (default 1000000)\n"
 	        "  --census FILE.csv     cycles and resource demand of every chunk of tiles\n"
 	        "                        (cycle and functional; docs/fidelity.md)\n"
 	        "  --fidelity MODE       cycle | sampled | functional (docs/fidelity.md)\n"
@@ -135,6 +140,8 @@ typedef struct cli {
 	world_opts wo; /* the world flags (rtref's) */
 	const char *config, *out, *report, *size, *frames;
 	const char *csv, *trace, *census, *mem_limit;
+	const char *timeline, *tl_window, *tl_max;
+	uint64_t tl_c0, tl_c1, tl_cap;
 	int check, list, doc, dry;
 } cli;
 
@@ -192,6 +199,12 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 			a->census = v;
 		else if (!strcmp(f, "--host-mem-limit"))
 			a->mem_limit = v;
+		else if (!strcmp(f, "--timeline"))
+			a->timeline = v;
+		else if (!strcmp(f, "--timeline-window"))
+			a->tl_window = v;
+		else if (!strcmp(f, "--timeline-max-events"))
+			a->tl_max = v;
 		else {
 			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
 			return DIAG_EXIT;
@@ -229,6 +242,30 @@ static int set_flags(int argc, char **argv, saar_config *cfg, const char **sampl
 	return 0;
 }
 
+/* The observers' flags: a window or cap needs a timeline, which needs
+ * cycle fidelity. */
+static int observe_args(cli *a, const saar_config *cfg, diag *d)
+{
+	a->tl_c0 = 0;
+	a->tl_c1 = UINT64_MAX;
+	a->tl_cap = OBS_TL_MAX_EVENTS;
+	if (!a->timeline && (a->tl_window || a->tl_max))
+		return diag_set(d, a->tl_window ? "--timeline-window" : "--timeline-max-events", 0,
+		                0, "needs --timeline FILE.json");
+	if (a->tl_window &&
+	    obs_parse_window("--timeline-window", a->tl_window, &a->tl_c0, &a->tl_c1, d))
+		return -1;
+	long cap;
+	if (a->tl_max && cli_parse_int("--timeline-max-events", a->tl_max, 1, 1000000000L, &cap, d))
+		return -1;
+	if (a->tl_max)
+		a->tl_cap = (uint64_t)cap;
+	if (a->timeline && cfg->fidelity != CFG_FIDELITY_CYCLE)
+		return diag_set(d, "--timeline", 0, 0, "needs --fidelity cycle (this run's is %s)",
+		                cfg->fidelity == CFG_FIDELITY_SAMPLED ? "sampled" : "functional");
+	return 0;
+}
+
 /* The config: defaults, file, --set and the key flags, --size, --frames;
  * validated; the host memory limit into *limit_mb and the kd-tree keys into
  * a->wo. Returns -1 to go on, else the exit status. */
@@ -262,6 +299,8 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 		return cli_bad("saarsim", d->msg);
 	if (hm_limit_mb(a->mem_limit, limit_mb, d))
 		return cli_bad("saarsim", d->msg);
+	if (observe_args(a, cfg, d))
+		return cli_bad("saarsim", d->msg);
 	a->wo.kd.cost_trav = (float)cfg->kdtree.cost_trav;
 	a->wo.kd.cost_isect = (float)cfg->kdtree.cost_isect;
 	a->wo.kd.max_depth = cfg->kdtree.max_depth;
@@ -286,6 +325,8 @@ static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 		return -1;
 	if (a->trace && af_reserve(a->trace, "", d))
 		return -1;
+	if (a->timeline && af_reserve(a->timeline, "", d))
+		return -1;
 	if (a->census && chip_census_check(cfg, d))
 		return -1;
 	return 0;
@@ -294,8 +335,18 @@ static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 /* Runs the chip with the memory trace (written under the temporary name
  * trace_tmp, renamed once the run succeeded) and the census on, then
  * checks the frame against kernel-ref unless --no-check. */
-static int simulate(chip *c, const cli *a, afile *trace_tmp, chip_check *chk, diag *d)
+static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, chip_check *chk,
+                    diag *d)
 {
+	obs_timeline *tl = NULL;
+	if (a->timeline) {
+		if (af_open(tl_tmp, a->timeline, "", 1)) {
+			af_diag(d, a->timeline);
+			return -1;
+		}
+		if (!(tl = obs_timeline_start(c, tl_tmp->f, a->tl_c0, a->tl_c1, a->tl_cap, d)))
+			return -1;
+	}
 	if (a->trace) {
 		if (af_open(trace_tmp, a->trace, "", 0)) {
 			af_diag(d, a->trace);
@@ -305,10 +356,28 @@ static int simulate(chip *c, const cli *a, afile *trace_tmp, chip_check *chk, di
 			return -1;
 	}
 	if (a->census && chip_census_on(c, d))
-		return -1;
-	if (chip_run(c, d) || chip_trace_close(c, d) || (a->check && chip_check_frame(c, chk, d)))
+		goto fail;
+	if (chip_run(c, d))
+		goto fail;
+	if (tl) {
+		uint64_t n, dropped;
+		int bad = obs_timeline_end(tl, &n, &dropped);
+		tl = NULL;
+		if (bad)
+			return af_diag(d, a->timeline);
+		if (dropped)
+			fprintf(stderr,
+			        "saarsim: --timeline: capped at %llu events, %llu more left out "
+			        "(narrow --timeline-window or raise --timeline-max-events)\n",
+			        (unsigned long long)n, (unsigned long long)dropped);
+	}
+	if (chip_trace_close(c, d) || (a->check && chip_check_frame(c, chk, d)))
 		return -1;
 	return 0;
+fail:
+	if (tl)
+		obs_timeline_end(tl, NULL, NULL);
+	return -1;
 }
 
 /* The report checks itself: a counter that stopped counting shows, one
@@ -326,7 +395,8 @@ static void check_report(const chip *c, rc_list *inv)
  * are renamed into place together once the last one (the CSV with its new
  * row) is done: a run that fails on any leaves the files at all the output
  * paths as they were. Then the summary on stdout. Returns the exit status. */
-static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, double t_start, diag *d)
+static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, afile *tl_tmp,
+                         double t_start, diag *d)
 {
 	af_group outs = {0};
 	int csv_lock = -1;
@@ -343,6 +413,14 @@ static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, double
 		trace_tmp->tmp[0] = 0; /* in the group, or removed */
 		if (bad) {
 			af_diag(d, a->trace);
+			goto fail;
+		}
+	}
+	if (a->timeline) {
+		int bad = af_commit_to(tl_tmp, &outs);
+		tl_tmp->tmp[0] = 0;
+		if (bad) {
+			af_diag(d, a->timeline);
 			goto fail;
 		}
 	}
@@ -413,9 +491,10 @@ int main(int argc, char **argv)
 	}
 	chip_check chk;
 	memset(&chk, 0, sizeof chk);
-	afile trace_tmp;
+	static afile trace_tmp, tl_tmp;
 	trace_tmp.tmp[0] = 0; /* "" while none is open */
-	if (simulate(c, &a, &trace_tmp, &chk, &d)) {
+	tl_tmp.tmp[0] = 0;
+	if (simulate(c, &a, &trace_tmp, &tl_tmp, &chk, &d)) {
 		rc = cli_bad("saarsim", d.msg);
 	} else {
 		if (pr.shown)
@@ -424,11 +503,13 @@ int main(int argc, char **argv)
 		check_report(c, &inv);
 		report_info ri = {c, &w,   a.check ? &chk : NULL,         load_ms,
 		                  0, NULL, (double)mem.total / (1 << 20), &inv};
-		rc = write_outputs(&a, &ri, &trace_tmp, t_start, &d);
+		rc = write_outputs(&a, &ri, &trace_tmp, &tl_tmp, t_start, &d);
 	}
 	chip_destroy(c);
 	if (trace_tmp.tmp[0])
 		af_abort(&trace_tmp);
+	if (tl_tmp.tmp[0])
+		af_abort(&tl_tmp);
 	world_free(&w);
 	return rc;
 }

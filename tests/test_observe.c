@@ -1,0 +1,224 @@
+/*
+ * test_observe.c: seeing inside a run (docs/observe.md). The timeline
+ * (--timeline) is valid trace-event JSON whose spans agree with the same
+ * run's report (scripts/timeline-check.py: per RTP and unit the ops and
+ * issue cycles, per RTP the thread-state time, the L1 fills, the SDRAM
+ * segments and busy time, the host-bus transfers); a window holds exactly
+ * the full timeline's part; the cap is kept and said; the checker itself
+ * catches a dropped op, an overlap and a wrong total; the observers change
+ * nothing in the report; bad flags give one line and no file.
+ */
+#include <sys/stat.h>
+
+#include "tests/testutil.h"
+
+static char dir[256];
+
+static void setup(void)
+{
+	tu_tmpdir(dir, sizeof dir);
+}
+
+TestSuite(observe, .init = setup);
+
+static const char *root(void)
+{
+	const char *r = getenv("SAAR_ROOT");
+	return r && *r ? r : ".";
+}
+
+static int saarsim(const char *args)
+{
+	return tu_prog(dir, "saarsim", args);
+}
+
+/* scripts/timeline-check.py on dir's files (args: "t.json r.json" ...);
+ * its output in dir/check. */
+static int check(const char *args)
+{
+	char cmd[2048], a[1024];
+	/* every file name in args is in dir */
+	a[0] = 0;
+	for (const char *p = args; *p;) {
+		size_t n = strcspn(p, " ");
+		if (!strncmp(p, "--", 2))
+			snprintf(a + strlen(a), sizeof a - strlen(a), "%.*s ", (int)n, p);
+		else
+			snprintf(a + strlen(a), sizeof a - strlen(a), "%s/%.*s ", dir, (int)n, p);
+		p += n;
+		p += strspn(p, " ");
+	}
+	snprintf(cmd, sizeof cmd, "python3 %s/scripts/timeline-check.py %s >%s/check 2>&1", root(),
+	         a, dir);
+	return tu_run(cmd);
+}
+
+#define RUN2 "--size 64x48 --set chip.rtps=2 --no-check"
+
+Test(observe, timeline_agrees_with_the_report)
+{
+	char args[1024];
+	snprintf(args, sizeof args, RUN2 " --report %s/r.json --timeline %s/t.json", dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(tu_temps(dir, "t.json"), 0);
+	cr_assert_eq(check("t.json r.json"), 0, "%s", tu_slurp(dir, "check"));
+	/* a run that loads is more than parseable: it has ops of every kind
+	 * and the memory tracks */
+	char *t = tu_slurp(dir, "t.json");
+	for (const char *s = "\"name\":\"trav\"\0\"name\":\"isect\"\0\"name\":\"list\"\0"
+	                     "\"name\":\"rgs\"\0\"name\":\"waiting_memory\"\0\"name\":\"kd miss\"\0"
+	                     "\"name\":\"read\"\0";
+	     *s; s += strlen(s) + 1)
+		cr_assert(strstr(t, s), "no %s in the timeline", s);
+}
+
+/* Several instances of a unit (each op on the instance it issued on:
+ * no overlap on a track) and the VMA's host bus. */
+Test(observe, timeline_instances_and_host_bus)
+{
+	char args[1024];
+	snprintf(
+	    args, sizeof args,
+	    "--config %s/configs/saarcor-vma.yaml --size 64x48 --no-check --set "
+	    "chip.trav.count=3 --set chip.isect.count=2 --report %s/r.json --timeline %s/t.json",
+	    root(), dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(check("t.json r.json"), 0, "%s", tu_slurp(dir, "check"));
+	char *t = tu_slurp(dir, "t.json");
+	cr_assert(strstr(t, "\"name\":\"dma\""), "no host-bus transfer");
+	cr_assert(strstr(t, "\"kind\":\"trav\",\"instance\":2"), "trav instance 2 never used");
+}
+
+Test(observe, conference_timeline, .timeout = 120)
+{
+	char views[512], args[2048];
+	SCENE_OR_SKIP(views, "views.yaml");
+	snprintf(args, sizeof args,
+	         "--views %s --view conference --size 64x48 --no-check --report %s/r.json "
+	         "--timeline %s/t.json",
+	         views, dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(check("t.json r.json"), 0, "%s", tu_slurp(dir, "check"));
+}
+
+Test(observe, window_is_the_full_timelines_part)
+{
+	char args[1024];
+	snprintf(args, sizeof args, RUN2 " --timeline %s/t.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	snprintf(args, sizeof args, RUN2 " --timeline-window 20000:50000 --timeline %s/w.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(check("w.json --full t.json"), 0, "%s", tu_slurp(dir, "check"));
+	/* open ends */
+	snprintf(args, sizeof args, RUN2 " --timeline-window 150000: --timeline %s/w.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(check("w.json --full t.json"), 0, "%s", tu_slurp(dir, "check"));
+	/* a window against the report is refused: it is not the whole run */
+	cr_assert_neq(check("w.json t.json"), 0);
+}
+
+Test(observe, cap_is_kept_and_said)
+{
+	char args[1024];
+	snprintf(args, sizeof args, RUN2 " --timeline-max-events 100 --timeline %s/t.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(check("t.json"), 0, "%s", tu_slurp(dir, "check"));
+	cr_assert(strstr(tu_slurp(dir, "check"), "ok: 100 spans"), "%s", tu_slurp(dir, "check"));
+	char *t = tu_slurp(dir, "t.json");
+	cr_assert(strstr(t, "\"max_events\":100,") && strstr(t, "\"capped\":true"), "%s",
+	          strstr(t, "otherData"));
+	char *e = tu_slurp(dir, "err");
+	cr_assert(strstr(e, "saarsim: --timeline: capped at 100 events"), "%s", e);
+}
+
+/* The observers only look: the report is the same with and without
+ * them, host times aside. */
+Test(observe, report_unchanged_by_the_timeline)
+{
+	char args[1024];
+	snprintf(args, sizeof args, RUN2 " --report %s/a.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	snprintf(args, sizeof args, RUN2 " --report %s/b.json --timeline %s/t.json", dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	char cmd[2048];
+	snprintf(cmd, sizeof cmd,
+	         "python3 -c \"import json,sys; a,b=(json.load(open(p)) for p in sys.argv[1:]); "
+	         "[x.pop(k,None) for x in (a,b) for k in ('host','program')]; "
+	         "sys.exit(a!=b)\" %s/a.json %s/b.json",
+	         dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "the report changed with --timeline");
+}
+
+/* The checker catches the mistakes it is there for. Each edit of a good
+ * timeline (python, on the parsed JSON) must fail the check naming it. */
+static void planted(const char *edit, const char *named)
+{
+	char cmd[4096];
+	snprintf(cmd, sizeof cmd,
+	         "python3 -c \"import json; d=json.load(open('%s/t.json')); "
+	         "x=[e for e in d['traceEvents'] if e['ph']=='X']; %s; "
+	         "json.dump(d, open('%s/m.json','w'))\"",
+	         dir, edit, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+	cr_assert_eq(check("m.json r.json"), 1, "not caught: %s", edit);
+	cr_assert(strstr(tu_slurp(dir, "check"), named), "%s: %s", edit, tu_slurp(dir, "check"));
+}
+
+Test(observe, checker_catches_planted_mistakes)
+{
+	char args[1024];
+	snprintf(args, sizeof args, RUN2 " --report %s/r.json --timeline %s/t.json", dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	/* a dropped unit op (the count in otherData kept right) */
+	planted("o=[e for e in x if e['name']=='trav'][5]; d['traceEvents'].remove(o); "
+	        "d['otherData']['events']-=1",
+	        "trav.ops");
+	/* an op with one issue cycle too many */
+	planted("o=[e for e in x if e['name']=='isect'][3]; o['args']['issue_cycles']+=1", "isect");
+	/* two ops of one unit overlapping */
+	planted("o=[e for e in x if e['name']=='trav' and e['pid']==0 and e['tid']==1001]; "
+	        "o[1]['ts']=o[0]['ts']",
+	        "overlaps");
+	/* a thread-state span lost (the longest: the sums allow the 3
+	 * decimals' rounding, half a thousandth of a cycle per span) */
+	planted("o=max((e for e in x if e['name']=='waiting_memory'), key=lambda e: e['dur']); "
+	        "d['traceEvents'].remove(o); "
+	        "d['otherData']['events']-=1",
+	        "waiting_memory_ps");
+	/* an L1 miss lost */
+	planted("o=[e for e in x if e['name']=='kd miss'][0]; d['traceEvents'].remove(o); "
+	        "d['otherData']['events']-=1",
+	        "l1.kd");
+	/* the event count disagreeing with the events */
+	planted("d['otherData']['events']+=1", "otherData.events");
+	/* an event outside the window */
+	planted("d['otherData']['window']=[10, 1000]", "outside the window");
+}
+
+Test(observe, bad_flags_one_line_no_file)
+{
+	struct {
+		const char *args, *named;
+	} bad[] = {
+	    {"--fidelity functional --timeline %s/t.json", "--timeline"},
+	    {"--fidelity sampled --timeline %s/t.json", "--timeline"},
+	    {"--timeline %s/t.json --timeline-window 5:3", "--timeline-window"},
+	    {"--timeline %s/t.json --timeline-window 5", "--timeline-window"},
+	    {"--timeline %s/t.json --timeline-window a:9", "--timeline-window"},
+	    {"--timeline %s/t.json --timeline-window -1:9", "--timeline-window"},
+	    {"--timeline %s/t.json --timeline-max-events 0", "--timeline-max-events"},
+	    {"--timeline-window 0:9 --report %s/t.json", "--timeline-window"},
+	    {"--timeline %s/no/such/dir/t.json", "t.json"},
+	};
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		char a[512], args[1024];
+		snprintf(a, sizeof a, bad[i].args, dir);
+		snprintf(args, sizeof args, "--size 16x16 --report %s/r.json %s", dir, a);
+		cr_assert_eq(saarsim(args), 2, "%s", args);
+		tu_one_line(dir, "saarsim", bad[i].named);
+		cr_assert(!tu_exists(dir, "t.json") && !tu_exists(dir, "r.json"), "%s left a file",
+		          args);
+		cr_assert_eq(tu_temps(dir, "t.json") + tu_temps(dir, "r.json"), 0, "%s", args);
+	}
+}
