@@ -135,7 +135,8 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 		uint64_t a = q->addr > lo ? q->addr : lo, b = end < hi ? end : hi;
 		int m = -1;
 		uint32_t slot = 0;
-		switch (tcache_lookup(&l->t, line, (uint32_t)(b - a), q, &m, &slot)) {
+		cache_result r = tcache_lookup(&l->t, line, (uint32_t)(b - a), q, &m, &slot);
+		switch (r) {
 		case CACHE_HIT:
 			/* the bytes leave the array at the tag check */
 			if (q->dst)
@@ -149,6 +150,18 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 			/* fall through */
 		case CACHE_MISS_MERGED: /* q waits on the MSHR */
 			q->pending++;
+			if (h->obs) {
+				mem_obs_ev ev = {MEM_OBS_L1_LOOKUP_MISS,
+				                 l->type,
+				                 r == CACHE_MISS_MERGED,
+				                 0,
+				                 t,
+				                 t,
+				                 lo,
+				                 lb,
+				                 q->ctx};
+				h->obs->fn(h->obs->ctx, &ev);
+			}
 			break;
 		case CACHE_MSHR_FULL:
 			return 1;
@@ -183,8 +196,8 @@ static void l1_filled(eng *e, void *ctx, uint64_t line)
 		memcpy(d, l->t.mbuf + (size_t)m * l->t.c.p.line_bytes, l->t.c.p.line_bytes);
 	if (h->obs && m >= 0) {
 		uint32_t lb = l->t.c.p.line_bytes;
-		mem_obs_ev ev = {MEM_OBS_L1_MISS,        l->type, m,         0,
-		                 h->miss_t0[l->type][m], now,     line * lb, lb};
+		mem_obs_ev ev = {MEM_OBS_L1_MISS, l->type, m,   0, h->miss_t0[l->type][m], now,
+		                 line * lb,       lb,      NULL};
 		h->obs->fn(h->obs->ctx, &ev);
 	}
 	for (hreq *q; (q = tcache_pop(&l->t, &w));) {

@@ -47,14 +47,18 @@ typedef struct mem_req {
  * L1 miss: a line's fetch from the miss (request below) to its fill; id
  * = the MSHR, type = the L1 (enum mem_req_type). SDRAM: one row's data
  * burst on the data bus; id = the bank, type = enum mem_obs_row. Host
- * bus: one DMA transfer; id 0, type 0. */
-enum mem_obs_kind { MEM_OBS_L1_MISS, MEM_OBS_SDRAM, MEM_OBS_HOSTBUS, MEM_OBS_NKINDS };
+ * bus: one DMA transfer; id 0, type 0. L1 lookup missed: a read's line
+ * missed in its L1 at t0 = t1 (a new miss, id 0, or one merged into a
+ * fetch on its way, id 1), who = the read's requester (the ctx its done
+ * callback gets; the chip's timed reads pass their thread). */
+enum mem_obs_kind { MEM_OBS_L1_MISS, MEM_OBS_SDRAM, MEM_OBS_HOSTBUS, MEM_OBS_L1_LOOKUP_MISS };
 enum mem_obs_row { MEM_OBS_ROW_HIT, MEM_OBS_ROW_EMPTY, MEM_OBS_ROW_CONFLICT };
 
 typedef struct mem_obs_ev {
 	int kind, type, id, write;
 	uint64_t t0, t1, addr;
 	uint32_t bytes;
+	const void *who; /* L1 lookup miss only; else NULL */
 } mem_obs_ev;
 
 /* An observer: fn(ctx, ev) at each event. Components hold a pointer to

@@ -158,7 +158,7 @@ static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int
 	if (first)
 		*first = data;
 	if (s->obs) {
-		mem_obs_ev ev = {MEM_OBS_SDRAM, how, (int)b, write, data, end, addr, bytes};
+		mem_obs_ev ev = {MEM_OBS_SDRAM, how, (int)b, write, data, end, addr, bytes, NULL};
 		s->obs->fn(s->obs->ctx, &ev);
 	}
 	return end;

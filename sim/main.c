@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -51,6 +52,8 @@ static void usage(FILE *f)
 	        "                        (cycle fidelity; docs/observe.md)\n"
 	        "  --timeline-window C0:C1  only the events starting in cycles [C0, C1)\n"
 	        "  --timeline-max-events N  cap on the timeline's events (default 1000000)\n"
+	        "  --heatmap DIR         heat maps per tile and pixel, EXR and PNG (cycle\n"
+	        "                        fidelity; docs/observe.md)\n"
 	        "  --census FILE.csv     cycles and resource demand of every chunk of tiles\n"
 	        "                        (cycle and functional; docs/fidelity.md)\n"
 	        "  --fidelity MODE       cycle | sampled | functional (docs/fidelity.md)\n"
@@ -140,7 +143,7 @@ typedef struct cli {
 	world_opts wo; /* the world flags (rtref's) */
 	const char *config, *out, *report, *size, *frames;
 	const char *csv, *trace, *census, *mem_limit;
-	const char *timeline, *tl_window, *tl_max;
+	const char *timeline, *tl_window, *tl_max, *heatmap;
 	uint64_t tl_c0, tl_c1, tl_cap;
 	int check, list, doc, dry;
 } cli;
@@ -205,6 +208,8 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 			a->tl_window = v;
 		else if (!strcmp(f, "--timeline-max-events"))
 			a->tl_max = v;
+		else if (!strcmp(f, "--heatmap"))
+			a->heatmap = v;
 		else {
 			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
 			return DIAG_EXIT;
@@ -260,8 +265,9 @@ static int observe_args(cli *a, const saar_config *cfg, diag *d)
 		return -1;
 	if (a->tl_max)
 		a->tl_cap = (uint64_t)cap;
-	if (a->timeline && cfg->fidelity != CFG_FIDELITY_CYCLE)
-		return diag_set(d, "--timeline", 0, 0, "needs --fidelity cycle (this run's is %s)",
+	if ((a->timeline || a->heatmap) && cfg->fidelity != CFG_FIDELITY_CYCLE)
+		return diag_set(d, a->timeline ? "--timeline" : "--heatmap", 0, 0,
+		                "needs --fidelity cycle (this run's is %s)",
 		                cfg->fidelity == CFG_FIDELITY_SAMPLED ? "sampled" : "functional");
 	return 0;
 }
@@ -309,6 +315,43 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	return -1;
 }
 
+/* --heatmap's folder, made here if missing and removed at exit if it is
+ * still empty then (a failed run: its files' temporaries are removed
+ * first, atexit's order being the reverse of registration). */
+static char heat_made[4096];
+
+static void heat_rmdir(void)
+{
+	if (heat_made[0])
+		rmdir(heat_made);
+}
+
+static int reserve_heatmap(const char *dir, diag *d)
+{
+	struct stat st;
+	if (!*dir)
+		return diag_set(d, "--heatmap", 0, 0, "an empty folder name");
+	if (stat(dir, &st)) {
+		if (errno != ENOENT || mkdir(dir, 0777))
+			return diag_set(d, "--heatmap", 0, 0, "%s: cannot make the folder: %s", dir,
+			                strerror(errno));
+		snprintf(heat_made, sizeof heat_made, "%s", dir);
+		atexit(heat_rmdir);
+	} else if (!S_ISDIR(st.st_mode))
+		return diag_set(d, "--heatmap", 0, 0, "%s: not a folder", dir);
+	char path[4200];
+	for (int i = 0; obs_heat_files[i]; i++) {
+		snprintf(path, sizeof path, "%s/%s", dir, obs_heat_files[i]);
+		const char *ext = strrchr(obs_heat_files[i], '.');
+		if (strcmp(ext, ".json") ? img_reserve(path, d) : af_reserve(path, "", d)) {
+			char m[sizeof d->msg];
+			snprintf(m, sizeof m, "%s", d->msg);
+			return diag_set(d, "--heatmap", 0, 0, "%s", m);
+		}
+	}
+	return 0;
+}
+
 /* Every output's temporary is made now, so an unwritable --out format, a
  * missing or read-only folder or a CSV of other columns fails before the
  * run, not after it (af_reserve); so does a census the run cannot keep,
@@ -327,6 +370,8 @@ static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 		return -1;
 	if (a->timeline && af_reserve(a->timeline, "", d))
 		return -1;
+	if (a->heatmap && reserve_heatmap(a->heatmap, d))
+		return -1;
 	if (a->census && chip_census_check(cfg, d))
 		return -1;
 	return 0;
@@ -335,16 +380,15 @@ static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 /* Runs the chip with the memory trace (written under the temporary name
  * trace_tmp, renamed once the run succeeded) and the census on, then
  * checks the frame against kernel-ref unless --no-check. */
-static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, chip_check *chk,
-                    diag *d)
+static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, obs **ob,
+                    chip_check *chk, diag *d)
 {
-	obs_timeline *tl = NULL;
-	if (a->timeline) {
-		if (af_open(tl_tmp, a->timeline, "", 1)) {
-			af_diag(d, a->timeline);
-			return -1;
-		}
-		if (!(tl = obs_timeline_start(c, tl_tmp->f, a->tl_c0, a->tl_c1, a->tl_cap, d)))
+	if (a->timeline && af_open(tl_tmp, a->timeline, "", 1))
+		return af_diag(d, a->timeline);
+	if (a->timeline || a->heatmap) {
+		obs_opts op = {a->timeline ? tl_tmp->f : NULL, a->tl_c0, a->tl_c1, a->tl_cap,
+		               a->heatmap != NULL};
+		if (!(*ob = obs_start(c, &op, a->timeline ? "--timeline" : "--heatmap", d)))
 			return -1;
 	}
 	if (a->trace) {
@@ -356,14 +400,12 @@ static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, chip
 			return -1;
 	}
 	if (a->census && chip_census_on(c, d))
-		goto fail;
+		return -1;
 	if (chip_run(c, d))
-		goto fail;
-	if (tl) {
+		return -1;
+	if (*ob) {
 		uint64_t n, dropped;
-		int bad = obs_timeline_end(tl, &n, &dropped);
-		tl = NULL;
-		if (bad)
+		if (obs_finish(*ob, &n, &dropped))
 			return af_diag(d, a->timeline);
 		if (dropped)
 			fprintf(stderr,
@@ -374,10 +416,6 @@ static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, chip
 	if (chip_trace_close(c, d) || (a->check && chip_check_frame(c, chk, d)))
 		return -1;
 	return 0;
-fail:
-	if (tl)
-		obs_timeline_end(tl, NULL, NULL);
-	return -1;
 }
 
 /* The report checks itself: a counter that stopped counting shows, one
@@ -396,9 +434,10 @@ static void check_report(const chip *c, rc_list *inv)
  * row) is done: a run that fails on any leaves the files at all the output
  * paths as they were. Then the summary on stdout. Returns the exit status. */
 static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, afile *tl_tmp,
-                         double t_start, diag *d)
+                         const obs *ob, double t_start, diag *d)
 {
-	af_group outs = {0};
+	static af_group outs; /* 24 files of PATH_MAX names: not on the stack */
+	memset(&outs, 0, sizeof outs);
 	int csv_lock = -1;
 	ri->group = &outs;
 	if (a->out && fb_write(&ri->c->fb, a->out, &outs, d))
@@ -416,6 +455,8 @@ static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, afile 
 			goto fail;
 		}
 	}
+	if (a->heatmap && obs_heat_write(ob, a->heatmap, &outs, d))
+		goto fail;
 	if (a->timeline) {
 		int bad = af_commit_to(tl_tmp, &outs);
 		tl_tmp->tmp[0] = 0;
@@ -494,7 +535,8 @@ int main(int argc, char **argv)
 	static afile trace_tmp, tl_tmp;
 	trace_tmp.tmp[0] = 0; /* "" while none is open */
 	tl_tmp.tmp[0] = 0;
-	if (simulate(c, &a, &trace_tmp, &tl_tmp, &chk, &d)) {
+	obs *ob = NULL;
+	if (simulate(c, &a, &trace_tmp, &tl_tmp, &ob, &chk, &d)) {
 		rc = cli_bad("saarsim", d.msg);
 	} else {
 		if (pr.shown)
@@ -503,8 +545,9 @@ int main(int argc, char **argv)
 		check_report(c, &inv);
 		report_info ri = {c, &w,   a.check ? &chk : NULL,         load_ms,
 		                  0, NULL, (double)mem.total / (1 << 20), &inv};
-		rc = write_outputs(&a, &ri, &trace_tmp, &tl_tmp, t_start, &d);
+		rc = write_outputs(&a, &ri, &trace_tmp, &tl_tmp, ob, t_start, &d);
 	}
+	obs_free(ob);
 	chip_destroy(c);
 	if (trace_tmp.tmp[0])
 		af_abort(&trace_tmp);

@@ -23,25 +23,40 @@
 #include "sim/chip.h"
 
 /* The cap on a timeline's events unless the caller gives another: about
- * 120 MB of JSON. */
+ * 125 MB of JSON. */
 #define OBS_TL_MAX_EVENTS 1000000ull
 
-typedef struct obs_timeline obs_timeline;
+/* What to observe: the timeline (tl: the open file to write it to, NULL:
+ * none; events starting in cycles [c0, c1), at most max of them) and the
+ * heat maps. */
+typedef struct obs_opts {
+	FILE *tl;
+	uint64_t c0, c1, max;
+	int heat;
+} obs_opts;
+
+typedef struct obs obs;
 
 /* Parses a cycle window "C0:C1" (either side may be empty: from the start,
  * to the end; C0 < C1) into *c0, *c1 (C1 UINT64_MAX: open). -1 with d
  * naming flag. */
 int obs_parse_window(const char *flag, const char *s, uint64_t *c0, uint64_t *c1, diag *d);
 
-/* Starts the timeline of c's run (cycle fidelity only; -1 with d set
- * otherwise): events starting in cycles [c0, c1), at most max_events,
- * written to f (open for writing; the caller closes it). Call before
- * chip_run, obs_timeline_end after it. */
-obs_timeline *obs_timeline_start(chip *c, FILE *f, uint64_t c0, uint64_t c1, uint64_t max_events,
-                                 diag *d);
-/* Ends it: the spans still open, the file's end; the observers removed
- * and o freed. *written and *dropped (may be NULL): events written, and
- * left out for the cap. -1 on a write error (errno set). */
-int obs_timeline_end(obs_timeline *o, uint64_t *written, uint64_t *dropped);
+/* Starts observing c's run (cycle fidelity only: -1 with d naming flag
+ * otherwise). Call before chip_run, obs_finish after it. NULL with d set
+ * when out of memory. */
+obs *obs_start(chip *c, const obs_opts *p, const char *flag, diag *d);
+/* After the run: the spans still open, the timeline's end written (the
+ * caller closes its file); the observers removed from the chip. *written
+ * and *dropped (may be NULL): timeline events written, and left out for
+ * the cap. -1 on a write error of the timeline (errno set). */
+int obs_finish(obs *o, uint64_t *written, uint64_t *dropped);
+
+/* The heat maps' files in dir (obs_heat_names), for reserving them. */
+extern const char *const obs_heat_files[];
+/* Writes the heat maps into dir (every file committed into g; NULL:
+ * renamed at once). -1 with d set. */
+int obs_heat_write(const obs *o, const char *dir, af_group *g, diag *d);
+void obs_free(obs *o);
 
 #endif

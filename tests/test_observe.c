@@ -6,10 +6,15 @@
  * segments and busy time, the host-bus transfers); a window holds exactly
  * the full timeline's part; the cap is kept and said; the checker itself
  * catches a dropped op, an overlap and a wrong total; the observers change
- * nothing in the report; bad flags give one line and no file.
+ * nothing in the report; bad flags give one line and no file. The heat
+ * maps (--heatmap) add up to the report's totals (scripts/heatmap-check.py:
+ * kd steps, triangle tests, L1 misses, busy and memory-waiting thread
+ * cycles), each EXR to its heatmap.json total; a folder the run made is
+ * gone when the run fails.
  */
 #include <sys/stat.h>
 
+#include "sim/observe.h"
 #include "tests/testutil.h"
 
 static char dir[256];
@@ -221,4 +226,108 @@ Test(observe, bad_flags_one_line_no_file)
 		          args);
 		cr_assert_eq(tu_temps(dir, "t.json") + tu_temps(dir, "r.json"), 0, "%s", args);
 	}
+}
+
+/* ---- heat maps ---- */
+
+/* scripts/heatmap-check.py on dir/hm (and a report): each map's EXR adds
+ * up to heatmap.json's total, and the totals are the report's. */
+static int heat_check(const char *report)
+{
+	char cmd[2048];
+	snprintf(cmd, sizeof cmd, "python3 %s/scripts/heatmap-check.py %s/hm %s%s%s >%s/check 2>&1",
+	         root(), dir, report ? dir : "", report ? "/" : "", report ? report : "", dir);
+	return tu_run(cmd);
+}
+
+Test(observe, heatmap_totals_equal_the_report)
+{
+	char args[1024];
+	/* 100x60: partial tiles at the right and bottom edges */
+	snprintf(args, sizeof args,
+	         "--size 100x60 --set chip.rtps=2 --report %s/r.json --heatmap %s/hm", dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(heat_check("r.json"), 0, "%s", tu_slurp(dir, "check"));
+	char *j = tu_slurp(dir, "hm/heatmap.json");
+	cr_assert(strstr(j, "\"tiles_x\":13,\"tiles_y\":8,") &&
+	              strstr(j, "\"l1_misses_unattributed\":0,"),
+	          "%s", j);
+	char d2[300];
+	snprintf(d2, sizeof d2, "%s/hm", dir);
+	for (int i = 0; obs_heat_files[i]; i++)
+		cr_assert(tu_exists(d2, obs_heat_files[i]) && !tu_temps(d2, obs_heat_files[i]),
+		          "%s", obs_heat_files[i]);
+}
+
+/* With the VMA, two frames (the maps add both up, as the report does),
+ * a timeline beside them (one set of observers serves both). */
+Test(observe, heatmap_vma_two_frames_with_timeline)
+{
+	char args[1024];
+	snprintf(args, sizeof args,
+	         "--config %s/configs/saarcor-vma.yaml --size 64x48 --frames 2 --no-check --report "
+	         "%s/r.json --heatmap %s/hm --timeline %s/t.json",
+	         root(), dir, dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	cr_assert_eq(heat_check("r.json"), 0, "%s", tu_slurp(dir, "check"));
+	cr_assert_eq(check("t.json r.json"), 0, "%s", tu_slurp(dir, "check"));
+}
+
+/* The checker catches a map that lost a tile's worth, and a total that
+ * disagrees with the report. */
+Test(observe, heatmap_checker_catches_planted_mistakes)
+{
+	char args[1024], cmd[2048];
+	snprintf(args, sizeof args, RUN2 " --report %s/r.json --heatmap %s/hm", dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	/* an EXR whose values no longer add up (a thousandth less) */
+	snprintf(cmd, sizeof cmd,
+	         "cd %s/hm && oiiotool kd_steps.exr --mulc 0.999 -d float -o k.exr && mv "
+	         "k.exr kd_steps.exr",
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0);
+	cr_assert_eq(heat_check(NULL), 1, "not caught: a changed EXR");
+	cr_assert(strstr(tu_slurp(dir, "check"), "kd_steps.exr: values add up"), "%s",
+	          tu_slurp(dir, "check"));
+	/* a total off by one against the report */
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	snprintf(cmd, sizeof cmd,
+	         "python3 -c \"import json; p='%s/r.json'; r=json.load(open(p)); "
+	         "r['traversal']['triangle_tests']+=1; json.dump(r, open(p,'w'))\"",
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0);
+	cr_assert_eq(heat_check("r.json"), 1, "not caught: a total off by one");
+	cr_assert(strstr(tu_slurp(dir, "check"), "tri_tests"), "%s", tu_slurp(dir, "check"));
+}
+
+Test(observe, heatmap_bad_input_one_line_no_folder_left)
+{
+	char args[1024];
+	/* not a cycle run */
+	snprintf(args, sizeof args, "--size 16x16 --fidelity functional --heatmap %s/hm", dir);
+	cr_assert_eq(saarsim(args), 2);
+	tu_one_line(dir, "saarsim", "--heatmap");
+	cr_assert(!tu_exists(dir, "hm"));
+	/* a file where the folder should be */
+	snprintf(args, sizeof args, "--size 16x16 --heatmap %s/out", dir);
+	cr_assert_eq(saarsim(args), 2);
+	tu_one_line(dir, "saarsim", "--heatmap");
+	/* a parent that does not exist */
+	snprintf(args, sizeof args, "--size 16x16 --heatmap %s/no/such/hm", dir);
+	cr_assert_eq(saarsim(args), 2);
+	tu_one_line(dir, "saarsim", "--heatmap");
+	/* a run that fails after the folder was made: nothing left, the
+	 * folder neither */
+	snprintf(args, sizeof args, "--size 16x16 --scene %s/none.obj --heatmap %s/hm", dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	cr_assert(!tu_exists(dir, "hm"), "the folder it made is left");
+	/* a folder that was there stays, with nothing added */
+	char made[300];
+	snprintf(made, sizeof made, "%s/keep", dir);
+	cr_assert_eq(mkdir(made, 0777), 0);
+	snprintf(args, sizeof args, "--size 16x16 --scene %s/none.obj --heatmap %s/keep", dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	cr_assert(tu_exists(dir, "keep"));
+	char any[600];
+	cr_assert_eq(tu_find_files(made, "", any, sizeof any), 2, "files left in the folder");
 }
