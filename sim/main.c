@@ -61,6 +61,7 @@ static void usage(FILE *f)
 	        "  --unit-tiles N        sampled: tiles per measured unit (sampling.unit_tiles)\n"
 	        "  --warmup-tiles N      sampled: detailed warm-up tiles (sampling.warmup_tiles)\n"
 	        "  --no-check            skip the comparison with kernel-ref\n"
+	        "  --quiet               no progress line (shown on a terminal after 2 s)\n"
 	        "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
 	        "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
 	        "  --dry-run             check the arguments and the config, then exit (no scene\n"
@@ -77,18 +78,40 @@ static double now_ms(void)
 	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
+/* The progress line (docs/observe.md): once the run has simulated for
+ * `after` ms (SAARSIM_PROGRESS_AFTER_MS, default 2000), one line on
+ * stderr, rewritten at most every 250 ms, cleared at the end; only when
+ * stderr is a terminal and --quiet is not given. */
 typedef struct progress {
-	double t0;
+	double t0, after, last;
 	int shown;
+	const chip *c;
 } progress;
 
 static void show_progress(void *ctx, int frame, int done, int total)
 {
 	progress *p = ctx;
-	if (now_ms() - p->t0 < 1000.0)
+	double now = now_ms(), el = now - p->t0;
+	if (el < p->after || (p->shown && now - p->last < 250.0))
 		return;
-	fprintf(stderr, "\rsaarsim: frame %d: %d/%d tiles", frame + 1, done, total);
+	p->last = now;
+	int frames = p->c->cfg.frame.frames;
+	double all = (double)frames * total, got = (double)frame * total + done;
+	double cycles = (double)eng_now(p->c->e) / (double)p->c->clk.period;
+	double left = got > 0 ? el / 1000.0 * (all - got) / got : 0;
+	fprintf(stderr,
+	        "\r\033[Ksaarsim: frame %d/%d, %d/%d tiles, %.4g cycles, %.3g cycles/s, %.0f s "
+	        "left",
+	        frame + 1, frames, done, total, cycles, el > 0 ? cycles / (el / 1000.0) : 0, left);
+	fflush(stderr);
 	p->shown = 1;
+}
+
+static void progress_clear(progress *p)
+{
+	if (p->shown)
+		fputs("\r\033[K", stderr);
+	p->shown = 0;
 }
 
 /* The config key a shorthand flag sets, NULL if a is not one: the
@@ -116,7 +139,7 @@ static const char *key_flag(const char *a)
 static int bare_flag(const char *a)
 {
 	static const char *const bare_flags[] = {"--no-check", "--list-config", "--config-doc",
-	                                         "--dry-run"};
+	                                         "--dry-run", "--quiet"};
 	for (int k = 0; k < (int)(sizeof bare_flags / sizeof *bare_flags); k++)
 		if (!strcmp(a, bare_flags[k]))
 			return k;
@@ -145,7 +168,7 @@ typedef struct cli {
 	const char *csv, *trace, *census, *mem_limit;
 	const char *timeline, *tl_window, *tl_max, *heatmap;
 	uint64_t tl_c0, tl_c1, tl_cap;
-	int check, list, doc, dry;
+	int check, list, doc, dry, quiet;
 } cli;
 
 /* The first pass: every argument checked, the world flags into a->wo, the
@@ -170,8 +193,8 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 		}
 		int b = bare_flag(f);
 		if (b >= 0) {
-			int *set[] = {&a->check, &a->list, &a->doc,
-			              &a->dry}; /* bare_flags' order */
+			int *set[] = {&a->check, &a->list, &a->doc, &a->dry,
+			              &a->quiet}; /* bare_flags' order */
 			*set[b] = b != 0;
 			i++;
 			continue;
@@ -525,8 +548,9 @@ int main(int argc, char **argv)
 		world_free(&w);
 		return cli_bad("saarsim", d.msg);
 	}
-	progress pr = {now_ms(), 0};
-	if (isatty(STDERR_FILENO)) {
+	const char *after = getenv("SAARSIM_PROGRESS_AFTER_MS");
+	progress pr = {now_ms(), after && *after ? atof(after) : 2000.0, 0, 0, c};
+	if (isatty(STDERR_FILENO) && !a.quiet) {
 		c->progress = show_progress;
 		c->progress_ctx = &pr;
 	}
@@ -536,11 +560,11 @@ int main(int argc, char **argv)
 	trace_tmp.tmp[0] = 0; /* "" while none is open */
 	tl_tmp.tmp[0] = 0;
 	obs *ob = NULL;
-	if (simulate(c, &a, &trace_tmp, &tl_tmp, &ob, &chk, &d)) {
+	int bad = simulate(c, &a, &trace_tmp, &tl_tmp, &ob, &chk, &d);
+	progress_clear(&pr);
+	if (bad) {
 		rc = cli_bad("saarsim", d.msg);
 	} else {
-		if (pr.shown)
-			fputc('\n', stderr);
 		static rc_list inv;
 		check_report(c, &inv);
 		report_info ri = {c, &w,   a.check ? &chk : NULL,         load_ms,

@@ -331,3 +331,87 @@ Test(observe, heatmap_bad_input_one_line_no_folder_left)
 	char any[600];
 	cr_assert_eq(tu_find_files(made, "", any, sizeof any), 2, "files left in the folder");
 }
+
+/* ---- progress ---- */
+
+/* Runs cmd (a shell command) on a pseudo-terminal (python3's pty: the
+ * program's stdout and stderr are the terminal) with env before it;
+ * what the terminal showed goes to dir/tty. Returns the exit status. */
+static int on_tty(const char *env, const char *cmd)
+{
+	static const char py[] = "import os, pty, sys\n"
+	                         "pid, fd = pty.fork()\n"
+	                         "if pid == 0:\n"
+	                         "    os.execv('/bin/sh', ['sh', '-c', sys.argv[1]])\n"
+	                         "out = b''\n"
+	                         "while True:\n"
+	                         "    try:\n"
+	                         "        b = os.read(fd, 65536)\n"
+	                         "    except OSError:\n"
+	                         "        break\n"
+	                         "    if not b:\n"
+	                         "        break\n"
+	                         "    out += b\n"
+	                         "_, st = os.waitpid(pid, 0)\n"
+	                         "open(sys.argv[2], 'wb').write(out)\n"
+	                         "sys.exit(os.WEXITSTATUS(st))\n";
+	char path[512], full[4096];
+	tu_write(path, sizeof path, dir, "ontty.py",
+	         py); /* not pty.py: it would shadow the module */
+	snprintf(full, sizeof full, "%s python3 %s '%s' %s/tty", env, path, cmd, dir);
+	return tu_run(full);
+}
+
+#define PROG_RUN "--size 256x256 --no-check"
+
+Test(observe, progress_line_on_a_terminal_only)
+{
+	char cmd[2048];
+	/* on a terminal: the line, with its fields, rewritten in place and
+	 * cleared before the summary */
+	snprintf(cmd, sizeof cmd, "%s/saarsim " PROG_RUN, tu_bin_dir());
+	cr_assert_eq(on_tty("SAARSIM_PROGRESS_AFTER_MS=0", cmd), 0);
+	char *t = tu_slurp(dir, "tty");
+	cr_assert(strstr(t, "\r\033[Ksaarsim: frame 1/1, 64/1024 tiles, "), "%s", t);
+	cr_assert(strstr(t, " cycles/s, ") && strstr(t, " s left"), "%s", t);
+	cr_assert(strstr(t, "left\r\033[Ksaarsim: embedded:cornell"), "not cleared: %s", t);
+	/* --quiet: none */
+	snprintf(cmd, sizeof cmd, "%s/saarsim " PROG_RUN " --quiet", tu_bin_dir());
+	cr_assert_eq(on_tty("SAARSIM_PROGRESS_AFTER_MS=0", cmd), 0);
+	cr_assert(!strstr(tu_slurp(dir, "tty"), "tiles"), "%s", tu_slurp(dir, "tty"));
+	/* a run shorter than the default 2 s: none */
+	snprintf(cmd, sizeof cmd, "%s/saarsim --size 64x64 --no-check", tu_bin_dir());
+	cr_assert_eq(on_tty("", cmd), 0);
+	cr_assert(!strstr(tu_slurp(dir, "tty"), "tiles"), "%s", tu_slurp(dir, "tty"));
+	/* stderr a file, or a pipe (stdout still the terminal): none */
+	snprintf(cmd, sizeof cmd, "%s/saarsim " PROG_RUN " 2>%s/e1", tu_bin_dir(), dir);
+	cr_assert_eq(on_tty("SAARSIM_PROGRESS_AFTER_MS=0", cmd), 0);
+	cr_assert(!strstr(tu_slurp(dir, "e1"), "tiles"), "%s", tu_slurp(dir, "e1"));
+	cr_assert(!strstr(tu_slurp(dir, "tty"), "tiles"));
+	snprintf(cmd, sizeof cmd, "%s/saarsim " PROG_RUN " 2>&1 | cat >%s/e2", tu_bin_dir(), dir);
+	cr_assert_eq(on_tty("SAARSIM_PROGRESS_AFTER_MS=0", cmd), 0);
+	char *e2 = tu_slurp(dir, "e2");
+	cr_assert(strstr(e2, "saarsim: embedded:cornell") && !strstr(e2, "tiles"), "%s", e2);
+}
+
+Test(observe, sweep_progress_on_a_terminal_only, .timeout = 120)
+{
+	char cmd[2048];
+	snprintf(cmd, sizeof cmd,
+	         "SAARSIM=%s/saarsim sh %s/scripts/sweep --out %s/sw --scene spd:tetra:2 --size "
+	         "32x32 --set chip.threads_per_rtp=2,16 -j 2",
+	         tu_bin_dir(), root(), dir);
+	cr_assert_eq(on_tty("", cmd), 0, "%s", tu_slurp(dir, "tty"));
+	char *t = tu_slurp(dir, "tty");
+	cr_assert(strstr(t, "\r\033[Ksweep: 0 of 2 points done") ||
+	              strstr(t, "\r\033[Ksweep: 1 of 2 points done"),
+	          "%s", t);
+	/* stderr a file: none; --quiet: none */
+	char cmd2[4800];
+	snprintf(cmd2, sizeof cmd2, "%s --out %s/sw2 2>%s/e1", cmd, dir, dir);
+	cr_assert_eq(on_tty("", cmd2), 0);
+	cr_assert(!strstr(tu_slurp(dir, "e1"), "points done"), "%s", tu_slurp(dir, "e1"));
+	snprintf(cmd2, sizeof cmd2, "%s --out %s/sw3 --quiet", cmd, dir);
+	cr_assert_eq(on_tty("", cmd2), 0);
+	cr_assert(!strstr(tu_slurp(dir, "tty"), "points done"), "%s", tu_slurp(dir, "tty"));
+}
