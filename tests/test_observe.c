@@ -415,3 +415,35 @@ Test(observe, sweep_progress_on_a_terminal_only, .timeout = 120)
 	cr_assert_eq(on_tty("", cmd2), 0);
 	cr_assert(!strstr(tu_slurp(dir, "tty"), "points done"), "%s", tu_slurp(dir, "tty"));
 }
+
+/* ---- the timeline's picture ---- */
+
+Test(observe, timeline_plot_writes_a_png, .timeout = 120)
+{
+	char args[1024], cmd[2048];
+	snprintf(args, sizeof args, RUN2 " --timeline-window 20000:22000 --timeline %s/t.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
+	snprintf(cmd, sizeof cmd,
+	         "python3 %s/scripts/timeline-plot %s/t.json %s/t.png --threads 4 2>%s/perr",
+	         root(), dir, dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", tu_slurp(dir, "perr"));
+	char *png = tu_slurp(dir, "t.png");
+	cr_assert(!memcmp(png, "\x89PNG\r\n", 6), "not a PNG");
+	cr_assert_eq(tu_temps(dir, "t.png"), 0);
+	/* one data row per span drawn: the panels hold the window's ops */
+	char *gp = tu_slurp(dir, "t.plot/plot.gp");
+	cr_assert(strstr(gp, "'trav 0' 1") && strstr(gp, "'thread 3'") && !strstr(gp, "'thread 4'"),
+	          "%s", gp);
+	/* bad input: one line, exit 2, no picture */
+	snprintf(cmd, sizeof cmd,
+	         "python3 %s/scripts/timeline-plot %s/t.json %s/u.png --window 9:3 2>%s/perr",
+	         root(), dir, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2);
+	cr_assert(strstr(tu_slurp(dir, "perr"), "timeline-plot: --window"), "%s",
+	          tu_slurp(dir, "perr"));
+	snprintf(cmd, sizeof cmd, "python3 %s/scripts/timeline-plot %s/out %s/u.png 2>%s/perr",
+	         root(), dir, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2);
+	cr_assert(!tu_exists(dir, "u.png"));
+}
