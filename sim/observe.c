@@ -589,11 +589,32 @@ static void text(uint8_t *img, int w, int h, int x, int y, const char *s)
 }
 
 /* One map: its values (n x m, per tile or per pixel) as EXR (the raw
- * values, one 32-bit float channel Y) and as false-colour PNG at the frame's size
- * (an integer multiple, at least 256 pixels wide) with a colour bar from
- * 0 to the maximum below it. */
+ * values, one 32-bit float channel Y) and as false-colour PNG at the
+ * frame's size (an integer multiple, at least 256 pixels wide) with a
+ * colour bar from 0 to bar_top below it. */
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return x < y ? -1 : x > y;
+}
+
+/* The value at the colour bar's top: the 99th percentile of the map's
+ * values, so that a few hot tiles or pixels do not leave the rest dark
+ * (larger values saturate); the maximum when that is 0. */
+static double bar_top(const double *v, size_t n, double mx)
+{
+	double *s = malloc(n * sizeof *s);
+	if (!s)
+		return mx;
+	memcpy(s, v, n * sizeof *s);
+	qsort(s, n, sizeof *s, cmp_double);
+	double top = s[(n - 1) * 99 / 100];
+	free(s);
+	return top > 0 ? top : mx;
+}
+
 static int write_map(const heat *hm, const char *dir, const char *name, const double *v,
-                     int per_tile, double *total, double *vmax, af_group *g, diag *d)
+                     int per_tile, double *total, double *vmax, double *vtop, af_group *g, diag *d)
 {
 	int n = per_tile ? hm->tx : hm->w, m = per_tile ? hm->ty : hm->h;
 	size_t cnt = (size_t)n * (size_t)m;
@@ -605,6 +626,7 @@ static int write_map(const heat *hm, const char *dir, const char *name, const do
 	}
 	*total = sum;
 	*vmax = mx;
+	double top = *vtop = bar_top(v, cnt, mx);
 	char path[4200];
 	int rc = -1;
 	float *f = malloc(cnt * sizeof *f);
@@ -618,7 +640,7 @@ static int write_map(const heat *hm, const char *dir, const char *name, const do
 	}
 	for (size_t i = 0; i < cnt; i++) {
 		f[i] = (float)v[i];
-		colour(mx > 0 ? v[i] / mx : 0, c8 + 3 * i);
+		colour(top > 0 ? v[i] / top : 0, c8 + 3 * i);
 	}
 	snprintf(path, sizeof path, "%s/%s.exr", dir, name);
 	if (img_write_values(path, n, m, f, g, d))
@@ -631,7 +653,7 @@ static int write_map(const heat *hm, const char *dir, const char *name, const do
 			                    : (size_t)py * (size_t)hm->w + (size_t)px;
 			memcpy(png + ((size_t)y * (size_t)pw + (size_t)x) * 3, c8 + 3 * i, 3);
 		}
-	/* the colour bar: 0 at the left, the maximum at the right */
+	/* the colour bar: 0 at the left, top at the right */
 	int y0 = hm->h * k + 8, x0 = 4, x1 = pw - 4;
 	for (int y = y0; y < y0 + 12; y++)
 		for (int x = x0; x < x1; x++)
@@ -639,7 +661,7 @@ static int write_map(const heat *hm, const char *dir, const char *name, const do
 			       png + ((size_t)y * (size_t)pw + (size_t)x) * 3);
 	char lab[32];
 	text(png, pw, ph, x0, y0 + 16, "0");
-	snprintf(lab, sizeof lab, "%.4g", mx);
+	snprintf(lab, sizeof lab, "%.4g", top);
 	text(png, pw, ph, x1 - (int)strlen(lab) * 4 * GS + GS, y0 + 16, lab);
 	snprintf(path, sizeof path, "%s/%s.png", dir, name);
 	if (img_write(path, pw, ph, png, NULL, g, d))
@@ -681,10 +703,10 @@ int obs_heat_write(const obs *o, const char *dir, af_group *g, diag *d)
 	    {"tri_tests", "triangle tests, each packet's shared by its rays", 0},
 	};
 	const double *vals[5] = {tv[0], tv[1], tv[2], hm->kd, hm->tri};
-	double total[5], vmax[5];
+	double total[5], vmax[5], vtop[5];
 	for (int i = 0; i < 5; i++)
 		if (write_map(hm, dir, maps[i].name, vals[i], maps[i].per_tile, &total[i], &vmax[i],
-		              g, d))
+		              &vtop[i], g, d))
 			goto out;
 	char path[4200];
 	snprintf(path, sizeof path, "%s/heatmap.json", dir);
@@ -701,9 +723,9 @@ int obs_heat_write(const obs *o, const char *dir, af_group *g, diag *d)
 	for (int i = 0; i < 5; i++)
 		fprintf(a.f,
 		        "%s\n\"%s\":{\"per\":\"%s\",\"what\":\"%s\",\"exr\":\"%s.exr\",\"png\":"
-		        "\"%s.png\",\"total\":%.17g,\"max\":%.17g}",
+		        "\"%s.png\",\"total\":%.17g,\"max\":%.17g,\"png_top\":%.17g}",
 		        i ? "," : "", maps[i].name, maps[i].per_tile ? "tile" : "pixel",
-		        maps[i].unit, maps[i].name, maps[i].name, total[i], vmax[i]);
+		        maps[i].unit, maps[i].name, maps[i].name, total[i], vmax[i], vtop[i]);
 	fputs("}}\n", a.f);
 	if (af_commit_to(&a, g)) {
 		af_diag(d, path);
