@@ -94,16 +94,22 @@ Test(observe, timeline_instances_and_host_bus)
 	cr_assert(strstr(t, "\"kind\":\"trav\",\"instance\":2"), "trav instance 2 never used");
 }
 
-Test(observe, conference_timeline, .timeout = 120)
+/* The issue's "done when": a Conference run's timeline is valid trace
+ * events agreeing with its report, and its heat maps' totals are the
+ * report's. (heat_check is defined with the heat-map tests below.) */
+static int heat_check(const char *report);
+
+Test(observe, conference_timeline_and_heatmap, .timeout = 120)
 {
 	char views[512], args[2048];
 	SCENE_OR_SKIP(views, "views.yaml");
 	snprintf(args, sizeof args,
 	         "--views %s --view conference --size 64x48 --no-check --report %s/r.json "
-	         "--timeline %s/t.json",
-	         views, dir, dir);
+	         "--timeline %s/t.json --heatmap %s/hm",
+	         views, dir, dir, dir);
 	cr_assert_eq(saarsim(args), 0, "%s", tu_slurp(dir, "err"));
 	cr_assert_eq(check("t.json r.json"), 0, "%s", tu_slurp(dir, "check"));
+	cr_assert_eq(heat_check("r.json"), 0, "%s", tu_slurp(dir, "check"));
 }
 
 Test(observe, window_is_the_full_timelines_part)
