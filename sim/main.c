@@ -338,6 +338,14 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	return -1;
 }
 
+/* d's message with the flag in front ("--timeline: path: ..."); -1. */
+static int flag_first(const char *flag, diag *d)
+{
+	char m[sizeof d->msg];
+	snprintf(m, sizeof m, "%s", d->msg);
+	return diag_set(d, flag, 0, 0, "%s", m);
+}
+
 /* --heatmap's folder, made here if missing and removed at exit if it is
  * still empty then (a failed run: its files' temporaries are removed
  * first, atexit's order being the reverse of registration). */
@@ -366,11 +374,8 @@ static int reserve_heatmap(const char *dir, diag *d)
 	for (int i = 0; obs_heat_files[i]; i++) {
 		snprintf(path, sizeof path, "%s/%s", dir, obs_heat_files[i]);
 		const char *ext = strrchr(obs_heat_files[i], '.');
-		if (strcmp(ext, ".json") ? img_reserve(path, d) : af_reserve(path, "", d)) {
-			char m[sizeof d->msg];
-			snprintf(m, sizeof m, "%s", d->msg);
-			return diag_set(d, "--heatmap", 0, 0, "%s", m);
-		}
+		if (strcmp(ext, ".json") ? img_reserve(path, d) : af_reserve(path, "", d))
+			return flag_first("--heatmap", d);
 	}
 	return 0;
 }
@@ -392,7 +397,7 @@ static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 	if (a->trace && af_reserve(a->trace, "", d))
 		return -1;
 	if (a->timeline && af_reserve(a->timeline, "", d))
-		return -1;
+		return flag_first("--timeline", d);
 	if (a->heatmap && reserve_heatmap(a->heatmap, d))
 		return -1;
 	if (a->census && chip_census_check(cfg, d))
