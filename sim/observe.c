@@ -341,7 +341,7 @@ static void tl_head(obs *o)
 {
 	chip *c = o->c;
 	FILE *f = o->f;
-	fputs("{\"displayTimeUnit\":\"ns\",\"traceEvents\":[\n{\"ph\":\"M\",\"name\":"
+	fputs("{\"traceEvents\":[\n{\"ph\":\"M\",\"name\":"
 	      "\"process_name\",\"pid\":0,\"args\":{\"name\":\"RTP 0\"}}",
 	      f);
 	char name[64];
