@@ -61,7 +61,7 @@ int af_reserve(const char *path, const char *suffix, diag *d);
  * that af_group_abort removes them: the user's files at the outputs' paths
  * stay as they were unless the run succeeds. (Undoing by deleting outputs
  * already renamed would delete the files they had replaced.) */
-#define AF_GROUP_MAX 8
+#define AF_GROUP_MAX 24
 typedef struct af_group {
 	int n;
 	afile a[AF_GROUP_MAX];

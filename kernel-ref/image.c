@@ -149,6 +149,38 @@ out:
 	return rc;
 }
 
+int img_write_values(const char *path, int w, int h, const float *v, af_group *g, diag *d)
+{
+	if (w <= 0 || h <= 0 || !v)
+		return diag_set(d, path, 0, 0, "cannot write a %dx%d image without pixels", w, h);
+	const img_plugin *p;
+	void *lib = plugin_open(&p, path, d);
+	if (!lib)
+		return -1;
+	char ext[32], sfx[34], err[512] = "";
+	ext_of(path, ext, sizeof ext);
+	int rc = -1;
+	afile a;
+	snprintf(sfx, sizeof sfx, ".%s", ext);
+	if (af_open(&a, path, sfx, 0)) {
+		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
+		goto out;
+	}
+	if (p->write_y32f(a.tmp, ext, w, h, v, err, sizeof err) != 0) {
+		af_abort(&a);
+		diag_set(d, path, 0, 0, "cannot write image: %s", err);
+		goto out;
+	}
+	if (af_commit_to(&a, g)) {
+		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
+		goto out;
+	}
+	rc = 0;
+out:
+	dlclose(lib);
+	return rc;
+}
+
 int img_can_write(const char *path, diag *d)
 {
 	const img_plugin *p;

@@ -25,6 +25,9 @@ extern "C" {
 int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, af_group *g,
               diag *d);
 
+/* Writes w*h values (row 0 at the top) as one 32-bit float channel "Y"
+ * to a float format (.exr): raw data, not a picture. g as img_write. */
+int img_write_values(const char *path, int w, int h, const float *v, af_group *g, diag *d);
 /* 0 if an image can be written to path's format (the plugin loads and has
  * a writer for the extension), else -1 with d set: lets a program refuse
  * --out before it spends the run. */

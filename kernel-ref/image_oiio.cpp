@@ -112,7 +112,32 @@ static int read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, char *er
 	}
 }
 
-static const img_plugin plugin = {IMG_PLUGIN_ABI, write_rgb, can_write, read_rgba8};
+static int write_y32f(const char *path, const char *ext_c, int w, int h, const float *v,
+                      char *err, size_t errlen)
+{
+	try {
+		auto out = ImageOutput::create(path);
+		if (!out)
+			return fail(err, errlen,
+			            std::string("no image writer for extension '.") + ext_c +
+			                "': " + one_line(OIIO::geterror()));
+		ImageSpec spec(w, h, 1, TypeDesc::FLOAT);
+		spec.channelnames = {"Y"};
+		if (!out->open(path, spec))
+			return fail(err, errlen, one_line(out->geterror()));
+		bool ok = out->write_image(TypeDesc::FLOAT, v);
+		std::string e = ok ? "" : one_line(out->geterror());
+		if (!out->close() && ok) {
+			e = one_line(out->geterror());
+			ok = false;
+		}
+		return ok ? 0 : fail(err, errlen, e);
+	} catch (const std::exception &x) {
+		return fail(err, errlen, x.what());
+	}
+}
+
+static const img_plugin plugin = {IMG_PLUGIN_ABI, write_rgb, can_write, read_rgba8, write_y32f};
 
 /* No worker pools: OpenImageIO's own and OpenEXR's (which an EXR read or
  * write, or an EXR writer's creation, starts) would be threads the scene

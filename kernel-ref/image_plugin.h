@@ -24,7 +24,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever img_plugin changes; image.c refuses another version. */
-#define IMG_PLUGIN_ABI   2
+#define IMG_PLUGIN_ABI   3
 #define IMG_PLUGIN_FILE  "libsaar-oiio.so"
 #define IMG_PLUGIN_ENTRY "saar_image_plugin"
 
@@ -40,6 +40,10 @@ typedef struct img_plugin {
 	/* Reads any format as RGBA8 into a malloc'd *rgba. 0, or -1 with err. */
 	int (*read_rgba8)(const char *path, int *w, int *h, uint8_t **rgba, char *err,
 	                  size_t errlen);
+	/* Writes w x h values of one channel ("Y") as 32-bit floats to path
+	 * in the format of ext (a float format: exr). 0, or -1 with err. */
+	int (*write_y32f)(const char *path, const char *ext, int w, int h, const float *v,
+	                  char *err, size_t errlen);
 } img_plugin;
 
 /* The one symbol the plugin exports. */

@@ -135,18 +135,33 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 		uint64_t a = q->addr > lo ? q->addr : lo, b = end < hi ? end : hi;
 		int m = -1;
 		uint32_t slot = 0;
-		switch (tcache_lookup(&l->t, line, (uint32_t)(b - a), q, &m, &slot)) {
+		cache_result r = tcache_lookup(&l->t, line, (uint32_t)(b - a), q, &m, &slot);
+		switch (r) {
 		case CACHE_HIT:
 			/* the bytes leave the array at the tag check */
 			if (q->dst)
 				deliver(h, l, q, line, slot);
 			break;
 		case CACHE_MISS_NEW:
+			if (h->obs)
+				h->miss_t0[l->type][m] = t;
 			lower_read(h, t, l->type, lo, lb, h->ms ? l->t.mbuf + (size_t)m * lb : NULL,
 			           l1_filled, l, line);
 			/* fall through */
 		case CACHE_MISS_MERGED: /* q waits on the MSHR */
 			q->pending++;
+			if (h->obs) {
+				mem_obs_ev ev = {MEM_OBS_L1_LOOKUP_MISS,
+				                 l->type,
+				                 r == CACHE_MISS_MERGED,
+				                 0,
+				                 t,
+				                 t,
+				                 lo,
+				                 lb,
+				                 q->ctx};
+				h->obs->fn(h->obs->ctx, &ev);
+			}
 			break;
 		case CACHE_MSHR_FULL:
 			return 1;
@@ -179,6 +194,12 @@ static void l1_filled(eng *e, void *ctx, uint64_t line)
 	uint8_t *d = m >= 0 ? l1_data(h, l, slot) : NULL;
 	if (d) /* the line arrived in the MSHR's buffer */
 		memcpy(d, l->t.mbuf + (size_t)m * l->t.c.p.line_bytes, l->t.c.p.line_bytes);
+	if (h->obs && m >= 0) {
+		uint32_t lb = l->t.c.p.line_bytes;
+		mem_obs_ev ev = {MEM_OBS_L1_MISS, l->type, m,   0, h->miss_t0[l->type][m], now,
+		                 line * lb,       lb,      NULL};
+		h->obs->fn(h->obs->ctx, &ev);
+	}
 	for (hreq *q; (q = tcache_pop(&l->t, &w));) {
 		if (q->dst)
 			deliver(h, l, q, line, slot);
@@ -363,11 +384,34 @@ static void hier_destroy(void *impl)
 		n = c->next;
 		free(c);
 	}
+	for (int t = 0; t < MEM_NTYPES; t++)
+		free(h->miss_t0[t]);
 	free(h);
 }
 
-static const memport_model hier_model = {"hierarchy",      hier_access, hier_destroy,
-                                         hier_access_func, hier_peek,   hier_failed};
+/* The observer reaches the L1s, the SDRAM and the host bus. A miss in
+ * flight when it is set shows from the tick it was set. */
+static void hier_observe(void *impl, const mem_obs *o)
+{
+	hier *h = impl;
+	for (int t = 0; o && t < MEM_NTYPES; t++) {
+		if (h->miss_t0[t])
+			continue;
+		h->miss_t0[t] = malloc(h->l1[t].t.c.p.mshrs * sizeof *h->miss_t0[t]);
+		if (!h->miss_t0[t]) {
+			h->oom = 1;
+			return;
+		}
+		for (uint32_t i = 0; i < h->l1[t].t.c.p.mshrs; i++)
+			h->miss_t0[t][i] = eng_now(h->e);
+	}
+	h->obs = o;
+	h->sd.obs = o;
+	h->hb.obs = o;
+}
+
+static const memport_model hier_model = {"hierarchy", hier_access, hier_destroy, hier_access_func,
+                                         hier_peek,   hier_failed, hier_observe};
 
 /* ---- construction ---- */
 

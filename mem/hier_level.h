@@ -71,6 +71,10 @@ struct hier {
 	hbus hb;
 	hchunk *chunks;
 	hreq *free_r;
+	/* an observer of the timing (memport.h mem_observe; NULL: none) and,
+	 * while one is set, per L1 and MSHR the tick its miss was sent below */
+	const mem_obs *obs;
+	uint64_t *miss_t0[MEM_NTYPES];
 	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
 	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
 	uint64_t bypass[MEM_NTYPES], wait_ticks[MEM_NTYPES], stall_ticks[MEM_NTYPES];

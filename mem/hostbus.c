@@ -64,6 +64,10 @@ uint64_t hbus_transfer(hbus *h, uint64_t t, uint32_t bytes)
 	h->s.busy_ticks += dur;
 	h->s.wait_ticks += start - t;
 	h->busy_until = start + dur;
+	if (h->obs) {
+		mem_obs_ev ev = {MEM_OBS_HOSTBUS, 0, 0, 0, start, start + dur, 0, bytes, NULL};
+		h->obs->fn(h->obs->ctx, &ev);
+	}
 	return h->busy_until;
 }
 

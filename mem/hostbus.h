@@ -15,6 +15,7 @@
 #include <stdint.h>
 
 #include "kernel-ref/diag.h"
+#include "mem/memport.h"
 #include "sim/core/engine.h"
 
 typedef struct hbus_params {
@@ -34,6 +35,7 @@ typedef struct hbus {
 	uint64_t latency; /* ticks per transaction */
 	uint64_t busy_until;
 	hbus_stats s;
+	const mem_obs *obs; /* sees every transfer (memport.h); NULL: none */
 } hbus;
 
 /* Presets by name: "pci" (32/33), "pci66" (64/66), "agp" (32-bit AGP 4x,

@@ -61,8 +61,8 @@ static void fixed_destroy(void *impl)
 	free(impl);
 }
 
-static const memport_model fixed_model = {"fixed",           fixed_access, fixed_destroy,
-                                          fixed_access_func, fixed_peek,   fixed_failed};
+static const memport_model fixed_model = {
+    "fixed", fixed_access, fixed_destroy, fixed_access_func, fixed_peek, fixed_failed, NULL};
 
 int mem_init_fixed(memport *p, eng *e, eng_clock clk, int latency, mem_store *store)
 {
@@ -81,6 +81,14 @@ void mem_free(memport *p)
 	if (p->model && p->model->destroy)
 		p->model->destroy(p->impl);
 	memset(p, 0, sizeof *p);
+}
+
+int mem_observe(memport *p, const mem_obs *o)
+{
+	if (!p->model || !p->model->observe)
+		return -1;
+	p->model->observe(p->impl, o);
+	return 0;
 }
 
 const char *mem_type_name(int type)

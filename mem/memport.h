@@ -42,6 +42,32 @@ typedef struct mem_req {
 	void *data;
 } mem_req;
 
+/* What the memory system shows an observer of its timing (the timeline,
+ * sim/observe.c; docs/observe.md): a span [t0, t1) in engine ticks.
+ * L1 miss: a line's fetch from the miss (request below) to its fill; id
+ * = the MSHR, type = the L1 (enum mem_req_type). SDRAM: one row's data
+ * burst on the data bus; id = the bank, type = enum mem_obs_row. Host
+ * bus: one DMA transfer; id 0, type 0. L1 lookup missed: a read's line
+ * missed in its L1 at t0 = t1 (a new miss, id 0, or one merged into a
+ * fetch on its way, id 1), who = the read's requester (the ctx its done
+ * callback gets; the chip's timed reads pass their thread). */
+enum mem_obs_kind { MEM_OBS_L1_MISS, MEM_OBS_SDRAM, MEM_OBS_HOSTBUS, MEM_OBS_L1_LOOKUP_MISS };
+enum mem_obs_row { MEM_OBS_ROW_HIT, MEM_OBS_ROW_EMPTY, MEM_OBS_ROW_CONFLICT };
+
+typedef struct mem_obs_ev {
+	int kind, type, id, write;
+	uint64_t t0, t1, addr;
+	uint32_t bytes;
+	const void *who; /* L1 lookup miss only; else NULL */
+} mem_obs_ev;
+
+/* An observer: fn(ctx, ev) at each event. Components hold a pointer to
+ * it (NULL: none; one predictable branch where an event happens). */
+typedef struct mem_obs {
+	void (*fn)(void *ctx, const mem_obs_ev *ev);
+	void *ctx;
+} mem_obs;
+
 typedef struct mem_counts {
 	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
 	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
@@ -64,6 +90,9 @@ typedef struct memport_model {
 	void (*peek)(void *impl, const mem_req *r, void *dst);
 	/* Nonzero once the model lost data for want of host memory. */
 	int (*failed)(const void *impl);
+	/* Shows the model's timing events to o from now on (NULL: stop);
+	 * NULL: the model has none to show (fixed). */
+	void (*observe)(void *impl, const mem_obs *o);
 } memport_model;
 
 typedef struct memport {
@@ -126,6 +155,11 @@ static inline int mem_failed(const memport *p)
 {
 	return p->model && p->model->failed && p->model->failed(p->impl);
 }
+
+/* Shows the model's timing events (L1 misses, SDRAM bursts, host-bus
+ * transfers) to o from now on; o NULL stops it. o must outlive the
+ * model or be removed. Returns -1 when the model has none (fixed). */
+int mem_observe(memport *p, const mem_obs *o);
 
 const char *mem_type_name(int type); /* "shade", "kd", "list", "tri" */
 

@@ -124,6 +124,7 @@ static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int
 	sdram_bank *k = &s->bank[b];
 	uint64_t c = eng_next_edge(T->clk, max64(t, k->col_ok));
 	uint64_t colcmd;
+	int how = MEM_OBS_ROW_HIT;
 	if (k->open_row == row) {
 		s->s.row_hits++;
 		colcmd = c;
@@ -131,8 +132,10 @@ static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int
 		uint64_t act = c;
 		if (k->open_row == SDRAM_NO_ROW) {
 			s->s.row_empty++;
+			how = MEM_OBS_ROW_EMPTY;
 		} else {
 			s->s.row_conflicts++;
+			how = MEM_OBS_ROW_CONFLICT;
 			uint64_t pre = eng_next_edge(T->clk, max64(c, k->pre_ok));
 			act = pre + T->trp;
 		}
@@ -154,6 +157,10 @@ static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int
 	k->pre_ok = max64(k->act + T->tras, end);
 	if (first)
 		*first = data;
+	if (s->obs) {
+		mem_obs_ev ev = {MEM_OBS_SDRAM, how, (int)b, write, data, end, addr, bytes, NULL};
+		s->obs->fn(s->obs->ctx, &ev);
+	}
 	return end;
 }
 

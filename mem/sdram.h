@@ -35,6 +35,7 @@
 #include <stdint.h>
 
 #include "kernel-ref/diag.h"
+#include "mem/memport.h"
 #include "sim/core/engine.h"
 
 #define SDRAM_MAX_BANKS 64
@@ -82,6 +83,7 @@ typedef struct sdram {
 	sdram_bank bank[SDRAM_MAX_BANKS];
 	uint64_t bus_free; /* data bus busy until */
 	sdram_stats s;
+	const mem_obs *obs; /* sees every data burst (memport.h); NULL: none */
 } sdram;
 
 /* Checks the parameters (errors name "memory.sdram") and derives timing. */

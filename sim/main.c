@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -31,6 +32,7 @@
 #include "sim/chip.h"
 #include "sim/config.h"
 #include "sim/hostmem.h"
+#include "sim/observe.h"
 #include "sim/report.h"
 #include "sim/reportcheck.h"
 
@@ -46,6 +48,12 @@ static void usage(FILE *f)
 	        "  --report FILE.json    write the JSON report (docs/report.md)\n"
 	        "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
 	        "  --trace-mem FILE.gz   record every memory request (traces/memtrace.h)\n"
+	        "  --timeline FILE.json  activity timeline, Chrome trace events for Perfetto\n"
+	        "                        (cycle fidelity; docs/observe.md)\n"
+	        "  --timeline-window C0:C1  only the events starting in cycles [C0, C1)\n"
+	        "  --timeline-max-events N  cap on the timeline's events (default 1000000)\n"
+	        "  --heatmap DIR         heat maps per tile and pixel, EXR and PNG (cycle\n"
+	        "                        fidelity; docs/observe.md)\n"
 	        "  --census FILE.csv     cycles and resource demand of every chunk of tiles\n"
 	        "                        (cycle and functional; docs/fidelity.md)\n"
 	        "  --fidelity MODE       cycle | sampled | functional (docs/fidelity.md)\n"
@@ -53,6 +61,7 @@ static void usage(FILE *f)
 	        "  --unit-tiles N        sampled: tiles per measured unit (sampling.unit_tiles)\n"
 	        "  --warmup-tiles N      sampled: detailed warm-up tiles (sampling.warmup_tiles)\n"
 	        "  --no-check            skip the comparison with kernel-ref\n"
+	        "  --quiet               no progress line (shown on a terminal after 2 s)\n"
 	        "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
 	        "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
 	        "  --dry-run             check the arguments and the config, then exit (no scene\n"
@@ -69,18 +78,40 @@ static double now_ms(void)
 	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
+/* The progress line (docs/observe.md): once the run has simulated for
+ * `after` ms (SAARSIM_PROGRESS_AFTER_MS, default 2000), one line on
+ * stderr, rewritten at most every 250 ms, cleared at the end; only when
+ * stderr is a terminal and --quiet is not given. */
 typedef struct progress {
-	double t0;
+	double t0, after, last;
 	int shown;
+	const chip *c;
 } progress;
 
 static void show_progress(void *ctx, int frame, int done, int total)
 {
 	progress *p = ctx;
-	if (now_ms() - p->t0 < 1000.0)
+	double now = now_ms(), el = now - p->t0;
+	if (el < p->after || (p->shown && now - p->last < 250.0))
 		return;
-	fprintf(stderr, "\rsaarsim: frame %d: %d/%d tiles", frame + 1, done, total);
+	p->last = now;
+	int frames = p->c->cfg.frame.frames;
+	double all = (double)frames * total, got = (double)frame * total + done;
+	double cycles = (double)eng_now(p->c->e) / (double)p->c->clk.period;
+	double left = got > 0 ? el / 1000.0 * (all - got) / got : 0;
+	fprintf(stderr,
+	        "\r\033[Ksaarsim: frame %d/%d, %d/%d tiles, %.4g cycles, %.3g cycles/s, %.0f s "
+	        "left",
+	        frame + 1, frames, done, total, cycles, el > 0 ? cycles / (el / 1000.0) : 0, left);
+	fflush(stderr);
 	p->shown = 1;
+}
+
+static void progress_clear(progress *p)
+{
+	if (p->shown)
+		fputs("\r\033[K", stderr);
+	p->shown = 0;
 }
 
 /* The config key a shorthand flag sets, NULL if a is not one: the
@@ -108,7 +139,7 @@ static const char *key_flag(const char *a)
 static int bare_flag(const char *a)
 {
 	static const char *const bare_flags[] = {"--no-check", "--list-config", "--config-doc",
-	                                         "--dry-run"};
+	                                         "--dry-run", "--quiet"};
 	for (int k = 0; k < (int)(sizeof bare_flags / sizeof *bare_flags); k++)
 		if (!strcmp(a, bare_flags[k]))
 			return k;
@@ -135,7 +166,9 @@ typedef struct cli {
 	world_opts wo; /* the world flags (rtref's) */
 	const char *config, *out, *report, *size, *frames;
 	const char *csv, *trace, *census, *mem_limit;
-	int check, list, doc, dry;
+	const char *timeline, *tl_window, *tl_max, *heatmap;
+	uint64_t tl_c0, tl_c1, tl_cap;
+	int check, list, doc, dry, quiet;
 } cli;
 
 /* The first pass: every argument checked, the world flags into a->wo, the
@@ -160,8 +193,8 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 		}
 		int b = bare_flag(f);
 		if (b >= 0) {
-			int *set[] = {&a->check, &a->list, &a->doc,
-			              &a->dry}; /* bare_flags' order */
+			int *set[] = {&a->check, &a->list, &a->doc, &a->dry,
+			              &a->quiet}; /* bare_flags' order */
 			*set[b] = b != 0;
 			i++;
 			continue;
@@ -192,6 +225,14 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 			a->census = v;
 		else if (!strcmp(f, "--host-mem-limit"))
 			a->mem_limit = v;
+		else if (!strcmp(f, "--timeline"))
+			a->timeline = v;
+		else if (!strcmp(f, "--timeline-window"))
+			a->tl_window = v;
+		else if (!strcmp(f, "--timeline-max-events"))
+			a->tl_max = v;
+		else if (!strcmp(f, "--heatmap"))
+			a->heatmap = v;
 		else {
 			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
 			return DIAG_EXIT;
@@ -229,6 +270,31 @@ static int set_flags(int argc, char **argv, saar_config *cfg, const char **sampl
 	return 0;
 }
 
+/* The observers' flags: a window or cap needs a timeline, which needs
+ * cycle fidelity. */
+static int observe_args(cli *a, const saar_config *cfg, diag *d)
+{
+	a->tl_c0 = 0;
+	a->tl_c1 = UINT64_MAX;
+	a->tl_cap = OBS_TL_MAX_EVENTS;
+	if (!a->timeline && (a->tl_window || a->tl_max))
+		return diag_set(d, a->tl_window ? "--timeline-window" : "--timeline-max-events", 0,
+		                0, "needs --timeline FILE.json");
+	if (a->tl_window &&
+	    obs_parse_window("--timeline-window", a->tl_window, &a->tl_c0, &a->tl_c1, d))
+		return -1;
+	long cap;
+	if (a->tl_max && cli_parse_int("--timeline-max-events", a->tl_max, 1, 1000000000L, &cap, d))
+		return -1;
+	if (a->tl_max)
+		a->tl_cap = (uint64_t)cap;
+	if ((a->timeline || a->heatmap) && cfg->fidelity != CFG_FIDELITY_CYCLE)
+		return diag_set(d, a->timeline ? "--timeline" : "--heatmap", 0, 0,
+		                "needs --fidelity cycle (this run's is %s)",
+		                cfg->fidelity == CFG_FIDELITY_SAMPLED ? "sampled" : "functional");
+	return 0;
+}
+
 /* The config: defaults, file, --set and the key flags, --size, --frames;
  * validated; the host memory limit into *limit_mb and the kd-tree keys into
  * a->wo. Returns -1 to go on, else the exit status. */
@@ -262,12 +328,56 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 		return cli_bad("saarsim", d->msg);
 	if (hm_limit_mb(a->mem_limit, limit_mb, d))
 		return cli_bad("saarsim", d->msg);
+	if (observe_args(a, cfg, d))
+		return cli_bad("saarsim", d->msg);
 	a->wo.kd.cost_trav = (float)cfg->kdtree.cost_trav;
 	a->wo.kd.cost_isect = (float)cfg->kdtree.cost_isect;
 	a->wo.kd.max_depth = cfg->kdtree.max_depth;
 	a->wo.kd.leaf_size = cfg->kdtree.leaf_size;
 	a->wo.kd.empty_bonus = (float)cfg->kdtree.empty_bonus;
 	return -1;
+}
+
+/* d's message with the flag in front ("--timeline: path: ..."); -1. */
+static int flag_first(const char *flag, diag *d)
+{
+	char m[sizeof d->msg];
+	snprintf(m, sizeof m, "%s", d->msg);
+	return diag_set(d, flag, 0, 0, "%s", m);
+}
+
+/* --heatmap's folder, made here if missing and removed at exit if it is
+ * still empty then (a failed run: its files' temporaries are removed
+ * first, atexit's order being the reverse of registration). */
+static char heat_made[4096];
+
+static void heat_rmdir(void)
+{
+	if (heat_made[0])
+		rmdir(heat_made);
+}
+
+static int reserve_heatmap(const char *dir, diag *d)
+{
+	struct stat st;
+	if (!*dir)
+		return diag_set(d, "--heatmap", 0, 0, "an empty folder name");
+	if (stat(dir, &st)) {
+		if (errno != ENOENT || mkdir(dir, 0777))
+			return diag_set(d, "--heatmap", 0, 0, "%s: cannot make the folder: %s", dir,
+			                strerror(errno));
+		snprintf(heat_made, sizeof heat_made, "%s", dir);
+		atexit(heat_rmdir);
+	} else if (!S_ISDIR(st.st_mode))
+		return diag_set(d, "--heatmap", 0, 0, "%s: not a folder", dir);
+	char path[4200];
+	for (int i = 0; obs_heat_files[i]; i++) {
+		snprintf(path, sizeof path, "%s/%s", dir, obs_heat_files[i]);
+		const char *ext = strrchr(obs_heat_files[i], '.');
+		if (strcmp(ext, ".json") ? img_reserve(path, d) : af_reserve(path, "", d))
+			return flag_first("--heatmap", d);
+	}
+	return 0;
 }
 
 /* Every output's temporary is made now, so an unwritable --out format, a
@@ -286,6 +396,10 @@ static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 		return -1;
 	if (a->trace && af_reserve(a->trace, "", d))
 		return -1;
+	if (a->timeline && af_reserve(a->timeline, "", d))
+		return flag_first("--timeline", d);
+	if (a->heatmap && reserve_heatmap(a->heatmap, d))
+		return -1;
 	if (a->census && chip_census_check(cfg, d))
 		return -1;
 	return 0;
@@ -294,8 +408,17 @@ static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 /* Runs the chip with the memory trace (written under the temporary name
  * trace_tmp, renamed once the run succeeded) and the census on, then
  * checks the frame against kernel-ref unless --no-check. */
-static int simulate(chip *c, const cli *a, afile *trace_tmp, chip_check *chk, diag *d)
+static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, obs **ob,
+                    chip_check *chk, diag *d)
 {
+	if (a->timeline && af_open(tl_tmp, a->timeline, "", 1))
+		return af_diag(d, a->timeline);
+	if (a->timeline || a->heatmap) {
+		obs_opts op = {a->timeline ? tl_tmp->f : NULL, a->tl_c0, a->tl_c1, a->tl_cap,
+		               a->heatmap != NULL};
+		if (!(*ob = obs_start(c, &op, a->timeline ? "--timeline" : "--heatmap", d)))
+			return -1;
+	}
 	if (a->trace) {
 		if (af_open(trace_tmp, a->trace, "", 0)) {
 			af_diag(d, a->trace);
@@ -306,7 +429,19 @@ static int simulate(chip *c, const cli *a, afile *trace_tmp, chip_check *chk, di
 	}
 	if (a->census && chip_census_on(c, d))
 		return -1;
-	if (chip_run(c, d) || chip_trace_close(c, d) || (a->check && chip_check_frame(c, chk, d)))
+	if (chip_run(c, d))
+		return -1;
+	if (*ob) {
+		uint64_t n, dropped;
+		if (obs_finish(*ob, &n, &dropped))
+			return af_diag(d, a->timeline);
+		if (dropped)
+			fprintf(stderr,
+			        "saarsim: --timeline: capped at %llu events, %llu more left out "
+			        "(narrow --timeline-window or raise --timeline-max-events)\n",
+			        (unsigned long long)n, (unsigned long long)dropped);
+	}
+	if (chip_trace_close(c, d) || (a->check && chip_check_frame(c, chk, d)))
 		return -1;
 	return 0;
 }
@@ -326,9 +461,11 @@ static void check_report(const chip *c, rc_list *inv)
  * are renamed into place together once the last one (the CSV with its new
  * row) is done: a run that fails on any leaves the files at all the output
  * paths as they were. Then the summary on stdout. Returns the exit status. */
-static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, double t_start, diag *d)
+static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, afile *tl_tmp,
+                         const obs *ob, double t_start, diag *d)
 {
-	af_group outs = {0};
+	static af_group outs; /* 24 files of PATH_MAX names: not on the stack */
+	memset(&outs, 0, sizeof outs);
 	int csv_lock = -1;
 	ri->group = &outs;
 	if (a->out && fb_write(&ri->c->fb, a->out, &outs, d))
@@ -343,6 +480,16 @@ static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, double
 		trace_tmp->tmp[0] = 0; /* in the group, or removed */
 		if (bad) {
 			af_diag(d, a->trace);
+			goto fail;
+		}
+	}
+	if (a->heatmap && obs_heat_write(ob, a->heatmap, &outs, d))
+		goto fail;
+	if (a->timeline) {
+		int bad = af_commit_to(tl_tmp, &outs);
+		tl_tmp->tmp[0] = 0;
+		if (bad) {
+			af_diag(d, a->timeline);
 			goto fail;
 		}
 	}
@@ -406,29 +553,35 @@ int main(int argc, char **argv)
 		world_free(&w);
 		return cli_bad("saarsim", d.msg);
 	}
-	progress pr = {now_ms(), 0};
-	if (isatty(STDERR_FILENO)) {
+	const char *after = getenv("SAARSIM_PROGRESS_AFTER_MS");
+	progress pr = {now_ms(), after && *after ? atof(after) : 2000.0, 0, 0, c};
+	if (isatty(STDERR_FILENO) && !a.quiet) {
 		c->progress = show_progress;
 		c->progress_ctx = &pr;
 	}
 	chip_check chk;
 	memset(&chk, 0, sizeof chk);
-	afile trace_tmp;
+	static afile trace_tmp, tl_tmp;
 	trace_tmp.tmp[0] = 0; /* "" while none is open */
-	if (simulate(c, &a, &trace_tmp, &chk, &d)) {
+	tl_tmp.tmp[0] = 0;
+	obs *ob = NULL;
+	int bad = simulate(c, &a, &trace_tmp, &tl_tmp, &ob, &chk, &d);
+	progress_clear(&pr);
+	if (bad) {
 		rc = cli_bad("saarsim", d.msg);
 	} else {
-		if (pr.shown)
-			fputc('\n', stderr);
 		static rc_list inv;
 		check_report(c, &inv);
 		report_info ri = {c, &w,   a.check ? &chk : NULL,         load_ms,
 		                  0, NULL, (double)mem.total / (1 << 20), &inv};
-		rc = write_outputs(&a, &ri, &trace_tmp, t_start, &d);
+		rc = write_outputs(&a, &ri, &trace_tmp, &tl_tmp, ob, t_start, &d);
 	}
+	obs_free(ob);
 	chip_destroy(c);
 	if (trace_tmp.tmp[0])
 		af_abort(&trace_tmp);
+	if (tl_tmp.tmp[0])
+		af_abort(&tl_tmp);
 	world_free(&w);
 	return rc;
 }

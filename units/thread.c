@@ -270,6 +270,8 @@ void thr_set(thr_ctx *t, int state)
 {
 	if (state == t->state)
 		return;
+	if (t->env->on_state)
+		t->env->on_state(t->env->state_ctx, t, state);
 	thr_flush(t);
 	if (t->state == THR_IDLE)
 		t->rtp->nidle--;

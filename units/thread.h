@@ -187,6 +187,11 @@ typedef struct thr_env {
 	/* the pipeline's order: where a unit hands a thread on (set by the
 	 * chip's wiring, unit_table.h) */
 	unit_route route;
+	/* an observer of the threads' states (the timeline and heat maps,
+	 * sim/observe.c): called at each change before it is made (t->state
+	 * and t->since are the old state's); NULL: none */
+	void (*on_state)(void *ctx, struct thr_ctx *t, int to);
+	void *state_ctx;
 	/* a thread became free: give it work (set by the chip) */
 	void (*on_free)(struct thr_ctx *t);
 	void *owner;
