@@ -36,7 +36,8 @@
 # (default docs/CALIBRATION.md; generated, every number from the run).
 # Environment: SAARSIM (default build/saarsim), SAAR_SCENES (default
 # ../shared/scenes beside the repository, else /work/shared/scenes),
-# CAL_WORLD_CACHE (saarsim --world-cache; default DIR/world-cache).
+# CAL_WORLD_CACHE (saarsim --world-cache; default DIR/world-cache), CAL_KNOBS
+# (replaces the KNOBS list below: "key v1,v2,..." lines).
 # Runs under nice. Exit status: 0 done, 1 a run failed, 2 bad input.
 set -eu
 
@@ -120,6 +121,7 @@ memory.l1.tri.mshrs 8,16,32
 memory.memif.policy round_robin,frfcfs
 chip.thread_sched round_robin,oldest_first
 memory.vma.tag_cache_latency 1,2,4,8'
+KNOBS=${CAL_KNOBS:-$KNOBS}
 
 "$SAARSIM" --config "$ASSUMED" --list-config >"$OUT/list-config.txt"
 printf '%s\n' "$KNOBS" >"$OUT/knobs.txt"
