@@ -242,9 +242,10 @@ P("| H5 meta-data share of SDRAM accesses (VMA) | roughly 20%% (15-25) | %.1f%% 
 P()
 if C["pci"] < 0.01:
     P("H2: in the steady state Conference's %.1f MB/frame stay on the 64 MB board, so nothing "
-      "crosses PCI after the first frame; Table 5's 0.09 MB/frame for Conference means the chip "
-      "measured there still missed the board now and then (a replacement effect our 4-way 128-byte "
-      "L2 with the whole scene resident does not have)." % C["mbv"])
+      "crosses PCI after the first frame; Table 5's 0.09 MB/frame for Conference says the chip "
+      "measured there still fetched from the host in the steady state. Ours holds the whole scene "
+      "on the board once warm, so this figure is out of reach of every point searched (the search "
+      "moves no VMA geometry: it is published)." % C["mbv"])
     P()
 
 # ---- item 5
