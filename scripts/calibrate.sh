@@ -310,7 +310,8 @@ run_sweep "$OUT/final/vma-config" "$SIZE" "$ROOT/configs/saarcor-vma.yaml" \
 
 # ---- the doc
 python3 "$ROOT/scripts/calibrate-doc.py" "$OUT" "$SIZE" "$CHECK_SIZE" "$ROUNDS_RUN" "$steps" \
-	"$(git -C "$ROOT" describe --always --dirty 2>/dev/null || echo unknown)" \
+	"$(git -C "$ROOT" describe --always 2>/dev/null || echo unknown)$(git -C "$ROOT" diff --quiet HEAD -- \
+		. ":(exclude)docs/CALIBRATION.md" 2>/dev/null || echo ' (with uncommitted changes)')" \
 	"$(date -u '+%Y-%m-%d %H:%M UTC')" "$(uname -n), $(uname -m)" >"$DOC.tmp"
 mv -f "$DOC.tmp" "$DOC"
 say "wrote $DOC"
