@@ -384,6 +384,17 @@ P("- Not reproduced: %s. Residuals at the chosen point: F1 %s, F2 %+.1f points f
   (", ".join(miss) if miss else "none",
    "inside" if ok["F1"] else "%+.1f points outside 60-80%%" % (C["u16"] - (60 if C["u16"] < 60 else 80)),
    C["gain"] - 10, C["loss"] - 11.7, A["u16"], A["gain"], A["loss"]))
+
+
+def outside(x, lo, hi):
+    return 0.0 if lo <= x <= hi else (lo - x if x < lo else x - hi)
+
+
+BANDS = (("F1", "u16", 60, 80), ("F2", "gain", 7, 13), ("F3", "loss", F3LO, F3HI))
+P("- Against the assumed point (distance outside each band, points): " + "; ".join(
+    "%s %.2f -> %.2f" % (n, outside(A[k], lo, hi), outside(C[k], lo, hi)) for n, k, lo, hi in BANDS) +
+  ". The cost weighs F2's distance most (scale 3 points), so the search traded a small F3 miss "
+  "for a smaller F2 miss where the two conflicted.")
 if not ok["F2"]:
     b = max(log, key=lambda r: float(r["gain"]))
     P("- F2: the best gain any candidate of the search reached was %+.1f points (round %s, `%s` = "
