@@ -393,8 +393,9 @@ def outside(x, lo, hi):
 BANDS = (("F1", "u16", 60, 80), ("F2", "gain", 7, 13), ("F3", "loss", F3LO, F3HI))
 P("- Against the assumed point (distance outside each band, points): " + "; ".join(
     "%s %.2f -> %.2f" % (n, outside(A[k], lo, hi), outside(C[k], lo, hi)) for n, k, lo, hi in BANDS) +
-  ". The cost weighs F2's distance most (scale 3 points), so the search traded a small F3 miss "
-  "for a smaller F2 miss where the two conflicted.")
+  "." + (" The cost weighs distances by their scales (F1 5, F2 3, F3 1.2 points), so the search "
+         "traded the small new F3 miss for the larger cut in F2's." if
+         outside(A["loss"], F3LO, F3HI) == 0 < outside(C["loss"], F3LO, F3HI) else ""))
 if not ok["F2"]:
     b = max(log, key=lambda r: float(r["gain"]))
     P("- F2: the best gain any candidate of the search reached was %+.1f points (round %s, `%s` = "
