@@ -4,6 +4,8 @@
 #   make run        render the embedded default scene and print the report
 #   make test       build and run the Criterion test suite
 #   make bench      benchmarks; writes docs/PERFORMANCE.md
+#   make calibrate  fit the assumed parameters to published figures; writes
+#                   docs/CALIBRATION.md (docs/calibration.md)
 #   make mutate     mutation tests: each tests/mutants/ patch must be caught
 #                   by the tests it names (docs/TESTING.md)
 #   make install    install binaries into $(PREFIX)/bin
@@ -80,7 +82,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity stress validate mutate install clean deps
+.PHONY: all run test bench bench-fidelity stress validate calibrate mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -145,6 +147,12 @@ bench-fidelity: all
 # default 1024x768, VALIDATE_VIEWS: scripts/validate.sh; minutes on 2 cores).
 validate: all
 	sh scripts/validate.sh $(B)
+
+# Calibration of the assumed parameters against seed 002's figures (issue 31):
+# coordinate search on Conference, writes docs/CALIBRATION.md; about 30 min
+# on two cores (docs/calibration.md; CALIBRATE_ARGS: scripts/calibrate.sh).
+calibrate: all
+	SAARSIM=$(CURDIR)/$(B)/saarsim sh scripts/calibrate.sh $(CALIBRATE_ARGS)
 
 # The numerical stress suite at full size; writes docs/NUMERICS.md.
 stress: all

@@ -8,7 +8,9 @@
  * unit kinds' keys come from units/unit_table.h: UNIT_KEYS). Keys of
  * one section must stay contiguous in the table (the JSON writer opens each
  * section once; tests check this). Provenance: "published" values cite the
- * seed paper (Wald et al., EG 2003 STAR, seed 002 §4); "assumed" ones say why.
+ * seed paper (Wald et al., EG 2003 STAR, seed 002 §4); "assumed" ones say why;
+ * "calibrated" ones (.calibrated) were fitted to published figures by
+ * scripts/calibrate.sh (docs/CALIBRATION.md) and say what was assumed before.
  */
 #include "sim/config.h"
 #include "kernel-ref/infile.h"
@@ -65,15 +67,15 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 	{INT("memory.l1." #c ".line", memory.l1.c.line, L1LINE_##c, 1, 4096, "bytes"),             \
 	 PUB "§4.1 (8 B kd-nodes, 36 B triangles, 8 B shading/lists: 64-bit bus)",                \
 	 .desc = "line size of the " what " cache; any size (36 need not be a power of two)"},     \
-	{INT("memory.l1." #c ".hit_latency", memory.l1.c.hit_latency, 2, 1, 1000, "core cycles"),  \
-	 TIMING,                                                                                   \
-	 .source = "not published; a small pipelined SRAM",                                        \
+	{INT("memory.l1." #c ".hit_latency", memory.l1.c.hit_latency, L1HIT_##c, 1, 1000,         \
+	     "core cycles"),                                                                       \
+	 TIMING, L1HITSRC_##c,                                                                     \
 	 .desc = "cycles from access to data for a hit in the " what " cache"},                   \
 	{INT("memory.l1." #c ".ports", memory.l1.c.ports, 4, 1, 64, "accesses/cycle"),             \
 	 .source = "not published; one port per RTP of the standard chip",                         \
 	 .desc = "accesses the " what " cache accepts per core cycle (all RTPs together)"},        \
-	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, 16, 1, 4096, "lines"), TIMING,           \
-	 .source = "not published; one per thread of an RTP",                                      \
+	{INT("memory.l1." #c ".mshrs", memory.l1.c.mshrs, L1MSHR_##c, 1, 4096, "lines"), TIMING,  \
+	 L1MSHRSRC_##c,                                                                            \
 	 .desc = "outstanding missed lines of the " what " cache; more misses merge or wait"},      \
 	{KEY("memory.l1." #c ".replacement", CFG_STR, memory.l1.c.replacement, 0, 0, 0, ""),       \
 	 .sdef = "lru", .source = "not published; LRU assumed (exact; the seed names no policy)",  \
@@ -90,6 +92,28 @@ static const char *const fidelity_names[] = {"cycle", "sampled", "functional", N
 #define L1LINE_kd    8
 #define L1LINE_list  8
 #define L1LINE_tri   36
+/* hit latency and MSHRs: assumed, or calibrated (scripts/calibrate.sh) */
+#define L1HIT_ASSUMED  .source = "not published; a small pipelined SRAM"
+#define L1MSHR_ASSUMED .source = "not published; one per thread of an RTP"
+#define CAL            .calibrated = true, .source = "fitted to F1-F3 (docs/CALIBRATION.md); "
+#define L1HIT_CAL      CAL "not published; assumed before: 2 (a small pipelined SRAM)"
+#define L1MSHR_CAL(w)  CAL "not published; assumed before: " #w " (one per thread of an RTP)"
+#define L1HIT_shade    2
+#define L1HIT_kd       8
+#define L1HIT_list     2
+#define L1HIT_tri      8
+#define L1HITSRC_shade L1HIT_ASSUMED
+#define L1HITSRC_kd    L1HIT_CAL
+#define L1HITSRC_list  L1HIT_ASSUMED
+#define L1HITSRC_tri   L1HIT_CAL
+#define L1MSHR_shade   16
+#define L1MSHR_kd      16
+#define L1MSHR_list    16
+#define L1MSHR_tri     8
+#define L1MSHRSRC_shade L1MSHR_ASSUMED
+#define L1MSHRSRC_kd    L1MSHR_ASSUMED
+#define L1MSHRSRC_list  L1MSHR_ASSUMED
+#define L1MSHRSRC_tri   L1MSHR_CAL(16)
 /* clang-format on */
 
 static const cfg_key keys_src[] = {
@@ -181,8 +205,9 @@ static const cfg_key keys_src[] = {
      .source = "§4.5: partly active packets cost about as much as full ones",
      .desc = "true: every packet op costs all packet_w*packet_h rays (inactive rays masked); "
              "false: only active rays cost"},
-    {ENUM("chip.thread_sched", chip.thread_sched, thread_sched_names), TIMING,
-     .source = "not published; the simplest fair policy",
+    {KEY("chip.thread_sched", CFG_ENUM, chip.thread_sched, CFG_SCHED_OLDEST_FIRST, 0, 0, ""),
+     .names = thread_sched_names, TIMING,
+     CAL "not published; assumed before: round_robin (the simplest fair policy)",
      .desc = "which ready thread a unit serves next"},
     {ENUM("chip.tile_order", chip.tile_order, tile_order_names),
      .source = "not published; the simplest order",
@@ -246,10 +271,12 @@ static const cfg_key keys_src[] = {
     {INT("memory.sdram.row_bytes", memory.sdram.row_bytes, 8192, 16, 1048576, "bytes"), TIMING,
      .source = "not published; 512 columns x 16 bytes across the 128-bit bus",
      .desc = "bytes of one row of one bank across the whole bus (power of two)"},
-    {INT("memory.sdram.cl", memory.sdram.cl, 3, 1, 100, "SDRAM cycles"), TIMING,
-     .source = "not published; PC133 CL3", .desc = "CAS latency: read command to first data"},
-    {INT("memory.sdram.trcd", memory.sdram.trcd, 3, 1, 100, "SDRAM cycles"), TIMING,
-     .source = "not published; PC133 (20 ns)", .desc = "ACTIVATE to READ/WRITE"},
+    {INT("memory.sdram.cl", memory.sdram.cl, 2, 1, 100, "SDRAM cycles"), TIMING,
+     CAL "not published; assumed before: 3 (PC133 CL3; CL2 parts exist)",
+     .desc = "CAS latency: read command to first data"},
+    {INT("memory.sdram.trcd", memory.sdram.trcd, 2, 1, 100, "SDRAM cycles"), TIMING,
+     CAL "not published; assumed before: 3 (PC133, 20 ns; 15 ns parts exist)",
+     .desc = "ACTIVATE to READ/WRITE"},
     {INT("memory.sdram.trp", memory.sdram.trp, 3, 1, 100, "SDRAM cycles"), TIMING,
      .source = "not published; PC133 (20 ns)", .desc = "PRECHARGE to ACTIVATE"},
     {INT("memory.sdram.tras", memory.sdram.tras, 6, 1, 100, "SDRAM cycles"), TIMING,
@@ -281,8 +308,9 @@ static const cfg_key keys_src[] = {
      PUB "§4.7 (64 KB for L2-cache meta data)", .desc = "on-chip cache of the L2 meta-data"},
     {INT("memory.vma.tag_cache_ways", memory.vma.tag_cache_ways, 4, 1, 64, ""),
      PUB "§4.7 (L1 caches are 4-way)", .desc = "associativity of the tag cache"},
-    {INT("memory.vma.tag_cache_latency", memory.vma.tag_cache_latency, 2, 1, 1000, "core cycles"),
-     TIMING, .source = "not published; as the L1 caches", .desc = "tag cache hit latency"},
+    {INT("memory.vma.tag_cache_latency", memory.vma.tag_cache_latency, 4, 1, 1000, "core cycles"),
+     TIMING, CAL "not published; assumed before: 2 (as the L1 caches)",
+     .desc = "tag cache hit latency"},
     {BOOL("memory.vma.tag_cache_enabled", memory.vma.tag_cache_enabled, 1), PUB "§4.2",
      .desc = "false: every meta-data lookup reads SDRAM (for studies)"},
     {KEY("memory.vma.replacement", CFG_STR, memory.vma.replacement, 0, 0, 0, ""), .sdef = "lru",
@@ -337,6 +365,7 @@ static cfg_key unit_key(int k, int p, const char *leaf, const char *unit, const 
 	                 .max = u->max,
 	                 .unit = unit,
 	                 .published = u->published,
+	                 .calibrated = u->calibrated,
 	                 .timing_only = u->timing,
 	                 .source = u->source,
 	                 .desc = desc};
@@ -911,6 +940,11 @@ static void fmt_range(char *buf, size_t n, const cfg_key *k)
 	}
 }
 
+const char *cfg_provenance(const cfg_key *k)
+{
+	return k->published ? "published" : k->calibrated ? "calibrated" : "assumed";
+}
+
 void cfg_list(FILE *f)
 {
 	keys_init();
@@ -922,8 +956,7 @@ void cfg_list(FILE *f)
 		fmt_default(def, sizeof def, k);
 		fmt_range(range, sizeof range, k);
 		fprintf(f, "%-24s %-6s %-12s %-24s %-12s %s: %s\n    %s\n", k->path, type_name(k),
-		        def, range, k->unit, k->published ? "published" : "assumed", k->source,
-		        k->desc);
+		        def, range, k->unit, cfg_provenance(k), k->source, k->desc);
 	}
 }
 
@@ -1001,8 +1034,7 @@ void cfg_write_markdown(FILE *f)
 		fmt_default(def, sizeof def, k);
 		fmt_range(range, sizeof range, k);
 		fprintf(f, "| `%s` | %s | `%s` | %s | %s | %s: %s | %s |\n", k->path, type_name(k),
-		        def, range, k->unit, k->published ? "published" : "assumed", k->source,
-		        k->desc);
+		        def, range, k->unit, cfg_provenance(k), k->source, k->desc);
 	}
 	fputs("\n## Errors\n\n"
 	      "Every error is one line and the program exits with status 2. In a file the\n"

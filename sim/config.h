@@ -158,6 +158,10 @@ typedef struct cfg_key {
 	const char *const *names; /* CFG_ENUM names, NULL-terminated */
 	const char *unit;         /* "" when dimensionless */
 	bool published;           /* value taken from a paper (else assumed) */
+	/* value fitted to published figures by scripts/calibrate.sh
+	 * (docs/CALIBRATION.md); the source says to which and what was
+	 * assumed before */
+	bool calibrated;
 	/* only timing reads it (latencies, SDRAM timing, MSHRs, scheduling):
 	 * functional processing does the same with any value, so stored
 	 * warming's key leaves it out (sim/chip.c warm_key) */
@@ -165,6 +169,9 @@ typedef struct cfg_key {
 	const char *source; /* where published, or why assumed */
 	const char *desc;
 } cfg_key;
+
+/* A key's provenance: "published", "calibrated" or "assumed". */
+const char *cfg_provenance(const cfg_key *k);
 
 /* The whole table, in documentation order (keys of a section contiguous). */
 const cfg_key *cfg_keys(size_t *n);

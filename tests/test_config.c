@@ -42,7 +42,11 @@ Test(config, defaults_resolve_and_validate)
 	cr_assert_eq(c.chip.threads_per_rtp, 16);
 	cr_assert_eq(c.chip.packet_w * c.chip.packet_h, 64);
 	cr_assert(c.chip.masked_packets);
-	cr_assert_eq(c.chip.thread_sched, CFG_SCHED_ROUND_ROBIN);
+	/* thread_sched is calibrated (docs/CALIBRATION.md): the assumption
+	 * it replaced stays in the -assumed config */
+	saar_config a;
+	cr_assert_eq(cfg_load(&a, "configs/saarcor-std-assumed.yaml", &d), 0, "%s", d.msg);
+	cr_assert_eq(a.chip.thread_sched, CFG_SCHED_ROUND_ROBIN);
 	cr_assert_eq(c.chip.tile_order, CFG_TILES_SCANLINE);
 	cr_assert_eq(c.chip.unit[UNIT_TRAV].width, 4 * c.chip.unit[UNIT_ISECT].width,
 	             "designed for 4:1 (seed 002 §4.7)");
@@ -92,6 +96,57 @@ Test(config, standard_config_equals_defaults)
 	 * the padding matches too. */
 	cfg_defaults(&def);
 	cr_assert(!memcmp(&c, &def, sizeof c), "configs/saarcor-std.yaml differs from defaults");
+}
+
+/* Calibration (docs/calibration.md) may only move assumed values: a key
+ * is never both published and calibrated, and a calibrated one cites the
+ * calibration. Catches: a published value (clock, cache sizes, ...) taken
+ * into the fit, or a fitted value passed off without its provenance. */
+Test(config, calibrated_keys_are_not_published_and_cite_the_fit)
+{
+	size_t n;
+	const cfg_key *k = cfg_keys(&n);
+	for (size_t i = 0; i < n; i++) {
+		cr_assert(!(k[i].published && k[i].calibrated), "%s: published and calibrated",
+		          k[i].path);
+		if (k[i].calibrated)
+			cr_assert(strstr(k[i].source, "docs/CALIBRATION.md"), "%s: %s", k[i].path,
+			          k[i].source);
+		cr_assert_str_eq(cfg_provenance(&k[i]), k[i].published    ? "published"
+		                                        : k[i].calibrated ? "calibrated"
+		                                                          : "assumed");
+	}
+}
+
+/* The -assumed configs keep the uncalibrated assumptions: each differs
+ * from its calibrated config (std = the defaults) in the calibrated keys
+ * and the name only, and in every calibrated key. Catches: a calibrated
+ * value the schema still calls assumed, a key marked calibrated whose
+ * value the calibration did not change, and an -assumed config that
+ * drifted from what the calibration started from. */
+Test(config, assumed_configs_differ_in_the_calibrated_keys_only)
+{
+	const char *pairs[2][2] = {
+	    {"configs/saarcor-std-assumed.yaml", "configs/saarcor-std.yaml"},
+	    {"configs/saarcor-vma-assumed.yaml", "configs/saarcor-vma.yaml"}};
+	size_t n;
+	const cfg_key *k = cfg_keys(&n);
+	for (int p = 0; p < 2; p++) {
+		saar_config a, c;
+		diag d = {{0}};
+		cr_assert_eq(cfg_load(&a, pairs[p][0], &d), 0, "%s", d.msg);
+		cr_assert_eq(cfg_load(&c, pairs[p][1], &d), 0, "%s", d.msg);
+		for (size_t i = 0; i < n; i++) {
+			if (!strcmp(k[i].path, "name"))
+				continue;
+			int differs = memcmp((const char *)&a + k[i].off,
+			                     (const char *)&c + k[i].off, k[i].size) != 0;
+			cr_assert_eq(differs, k[i].calibrated, "%s vs %s: %s %s", pairs[p][0],
+			             pairs[p][1], k[i].path,
+			             differs ? "differs but is not calibrated"
+			                     : "is calibrated but the same");
+		}
+	}
 }
 
 Test(config, nested_and_dotted_keys)

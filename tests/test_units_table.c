@@ -64,6 +64,7 @@ Test(units_table, config_keys_follow_the_table)
 			cr_assert_eq(key->min, p[i]->min, "%s min", path);
 			cr_assert_eq(key->max, p[i]->max, "%s max", path);
 			cr_assert_eq(key->published, p[i]->published != 0, "%s provenance", path);
+			cr_assert_eq(key->calibrated, p[i]->calibrated != 0, "%s calibrated", path);
 			cr_assert_eq(key->timing_only, p[i]->timing != 0, "%s timing", path);
 			cr_assert_str_eq(key->source, p[i]->source);
 			cr_assert(strstr(key->desc, u->what), "%s: %s", path, key->desc);

@@ -13,7 +13,7 @@
 #include "mem/memport.h"
 
 /* Every kind: one unit per RTP (published), and a pipeline latency of its
- * own (assumed, timing only). */
+ * own (assumed, or calibrated by scripts/calibrate.sh; timing only). */
 #define COUNT                                                                                      \
 	{                                                                                          \
 		1, 1, 64, 1, 0, "seed 002 §4.1 (one per RTP)"                                     \
@@ -26,19 +26,30 @@
 	{                                                                                          \
 		l, 1, 10000, 0, 1, "pipeline depth not published; a few cycles per stage group"    \
 	}
+/* A latency fitted by scripts/calibrate.sh; was: the assumed value before. */
+#define LATENCY_CAL(l, was)                                                                        \
+	{                                                                                          \
+		l, 1, 10000, 0, 1,                                                                 \
+		    "fitted to F1-F3 (docs/CALIBRATION.md); pipeline depth not published; "        \
+		    "assumed before: " #was,                                                       \
+		    1                                                                              \
+	}
 
 /* clang-format off */
 const unit_desc unit_table[UNIT_NKINDS] = {
     [UNIT_RGS] = {"rgs", "ray-generation and shading", COUNT,
-                  WIDTH(4, "not published; shading is the costliest op"), LATENCY(24), MEM_SHADE},
+                  WIDTH(4, "not published; shading is the costliest op"), LATENCY_CAL(48, 24),
+                  MEM_SHADE},
     [UNIT_TRAV] = {"trav", "traversal", COUNT,
-                   WIDTH(16, "not published; 4x isect width (§4.7: designed for 4:1)"), LATENCY(8),
+                   WIDTH(16, "not published; 4x isect width (§4.7: designed for 4:1)"),
+                   LATENCY_CAL(32, 8),
                    MEM_KD},
     [UNIT_LIST] = {"list", "list", COUNT,
                    WIDTH(64, "not published; one list entry serves the whole packet"), LATENCY(2),
                    MEM_LIST},
     [UNIT_ISECT] = {"isect", "intersection", COUNT,
-                    WIDTH(4, "not published; 1/4 of trav width (§4.7: 4:1)"), LATENCY(20), MEM_TRI},
+                    WIDTH(4, "not published; 1/4 of trav width (§4.7: 4:1)"), LATENCY_CAL(80, 20),
+                    MEM_TRI},
 };
 /* clang-format on */
 

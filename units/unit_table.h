@@ -46,6 +46,7 @@ typedef struct unit_param_desc {
 	int def, min, max;
 	int published, timing;
 	const char *source;
+	int calibrated; /* fitted by scripts/calibrate.sh (docs/CALIBRATION.md) */
 } unit_param_desc;
 
 typedef struct unit_desc {
