@@ -236,7 +236,7 @@ P("| H3 SDRAM bandwidth in use, standard | 4-74%% (Conference 30.8%%) | %.1f%% |
 P("| H3 SDRAM bandwidth in use, VMA | 4-74%% (Conference 34.5%%) | %.1f%% | %.1f%% | %.1f%% | %s |" %
   (A["bwv"], C["bwv"], CC["bwv"], verdict(C["bwv"], 4, 74)))
 P("| H4 linear cost law (§4.7) | fps x (1+l)(1+r/100) nearly constant | - | - | - | "
-  "left to scripts/validate.sh (docs/VALIDATION.md, "The linear cost law (H4)") |")
+  "left to scripts/validate.sh (docs/VALIDATION.md, \"The linear cost law (H4)\") |")
 P("| H5 meta-data share of SDRAM accesses (VMA) | roughly 20%% (15-25) | %.1f%% | %.1f%% | %.1f%% | %s |" %
   (A["meta"], C["meta"], CC["meta"], verdict(C["meta"], 15, 25)))
 P()
