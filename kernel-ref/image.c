@@ -97,11 +97,19 @@ static const char *ext_of(const char *path, char *buf, size_t cap)
 	return buf;
 }
 
-int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, af_group *g,
-              diag *d)
+/* What one image file holds: RGB (8-bit and/or float pixels) or one
+ * float channel (y non-NULL). */
+typedef struct img_job {
+	int w, h;
+	const uint8_t *rgb8;
+	const float *rgbf, *y;
+} img_job;
+
+/* Writes j to path through the plugin: a temporary beside it with the
+ * same extension (the plugin picks the format by it), renamed into place
+ * (now, or with group g). The one open-write-commit path both writers share. */
+static int write_job(const char *path, const img_job *j, af_group *g, diag *d)
 {
-	if (w <= 0 || h <= 0 || (!rgb8 && !rgbf))
-		return diag_set(d, path, 0, 0, "cannot write a %dx%d image without pixels", w, h);
 	const img_plugin *p;
 	void *lib = plugin_open(&p, path, d);
 	if (!lib)
@@ -109,23 +117,40 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
 	char ext[32], sfx[34], err[512] = "";
 	ext_of(path, ext, sizeof ext);
 	int rc = -1;
-	uint8_t *conv = NULL;
 	afile a;
-	/* the temporary keeps the extension: the plugin picks the format by it */
 	snprintf(sfx, sizeof sfx, ".%s", ext);
 	if (af_open(&a, path, sfx, 0)) {
 		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
 		goto out;
 	}
+	if ((j->y ? p->write_y32f(a.tmp, ext, j->w, j->h, j->y, err, sizeof err)
+	          : p->write_rgb(a.tmp, ext, j->w, j->h, j->rgb8, j->rgbf, err, sizeof err)) != 0) {
+		af_abort(&a);
+		diag_set(d, path, 0, 0, "cannot write image: %s", err);
+		goto out;
+	}
+	if (af_commit_to(&a, g)) {
+		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
+		goto out;
+	}
+	rc = 0;
+out:
+	dlclose(lib);
+	return rc;
+}
+
+int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *rgbf, af_group *g,
+              diag *d)
+{
+	if (w <= 0 || h <= 0 || (!rgb8 && !rgbf))
+		return diag_set(d, path, 0, 0, "cannot write a %dx%d image without pixels", w, h);
+	uint8_t *conv = NULL;
 	if (!rgb8) {
 		/* only a float buffer, but the format may be 8-bit: clamp and
 		 * quantise here */
 		size_t n = (size_t)w * (size_t)h * 3;
-		if (!(conv = malloc(n))) {
-			af_abort(&a);
-			diag_set(d, path, 0, 0, "cannot write image: out of memory");
-			goto out;
-		}
+		if (!(conv = malloc(n)))
+			return diag_set(d, path, 0, 0, "cannot write image: out of memory");
 		for (size_t i = 0; i < n; i++) {
 			float v = rgbf[i];
 			v = v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f;
@@ -133,19 +158,9 @@ int img_write(const char *path, int w, int h, const uint8_t *rgb8, const float *
 		}
 		rgb8 = conv;
 	}
-	if (p->write_rgb(a.tmp, ext, w, h, rgb8, rgbf, err, sizeof err) != 0) {
-		af_abort(&a);
-		diag_set(d, path, 0, 0, "cannot write image: %s", err);
-		goto out;
-	}
-	if (af_commit_to(&a, g)) {
-		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
-		goto out;
-	}
-	rc = 0;
-out:
+	img_job j = {w, h, rgb8, rgbf, NULL};
+	int rc = write_job(path, &j, g, d);
 	free(conv);
-	dlclose(lib);
 	return rc;
 }
 
@@ -153,32 +168,8 @@ int img_write_values(const char *path, int w, int h, const float *v, af_group *g
 {
 	if (w <= 0 || h <= 0 || !v)
 		return diag_set(d, path, 0, 0, "cannot write a %dx%d image without pixels", w, h);
-	const img_plugin *p;
-	void *lib = plugin_open(&p, path, d);
-	if (!lib)
-		return -1;
-	char ext[32], sfx[34], err[512] = "";
-	ext_of(path, ext, sizeof ext);
-	int rc = -1;
-	afile a;
-	snprintf(sfx, sizeof sfx, ".%s", ext);
-	if (af_open(&a, path, sfx, 0)) {
-		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
-		goto out;
-	}
-	if (p->write_y32f(a.tmp, ext, w, h, v, err, sizeof err) != 0) {
-		af_abort(&a);
-		diag_set(d, path, 0, 0, "cannot write image: %s", err);
-		goto out;
-	}
-	if (af_commit_to(&a, g)) {
-		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
-		goto out;
-	}
-	rc = 0;
-out:
-	dlclose(lib);
-	return rc;
+	img_job j = {w, h, NULL, NULL, v};
+	return write_job(path, &j, g, d);
 }
 
 int img_can_write(const char *path, diag *d)

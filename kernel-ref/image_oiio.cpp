@@ -30,30 +30,43 @@ static int fail(char *err, size_t errlen, const std::string &what)
 	return -1;
 }
 
-static int write_rgb(const char *path, const char *ext_c, int w, int h, const uint8_t *rgb8,
-                     const float *rgbf, char *err, size_t errlen)
+/* Writes one image of `spec` from pixels px of type `type`: create,
+ * open, write, close, each error one line. Both writers below end here. */
+static int write_spec(const char *path, const char *ext_c, const ImageSpec &spec, TypeDesc type,
+                      const void *px, char *err, size_t errlen)
 {
 	try {
-		std::string ext = ext_c;
 		auto out = ImageOutput::create(path);
 		if (!out)
 			return fail(err, errlen,
-			            "no image writer for extension '." + ext +
+			            std::string("no image writer for extension '.") + ext_c +
 			                "': " + one_line(OIIO::geterror()));
-		bool is_float = ext == "exr" || ext == "hdr";
-		/* Float formats store half floats; an 8-bit source is converted by
-		 * OIIO's normalised conversion (v/255), which suffices for previews. */
-		ImageSpec spec(w, h, 3, is_float ? TypeDesc::HALF : TypeDesc::UINT8);
 		if (!out->open(path, spec))
 			return fail(err, errlen, one_line(out->geterror()));
-		bool ok = (is_float && rgbf) ? out->write_image(TypeDesc::FLOAT, rgbf)
-		                             : out->write_image(TypeDesc::UINT8, rgb8);
+		bool ok = out->write_image(type, px);
 		std::string e = ok ? "" : one_line(out->geterror());
 		if (!out->close() && ok) {
 			e = one_line(out->geterror());
 			ok = false;
 		}
 		return ok ? 0 : fail(err, errlen, e);
+	} catch (const std::exception &x) {
+		return fail(err, errlen, x.what());
+	}
+}
+
+static int write_rgb(const char *path, const char *ext_c, int w, int h, const uint8_t *rgb8,
+                     const float *rgbf, char *err, size_t errlen)
+{
+	try {
+		std::string ext = ext_c;
+		bool is_float = ext == "exr" || ext == "hdr";
+		/* Float formats store half floats; an 8-bit source is converted by
+		 * OIIO's normalised conversion (v/255), which suffices for previews. */
+		ImageSpec spec(w, h, 3, is_float ? TypeDesc::HALF : TypeDesc::UINT8);
+		if (is_float && rgbf)
+			return write_spec(path, ext_c, spec, TypeDesc::FLOAT, rgbf, err, errlen);
+		return write_spec(path, ext_c, spec, TypeDesc::UINT8, rgb8, err, errlen);
 	} catch (const std::exception &x) {
 		return fail(err, errlen, x.what());
 	}
@@ -112,26 +125,13 @@ static int read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, char *er
 	}
 }
 
-static int write_y32f(const char *path, const char *ext_c, int w, int h, const float *v,
-                      char *err, size_t errlen)
+static int write_y32f(const char *path, const char *ext_c, int w, int h, const float *v, char *err,
+                      size_t errlen)
 {
 	try {
-		auto out = ImageOutput::create(path);
-		if (!out)
-			return fail(err, errlen,
-			            std::string("no image writer for extension '.") + ext_c +
-			                "': " + one_line(OIIO::geterror()));
 		ImageSpec spec(w, h, 1, TypeDesc::FLOAT);
 		spec.channelnames = {"Y"};
-		if (!out->open(path, spec))
-			return fail(err, errlen, one_line(out->geterror()));
-		bool ok = out->write_image(TypeDesc::FLOAT, v);
-		std::string e = ok ? "" : one_line(out->geterror());
-		if (!out->close() && ok) {
-			e = one_line(out->geterror());
-			ok = false;
-		}
-		return ok ? 0 : fail(err, errlen, e);
+		return write_spec(path, ext_c, spec, TypeDesc::FLOAT, v, err, errlen);
 	} catch (const std::exception &x) {
 		return fail(err, errlen, x.what());
 	}
