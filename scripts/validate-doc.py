@@ -425,18 +425,19 @@ def build_rows():
         P = PUB[n]
         sub = ROLE[n][0]
         if n != "Conference":
-            rrow("T5 %s fps" % n, "%s fps / Conference fps, standard (Table 5; ours: %s / "
-                 "conference)" % (n, sub), "%d/%d = %.2f" % (P["fps"], C["fps"], P["fps"] / C["fps"]),
-                 P["fps"] / C["fps"],
-                 lambda M, n=n: (role_f(M, n, False, "fps") / role_f(M, "Conference", False, "fps"))
-                 if role_f(M, n, False, "fps") and role_f(M, "Conference", False, "fps") else None,
-                 "fps / Conference")
-            rrow("T5 %s MB" % n, "%s SDRAM MB/frame / Conference's, standard (ours: %s / "
-                 "conference)" % (n, sub), "%.1f/%.1f = %.2f" % (P["mb"], C["mb"], P["mb"] / C["mb"]),
-                 P["mb"] / C["mb"],
-                 lambda M, n=n: (role_f(M, n, False, "mb") / role_f(M, "Conference", False, "mb"))
-                 if role_f(M, n, False, "mb") and role_f(M, "Conference", False, "mb") else None,
-                 "MB / Conference")
+            # the row's ratio to Conference's, for fps and for SDRAM MB/frame
+            for key, tag, what, fmt, label in (
+                    ("fps", "fps", "%s fps / Conference fps, standard (Table 5; ours: %s / "
+                     "conference)", "%d/%d = %.2f", "fps / Conference"),
+                    ("mb", "MB", "%s SDRAM MB/frame / Conference's, standard (ours: %s / "
+                     "conference)", "%.1f/%.1f = %.2f", "MB / Conference")):
+                rrow("T5 %s %s" % (n, tag), what % (n, sub),
+                     fmt % (P[key], C[key], P[key] / C[key]), P[key] / C[key],
+                     lambda M, n=n, key=key:
+                     (role_f(M, n, False, key) / role_f(M, "Conference", False, key))
+                     if role_f(M, n, False, key) and role_f(M, "Conference", False, key)
+                     else None,
+                     label)
         if n == "Conference":
             row("T5 Conference fps", "-", "Conference fps, standard, digit for digit (Table 5)",
                 "77 (read 54-100)", "`table.fps`, steady state, %s at %s" % (TV, SIZE),
