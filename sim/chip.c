@@ -149,8 +149,8 @@ void chip_demand(const chip *c, double d[RES_N])
 	if (hier_get_stats(&c->mem, &h))
 		return;
 	for (int t = 0; t < MEM_NTYPES; t++)
-		d[RES_L1 + t] =
-		    (double)(h.reads[t] - h.bypass_reads[t]) / hier_l1_params(&c->cfg, t).ports;
+		d[RES_L1 + t] = (double)(h.reads[t] - h.bypass_reads[t]) /
+		                (uint32_t)memcfg_l1_ports(&c->cfg, t);
 	double per = (double)c->clk.period;
 	d[RES_SDRAM] =
 	    ((double)(h.sdram.busy_ticks + h.func_sdram_busy_ticks) - h.func_sdram_merge_ticks) /

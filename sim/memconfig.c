@@ -22,6 +22,11 @@ static const cfg_l1 *l1_cfg(const saar_config *cfg, int t)
 	}
 }
 
+int memcfg_l1_ports(const saar_config *cfg, int type)
+{
+	return l1_cfg(cfg, type)->ports;
+}
+
 cache_params hier_l1_params(const saar_config *cfg, int type)
 {
 	const cfg_l1 *c = l1_cfg(cfg, type);

@@ -16,6 +16,9 @@
  * policy is registered under gives repl NULL (LRU); memcfg_hier reports
  * it as an error. */
 cache_params hier_l1_params(const saar_config *cfg, int type);
+/* The accesses per core cycle of that L1 (its ports), without building
+ * its parameters (the sampled estimator's demand asks per chunk). */
+int memcfg_l1_ports(const saar_config *cfg, int type);
 vma_params hier_vma_params(const saar_config *cfg);
 void hier_hbus_params(const saar_config *cfg, hbus_params *p);
 /* The memory stack the config names, top first, into buf: memory.levels,

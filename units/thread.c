@@ -63,11 +63,8 @@ uint64_t thr_unit_issue_div(const thr_unit *u, int rays)
 static void start(thr_unit *u, int inst, const thr_op *op)
 {
 	uint64_t t0 = eng_next_edge(u->clk, eng_now(u->e));
-	uint64_t issue = thr_unit_issue(u, op->rays);
+	uint64_t issue = thr_unit_count(u, op->rays, 1);
 	u->free_at[inst] = t0 + eng_cycles_to_ticks(u->clk, issue);
-	++*u->ops_n;
-	*u->busy += issue;
-	*u->rays += (uint64_t)op->rays;
 	if (u->on_start)
 		u->on_start(op->ctx, op->arg);
 	eng_schedule(u->e, t0 + eng_cycles_to_ticks(u->clk, issue + (uint64_t)u->latency), op->done,

@@ -102,6 +102,19 @@ static inline uint64_t thr_unit_issue(const thr_unit *u, int rays)
 {
 	return rays >= 0 && rays <= PKT_RAYS ? u->issue[rays] : thr_unit_issue_div(u, rays);
 }
+/* Counts (sign 1) or takes back (sign -1) one op of `rays` rays at u:
+ * ops, issue cycles, rays. The one place an op's counts are made: at
+ * issue (thread.c), in a functional op, and taken back when a functional
+ * op becomes a timed one (sim/modes/functional.c). Returns the issue
+ * cycles. */
+static inline uint64_t thr_unit_count(thr_unit *u, int rays, int sign)
+{
+	uint64_t issue = thr_unit_issue(u, rays), s = (uint64_t)(int64_t)sign;
+	*u->ops_n += s;
+	*u->busy += s * issue;
+	*u->rays += s * (uint64_t)rays;
+	return issue;
+}
 /* Requests one op for requester id (at most one outstanding per id). done
  * runs at issue start + issue cycles + latency. */
 void thr_unit_request(thr_unit *u, int id, uint64_t age, int rays, eng_handler done, void *ctx,

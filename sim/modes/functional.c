@@ -26,10 +26,7 @@ static void func_use(thr_sink *s, thr_ctx *t, int kind, int rays, eng_handler do
 	(void)s;
 	/* the op's counts as its issue makes them (thread.c start), without
 	 * its time */
-	thr_unit *u = &t->rtp->u[kind];
-	++*u->ops_n;
-	*u->busy += thr_unit_issue(u, rays);
-	*u->rays += (uint64_t)rays;
+	thr_unit_count(&t->rtp->u[kind], rays, 1);
 	mode_slot_state *m = mode_slot(t);
 	m->fnext = done;
 	m->fkind = kind;
@@ -64,9 +61,7 @@ void mode_func_to_timed(thr_ctx *t)
 		return;
 	m->fnext = NULL;
 	thr_unit *u = &t->rtp->u[m->fkind];
-	--*u->ops_n;
-	*u->busy -= thr_unit_issue(u, m->frays);
-	*u->rays -= (uint64_t)m->frays;
+	thr_unit_count(u, m->frays, -1);
 	thr_set(t, THR_WAIT_UNIT);
 	thr_unit_request(u, t->id, t->age, m->frays, done, t, 0);
 }
