@@ -11,6 +11,9 @@
  * Each test is written to catch "a table-derived list forgot a kind" (or
  * took another kind's slot) in one of the derivations.
  */
+#include <math.h>
+#include <stdlib.h>
+
 #include "kernel-ref/view.h"
 #include "sim/report.h"
 #include "tests/chiptest.h"
@@ -117,19 +120,37 @@ Test(units_table, resources_and_regressors_cover_every_kind)
 	cr_assert_str_eq(chip_lin_name(UNIT_NKINDS + 1), "hostbus");
 }
 
-/* Catches: a kind's PR_USE code colliding with the next op (the fifth
- * kind used to be PR_SPILL_R). */
+/* Catches: two ops of the packet record sharing a code: a kind's PR_USE
+ * code on the next op (the fifth kind used to be PR_SPILL_R), the typed-in
+ * bases of the per-memory-type ranges (READ, READ_SAME, WRITE, USE) too
+ * close for MEM_NTYPES types, or an op reaching the counter codes. Every
+ * code below PR_COUNT1 is marked once; a second mark is the collision. */
 Test(units_table, packet_record_op_range_covers_every_kind)
 {
-	for (int k = 0; k < UNIT_NKINDS; k++) {
-		int op = PR_USE + k;
-		cr_assert(op > PR_WRITE + 3 && op < PR_SPILL_R, "kind %d's op %d collides", k, op);
+	int owner[PR_COUNT1];
+	for (int i = 0; i < PR_COUNT1; i++)
+		owner[i] = -1;
+	int n = 0;
+#define MARK(code)                                                                                 \
+	do {                                                                                       \
+		int c_ = (code);                                                                   \
+		cr_assert(c_ >= 0 && c_ < PR_COUNT1, "op code %d outside 0..%d", c_,               \
+		          PR_COUNT1 - 1);                                                          \
+		cr_assert_eq(owner[c_], -1, "op code %d used by ops %d and %d", c_, owner[c_], n); \
+		owner[c_] = n++;                                                                   \
+	} while (0)
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		MARK(PR_READ + t);
+		MARK(PR_READ_SAME + t);
+		MARK(PR_WRITE + t);
 	}
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		MARK(PR_USE + k);
 	int later[] = {PR_SPILL_R, PR_SPILL_W, PR_MAXSP, PR_SHADE,
 	               PR_ENTER,   PR_SPAWN,   PR_END,   PR_WAIT};
 	for (size_t i = 0; i < sizeof later / sizeof *later; i++)
-		cr_assert(later[i] >= PR_USE + UNIT_NKINDS && later[i] < PR_COUNT1, "op %d",
-		          later[i]);
+		MARK(later[i]);
+#undef MARK
 }
 
 /* The run the two tests below look at: the embedded room, small. */
@@ -171,7 +192,13 @@ Test(units_table, report_has_every_kind_with_utilisation)
 		cr_assert(u, "report lacks units.%s", unit_table[k].name);
 		const char *ut = strstr(u, "\"utilisation\":"), *end = strchr(u + strlen(key), '}');
 		cr_assert(ut && ut < end, "units.%s has no utilisation", unit_table[k].name);
-		cr_assert_gt(fig_util(ch, k, -1), 0, "%s idle", unit_table[k].name);
+		/* the report's number is this kind's own (not another kind's, not 0) */
+		double v = strtod(ut + strlen("\"utilisation\":"), NULL),
+		       want = fig_util(ch, k, -1);
+		cr_assert_gt(want, 0, "%s idle", unit_table[k].name);
+		cr_assert(fabs(v - want) <= 1e-9 * want,
+		          "units.%s.utilisation %.17g, the chip's %.17g", unit_table[k].name, v,
+		          want);
 	}
 
 	chip_destroy(ch);
