@@ -101,13 +101,16 @@ SUM=$(cat "$OUT/saarsim.cksum")
 # Keys joined by + move together (values joined by +): the traversal unit
 # stays 4x as wide as the intersection unit, the chip being "designed for
 # 4:1 ratio" of traversal to intersection operations (seed 002 §4.7).
+# Widths need not be powers of two: a 64-ray packet op takes
+# ceil(64/width) cycles (units/unit_table.c), so 5 and 6 lanes are 13 and
+# 11 cycles per op, between 4's 16 and 8's 8.
 # chip.tile_order is not searched: with morton order the sampled fidelity
 # mode's estimates fall outside their intervals (tests/test_fidelity.c
 # interval_covers_small_cases, sdram_factor_tightens_conference;
 # test_saarsim_cli.c stall_cycles_are_the_frames), so a fitted morton default
 # would break --fidelity sampled; an earlier search chose it
 # (docs/CALIBRATION.md says so).
-KNOBS='chip.isect.width+chip.trav.width 2+8,4+16,8+32
+KNOBS='chip.isect.width+chip.trav.width 2+8,3+12,4+16,5+20,6+24,8+32
 memory.sdram.banks 2,4,8
 memory.sdram.cl 2,3
 memory.sdram.trcd 2,3
