@@ -133,6 +133,46 @@ Test(datapath, damaged_triangle_in_host_memory_changes_the_frame_through_the_vma
 	damaged_triangle(on_vma, 2);
 }
 
+/* The packet record (docs/fidelity.md "The packet record"): a functional
+ * or sampled run with a world cache records its frame while it runs the
+ * math, through the recording sink around the functional one, so its
+ * units decode what their reads return as without a record: one visible
+ * triangle damaged in board memory changes the recording run's frame, and
+ * the record keeps that frame, so a run replaying it (which runs no math
+ * and decodes nothing, with an undamaged board here) shows it too. What a
+ * replaying run cannot show is damage made to its own board: its pixels
+ * are the recording run's (docs/fidelity.md says so). Catches: a
+ * recording run whose units see the host's image instead of the board's
+ * bytes (both frames would be kernel-ref's). */
+Test(datapath, damaged_triangle_changes_the_recording_run_and_its_record, .timeout = 300)
+{
+	static const char *const rec_modes[] = {"functional", "sampled"};
+	for (int m = 0; m < 2; m++) {
+		char dir[64];
+		tu_tmpdir(dir, sizeof dir);
+		world w;
+		tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+		uint32_t ta = visible_tri(&w, 128);
+		saar_config c;
+		cfg_for(&c, 128, rec_modes[m], NULL, 0);
+		chip *ch = make_chip(&w, &c);
+		flatten_tri(ch, ta);
+		cr_assert_not(frame_identical(ch, &w), "%s: the recording run did not see it",
+		              rec_modes[m]);
+		cr_assert_eq(ch->rec_state, REC_STORED, "%s: %s", rec_modes[m],
+		             chip_rec_name(ch->rec_state));
+		chip_destroy(ch);
+		ch = make_chip(&w, &c);
+		cr_assert_not(frame_identical(ch, &w), "%s: the replayed record lost it",
+		              rec_modes[m]);
+		cr_assert_eq(ch->rec_state, REC_REPLAYED, "%s: %s", rec_modes[m],
+		             chip_rec_name(ch->rec_state));
+		cr_assert_gt(ch->fid.replayed_tiles, 0, "%s", rec_modes[m]);
+		chip_destroy(ch);
+		world_free(&w);
+	}
+}
+
 /* The shader's records travel too: the material of the visible triangle
  * made black in board memory. */
 Test(datapath, damaged_material_changes_the_frame)
