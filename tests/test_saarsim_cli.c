@@ -788,6 +788,38 @@ Test(saarsim_cli, image_too_big_without_vma_suggests_vma_config)
 	cr_assert_gt(JNUM(r, "hostbus", "bytes"), 0, "no PCI traffic");
 }
 
+/* The report checks itself in a user's run (issue 29 item 5; docs/report.md
+ * "Invariants"): a run that moves lines over PCI, evicts on-board lines and
+ * writes dirty ones back (a spilling stack through a 1 MB board), timed and
+ * functional, prints no "warning: report invariant failed" line on stderr
+ * and its JSON lists none. Catches: a counter that stopped counting in the
+ * program (make mutate: PCI bytes uncounted by the timed host bus, mutant
+ * 08, or by the functional VMA walk, mutant 09): the run then warns, one
+ * line per failed invariant, and this test fails on that line. Before the
+ * invariants counted the VMA's write-backs, this run warned three times. */
+Test(saarsim_cli, vma_run_with_write_backs_warns_of_nothing)
+{
+	static const char *const modes[] = {"cycle", "functional"};
+	for (int m = 0; m < 2; m++) {
+		char args[1024];
+		snprintf(
+		    args, sizeof args,
+		    "--size 64x64 --set chip.stack_depth=1 --set memory.vma.enabled=true --set "
+		    "memory.sdram.mb=1 --set fidelity=%s --report %s/r.json",
+		    modes[m], dir);
+		/* tu_prog fails the test on a warning line, naming it */
+		cr_assert_eq(saarsim(args), 0, "%s: %s", modes[m], slurp("err"));
+		cr_assert_not(strstr(slurp("err"), "warning:"), "%s: %s", modes[m], slurp("err"));
+		char *r = slurp("r.json");
+		cr_assert(strstr(r, "\"invariants_failed\": []"), "%s: failed invariants listed",
+		          modes[m]);
+		cr_assert(strstr(r, "\"identical_8bit\": true"), "%s", modes[m]);
+		cr_assert_gt(JNUM(r, "hostbus", "bytes"), 0, "%s: no PCI traffic", modes[m]);
+		cr_assert_gt(JNUM(r, "vma", "writebacks"), 0, "%s: no dirty line written back",
+		             modes[m]);
+	}
+}
+
 Test(saarsim_cli, small_stack_spills_and_keeps_the_image)
 {
 	char args[1024];

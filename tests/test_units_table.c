@@ -177,6 +177,7 @@ Test(units_table, report_has_every_kind_with_utilisation)
 	chip *ch = small_run(&w, &c);
 	diag d;
 	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
+	tu_assert_report_ok(ch); /* a test that writes a report checks it */
 	char dir[256], path[300];
 	tu_tmpdir(dir, sizeof dir);
 	snprintf(path, sizeof path, "%s/r.json", dir);
