@@ -547,10 +547,16 @@ static int chip_env(chip *c, diag *d)
 	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr))
 		return diag_set(d, "chip", 0, 0, "out of memory for %d RTPs x %d threads",
 		                cfg->chip.rtps, cfg->chip.threads_per_rtp);
+	/* distribution effects (kernel-ref/drt.h) are kernel-ref's only so
+	 * far: the RGC hands out one primary packet per tile */
+	if (!drt_is_off(&w->v.drt))
+		return diag_set(d, "view", 0, 0,
+		                "distribution ray tracing (drt: spp, aperture, light_size, gloss, "
+		                "motion) is not on the chip yet; rtref renders it");
 	render_opts ro;
 	render_opts_default(&ro);
 	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
-	                    ro.background, &c->fb,      NULL};
+	                    ro.background, &c->fb,      NULL,         NULL};
 	cam_setup(&v->cam, &w->v.cam, cfg->frame.width, cfg->frame.height);
 	return 0;
 }
