@@ -313,7 +313,8 @@ static int parse_lights(yfile *y, yaml_node_t *ln, view *v)
 	return 0;
 }
 
-/* The scene path is relative to the views file's folder. */
+/* The scene path is relative to the views file's folder; a procedural
+ * scene (spd:NAME...) is kept as it is. */
 static int resolve_scene(yfile *y, yaml_node_t *sn, view *v)
 {
 	const char *s = scalar(sn);
@@ -321,7 +322,8 @@ static int resolve_scene(yfile *y, yaml_node_t *sn, view *v)
 		return node_err(y, sn, "scene must be a file path");
 	const char *slash = strrchr(y->file, '/');
 	int n;
-	if (s[0] == '/' || !slash)
+	/* a procedural scene (kernel-ref/spd.h) is a name, not a path */
+	if (s[0] == '/' || !slash || !strncmp(s, "spd:", 4))
 		n = snprintf(v->scene, sizeof v->scene, "%s", s);
 	else
 		n = snprintf(v->scene, sizeof v->scene, "%.*s/%s", (int)(slash - y->file), y->file,

@@ -17,8 +17,9 @@
 const char world_usage[] =
     "  --scene PATH          scene file (.obj .ply .stl .3ds .gltf .glb .dae, .gz ok; limits:\n"
     "                        SAARSIM_IMPORT_CPU_S, SAARSIM_IMPORT_MEM_MB) or a procedural scene\n"
-    "                        spd:balls|tetra|mount|rings|cornell[:SIZE[:TESS]] (docs/spd.md);\n"
-    "                        default: the view's scene, else the embedded Cornell-like room\n"
+    "                        spd:balls|tetra|mount|rings|cornell|billiard[:SIZE[:TESS]]\n"
+    "                        (docs/spd.md); default: the view's scene, else the embedded\n"
+    "                        Cornell-like room\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"

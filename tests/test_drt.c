@@ -521,3 +521,44 @@ Test(drt, bad_values_are_refused)
 		tu_one_line(dir, "saarsim", flags[k].what);
 	}
 }
+
+/* ---- the benchmark views ---- */
+
+/* Mistake: configs/drt-views.yaml naming a scene that does not resolve
+ * (a procedural spd: name taken as a path under configs/, a shared scene
+ * at the wrong relative path or copied into the repository), or a view
+ * with an effect left off. Every view has all five effects at 16 spp,
+ * and the billiard view renders (its DRT frame differs from its pinhole
+ * frame). */
+Test(drt, the_drt_views_file_has_every_effect)
+{
+	static const char *const names[] = {"billiard-drt", "cornell-drt", "conference-drt"};
+	for (int k = 0; k < 3; k++) {
+		view v;
+		diag d;
+		cr_assert_eq(view_load(&v, "configs/drt-views.yaml", names[k], &d), 0, "%s", d.msg);
+		const drt_params *p = &v.drt;
+		cr_assert(p->spp == 16 && p->aperture > 0 && p->light_size > 0 && p->gloss > 0 &&
+		              v3_len(p->motion) > 0,
+		          "%s: an effect is off", names[k]);
+		if (k == 0) {
+			cr_assert_str_eq(v.scene, "spd:billiard");
+			continue;
+		}
+		cr_assert(strstr(v.scene, "configs/../../shared/scenes/") == v.scene,
+		          "%s: the scene %s is not the shared one", names[k], v.scene);
+		char rel[1024];
+		SCENE_OR_SKIP(rel, strstr(v.scene, "scenes/") + strlen("scenes/"));
+		cr_assert_eq(access(v.scene, R_OK), 0, "%s: %s is not there", names[k], v.scene);
+	}
+	world w;
+	tu_load_world(&w, NULL, "configs/drt-views.yaml", "billiard-drt");
+	cr_assert_str_eq(w.s.name, "spd:billiard");
+	uint8_t *a = frame(&w, &w.v, 32, 2, NULL);
+	w.v.drt = (drt_params){0};
+	uint8_t *b = frame(&w, &w.v, 32, 2, NULL);
+	cr_assert(!img_compare(a, b, 32, 32).identical, "the DRT frame is the pinhole frame");
+	free(a);
+	free(b);
+	world_free(&w);
+}
