@@ -547,17 +547,15 @@ static int chip_env(chip *c, diag *d)
 	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr))
 		return diag_set(d, "chip", 0, 0, "out of memory for %d RTPs x %d threads",
 		                cfg->chip.rtps, cfg->chip.threads_per_rtp);
-	/* distribution effects (kernel-ref/drt.h) are kernel-ref's only so
-	 * far: the RGC hands out one primary packet per tile */
-	if (!drt_is_off(&w->v.drt))
-		return diag_set(d, "view", 0, 0,
-		                "distribution ray tracing (drt: spp, aperture, light_size, gloss, "
-		                "motion) is not on the chip yet; rtref renders it");
 	render_opts ro;
 	render_opts_default(&ro);
 	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
 	                    ro.background, &c->fb,      NULL,         NULL};
-	cam_setup(&v->cam, &w->v.cam, cfg->frame.width, cfg->frame.height);
+	cam_setup_view(&v->cam, &w->v, cfg->frame.width, cfg->frame.height);
+	if (!drt_is_off(&w->v.drt)) { /* distribution effects (kernel-ref/drt.h) */
+		drt_shade_setup(&v->drt, &w->v.drt, w->v.cam.up, (uint32_t)cfg->frame.width);
+		v->sc.drt = &v->drt;
+	}
 	return 0;
 }
 
