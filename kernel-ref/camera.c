@@ -3,6 +3,8 @@
  */
 #include "kernel-ref/camera.h"
 
+#include "kernel-ref/sudoku.h"
+
 #include <string.h>
 
 void cam_setup(cam_frame *c, const camera *cam, int width, int height)
@@ -15,6 +17,51 @@ void cam_setup(cam_frame *c, const camera *cam, int width, int height)
 	c->sx = c->sy * (float)width / (float)height;
 	c->width = width;
 	c->height = height;
+	c->spp = 1;
+	c->lens_r = 0.0f;
+	c->inv_f = 1.0f;
+	c->motion = v3(0, 0, 0);
+	c->weight = 1.0f;
+}
+
+void cam_setup_view(cam_frame *c, const view *v, int width, int height)
+{
+	cam_setup(c, &v->cam, width, height);
+	const drt_params *p = &v->drt;
+	c->spp = drt_spp(p);
+	c->lens_r = 0.5f * p->aperture;
+	float f = p->focus > 0.0f ? p->focus : v3_len(v3_sub(v->cam.lookat, v->cam.eye));
+	c->inv_f = 1.0f / f;
+	c->motion = p->motion;
+	c->weight = 1.0f / (float)c->spp;
+}
+
+/* Sample s of pixel (x, y): origin and direction through the thin lens
+ * at the shutter time of the sample. The pinhole ray d points at the
+ * focal plane's point eye + f d (d has unit length along w); from the
+ * lens point eye + l the direction is f d - l, i.e. d - l / f. A zero
+ * lens offset or motion adds nothing (drt_add), so a pinhole is exact. */
+static void sample_ray(const cam_frame *c, int x, int y, int s, vec3 *o, vec3 *dir)
+{
+	float u, v;
+	sudoku_sample((uint32_t)x, (uint32_t)y, s, SUDOKU_DIM_IMAGE, c->spp, &u, &v);
+	float px = (2.0f * ((float)x + u) / (float)c->width - 1.0f) * c->sx;
+	float py = (1.0f - 2.0f * ((float)y + v) / (float)c->height) * c->sy;
+	vec3 d = v3_add(c->w, v3_add(v3_scale(c->u, px), v3_scale(c->v, py)));
+	vec3 e = c->eye;
+	if (c->spp > 1 || c->lens_r != 0.0f || c->motion.x != 0.0f || c->motion.y != 0.0f ||
+	    c->motion.z != 0.0f) {
+		float t, tv, lu, lv;
+		sudoku_sample((uint32_t)x, (uint32_t)y, s, SUDOKU_DIM_TIME, c->spp, &t, &tv);
+		e = drt_add3(e, v3_scale(c->motion, t));
+		sudoku_sample((uint32_t)x, (uint32_t)y, s, SUDOKU_DIM_LENS, c->spp, &lu, &lv);
+		float th = 2.0f * (float)M_PI * lu, r = c->lens_r * sqrtf(lv);
+		vec3 l = v3_add(v3_scale(c->u, r * cosf(th)), v3_scale(c->v, r * sinf(th)));
+		e = drt_add3(e, l);
+		d = drt_add3(d, v3_scale(l, -c->inv_f));
+	}
+	*o = e;
+	*dir = v3_norm(d);
 }
 
 void pkt_clear(packet *p, int type, int depth)
@@ -26,7 +73,13 @@ void pkt_clear(packet *p, int type, int depth)
 
 int cam_primary_packet(const cam_frame *c, int tx, int ty, packet *p)
 {
+	return cam_sample_packet(c, tx, ty, 0, p);
+}
+
+int cam_sample_packet(const cam_frame *c, int tx, int ty, int s, packet *p)
+{
 	pkt_clear(p, PKT_PRIMARY, 0);
+	p->sample = (uint16_t)s;
 	int nvalid = 0;
 	for (int j = 0; j < TILE_H; j++)
 		for (int i = 0; i < TILE_W; i++) {
@@ -35,18 +88,16 @@ int cam_primary_packet(const cam_frame *c, int tx, int ty, packet *p)
 			p->tmax[lane] = INFINITY;
 			if (x >= c->width || y >= c->height)
 				continue;
-			float px = (2.0f * ((float)x + 0.5f) / (float)c->width - 1.0f) * c->sx;
-			float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)c->height) * c->sy;
-			vec3 d =
-			    v3_norm(v3_add(c->w, v3_add(v3_scale(c->u, px), v3_scale(c->v, py))));
-			p->ox[lane] = c->eye.x;
-			p->oy[lane] = c->eye.y;
-			p->oz[lane] = c->eye.z;
+			vec3 o, d;
+			sample_ray(c, x, y, s, &o, &d);
+			p->ox[lane] = o.x;
+			p->oy[lane] = o.y;
+			p->oz[lane] = o.z;
 			p->dx[lane] = d.x;
 			p->dy[lane] = d.y;
 			p->dz[lane] = d.z;
 			p->pixel[lane] = (uint32_t)(y * c->width + x);
-			p->wr[lane] = p->wg[lane] = p->wb[lane] = 1.0f;
+			p->wr[lane] = p->wg[lane] = p->wb[lane] = c->weight;
 			p->valid |= 1ull << lane;
 			nvalid++;
 		}

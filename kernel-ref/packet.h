@@ -64,6 +64,7 @@ typedef struct packet {
 	uint64_t valid;                   /* rays present */
 	uint32_t n;                       /* number of rays (lanes 0..n-1 may be valid) */
 	uint8_t type, depth;
+	uint16_t sample; /* the pixels' sample index (drt.h); children inherit it */
 } __attribute__((aligned(32))) packet;
 
 /* Zeroes a packet and sets its type and depth (camera.c). */

@@ -31,6 +31,7 @@ typedef struct job {
 	const mimg *m;
 	const render_opts *o;
 	shade_ctx sc;
+	drt_shade drt;
 	cam_frame cam;
 	int tiles_x, ntiles;
 	atomic_int next;
@@ -69,11 +70,13 @@ static void trace_single(const mimg *m, packet *p, trav_counts *c, const pkt_pre
 	}
 }
 
-static void do_tile(worker *w, int tile)
+/* Traces sample s of a tile: its primary packet and, depth first, every
+ * packet it spawns. */
+static void do_sample(worker *w, int tile, int s)
 {
 	job *j = w->j;
 	int n = 0;
-	cam_primary_packet(&j->cam, tile % j->tiles_x, tile / j->tiles_x, &w->work[n++]);
+	cam_sample_packet(&j->cam, tile % j->tiles_x, tile / j->tiles_x, s, &w->work[n++]);
 	while (n > 0) {
 		packet *p = &w->work[--n];
 		int nrays = __builtin_popcountll(p->valid);
@@ -100,6 +103,13 @@ static void do_tile(worker *w, int tile)
 		for (int k = 0; k < made && n < w->cap; k++)
 			w->work[n++] = w->kids[k];
 	}
+}
+
+/* A tile: its spp samples, one primary packet each (drt.h). */
+static void do_tile(worker *w, int tile)
+{
+	for (int s = 0; s < w->j->cam.spp; s++)
+		do_sample(w, tile, s);
 }
 
 static void *worker_main(void *arg)
@@ -156,7 +166,11 @@ int render_frame(const mimg *m, const view *v, const render_opts *o, framebuf *f
 	j.sc.max_depth = o->max_depth;
 	j.sc.background = o->background;
 	j.sc.fb = fb;
-	cam_setup(&j.cam, &v->cam, o->width, o->height);
+	cam_setup_view(&j.cam, v, o->width, o->height);
+	if (!drt_is_off(&v->drt)) {
+		drt_shade_setup(&j.drt, &v->drt, v->cam.up, (uint32_t)o->width);
+		j.sc.drt = &j.drt;
+	}
 	j.tiles_x = (o->width + TILE_W - 1) / TILE_W;
 	j.ntiles = j.tiles_x * ((o->height + TILE_H - 1) / TILE_H);
 	atomic_init(&j.next, 0);

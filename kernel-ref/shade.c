@@ -10,6 +10,8 @@
  */
 #include "kernel-ref/shade.h"
 
+#include "kernel-ref/sudoku.h"
+
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -273,7 +275,8 @@ static void textures(const shade_reader *rdr, const mimg *m, const fpfmt *fq, hi
 /* Shadow rays from lane i: one per light the surface faces, carrying the
  * light's diffuse and specular term (weight wl, diffuse colour kd). */
 static void shadow_rays(const shade_ctx *c, const fpfmt *fq, const hit *h, const spawn *sp, int i,
-                        uint32_t pixel, vec3 d, vec3 kd, vec3 wl, float kl, shade_counts *cnt)
+                        uint32_t pixel, int sample, vec3 d, vec3 kd, vec3 wl, float kl,
+                        shade_counts *cnt)
 {
 	const mimg_mat *mt = &h->mt;
 	vec3 ns = h->ns, ng = h->ng;
@@ -282,6 +285,8 @@ static void shadow_rays(const shade_ctx *c, const fpfmt *fq, const hit *h, const
 	vec3 vdir = v3_scale(v3_norm(d), -1.0f);
 	for (int l = 0; l < sp->nl && kl > 0.0f; l++) {
 		vec3 lp = c->lights[l].pos;
+		if (c->drt) /* the light's point for this sample (seed 000 §3.2) */
+			lp = drt_light_point(c->drt, lp, pixel, sample, l);
 		vec3 L = v3_sub(lp, h->hp);
 		vec3 ld = v3_norm(L);
 		float ndl = rnd(fq, v3_dot(ns, ld));
@@ -302,13 +307,25 @@ static void shadow_rays(const shade_ctx *c, const fpfmt *fq, const hit *h, const
 
 /* The reflection and refraction rays from lane i (weights w*kr, w*kt);
  * a total internal reflection adds the refracted weight to the reflected. */
-static void secondary_rays(const fpfmt *fq, const hit *h, const spawn *sp, int i, uint32_t pixel,
-                           vec3 d, vec3 w, float kr, float kt)
+static void secondary_rays(const shade_ctx *c, const fpfmt *fq, const hit *h, const spawn *sp,
+                           int i, const packet *p, vec3 d, vec3 w, float kr, float kt)
 {
+	uint32_t pixel = p->pixel[i];
 	vec3 ns = h->ns, ng = h->ng;
 	vec3 rd = v3_sub(d, v3_scale(ns, 2.0f * v3_dot(d, ns)));
 	if (v3_dot(rd, ng) <= 0.0f) /* shading normal bent it under: use the true one */
 		rd = v3_sub(d, v3_scale(ng, 2.0f * v3_dot(d, ng)));
+	if (c->drt && c->drt->gloss > 0.0f) {
+		/* glossy: a Phong lobe around the mirror direction (seed 000
+		 * §3.3); a direction under the surface keeps the mirror one */
+		float u1, u2;
+		const drt_shade *g = c->drt;
+		sudoku_sample(pixel % g->width, pixel / g->width, p->sample,
+		              SUDOKU_DIM_GLOSS + p->depth, g->spp, &u1, &u2);
+		vec3 gd = drt_glossy_dir(rd, g->gloss, u1, u2);
+		if (v3_dot(gd, ng) > 0.0f)
+			rd = gd;
+	}
 	rd = rnd3(fq, rd); /* spawn_origin picks its side from the rounded rd */
 	vec3 wr = rnd3(fq, v3_scale(w, kr));
 	if (kt > 0.0f) {
@@ -358,7 +375,7 @@ static void shade_lane(const shade_ctx *c, const fpfmt *fq, const shade_reader *
 	vec3 wl = v3_scale(w, kl);
 	vec3 amb = rnd3(fq, v3_scale(v3_mul(wl, ka), SHADE_AMBIENT));
 	add(c, p->pixel[i], amb);
-	shadow_rays(c, fq, &h, sp, i, p->pixel[i], d, kd, wl, kl, cnt);
+	shadow_rays(c, fq, &h, sp, i, p->pixel[i], p->sample, d, kd, wl, kl, cnt);
 
 	if (kr <= 0.0f && kt <= 0.0f)
 		return;
@@ -366,7 +383,7 @@ static void shade_lane(const shade_ctx *c, const fpfmt *fq, const shade_reader *
 		cnt->depth_cut += (kr > 0.0f) + (kt > 0.0f);
 		return;
 	}
-	secondary_rays(fq, &h, sp, i, p->pixel[i], d, w, kr, kt);
+	secondary_rays(c, fq, &h, sp, i, p, d, w, kr, kt);
 }
 
 int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr, const packet *p,
@@ -381,6 +398,8 @@ int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr
 		pkt_clear(&sp.shadow[l], PKT_SHADOW, p->depth);
 	pkt_clear(sp.refl, PKT_REFLECT, p->depth + 1);
 	pkt_clear(sp.refr, PKT_REFRACT, p->depth + 1);
+	for (int l = 0; l < nl + 2; l++)
+		out[l].sample = p->sample; /* children keep the pixels' sample */
 	for (uint64_t b = p->valid; b; b &= b - 1)
 		shade_lane(c, fq, rdr, p, __builtin_ctzll(b), &sp, cnt);
 	if (!sp.refl->valid && !sp.refr->valid && p->type != PKT_SHADOW)

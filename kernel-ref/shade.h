@@ -26,6 +26,7 @@
 #ifndef SAAR_KREF_SHADE_H
 #define SAAR_KREF_SHADE_H
 
+#include "kernel-ref/drt.h"
 #include "kernel-ref/fpfmt.h"
 #include "kernel-ref/framebuf.h"
 #include "kernel-ref/memimage.h"
@@ -55,6 +56,9 @@ typedef struct shade_ctx {
 	/* non-NULL: shade_packet* keeps its frame-buffer adds here (emptied
 	 * first) instead of making them; shade_adds_apply makes them */
 	shade_adds *defer;
+	/* distribution effects (drt.h): area-light points and glossy
+	 * reflection from the packet's sample; NULL: point lights, mirrors */
+	const drt_shade *drt;
 } shade_ctx;
 
 /* Where the shader's scene data comes from: read(ctx, addr, bytes, region)

@@ -222,6 +222,71 @@ static void add_mountain(scene *s, int level, vec3 A, vec3 B, vec3 C, float roug
 	free(p);
 }
 
+/* ---- billiard: a pool table after seed 000's benchmark ------------------------ */
+
+/* An axis-aligned box from lo to hi: six quads, 12 triangles. */
+static void add_box(scene *s, vec3 lo, vec3 hi, uint32_t m)
+{
+	vec3 c[8];
+	for (int k = 0; k < 8; k++)
+		c[k] = v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+	static const int f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+	                            {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+	for (int k = 0; k < 6; k++)
+		add_quad(s, c[f[k][0]], c[f[k][1]], c[f[k][2]], c[f[k][3]], m);
+}
+
+/* floor 2 + felt 2 + bed 12 + four rails 48 + four legs 48 */
+#define BILLIARD_FIXED_TRIS 112ull
+#define BALL_R              0.028575f /* 57.15 mm balls */
+#define FELT_Z              0.8f
+
+/* The table (a 2.54 x 1.27 m bed of green felt, glossy wooden rails on a
+ * wooden body and legs) on a floor, with nb balls (z up, metres): the
+ * cue ball, then a rack of up to 15 in five rows. The balls are glossy
+ * (reflect 0.12) and so are the rails (0.25): with `drt: {gloss: N}`
+ * their reflections blur, as the seed's balls do (§5.3). */
+static void billiard(scene *s, view *v, int nb, int tess)
+{
+	uint32_t floor_m = mat(s, "floor", v3(0.45f, 0.4f, 0.35f), v3(0, 0, 0), 1, 0, 0, 1);
+	uint32_t felt = mat(s, "felt", v3(0.05f, 0.35f, 0.12f), v3(0, 0, 0), 1, 0, 0, 1);
+	uint32_t wood =
+	    mat(s, "wood", v3(0.35f, 0.17f, 0.07f), v3(0.4f, 0.4f, 0.4f), 40, 0.25f, 0, 1);
+	add_quad(s, v3(-4, -3, 0), v3(4, -3, 0), v3(4, 3, 0), v3(-4, 3, 0), floor_m);
+	add_quad(s, v3(-1.27f, -0.635f, FELT_Z), v3(1.27f, -0.635f, FELT_Z),
+	         v3(1.27f, 0.635f, FELT_Z), v3(-1.27f, 0.635f, FELT_Z), felt);
+	add_box(s, v3(-1.37f, -0.735f, 0.6f), v3(1.37f, 0.735f, 0.79f), wood); /* the bed */
+	const float rz = FELT_Z + 0.04f;
+	add_box(s, v3(-1.37f, 0.635f, FELT_Z), v3(1.37f, 0.735f, rz), wood);
+	add_box(s, v3(-1.37f, -0.735f, FELT_Z), v3(1.37f, -0.635f, rz), wood);
+	add_box(s, v3(1.27f, -0.635f, FELT_Z), v3(1.37f, 0.635f, rz), wood);
+	add_box(s, v3(-1.37f, -0.635f, FELT_Z), v3(-1.27f, 0.635f, rz), wood);
+	for (int k = 0; k < 4; k++) {
+		float x = k & 1 ? 1.1f : -1.1f, y = k & 2 ? 0.5f : -0.5f;
+		add_box(s, v3(x - 0.06f, y - 0.06f, 0), v3(x + 0.06f, y + 0.06f, 0.6f), wood);
+	}
+	static const float col[8][3] = {
+	    {0.9f, 0.75f, 0.1f}, {0.1f, 0.2f, 0.7f}, {0.8f, 0.1f, 0.1f}, {0.4f, 0.1f, 0.5f},
+	    {0.9f, 0.45f, 0.1f}, {0.1f, 0.5f, 0.2f}, {0.5f, 0.1f, 0.1f}, {0.03f, 0.03f, 0.03f}};
+	uint32_t bm[9];
+	for (int k = 0; k < 8; k++)
+		bm[k] = mat(s, "ball", v3(col[k][0], col[k][1], col[k][2]), v3(0.6f, 0.6f, 0.6f),
+		            80, 0.12f, 0, 1);
+	bm[8] = mat(s, "cue", v3(0.9f, 0.9f, 0.85f), v3(0.6f, 0.6f, 0.6f), 80, 0.12f, 0, 1);
+	const float zc = FELT_Z + BALL_R, gap = 2.0f * BALL_R + 0.0005f;
+	if (nb > 0)
+		spd_add_sphere(s, v3(-0.635f, 0.05f, zc), BALL_R, tess, bm[8]);
+	for (int b = 1, row = 0; b < nb; row++)
+		for (int j = 0; j <= row && b < nb; j++, b++)
+			spd_add_sphere(s,
+			               v3(0.635f + (float)row * gap * 0.8660254f,
+			                  ((float)j - 0.5f * (float)row) * gap, zc),
+			               BALL_R, tess, bm[(b - 1) % 8]);
+	vec3 l[2] = {v3(-0.6f, 0, 1.8f), v3(0.6f, 0, 1.8f)};
+	set_view(v, "spd-billiard", v3(-0.9f, -1.2f, 1.5f), v3(0.25f, 0, FELT_Z), v3(0, 0, 1), 40,
+	         l, 2);
+}
+
 /* ---- the generators ------------------------------------------------------------ */
 
 typedef struct spd_spec {
@@ -234,7 +299,7 @@ static const struct spd_info {
 	int def_size, max_size, def_tess;
 } spd_table[] = {
     {"balls", 3, 6, 12},  {"tetra", 6, 10, 0},  {"mount", 6, 11, 16},
-    {"rings", 4, 60, 16}, {"cornell", 0, 0, 0},
+    {"rings", 4, 60, 16}, {"cornell", 0, 0, 0}, {"billiard", 16, 16, 24},
 };
 
 static const struct spd_info *parse(const char *spec, spd_spec *o, diag *d)
@@ -250,9 +315,9 @@ static const struct spd_info *parse(const char *spec, spd_spec *o, diag *d)
 		if (strlen(spd_table[k].name) == len && strncmp(p, spd_table[k].name, len) == 0)
 			in = &spd_table[k];
 	if (!in)
-		return diag_set(
-		           d, spec, 0, 0,
-		           "unknown procedural scene (known: balls, tetra, mount, rings, cornell)"),
+		return diag_set(d, spec, 0, 0,
+		                "unknown procedural scene (known: balls, tetra, mount, rings, "
+		                "cornell, billiard)"),
 		       NULL;
 	snprintf(o->name, sizeof o->name, "%s", in->name);
 	o->size = in->def_size;
@@ -299,6 +364,8 @@ static uint64_t count(const spd_spec *o)
 		return 5ull * (uint64_t)o->size * (uint64_t)o->size * 2ull *
 		           (uint64_t)(2 * o->tess) * (uint64_t)(o->tess / 2) +
 		       2;
+	if (!strcmp(o->name, "billiard"))
+		return BILLIARD_FIXED_TRIS + (uint64_t)o->size * sphere_tris(o->tess);
 	return 32; /* cornell */
 }
 
@@ -388,6 +455,8 @@ int spd_generate(scene *s, view *v, const char *spec, diag *d)
 		vec3 l[2] = {v3(span, -span, 2.0f * span), v3(-span, -0.5f * span, span)};
 		set_view(v, "spd-rings", v3(0.9f * span, -1.3f * span, 0.9f * span), v3(0, 0, 0),
 		         v3(0, 0, 1), 45, l, 2);
+	} else if (!strcmp(o.name, "billiard")) {
+		billiard(s, v, o.size, o.tess);
 	} else { /* cornell: the Cornell box measurements (Cornell PCG) */
 		uint32_t white = mat(s, "white", v3(0.73f, 0.73f, 0.73f), v3(0, 0, 0), 1, 0, 0, 1);
 		uint32_t red = mat(s, "red", v3(0.65f, 0.05f, 0.05f), v3(0, 0, 0), 1, 0, 0, 1);

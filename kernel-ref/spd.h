@@ -2,7 +2,8 @@
  * spd.h: procedural benchmark scenes after Eric Haines' Standard Procedural
  * Databases (IEEE CG&A 1987; the SPD package): balls (sphereflake), tetra
  * (Sierpinski tetrahedron), mount (fractal mountain with glass spheres),
- * rings (rings of tori), plus the Cornell box. Written by us from the
+ * rings (rings of tori), plus the Cornell box and a billiard table (after
+ * the benchmark of seed 000, Boulos et al.). Written by us from the
  * published descriptions, tessellated into triangles, each with its
  * standard view and lights (docs/spd.md gives the formulas and counts).
  *

@@ -313,7 +313,8 @@ static int parse_lights(yfile *y, yaml_node_t *ln, view *v)
 	return 0;
 }
 
-/* The scene path is relative to the views file's folder. */
+/* The scene path is relative to the views file's folder; a procedural
+ * scene (spd:NAME...) is kept as it is. */
 static int resolve_scene(yfile *y, yaml_node_t *sn, view *v)
 {
 	const char *s = scalar(sn);
@@ -321,7 +322,8 @@ static int resolve_scene(yfile *y, yaml_node_t *sn, view *v)
 		return node_err(y, sn, "scene must be a file path");
 	const char *slash = strrchr(y->file, '/');
 	int n;
-	if (s[0] == '/' || !slash)
+	/* a procedural scene (kernel-ref/spd.h) is a name, not a path */
+	if (s[0] == '/' || !slash || !strncmp(s, "spd:", 4))
 		n = snprintf(v->scene, sizeof v->scene, "%s", s);
 	else
 		n = snprintf(v->scene, sizeof v->scene, "%.*s/%s", (int)(slash - y->file), y->file,
@@ -331,15 +333,47 @@ static int resolve_scene(yfile *y, yaml_node_t *sn, view *v)
 	return 0;
 }
 
+/* The `drt` mapping (drt.h): every key optional, each value checked by
+ * drt_problem at its node. */
+static int parse_drt(yfile *y, yaml_node_t *dn, const char *vname, drt_params *p)
+{
+	static const char *const keys[] = {"spp",        "aperture", "focus",
+	                                   "light_size", "gloss",    "motion"};
+	enum { NK = sizeof keys / sizeof *keys };
+	yaml_node_t *vn[NK];
+	if (dn->type != YAML_MAPPING_NODE)
+		return node_err(y, dn, "drt of view '%s' must be a mapping", vname);
+	char where[VIEW_NAME_MAX + 32];
+	snprintf(where, sizeof where, "drt of view '%s'", vname);
+	if (map_fields(y, dn, keys, NK, vn, where))
+		return -1;
+	float spp = 1, *f[] = {&spp, &p->aperture, &p->focus, &p->light_size, &p->gloss};
+	for (int i = 0; i < 5; i++)
+		if (vn[i] && get_num(y, vn[i], keys[i], f[i]))
+			return -1;
+	if (vn[5] && get_vec3(y, vn[5], "motion", &p->motion))
+		return -1;
+	p->spp = spp == (float)(int)spp && spp >= 1 && spp <= 64 ? (int)spp : -1;
+	const char *key, *prob = drt_problem(p, &key);
+	if (!prob)
+		return 0;
+	for (int i = 0; i < NK; i++)
+		if (!strcmp(keys[i], key))
+			return node_err(y, vn[i] ? vn[i] : dn, "%s", prob);
+	return node_err(y, dn, "%s", prob);
+}
+
 static int parse_view(yfile *y, yaml_node_t *vn, const char *name, view *v)
 {
 	if (vn->type != YAML_MAPPING_NODE)
 		return node_err(y, vn, "view '%s' must be a mapping", name);
-	static const char *const keys[] = {"scene", "camera", "lights", "note"};
-	yaml_node_t *val[4];
+	static const char *const keys[] = {"scene", "camera", "lights", "note", "drt"};
+	yaml_node_t *val[5];
 	char where[VIEW_NAME_MAX + 16];
 	snprintf(where, sizeof where, "view '%s'", name);
-	if (map_fields(y, vn, keys, 4, val, where))
+	if (map_fields(y, vn, keys, 5, val, where))
+		return -1;
+	if (val[4] && parse_drt(y, val[4], name, &v->drt))
 		return -1;
 	if (val[0] && resolve_scene(y, val[0], v))
 		return -1;
@@ -484,6 +518,18 @@ void view_json(struct jsonw *j, const view *v)
 	for (int i = 0; i < v->nlights; i++)
 		json_vec(j, NULL, v->lights[i].pos);
 	jsonw_arr_end(j);
+	if (drt_is_off(&v->drt)) /* the pinhole frame's reports stay as they were */
+		return;
+	const drt_params *p = &v->drt;
+	jsonw_key(j, "drt");
+	jsonw_obj_begin(j);
+	jsonw_kint(j, "spp", drt_spp(p));
+	jsonw_knum(j, "aperture", p->aperture);
+	jsonw_knum(j, "focus", p->focus);
+	jsonw_knum(j, "light_size", p->light_size);
+	jsonw_knum(j, "gloss", p->gloss);
+	json_vec(j, "motion", p->motion);
+	jsonw_obj_end(j);
 }
 
 void view_describe(const view *v, char *buf, size_t n)
@@ -499,4 +545,11 @@ void view_describe(const view *v, char *buf, size_t n)
 	for (int i = 0; i < v->nlights && k < n; i++)
 		k += (size_t)snprintf(buf + k, n - k, " (%g,%g,%g)", v->lights[i].pos.x,
 		                      v->lights[i].pos.y, v->lights[i].pos.z);
+	const drt_params *p = &v->drt;
+	if (k < n && !drt_is_off(p))
+		snprintf(
+		    buf + k, n - k,
+		    "; drt spp %d aperture %g focus %g light_size %g gloss %g motion (%g,%g,%g)",
+		    drt_spp(p), p->aperture, p->focus, p->light_size, p->gloss, p->motion.x,
+		    p->motion.y, p->motion.z);
 }

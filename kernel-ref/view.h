@@ -9,6 +9,7 @@
  *       scene: relative/path.obj.gz      # relative to the views file
  *       camera: {eye: [x,y,z], lookat: [x,y,z], up: [x,y,z], fov: degrees}
  *       lights: [[x,y,z], ...]           # optional; white, intensity 1
+ *       drt: {spp: 16, aperture: 0.5, ...} # optional; distribution effects (drt.h)
  *       note: "free text"                # optional, ignored
  *
  * A view without `lights` gets one light at lookat + (0, 2R, R), R = half
@@ -20,6 +21,7 @@
 #define SAAR_KREF_VIEW_H
 
 #include "kernel-ref/diag.h"
+#include "kernel-ref/drt.h"
 #include "kernel-ref/scene.h"
 #include "kernel-ref/vecmath.h"
 
@@ -47,6 +49,7 @@ typedef struct view {
 	int lights_given; /* 0: place the default light once the scene is known */
 	int nlights;
 	light lights[VIEW_MAX_LIGHTS];
+	drt_params drt; /* distribution effects; all zero: the pinhole frame */
 } view;
 
 /* Reads view `name` from `file`. Unknown name: the diag lists the names

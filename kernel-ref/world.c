@@ -17,12 +17,15 @@
 const char world_usage[] =
     "  --scene PATH          scene file (.obj .ply .stl .3ds .gltf .glb .dae, .gz ok; limits:\n"
     "                        SAARSIM_IMPORT_CPU_S, SAARSIM_IMPORT_MEM_MB) or a procedural scene\n"
-    "                        spd:balls|tetra|mount|rings|cornell[:SIZE[:TESS]] (docs/spd.md);\n"
-    "                        default: the view's scene, else the embedded Cornell-like room\n"
+    "                        spd:balls|tetra|mount|rings|cornell|billiard[:SIZE[:TESS]]\n"
+    "                        (docs/spd.md); default: the view's scene, else the embedded\n"
+    "                        Cornell-like room\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
     "  --no-lights           no lights: no shadow rays\n"
+    "  --spp N (1|4|16|64) --aperture F --focus F --light-size F --gloss F --motion X,Y,Z\n"
+    "                        distribution ray tracing (override the view's drt; docs/views.md)\n"
     "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n"
     "  --world-cache DIR     keep built worlds (scene, kd-tree, memory image) in DIR and\n"
     "                        reuse them while the program and scene files are unchanged\n";
@@ -77,6 +80,38 @@ static int parse_num(const char *flag, const char *s, double lo, double hi, doub
 	return 0;
 }
 
+/* The distribution ray tracing flags, in the order of world_opts.have_drt's
+ * bits; their ranges are checked with the view (drt_problem). */
+static const char *const drt_flags[] = {"--spp",        "--aperture", "--focus",
+                                        "--light-size", "--gloss",    "--motion"};
+
+/* Flag a with value v if it is a DRT flag: 1 (taken), -1 (bad), 0 (not one). */
+static int drt_flag(world_opts *o, const char *a, const char *v, diag *d)
+{
+	int k = 0;
+	while (k < 6 && strcmp(a, drt_flags[k]))
+		k++;
+	if (k == 6)
+		return 0;
+	o->have_drt |= 1u << k;
+	double x;
+	long n;
+	float *f[] = {NULL, &o->drt.aperture, &o->drt.focus, &o->drt.light_size, &o->drt.gloss};
+	if (k == 0) {
+		if (cli_parse_int(a, v, 1, 64, &n, d))
+			return -1;
+		o->drt.spp = (int)n;
+	} else if (k == 5) {
+		if (parse_vec(a, v, &o->drt.motion, d))
+			return -1;
+	} else {
+		if (parse_num(a, v, 0, DRT_SIZE_MAX, &x, d))
+			return -1;
+		*f[k] = (float)x;
+	}
+	return 1;
+}
+
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 {
 	const char *a = argv[*i];
@@ -93,7 +128,13 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	                                         "--kd-max-depth",
 	                                         "--kd-leaf-size",
 	                                         "--kd-empty-bonus",
-	                                         "--world-cache"};
+	                                         "--world-cache",
+	                                         "--spp",
+	                                         "--aperture",
+	                                         "--focus",
+	                                         "--light-size",
+	                                         "--gloss",
+	                                         "--motion"};
 	int takes = 0;
 	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
 		takes |= strcmp(a, with_value[k]) == 0;
@@ -111,6 +152,9 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	*i += 2;
 	double x;
 	long n;
+	int dk = drt_flag(o, a, v, d);
+	if (dk)
+		return dk;
 	if (!strcmp(a, "--scene"))
 		o->scene = v;
 	else if (!strcmp(a, "--views"))
@@ -274,6 +318,27 @@ static int apply_view_flags(world *w, const world_opts *o, diag *d)
 		w->v.nlights = o->nlights;
 		memcpy(w->v.lights, o->lights, sizeof o->lights);
 		w->v.lights_given = 1;
+		w->view_changed = 1;
+	}
+	if (o->have_drt) {
+		drt_params *p = &w->v.drt;
+		const drt_params *q = &o->drt;
+		unsigned h = o->have_drt;
+		p->spp = h & 1 ? q->spp : p->spp;
+		p->aperture = h & 2 ? q->aperture : p->aperture;
+		p->focus = h & 4 ? q->focus : p->focus;
+		p->light_size = h & 8 ? q->light_size : p->light_size;
+		p->gloss = h & 16 ? q->gloss : p->gloss;
+		p->motion = h & 32 ? q->motion : p->motion;
+		const char *key, *prob = drt_problem(p, &key);
+		if (prob) { /* the flag of the key (the views file's name for it) */
+			static const char *const keys[] = {"spp",        "aperture", "focus",
+			                                   "light_size", "gloss",    "motion"};
+			int k = 0;
+			while (k < 5 && strcmp(keys[k], key))
+				k++;
+			return diag_set(d, drt_flags[k], 0, 0, "%s", prob);
+		}
 		w->view_changed = 1;
 	}
 	view_place_default_light(&w->v, &w->s);

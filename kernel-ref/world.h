@@ -24,7 +24,9 @@ typedef struct world_opts {
 	camera cam;  /* flags override the view's camera */
 	int nlights; /* --light flags (replace the view's lights) */
 	light lights[VIEW_MAX_LIGHTS];
-	int no_lights; /* --no-lights */
+	int no_lights;     /* --no-lights */
+	drt_params drt;    /* --spp --aperture --focus --light-size --gloss --motion */
+	unsigned have_drt; /* which of them were given (bit i: the i-th flag) */
 	kd_params kd;
 	const char *cache_dir; /* --world-cache DIR, or NULL (worldcache.h) */
 } world_opts;
@@ -57,7 +59,8 @@ void world_opts_default(world_opts *o);
  * advances *i and returns 1; returns 0 if it is not one of ours; -1 with
  * diag on a bad value. Flags: --scene P, --views F, --view N, --eye x,y,z,
  * --lookat x,y,z, --up x,y,z, --fov deg, --light x,y,z (repeatable),
- * --no-lights, --kd-cost-trav f, --kd-cost-isect f, --kd-max-depth n,
+ * --no-lights, --spp n, --aperture f, --focus f, --light-size f, --gloss f,
+ * --motion x,y,z (override the view's drt), --kd-cost-trav f, --kd-cost-isect f, --kd-max-depth n,
  * --kd-leaf-size n, --kd-empty-bonus f, --world-cache DIR. */
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
 

@@ -217,6 +217,18 @@ char *wc_frame_key(const char *prog, uint32_t image_crc, uint64_t image_size, co
 	             o->shadows, o->single_ray, (double)o->background.x, (double)o->background.y,
 	             (double)o->background.z, sizeof(render_stats));
 	free(lights);
+	/* distribution effects name the frame too (a pinhole frame's key is
+	 * as it was) */
+	const drt_params *p = &v->drt;
+	if (n >= 0 && !drt_is_off(p)) {
+		char *k2;
+		n = asprintf(&k2, "%sdrt %d %a %a %a %a %a %a %a\n", key, drt_spp(p),
+		             (double)p->aperture, (double)p->focus, (double)p->light_size,
+		             (double)p->gloss, (double)p->motion.x, (double)p->motion.y,
+		             (double)p->motion.z);
+		free(key);
+		key = n < 0 ? NULL : k2;
+	}
 	return n < 0 ? NULL : key;
 }
 

@@ -1025,7 +1025,19 @@ void cfg_write_markdown(FILE *f)
 			snprintf(sec, sizeof sec, "%.*s", tl, k->path);
 			if (tl)
 				fprintf(f, "\n## `%s`\n\n", sec);
-			else
+			if (!strcmp(sec, "shading"))
+				fputs(
+				    "Distribution ray tracing (samples per pixel, thin lens, area "
+				    "lights,\nglossy reflection, camera motion) is a property of "
+				    "the "
+				    "view, not of\nthe chip: the views file's `drt` key or the "
+				    "flags "
+				    "`--spp`, `--aperture`,\n`--focus`, `--light-size`, `--gloss` "
+				    "and "
+				    "`--motion`, which saarsim and\nrtref share, set it "
+				    "([views.md](views.md#distribution-ray-tracing-drt)).\n\n",
+				    f);
+			if (!tl)
 				fputs("\n## Top level\n\n", f);
 			fputs("| key | type | default | range | unit | provenance | description |\n"
 			      "|---|---|---|---|---|---|---|\n",

@@ -103,7 +103,7 @@ static void walk_frame(walk *k, const world *w, const saar_config *c)
 	render_opts ro;
 	render_opts_default(&ro);
 	shade_ctx sc = {&w->m,         w->v.lights, w->v.nlights, c->shading.max_depth,
-	                ro.background, &fb,         NULL};
+	                ro.background, &fb,         NULL,         NULL};
 	int nk = w->v.nlights + 2, cap = (c->shading.max_depth + 2) * nk + 1;
 	packet *work = hm_alloc((size_t)cap * sizeof *work), *kids = hm_alloc(nk * sizeof *kids);
 	trav_entry *stack = hm_alloc(PKT_STACK_MAX * sizeof *stack);

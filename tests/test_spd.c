@@ -66,10 +66,21 @@ Test(spd, documented_counts)
 	cr_assert_eq(spd_triangles("spd:mount:6"), 4096 + 4 * 224);
 	cr_assert_eq(spd_triangles("spd:rings:2:8"), 5 * 4 * 2 * 16 * 4 + 2);
 	cr_assert_eq(spd_triangles("spd:cornell"), 32);
+	/* billiard: 112 (floor, felt, bed, rails, legs) + SIZE balls */
+	cr_assert_eq(spd_triangles("spd:billiard"), 112 + 16 * 528);
+	cr_assert_eq(spd_triangles("spd:billiard:0"), 112);
+	cr_assert_eq(spd_triangles("spd:billiard:5:8"), 112 + 5 * 48);
 	/* a user can dial from about 1k to 5M triangles */
 	cr_assert_lt(spd_triangles("spd:balls:1"), 2000);
 	cr_assert_gt(spd_triangles("spd:balls:5:16"), 5000000);
 }
+
+/* Edges of the billiard table not used by exactly two triangles, none of
+ * them a hole in a closed object: the floor's border (4), the felt's long
+ * edges (2, open) and short edges (2, also edges of the short rails'
+ * boxes: 3 triangles), and the 4 vertical edges where a long and a short
+ * rail's boxes meet (4 triangles). Every box and ball is closed. */
+#define BILLIARD_OPEN 12
 
 Test(spd, closed_meshes_and_counts)
 {
@@ -90,6 +101,15 @@ Test(spd, closed_meshes_and_counts)
 	scene_free(&s);
 	gen(&s, &v, "spd:cornell");
 	scene_free(&s);
+	/* Mistake caught: a ball or box left open, a ball count off the
+	 * formula, the view's two lamps missing */
+	gen(&s, &v, "spd:billiard:16:12");
+	int oe = open_edges(&s);
+	cr_assert_eq(oe, BILLIARD_OPEN,
+	             "only the floor, the felt and touching boxes' edges, not %d", oe);
+	cr_assert_eq(v.nlights, 2);
+	cr_assert_eq(s.nmats, 12);
+	scene_free(&s);
 }
 
 Test(spd, deterministic)
@@ -104,8 +124,8 @@ Test(spd, deterministic)
 
 Test(spd, bad_specs)
 {
-	const char *bad[] = {"spd:",         "spd:nope",      "spd:balls:x",
-	                     "spd:balls:99", "spd:balls:2:2", "spd:tetra:3:"};
+	const char *bad[] = {"spd:",          "spd:nope",     "spd:balls:x",    "spd:balls:99",
+	                     "spd:balls:2:2", "spd:tetra:3:", "spd:billiard:17"};
 	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
 		scene s;
 		diag d;

@@ -25,8 +25,16 @@ int rgs_primary(thr_ctx *t, int tx, int ty)
 	packet *p = thr_pkt_alloc(t->env);
 	if (!p)
 		return -1;
-	cam_primary_packet(&t->env->cam, tx, ty, p);
+	const cam_frame *cam = &t->env->cam;
+	cam_sample_packet(cam, tx, ty, 0, p);
 	enter(t, p);
+	/* the tile's further samples (kernel-ref/drt.h) queue like children:
+	 * a free thread takes each, and generates it with its own RGS op
+	 * (rgs_secondary); a lost one the image check reports */
+	for (int s = 1; s < cam->spp; s++) {
+		cam_sample_packet(cam, tx, ty, s, &t->kids[0]);
+		thr_spawn(t, 1, &t->kids[0], NULL);
+	}
 	thr_use(t, UNIT_RGS, (int)thr_rays(p), gen_done);
 	return 0;
 }
@@ -34,7 +42,10 @@ int rgs_primary(thr_ctx *t, int tx, int ty)
 void rgs_secondary(thr_ctx *t, packet *p)
 {
 	enter(t, p);
-	t->env->route.enter(t);
+	if (p->type == PKT_PRIMARY) /* a tile's further sample: generated now */
+		thr_use(t, UNIT_RGS, (int)thr_rays(p), gen_done);
+	else
+		t->env->route.enter(t);
 }
 
 static void shadow_done(eng *e, void *ctx, uint64_t arg)

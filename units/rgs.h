@@ -4,8 +4,11 @@
  *
  * Three jobs, each one RGS operation (ceil(rays/width) issue cycles +
  * latency):
- *  - primary rays: cam_primary_packet for a tile the RGC handed out, then
- *    the packet enters the ray-tracing core;
+ *  - primary rays: cam_sample_packet for a tile the RGC handed out, then
+ *    the packet enters the ray-tracing core; with spp samples per pixel
+ *    (kernel-ref/drt.h) the tile's other spp - 1 primary packets are
+ *    made at once and queued like children, and the thread that takes
+ *    one generates it with its own RGS op (rgs_secondary);
  *  - shading a traced primary/reflection/refraction packet:
  *    shade_packet_rd() (kernel-ref) adds each ray's direct terms into the
  *    frame buffer and makes the child packets (one shadow packet per light,

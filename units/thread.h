@@ -180,6 +180,7 @@ typedef struct thr_env {
 	const mimg *m; /* region bases and scene box; bytes NULL (the chip's) */
 	shade_ctx sc;
 	cam_frame cam;
+	drt_shade drt; /* distribution effects (sc.drt points here when on) */
 	int stack_depth, masked, nlights;
 	/* a packet that takes more traversal steps than this has looped on
 	 * damaged node data (a correct walk visits each node at most once):
