@@ -26,6 +26,13 @@
 	{                                                                                          \
 		l, 1, 10000, 0, 1, "pipeline depth not published; a few cycles per stage group"    \
 	}
+/* A width fitted by scripts/calibrate.sh; was: the assumed value before. */
+#define WIDTH_CAL(w, was, why)                                                                     \
+	{                                                                                          \
+		w, 1, 64, 0, 0,                                                                    \
+		    "fitted to F1-F3 (docs/CALIBRATION.md); " why "; assumed before: " #was,       \
+		    1                                                                              \
+	}
 /* A latency fitted by scripts/calibrate.sh; was: the assumed value before. */
 #define LATENCY_CAL(l, was)                                                                        \
 	{                                                                                          \
@@ -41,14 +48,14 @@ const unit_desc unit_table[UNIT_NKINDS] = {
                   WIDTH(4, "not published; shading is the costliest op"), LATENCY_CAL(48, 24),
                   MEM_SHADE},
     [UNIT_TRAV] = {"trav", "traversal", COUNT,
-                   WIDTH(16, "not published; 4x isect width (§4.7: designed for 4:1)"),
+                   WIDTH_CAL(24, 16, "not published; 4x isect width (§4.7: designed for 4:1)"),
                    LATENCY_CAL(32, 8),
                    MEM_KD},
     [UNIT_LIST] = {"list", "list", COUNT,
                    WIDTH(64, "not published; one list entry serves the whole packet"), LATENCY(2),
                    MEM_LIST},
     [UNIT_ISECT] = {"isect", "intersection", COUNT,
-                    WIDTH(4, "not published; 1/4 of trav width (§4.7: 4:1)"), LATENCY_CAL(80, 20),
+                    WIDTH_CAL(6, 4, "not published; 1/4 of trav width (§4.7: 4:1)"), LATENCY_CAL(80, 20),
                     MEM_TRI},
 };
 /* clang-format on */
