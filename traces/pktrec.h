@@ -13,7 +13,10 @@
  * docs/fidelity.md, "The packet record".
  *
  * A stream is a sequence of ops: one op byte, then its arguments as
- * LEB128 varints (7 bits per byte, low group first).
+ * LEB128 varints (7 bits per byte, low group first). A read (PR_READ,
+ * PR_READ_SAME) ends with PR_SUM_BYTES bytes more, the checksum of the
+ * bytes the read returned (pr_sum), which a replay compares with what its
+ * own read returns (docs/fidelity.md, "What replay checks").
  */
 #ifndef SAAR_TRACES_PKTREC_H
 #define SAAR_TRACES_PKTREC_H
@@ -29,10 +32,11 @@
  * op (the format changes with the table; records are keyed by the program
  * that wrote them, kernel-ref/worldcache.h). */
 enum pr_op {
-	PR_READ = 0,      /* + memory type (0-3): address delta, bytes */
-	PR_READ_SAME = 4, /* + memory type: address delta; bytes as the type's last read */
-	PR_WRITE = 8,     /* + memory type: address, bytes */
-	PR_USE = 12,      /* + unit kind (< UNIT_NKINDS): rays; ends a functional step */
+	PR_READ = 0, /* + memory type (0-3): address delta, bytes; checksum */
+	PR_READ_SAME =
+	    4,        /* + memory type: address delta; checksum; bytes as the type's last read */
+	PR_WRITE = 8, /* + memory type: address, bytes */
+	PR_USE = 12,  /* + unit kind (< UNIT_NKINDS): rays; ends a functional step */
 	PR_SPILL_R = PR_USE + UNIT_NKINDS, /* stack entry index: the read of a spilled entry */
 	PR_SPILL_W,                        /* stack entry index: a spill */
 	PR_MAXSP,                          /* stack depth reached (trav.max_stack_depth) */
@@ -106,6 +110,34 @@ static inline const uint8_t *pr_stream(const pktrec *r, uint32_t id, const uint8
 /* Sets fb's pixels of tile (tx, ty) (tiles of tw x th pixels) to the
  * recorded frame's. */
 void pr_put_tile(const pktrec *r, framebuf *fb, int tx, int ty, int tw, int th);
+
+/* A read's checksum: 32-bit FNV-1a over its bytes, folded to the
+ * PR_SUM_BYTES bytes a stream keeps (a damaged or wrong read passes
+ * unseen with odds 2^-16 per read; a damaged triangle or node is read by
+ * many packets). Stored little-endian, after the read's arguments. */
+enum { PR_SUM_BYTES = 2 };
+
+static inline uint32_t pr_sum(const void *b, size_t n)
+{
+	const uint8_t *p = b;
+	uint32_t h = 2166136261u;
+	for (size_t i = 0; i < n; i++)
+		h = (h ^ p[i]) * 16777619u;
+	return PR_SUM_BYTES >= 4 ? h : (h >> 16 ^ h) & ((1u << 8 * PR_SUM_BYTES) - 1);
+}
+
+/* Appends sum (pr_sum) to packet id's stream. */
+void pr_put_sum(pktrec *r, int32_t id, uint32_t sum);
+
+/* Reads a checksum; a damaged stream's end reads zeros. */
+static inline uint32_t pr_get_sum(const uint8_t **p, const uint8_t *end)
+{
+	uint32_t v = 0;
+	for (int k = 0; k < PR_SUM_BYTES; k++)
+		if (*p < end)
+			v |= (uint32_t) * (*p)++ << 8 * k;
+	return v;
+}
 
 /* LEB128 encoding of v into b (10 bytes at most); returns the bytes
  * written. Packet records and memory traces (memtrace.c) share it. */
