@@ -544,7 +544,7 @@ static int chip_env(chip *c, diag *d)
 	v->route = pipeline;
 	v->on_free = on_free;
 	v->owner = c;
-	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr))
+	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr, c->replayed))
 		return diag_set(d, "chip", 0, 0, "out of memory for %d RTPs x %d threads",
 		                cfg->chip.rtps, cfg->chip.threads_per_rtp);
 	render_opts ro;
@@ -933,6 +933,23 @@ uint64_t chip_rtp_sum(const chip *c, const char *suffix)
 	return s;
 }
 
+uint64_t chip_replay_bad(const chip *c, char *msg, size_t n)
+{
+	const mode_rbad *b = &c->md.bad;
+	if (!b->n)
+		return 0;
+	int tx = b->tile >= 0 ? b->tile % c->g.tiles_x : -1,
+	    ty = b->tile >= 0 ? b->tile / c->g.tiles_x : -1;
+	snprintf(msg, n,
+	         "packet-record replay: %llu read%s returned other bytes than recorded; the "
+	         "first: packet %d of tile %d (%d,%d) read %u bytes at 0x%llx (%s): checksum "
+	         "%04x, recorded %04x",
+	         (unsigned long long)b->n, b->n == 1 ? "" : "s", (int)b->pk, (int)b->tile, tx, ty,
+	         (unsigned)b->bytes, (unsigned long long)b->addr, mem_type_name(b->type),
+	         (unsigned)b->got, (unsigned)b->want);
+	return b->n;
+}
+
 int chip_check_frame(chip *c, chip_check *out, diag *d)
 {
 	memset(out, 0, sizeof *out);
@@ -965,6 +982,11 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	}
 	if (!rc) {
 		out->single = img_compare(a, b, ro.width, ro.height);
+		/* a replayed read that returned other bytes than recorded: the
+		 * frame is not the one memory holds, whatever its pixels */
+		out->replay_bad = chip_replay_bad(c, out->replay_msg, sizeof out->replay_msg);
+		if (out->replay_bad)
+			out->cmp.identical = out->single.identical = 0;
 		out->check_ms = chip_now_ms() - t0;
 		out->done = 1;
 	}

@@ -52,6 +52,10 @@ typedef struct chip_check {
 	int cached;       /* the reference frame came from the world cache */
 	img_cmp single;   /* vs the single-ray render */
 	int single_cached;
+	/* packet-record replay: reads whose bytes were not the recorded ones
+	 * (chip_replay_bad); the frame then counts as DIFFERENT */
+	uint64_t replay_bad;
+	char replay_msg[320];
 } chip_check;
 
 /* Resources the busiest-resource bound looks at (chip_fidelity): every
@@ -233,6 +237,11 @@ int chip_run(chip *c, diag *d);
  * with packets and with single rays (each from the world cache when it
  * has it), and compares the 8-bit images into c's check. */
 int chip_check_frame(chip *c, chip_check *out, diag *d);
+
+/* The reads a packet-record replay made that returned other bytes than
+ * the recorded ones (sim/modes/replay.h), all frames, and the first one
+ * described in msg (one line, no newline). 0: none. */
+uint64_t chip_replay_bad(const chip *c, char *msg, size_t n);
 
 /* ---- for the mode drivers (sim/modes/) ---- */
 

@@ -567,6 +567,9 @@ int main(int argc, char **argv)
 	obs *ob = NULL;
 	int bad = simulate(c, &a, &trace_tmp, &tl_tmp, &ob, &chk, &d);
 	progress_clear(&pr);
+	char rbad[320];
+	if (!bad && !a.check && chip_replay_bad(c, rbad, sizeof rbad))
+		fprintf(stderr, "warning: %s\n", rbad); /* with the check, its line says it */
 	if (bad) {
 		rc = cli_bad("saarsim", d.msg);
 	} else {

@@ -378,6 +378,8 @@ void report_text(FILE *f, const report_info *ri)
 		fputc(',', f);
 		check_text(f, "single rays", &ri->check->single, ri->check->single_cached);
 		fputc('\n', f);
+		if (ri->check->replay_bad)
+			fprintf(f, "  check: %s\n", ri->check->replay_msg);
 	}
 	fprintf(f, "  host: %.3f s simulating (%.3g cycles/s), %.3f s loading", c->sim_ms / 1e3,
 	        ratio((double)cyc, c->sim_ms / 1e3), ri->load_ms / 1e3);
@@ -667,6 +669,10 @@ static void json_check(jsonw *j, const report_info *ri)
 	kv(j, "differing_pixels", ri->check->single.differing_pixels);
 	jsonw_kstr(j, "reference", ri->check->single_cached ? "cached" : "rendered");
 	jsonw_obj_end(j);
+	if (ri->check->replay_bad) { /* only then: other reports stay as they were */
+		kv(j, "replay_bad_reads", ri->check->replay_bad);
+		jsonw_kstr(j, "replay_bad_first", ri->check->replay_msg);
+	}
 	jsonw_obj_end(j);
 }
 

@@ -138,12 +138,11 @@ Test(datapath, damaged_triangle_in_host_memory_changes_the_frame_through_the_vma
  * math, through the recording sink around the functional one, so its
  * units decode what their reads return as without a record: one visible
  * triangle damaged in board memory changes the recording run's frame, and
- * the record keeps that frame, so a run replaying it (which runs no math
- * and decodes nothing, with an undamaged board here) shows it too. What a
- * replaying run cannot show is damage made to its own board: its pixels
- * are the recording run's (docs/fidelity.md says so). Catches: a
- * recording run whose units see the host's image instead of the board's
- * bytes (both frames would be kernel-ref's). */
+ * the record keeps that frame and the checksums of the damaged bytes, so
+ * a run replaying it on an undamaged board shows a frame other than
+ * kernel-ref's too, and says its reads returned other bytes than the
+ * recording's. Catches: a recording run whose units see the host's image
+ * instead of the board's bytes (both frames would be kernel-ref's). */
 Test(datapath, damaged_triangle_changes_the_recording_run_and_its_record, .timeout = 300)
 {
 	static const char *const rec_modes[] = {"functional", "sampled"};
@@ -168,9 +167,98 @@ Test(datapath, damaged_triangle_changes_the_recording_run_and_its_record, .timeo
 		cr_assert_eq(ch->rec_state, REC_REPLAYED, "%s: %s", rec_modes[m],
 		             chip_rec_name(ch->rec_state));
 		cr_assert_gt(ch->fid.replayed_tiles, 0, "%s", rec_modes[m]);
+		char msg[320];
+		cr_assert_gt(chip_replay_bad(ch, msg, sizeof msg), 0, "%s", rec_modes[m]);
 		chip_destroy(ch);
 		world_free(&w);
 	}
+}
+
+/* A run replaying a packet record runs no math, but its reads carry
+ * their bytes and the record holds each recorded read's checksum
+ * (traces/pktrec.h pr_sum): a replayed read that returns other bytes is
+ * reported by the frame's check. Records an undamaged frame, then replays
+ * it in functional and sampled mode (functional stretches and timed
+ * regions) with `spoil` applied to the replaying chip only; the check must
+ * say DIFFERENT and name a read of the given type (and address, unless
+ * 0). Undamaged, the replay is kernel-ref's frame with no bad read. */
+static void replay_sees(void (*spoil_fn)(chip *ch, uint64_t arg), uint64_t arg, const char *type,
+                        uint64_t addr)
+{
+	static const char *const rec_modes[] = {"functional", "sampled"};
+	char blind[64] = "";
+	for (int m = 0; m < 2; m++) {
+		char dir[64];
+		tu_tmpdir(dir, sizeof dir);
+		world w;
+		tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+		saar_config c;
+		cfg_for(&c, 128, rec_modes[m], NULL, 0);
+		chip *ch = make_chip(&w, &c);
+		cr_assert(frame_identical(ch, &w), "%s: the recording run", rec_modes[m]);
+		cr_assert_eq(ch->rec_state, REC_STORED);
+		chip_destroy(ch);
+		char msg[320];
+		ch = make_chip(&w, &c);
+		cr_assert(frame_identical(ch, &w), "%s: an undamaged replay", rec_modes[m]);
+		cr_assert_eq(ch->rec_state, REC_REPLAYED);
+		cr_assert_eq(chip_replay_bad(ch, msg, sizeof msg), 0, "%s: %s", rec_modes[m], msg);
+		chip_destroy(ch);
+		ch = make_chip(&w, &c);
+		spoil_fn(ch, arg);
+		int same = frame_identical(ch, &w);
+		cr_assert_eq(ch->rec_state, REC_REPLAYED);
+		cr_assert_eq(ch->fid.replayed_tiles, (uint64_t)ch->g.ntiles, "%s", rec_modes[m]);
+		if (same || !chip_replay_bad(ch, msg, sizeof msg)) {
+			strcat(strcat(blind, " "), rec_modes[m]);
+		} else {
+			/* one line naming the packet, its tile and the read */
+			char want[64];
+			snprintf(want, sizeof want, "(%s)", type);
+			cr_assert(strstr(msg, "packet-record replay") && strstr(msg, " of tile ") &&
+			              strstr(msg, want) && !strchr(msg, '\n'),
+			          "%s: %s", rec_modes[m], msg);
+			snprintf(want, sizeof want, "at 0x%llx (", (unsigned long long)addr);
+			cr_assert(!addr || strstr(msg, want), "%s: %s", rec_modes[m], msg);
+		}
+		chip_destroy(ch);
+		world_free(&w);
+	}
+	cr_assert_str_empty(blind, "the replaying run did not see it in:%s", blind);
+}
+
+static void flatten(chip *ch, uint64_t ta)
+{
+	flatten_tri(ch, (uint32_t)ta);
+}
+
+/* Issue 29: a visible triangle damaged in the board memory of a run that
+ * replays a packet record (the record made from an undamaged board). The
+ * replayed tile used to take the recorded frame's pixels and the check
+ * said identical. Catches: replay comparing no checksums (tests/mutants
+ * 28), replayed reads carrying no bytes, a record without checksums. */
+Test(datapath, damaged_triangle_in_a_replaying_runs_board_memory_is_caught, .timeout = 300)
+{
+	world w;
+	tu_load_world(&w, NULL, NULL, NULL);
+	uint32_t ta = visible_tri(&w, 128);
+	world_free(&w);
+	replay_sees(flatten, ta, "tri", ta);
+}
+
+static void next_tri(chip *ch, uint64_t arg)
+{
+	(void)arg;
+	ch->env.mutant = THR_MUT_REPLAY_NEXT_TRI;
+}
+
+/* A replay that asks for the wrong address (a test hook: every triangle
+ * record read at the next one's) reads other bytes than were recorded,
+ * and the check says so. Catches: the same mistakes as above, for an
+ * address the replay decodes wrongly rather than damaged data. */
+Test(datapath, wrong_replayed_address_is_caught, .timeout = 300)
+{
+	replay_sees(next_tri, 0, "tri", 0);
 }
 
 /* The shader's records travel too: the material of the visible triangle

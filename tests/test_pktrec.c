@@ -5,15 +5,17 @@
  * record, figure for figure: every counter, the memory and cache counts,
  * the estimate and its interval, the frame. Replays into other thread
  * counts and memory systems than the recording's, through the VMA, and
- * over several frames; a damaged or foreign record is recorded again,
- * never replayed.
+ * over several frames; a damaged, foreign or old-format record is
+ * recorded again, never replayed. (What a replay checks of its reads'
+ * bytes is tested in test_datapath.c.)
  */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
-#include "tests/chiptest.h"
 #include "sim/modes/replay.h"
+#include "tests/chiptest.h"
 
 /* Loads the scene (NULL: the embedded room) with a world cache in dir
  * (NULL: none). */
@@ -83,6 +85,8 @@ static uint64_t record_then_replay(const world *plain, const world *cached, cons
 	same_run(ref, rep, what);
 	uint64_t n = rep->fid.replayed_tiles;
 	cr_assert_gt(n, 0, "%s: nothing replayed", what);
+	char msg[320];
+	cr_assert_eq(chip_replay_bad(rep, msg, sizeof msg), 0, "%s: %s", what, msg);
 	tu_assert_identical(rep, what);
 	chip_destroy(ref);
 	chip_destroy(rec);
@@ -241,6 +245,58 @@ Test(pktrec, damaged_or_foreign_records_are_not_replayed)
 	cr_assert_eq(cy->rec_state, REC_OFF);
 	chip_destroy(cy);
 	chip_destroy(ref);
+	world_free(&plain);
+	world_free(&cached);
+}
+
+/* A record of the previous format (version "PKR2": reads without their
+ * checksums) under the current key must not be replayed: its streams
+ * would decode wrongly. pr_load refuses it, and the run records its frame
+ * anew, figure for figure the run without a record. Catches: a format
+ * change without a new version (the old record replayed with its
+ * arguments read as checksums). */
+Test(pktrec, old_version_record_is_recorded_anew)
+{
+	char dir[64];
+	world plain, cached;
+	saar_config c;
+	embedded(&plain, &cached, dir, sizeof dir, &c, 64);
+	chip *ref = tu_run_chip(&plain, &c);
+	chip *rec = tu_run_chip(&cached, &c);
+	cr_assert_eq(rec->rec_state, REC_STORED);
+	void *tail = NULL;
+	size_t n = 0;
+	cr_assert_eq(wc_get(rec->rec_file, rec->rec_key, NULL, 0, &tail, &n), 1);
+	/* the stored form loads; with the old magic it does not */
+	pktrec r;
+	void *copy = malloc(n);
+	cr_assert(copy);
+	memcpy(copy, tail, n);
+	cr_assert_eq(pr_load(&r, copy, n, 1, 64, 64, rec->g.ntiles), 0);
+	pr_free(&r);
+	static const uint32_t pkr2 = 0x32524b50; /* "PKR2" */
+	memcpy(tail, &pkr2, 4);
+	copy = malloc(n);
+	cr_assert(copy);
+	memcpy(copy, tail, n);
+	cr_assert_eq(pr_load(&r, copy, n, 1, 64, 64, rec->g.ntiles), -1, "PKR2 loaded");
+	/* stored under the current key, CRC and all: recorded anew */
+	diag d;
+	cr_assert_eq(wc_put(rec->rec_file, rec->rec_key, NULL, NULL, 0, tail, n, &d), 0, "%s",
+	             d.msg);
+	free(tail);
+	chip *again = tu_run_chip(&cached, &c);
+	cr_assert_eq(again->rec_state, REC_STORED, "an old record: %s",
+	             chip_rec_name(again->rec_state));
+	same_run(ref, again, "after an old record");
+	chip *rep = tu_run_chip(&cached, &c);
+	cr_assert_eq(rep->rec_state, REC_REPLAYED, "the new record: %s",
+	             chip_rec_name(rep->rec_state));
+	same_run(ref, rep, "the new record");
+	chip_destroy(ref);
+	chip_destroy(rec);
+	chip_destroy(again);
+	chip_destroy(rep);
 	world_free(&plain);
 	world_free(&cached);
 }

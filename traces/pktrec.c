@@ -6,7 +6,7 @@
  *
  * Stored form (little-endian host order; the world cache's CRC and key
  * guard it, pr_load checks its shape):
- *   u32 magic "PKR2", w, h, ntiles, npk, acc bits (32/64), u64 blob bytes
+ *   u32 magic "PKR3", w, h, ntiles, npk, acc bits (32/64), u64 blob bytes
  *   i32 tile_pk[ntiles], padded to 8 bytes
  *   i32 from[npk], padded to 8 bytes; u8 kid[npk], padded to 8 bytes
  *   u64 off[npk + 1]
@@ -25,7 +25,9 @@ struct pr_chunk {
 	uint8_t b[PR_CHUNK];
 };
 
-enum { PR_MAGIC = 0x32524b50 }; /* "PKR2": PKR1 had no PR_WAIT */
+/* "PKR3": PKR1 had no PR_WAIT, PKR2 no reads' checksums (its reads would
+ * decode wrongly: it is refused, and recorded anew) */
+enum { PR_MAGIC = 0x33524b50 };
 
 typedef struct pr_head {
 	uint32_t magic, w, h, ntiles, npk, accbits;
@@ -167,6 +169,14 @@ void pr_put_u(pktrec *r, int32_t id, uint64_t v)
 {
 	uint8_t buf[10];
 	append(r, id, buf, pr_put_var(buf, v));
+}
+
+void pr_put_sum(pktrec *r, int32_t id, uint32_t sum)
+{
+	uint8_t buf[PR_SUM_BYTES];
+	for (int k = 0; k < PR_SUM_BYTES; k++)
+		buf[k] = (uint8_t)(sum >> 8 * k);
+	append(r, id, buf, PR_SUM_BYTES);
 }
 
 static size_t pad8(size_t n)

@@ -13,13 +13,17 @@
  * docs/fidelity.md, "The packet record".
  *
  * A stream is a sequence of ops: one op byte, then its arguments as
- * LEB128 varints (7 bits per byte, low group first).
+ * LEB128 varints (7 bits per byte, low group first). A read (PR_READ,
+ * PR_READ_SAME) ends with PR_SUM_BYTES bytes more, the checksum of the
+ * bytes the read returned (pr_sum), which a replay compares with what its
+ * own read returns (docs/fidelity.md, "What replay checks").
  */
 #ifndef SAAR_TRACES_PKTREC_H
 #define SAAR_TRACES_PKTREC_H
 
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "kernel-ref/framebuf.h"
 #include "units/unit_table.h"
@@ -29,10 +33,11 @@
  * op (the format changes with the table; records are keyed by the program
  * that wrote them, kernel-ref/worldcache.h). */
 enum pr_op {
-	PR_READ = 0,      /* + memory type (0-3): address delta, bytes */
-	PR_READ_SAME = 4, /* + memory type: address delta; bytes as the type's last read */
-	PR_WRITE = 8,     /* + memory type: address, bytes */
-	PR_USE = 12,      /* + unit kind (< UNIT_NKINDS): rays; ends a functional step */
+	PR_READ = 0, /* + memory type (0-3): address delta, bytes; checksum */
+	PR_READ_SAME =
+	    4,        /* + memory type: address delta; checksum; bytes as the type's last read */
+	PR_WRITE = 8, /* + memory type: address, bytes */
+	PR_USE = 12,  /* + unit kind (< UNIT_NKINDS): rays; ends a functional step */
 	PR_SPILL_R = PR_USE + UNIT_NKINDS, /* stack entry index: the read of a spilled entry */
 	PR_SPILL_W,                        /* stack entry index: a spill */
 	PR_MAXSP,                          /* stack depth reached (trav.max_stack_depth) */
@@ -106,6 +111,49 @@ static inline const uint8_t *pr_stream(const pktrec *r, uint32_t id, const uint8
 /* Sets fb's pixels of tile (tx, ty) (tiles of tw x th pixels) to the
  * recorded frame's. */
 void pr_put_tile(const pktrec *r, framebuf *fb, int tx, int ty, int tw, int th);
+
+/* A read's checksum: its bytes taken 8 at a time (host order, as the
+ * whole record), each word mixed in by a multiply and shift (both
+ * bijections, so two reads differing in one word always differ in the
+ * 64-bit state), the top PR_SUM_BYTES bytes of the final mix kept. A
+ * damaged or wrong read passes unseen with odds 2^-16 per read; a damaged
+ * triangle or node is read by many packets. Word by word, not FNV-1a's
+ * byte by byte: byte-wise hashing took a quarter of a replay's host time.
+ * Stored little-endian, after the read's arguments. */
+enum { PR_SUM_BYTES = 2 };
+
+static inline uint32_t pr_sum(const void *b, size_t n)
+{
+	const uint64_t k = 0xff51afd7ed558ccdull;
+	const uint8_t *p = b;
+	uint64_t h = 0x9e3779b97f4a7c15ull ^ n, w;
+	for (; n >= 8; n -= 8, p += 8) {
+		memcpy(&w, p, 8);
+		h = (h ^ w) * k;
+		h ^= h >> 29;
+	}
+	if (n) {
+		w = 0;
+		memcpy(&w, p, n);
+		h = (h ^ w) * k;
+		h ^= h >> 29;
+	}
+	h = (h ^ h >> 32) * k;
+	return (uint32_t)(h >> (64 - 8 * PR_SUM_BYTES));
+}
+
+/* Appends sum (pr_sum) to packet id's stream. */
+void pr_put_sum(pktrec *r, int32_t id, uint32_t sum);
+
+/* Reads a checksum; a damaged stream's end reads zeros. */
+static inline uint32_t pr_get_sum(const uint8_t **p, const uint8_t *end)
+{
+	uint32_t v = 0;
+	for (int k = 0; k < PR_SUM_BYTES; k++)
+		if (*p < end)
+			v |= (uint32_t) * (*p)++ << 8 * k;
+	return v;
+}
 
 /* LEB128 encoding of v into b (10 bytes at most); returns the bytes
  * written. Packet records and memory traces (memtrace.c) share it. */

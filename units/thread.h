@@ -57,6 +57,9 @@ enum thr_state { THR_IDLE, THR_RUN, THR_WAIT_MEM, THR_WAIT_UNIT, THR_NSTATES };
 enum thr_mutant {
 	THR_MUT_NONE,
 	THR_MUT_KD_SIBLING, /* the traversal unit reads a node's sibling instead */
+	/* packet-record replay (sim/modes/replay.c) reads each triangle
+	 * record at the next one's address: the replay's checksums must see it */
+	THR_MUT_REPLAY_NEXT_TRI,
 };
 
 /* ---- pipelined units ---- */

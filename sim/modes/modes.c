@@ -6,6 +6,7 @@
 #include <stdlib.h>
 
 #include "sim/modes/functional.h"
+#include "sim/modes/replay.h"
 #include "sim/modes/timed.h"
 
 /* thr_env.sink: the observer around the recording sink around the base,
@@ -23,14 +24,17 @@ static void wire(mode_sinks *m)
 	m->env->sink = s;
 }
 
-int mode_sinks_init(mode_sinks *m, thr_env *v, int nslots)
+int mode_sinks_init(mode_sinks *m, thr_env *v, int nslots, uint8_t *tiles)
 {
-	*m = (mode_sinks){.env = v};
+	*m = (mode_sinks){.env = v, .nslots = nslots};
 	m->slot = calloc((size_t)(nslots > 0 ? nslots : 1), sizeof *m->slot);
 	if (!m->slot)
 		return -1;
-	for (int i = 0; i < nslots; i++)
+	m->bad.tiles = tiles;
+	for (int i = 0; i < nslots; i++) {
 		m->slot[i].rec = -1;
+		m->slot[i].bad = &m->bad;
+	}
 	v->modes = m->slot;
 	m->timed.op = &mode_timed_ops;
 	m->func.op = &mode_func_ops;
@@ -41,8 +45,12 @@ int mode_sinks_init(mode_sinks *m, thr_env *v, int nslots)
 
 void mode_sinks_free(mode_sinks *m)
 {
+	for (int i = 0; m->slot && i < m->nslots; i++)
+		mode_replay_free(&m->slot[i]);
 	free(m->slot);
 	m->slot = NULL;
+	free(m->rec.buf);
+	m->rec.buf = NULL;
 }
 
 void mode_set_func(mode_sinks *m, int on)

@@ -25,11 +25,14 @@ typedef struct mode_sinks {
 	thr_sink *obs;         /* an observer outside them all, NULL */
 	const pktrec *in;      /* the record whose streams replay, NULL */
 	int func_on;           /* the base sink is the functional one */
+	int nslots;
+	mode_rbad bad; /* what replay found (slot.h) */
 } mode_sinks;
 
 /* Sinks for env v and its nslots thread slots; the timed one runs,
- * nothing is recorded. -1 when out of memory. */
-int mode_sinks_init(mode_sinks *m, thr_env *v, int nslots);
+ * nothing is recorded; replay's findings mark tiles[] (ntiles, the
+ * chip's). -1 when out of memory. */
+int mode_sinks_init(mode_sinks *m, thr_env *v, int nslots, uint8_t *tiles);
 void mode_sinks_free(mode_sinks *m);
 /* The base sink becomes the functional (on) or the timed one; a record
  * being made goes on through the new base. */

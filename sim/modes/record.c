@@ -3,6 +3,7 @@
  */
 #include "sim/modes/record.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #include "sim/modes/slot.h"
@@ -12,9 +13,30 @@ static void put(thr_sink *s, thr_ctx *t, int op, int n, uint64_t a, uint64_t b)
 	pr_put(((mode_rec *)s)->out, mode_slot(t)->rec, op, n, a, b);
 }
 
+/* The checksum of the bytes a read of (type, addr, bytes) returns: those
+ * memory holds there as it is made (mem_peek). A read returns them: no
+ * write reaches the scene's data (spills, the only writes, are recorded
+ * without one), and the recording run's units decode these very bytes.
+ * Taken at the request because a timed read's bytes arrive later. */
+static int read_sum(mode_rec *r, thr_ctx *t, int type, uint64_t addr, uint32_t bytes, uint32_t *sum)
+{
+	if (bytes > r->cap) {
+		uint32_t cap = bytes > 2 * r->cap ? bytes : 2 * r->cap;
+		uint8_t *b = realloc(r->buf, cap);
+		if (!b)
+			return -1;
+		r->buf = b;
+		r->cap = cap;
+	}
+	mem_req q = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, NULL};
+	mem_peek(t->env->mem, &q, r->buf);
+	*sum = pr_sum(r->buf, bytes);
+	return 0;
+}
+
 /* Records a request: stack spills by entry index, since their address
  * belongs to the thread slot (thr_spill_addr), other requests as they
- * are. */
+ * are, a read with its checksum. */
 static void rec_req(thr_sink *s, thr_ctx *t, int write, int type, uint64_t addr, uint32_t bytes)
 {
 	mode_slot_state *m = mode_slot(t);
@@ -34,14 +56,21 @@ static void rec_req(thr_sink *s, thr_ctx *t, int write, int type, uint64_t addr,
 		put(s, t, PR_WRITE + type, 2, addr, bytes);
 		return;
 	}
+	mode_rec *r = (mode_rec *)s;
+	uint32_t sum;
+	if (read_sum(r, t, type, addr, bytes, &sum)) {
+		r->out->failed = 1; /* out of memory: the record is not stored */
+		return;
+	}
 	uint64_t z = pr_zigzag(addr - m->raddr[type]);
 	m->raddr[type] = addr;
 	if (bytes == m->rbytes[type]) {
 		put(s, t, PR_READ_SAME + type, 1, z, 0);
-		return;
+	} else {
+		m->rbytes[type] = bytes;
+		put(s, t, PR_READ + type, 2, z, bytes);
 	}
-	m->rbytes[type] = bytes;
-	put(s, t, PR_READ + type, 2, z, bytes);
+	pr_put_sum(r->out, m->rec, sum);
 }
 
 static void rec_read(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)

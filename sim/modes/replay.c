@@ -9,6 +9,7 @@
  */
 #include "sim/modes/replay.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #include "sim/modes/functional.h"
@@ -28,18 +29,119 @@ static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 }
 
 static void run(thr_ctx *t);
+static void check_reads(thr_ctx *t);
 
 /* The reads so far are still on their way (timed): the stream goes on
  * from p when they are in, as thr_wait_mem's continuation does. */
 static int wait_reads(thr_ctx *t, const uint8_t *p)
 {
-	if (!thr_park_mem(t, run))
+	if (!thr_park_mem(t, run)) {
+		check_reads(t);
 		return 0;
+	}
 	mode_slot(t)->rp = p;
 	return 1;
 }
 
 static void op_done(eng *e, void *ctx, uint64_t arg);
+
+/* Room for a read of n bytes in slot m's buffer; NULL when out of memory.
+ * A block with reads in flight is never moved: a larger one replaces it
+ * and it is freed once they are in (checked). */
+static uint8_t *room(mode_slot_state *m, uint32_t n)
+{
+	mode_rblk *b = m->rbuf;
+	if (b && b->cap - b->used >= n) {
+		b->used += n;
+		return b->b + b->used - n;
+	}
+	/* small at first: every slot that replays has one (a million slots
+	 * are a legal config); a node is 8 bytes, a triangle 36 */
+	uint32_t cap = b && 2 * b->cap > n ? 2 * b->cap : n > 64 ? n : 64;
+	mode_rblk *nb = malloc(sizeof *nb + cap);
+	if (!nb)
+		return NULL;
+	nb->cap = cap;
+	nb->used = n;
+	nb->next = NULL;
+	if (b && b->used)
+		nb->next = b; /* still receiving */
+	else
+		free(b);
+	m->rbuf = nb;
+	return nb->b;
+}
+
+/* The first read whose bytes are not the recorded ones, described; the
+ * packet's tile takes no pixels from the record. */
+static void found(thr_ctx *t, const mode_rcheck *k, uint32_t got)
+{
+	mode_slot_state *m = mode_slot(t);
+	mode_rbad *bad = m->bad;
+	int32_t p = m->rec;
+	while (p >= 0 && m->src->from[p] >= 0) /* up to the tile's primary */
+		p = m->src->from[p];
+	int32_t tile = p >= 0 ? -1 - m->src->from[p] : -1;
+	if (!bad->n++)
+		*bad = (mode_rbad){1,        m->rec, tile,   k->type,   k->addr,
+		                   k->bytes, got,    k->sum, bad->tiles};
+	if (bad->tiles && tile >= 0)
+		bad->tiles[tile] = 2;
+}
+
+/* The reads so far are in (no read of the thread is outstanding): their
+ * bytes' checksums against the record's. */
+static void check_reads(thr_ctx *t)
+{
+	mode_slot_state *m = mode_slot(t);
+	if (t->pending)
+		return;
+	for (uint32_t i = 0; i < m->nchk; i++) {
+		const mode_rcheck *k = &m->chk[i];
+		uint32_t got = pr_sum(k->at, k->bytes);
+		if (got != k->sum)
+			found(t, k, got);
+	}
+	m->nchk = 0;
+	mode_rblk *b = m->rbuf;
+	if (b) {
+		for (mode_rblk *o = b->next, *n; o; o = n) {
+			n = o->next;
+			free(o);
+		}
+		b->next = NULL;
+		b->used = 0;
+	}
+}
+
+/* A replayed read: its bytes into the slot's buffer, to be checked
+ * against the recorded checksum once they are in (at once, functional). */
+static void read_checked(thr_ctx *t, int type, uint64_t a, uint32_t bytes, uint32_t sum)
+{
+	mode_slot_state *m = mode_slot(t);
+	if (t->env->mutant == THR_MUT_REPLAY_NEXT_TRI && type == MEM_TRI)
+		a += MIMG_TRI_BYTES; /* test hook */
+	if (m->nchk == m->capchk) {
+		uint32_t cap = m->capchk ? 2 * m->capchk : 4;
+		mode_rcheck *c = realloc(m->chk, cap * sizeof *c);
+		if (!c) {
+			t->env->oom = 1; /* the frame fails */
+			thr_read(t, type, a, bytes, NULL);
+			return;
+		}
+		m->chk = c;
+		m->capchk = cap;
+	}
+	uint8_t *dst = room(m, bytes);
+	if (!dst) {
+		t->env->oom = 1;
+		thr_read(t, type, a, bytes, NULL);
+		return;
+	}
+	m->chk[m->nchk++] = (mode_rcheck){dst, a, bytes, sum, type};
+	thr_read(t, type, a, bytes, dst);
+	check_reads(t);
+}
 
 /* A read or write op (below PR_USE). */
 static void access(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
@@ -54,7 +156,7 @@ static void access(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
 	uint64_t a = m->raddr[type] += pr_unzigzag(pr_get(p, end));
 	if (op < PR_READ_SAME)
 		m->rbytes[type] = (uint32_t)pr_get(p, end);
-	thr_read(t, type, a, m->rbytes[type], NULL);
+	read_checked(t, type, a, m->rbytes[type], pr_get_sum(p, end));
 }
 
 /* A shading count or a packet entering: the ops between PR_SPILL_R and
@@ -100,6 +202,7 @@ static void run(thr_ctx *t)
 {
 	const uint8_t *p = mode_slot(t)->rp, *end = mode_slot(t)->rpe;
 	int spawned = 0;
+	check_reads(t); /* the reads waited for are in */
 	while (p < end) {
 		const uint8_t *at = p;
 		int op = *p++;
@@ -130,6 +233,7 @@ static void run(thr_ctx *t)
 			p = end;
 		}
 	}
+	check_reads(t);
 	/* as shade_done and shadow_done: the slot is free, and after a
 	 * shading op the RTP's idle slots get the children it queued */
 	if (spawned)
@@ -156,12 +260,24 @@ void mode_replay_begin(const pktrec *r, thr_ctx *t, int32_t id)
 	run(t);
 }
 
+void mode_replay_free(mode_slot_state *m)
+{
+	for (mode_rblk *b = m->rbuf, *n; b; b = n) {
+		n = b->next;
+		free(b);
+	}
+	m->rbuf = NULL;
+	free(m->chk);
+	m->chk = NULL;
+	m->nchk = m->capchk = 0;
+}
+
 int mode_replay_save(const thr_ctx *t, mode_replay_state *s)
 {
 	const mode_slot_state *m = mode_slot(t);
 	memset(s, 0, sizeof *s);
 	s->rec = -1;
-	if (t->p || (m->rp && !m->fnext))
+	if (t->p || (m->rp && !m->fnext) || m->nchk)
 		return -1;
 	if (!m->rp)
 		return 0;
@@ -185,6 +301,7 @@ int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
 	}
 	t->pending = 0;
 	t->cont = NULL;
+	mode_replay_free(m); /* no read is outstanding */
 	m->rec = -1;
 	m->rp = m->rpe = NULL;
 	m->fnext = NULL;

@@ -9,10 +9,20 @@
  * before every op), so a detailed region replaying a packet makes the
  * same events at the same ticks as one running its math, and takes over
  * a packet a functional stretch left in flight as it is.
+ *
+ * A replayed read carries its bytes (into the slot's buffer): once they
+ * are in, their checksum is compared with the record's (pr_sum). A read
+ * that returned other bytes than the recorded one (damaged board memory,
+ * a wrong address, a fault on the data's way) is counted in the chip's
+ * mode_rbad, the first one described, and its tile takes no pixels from
+ * the record: the frame's check says DIFFERENT (docs/fidelity.md, "What
+ * replay checks"). Spilled stack entries are not checked: replayed spills
+ * write no bytes.
  */
 #ifndef SAAR_SIM_MODES_REPLAY_H
 #define SAAR_SIM_MODES_REPLAY_H
 
+#include "sim/modes/slot.h"
 #include "traces/pktrec.h"
 #include "units/rgs.h"
 #include "units/thread.h"
@@ -21,6 +31,9 @@
  * its first unit op, as rgs_primary / rgs_secondary do. Its later steps
  * are the ops' completions (timed) or mode_func_step (functional). */
 void mode_replay_begin(const pktrec *r, thr_ctx *t, int32_t id);
+
+/* Frees slot m's replay buffers (mode_sinks_free). */
+void mode_replay_free(mode_slot_state *m);
 
 /* Where a functional thread slot is between two steps, as stored
  * warming's checkpoints keep it (sim/warming.h): idle (rec -1), or

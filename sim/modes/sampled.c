@@ -364,8 +364,11 @@ void mode_sampled_frame_stored(chip *c, int f)
 		if (c->warm_err)
 			break;
 	}
-	/* every tile's packets were replayed, here or in the warming run */
-	memset(c->replayed, 1, (size_t)N);
+	/* every tile's packets were replayed, here or in the warming run (2:
+	 * and a read returned other bytes than recorded, replay.h) */
+	for (int i = 0; i < N; i++)
+		if (!c->replayed[i])
+			c->replayed[i] = 1;
 	sampled_estimate(c, f, j, t0);
 }
 

@@ -13,7 +13,8 @@
 #include "kernel-ref/worldcache.h"
 #include "sim/warming.h"
 
-/* The packet record's key: kernel-ref's frame key for this view and size
+/* The packet record's key (its version 2: reads carry checksums,
+ * traces/pktrec.h): kernel-ref's frame key for this view and size
  * (the memory image by its CRC, camera, lights, shading depth) and what
  * else changes a packet's work on the chip: the datapath formats and the
  * stack depth (spills). Thread counts, units and memory do not. */
@@ -31,7 +32,7 @@ static char *rec_key(const chip *c)
 		return NULL;
 	int n =
 	    asprintf(&key,
-	             "saarsim packet record 1\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
+	             "saarsim packet record 2\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
 	             "counters %d shade %zu\n",
 	             fk, g->chip.fp.trav.exp, g->chip.fp.trav.mant, g->chip.fp.isect.exp,
 	             g->chip.fp.isect.mant, g->chip.fp.shade.exp, g->chip.fp.shade.mant,
@@ -100,14 +101,17 @@ void mode_rec_store(chip *c)
 }
 
 /* Replayed tiles take the recorded frame's pixels (a replayed packet
- * draws nothing). */
+ * draws nothing), unless one of their reads returned other bytes than the
+ * recorded one (2: replay.h): those keep none. */
 void mode_rec_pixels(chip *c)
 {
 	for (int i = 0; i < c->g.ntiles; i++)
 		if (c->replayed[i]) {
+			int bad = c->replayed[i] == 2;
 			c->replayed[i] = 0;
-			pr_put_tile(&c->rec, &c->fb, i % c->g.tiles_x, i / c->g.tiles_x, TILE_W,
-			            TILE_H);
+			if (!bad)
+				pr_put_tile(&c->rec, &c->fb, i % c->g.tiles_x, i / c->g.tiles_x,
+				            TILE_W, TILE_H);
 		}
 }
 
