@@ -21,11 +21,17 @@ static pthread_once_t live_once = PTHREAD_ONCE_INIT;
 
 static const int live_sigs[] = {SIGINT, SIGTERM, SIGHUP};
 
+/* af_made_dir's folder; rmdir is async-signal-safe too */
+static char made_dir[PATH_MAX];
+static volatile sig_atomic_t made_on;
+
 static void live_remove_all(void)
 {
 	for (int i = 0; i < AF_LIVE_MAX; i++)
 		if (live_on[i])
 			unlink(live_path[i]);
+	if (made_on)
+		rmdir(made_dir);
 }
 
 static void on_fatal(int sig)
@@ -61,6 +67,14 @@ static void live_add(const char *tmp)
 			break;
 		}
 	pthread_mutex_unlock(&live_mu);
+}
+
+void af_made_dir(const char *dir)
+{
+	pthread_once(&live_once, live_install);
+	made_on = 0;
+	snprintf(made_dir, sizeof made_dir, "%s", dir);
+	made_on = 1;
 }
 
 static void live_del(const char *tmp)

@@ -54,6 +54,13 @@ int af_reserve(const char *path, const char *suffix, diag *d);
  * watched at once; more are still written, only not cleaned on a signal. */
 #define AF_LIVE_MAX 64
 
+/* A folder the program made for its outputs (saarsim's --heatmap DIR):
+ * removed, if it is empty then, after the temporaries at exit and on the
+ * signals above, so a failed or interrupted run leaves no folder behind
+ * (a run that wrote its files there leaves it, as rmdir fails). One
+ * folder; a second call replaces the first. */
+void af_made_dir(const char *dir);
+
 /* Outputs that appear together. A program writing several files (an
  * image, a report, a trace, a CSV row) commits each into a group, which
  * only closes its temporary (a write error fails there); once every one is

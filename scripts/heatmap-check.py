@@ -13,7 +13,8 @@ cycles' the threads' running, waiting_memory and waiting_unit time and
 mem_stall's their waiting_memory time (counters rtp<r>.threads.<state>_ps,
 in core cycles).
 
-Prints "ok: ..." and exits 0, or one line per problem and exits 1.
+Prints "ok: ..." and exits 0, or one line per problem and exits 1; a file
+that cannot be read (missing, not JSON) is one line and exit status 2.
 """
 import json
 import os
@@ -44,13 +45,20 @@ def near(a, b, rel=2e-6):
     return abs(a - b) <= rel * max(1.0, abs(a), abs(b))
 
 
+def load(path):
+    with open(path) as f:
+        try:
+            return json.load(f)
+        except ValueError as e:
+            raise ValueError(f"{path}: not JSON ({e})") from None
+
+
 def main(argv):
     if not 1 <= len(argv) <= 2:
         print(__doc__.strip().splitlines()[2], file=sys.stderr)
         return 2
     d = argv[0]
-    with open(os.path.join(d, "heatmap.json")) as f:
-        h = json.load(f)
+    h = load(os.path.join(d, "heatmap.json"))
     for name in MAPS:
         m = h["maps"].get(name)
         if not m:
@@ -74,8 +82,7 @@ def main(argv):
         if not near(max(vals), m["max"], 1e-6):
             bad(f"{name}.exr: maximum {max(vals)}, heatmap.json {m['max']}")
     if len(argv) == 2 and not problems:
-        with open(argv[1]) as f:
-            r = json.load(f)
+        r = load(argv[1])
         t, c, per = r["traversal"], r["counters"], h["period_ps"]
         tot = {k: h["maps"][k]["total"] for k in MAPS}
         if not near(tot["kd_steps"], t["kd_node_steps"]):
@@ -104,4 +111,11 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    if sys.argv[1:2] in (["-h"], ["--help"]):
+        print(__doc__.strip())
+        sys.exit(0)
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except (OSError, ValueError) as e:  # a file missing or not JSON: one line
+        print(f"heatmap-check.py: {e}", file=sys.stderr)
+        sys.exit(2)

@@ -22,7 +22,8 @@ windowed timeline holds exactly the full one's unit ops, L1 misses, SDRAM
 and host-bus spans that start in the window, and its thread spans are the
 full one's clipped to it.
 
-Prints "ok: ..." and exits 0, or one line per problem and exits 1.
+Prints "ok: ..." and exits 0, or one line per problem and exits 1; a file
+that cannot be read (missing, not JSON) is one line and exit status 2.
 """
 import json
 import sys
@@ -44,7 +45,10 @@ def bad(msg):
 
 def load(path):
     with open(path) as f:
-        return json.load(f)
+        try:
+            return json.load(f)
+        except ValueError as e:
+            raise ValueError(f"{path}: not JSON ({e})") from None
 
 
 def spans(tl):
@@ -244,4 +248,11 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    if sys.argv[1:2] in (["-h"], ["--help"]):
+        print(__doc__.strip())
+        sys.exit(0)
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except (OSError, ValueError) as e:  # a file missing or not JSON: one line
+        print(f"timeline-check.py: {e}", file=sys.stderr)
+        sys.exit(2)

@@ -346,17 +346,9 @@ static int flag_first(const char *flag, diag *d)
 	return diag_set(d, flag, 0, 0, "%s", m);
 }
 
-/* --heatmap's folder, made here if missing and removed at exit if it is
- * still empty then (a failed run: its files' temporaries are removed
- * first, atexit's order being the reverse of registration). */
-static char heat_made[4096];
-
-static void heat_rmdir(void)
-{
-	if (heat_made[0])
-		rmdir(heat_made);
-}
-
+/* --heatmap's folder, made here if missing and removed, if still empty,
+ * at exit or on SIGINT/SIGTERM/SIGHUP after its files' temporaries
+ * (af_made_dir): a failed or interrupted run leaves no folder. */
 static int reserve_heatmap(const char *dir, diag *d)
 {
 	struct stat st;
@@ -366,8 +358,7 @@ static int reserve_heatmap(const char *dir, diag *d)
 		if (errno != ENOENT || mkdir(dir, 0777))
 			return diag_set(d, "--heatmap", 0, 0, "%s: cannot make the folder: %s", dir,
 			                strerror(errno));
-		snprintf(heat_made, sizeof heat_made, "%s", dir);
-		atexit(heat_rmdir);
+		af_made_dir(dir);
 	} else if (!S_ISDIR(st.st_mode))
 		return diag_set(d, "--heatmap", 0, 0, "%s: not a folder", dir);
 	char path[4200];

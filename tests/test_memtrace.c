@@ -412,6 +412,19 @@ Test(memtrace, replay_tool)
 		         "test $(wc -l < %s/err.txt) -eq 1 && grep -q cut.gz %s/err.txt", dir, dir);
 		cr_assert_eq(tu_run(cmd), 0, "one line naming the trace (%s)", modes[m]);
 	}
+	/* --json into a folder that does not exist is refused before the
+	 * replay: one line, nothing on stdout (the whole replay ran and
+	 * printed its figures, then the write failed with exit 2) */
+	snprintf(cmd, sizeof cmd,
+	         "%s/saarsim-replay --json %s/missing/r.json %s >%s/out.txt 2>%s/err.txt",
+	         tu_bin_dir(), dir, p, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	snprintf(cmd, sizeof cmd,
+	         "test $(wc -l < %s/err.txt) -eq 1 && grep -q 'missing does not exist' %s/err.txt",
+	         dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "one line naming the folder");
+	snprintf(cmd, sizeof cmd, "test ! -s %s/out.txt", dir);
+	cr_assert_eq(tu_run(cmd), 0, "the replay ran before the output was refused");
 	/* bad command lines: one line with the program's name (the usage
 	 * came as a second line; --image-bytes took "", -1 and huge values) */
 	const char *bad[] = {"--image-bytes '' %s",

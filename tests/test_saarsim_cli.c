@@ -274,13 +274,16 @@ Test(saarsim_cli, outputs_are_checked_before_the_run)
 }
 
 /* A run ended by SIGTERM or SIGINT removes the temporaries of its outputs
- * (an 8 MB t.gz.XXXXXX trace was left) and still ends by the signal. */
+ * (an 8 MB t.gz.XXXXXX trace was left) and still ends by the signal; the
+ * --heatmap folder it made is removed too (an empty folder was left: only
+ * a normal exit removed it). */
 Test(saarsim_cli, interrupted_run_leaves_no_temporaries, .timeout = 120)
 {
 	const int sigs[] = {SIGTERM, SIGINT};
 	for (int k = 0; k < 2; k++) {
-		char bin[512], tr[512], rep[512];
+		char bin[512], tr[512], rep[512], hm[512];
 		snprintf(bin, sizeof bin, "%s/saarsim", tu_bin_dir());
+		snprintf(hm, sizeof hm, "%s/hm%d", dir, k);
 		snprintf(tr, sizeof tr, "%s/t%d.gz", dir, k);
 		snprintf(rep, sizeof rep, "%s/r%d.json", dir, k);
 		pid_t pid = fork();
@@ -293,7 +296,7 @@ Test(saarsim_cli, interrupted_run_leaves_no_temporaries, .timeout = 120)
 			 * test wants the default the user's terminal gives */
 			signal(SIGINT, SIG_DFL);
 			execl(bin, bin, "--size", "512x512", "--frames", "50", "--trace-mem", tr,
-			      "--report", rep, (char *)NULL);
+			      "--report", rep, "--heatmap", hm, (char *)NULL);
 			_exit(127);
 		}
 		/* wait until the trace's temporary exists, then interrupt */
@@ -313,6 +316,8 @@ Test(saarsim_cli, interrupted_run_leaves_no_temporaries, .timeout = 120)
 		snprintf(base, sizeof base, "t%d.gz", k);
 		cr_assert_eq(tu_temps(dir, base), 0, "the trace's temporary is left");
 		cr_assert_not(tu_exists(dir, base), "a partial trace was renamed into place");
+		snprintf(base, sizeof base, "hm%d", k);
+		cr_assert_not(tu_exists(dir, base), "the --heatmap folder the run made is left");
 	}
 }
 

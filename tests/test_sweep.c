@@ -458,6 +458,41 @@ Test(sweep, special_paths_over_ssh, .timeout = 120)
 	cr_assert_eq(count_in(path, "GNU_Parallel_worker"), 2);
 }
 
+/* --help prints the usage on stdout and exits 0 in every script a user
+ * runs (docs/sweeps.md, docs/observe.md), as in the programs
+ * (stress/every_program_has_help): sweep-plot took --help for a folder
+ * (exit 2), timeline-plot printed it on stderr, the two checkers ended in a
+ * Python traceback. A checker given a file it cannot read (missing, not
+ * JSON) says so in one line naming the file, exit 2 (it was a traceback). */
+Test(sweep, user_scripts_have_help_and_one_line_errors)
+{
+	char dir[256], cmd[8192], p[512], top[PATH_MAX];
+	tu_tmpdir(dir, sizeof dir);
+	cr_assert(realpath(root(), top), "%s", root());
+	const char *scripts[] = {"sweep", "sweep-plot", "timeline-plot", "heatmap-check.py",
+	                         "timeline-check.py"};
+	for (size_t i = 0; i < sizeof scripts / sizeof *scripts; i++) {
+		snprintf(cmd, sizeof cmd, "%s %s/scripts/%s --help >%s/out 2>%s/err",
+		         strstr(scripts[i], ".py") ? "python3" : "", root(), scripts[i], dir, dir);
+		cr_assert_eq(tu_run(cmd), 0, "%s --help", scripts[i]);
+		cr_assert(strstr(tu_slurp(dir, "out"), "DIR") ||
+		              strstr(tu_slurp(dir, "out"), ".json"),
+		          "%s: no usage on stdout: %s", scripts[i], tu_slurp(dir, "out"));
+		cr_assert_str_eq(tu_slurp(dir, "err"), "", "%s wrote to stderr", scripts[i]);
+	}
+	tu_write(p, sizeof p, dir, "heatmap.json", "{\n");
+	const char *bad[][2] = {{"heatmap-check.py", "nothing"},
+	                        {"heatmap-check.py", "."},
+	                        {"timeline-check.py", "nothing.json"},
+	                        {"timeline-check.py", "heatmap.json"}};
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		snprintf(cmd, sizeof cmd, "cd %s && python3 %s/scripts/%s %s >out 2>err", dir, top,
+		         bad[i][0], bad[i][1]);
+		cr_assert_eq(tu_run(cmd), 2, "%s %s", bad[i][0], bad[i][1]);
+		tu_one_line(dir, bad[i][0], !strcmp(bad[i][1], ".") ? "heatmap.json" : bad[i][1]);
+	}
+}
+
 /* The saarsim arguments after -- are checked once, before anything runs:
  * one line and exit 2 (every point failed with exit 1 before), and no
  * sweep folder made. */

@@ -20,6 +20,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "kernel-ref/atomicfile.h"
 #include "sim/config.h"
 #include "sim/memconfig.h"
 #include "sim/report_mem.h"
@@ -436,6 +437,10 @@ int main(int argc, char **argv)
 	int ret = parse_args(argc, argv, &o, &d);
 	if (ret >= 0)
 		return ret;
+	/* the JSON's temporary now, so a missing or unwritable folder is
+	 * refused before the replay, not after it (atomicfile.h) */
+	if (o.json && af_reserve(o.json, "", &d))
+		return fail(&d);
 
 	/* the clock includes opening the trace (its first read) */
 	double t0 = now_s();

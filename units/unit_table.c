@@ -16,15 +16,15 @@
  * own (assumed, or calibrated by scripts/calibrate.sh; timing only). */
 #define COUNT                                                                                      \
 	{                                                                                          \
-		1, 1, 64, 1, 0, "seed 002 §4.1 (one per RTP)"                                     \
+		1, 1, 64, 1, 0, "seed 002 §4.1 (one per RTP)", 0                                   \
 	}
 #define WIDTH(w, why)                                                                              \
 	{                                                                                          \
-		w, 1, 64, 0, 0, why                                                                \
+		w, 1, 64, 0, 0, why, 0                                                             \
 	}
 #define LATENCY(l)                                                                                 \
 	{                                                                                          \
-		l, 1, 10000, 0, 1, "pipeline depth not published; a few cycles per stage group"    \
+		l, 1, 10000, 0, 1, "pipeline depth not published; a few cycles per stage group", 0 \
 	}
 /* A width fitted by scripts/calibrate.sh; was: the assumed value before. */
 #define WIDTH_CAL(w, was, why)                                                                     \
