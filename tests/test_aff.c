@@ -352,6 +352,87 @@ Test(aff_reader, bad_input_one_line_with_place, .init = setup_dir)
 	}
 }
 
+/* The programs: a bad AFF file is one line and exit status 2 through the
+ * same import entry in both; --anim-time needs an AFF scene. */
+Test(aff_reader, programs_refuse_bad_aff, .init = setup_dir)
+{
+	char p[1024], args[1200];
+	tu_write(p, sizeof p, dir, "bad.aff", TRI "q\n");
+	snprintf(args, sizeof args, "--scene %s --size 8x8", p);
+	cr_assert_eq(tu_prog(dir, "rtref", args), 2);
+	tu_one_line(dir, "rtref", "bad.aff:8:1: unknown AFF command 'q'");
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 2);
+	tu_one_line(dir, "saarsim", "bad.aff:8:1: unknown AFF command 'q'");
+	cr_assert_eq(tu_prog(dir, "rtref", "--scene spd:tetra --anim-time 1"), 2);
+	tu_one_line(dir, "rtref", "--anim-time: needs an AFF scene");
+}
+
+/* A triangle that moves 1 to the right per time unit, under a view. */
+static const char *MOVING = "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 1\n"
+                            "resolution 8 8\nl 0 5 5\nx mover {\nm\nvertices 3\n-1 -1 0\n"
+                            "1 -1 0\n0 1 0\ntriangles 1\n0 1 2\n}\nk mover {\ntransl 4\n"
+                            "0 0 0 0 0 0 0\n0 0 0 0 0 0 0\n1 1 0 0 0 0 0\n1 1 0 0 0 0 0\n}\n";
+
+/* Mistake: world_set_time leaving something of the old time behind (the
+ * view, the kd-tree over the old triangles): moving a world to t = 1
+ * must give what loading it at t = 1 gives. */
+Test(aff_world, set_time_equals_load_at_time, .init = setup_dir)
+{
+	char p[1024];
+	tu_write(p, sizeof p, dir, "moving.aff", MOVING);
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = p;
+	o.have_anim_fps = 1;
+	o.anim_fps = 4;
+	world w, w1;
+	diag d = {{0}};
+	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(world_set_time(&w, &o, world_frame_time(&o, 3), &d), 0, "%s", d.msg);
+	o.have_anim_fps = 0;
+	o.have_anim_time = 1;
+	o.anim_time = 0.75;
+	cr_assert_eq(world_load(&w1, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(w.s.ntris, w1.s.ntris);
+	cr_assert(!memcmp(w.s.v, w1.s.v, 3 * sizeof *w.s.v), "the triangles differ");
+	cr_assert(!memcmp(&w.v.cam, &w1.v.cam, sizeof w.v.cam), "the cameras differ");
+	cr_assert_eq(w.m.size, w1.m.size);
+	cr_assert(!memcmp(w.m.bytes, w1.m.bytes, w.m.size), "the memory images differ");
+	cr_assert_str_eq(w.scene_label, w1.scene_label);
+	world_free(&w);
+	world_free(&w1);
+}
+
+/* Both programs render an animation: --anim-fps F --frames N writes one
+ * file per frame (name-0000.png, ...), the frames differ, and each chip
+ * frame is checked against kernel-ref's. Mistake caught: frames all at
+ * the first time, or one file overwritten N times. */
+Test(aff_world, programs_render_frames, .init = setup_dir)
+{
+	char p[1024], args[1400];
+	tu_write(p, sizeof p, dir, "moving.aff", MOVING);
+	snprintf(args, sizeof args,
+	         "--scene %s --size 16x16 --anim-fps 2 --frames 2 --out %s/r.ppm", p, dir);
+	cr_assert_eq(tu_prog(dir, "rtref", args), 0);
+	cr_assert(strstr(tu_slurp(dir, "out"), "moving.aff@t=0.5"), "no frame at t = 0.5");
+	char *f0 = tu_slurp(dir, "r-0000.ppm"), *f1 = tu_slurp(dir, "r-0001.ppm");
+	cr_assert(strlen(f0) > 10 && memcmp(f0, f1, 16 * 16 * 3 + 10), "the two frames are equal");
+	snprintf(
+	    args, sizeof args,
+	    "--scene %s --size 16x16 --anim-fps 2 --frames 2 --out %s/c.ppm --report %s/c.json", p,
+	    dir, dir);
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 0);
+	const char *out = tu_slurp(dir, "out");
+	const char *a = strstr(out, "packets identical"),
+	           *b = a ? strstr(a + 1, "packets identical") : NULL;
+	cr_assert(b, "not every chip frame was checked: %s", out);
+	cr_assert(tu_exists(dir, "c-0001.ppm") && tu_exists(dir, "c-0001.json") &&
+	              !tu_exists(dir, "c.ppm"),
+	          "per-frame outputs");
+	cr_assert(!memcmp(tu_slurp(dir, "c-0001.ppm"), tu_slurp(dir, "r-0001.ppm"), 16 * 16 * 3),
+	          "the chip's frame 1 is not kernel-ref's");
+}
+
 /* ---- BART Robots against its flattened OBJ ---- */
 
 /* A triangle's cell: its centroid on a grid of RB_CELL units. */
