@@ -20,6 +20,7 @@
 #include "kernel-ref/image.h"
 #include "kernel-ref/jsonw.h"
 #include "kernel-ref/render.h"
+#include "kernel-ref/twolevel.h"
 #include "kernel-ref/world.h"
 
 static void usage(FILE *f)
@@ -114,6 +115,14 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kuint(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_knum(j, "sah_cost", w->kd.sah_cost);
 	jsonw_obj_end(j);
+	if (w->tl) {
+		jsonw_key(j, "two_level");
+		jsonw_obj_begin(j);
+		jsonw_kuint(j, "objects", w->tl->nobj);
+		jsonw_knum(j, "bottom_build_ms", w->tl->build_ms);
+		jsonw_knum(j, "top_build_ms", w->tl->frame_ms);
+		jsonw_obj_end(j);
+	}
 	jsonw_kuint(j, "memory_image_bytes", w->m.size);
 	jsonw_knum(j, "load_ms", w->load_ms);
 	jsonw_knum(j, "build_ms", w->kd_ms);
@@ -263,8 +272,13 @@ static void print_summary(const cli *a, const char *out, const world *w, const r
 	uint64_t total = 0;
 	for (int t = 0; t < PKT_NTYPES; t++)
 		total += st->rays[t];
-	char kd[96];
-	if (w->cache == WORLD_CACHE_HIT)
+	char kd[160];
+	if (w->tl)
+		snprintf(kd, sizeof kd,
+		         "two-level: %u objects (their trees built once in %.1f ms), top level "
+		         "built in %.2f ms",
+		         w->tl->nobj, w->tl->build_ms, w->tl->frame_ms);
+	else if (w->cache == WORLD_CACHE_HIT)
 		snprintf(kd, sizeof kd, "kd-tree %u nodes from the world cache", w->kd.nnodes);
 	else
 		snprintf(kd, sizeof kd, "kd-tree %u nodes built in %.1f ms", w->kd.nnodes,
@@ -313,6 +327,12 @@ int main(int argc, char **argv)
 	world w;
 	if (world_load(&w, &a.wo, &d))
 		return cli_bad("rtref", d.msg);
+	if (w.tl)
+		a.ro.tracer = &w.tl->tracer;
+	if (w.tl && a.ro.prec) {
+		world_free(&w);
+		return cli_bad("rtref", "--two-level: traces at full precision only (no --fp-*)");
+	}
 	framebuf fb;
 	if (fb_init(&fb, a.ro.width, a.ro.height)) {
 		world_free(&w);

@@ -6,6 +6,7 @@
 #include "kernel-ref/aff.h"
 #include "kernel-ref/image.h"
 #include "kernel-ref/spd.h"
+#include "kernel-ref/twolevel.h"
 #include "kernel-ref/worldcache.h"
 
 #include <errno.h>
@@ -24,6 +25,8 @@ const char world_usage[] =
     "  --anim-time T         AFF scene: the animation time to render (default 0)\n"
     "  --anim-fps F          AFF scene: frames per second of animation time; frame i of a\n"
     "                        multi-frame run (--frames N) is at T + i/F\n"
+    "  --two-level           AFF scene, rtref: trace through a kd-tree per rigid object\n"
+    "                        (built once) under a tree of instances rebuilt per frame\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
@@ -105,8 +108,8 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
 		takes |= strcmp(a, with_value[k]) == 0;
 	if (!takes) {
-		if (strcmp(a, "--no-lights") == 0) {
-			o->no_lights = 1;
+		if (strcmp(a, "--no-lights") == 0 || strcmp(a, "--two-level") == 0) {
+			*(a[2] == 'n' ? &o->no_lights : &o->two_level) = 1;
 			(*i)++;
 			return 1;
 		}
@@ -183,6 +186,29 @@ const char *world_cache_name(int status)
 {
 	static const char *const names[] = {"off", "hit", "stored", "not stored"};
 	return status >= 0 && status < 4 ? names[status] : "?";
+}
+
+/* The world's own kd-tree parameters: with --two-level the image serves
+ * shading only (the two-level trees trace), so one split is enough. */
+static const kd_params *world_kd(const world_opts *o)
+{
+	static _Thread_local kd_params one;
+	if (!o->two_level)
+		return &o->kd;
+	one = o->kd;
+	one.max_depth = 1;
+	return &one;
+}
+
+/* --two-level: the objects' trees, once, and the instances at the
+ * world's time. */
+static int two_level_build(world *w, const world_opts *o, diag *d)
+{
+	if (!(w->tl = calloc(1, sizeof *w->tl)))
+		return diag_set(d, "--two-level", 0, 0, "out of memory");
+	if (tl_build(w->tl, w->aff, &o->kd, d))
+		return -1;
+	return tl_frame(w->tl, w->aff, w->anim_time, &w->m, d);
 }
 
 /* An AFF scene read and flattened at o's time; its own view (if the file
@@ -351,9 +377,12 @@ int world_load(world *w, const world_opts *o, diag *d)
 		return -1;
 	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
 	int spd = spd_is(path), aff = aff_is(path), aff_has_view = 0;
-	if ((o->have_anim_time || o->have_anim_fps) && !aff)
-		return diag_set(d, o->have_anim_time ? "--anim-time" : "--anim-fps", 0, 0,
-		                "needs an AFF scene (--scene FILE.aff)");
+	if ((o->have_anim_time || o->have_anim_fps || o->two_level) && !aff)
+		return diag_set(d,
+		                o->have_anim_time  ? "--anim-time"
+		                : o->have_anim_fps ? "--anim-fps"
+		                                   : "--two-level",
+		                0, 0, "needs an AFF scene (--scene FILE.aff)");
 	wc_files files = {0};
 	char cfile[PATH_MAX], *ckey = NULL;
 	view sv;
@@ -386,7 +415,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 		goto fail;
 	if (w->cache != WORLD_CACHE_HIT) {
 		t0 = now_ms();
-		if (kd_build(&w->kd, &w->s, &o->kd, d))
+		if (kd_build(&w->kd, &w->s, world_kd(o), d))
 			goto fail;
 		w->kd_ms = now_ms() - t0;
 		t0 = now_ms();
@@ -396,6 +425,8 @@ int world_load(world *w, const world_opts *o, diag *d)
 		if (o->cache_dir && !aff)
 			cache_store(w, &sv, cfile, ckey, &files);
 	}
+	if (o->two_level && two_level_build(w, o, d))
+		goto fail;
 	wc_files_free(&files);
 	free(ckey);
 	if (w->kd.nbudget_leaves) /* also from the cache: each run says so */
@@ -466,6 +497,11 @@ void world_free(world *w)
 		free(w->aff);
 		w->aff = NULL;
 	}
+	if (w->tl) {
+		tl_free(w->tl);
+		free(w->tl);
+		w->tl = NULL;
+	}
 }
 
 double world_frame_time(const world_opts *o, int i)
@@ -500,14 +536,14 @@ int world_set_time(world *w, const world_opts *o, double t, diag *d)
 	if (apply_view_flags(w, o, d))
 		return -1;
 	t0 = now_ms();
-	if (kd_build(&w->kd, &w->s, &o->kd, d))
+	if (kd_build(&w->kd, &w->s, world_kd(o), d))
 		return -1;
 	w->kd_ms = now_ms() - t0;
 	t0 = now_ms();
 	if (mimg_build(&w->m, &w->s, &w->kd, d))
 		return -1;
 	w->image_ms = now_ms() - t0;
-	return 0;
+	return w->tl ? tl_frame(w->tl, w->aff, t, &w->m, d) : 0;
 }
 
 /* ---- command-line helpers ---- */

@@ -31,6 +31,7 @@ typedef struct world_opts {
 	 * frame i of a multi-frame run is at anim_time + i / anim_fps */
 	int have_anim_time, have_anim_fps;
 	double anim_time, anim_fps;
+	int two_level; /* --two-level: trace through twolevel.h's trees (AFF, kernel-ref) */
 } world_opts;
 
 /* What the world cache did for this world (host.world_cache). */
@@ -57,6 +58,10 @@ typedef struct world {
 	 * s is flattened at; NULL for every other scene. */
 	struct aff_scene *aff;
 	double anim_time;
+	/* With --two-level: the objects' trees (built once) and the instances
+	 * at anim_time; the render_opts.tracer for the frame is tl->tracer,
+	 * and kd is then a depth-1 tree (m serves only for shading). */
+	struct tl_scene *tl;
 } world;
 
 void world_opts_default(world_opts *o);

@@ -323,6 +323,10 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	}
 	if (a->size && cli_parse_size(a->size, &cfg->frame.width, &cfg->frame.height, d))
 		return cli_bad("saarsim", d->msg);
+	if (a->wo.two_level)
+		return cli_bad("saarsim",
+		               "--two-level: kernel-ref (rtref) only; the chip traces one "
+		               "tree over the flattened frame (issue 33 item 3)");
 	long nframes;
 	if (a->frames) {
 		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))
