@@ -439,6 +439,8 @@ static int find_texture(parser *p, lexer *lx, const tok *name, int32_t *idx)
 		if (grow(&a->tex, &a->captex, (uint64_t)a->ntex + 1, sizeof *a->tex))
 			return oom(p, lx, name);
 		memcpy(a->tex[a->ntex].path, cand[c], sizeof a->tex->path); /* length checked */
+		snprintf(a->tex[a->ntex].where, sizeof a->tex->where, "%.280s:%d:%d", lx->file,
+		         name->line, name->col);
 		*idx = (int32_t)a->ntex++;
 		return 0;
 	}
@@ -1118,7 +1120,7 @@ static int load_textures(const aff_scene *a, scene *s, int32_t *texmap, diag *d)
 		memcpy(t->path, a->tex[i].path, sizeof t->path);
 		diag td;
 		if (img_read_rgba8(t->path, &t->w, &t->h, &t->rgba, &td))
-			return diag_set(d, a->path, 0, 0, "texture %s", td.msg);
+			return diag_set(d, a->tex[i].where, 0, 0, "texture %s", td.msg);
 		s->ntexs = i + 1;
 		texmap[i] = (int32_t)i;
 	}

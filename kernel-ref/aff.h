@@ -74,7 +74,8 @@ typedef struct aff_mat {
 } aff_mat;
 
 typedef struct aff_tex {
-	char path[256]; /* resolved file (as long as scene.h's texture paths) */
+	char path[256];  /* resolved file (as long as scene.h's texture paths) */
+	char where[320]; /* "file:line:col" of the first texturecoords naming it */
 } aff_tex;
 
 /* A mesh (or polygon) in the frame of transform `xform` (-1: world).

@@ -236,6 +236,25 @@ Test(aff_reader, separate_corner_indices, .init = setup_dir)
 	aff_free(&a);
 }
 
+/* Mistake: a texture that cannot be decoded reported without the place
+ * that names it (it is read when the scene is flattened, after the files
+ * are closed). */
+Test(aff_reader, bad_texture_names_its_line, .init = setup_dir)
+{
+	char p[1024];
+	tu_write(p, sizeof p, dir, "bad.ppm", "P6\n4 4\n255\nshort");
+	aff_scene a;
+	load_ok(&a, "tex.aff",
+	        "m\nvertices 3\n0 0 0\n1 0 0\n0 1 0\ntexturecoords 3 bad.ppm\n0 0\n1 0\n0 1\n"
+	        "triangles 1\n0 1 2 0 1 2\n");
+	scene s;
+	diag d = {{0}};
+	cr_assert_neq(aff_flatten(&a, 0, 1, &s, &d), 0, "a cut PPM was read");
+	cr_assert(strstr(d.msg, "tex.aff:6:17: texture ") && strstr(d.msg, "bad.ppm"), "%s", d.msg);
+	cr_assert(!strchr(d.msg, '\n'), "not one line: %s", d.msg);
+	aff_free(&a);
+}
+
 /* Mistake: an include resolved against the working folder instead of the
  * including file's folder. The working folder holds a decoy part.aff
  * with two triangles; the one beside main.aff has one. The material set
