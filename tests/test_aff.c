@@ -480,8 +480,11 @@ static int rb_cmp(const void *x, const void *y)
 	return 0;
 }
 
-/* Triangle ta of a and tb of b have the same corners, in the same cyclic
- * order (the same winding), within RB_TOL. */
+/* Triangle ta of a and tb of b have the same corners with the same texture
+ * coordinates, in the same cyclic order (the same winding), within RB_TOL
+ * (city2.aff has coincident copies of triangles that differ only in their
+ * texture coordinates): 1 + the rotation r (a's corner k is b's corner
+ * k + r), or 0. */
 static int rb_same(const scene *a, uint32_t ta, const scene *b, uint32_t tb)
 {
 	const vec3 *p = a->v + 3 * (uint64_t)ta, *q = b->v + 3 * (uint64_t)tb;
@@ -489,10 +492,13 @@ static int rb_same(const scene *a, uint32_t ta, const scene *b, uint32_t tb)
 		int ok = 1;
 		for (int k = 0; k < 3 && ok; k++) {
 			vec3 d = v3_sub(p[k], q[(k + r) % 3]);
-			ok = fabsf(d.x) < RB_TOL && fabsf(d.y) < RB_TOL && fabsf(d.z) < RB_TOL;
+			vec2 u = a->uv[3 * (uint64_t)ta + k],
+			     w = b->uv[3 * (uint64_t)tb + (k + r) % 3];
+			ok = fabsf(d.x) < RB_TOL && fabsf(d.y) < RB_TOL && fabsf(d.z) < RB_TOL &&
+			     fabsf(u.u - w.u) < RB_TOL && fabsf(u.v - w.v) < RB_TOL;
 		}
 		if (ok)
-			return 1;
+			return 1 + r;
 	}
 	return 0;
 }
@@ -500,7 +506,7 @@ static int rb_same(const scene *a, uint32_t ta, const scene *b, uint32_t tb)
 /* An unused triangle of a (index e, sorted by cell) matching triangle t
  * of b; -1 if none. Looks in t's cell and the 26 around it. */
 static long rb_find(const rb_entry *e, uint32_t n, const uint8_t *used, const scene *a,
-                    const scene *b, uint32_t t)
+                    const scene *b, uint32_t t, int *rot)
 {
 	int64_t c[3];
 	rb_cell(b, t, c);
@@ -514,17 +520,19 @@ static long rb_find(const rb_entry *e, uint32_t n, const uint8_t *used, const sc
 				while (hit > e && !rb_cmp(hit - 1, &k))
 					hit--;
 				for (; hit < e + n && !rb_cmp(hit, &k); hit++)
-					if (!used[hit->tri] && rb_same(a, hit->tri, b, t))
+					if (!used[hit->tri] && (*rot = rb_same(a, hit->tri, b, t)))
 						return hit->tri;
 			}
 	return -1;
 }
 
 /* Mistakes: any in the transforms, splines at t = 0, includes, the index
- * order of the meshes or the materials. The flattened t = 0 OBJ in
+ * order of the meshes, the normals' transform, the texture coordinates
+ * (their indices, a flipped v) or the materials. The flattened t = 0 OBJ in
  * ../shared/scenes/bart_robots was made from the same files by another
  * program: every triangle must have its match there (up to order and the
- * OBJ's 7 printed digits), with the same winding and the same fm colours. */
+ * OBJ's 7 printed digits), with the same winding, texture coordinates,
+ * normals and fm colours. */
 Test(aff_robots, t0_equals_flattened_obj, .timeout = 120)
 {
 	char aff[1024], obj[1024];
@@ -546,15 +554,21 @@ Test(aff_robots, t0_equals_flattened_obj, .timeout = 120)
 		e[t].tri = t;
 	}
 	qsort(e, s.ntris, sizeof *e, rb_cmp);
-	uint32_t missing = 0, first = 0, colour = 0;
+	uint32_t missing = 0, first = 0, colour = 0, normal = 0;
 	for (uint32_t t = 0; t < o.ntris; t++) {
-		long m = rb_find(e, s.ntris, used, &s, &o, t);
+		int rot = 0;
+		long m = rb_find(e, s.ntris, used, &s, &o, t, &rot);
 		if (m < 0) {
 			if (!missing++)
 				first = t;
 			continue;
 		}
 		used[m] = 1;
+		for (int k = 0; k < 3; k++) {
+			uint64_t ia = 3 * (uint64_t)m + (uint64_t)k,
+			         ib = 3 * (uint64_t)t + (k + rot - 1) % 3;
+			normal += v3_len(v3_sub(s.n[ia], o.n[ib])) > RB_TOL;
+		}
 		vec3 dk = v3_sub(s.mats[s.mat[m]].kd, o.mats[o.mat[t]].kd);
 		vec3 ds = v3_sub(s.mats[s.mat[m]].ks, o.mats[o.mat[t]].ks);
 		colour += fabsf(dk.x) + fabsf(dk.y) + fabsf(dk.z) + fabsf(ds.x) + fabsf(ds.y) +
@@ -567,6 +581,7 @@ Test(aff_robots, t0_equals_flattened_obj, .timeout = 120)
 	             missing, f[0].x, f[0].y, f[0].z, f[1].x, f[1].y, f[1].z, f[2].x, f[2].y,
 	             f[2].z);
 	cr_assert_eq(colour, 0, "%u triangles with other fm colours than the OBJ's", colour);
+	cr_assert_eq(normal, 0, "%u corners with other normals than the OBJ's", normal);
 	/* and it moves: the robots and the camera at t = 10 are elsewhere */
 	scene s10;
 	flat(&a, 10, &s10);
