@@ -385,6 +385,12 @@ static int rd_pool(parser *p, lexer *lx, const tok *at, float **pool, uint32_t *
 {
 	if (count_fits(p, lx, at, n, (uint32_t)k))
 		return -1;
+	if ((uint64_t)*np + n > AFF_POOL_MAX)
+		return perr(
+		    lx, at, p->d,
+		    "the scene has more than %u vertices, normals or texture coordinates of "
+		    "one kind",
+		    AFF_POOL_MAX);
 	if (grow(pool, cap, (uint64_t)*np + n, (size_t)k * sizeof(float)))
 		return oom(p, lx, at);
 	float *dst = *pool + (size_t)*np * (size_t)k;
@@ -707,6 +713,10 @@ static int rd_track(parser *p, lexer *lx, const tok *kind, aff_track *tr)
 	            "the number of keys (at least 4: the first and last shape the end tangents)") ||
 	    count_fits(p, lx, &p->last, n, (uint32_t)(4 + nv)))
 		return -1;
+	if ((uint64_t)p->a->nkeys + n > AFF_KEYS_MAX)
+		return perr(lx, &p->last, p->d, "the scene has more than %u keyframes",
+		            AFF_KEYS_MAX);
+	p->a->nkeys += n;
 	tr->k = calloc(n, sizeof *tr->k);
 	if (!tr->k || (rot && !(tr->q = calloc(4 * (size_t)n, sizeof *tr->q))))
 		return oom(p, lx, kind);

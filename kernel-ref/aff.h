@@ -40,7 +40,9 @@
 #define AFF_INCLUDE_DEPTH 16           /* include nesting */
 #define AFF_FILE_MAX      (64u << 20)  /* bytes of one file */
 #define AFF_TOTAL_MAX     (256u << 20) /* bytes read over all includes */
-#define AFF_TRIS_MAX      (1u << 24)   /* triangles after expanding includes */
+#define AFF_TRIS_MAX      (1u << 22)   /* triangles after expanding includes */
+#define AFF_POOL_MAX      (3u << 22)   /* vertices, normals, texture coordinates (each) */
+#define AFF_KEYS_MAX      (1u << 20)   /* keyframes, all tracks */
 #define AFF_NEST_MAX      256          /* open transform blocks */
 #define AFF_NAME_MAX      64           /* transform and keyframe names */
 #define AFF_FILES_MAX     4096         /* distinct files */
@@ -120,6 +122,7 @@ typedef struct aff_scene {
 	int frames;
 	uint32_t nfiles;    /* distinct files read */
 	uint32_t nincludes; /* include lines carried out */
+	uint32_t nkeys;     /* keyframes read */
 	uint64_t bytes;     /* bytes read, includes counted each time */
 } aff_scene;
 

@@ -337,7 +337,7 @@ static const struct bad {
     {"}\n", ":1:1:", "closes no transform block"},
     {"x a {\n" TRI, ":9:1:", "opened at line 1 is not closed"},
     {"m\nvertices 3\n1 0 0\n0 1 0\n0 0 1\ntriangles 1\n0 1 3\n", ":7:5:", "vertex index 3"},
-    {"m\nvertices 10000000\n1 2 3\n", ":2:10:", "more than the rest of the file"},
+    {"m\nvertices 4000000\n1 2 3\n", ":2:10:", "more than the rest of the file"},
     {"m\nvertices 3\n1 0 0\n0 nan 0\n0 0 1\n", ":4:3:", "not finite"},
     {"m\nvertices 3\n1 0 0\n0 1.0x 0\n", ":4:3:", "found '1.0x'"},
     {"k a {\nrot 3\n0 0 1 0 0 0 0 0\n", ":2:5:", "out of range [4,"},
