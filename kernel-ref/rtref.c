@@ -44,6 +44,17 @@ static void usage(FILE *f)
 	fputs(world_usage, f);
 }
 
+/* --two-level: the objects and the two levels' build times. */
+static void two_level_stats(jsonw *j, const tl_scene *t)
+{
+	jsonw_key(j, "two_level");
+	jsonw_obj_begin(j);
+	jsonw_kuint(j, "objects", t->nobj);
+	jsonw_knum(j, "bottom_build_ms", t->build_ms);
+	jsonw_knum(j, "top_build_ms", t->frame_ms);
+	jsonw_obj_end(j);
+}
+
 static void write_stats(jsonw *j, const world *w, const render_opts *o, const render_stats *st)
 {
 	uint64_t total = 0;
@@ -115,14 +126,8 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kuint(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_knum(j, "sah_cost", w->kd.sah_cost);
 	jsonw_obj_end(j);
-	if (w->tl) {
-		jsonw_key(j, "two_level");
-		jsonw_obj_begin(j);
-		jsonw_kuint(j, "objects", w->tl->nobj);
-		jsonw_knum(j, "bottom_build_ms", w->tl->build_ms);
-		jsonw_knum(j, "top_build_ms", w->tl->frame_ms);
-		jsonw_obj_end(j);
-	}
+	if (w->tl)
+		two_level_stats(j, w->tl);
 	jsonw_kuint(j, "memory_image_bytes", w->m.size);
 	jsonw_knum(j, "load_ms", w->load_ms);
 	jsonw_knum(j, "build_ms", w->kd_ms);

@@ -85,6 +85,17 @@ static int parse_num(const char *flag, const char *s, double lo, double hi, doub
 	return 0;
 }
 
+/* --anim-time T (any finite time within 1e9) or --anim-fps F. */
+static int anim_arg(world_opts *o, const char *a, const char *v, diag *d)
+{
+	int fps = !strcmp(a, "--anim-fps");
+	if (parse_num(a, v, fps ? 1e-6 : -1e9, fps ? 1e6 : 1e9, fps ? &o->anim_fps : &o->anim_time,
+	              d))
+		return -1;
+	*(fps ? &o->have_anim_fps : &o->have_anim_time) = 1;
+	return 0;
+}
+
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 {
 	const char *a = argv[*i];
@@ -129,15 +140,9 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->view = v;
 	else if (!strcmp(a, "--world-cache"))
 		o->cache_dir = v;
-	else if (!strcmp(a, "--anim-time")) {
-		if (parse_num(a, v, -1e9, 1e9, &o->anim_time, d))
-			return -1;
-		o->have_anim_time = 1;
-	} else if (!strcmp(a, "--anim-fps")) {
-		if (parse_num(a, v, 1e-6, 1e6, &o->anim_fps, d))
-			return -1;
-		o->have_anim_fps = 1;
-	} else if (!strcmp(a, "--eye")) {
+	else if (!strncmp(a, "--anim-", 7))
+		return anim_arg(o, a, v, d) ? -1 : 1;
+	else if (!strcmp(a, "--eye")) {
 		o->have_eye = 1;
 		return parse_vec(a, v, &o->cam.eye, d) ? -1 : 1;
 	} else if (!strcmp(a, "--lookat")) {
