@@ -49,6 +49,7 @@ static void two_level_stats(jsonw *j, const tl_scene *t)
 {
 	jsonw_key(j, "two_level");
 	jsonw_obj_begin(j);
+	jsonw_kuint(j, "instances", t->ninst);
 	jsonw_kuint(j, "objects", t->nobj);
 	jsonw_knum(j, "bottom_build_ms", t->build_ms);
 	jsonw_knum(j, "top_build_ms", t->frame_ms);
@@ -280,9 +281,9 @@ static void print_summary(const cli *a, const char *out, const world *w, const r
 	char kd[160];
 	if (w->tl)
 		snprintf(kd, sizeof kd,
-		         "two-level: %u objects (their trees built once in %.1f ms), top level "
-		         "built in %.2f ms",
-		         w->tl->nobj, w->tl->build_ms, w->tl->frame_ms);
+		         "two-level: %u instances of %u objects (their trees built once in %.1f "
+		         "ms), top level built in %.2f ms",
+		         w->tl->ninst, w->tl->nobj, w->tl->build_ms, w->tl->frame_ms);
 	else if (w->cache == WORLD_CACHE_HIT)
 		snprintf(kd, sizeof kd, "kd-tree %u nodes from the world cache", w->kd.nnodes);
 	else

@@ -23,34 +23,104 @@ static double now_ms(void)
 
 /* ---- bottom level ---- */
 
-/* Object k's scene: the triangles of the meshes under its node, in their
- * node's frame, in flattening order (the map into the flattened scene in
- * o->global). */
-static int object_scene(const aff_scene *a, tl_object *o, scene *s, diag *d)
+/* Instance in's scene: its triangles (the flattened scene's gtri[first..
+ * first+n), each found in its mesh through tmesh) in its node's frame. */
+static int inst_scene(const aff_scene *a, const uint32_t *gtri, const uint32_t *tmesh, uint32_t n,
+                      scene *s, diag *d)
 {
 	scene_init(s, a->path);
 	material m = material_default("object");
 	scene_add_material(s, &m);
-	o->global = malloc(((size_t)o->ntris + 1) * sizeof *o->global);
-	if (!o->global)
-		return diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
-	uint32_t g = 0, k = 0;
-	for (uint32_t i = 0; i < a->nmesh; i++) {
-		const aff_mesh *me = &a->mesh[i];
-		for (uint32_t t = 0; t < me->ntris; t++, g++) {
-			if (me->xform != o->xform)
-				continue;
-			const uint32_t *r = a->idx + 9 * (uint64_t)(me->t0 + t);
-			vec3 p[3];
-			for (int c = 0; c < 3; c++) {
-				const float *v = a->pv + 3 * (uint64_t)(me->v0 + r[c]);
-				p[c] = v3(v[0], v[1], v[2]);
-			}
-			scene_add_triangle(s, p, NULL, NULL, 0);
-			o->global[k++] = g;
+	for (uint32_t k = 0; k < n; k++) {
+		const aff_mesh *me = &a->mesh[tmesh[gtri[k]]];
+		const uint32_t *r = a->idx + 9 * (uint64_t)gtri[k];
+		vec3 p[3];
+		for (int c = 0; c < 3; c++) {
+			const float *v = a->pv + 3 * (uint64_t)(me->v0 + r[c]);
+			p[c] = v3(v[0], v[1], v[2]);
 		}
+		scene_add_triangle(s, p, NULL, NULL, 0);
 	}
 	return scene_finish(s, a->path, d);
+}
+
+static uint32_t hash_tris(const scene *s)
+{
+	const unsigned char *b = (const unsigned char *)s->v;
+	uint32_t h = 2166136261u ^ s->ntris;
+	for (size_t i = 0; i < 3 * (size_t)s->ntris * sizeof *s->v; i++)
+		h = (h ^ b[i]) * 16777619u;
+	return h;
+}
+
+/* The triangles of every transform node, grouped: t->gtri holds the
+ * flattened scene's triangle indices node by node (mesh order within a
+ * node; aff_flatten numbers the triangles in mesh order, so a mesh's
+ * triangle k is index t0 + k), tmesh[g] the mesh of triangle g; one
+ * instance per node with triangles. */
+static int group_instances(tl_scene *t, const aff_scene *a, uint32_t *tmesh, diag *d)
+{
+	uint32_t nx = a->nxf + 1;
+	uint32_t *start = calloc((size_t)nx + 1, sizeof *start);
+	t->gtri = malloc(((size_t)a->ntris + 1) * sizeof *t->gtri);
+	if (!start || !t->gtri) {
+		free(start);
+		return diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
+	}
+	for (uint32_t i = 0; i < a->nmesh; i++)
+		start[a->mesh[i].xform + 2] += a->mesh[i].ntris;
+	for (uint32_t x = 0; x < nx; x++) {
+		t->ninst += start[x + 1] > 0;
+		start[x + 1] += start[x];
+	}
+	t->inst = calloc((size_t)t->ninst + 1, sizeof *t->inst);
+	if (!t->inst) {
+		free(start);
+		return diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
+	}
+	for (uint32_t x = 0, k = 0; x < nx; x++)
+		if (start[x + 1] > start[x])
+			t->inst[k++] = (tl_inst){.xform = (int32_t)x - 1, .first = start[x]};
+	for (uint32_t i = 0; i < a->nmesh; i++) {
+		const aff_mesh *me = &a->mesh[i];
+		for (uint32_t k = 0; k < me->ntris; k++) {
+			t->gtri[start[me->xform + 1]++] = me->t0 + k;
+			tmesh[me->t0 + k] = i;
+		}
+	}
+	free(start);
+	return 0;
+}
+
+/* The object of instance k: an equal one built before (same triangles in
+ * their own frames: hash, then compare), or a new one. kept[] holds the
+ * distinct objects' scenes, slot[] (2^n, object + 1) their hashes. */
+static int find_object(tl_scene *t, uint32_t k, scene *s, scene *kept, uint32_t *slot,
+                       uint32_t *hashes, uint32_t cap, const kd_params *kp, diag *d)
+{
+	uint32_t h = hash_tris(s), i = h & (cap - 1);
+	for (; slot[i]; i = (i + 1) & (cap - 1)) {
+		const scene *o = &kept[slot[i] - 1];
+		if (hashes[slot[i] - 1] == h && o->ntris == s->ntris &&
+		    !memcmp(o->v, s->v, 3 * (size_t)s->ntris * sizeof *s->v)) {
+			t->inst[k].obj = slot[i] - 1;
+			scene_free(s);
+			return 0;
+		}
+	}
+	tl_object *ob = &t->obj[t->nobj];
+	ob->ntris = s->ntris;
+	if (kd_build(&ob->kd, s, kp, d) || mimg_build(&ob->m, s, &ob->kd, d)) {
+		kd_free(&ob->kd);
+		mimg_free(&ob->m);
+		scene_free(s);
+		return -1;
+	}
+	kept[t->nobj] = *s;
+	hashes[t->nobj] = h;
+	t->inst[k].obj = t->nobj++;
+	slot[i] = t->nobj;
+	return 0;
 }
 
 static ray_hit tracer_ray(const void *ctx, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)
@@ -64,37 +134,49 @@ static uint64_t tracer_packet(const void *ctx, packet *p, trav_entry *stack, int
 	return tl_pkt_trace(ctx, p, stack, stack_max, c);
 }
 
+/* The objects of the grouped instances (group_instances). */
+static int build_objects(tl_scene *t, const aff_scene *a, const uint32_t *tmesh,
+                         const kd_params *kp, diag *d)
+{
+	uint32_t cap = 16;
+	while (cap < 2 * (uint64_t)t->ninst + 2)
+		cap *= 2;
+	scene *kept = calloc((size_t)t->ninst + 1, sizeof *kept);
+	uint32_t *slot = calloc(cap, sizeof *slot), *hashes = calloc(t->ninst + 1u, sizeof *hashes);
+	t->obj = calloc((size_t)t->ninst + 1, sizeof *t->obj);
+	t->order = calloc((size_t)t->ninst + 1, sizeof *t->order);
+	t->node = calloc(2 * (size_t)t->ninst + 1, sizeof *t->node);
+	int rc = 0;
+	if (!kept || !slot || !hashes || !t->obj || !t->order || !t->node)
+		rc = diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
+	for (uint32_t k = 0; !rc && k < t->ninst; k++) {
+		uint32_t end = k + 1 < t->ninst ? t->inst[k + 1].first : a->ntris;
+		scene s;
+		rc =
+		    inst_scene(a, t->gtri + t->inst[k].first, tmesh, end - t->inst[k].first, &s, d);
+		if (rc)
+			scene_free(&s);
+		else
+			rc = find_object(t, k, &s, kept, slot, hashes, cap, kp, d);
+	}
+	for (uint32_t k = 0; kept && k < t->nobj; k++)
+		scene_free(&kept[k]);
+	free(kept);
+	free(slot);
+	free(hashes);
+	return rc ? -1 : 0;
+}
+
 int tl_build(tl_scene *t, const aff_scene *a, const kd_params *kp, diag *d)
 {
 	double t0 = now_ms();
 	memset(t, 0, sizeof *t);
-	/* objects: the nodes that hold triangles (index xform + 1) */
-	uint32_t *count = calloc((size_t)a->nxf + 1, sizeof *count);
-	if (!count)
-		return diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
-	for (uint32_t i = 0; i < a->nmesh; i++)
-		count[a->mesh[i].xform + 1] += a->mesh[i].ntris;
-	for (uint32_t x = 0; x <= a->nxf; x++)
-		t->nobj += count[x] > 0;
-	t->obj = calloc((size_t)t->nobj + 1, sizeof *t->obj);
-	t->inst = calloc((size_t)t->nobj + 1, sizeof *t->inst);
-	t->order = calloc((size_t)t->nobj + 1, sizeof *t->order);
-	t->node = calloc(2 * (size_t)t->nobj + 1, sizeof *t->node);
-	int rc = 0;
-	if (!t->obj || !t->inst || !t->order || !t->node)
-		rc = diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
-	for (uint32_t x = 0, k = 0; !rc && x <= a->nxf; x++) {
-		if (!count[x])
-			continue;
-		tl_object *o = &t->obj[k++];
-		o->xform = (int32_t)x - 1;
-		o->ntris = count[x];
-		scene s;
-		rc = object_scene(a, o, &s, d) || kd_build(&o->kd, &s, kp, d) ||
-		     mimg_build(&o->m, &s, &o->kd, d);
-		scene_free(&s);
-	}
-	free(count);
+	uint32_t *tmesh = malloc(((size_t)a->ntris + 1) * sizeof *tmesh);
+	int rc = tmesh ? group_instances(t, a, tmesh, d)
+	               : diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
+	if (!rc)
+		rc = build_objects(t, a, tmesh, kp, d);
+	free(tmesh);
 	t->tracer = (render_tracer){t, tracer_ray, tracer_packet};
 	t->build_ms = now_ms() - t0;
 	if (rc)
@@ -107,10 +189,10 @@ void tl_free(tl_scene *t)
 	for (uint32_t k = 0; t->obj && k < t->nobj; k++) {
 		kd_free(&t->obj[k].kd);
 		mimg_free(&t->obj[k].m);
-		free(t->obj[k].global);
 	}
 	free(t->obj);
 	free(t->inst);
+	free(t->gtri);
 	free(t->order);
 	free(t->node);
 	memset(t, 0, sizeof *t);
@@ -201,18 +283,17 @@ int tl_frame(tl_scene *t, const aff_scene *a, double time, const mimg *world, di
 		return diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
 	aff_matrices(a, time, m);
 	static const double id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
-	for (uint32_t k = 0; k < t->nobj; k++) {
-		const tl_object *o = &t->obj[k];
-		const double *w = o->xform >= 0 ? m + 12 * (size_t)o->xform : id;
-		t->inst[k].obj = k;
-		affine_inverse(w, t->inst[k].inv);
-		t->inst[k].box = world_box(w, o->m.bounds);
+	for (uint32_t k = 0; k < t->ninst; k++) {
+		tl_inst *in = &t->inst[k];
+		const double *w = in->xform >= 0 ? m + 12 * (size_t)in->xform : id;
+		affine_inverse(w, in->inv);
+		in->box = world_box(w, t->obj[in->obj].m.bounds);
 		t->order[k] = k;
 	}
 	free(m);
 	t->nnode = 1;
-	if (t->nobj)
-		bvh_build(t, 0, 0, t->nobj);
+	if (t->ninst)
+		bvh_build(t, 0, 0, t->ninst);
 	t->world = world;
 	t->frame_ms = now_ms() - t0;
 	return 0;
@@ -252,10 +333,11 @@ static int box_hit(const aabb *b, const float o[3], const float id[3], float tma
 	return tn <= tf;
 }
 
-/* The address in the world image of local triangle address a of object o. */
-static uint32_t world_addr(const tl_scene *t, const tl_object *o, uint32_t a)
+/* The address in the world image of local triangle address a of
+ * instance in (object ob). */
+static uint32_t world_addr(const tl_scene *t, const tl_inst *in, const tl_object *ob, uint32_t a)
 {
-	return (uint32_t)mimg_tri_addr(t->world, o->global[mimg_tri_index(&o->m, a)]);
+	return (uint32_t)mimg_tri_addr(t->world, t->gtri[in->first + mimg_tri_index(&ob->m, a)]);
 }
 
 /* One instance for one ray: traced in object space with the best t so far
@@ -270,7 +352,7 @@ static int ray_inst(const tl_scene *t, const tl_inst *in, const float o[3], cons
 	ray_hit r = ray_trace(&ob->m, oo, od, h->t, any, c);
 	if (r.tri == PKT_NOHIT)
 		return 0;
-	uint32_t g = world_addr(t, ob, r.tri);
+	uint32_t g = world_addr(t, in, ob, r.tri);
 	if (any) {
 		h->t = r.t;
 		h->tri = g;
@@ -290,7 +372,7 @@ ray_hit tl_ray_trace(const tl_scene *t, vec3 o, vec3 d, float tmax, int any_hit,
 	const float id[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
 	uint32_t stack[64];
 	int sp = 0;
-	if (t->nobj)
+	if (t->ninst)
 		stack[sp++] = 0;
 	while (sp > 0) {
 		const tl_node *n = &t->node[stack[--sp]];
@@ -354,7 +436,7 @@ static void pkt_inst(const tl_scene *t, const tl_inst *in, packet *p, uint64_t m
 		int i = __builtin_ctzll(m);
 		if (q->tri[i] == PKT_NOHIT)
 			continue;
-		uint32_t g = world_addr(t, ob, q->tri[i]);
+		uint32_t g = world_addr(t, in, ob, q->tri[i]);
 		if (shadow) {
 			p->t[i] = -INFINITY; /* occluded, as the packet path marks it */
 			p->tri[i] = g;
@@ -380,7 +462,7 @@ uint64_t tl_pkt_trace(const tl_scene *t, packet *p, trav_entry *stack, int stack
 		p->t[i] = p->tmax[i];
 		p->tri[i] = PKT_NOHIT;
 	}
-	if (!t->nobj)
+	if (!t->ninst)
 		return 0;
 	uint64_t entered = pkt_box(&t->node[0].box, p, p->valid);
 	packet q; /* the rays in an object's space */

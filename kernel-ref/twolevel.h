@@ -4,12 +4,14 @@
  * frame, over bottom-level trees built once; Wald, Benthin, Slusallek,
  * "Distributed Interactive Ray Tracing of Dynamic Scenes", 2003).
  *
- * The objects of an AFF scene (aff.h) are its transform nodes: the meshes
- * directly under one node move together, so each node with meshes is one
- * rigid object. tl_build gives every object a kd-tree and memory image of
- * its triangles in the node's own frame, once. tl_frame places them at a
- * time: an instance per object with its world matrix, its inverse and its
- * world box, and a small BVH over the boxes (median splits), per frame.
+ * The instances of an AFF scene (aff.h) are its transform nodes: the
+ * meshes directly under one node move together, so each node with meshes
+ * is one rigid instance. Instances whose triangles are the same in their
+ * own frames (a part file included ten times: Robots' 220 robot parts are
+ * 22 distinct objects) share one object. tl_build gives every object a
+ * kd-tree and memory image of its triangles, once. tl_frame places the
+ * instances at a time: each its world matrix's inverse and its world box,
+ * and a small BVH over the boxes (median splits), per frame.
  *
  * Tracing (tl_ray_trace, tl_pkt_trace) walks the BVH; at an instance the
  * rays are moved into object space (origin and direction by the inverse
@@ -36,14 +38,14 @@
 
 typedef struct tl_object {
 	kdtree kd;
-	mimg m;           /* the object's triangles in its own frame */
-	uint32_t *global; /* local triangle index -> index in the flattened scene */
+	mimg m; /* the object's triangles in its own frame */
 	uint32_t ntris;
-	int32_t xform; /* its AFF transform node (-1: the root) */
 } tl_object;
 
 typedef struct tl_inst {
 	uint32_t obj;
+	int32_t xform;  /* its AFF transform node (-1: the root) */
+	uint32_t first; /* its triangles' indices in the flattened scene: gtri[first..] */
 	double inv[12]; /* world -> object, row-major 3x4 */
 	aabb box;       /* world box, widened */
 } tl_inst;
@@ -57,7 +59,9 @@ typedef struct tl_node {
 typedef struct tl_scene {
 	tl_object *obj;
 	uint32_t nobj;
-	tl_inst *inst; /* one per object, per frame */
+	tl_inst *inst; /* placed per frame */
+	uint32_t ninst;
+	uint32_t *gtri; /* per instance, in order: the flattened scene's triangle indices */
 	uint32_t *order;
 	tl_node *node;
 	uint32_t nnode;
@@ -67,7 +71,8 @@ typedef struct tl_scene {
 	render_tracer tracer; /* hands tl_ray_trace / tl_pkt_trace to render_frame */
 } tl_scene;
 
-/* The bottom level: one kd-tree (parameters kp) per object of a. */
+/* The bottom level: the instances of a, and one kd-tree (parameters kp)
+ * per distinct object. */
 int tl_build(tl_scene *t, const aff_scene *a, const kd_params *kp, diag *d);
 
 /* The top level at time `time`: instances and their BVH. world is the
