@@ -160,8 +160,8 @@ stress: all
 	sh scripts/precision-chip.sh $(B)
 
 # ---- fuzzing (docs/TESTING.md) ----
-# libFuzzer harnesses (clang) for the config, views, OBJ, PLY and memory
-# trace readers: `make fuzz` builds them into build-fuzz/, `make
+# libFuzzer harnesses (clang) for the config, views, OBJ, PLY, AFF and
+# memory trace readers: `make fuzz` builds them into build-fuzz/, `make
 # fuzz-smoke` runs each for FUZZ_SECONDS (default 20) from the seeds in
 # tests/fuzz/seeds/ and files the repository and shared scenes already
 # have; FUZZ_SECONDS=600 is the long run. A finding stops the run with the
@@ -174,7 +174,7 @@ FZ_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -O1 -g -ffp-co
              -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter $(FZ_SAN) \
              -I. -Itests/fuzz
 FZ_OBJ    := $(LIB_C:%.c=$(FZ_B)/%.o)
-FZ_NAMES  := config views trace obj ply
+FZ_NAMES  := config views trace obj ply aff
 FZ_BINS   := $(FZ_NAMES:%=$(FZ_B)/fuzz-%)
 FUZZ_SECONDS ?= 20
 

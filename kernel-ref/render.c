@@ -55,14 +55,17 @@ static double now_ms(void)
 	return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
-/* Traces one packet with the single-ray path (for checking). */
-static void trace_single(const mimg *m, packet *p, trav_counts *c, const pkt_precision *prec)
+/* Traces one packet with the single-ray path (for checking), through the
+ * image's tree or another tracer (tr). */
+static void trace_single(const mimg *m, packet *p, trav_counts *c, const pkt_precision *prec,
+                         const render_tracer *tr)
 {
 	for (uint64_t b = p->valid; b; b &= b - 1) {
 		int i = __builtin_ctzll(b);
-		ray_hit h = ray_trace_fp(m, v3(p->ox[i], p->oy[i], p->oz[i]),
-		                         v3(p->dx[i], p->dy[i], p->dz[i]), p->tmax[i],
-		                         p->type == PKT_SHADOW, c, prec);
+		vec3 o = v3(p->ox[i], p->oy[i], p->oz[i]), d = v3(p->dx[i], p->dy[i], p->dz[i]);
+		int any = p->type == PKT_SHADOW;
+		ray_hit h = tr ? tr->ray(tr->ctx, o, d, p->tmax[i], any, c)
+		               : ray_trace_fp(m, o, d, p->tmax[i], any, c, prec);
 		p->t[i] = h.t;
 		p->tri[i] = h.tri;
 		p->bu[i] = h.bu;
@@ -83,11 +86,14 @@ static void do_sample(worker *w, int tile, int s)
 		w->st.rays[p->type] += (uint64_t)nrays;
 		w->st.packets[p->type]++;
 		double t0 = now_ms();
+		const render_tracer *tr = j->o->tracer;
 		if (j->o->single_ray) {
-			trace_single(j->m, p, &w->st.trav, j->o->prec);
+			trace_single(j->m, p, &w->st.trav, j->o->prec, tr);
 		} else {
 			uint64_t entered =
-			    pkt_trace_fp(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav, j->o->prec);
+			    tr ? tr->packet(tr->ctx, p, w->stack, PKT_STACK_MAX, &w->st.trav)
+			       : pkt_trace_fp(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav,
+			                      j->o->prec);
 			/* rays that miss the scene box skip traversal */
 			w->st.box_miss_rays += (uint64_t)__builtin_popcountll(p->valid & ~entered);
 			w->st.box_miss_packets += entered == 0;

@@ -18,6 +18,17 @@
 #include "kernel-ref/shade.h"
 #include "kernel-ref/view.h"
 
+/* Another tracer for the frame's rays, in place of the image's own kd-tree
+ * (the two-level trees of twolevel.h): its hits name triangles of the
+ * image render_frame is given, which the shader reads as usual. Full
+ * precision only (render_opts.prec is not passed on). */
+typedef struct render_tracer {
+	const void *ctx;
+	ray_hit (*ray)(const void *ctx, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c);
+	uint64_t (*packet)(const void *ctx, packet *p, trav_entry *stack, int stack_max,
+	                   trav_counts *c);
+} render_tracer;
+
 typedef struct render_opts {
 	int width, height;
 	int threads;    /* host threads, >= 1 */
@@ -28,6 +39,7 @@ typedef struct render_opts {
 	/* Reduced precision per stage (NULL: full precision, the reference).
 	 * Must outlive render_frame. */
 	const pkt_precision *prec;
+	const render_tracer *tracer; /* NULL: the image's kd-tree */
 } render_opts;
 
 typedef struct render_stats {

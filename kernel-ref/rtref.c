@@ -3,11 +3,14 @@
  *
  *   rtref [--scene P | --views F --view N] [--size WxH] [--threads N]
  *         [--depth N] [--no-shadows] [--single-ray] [--out FILE] [--stats FILE.json]
+ *         [--anim-time T] [--anim-fps F --frames N]
  *         [--fp-trav E,M] [--fp-isect E,M] [--fp-shade E,M] [--fp-round MODE]
  *
  * Prints one summary line; writes the frame (PNG, EXR, ... by extension)
- * and a JSON stats file. Bad input: one line on stderr, exit status 2, no
- * output file.
+ * and a JSON stats file. An animated (AFF) scene renders N frames at
+ * T + i/F with --frames N, each its own summary line and files (the
+ * frame number before the extension: out-0003.png). Bad input: one line on stderr, exit status 2,
+ * no output file.
  */
 #include <errno.h>
 #include <stdio.h>
@@ -17,6 +20,7 @@
 #include "kernel-ref/image.h"
 #include "kernel-ref/jsonw.h"
 #include "kernel-ref/render.h"
+#include "kernel-ref/twolevel.h"
 #include "kernel-ref/world.h"
 
 static void usage(FILE *f)
@@ -30,12 +34,26 @@ static void usage(FILE *f)
 	        "  --single-ray          trace with the scalar single-ray path (for checking)\n"
 	        "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
 	        "  --stats FILE.json     write statistics as JSON\n"
+	        "  --frames N            AFF scene with --anim-fps: N frames (1..100000) at\n"
+	        "                        T + i/F, written as FILE-0000.png, FILE-0001.png, ...\n"
 	        "  --fp-trav E,M         traversal in a reduced format: E exponent (2..8) and M\n"
 	        "                        mantissa bits (1..23); default full float (8,23)\n"
 	        "  --fp-isect E,M        intersection (the Woop test) in a reduced format\n"
 	        "  --fp-shade E,M        shading in a reduced format\n"
 	        "  --fp-round MODE       their rounding: nearest (default), zero, up, down\n");
 	fputs(world_usage, f);
+}
+
+/* --two-level: the objects and the two levels' build times. */
+static void two_level_stats(jsonw *j, const tl_scene *t)
+{
+	jsonw_key(j, "two_level");
+	jsonw_obj_begin(j);
+	jsonw_kuint(j, "instances", t->ninst);
+	jsonw_kuint(j, "objects", t->nobj);
+	jsonw_knum(j, "bottom_build_ms", t->build_ms);
+	jsonw_knum(j, "top_build_ms", t->frame_ms);
+	jsonw_obj_end(j);
 }
 
 static void write_stats(jsonw *j, const world *w, const render_opts *o, const render_stats *st)
@@ -46,6 +64,8 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_obj_begin(j);
 	jsonw_kstr(j, "program", "rtref");
 	jsonw_kstr(j, "scene", w->scene_label);
+	if (w->aff)
+		jsonw_knum(j, "anim_time", w->anim_time);
 	jsonw_kstr(j, "view", w->v.name);
 	view_json(j, &w->v);
 	jsonw_kuint(j, "triangles", w->s.ntris);
@@ -107,6 +127,8 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kuint(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_knum(j, "sah_cost", w->kd.sah_cost);
 	jsonw_obj_end(j);
+	if (w->tl)
+		two_level_stats(j, w->tl);
 	jsonw_kuint(j, "memory_image_bytes", w->m.size);
 	jsonw_knum(j, "load_ms", w->load_ms);
 	jsonw_knum(j, "build_ms", w->kd_ms);
@@ -127,6 +149,7 @@ typedef struct cli {
 	world_opts wo;
 	render_opts ro;
 	const char *out, *stats;
+	int frames;            /* --frames N (animation) */
 	const char *fp_arg[3]; /* traversal, intersection, shading */
 	int fp_mode;
 	pkt_precision prec; /* ro.prec points here when a format is given */
@@ -147,6 +170,10 @@ static int value_flag(cli *a, const char *f, const char *v, diag *d)
 		if (cli_parse_int(f, v, 0, 16, &n, d))
 			return cli_bad("rtref", d->msg);
 		a->ro.max_depth = (int)n;
+	} else if (!strcmp(f, "--frames")) {
+		if (cli_parse_int(f, v, 1, 100000, &n, d))
+			return cli_bad("rtref", d->msg);
+		a->frames = (int)n;
 	} else if (!strcmp(f, "--out")) {
 		a->out = v;
 	} else if (!strcmp(f, "--stats")) {
@@ -175,6 +202,7 @@ static int value_flag(cli *a, const char *f, const char *v, diag *d)
 static int parse_args(int argc, char **argv, cli *a, diag *d)
 {
 	memset(a, 0, sizeof *a);
+	a->frames = 1;
 	world_opts_default(&a->wo);
 	render_opts_default(&a->ro);
 	a->fp_mode = FPR_NEAREST;
@@ -212,20 +240,22 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 			return cli_bad("rtref", d->msg);
 	if (a->fp_arg[0] || a->fp_arg[1] || a->fp_arg[2])
 		a->ro.prec = &a->prec;
+	if (a->frames > 1 && !a->wo.have_anim_fps)
+		return cli_bad("rtref", "--frames: needs --anim-fps F (frame i is at T + i/F)");
 	return -1;
 }
 
 /* The image and the statistics appear together or not at all. Returns
  * the exit status. */
-static int write_outputs(const cli *a, const world *w, const framebuf *fb, const render_stats *st,
-                         diag *d)
+static int write_outputs(const cli *a, const char *out, const char *stats, const world *w,
+                         const framebuf *fb, const render_stats *st, diag *d)
 {
 	af_group outs = {0};
-	if (a->out && fb_write(fb, a->out, &outs, d))
+	if (out && fb_write(fb, out, &outs, d))
 		return cli_bad("rtref", d->msg);
-	if (a->stats) {
+	if (stats) {
 		jsonw j;
-		if (jsonw_open(&j, a->stats, d)) {
+		if (jsonw_open(&j, stats, d)) {
 			af_group_abort(&outs);
 			return cli_bad("rtref", d->msg);
 		}
@@ -242,14 +272,19 @@ static int write_outputs(const cli *a, const world *w, const framebuf *fb, const
 }
 
 /* The one summary line on stdout. */
-static void print_summary(const cli *a, const world *w, const render_stats *st)
+static void print_summary(const cli *a, const char *out, const world *w, const render_stats *st)
 {
 	const render_opts *ro = &a->ro;
 	uint64_t total = 0;
 	for (int t = 0; t < PKT_NTYPES; t++)
 		total += st->rays[t];
-	char kd[96];
-	if (w->cache == WORLD_CACHE_HIT)
+	char kd[160];
+	if (w->tl)
+		snprintf(kd, sizeof kd,
+		         "two-level: %u instances of %u objects (their trees built once in %.1f "
+		         "ms), top level built in %.2f ms",
+		         w->tl->ninst, w->tl->nobj, w->tl->build_ms, w->tl->frame_ms);
+	else if (w->cache == WORLD_CACHE_HIT)
 		snprintf(kd, sizeof kd, "kd-tree %u nodes from the world cache", w->kd.nnodes);
 	else
 		snprintf(kd, sizeof kd, "kd-tree %u nodes built in %.1f ms", w->kd.nnodes,
@@ -261,7 +296,26 @@ static void print_summary(const cli *a, const world *w, const render_stats *st)
 	       (unsigned long long)st->rays[PKT_PRIMARY], (unsigned long long)st->rays[PKT_SHADOW],
 	       (unsigned long long)st->rays[PKT_REFLECT], (unsigned long long)st->rays[PKT_REFRACT],
 	       st->render_ms, st->render_ms > 0 ? (double)total / (st->render_ms * 1e3) : 0.0, kd,
-	       a->out ? "; wrote " : "", a->out ? a->out : "");
+	       out ? "; wrote " : "", out ? out : "");
+}
+
+/* Frame i: the world moved to its time (after the first), rendered and
+ * written. Returns the exit status. */
+static int render_one(const cli *a, world *w, framebuf *fb, int i, diag *d)
+{
+	if (i > 0 && world_set_time(w, &a->wo, world_frame_time(&a->wo, i), d))
+		return cli_bad("rtref", d->msg);
+	char ob[4096], sb[4096];
+	const char *out = cli_frame_path(a->out, a->frames, i, ob, sizeof ob);
+	const char *stats = cli_frame_path(a->stats, a->frames, i, sb, sizeof sb);
+	render_stats st;
+	fb_clear(fb); /* render_frame adds into it */
+	if (render_frame(&w->m, &w->v, &a->ro, fb, &st, d))
+		return cli_bad("rtref", d->msg);
+	int rc = write_outputs(a, out, stats, w, fb, &st, d);
+	if (!rc)
+		print_summary(a, out, w, &st);
+	return rc;
 }
 
 int main(int argc, char **argv)
@@ -279,18 +333,20 @@ int main(int argc, char **argv)
 	world w;
 	if (world_load(&w, &a.wo, &d))
 		return cli_bad("rtref", d.msg);
+	if (w.tl)
+		a.ro.tracer = &w.tl->tracer;
+	if (w.tl && a.ro.prec) {
+		world_free(&w);
+		return cli_bad("rtref", "--two-level: traces at full precision only (no --fp-*)");
+	}
 	framebuf fb;
 	if (fb_init(&fb, a.ro.width, a.ro.height)) {
 		world_free(&w);
 		return cli_bad("rtref", "out of memory for the frame buffer");
 	}
-	render_stats st;
-	if (render_frame(&w.m, &w.v, &a.ro, &fb, &st, &d))
-		rc = cli_bad("rtref", d.msg);
-	else
-		rc = write_outputs(&a, &w, &fb, &st, &d);
-	if (!rc)
-		print_summary(&a, &w, &st);
+	rc = 0;
+	for (int i = 0; i < a.frames && !rc; i++)
+		rc = render_one(&a, &w, &fb, i, &d);
 	fb_free(&fb);
 	world_free(&w);
 	return rc;

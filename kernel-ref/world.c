@@ -3,8 +3,10 @@
  */
 #include "kernel-ref/world.h"
 
+#include "kernel-ref/aff.h"
 #include "kernel-ref/image.h"
 #include "kernel-ref/spd.h"
+#include "kernel-ref/twolevel.h"
 #include "kernel-ref/worldcache.h"
 
 #include <errno.h>
@@ -18,8 +20,14 @@ const char world_usage[] =
     "  --scene PATH          scene file (.obj .ply .stl .3ds .gltf .glb .dae, .gz ok; limits:\n"
     "                        SAARSIM_IMPORT_CPU_S, SAARSIM_IMPORT_MEM_MB) or a procedural scene\n"
     "                        spd:balls|tetra|mount|rings|cornell|billiard[:SIZE[:TESS]]\n"
-    "                        (docs/spd.md); default: the view's scene, else the embedded\n"
+    "                        (docs/spd.md), or an animated BART scene (.aff, docs/views.md\n"
+    "                        \"AFF scenes\"); default: the view's scene, else the embedded\n"
     "                        Cornell-like room\n"
+    "  --anim-time T         AFF scene: the animation time to render (default 0)\n"
+    "  --anim-fps F          AFF scene: frames per second of animation time; frame i of a\n"
+    "                        multi-frame run (--frames N) is at T + i/F\n"
+    "  --two-level           AFF scene, rtref: trace through a kd-tree per rigid object\n"
+    "                        (built once) under a tree of instances rebuilt per frame\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
@@ -112,6 +120,17 @@ static int drt_flag(world_opts *o, const char *a, const char *v, diag *d)
 	return 1;
 }
 
+/* --anim-time T (any finite time within 1e9) or --anim-fps F. */
+static int anim_arg(world_opts *o, const char *a, const char *v, diag *d)
+{
+	int fps = !strcmp(a, "--anim-fps");
+	if (parse_num(a, v, fps ? 1e-6 : -1e9, fps ? 1e6 : 1e9, fps ? &o->anim_fps : &o->anim_time,
+	              d))
+		return -1;
+	*(fps ? &o->have_anim_fps : &o->have_anim_time) = 1;
+	return 0;
+}
+
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 {
 	const char *a = argv[*i];
@@ -134,13 +153,15 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	                                         "--focus",
 	                                         "--light-size",
 	                                         "--gloss",
-	                                         "--motion"};
+	                                         "--motion",
+	                                         "--anim-time",
+	                                         "--anim-fps"};
 	int takes = 0;
 	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
 		takes |= strcmp(a, with_value[k]) == 0;
 	if (!takes) {
-		if (strcmp(a, "--no-lights") == 0) {
-			o->no_lights = 1;
+		if (strcmp(a, "--no-lights") == 0 || strcmp(a, "--two-level") == 0) {
+			*(a[2] == 'n' ? &o->no_lights : &o->two_level) = 1;
 			(*i)++;
 			return 1;
 		}
@@ -163,6 +184,8 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->view = v;
 	else if (!strcmp(a, "--world-cache"))
 		o->cache_dir = v;
+	else if (!strncmp(a, "--anim-", 7))
+		return anim_arg(o, a, v, d) ? -1 : 1;
 	else if (!strcmp(a, "--eye")) {
 		o->have_eye = 1;
 		return parse_vec(a, v, &o->cam.eye, d) ? -1 : 1;
@@ -212,6 +235,44 @@ const char *world_cache_name(int status)
 {
 	static const char *const names[] = {"off", "hit", "stored", "not stored"};
 	return status >= 0 && status < 4 ? names[status] : "?";
+}
+
+/* The world's own kd-tree parameters: with --two-level the image serves
+ * shading only (the two-level trees trace), so one split is enough. */
+static const kd_params *world_kd(const world_opts *o)
+{
+	static _Thread_local kd_params one;
+	if (!o->two_level)
+		return &o->kd;
+	one = o->kd;
+	one.max_depth = 1;
+	return &one;
+}
+
+/* --two-level: the objects' trees, once, and the instances at the
+ * world's time. */
+static int two_level_build(world *w, const world_opts *o, diag *d)
+{
+	if (!(w->tl = calloc(1, sizeof *w->tl)))
+		return diag_set(d, "--two-level", 0, 0, "out of memory");
+	if (tl_build(w->tl, w->aff, &o->kd, d))
+		return -1;
+	return tl_frame(w->tl, w->aff, w->anim_time, &w->m, d);
+}
+
+/* An AFF scene read and flattened at o's time; its own view (if the file
+ * has one) to *sv, *has_view set. */
+static int load_aff(world *w, const world_opts *o, const char *path, view *sv, int *has_view,
+                    diag *d)
+{
+	if (!(w->aff = calloc(1, sizeof *w->aff)))
+		return diag_set(d, path, 0, 0, "out of memory");
+	w->anim_time = world_frame_time(o, 0);
+	if (aff_load(w->aff, path, NULL, NULL, d) || aff_flatten(w->aff, w->anim_time, 1, &w->s, d))
+		return -1;
+	int r = aff_view(w->aff, w->anim_time, sv, d);
+	*has_view = r > 0;
+	return r < 0 ? -1 : 0;
 }
 
 /* Imports or generates the scene at path (NULL: the embedded one); a
@@ -385,43 +446,57 @@ int world_load(world *w, const world_opts *o, diag *d)
 	if (load_view(w, o, d))
 		return -1;
 	const char *path = o->scene ? o->scene : (o->views && w->v.scene[0]) ? w->v.scene : NULL;
-	int spd = spd_is(path);
+	int spd = spd_is(path), aff = aff_is(path), aff_has_view = 0;
+	if ((o->have_anim_time || o->have_anim_fps || o->two_level) && !aff)
+		return diag_set(d,
+		                o->have_anim_time  ? "--anim-time"
+		                : o->have_anim_fps ? "--anim-fps"
+		                                   : "--two-level",
+		                0, 0, "needs an AFF scene (--scene FILE.aff)");
 	wc_files files = {0};
 	char cfile[PATH_MAX], *ckey = NULL;
 	view sv;
 	memset(&sv, 0, sizeof sv);
 	wc_part parts[WORLD_PARTS];
 	world_parts(parts, &w->s, &w->kd, &w->m, &sv, &w->image_crc);
-	if (o->cache_dir && cache_lookup(w, o, path, parts, cfile, sizeof cfile, &ckey, d)) {
+	/* an AFF world is not cached: it is rebuilt per animation time */
+	if (o->cache_dir && !aff &&
+	    cache_lookup(w, o, path, parts, cfile, sizeof cfile, &ckey, d)) {
 		free(ckey);
 		return -1;
 	}
-	if (!w->cache && load_scene(w, path, &sv, o->cache_dir ? &files : NULL, d))
+	if (aff ? load_aff(w, o, path, &sv, &aff_has_view, d)
+	        : !w->cache && load_scene(w, path, &sv, o->cache_dir ? &files : NULL, d))
 		goto fail;
-	/* a procedural scene brings its standard view unless a views file
-	 * gave one */
-	if (spd && !o->views)
+	/* a procedural scene brings its standard view, an AFF scene its
+	 * camera at the time, unless a views file gave one */
+	if ((spd || aff_has_view) && !o->views)
 		w->v = sv;
 	/* a scene file without a view: framed by its bounding box (the
 	 * embedded room's camera showed a model as a few pixels) */
-	if (path && !spd && !o->views)
+	if (path && !spd && !aff_has_view && !o->views)
 		view_frame_bbox(&w->v, w->s.bounds);
-	snprintf(w->scene_label, sizeof w->scene_label, "%s", path ? path : w->s.name);
+	if (aff)
+		snprintf(w->scene_label, sizeof w->scene_label, "%.990s@t=%g", path, w->anim_time);
+	else
+		snprintf(w->scene_label, sizeof w->scene_label, "%s", path ? path : w->s.name);
 	w->load_ms = now_ms() - t0;
 	if (apply_view_flags(w, o, d))
 		goto fail;
 	if (w->cache != WORLD_CACHE_HIT) {
 		t0 = now_ms();
-		if (kd_build(&w->kd, &w->s, &o->kd, d))
+		if (kd_build(&w->kd, &w->s, world_kd(o), d))
 			goto fail;
 		w->kd_ms = now_ms() - t0;
 		t0 = now_ms();
 		if (mimg_build(&w->m, &w->s, &w->kd, d))
 			goto fail;
 		w->image_ms = now_ms() - t0;
-		if (o->cache_dir)
+		if (o->cache_dir && !aff)
 			cache_store(w, &sv, cfile, ckey, &files);
 	}
+	if (o->two_level && two_level_build(w, o, d))
+		goto fail;
 	wc_files_free(&files);
 	free(ckey);
 	if (w->kd.nbudget_leaves) /* also from the cache: each run says so */
@@ -487,6 +562,58 @@ void world_free(world *w)
 	mimg_free(&w->m);
 	kd_free(&w->kd);
 	scene_free(&w->s);
+	if (w->aff) {
+		aff_free(w->aff);
+		free(w->aff);
+		w->aff = NULL;
+	}
+	if (w->tl) {
+		tl_free(w->tl);
+		free(w->tl);
+		w->tl = NULL;
+	}
+}
+
+double world_frame_time(const world_opts *o, int i)
+{
+	return o->anim_time + (o->have_anim_fps ? (double)i / o->anim_fps : 0.0);
+}
+
+int world_set_time(world *w, const world_opts *o, double t, diag *d)
+{
+	if (!w->aff)
+		return diag_set(d, "--anim-time", 0, 0, "needs an AFF scene (--scene FILE.aff)");
+	mimg_free(&w->m);
+	kd_free(&w->kd);
+	scene_free(&w->s);
+	double t0 = now_ms();
+	w->anim_time = t;
+	if (aff_flatten(w->aff, t, 1, &w->s, d))
+		return -1;
+	view sv;
+	int r = aff_view(w->aff, t, &sv, d);
+	if (r < 0)
+		return -1;
+	if (!o->views) {
+		if (r)
+			w->v = sv;
+		else
+			view_frame_bbox(&w->v, w->s.bounds);
+	}
+	snprintf(w->scene_label, sizeof w->scene_label, "%.990s@t=%g", w->aff->path, t);
+	w->load_ms = now_ms() - t0;
+	w->view_changed = 0;
+	if (apply_view_flags(w, o, d))
+		return -1;
+	t0 = now_ms();
+	if (kd_build(&w->kd, &w->s, world_kd(o), d))
+		return -1;
+	w->kd_ms = now_ms() - t0;
+	t0 = now_ms();
+	if (mimg_build(&w->m, &w->s, &w->kd, d))
+		return -1;
+	w->image_ms = now_ms() - t0;
+	return w->tl ? tl_frame(w->tl, w->aff, t, &w->m, d) : 0;
 }
 
 /* ---- command-line helpers ---- */
@@ -520,6 +647,17 @@ int cli_parse_size(const char *s, int *w, int *h, diag *d)
 	*w = (int)a;
 	*h = (int)b;
 	return 0;
+}
+
+const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_t n)
+{
+	if (!path || frames <= 1 || !strcmp(path, "-"))
+		return path;
+	const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+	if (!dot || (slash && dot < slash))
+		dot = path + strlen(path);
+	snprintf(buf, n, "%.*s-%04d%s", (int)(dot - path), path, i, dot);
+	return buf;
 }
 
 int cli_bad(const char *prog, const char *msg)

@@ -29,6 +29,11 @@ typedef struct world_opts {
 	unsigned have_drt; /* which of them were given (bit i: the i-th flag) */
 	kd_params kd;
 	const char *cache_dir; /* --world-cache DIR, or NULL (worldcache.h) */
+	/* AFF scenes (aff.h): --anim-time T (default 0) and --anim-fps F;
+	 * frame i of a multi-frame run is at anim_time + i / anim_fps */
+	int have_anim_time, have_anim_fps;
+	double anim_time, anim_fps;
+	int two_level; /* --two-level: trace through twolevel.h's trees (AFF, kernel-ref) */
 } world_opts;
 
 /* What the world cache did for this world (host.world_cache). */
@@ -51,6 +56,14 @@ typedef struct world {
 	uint32_t
 	    image_crc; /* with a cache: CRC-32 of m's bytes (frame keys name the image by it) */
 	char cache_prog[64]; /* this program's identity in cache keys */
+	/* An AFF scene: the file as read (kept for other times) and the time
+	 * s is flattened at; NULL for every other scene. */
+	struct aff_scene *aff;
+	double anim_time;
+	/* With --two-level: the objects' trees (built once) and the instances
+	 * at anim_time; the render_opts.tracer for the frame is tl->tracer,
+	 * and kd is then a depth-1 tree (m serves only for shading). */
+	struct tl_scene *tl;
 } world;
 
 void world_opts_default(world_opts *o);
@@ -74,8 +87,22 @@ int cli_parse_int(const char *flag, const char *s, long lo, long hi, long *out, 
 /* "WxH", each 1..16384 (flag --size in messages). */
 int cli_parse_size(const char *s, int *w, int *h, diag *d);
 int cli_bad(const char *prog, const char *msg);
+/* The output of frame i of an animation of `frames` frames: path itself
+ * for one frame (or "-"), else path with "-NNNN" (i, four digits or more)
+ * before its extension ("out.png" -> "out-0003.png"); buf holds it. */
+const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_t n);
 
 int world_load(world *w, const world_opts *o, diag *d);
+
+/* An AFF world moved to time t: the scene flattened again at t, the view
+ * (the file's camera at t, unless a views file gave one; camera and
+ * light flags applied again), the kd-tree and the memory image rebuilt.
+ * -1 with d when w is not an AFF world or a step fails. */
+int world_set_time(world *w, const world_opts *o, double t, diag *d);
+
+/* The time of frame i: o->anim_time + i / o->anim_fps (anim_time alone
+ * without --anim-fps). */
+double world_frame_time(const world_opts *o, int i);
 
 /* kernel-ref's frame of w's view with options o as 8-bit sRGB (width x
  * height x 3 bytes into rgb) and its counts into st: from the world cache

@@ -35,6 +35,10 @@ for name in "$@"; do
 		{ printf "$hdr" binary_little_endian 4 2
 		  python3 -c 'import struct,sys; sys.stdout.buffer.write(b"".join(struct.pack("<3f",*p) for p in [(0,0,0),(1,0,0),(0,1,0),(1,1,0)]) + struct.pack("<B3i",3,0,1,2) + struct.pack("<B3i",3,1,3,2))'
 		} >"$corpus/quad-binary.ply" ;;
+	aff) for f in "$SCENES"/bart_robots_aff/aff/l_heel.aff "$SCENES"/bart_robots_aff/aff/color1.aff \
+		"$SCENES"/bart_robots_aff/aff/Robot5.aff; do
+		[ -f "$f" ] && cp "$f" "$corpus"/
+	done ;;
 	trace) [ -f "$corpus/seed.gz" ] || "$BUILD/saarsim" --size 16x16 --no-check \
 		--trace-mem "$corpus/seed.gz" >/dev/null ;;
 	esac

@@ -17,6 +17,9 @@
  * after the checks that need no world (every argument, the config, the
  * output formats, the CSV's columns): exit 0 if they pass, nothing loaded
  * or written (scripts/sweep checks its pass-through arguments with it).
+ * An AFF scene with --anim-fps F makes --frames N an animation: N chip
+ * runs at times T + i/F, each checked, each with numbered outputs
+ * (run_frame; docs/views.md "Flags").
  */
 #include <errno.h>
 #include <stdio.h>
@@ -38,36 +41,38 @@
 
 static void usage(FILE *f)
 {
-	fprintf(f,
-	        "usage: saarsim [options]\n"
-	        "  --config FILE         hardware config (YAML; default: built-in saarcor-std)\n"
-	        "  --set KEY=VALUE       override one config key (repeatable)\n"
-	        "  --size WxH            frame size (sets frame.width and frame.height)\n"
-	        "  --frames N            frames of the same view, memory kept warm (frame.frames)\n"
-	        "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
-	        "  --report FILE.json    write the JSON report (docs/report.md)\n"
-	        "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
-	        "  --trace-mem FILE.gz   record every memory request (traces/memtrace.h)\n"
-	        "  --timeline FILE.json  activity timeline, Chrome trace events for Perfetto\n"
-	        "                        (cycle fidelity; docs/observe.md)\n"
-	        "  --timeline-window C0:C1  only the events starting in cycles [C0, C1)\n"
-	        "  --timeline-max-events N  cap on the timeline's events (default 1000000)\n"
-	        "  --heatmap DIR         heat maps per tile and pixel, EXR and PNG (cycle\n"
-	        "                        fidelity; docs/observe.md)\n"
-	        "  --census FILE.csv     cycles and resource demand of every chunk of tiles\n"
-	        "                        (cycle and functional; docs/fidelity.md)\n"
-	        "  --fidelity MODE       cycle | sampled | functional (docs/fidelity.md)\n"
-	        "  --sample-rate R       sampled: share of tiles measured (sampling.rate)\n"
-	        "  --unit-tiles N        sampled: tiles per measured unit (sampling.unit_tiles)\n"
-	        "  --warmup-tiles N      sampled: detailed warm-up tiles (sampling.warmup_tiles)\n"
-	        "  --no-check            skip the comparison with kernel-ref\n"
-	        "  --quiet               no progress line (shown on a terminal after 2 s)\n"
-	        "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
-	        "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
-	        "  --dry-run             check the arguments and the config, then exit (no scene\n"
-	        "                        loaded, nothing run or written)\n"
-	        "  --list-config         print every config key and exit\n"
-	        "  --config-doc          print docs/config.md and exit\n");
+	fprintf(
+	    f, "usage: saarsim [options]\n"
+	       "  --config FILE         hardware config (YAML; default: built-in saarcor-std)\n"
+	       "  --set KEY=VALUE       override one config key (repeatable)\n"
+	       "  --size WxH            frame size (sets frame.width and frame.height)\n"
+	       "  --frames N            frames of the same view, memory kept warm (frame.frames);\n"
+	       "                        with --anim-fps (AFF scene): N animation frames, one chip\n"
+	       "                        run each, outputs numbered FILE-0000.png, ...\n"
+	       "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
+	       "  --report FILE.json    write the JSON report (docs/report.md)\n"
+	       "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
+	       "  --trace-mem FILE.gz   record every memory request (traces/memtrace.h)\n"
+	       "  --timeline FILE.json  activity timeline, Chrome trace events for Perfetto\n"
+	       "                        (cycle fidelity; docs/observe.md)\n"
+	       "  --timeline-window C0:C1  only the events starting in cycles [C0, C1)\n"
+	       "  --timeline-max-events N  cap on the timeline's events (default 1000000)\n"
+	       "  --heatmap DIR         heat maps per tile and pixel, EXR and PNG (cycle\n"
+	       "                        fidelity; docs/observe.md)\n"
+	       "  --census FILE.csv     cycles and resource demand of every chunk of tiles\n"
+	       "                        (cycle and functional; docs/fidelity.md)\n"
+	       "  --fidelity MODE       cycle | sampled | functional (docs/fidelity.md)\n"
+	       "  --sample-rate R       sampled: share of tiles measured (sampling.rate)\n"
+	       "  --unit-tiles N        sampled: tiles per measured unit (sampling.unit_tiles)\n"
+	       "  --warmup-tiles N      sampled: detailed warm-up tiles (sampling.warmup_tiles)\n"
+	       "  --no-check            skip the comparison with kernel-ref\n"
+	       "  --quiet               no progress line (shown on a terminal after 2 s)\n"
+	       "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
+	       "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
+	       "  --dry-run             check the arguments and the config, then exit (no scene\n"
+	       "                        loaded, nothing run or written)\n"
+	       "  --list-config         print every config key and exit\n"
+	       "  --config-doc          print docs/config.md and exit\n");
 	fputs(world_usage, f);
 }
 
@@ -318,6 +323,10 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	}
 	if (a->size && cli_parse_size(a->size, &cfg->frame.width, &cfg->frame.height, d))
 		return cli_bad("saarsim", d->msg);
+	if (a->wo.two_level)
+		return cli_bad("saarsim",
+		               "--two-level: kernel-ref (rtref) only; the chip traces one "
+		               "tree over the flattened frame (issue 33 item 3)");
 	long nframes;
 	if (a->frames) {
 		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))
@@ -502,6 +511,62 @@ fail:
 	return cli_bad("saarsim", d->msg);
 }
 
+/* One run of the chip: frame i of an animation (the world loaded for
+ * frame 0, moved to its time after), or the only one. The world stays
+ * with the caller. Returns the exit status. */
+static int run_frame(const cli *a, const saar_config *cfg, world *w, int i, uint64_t limit_mb,
+                     double t_start, diag *d)
+{
+	double t0 = now_ms();
+	if (i == 0 ? world_load(w, &a->wo, d)
+	           : world_set_time(w, &a->wo, world_frame_time(&a->wo, i), d))
+		return cli_bad("saarsim", d->msg);
+	double load_ms = now_ms() - t0;
+	/* a config inside every key's range can still want more memory than
+	 * the host has: refuse it before building anything */
+	hm_est mem;
+	hm_estimate(cfg, w, &mem);
+	if (hm_check(&mem, limit_mb, d))
+		return cli_bad("saarsim", d->msg);
+	chip *c = chip_create(cfg, w, d);
+	if (!c)
+		return cli_bad("saarsim", d->msg);
+	const char *after = getenv("SAARSIM_PROGRESS_AFTER_MS");
+	progress pr = {now_ms(), after && *after ? atof(after) : 2000.0, 0, 0, c};
+	if (isatty(STDERR_FILENO) && !a->quiet) {
+		c->progress = show_progress;
+		c->progress_ctx = &pr;
+	}
+	chip_check chk;
+	memset(&chk, 0, sizeof chk);
+	static afile trace_tmp, tl_tmp;
+	trace_tmp.tmp[0] = 0; /* "" while none is open */
+	tl_tmp.tmp[0] = 0;
+	obs *ob = NULL;
+	int bad = simulate(c, a, &trace_tmp, &tl_tmp, &ob, &chk, d);
+	progress_clear(&pr);
+	char rbad[320];
+	if (!bad && !a->check && chip_replay_bad(c, rbad, sizeof rbad))
+		fprintf(stderr, "warning: %s\n", rbad); /* with the check, its line says it */
+	int rc;
+	if (bad) {
+		rc = cli_bad("saarsim", d->msg);
+	} else {
+		static rc_list inv;
+		check_report(c, &inv);
+		report_info ri = {c, w,    a->check ? &chk : NULL,        load_ms,
+		                  0, NULL, (double)mem.total / (1 << 20), &inv};
+		rc = write_outputs(a, &ri, &trace_tmp, &tl_tmp, ob, t_start, d);
+	}
+	obs_free(ob);
+	chip_destroy(c);
+	if (trace_tmp.tmp[0])
+		af_abort(&trace_tmp);
+	if (tl_tmp.tmp[0])
+		af_abort(&tl_tmp);
+	return rc;
+}
+
 int main(int argc, char **argv)
 {
 	double t_start = now_ms();
@@ -522,60 +587,32 @@ int main(int argc, char **argv)
 	rc = config_from_args(argc, argv, &a, &cfg, &limit_mb, &d);
 	if (rc >= 0)
 		return rc;
-	if (reserve_outputs(&a, &cfg, &d))
+	/* an animation (--anim-fps, AFF scene): --frames N are N animation
+	 * times, each a chip run of its own (the chip's frame.frames repeat
+	 * one memory image; the animated chip is issue 33's item 3) */
+	int nanim = a.wo.have_anim_fps ? cfg.frame.frames : 1;
+	if (a.wo.have_anim_fps)
+		cfg.frame.frames = 1;
+	if (nanim > 1 && (a.trace || a.timeline || a.heatmap || a.census))
+		return cli_bad("saarsim",
+		               "--anim-fps with --frames N: --trace-mem, --timeline, "
+		               "--heatmap and --census take one frame (use --anim-time)");
+	cli fa = a;
+	char ob[4096], rb[4096];
+	fa.out = cli_frame_path(a.out, nanim, 0, ob, sizeof ob);
+	fa.report = cli_frame_path(a.report, nanim, 0, rb, sizeof rb);
+	if (reserve_outputs(&fa, &cfg, &d))
 		return cli_bad("saarsim", d.msg);
 	if (a.dry)
 		return 0;
-	double t0 = now_ms();
 	world w;
-	if (world_load(&w, &a.wo, &d))
-		return cli_bad("saarsim", d.msg);
-	double load_ms = now_ms() - t0;
-	/* a config inside every key's range can still want more memory than
-	 * the host has: refuse it before building anything */
-	hm_est mem;
-	hm_estimate(&cfg, &w, &mem);
-	if (hm_check(&mem, limit_mb, &d)) {
-		world_free(&w);
-		return cli_bad("saarsim", d.msg);
+	memset(&w, 0, sizeof w);
+	rc = 0;
+	for (int i = 0; i < nanim && !rc; i++) {
+		fa.out = cli_frame_path(a.out, nanim, i, ob, sizeof ob);
+		fa.report = cli_frame_path(a.report, nanim, i, rb, sizeof rb);
+		rc = run_frame(&fa, &cfg, &w, i, limit_mb, t_start, &d);
 	}
-	chip *c = chip_create(&cfg, &w, &d);
-	if (!c) {
-		world_free(&w);
-		return cli_bad("saarsim", d.msg);
-	}
-	const char *after = getenv("SAARSIM_PROGRESS_AFTER_MS");
-	progress pr = {now_ms(), after && *after ? atof(after) : 2000.0, 0, 0, c};
-	if (isatty(STDERR_FILENO) && !a.quiet) {
-		c->progress = show_progress;
-		c->progress_ctx = &pr;
-	}
-	chip_check chk;
-	memset(&chk, 0, sizeof chk);
-	static afile trace_tmp, tl_tmp;
-	trace_tmp.tmp[0] = 0; /* "" while none is open */
-	tl_tmp.tmp[0] = 0;
-	obs *ob = NULL;
-	int bad = simulate(c, &a, &trace_tmp, &tl_tmp, &ob, &chk, &d);
-	progress_clear(&pr);
-	char rbad[320];
-	if (!bad && !a.check && chip_replay_bad(c, rbad, sizeof rbad))
-		fprintf(stderr, "warning: %s\n", rbad); /* with the check, its line says it */
-	if (bad) {
-		rc = cli_bad("saarsim", d.msg);
-	} else {
-		static rc_list inv;
-		check_report(c, &inv);
-		report_info ri = {c, &w,   a.check ? &chk : NULL,         load_ms,
-		                  0, NULL, (double)mem.total / (1 << 20), &inv};
-		rc = write_outputs(&a, &ri, &trace_tmp, &tl_tmp, ob, t_start, &d);
-	}
-	obs_free(ob);
-	chip_destroy(c);
-	if (trace_tmp.tmp[0])
-		af_abort(&trace_tmp);
-	if (tl_tmp.tmp[0])
-		af_abort(&tl_tmp);
 	world_free(&w);
 	return rc;
 }
