@@ -110,6 +110,8 @@ def fig(r):
         "packets": {k: g(r, "packets." + k, 0) for k in ("primary", "shadow", "reflection", "refraction", "total")},
         "depth": g(r, "config.shading.max_depth", None),
         "peak": peak,
+        "kdhit": g(r, "memory.hierarchy.l1.kd.cache.hit_rate", None),
+        "trihit": g(r, "memory.hierarchy.l1.tri.cache.hit_rate", None),
     }
 
 
@@ -668,6 +670,24 @@ p("**Verdicts.** A published range is used as printed. A single published value 
   "from the nearer end." % (100 * TOL, RTOL))
 p()
 
+def f3_bands():
+    """Where the calibrated F3 lies against both bands, from the runs."""
+    x = MC["F3"]
+    if x is None:
+        return "F3 was not measured."
+    pl = PUB["Conference"]["loss"]
+    cal_lo, cal_hi = 1 - 68.5 / 76.5, 1 - 67.5 / 77.5
+    def where(lo, hi):
+        if x < lo:
+            return "%.2f points below" % (100 * (lo - x))
+        if x > hi:
+            return "%.2f points above" % (100 * (x - hi))
+        return "inside"
+    return ("At the calibrated point F3 (%s) is %s this document's band and %s the calibration's."
+            % (pct(x), where(pl * (1 - TOL), pl * (1 + TOL)),
+               where(cal_lo, cal_hi)))
+
+
 p("## Calibration: fit and held-out sets")
 p()
 p("Fixed before any fitting (issue 31; `scripts/calibrate.sh` fits, docs/CALIBRATION.md "
@@ -677,8 +697,7 @@ p("Fixed before any fitting (issue 31; `scripts/calibrate.sh` fits, docs/CALIBRA
   "Two bands for F3: the calibration fits to the band the rounding of 77 and 68 allows "
   "(10.46%-12.90%, docs/CALIBRATION.md), the narrowest reading of Table 5; the verdicts "
   "here give a single Table 5 value the +-30% every such row gets (8.2%-15.2%), for the "
-  "model's error beside the reading's. At the calibrated point F3 (10.4%) is inside this "
-  "document's band and 0.06 points outside the calibration's.")
+  "model's error beside the reading's. " + f3_bands())
 p()
 p("| set | name | published figure |")
 p("|---|---|---|")
@@ -1012,6 +1031,86 @@ if SZ["small"] and SZ["large"]:
         p("No verdict changes between %s, %s and %s." % (SMALL, SIZE, LARGE))
 else:
     p("The size-check runs are missing.")
+p()
+
+# ---- item 5: the mechanism behind the thread trend
+p("## 6. What sets the 16 -> 32 threads gain (item 5)")
+p()
+MECH_B = load("mech-bigl1")
+MECH_F = load("mech-fixed")
+mrows = [("hierarchy, as configured", CAL.s(TV, 16), CAL.s(TV, 32))]
+mrows.append(("hierarchy, L1s 16x the published sizes",
+              fig(pick(MECH_B, TV, chip__threads_per_rtp=16)),
+              fig(pick(MECH_B, TV, chip__threads_per_rtp=32))))
+lats = sorted({int(s["memory.latency"]) for _, s, _ in MECH_F if "memory.latency" in s})
+for lat in lats:
+    mrows.append(("fixed latency %d cycles (no caches, no SDRAM)" % lat,
+                  fig(pick(MECH_F, TV, chip__threads_per_rtp=16, memory__latency=lat)),
+                  fig(pick(MECH_F, TV, chip__threads_per_rtp=32, memory__latency=lat))))
+mrows = [m for m in mrows if m[1] and m[2]]
+if len(mrows) < 3:
+    p("The runs of this experiment are missing.")
+else:
+    def hh(a, b, k):
+        return "-" if a[k] is None or b[k] is None else "%s -> %s" % (pct(a[k]), pct(b[k]))
+    a0_, b0_ = mrows[0][1], mrows[0][2]
+    g0_ = 100 * (b0_["busy"] - a0_["busy"])
+    if 0.6 <= a0_["busy"] <= 0.8 and 7 <= g0_ <= 13:
+        p("The calibrated standard chip reproduces the published pair (60%%-80%% of the busiest "
+          "unit with 16 threads per RTP, about +10 points with 32) at %s: %s and %+.1f points "
+          "(F1, F2 above; the gain %.1f points inside its band), not at the other frame sizes "
+          "(section 5). What sets the gain in our model, and why it is this sensitive:"
+          % (SIZE, pct(a0_["busy"]), g0_, min(g0_ - 7, 13 - g0_)))
+    else:
+        p("The calibrated standard chip does not reproduce the published pair (60%%-80%% of the "
+          "busiest unit with 16 threads per RTP, about +10 points with 32) at %s: %s and %+.1f "
+          "points (F1, F2 above). What caps the gain in our model:" % (SIZE, pct(a0_["busy"]), g0_))
+    p()
+    p("The experiment: %s, standard chip as calibrated, 16 and 32 threads, with the memory as "
+      "configured, with L1 caches 16 times their published sizes (so that adding threads no "
+      "longer lowers their hit rates) and with a fixed memory latency (every access the same "
+      "number of cycles: latency only, no caches, no SDRAM). \"predicted\" is the gain a pure "
+      "latency allows, min(2u, 100%%) - u for a 16-thread utilisation u: the busiest unit's "
+      "utilisation doubles with the threads until it saturates." % TV)
+    p()
+    p("| memory | busiest unit, 16 threads | 32 threads | gain (points) | predicted by 2u (points) "
+      "| SDRAM MB/frame 16 -> 32 | kd L1 hits 16 -> 32 | tri L1 hits 16 -> 32 | threads waiting for memory 16 -> 32 |")
+    p("|---|---|---|---|---|---|---|---|---|")
+    for name, a, b in mrows:
+        gain = 100 * (b["busy"] - a["busy"])
+        pred = 100 * (min(2 * a["busy"], 1.0) - a["busy"])
+        mb = "-" if name.startswith("fixed") else "%.2f -> %.2f" % (a["mb"], b["mb"])
+        p("| %s | %s (%s) | %s | %+.1f | %+.1f | %s | %s | %s | %s |" % (
+            name, pct(a["busy"]), a["busy_unit"], pct(b["busy"]), gain, pred, mb,
+            hh(a, b, "kdhit"), hh(a, b, "trihit"), hh(a, b, "wait")))
+    p()
+    (n0, a0, b0), (n1, a1, b1) = mrows[0], mrows[1]
+    fx = [(n, a, b) for n, a, b in mrows[2:]]
+    g0 = 100 * (b0["busy"] - a0["busy"])
+    g1 = 100 * (b1["busy"] - a1["busy"])
+    inside = [n for n, a, b in mrows if 0.6 <= a["busy"] <= 0.8 and 7 <= 100 * (b["busy"] - a["busy"]) <= 13]
+    def pr(a):
+        return 100 * (min(2 * a["busy"], 1) - a["busy"])
+    p("Read from the rows. Under a fixed latency the gain follows the 2u prediction (%s): a "
+      "latency that threads overlap gives a sharp knee, so a 16-thread utilisation inside "
+      "60%%-80%% would go with a gain of 20 to 40 points, not 10; the published pair describes a "
+      "soft knee. In the hierarchy as configured the 16-thread utilisation %s allows %+.1f "
+      "points by 2u and %+.1f are measured: 32 threads raise the SDRAM traffic per frame from "
+      "%.2f to %.2f MB (%+.1f%%) as each added packet brings its working set into the shared "
+      "4-way L1s (kd hits %s, triangle hits %s), and the added misses queue at the SDRAM "
+      "(threads waiting for memory %s) instead of overlapping. With L1s 16 times larger the "
+      "traffic is %.2f -> %.2f MB, the 16-thread utilisation %s, and the gain %+.1f of the "
+      "%+.1f the 2u rule allows there. Two things cap the gain in our model, then: the L1s' "
+      "working set growing with the threads (the gap between measured and predicted in the "
+      "hierarchy), and saturation of the busiest unit once memory is fast (the big-L1 row). "
+      "Rows with both published figures inside their bands (60%%-80%%, +7 to +13 points): %s." % (
+          "; ".join("%s: %+.1f measured, %+.1f predicted" % (n.split(" (")[0], 100 * (b["busy"] - a["busy"]), pr(a))
+                    for n, a, b in fx),
+          pct(a0["busy"]), pr(a0), g0, a0["mb"], b0["mb"],
+          100 * (b0["mb"] / a0["mb"] - 1) if a0["mb"] else 0.0,
+          hh(a0, b0, "kdhit"), hh(a0, b0, "trihit"), hh(a0, b0, "wait"),
+          a1["mb"], b1["mb"], pct(a1["busy"]), g1, pr(a1),
+          ", ".join(inside) if inside else "none"))
 p()
 
 p("## Known model differences")

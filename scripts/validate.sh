@@ -23,6 +23,9 @@
 #            dragon2 (PCI traffic once the scene no longer fits)
 #   size-*   conference at half and twice the frame size (std 16/32, VMA
 #            16): the verdicts of F1-F3, H1-H3, H5 at three sizes
+#   mech-*   conference, 16 and 32 threads, with L1s 16x the published
+#            sizes and under a fixed memory latency 20..200 cycles: the
+#            experiment behind the thread trend (issue 31 item 5)
 #   asm-*    only if configs/saarcor-std-assumed.yaml exists: std, vma and
 #            roles again with the uncalibrated assumptions
 #            (configs/saarcor-std-assumed.yaml, configs/saarcor-vma-assumed.yaml),
@@ -232,6 +235,17 @@ for z in small:"$SMALL" large:"$LARGE"; do
 	sw "size-${z%%:*}-vma" --config "$VMA" --view "$TV" --size "${z#*:}" \
 		--set chip.threads_per_rtp=16 -- --no-check
 done
+# item 5 of issue 31 (why 16 -> 32 threads gains little): the thread pair
+# again with the L1s 16 times their published sizes (their hit rates no
+# longer fall as threads are added: the working-set effect removed), and
+# under a fixed memory latency (no caches, no SDRAM: pure latency)
+sw mech-bigl1 --config "$STD" --view "$TV" --size "$SIZE" \
+	--set chip.threads_per_rtp=16,32 -- --no-check \
+	--set memory.l1.kd.size_kb=1024 --set memory.l1.list.size_kb=1024 \
+	--set memory.l1.tri.size_kb=2304 --set memory.l1.shade.size_kb=1024
+sw mech-fixed --config "$STD" --view "$TV" --size "$SIZE" \
+	--set chip.threads_per_rtp=16,32 --set memory.latency=20,50,100,200 -- \
+	--no-check --set memory.model=fixed
 [ $ASSUMED = 0 ] || sets asm- "$STD_A" "$VMA_A"
 
 SRC=$OUT/threads/plots/threads-$(printf '%s\n' "$TV" | sed 's/[^A-Za-z0-9._-]/_/g').png
