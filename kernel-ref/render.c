@@ -83,6 +83,7 @@ static void do_sample(worker *w, int tile, int s)
 		w->st.rays[p->type] += (uint64_t)nrays;
 		w->st.packets[p->type]++;
 		double t0 = now_ms();
+		trav_counts before = w->st.trav;
 		if (j->o->single_ray) {
 			trace_single(j->m, p, &w->st.trav, j->o->prec);
 		} else {
@@ -93,6 +94,11 @@ static void do_sample(worker *w, int tile, int s)
 			w->st.box_miss_packets += entered == 0;
 		}
 		w->st.trace_ms += now_ms() - t0;
+		trav_counts *by = &w->st.trav_type[p->type];
+		by->node_steps += w->st.trav.node_steps - before.node_steps;
+		by->leaf_visits += w->st.trav.leaf_visits - before.leaf_visits;
+		by->tri_tests += w->st.trav.tri_tests - before.tri_tests;
+		by->ray_tri_tests += w->st.trav.ray_tri_tests - before.ray_tri_tests;
 		if (p->type == PKT_SHADOW) {
 			shade_shadow_done(&j->sc, p, &w->st.shade);
 			continue;
@@ -135,6 +141,10 @@ static void add_stats(render_stats *a, const render_stats *b)
 	for (int t = 0; t < PKT_NTYPES; t++) {
 		a->rays[t] += b->rays[t];
 		a->packets[t] += b->packets[t];
+		a->trav_type[t].node_steps += b->trav_type[t].node_steps;
+		a->trav_type[t].leaf_visits += b->trav_type[t].leaf_visits;
+		a->trav_type[t].tri_tests += b->trav_type[t].tri_tests;
+		a->trav_type[t].ray_tri_tests += b->trav_type[t].ray_tri_tests;
 	}
 	a->box_miss_packets += b->box_miss_packets;
 	a->box_miss_rays += b->box_miss_rays;

@@ -35,6 +35,9 @@ typedef struct render_stats {
 	uint64_t box_miss_packets; /* packets whose rays all missed the scene box: no traversal */
 	uint64_t box_miss_rays;
 	trav_counts trav;
+	/* trav split by the type of the packet that made the counts (seed 000
+	 * §3 groups packets by ray type); max_sp stays 0 here */
+	trav_counts trav_type[PKT_NTYPES];
 	shade_counts shade;
 	double trace_ms;  /* host time inside traversal + intersection, summed over threads */
 	double render_ms; /* wall time of the whole frame (rays, tracing, shading) */

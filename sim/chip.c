@@ -559,6 +559,38 @@ static int chip_env(chip *c, diag *d)
 	return 0;
 }
 
+/* The counters split by packet type (enum thr_type_counter):
+ * type.<type>.trav.node_steps ... type.<type>.<unit>.busy_cycles/rays. */
+static void chip_type_counters_reg(chip *c)
+{
+	static const struct {
+		int id;
+		const char *name, *unit, *desc;
+	} tc[] = {
+	    {TC_NODE_STEPS, "trav.node_steps", "ops", "traversal steps of packets of this type"},
+	    {TC_LEAF_VISITS, "trav.leaf_visits", "ops", "leaves reached by packets of this type"},
+	    {TC_LIST_ENTRIES, "list.entries", "entries", "list entries read for this type"},
+	    {TC_TRI_TESTS, "isect.tri_tests", "ops", "packet-triangle tests of this type"},
+	    {TC_RAY_TRI_TESTS, "isect.ray_tri_tests", "tests", "ray-triangle tests of this type"},
+	};
+	char name[96];
+	for (int t = 0; t < PKT_NTYPES; t++) {
+		uint64_t **ct = c->env.ct[t];
+		for (size_t i = 0; i < sizeof tc / sizeof *tc; i++) {
+			snprintf(name, sizeof name, "type.%s.%s", pkt_type_name(t), tc[i].name);
+			ct[tc[i].id] = reg(c, name, tc[i].unit, tc[i].desc);
+		}
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			snprintf(name, sizeof name, "type.%s.%s.busy_cycles", pkt_type_name(t),
+			         unit_table[k].name);
+			ct[TC_BUSY + k] = reg(c, name, "cycles", "issue cycles of this type's ops");
+			snprintf(name, sizeof name, "type.%s.%s.rays", pkt_type_name(t),
+			         unit_table[k].name);
+			ct[TC_RAYS + k] = reg(c, name, "rays", "active rays of this type's ops");
+		}
+	}
+}
+
 /* The chip-wide counters: packets and rays by type, the units' counters
  * (enum thr_counter), shade_counts and the memory port's traffic. */
 static void chip_counters_reg(chip *c)
@@ -583,6 +615,7 @@ static void chip_counters_reg(chip *c)
 			c->memc[t][k] = reg(c, name, k & 1 ? "bytes" : "requests",
 			                    "memory-port traffic of this requester type");
 		}
+	chip_type_counters_reg(c);
 }
 
 /* RTP r's units, one group per kind of unit_table, with their counters

@@ -619,3 +619,99 @@ Test(drt, chip_frame_equals_kernel_ref_on_the_drt_views)
 		world_free(&w);
 	}
 }
+
+/* ---- the figures per ray type (issue 32 item 2) ---- */
+
+/* The chip's counts of packets of type t against kernel-ref's, which
+ * splits its own traversal counts by the type of the packet it traces
+ * (render_stats.trav_type). With caches, each kd-node step is one L1 kd
+ * lookup and each packet-triangle test one L1 tri lookup (an 8-byte node
+ * and a 36-byte record never straddle a line), so the L1 lookups by ray
+ * type must equal the type's own steps and tests. */
+static void types_match(const world *w, int fid, const char *what)
+{
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 24;
+	c.fidelity = fid;
+	render_stats st;
+	free(tu_reference(w, &c, &st));
+	chip *ch = tu_run_chip(w, &c);
+	hier_stats hs;
+	cr_assert_eq(hier_get_stats(&ch->mem, &hs), 0, "%s: the default memory has L1s", what);
+	int shadow_seen = 0;
+	for (int t = 0; t < PKT_NTYPES; t++) {
+		uint64_t *const *ct = ch->env.ct[t];
+		const trav_counts *k = &st.trav_type[t];
+		const char *tn = pkt_type_name(t);
+		cr_assert_eq(*ct[TC_NODE_STEPS], k->node_steps, "%s: %s kd steps", what, tn);
+		cr_assert_eq(*ct[TC_LEAF_VISITS], k->leaf_visits, "%s: %s leaves", what, tn);
+		/* kernel-ref counts a leaf's entries as its tests; the chip
+		 * tests them in turn and a shadow packet stops when every ray
+		 * is occluded, so only the entries compare for shadows */
+		cr_assert_eq(*ct[TC_LIST_ENTRIES], k->tri_tests, "%s: %s list entries", what, tn);
+		if (t == PKT_SHADOW) {
+			cr_assert_leq(*ct[TC_TRI_TESTS], k->tri_tests, "%s: %s tests", what, tn);
+			cr_assert_leq(*ct[TC_RAY_TRI_TESTS], k->ray_tri_tests, "%s: %s", what, tn);
+		} else {
+			cr_assert_eq(*ct[TC_TRI_TESTS], k->tri_tests, "%s: %s tests", what, tn);
+			cr_assert_eq(*ct[TC_RAY_TRI_TESTS], k->ray_tri_tests, "%s: %s ray tests",
+			             what, tn);
+		}
+		cr_assert_eq(hs.ray_lookups[t][MEM_KD], k->node_steps, "%s: %s kd lookups", what,
+		             tn);
+		cr_assert_eq(hs.ray_lookups[t][MEM_TRI], *ct[TC_TRI_TESTS], "%s: %s tri lookups",
+		             what, tn);
+		/* a type with packets took RGS cycles (generation or shading) */
+		cr_assert_eq(*ct[TC_BUSY + UNIT_RGS] > 0, st.packets[t] > 0, "%s: %s RGS cycles",
+		             what, tn);
+		shadow_seen |= t == PKT_SHADOW && k->node_steps > 0;
+	}
+	cr_assert(shadow_seen, "%s: the view has shadow packets that traverse", what);
+	chip_destroy(ch);
+}
+
+/* Mistakes: a count made under the wrong packet type (a shadow packet's
+ * kd steps or triangle tests counted as primary: the type not set as a
+ * packet enters, or a type counter indexed by the counter's id), or an
+ * L1 lookup tagged with the wrong ray type (the read's tag not taken from
+ * the thread's packet). The split is compared with kernel-ref's own,
+ * made per traced packet, in cycle and functional fidelity, on the room
+ * with every effect on (primary, shadow and glossy reflection packets). */
+Test(drt, counts_by_ray_type_equal_kernel_ref)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	types_match(&w, CFG_FIDELITY_CYCLE, "room, cycle");
+	types_match(&w, CFG_FIDELITY_FUNCTIONAL, "room, functional");
+	world_free(&w);
+}
+
+/* Mistake: a unit's issue cycles or an L1's hits left out of the split in
+ * one mode (the functional sink not counting them by type): the report's
+ * invariant (the split adds up to the totals) fails. Checked directly on
+ * a spoiled figure, then on a sampled run. */
+Test(drt, the_split_adds_up_to_the_totals)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 24;
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	chip *ch = tu_run_chip(&w, &c); /* its invariants hold */
+	rc_figs f;
+	rc_list l;
+	cr_assert_eq(rc_figs_get(ch, &f), 0);
+	cr_assert_eq(rc_check(&f, &l), 0, "%s", l.msg[0]);
+	f.by_type[TC_BUSY + UNIT_ISECT]--;
+	cr_assert_geq(rc_check(&f, &l), 1, "a lost issue cycle is seen");
+	f.by_type[TC_BUSY + UNIT_ISECT]++;
+	f.h.ray_hits[PKT_SHADOW][MEM_TRI]++;
+	cr_assert_geq(rc_check(&f, &l), 1, "an extra hit is seen");
+	rc_figs_free(&f);
+	chip_destroy(ch);
+	world_free(&w);
+}

@@ -146,6 +146,24 @@ enum thr_counter {
 };
 _Static_assert(C_NCOUNTERS <= 32, "packet records (pktrec.h) hold 32 counters");
 
+/* Counters split by the type of the packet that made them (seed 000 §3
+ * groups packets by ray type; issue 32): kd steps, leaves, list entries
+ * and triangle tests, and each unit kind's issue cycles and op rays. They
+ * are not thr_counters (a packet record holds 32 of those): the sinks
+ * derive them where they count the totals, from the type of the thread's
+ * packet (thr_ctx.ptype), so a replayed record splits them as the
+ * recording run did. */
+enum thr_type_counter {
+	TC_NODE_STEPS,
+	TC_LEAF_VISITS,
+	TC_LIST_ENTRIES,
+	TC_TRI_TESTS,
+	TC_RAY_TRI_TESTS,
+	TC_BUSY,                         /* + kind: issue cycles of the kind's ops */
+	TC_RAYS = TC_BUSY + UNIT_NKINDS, /* + kind: active rays of the kind's ops */
+	TC_NCOUNTERS = TC_RAYS + UNIT_NKINDS
+};
+
 struct thr_ctx;
 struct thr_rtp;
 
@@ -197,6 +215,7 @@ typedef struct thr_env {
 	uint64_t spill_base;
 	uint64_t next_age;
 	uint64_t *c[C_NCOUNTERS];
+	uint64_t *ct[PKT_NTYPES][TC_NCOUNTERS]; /* enum thr_type_counter, by packet type */
 	shade_counts sh;
 	/* the pipeline's order: where a unit hands a thread on (set by the
 	 * chip's wiring, unit_table.h) */
@@ -240,6 +259,7 @@ typedef struct thr_ctx {
 	int state;
 	uint64_t since; /* tick of the last state change */
 	packet *p;
+	int ptype;         /* the packet's type (enum pkt_type), set as it enters */
 	uint64_t age;      /* packet sequence number: smaller = older */
 	trav_entry *stack; /* functional stack (PKT_STACK_MAX entries) */
 	int sp;            /* stack depth after the last step */
