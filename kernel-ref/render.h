@@ -28,6 +28,9 @@ typedef struct render_opts {
 	/* Reduced precision per stage (NULL: full precision, the reference).
 	 * Must outlive render_frame. */
 	const pkt_precision *prec;
+	/* cull leaf triangles outside each packet's enclosing cone (cone.h,
+	 * seed 004); the image is the same, the work less */
+	int cone_cull;
 } render_opts;
 
 typedef struct render_stats {

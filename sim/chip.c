@@ -106,6 +106,10 @@ static const struct {
     {C_QUEUED, "rgs.queue_samples", "packets",
      "sum over shading ops of the RTP queue length after spawning"},
     {C_MAX_QUEUE, "rgs.max_queue", "packets", "longest queue of secondary packets of one RTP"},
+    {C_CONE_PACKETS, "cone.packets", "packets", "enclosing cones built (chip.cone_cull)"},
+    {C_CONE_TESTS, "cone.tests", "ops", "triangle-cone tests (chip.cone_cull)"},
+    {C_CONE_CULLED, "cone.culled", "ops", "packet-triangle tests the cone saved"},
+    {C_CONE_SAVED, "cone.saved_ray_tests", "tests", "ray-triangle tests the cone saved"},
 };
 
 static const char *const shade_names[11] = {"shade.hits",
@@ -531,6 +535,7 @@ static int chip_env(chip *c, diag *d)
 	v->stack_depth = cfg->chip.stack_depth;
 	v->max_steps = 2 * (uint64_t)w->m.nnodes + 64;
 	v->masked = cfg->chip.masked_packets;
+	v->cone_cull = cfg->chip.cone_cull;
 	/* the datapath formats; kernel-ref's check frame stays full precision */
 	if (fpfmt_init(&v->prec.trav, cfg->chip.fp.trav.exp, cfg->chip.fp.trav.mant,
 	               cfg->chip.fp.round) ||
@@ -976,6 +981,7 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	ro.height = c->cfg.frame.height;
 	ro.max_depth = c->cfg.shading.max_depth;
 	ro.threads = 1;
+	ro.cone_cull = c->cfg.chip.cone_cull;
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
 	int rc = a && b ? world_reference_rgb8(c->w, &ro, b, &out->ref, &out->cached, d)

@@ -558,6 +558,18 @@ static void json_rays(jsonw *j, const chip *c)
 	kv(j, "stack_overflows", get(c, "trav.stack_overflows"));
 	kv(j, "stack_refills", get(c, "trav.stack_refills"));
 	jsonw_obj_end(j);
+
+	/* seed 004's cone culling (chip.cone_cull; kernel-ref/cone.h) */
+	uint64_t ct = get(c, "cone.tests"), cu = get(c, "cone.culled");
+	jsonw_key(j, "cone_cull");
+	jsonw_obj_begin(j);
+	jsonw_kbool(j, "enabled", c->cfg.chip.cone_cull);
+	kv(j, "cones", get(c, "cone.packets"));
+	kv(j, "tests", ct);
+	kv(j, "culled", cu);
+	kv(j, "saved_ray_tests", get(c, "cone.saved_ray_tests"));
+	jsonw_knum(j, "culled_share", ratio((double)cu, (double)ct));
+	jsonw_obj_end(j);
 }
 
 /* One ray type's L1 figures: per L1 and in total, the line lookups, hits

@@ -36,6 +36,7 @@
 #include <stdint.h>
 
 #include "kernel-ref/camera.h"
+#include "kernel-ref/cone.h"
 #include "kernel-ref/packet.h"
 #include "kernel-ref/shade.h"
 #include "mem/memport.h"
@@ -60,6 +61,16 @@ enum thr_mutant {
 };
 
 /* ---- pipelined units ---- */
+
+/* The `rays` of a packet-level op: one computation for the whole packet
+ * (the cone test of seed 004, units/intersection.c), one issue cycle and
+ * counted as one ray whether or not packets are masked. */
+#define THR_SCALAR_OP (PKT_RAYS + 1)
+/* The rays an op of `rays` counts (a packet-level op: one). */
+static inline int thr_op_rays(int rays)
+{
+	return rays == THR_SCALAR_OP ? 1 : rays;
+}
 
 typedef struct thr_op {
 	uint64_t age;
@@ -86,7 +97,7 @@ typedef struct thr_unit {
 	/* issue cycles by active rays (thr_unit_issue), computed once: every
 	 * op, timed or functional, needs it, and a division per op showed in
 	 * functional runs' profiles */
-	uint32_t issue[PKT_RAYS + 1];
+	uint32_t issue[THR_SCALAR_OP + 1];
 } thr_unit;
 
 /* count/width/latency, masked (charge 64 rays per op) and sched (enum
@@ -100,7 +111,7 @@ uint64_t thr_unit_host_bytes(int count, int max_waiters);
 uint64_t thr_unit_issue_div(const thr_unit *u, int rays);
 static inline uint64_t thr_unit_issue(const thr_unit *u, int rays)
 {
-	return rays >= 0 && rays <= PKT_RAYS ? u->issue[rays] : thr_unit_issue_div(u, rays);
+	return rays >= 0 && rays <= THR_SCALAR_OP ? u->issue[rays] : thr_unit_issue_div(u, rays);
 }
 /* Counts (sign 1) or takes back (sign -1) one op of `rays` rays at u:
  * ops, issue cycles, rays. The one place an op's counts are made: at
@@ -112,7 +123,7 @@ static inline uint64_t thr_unit_count(thr_unit *u, int rays, int sign)
 	uint64_t issue = thr_unit_issue(u, rays), s = (uint64_t)(int64_t)sign;
 	*u->ops_n += s;
 	*u->busy += s * issue;
-	*u->rays += s * (uint64_t)rays;
+	*u->rays += s * (uint64_t)thr_op_rays(rays);
 	return issue;
 }
 /* Requests one op for requester id (at most one outstanding per id). done
@@ -142,6 +153,10 @@ enum thr_counter {
 	C_SPAWNED,
 	C_QUEUED,
 	C_MAX_QUEUE,
+	C_CONE_PACKETS, /* cone culling (chip.cone_cull): cones built, */
+	C_CONE_TESTS,   /* triangle-cone tests, */
+	C_CONE_CULLED,  /* triangles culled for the whole packet, */
+	C_CONE_SAVED,   /* and the ray-triangle tests they saved */
 	C_NCOUNTERS
 };
 _Static_assert(C_NCOUNTERS <= 32, "packet records (pktrec.h) hold 32 counters");
@@ -200,6 +215,7 @@ typedef struct thr_env {
 	cam_frame cam;
 	drt_shade drt; /* distribution effects (sc.drt points here when on) */
 	int stack_depth, masked, nlights;
+	int cone_cull; /* chip.cone_cull: packets cull leaf triangles outside their cone */
 	/* a packet that takes more traversal steps than this has looped on
 	 * damaged node data (a correct walk visits each node at most once):
 	 * it is ended and the frame fails (damaged) */
@@ -281,6 +297,7 @@ typedef struct thr_ctx {
 	packet *kids; /* shade_packet's output */
 	int nkids, made;
 	uint64_t steps; /* traversal steps of the current packet (thr_env.max_steps) */
+	pkt_cone cone;  /* the packet's enclosing cone (chip.cone_cull) */
 } thr_ctx;
 
 /* A queued secondary packet: the packet, or (p NULL) a replayed stream. */

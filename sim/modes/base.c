@@ -43,7 +43,7 @@ void mode_base_use(thr_ctx *t, int kind, int rays)
 {
 	thr_env *v = t->env;
 	*v->ct[t->ptype][TC_BUSY + kind] += thr_unit_issue(&t->rtp->u[kind], rays);
-	*v->ct[t->ptype][TC_RAYS + kind] += (uint64_t)rays;
+	*v->ct[t->ptype][TC_RAYS + kind] += (uint64_t)thr_op_rays(rays);
 }
 
 void mode_base_count_max(thr_sink *s, thr_ctx *t, int id, uint64_t v)
