@@ -903,3 +903,36 @@ Test(drt, cone_costs_are_charged_to_their_units)
 	chip_destroy(b);
 	world_free(&w);
 }
+
+/* ---- sampled fidelity (issue 32 item 5) ---- */
+
+/* Mistakes: a tile's further samples lost beyond a fixed count (the spawn
+ * or the RTP queue sized for 16 samples: planted, 4096 pixels differ), or
+ * lost between the sampled mode's regions and functional stretches (they
+ * queue at the RTP like children). 64 samples per pixel with every effect
+ * on, units of 8 tiles so the frame is estimated (not every tile
+ * detailed): the frame is kernel-ref's and every primary ray is counted. */
+Test(drt, sampled_fidelity_with_many_samples)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	w.v.drt.spp = 64;
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 64;
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	/* 8 threads, so that 3 units of 8 tiles and their warm-ups leave
+	 * tiles to estimate (a unit holds a tile per thread at least) */
+	c.chip.threads_per_rtp = 2;
+	c.sampling.rate = 0.1;
+	c.sampling.unit_tiles = 8;
+	c.sampling.warmup_tiles = 2;
+	c.sampling.min_units = 3;
+	chip *ch = tu_run_chip(&w, &c);
+	cr_assert(!ch->fid.exact, "the frame is estimated, not every tile detailed");
+	tu_assert_identical(ch, "room, 64 spp, sampled");
+	cr_assert_eq(stats_get(&ch->st, "rays.primary"), 64u * 64u * 64u, "every sample traced");
+	chip_destroy(ch);
+	world_free(&w);
+}
