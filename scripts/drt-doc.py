@@ -175,6 +175,8 @@ def main():
     w(HEAD)
     w(row("pinhole", base, base))
     for key, title, xl, pts, logx in SWEEPS:
+        if key == "gloss":  # the mirror: a row, not a point of the log-scale plot
+            w(row("gl-0 (mirror)", rep("gl-0"), base))
         for x, v in pts:
             w(row(v, rep(v), base))
     w("")
