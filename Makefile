@@ -82,7 +82,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity stress validate calibrate mutate install clean deps
+.PHONY: all run test bench bench-fidelity stress validate calibrate drt mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -147,6 +147,12 @@ bench-fidelity: all
 # default 1024x768, VALIDATE_VIEWS: scripts/validate.sh; minutes on 2 cores).
 validate: all
 	sh scripts/validate.sh $(B)
+
+# Seed 000 §5's distribution ray tracing experiments on the chip (issue 32):
+# writes docs/DRT.md and docs/drt-*.png from runs in out/drt (DRT_SIZE,
+# default 128x96; a few minutes on 2 cores: scripts/drt.sh).
+drt: all
+	sh scripts/drt.sh $(B)
 
 # Calibration of the assumed parameters against seed 002's figures (issue 31):
 # coordinate search on Conference, writes docs/CALIBRATION.md; about 30 min

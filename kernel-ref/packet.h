@@ -192,6 +192,9 @@ uint64_t pkt_isect_tri_v(trav_state *s, packet *p, const mimg_tri *tri, uint64_t
  * optional counters; returns the mask of rays that entered the scene box. */
 typedef struct trav_counts {
 	uint64_t node_steps, leaf_visits, tri_tests, ray_tri_tests, max_sp;
+	/* cone culling (cone.h, pkt_trace_cone): triangles a packet skipped,
+	 * and the active rays they would have tested */
+	uint64_t cone_culled, cone_saved_ray_tests;
 } trav_counts;
 uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c);
 uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,

@@ -2,6 +2,7 @@
  * render.c: the reference packet tracer's frame loop (see render.h).
  */
 #include "kernel-ref/render.h"
+#include "kernel-ref/cone.h"
 
 #include <pthread.h>
 #include <stdatomic.h>
@@ -87,18 +88,29 @@ static void do_sample(worker *w, int tile, int s)
 		w->st.packets[p->type]++;
 		double t0 = now_ms();
 		const render_tracer *tr = j->o->tracer;
+		trav_counts before = w->st.trav;
 		if (j->o->single_ray) {
 			trace_single(j->m, p, &w->st.trav, j->o->prec, tr);
 		} else {
+			/* two-level trees trace through their own tracer (no cone
+			 * culling there); the image's kd-tree may cull by cone */
 			uint64_t entered =
 			    tr ? tr->packet(tr->ctx, p, w->stack, PKT_STACK_MAX, &w->st.trav)
-			       : pkt_trace_fp(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav,
-			                      j->o->prec);
+			       : pkt_trace_cone(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav,
+			                        j->o->prec, j->o->cone_cull);
 			/* rays that miss the scene box skip traversal */
 			w->st.box_miss_rays += (uint64_t)__builtin_popcountll(p->valid & ~entered);
 			w->st.box_miss_packets += entered == 0;
 		}
 		w->st.trace_ms += now_ms() - t0;
+		trav_counts *by = &w->st.trav_type[p->type];
+		by->node_steps += w->st.trav.node_steps - before.node_steps;
+		by->leaf_visits += w->st.trav.leaf_visits - before.leaf_visits;
+		by->tri_tests += w->st.trav.tri_tests - before.tri_tests;
+		by->ray_tri_tests += w->st.trav.ray_tri_tests - before.ray_tri_tests;
+		by->cone_culled += w->st.trav.cone_culled - before.cone_culled;
+		by->cone_saved_ray_tests +=
+		    w->st.trav.cone_saved_ray_tests - before.cone_saved_ray_tests;
 		if (p->type == PKT_SHADOW) {
 			shade_shadow_done(&j->sc, p, &w->st.shade);
 			continue;
@@ -141,6 +153,11 @@ static void add_stats(render_stats *a, const render_stats *b)
 	for (int t = 0; t < PKT_NTYPES; t++) {
 		a->rays[t] += b->rays[t];
 		a->packets[t] += b->packets[t];
+		a->trav_type[t].node_steps += b->trav_type[t].node_steps;
+		a->trav_type[t].leaf_visits += b->trav_type[t].leaf_visits;
+		a->trav_type[t].tri_tests += b->trav_type[t].tri_tests;
+		a->trav_type[t].ray_tri_tests += b->trav_type[t].ray_tri_tests;
+		a->trav_type[t].cone_culled += b->trav_type[t].cone_culled;
 	}
 	a->box_miss_packets += b->box_miss_packets;
 	a->box_miss_rays += b->box_miss_rays;
@@ -149,6 +166,8 @@ static void add_stats(render_stats *a, const render_stats *b)
 	a->trav.leaf_visits += b->trav.leaf_visits;
 	a->trav.tri_tests += b->trav.tri_tests;
 	a->trav.ray_tri_tests += b->trav.ray_tri_tests;
+	a->trav.cone_culled += b->trav.cone_culled;
+	a->trav.cone_saved_ray_tests += b->trav.cone_saved_ray_tests;
 	if (b->trav.max_sp > a->trav.max_sp)
 		a->trav.max_sp = b->trav.max_sp;
 	/* shade_counts is all uint64_t counters: add them field by field */

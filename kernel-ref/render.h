@@ -40,6 +40,9 @@ typedef struct render_opts {
 	 * Must outlive render_frame. */
 	const pkt_precision *prec;
 	const render_tracer *tracer; /* NULL: the image's kd-tree */
+	/* cull leaf triangles outside each packet's enclosing cone (cone.h,
+	 * seed 004); the image is the same, the work less */
+	int cone_cull;
 } render_opts;
 
 typedef struct render_stats {
@@ -47,6 +50,9 @@ typedef struct render_stats {
 	uint64_t box_miss_packets; /* packets whose rays all missed the scene box: no traversal */
 	uint64_t box_miss_rays;
 	trav_counts trav;
+	/* trav split by the type of the packet that made the counts (seed 000
+	 * §3 groups packets by ray type); max_sp stays 0 here */
+	trav_counts trav_type[PKT_NTYPES];
 	shade_counts shade;
 	double trace_ms;  /* host time inside traversal + intersection, summed over threads */
 	double render_ms; /* wall time of the whole frame (rays, tracing, shading) */

@@ -2,8 +2,8 @@
  * rtref.c: the reference packet tracer's command line.
  *
  *   rtref [--scene P | --views F --view N] [--size WxH] [--threads N]
- *         [--depth N] [--no-shadows] [--single-ray] [--out FILE] [--stats FILE.json]
- *         [--anim-time T] [--anim-fps F --frames N]
+ *         [--depth N] [--no-shadows] [--single-ray] [--cone-cull] [--out FILE]
+ *         [--stats FILE.json] [--anim-time T] [--anim-fps F --frames N]
  *         [--fp-trav E,M] [--fp-isect E,M] [--fp-shade E,M] [--fp-round MODE]
  *
  * Prints one summary line; writes the frame (PNG, EXR, ... by extension)
@@ -32,6 +32,8 @@ static void usage(FILE *f)
 	        "  --depth N             reflection/refraction depth (default 3; 0..16)\n"
 	        "  --no-shadows          primary (and secondary) rays only, no shadow rays\n"
 	        "  --single-ray          trace with the scalar single-ray path (for checking)\n"
+	        "  --cone-cull           packets skip leaf triangles outside their rays' cone\n"
+	        "                        (seed 004; the same frame; packet path only)\n"
 	        "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
 	        "  --stats FILE.json     write statistics as JSON\n"
 	        "  --frames N            AFF scene with --anim-fps: N frames (1..100000) at\n"
@@ -106,6 +108,9 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kuint(j, "triangle_tests", st->trav.tri_tests);
 	jsonw_kuint(j, "ray_triangle_tests", st->trav.ray_tri_tests);
 	jsonw_kuint(j, "max_stack_depth", st->trav.max_sp);
+	jsonw_kbool(j, "cone_cull", o->cone_cull);
+	jsonw_kuint(j, "cone_culled", st->trav.cone_culled);
+	jsonw_kuint(j, "cone_saved_ray_tests", st->trav.cone_saved_ray_tests);
 	jsonw_key(j, "skipped");
 	jsonw_obj_begin(j);
 	jsonw_kuint(j, "box_miss_packets", st->box_miss_packets);
@@ -217,6 +222,11 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 		if (!strcmp(f, "-h") || !strcmp(f, "--help")) {
 			usage(stdout);
 			return 0;
+		}
+		if (!strcmp(f, "--cone-cull")) {
+			a->ro.cone_cull = 1;
+			i++;
+			continue;
 		}
 		if (!strcmp(f, "--no-shadows") || !strcmp(f, "--single-ray")) {
 			*(f[2] == 'n' ? &a->ro.shadows : &a->ro.single_ray) = f[2] == 'n' ? 0 : 1;
@@ -338,6 +348,11 @@ int main(int argc, char **argv)
 	if (w.tl && a.ro.prec) {
 		world_free(&w);
 		return cli_bad("rtref", "--two-level: traces at full precision only (no --fp-*)");
+	}
+	if (w.tl && a.ro.cone_cull) {
+		world_free(&w);
+		return cli_bad("rtref",
+		               "--two-level: its tracer does not cull by cone (no --cone-cull)");
 	}
 	framebuf fb;
 	if (fb_init(&fb, a.ro.width, a.ro.height)) {

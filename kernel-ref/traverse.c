@@ -17,6 +17,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "kernel-ref/cone.h"
 #include "kernel-ref/isect.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/packet.h"
@@ -573,11 +574,20 @@ uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, t
 uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
                       const pkt_precision *prec)
 {
+	return pkt_trace_cone(p, m, stack, stack_max, c, prec, 0);
+}
+
+uint64_t pkt_trace_cone(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                        const pkt_precision *prec, int cull)
+{
 	trav_state st;
 	trav_state *s = &st;
 	uint64_t entered = pkt_trav_begin_fp(s, p, m, stack, stack_max, prec);
 	if (!entered)
 		return 0;
+	pkt_cone cone;
+	if (cull) /* the rays that entered the box (seed 004 §4) */
+		cone_build(&cone, p, entered);
 	const uint32_t *lists = mimg_lists(m);
 	trav_result r;
 	for (;;) {
@@ -598,7 +608,16 @@ uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max
 			}
 			uint64_t mask = r.mask;
 			for (uint32_t k = 0; k < r.leaf_count && mask; k++) {
-				pkt_isect_tri(s, p, m, mask, lists[r.leaf_first + k]);
+				uint32_t ta = lists[r.leaf_first + k];
+				if (cull && cone_culls_tri(&cone, mimg_tri_at(m, ta))) {
+					if (c) {
+						c->cone_culled++;
+						c->cone_saved_ray_tests +=
+						    (uint64_t)__builtin_popcountll(mask);
+					}
+					continue;
+				}
+				pkt_isect_tri(s, p, m, mask, ta);
 				if (s->shadow)
 					for (uint64_t b = mask; b; b &= b - 1) {
 						int i = __builtin_ctzll(b);

@@ -122,6 +122,16 @@ static void finish(hier *h, hreq *q)
 
 static void l1_filled(eng *e, void *ctx, uint64_t line);
 
+/* One L1 line lookup of L1 `type` by a packet of ray type ray - 1
+ * (mem_req.ray), a hit or not. */
+static inline void ray_count(hier *h, int ray, int type, int hit)
+{
+	if (ray > MEM_RAY_TYPES)
+		return;
+	h->ray_lookups[ray - 1][type]++;
+	h->ray_hits[ray - 1][type] += (uint64_t)hit;
+}
+
 /* Looks up q's remaining lines at tick t. Returns 0 when every line is
  * either present or awaited, 1 when refused for lack of an MSHR (q keeps
  * its place: next_line is the refused line). */
@@ -136,6 +146,8 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 		int m = -1;
 		uint32_t slot = 0;
 		cache_result r = tcache_lookup(&l->t, line, (uint32_t)(b - a), q, &m, &slot);
+		if (q->ray && r != CACHE_MSHR_FULL)
+			ray_count(h, q->ray, l->type, r == CACHE_HIT);
 		switch (r) {
 		case CACHE_HIT:
 			/* the bytes leave the array at the tag check */
@@ -247,7 +259,8 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	            .dst = dst,
 	            .bytes = bytes,
 	            .pending = 1,
-	            .type = (uint8_t)type};
+	            .type = (uint8_t)type,
+	            .ray = r->ray};
 	if (r->addr >= h->image_bytes) {
 		h->bypass[type]++;
 		lower_read(h, now, type, r->addr, bytes, dst, l1_bypass_done, h, (uintptr_t)q);
@@ -314,6 +327,8 @@ static void hier_access_func(void *impl, const mem_req *r)
 		uint32_t slot;
 		uint64_t victim;
 		int hit = cache_lookup_func_at(c, line, (uint32_t)(b - a), &slot, &victim);
+		if (r->ray) /* a line in flight is a merged miss (cache_lookup_func) */
+			ray_count(h, r->ray, type, hit && slot != CACHE_NO_SLOT);
 		if (!h->ms) {
 			if (!hit)
 				func_lower(h, type, lo, lb, 0, NULL);
@@ -537,6 +552,10 @@ int hier_get_stats(const memport *p, hier_stats *s)
 		s->bypass_reads[t] = h->bypass[t];
 		s->wait_cycles[t] = h->wait_ticks[t] / h->core.period;
 		s->mshr_stall_cycles[t] = h->stall_ticks[t] / h->core.period;
+		for (int r = 0; r < MEM_RAY_TYPES; r++) {
+			s->ray_lookups[r][t] = h->ray_lookups[r][t];
+			s->ray_hits[r][t] = h->ray_hits[r][t];
+		}
 	}
 	s->func_requests = h->freqs;
 	s->func_sdram_merge_ticks = h->fmerge_ticks;
@@ -669,6 +688,10 @@ size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap)
 		n = hier_add_ptrs(out, n, cap, arr[i], MEM_NTYPES);
 	for (int t = 0; t < MEM_NTYPES; t++)
 		n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->l1[t].t.c.s));
+	for (int r = 0; r < MEM_RAY_TYPES; r++) {
+		n = hier_add_ptrs(out, n, cap, h->ray_lookups[r], MEM_NTYPES);
+		n = hier_add_ptrs(out, n, cap, h->ray_hits[r], MEM_NTYPES);
+	}
 	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fsd));
 	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fmi));
 	n = hier_add_ptrs(out, n, cap, HIER_COUNTERS(h->fhb));

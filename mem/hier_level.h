@@ -36,6 +36,7 @@ struct hreq {
 	uint8_t *dst; /* where the bytes go; NULL: no data */
 	uint32_t bytes, pending;
 	uint8_t type;
+	uint8_t ray; /* mem_req.ray */
 	hreq *next;
 };
 
@@ -78,6 +79,9 @@ struct hier {
 	uint64_t reads[MEM_NTYPES], read_bytes[MEM_NTYPES];
 	uint64_t writes[MEM_NTYPES], write_bytes[MEM_NTYPES];
 	uint64_t bypass[MEM_NTYPES], wait_ticks[MEM_NTYPES], stall_ticks[MEM_NTYPES];
+	/* L1 line lookups (hits and misses, as the cache counts them) and
+	 * hits, by the ray type of the asking packet (mem_req.ray) */
+	uint64_t ray_lookups[MEM_RAY_TYPES][MEM_NTYPES], ray_hits[MEM_RAY_TYPES][MEM_NTYPES];
 	/* traffic of functional accesses (hier_access_func): what the timed
 	 * SDRAM, memory interface and host bus would have counted; busy_ticks
 	 * are data-bus occupancy without row or queueing overheads */

@@ -36,7 +36,11 @@ typedef struct hier_stats {
 	uint64_t bypass_reads[MEM_NTYPES];      /* spill-area reads that skip the L1 */
 	uint64_t wait_cycles[MEM_NTYPES];       /* sum over reads of issue -> data, core cycles */
 	uint64_t mshr_stall_cycles[MEM_NTYPES]; /* time reads waited for a free MSHR */
-	memif_stats memif;                      /* per requester: shade kd list tri meta fill */
+	/* per L1, its line lookups (hits + misses) and hits by the ray type of
+	 * the packet that asked (mem_req.ray; functional lookups count as the
+	 * cache counts them: a line in flight is a merged miss) */
+	uint64_t ray_lookups[MEM_RAY_TYPES][MEM_NTYPES], ray_hits[MEM_RAY_TYPES][MEM_NTYPES];
+	memif_stats memif; /* per requester: shade kd list tri meta fill */
 	sdram_stats sdram;
 	double sdram_peak_bytes_per_s;
 	/* with VMA */

@@ -30,6 +30,9 @@
 #include "sim/core/engine.h"
 
 enum mem_req_type { MEM_SHADE, MEM_KD, MEM_LIST, MEM_TRI, MEM_NTYPES };
+/* Ray types a request may name (mem_req.ray): kernel-ref's packet types
+ * (primary, shadow, reflection, refraction). */
+#define MEM_RAY_TYPES 4
 
 typedef struct mem_req {
 	uint64_t addr;
@@ -40,6 +43,9 @@ typedef struct mem_req {
 	/* read: where the bytes go (valid until done runs); write: the bytes
 	 * stored (taken at once); NULL: no data */
 	void *data;
+	/* the type of the packet whose unit asks, + 1 (the L1s count their
+	 * lookups and hits by it); 0: no packet's (a trace replay, a test) */
+	uint8_t ray;
 } mem_req;
 
 /* What the memory system shows an observer of its timing (the timeline,

@@ -20,7 +20,8 @@
 # besides the default 0.5; default "0.15 0.85"; a point "0.1@0.15"),
 # BENCH_CONF_SIZE (default 1024x768), BENCH_REPS (runs per point, the
 # fastest timed; default 3), BENCH_QUICK=1 (views conference and
-# cornell, threads 16, rates 0.05 0.1).
+# cornell, threads 16, rates 0.05 0.1). The DRT rows (BENCH_DRT_*, and
+# BENCH_ONLY=drt to run them alone) follow the rest.
 set -eu
 B=${1:-build}
 SIM="$B/saarsim"
@@ -92,6 +93,97 @@ print("replayed", int(r["host"].get("packet_record") == "replayed"))
 print("region_tiles", f.get("unit_tiles", 0) + f.get("warmup_tiles", 0))
 EOF
 }
+
+# ---- distribution ray tracing (issue 32 item 5) ----
+# The DRT views of configs/drt-views.yaml (16 samples per pixel, every
+# effect on; billiard also at 64) at BENCH_DRT_SIZE (default 512x384: at
+# 256x192 the sampled mode's units and warm-ups cover every tile), the
+# standard config, 16 threads: cycle (the truth), functional and sampled
+# at BENCH_DRT_RATES, BENCH_DRT_REPS runs each (default 1). Written
+# between the fidelity-drt markers of docs/FIDELITY.md; BENCH_ONLY=drt
+# runs this part alone and leaves the rest of the file as it is.
+DRT_VIEWS=configs/drt-views.yaml
+DRT_SIZE=${BENCH_DRT_SIZE:-512x384}
+DRT_RATES=${BENCH_DRT_RATES:-"0.05 0.1 0.2"}
+drt_rows() { # appends rows to $1
+	drows=$1
+	for vs in billiard-drt@16 billiard-drt@64 cornell-drt@16; do
+		view=${vs%@*}
+		spp=${vs#*@}
+		reps=1
+		run warm --views "$DRT_VIEWS" --view "$view" --size 16x16 --fidelity functional \
+			>/dev/null || continue
+		set -- --views "$DRT_VIEWS" --view "$view" --spp "$spp" --size "$DRT_SIZE" \
+			--set chip.threads_per_rtp=16
+		reps=${BENCH_DRT_REPS:-1}
+		run truth "$@" >"$TMP/dtruth.kv" || continue
+		for mode in functional $DRT_RATES; do
+			if [ "$mode" = functional ]; then
+				run pt "$@" --fidelity functional >"$TMP/dpt.kv" || continue
+			else
+				run pt "$@" --fidelity sampled --sample-rate "$mode" >"$TMP/dpt.kv" || continue
+			fi
+			python3 - "$TMP/dtruth.kv" "$TMP/dpt.kv" "$view" "$spp" "$mode" "$DRT_SIZE" >>"$drows" <<'EOF'
+import sys
+def kv(p):
+    d = {}
+    for l in open(p):
+        k, v = l.split()
+        try: d[k] = float(v)
+        except ValueError: d[k] = v
+    return d
+t, s = kv(sys.argv[1]), kv(sys.argv[2])
+view, spp, mode, size = sys.argv[3:7]
+err = lambda k: (s[k] - t[k]) / t[k] * 100 if t[k] else 0.0
+inside = ("yes" if s["fps_lo"] <= t["fps"] <= s["fps_hi"] else "NO") if mode != "functional" else "(bound)"
+if mode != "functional" and not s["estimated"]:
+    mode += " (all detailed)"
+    inside = "(exact)"
+hits = ["%.2f" % ((s[k] - t[k]) * 100) if t[k] >= 0 else "-" for k in ("hit_shade", "hit_kd", "hit_list", "hit_tri")]
+print("| " + " | ".join([view, spp, mode, size, "%.2f" % t["sim_s"], "%.2f" % s["sim_s"],
+      "%.1f" % (t["sim_s"] / s["sim_s"] if s["sim_s"] else 0), "%.2f" % t["fps"], "%.2f" % s["fps"],
+      "%.2f" % err("fps"), "%.2f" % s["fps_lo"], "%.2f" % min(s["fps_hi"], 1e9), inside] + hits +
+      ["%.2f" % err("sdram_mb") if t["sdram_mb"] else "-"]) + " |")
+EOF
+		done
+	done
+}
+# Writes the DRT section into $OUT between its markers (appended when the
+# file has none).
+drt_section() {
+	rows="$TMP/drt_rows.md"
+	: >"$rows"
+	drt_rows "$rows"
+	sec="$TMP/drt_sec.md"
+	{
+		echo "<!-- BEGIN fidelity-drt -->"
+		echo "## Distribution ray tracing"
+		echo
+		echo "The DRT views of configs/drt-views.yaml (seed 000: spp samples per pixel with a thin lens, area lights, glossy reflection and camera motion; docs/views.md), standard config, 16 threads, one frame at $DRT_SIZE; each mode against cycle (the truth). Written by \`BENCH_ONLY=drt sh scripts/bench-fidelity.sh\` (also part of \`make bench-fidelity\`) on $(date -u +%Y-%m-%d), $(nproc) host cores; host times (\`host.sim_s\`) are the fastest of ${BENCH_DRT_REPS:-1} run(s). *inside*: the cycle fps lies in the sampled run's 95% interval; *(exact)*: the units and warm-ups covered every tile; hit-rate errors in percentage points."
+		echo
+		echo "| view | spp | mode | size | cycle sim s | mode sim s | speed-up | cycle fps | mode fps | fps err % | CI lo | CI hi | inside | shade hit err | kd | list | tri | SDRAM MB err % |"
+		echo "|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"
+		cat "$rows"
+		echo "<!-- END fidelity-drt -->"
+	} >"$sec"
+	if [ -f "$OUT" ] && grep -q '<!-- BEGIN fidelity-drt -->' "$OUT"; then
+		awk -v sec="$sec" '
+			/<!-- BEGIN fidelity-drt -->/ {while ((getline l < sec) > 0) print l; skip = 1; next}
+			/<!-- END fidelity-drt -->/ {skip = 0; next}
+			!skip' "$OUT" >"$TMP/out_drt.md"
+		cp "$TMP/out_drt.md" "$OUT"
+	else
+		{
+			echo
+			cat "$sec"
+		} >>"$OUT"
+	fi
+	echo "bench-fidelity: wrote the DRT rows of $OUT"
+}
+if [ "${BENCH_ONLY:-}" = drt ]; then
+	drt_section
+	exit 0
+fi
 
 ROWS="$TMP/rows.tsv"
 : >"$ROWS"
@@ -479,3 +571,4 @@ else
 	} >"$OUT"
 fi
 echo "bench-fidelity: wrote $OUT ($((T1 - T0)) s)"
+drt_section

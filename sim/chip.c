@@ -106,6 +106,10 @@ static const struct {
     {C_QUEUED, "rgs.queue_samples", "packets",
      "sum over shading ops of the RTP queue length after spawning"},
     {C_MAX_QUEUE, "rgs.max_queue", "packets", "longest queue of secondary packets of one RTP"},
+    {C_CONE_PACKETS, "cone.packets", "packets", "enclosing cones built (chip.cone_cull)"},
+    {C_CONE_TESTS, "cone.tests", "ops", "triangle-cone tests (chip.cone_cull)"},
+    {C_CONE_CULLED, "cone.culled", "ops", "packet-triangle tests the cone saved"},
+    {C_CONE_SAVED, "cone.saved_ray_tests", "tests", "ray-triangle tests the cone saved"},
 };
 
 static const char *const shade_names[11] = {"shade.hits",
@@ -531,6 +535,7 @@ static int chip_env(chip *c, diag *d)
 	v->stack_depth = cfg->chip.stack_depth;
 	v->max_steps = 2 * (uint64_t)w->m.nnodes + 64;
 	v->masked = cfg->chip.masked_packets;
+	v->cone_cull = cfg->chip.cone_cull;
 	/* the datapath formats; kernel-ref's check frame stays full precision */
 	if (fpfmt_init(&v->prec.trav, cfg->chip.fp.trav.exp, cfg->chip.fp.trav.mant,
 	               cfg->chip.fp.round) ||
@@ -559,6 +564,38 @@ static int chip_env(chip *c, diag *d)
 	return 0;
 }
 
+/* The counters split by packet type (enum thr_type_counter):
+ * type.<type>.trav.node_steps ... type.<type>.<unit>.busy_cycles/rays. */
+static void chip_type_counters_reg(chip *c)
+{
+	static const struct {
+		int id;
+		const char *name, *unit, *desc;
+	} tc[] = {
+	    {TC_NODE_STEPS, "trav.node_steps", "ops", "traversal steps of packets of this type"},
+	    {TC_LEAF_VISITS, "trav.leaf_visits", "ops", "leaves reached by packets of this type"},
+	    {TC_LIST_ENTRIES, "list.entries", "entries", "list entries read for this type"},
+	    {TC_TRI_TESTS, "isect.tri_tests", "ops", "packet-triangle tests of this type"},
+	    {TC_RAY_TRI_TESTS, "isect.ray_tri_tests", "tests", "ray-triangle tests of this type"},
+	};
+	char name[96];
+	for (int t = 0; t < PKT_NTYPES; t++) {
+		uint64_t **ct = c->env.ct[t];
+		for (size_t i = 0; i < sizeof tc / sizeof *tc; i++) {
+			snprintf(name, sizeof name, "type.%s.%s", pkt_type_name(t), tc[i].name);
+			ct[tc[i].id] = reg(c, name, tc[i].unit, tc[i].desc);
+		}
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			snprintf(name, sizeof name, "type.%s.%s.busy_cycles", pkt_type_name(t),
+			         unit_table[k].name);
+			ct[TC_BUSY + k] = reg(c, name, "cycles", "issue cycles of this type's ops");
+			snprintf(name, sizeof name, "type.%s.%s.rays", pkt_type_name(t),
+			         unit_table[k].name);
+			ct[TC_RAYS + k] = reg(c, name, "rays", "active rays of this type's ops");
+		}
+	}
+}
+
 /* The chip-wide counters: packets and rays by type, the units' counters
  * (enum thr_counter), shade_counts and the memory port's traffic. */
 static void chip_counters_reg(chip *c)
@@ -583,6 +620,7 @@ static void chip_counters_reg(chip *c)
 			c->memc[t][k] = reg(c, name, k & 1 ? "bytes" : "requests",
 			                    "memory-port traffic of this requester type");
 		}
+	chip_type_counters_reg(c);
 }
 
 /* RTP r's units, one group per kind of unit_table, with their counters
@@ -960,6 +998,7 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	ro.height = c->cfg.frame.height;
 	ro.max_depth = c->cfg.shading.max_depth;
 	ro.threads = 1;
+	ro.cone_cull = c->cfg.chip.cone_cull;
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
 	int rc = a && b ? world_reference_rgb8(c->w, &ro, b, &out->ref, &out->cached, d)

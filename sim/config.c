@@ -205,6 +205,13 @@ static const cfg_key keys_src[] = {
      .source = "§4.5: partly active packets cost about as much as full ones",
      .desc = "true: every packet op costs all packet_w*packet_h rays (inactive rays masked); "
              "false: only active rays cost"},
+    {BOOL("chip.cone_cull", chip.cone_cull, 0),
+     .source = "not published; seed 004 §4 (enclosing cones of a tile's rays), issue 32",
+     .desc = "true: each packet's rays are enclosed in a cone (an RGS op of the packet's "
+             "rays as it enters traversal) and every leaf triangle is first tested "
+             "against it (a one-cycle packet-level op of the intersection unit); a "
+             "triangle outside is skipped for the whole packet (kernel-ref/cone.h). The "
+             "image is the same"},
     {KEY("chip.thread_sched", CFG_ENUM, chip.thread_sched, CFG_SCHED_OLDEST_FIRST, 0, 0, ""),
      .names = thread_sched_names, TIMING,
      CAL "not published; assumed before: round_robin (the simplest fair policy)",

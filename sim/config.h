@@ -78,6 +78,7 @@ typedef struct saar_config {
 		int rtps, threads_per_rtp, stack_depth;
 		int packet_w, packet_h;
 		bool masked_packets;
+		bool cone_cull;
 		cfg_thread_sched thread_sched;
 		cfg_tile_order tile_order;
 		cfg_unit unit[UNIT_NKINDS]; /* by enum unit_kind: chip.<name>.* */

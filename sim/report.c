@@ -560,6 +560,97 @@ static void json_rays(jsonw *j, const chip *c)
 	kv(j, "stack_overflows", get(c, "trav.stack_overflows"));
 	kv(j, "stack_refills", get(c, "trav.stack_refills"));
 	jsonw_obj_end(j);
+
+	/* seed 004's cone culling (chip.cone_cull; kernel-ref/cone.h) */
+	uint64_t ct = get(c, "cone.tests"), cu = get(c, "cone.culled");
+	jsonw_key(j, "cone_cull");
+	jsonw_obj_begin(j);
+	jsonw_kbool(j, "enabled", c->cfg.chip.cone_cull);
+	kv(j, "cones", get(c, "cone.packets"));
+	kv(j, "tests", ct);
+	kv(j, "culled", cu);
+	kv(j, "saved_ray_tests", get(c, "cone.saved_ray_tests"));
+	jsonw_knum(j, "culled_share", ratio((double)cu, (double)ct));
+	jsonw_obj_end(j);
+}
+
+/* One ray type's L1 figures: per L1 and in total, the line lookups, hits
+ * and hit rate (hier_stats.ray_*). */
+static void ray_type_l1(jsonw *j, const hier_stats *hs, int r)
+{
+	uint64_t look = 0, hit = 0;
+	jsonw_key(j, "l1");
+	jsonw_obj_begin(j);
+	for (int t = 0; t <= MEM_NTYPES; t++) {
+		uint64_t lk = t < MEM_NTYPES ? hs->ray_lookups[r][t] : look;
+		uint64_t h = t < MEM_NTYPES ? hs->ray_hits[r][t] : hit;
+		jsonw_key(j, t < MEM_NTYPES ? mem_type_name(t) : "total");
+		jsonw_obj_begin(j);
+		kv(j, "lookups", lk);
+		kv(j, "hits", h);
+		jsonw_knum(j, "hit_rate", ratio((double)h, (double)lk));
+		jsonw_obj_end(j);
+		look += lk;
+		hit += h;
+	}
+	jsonw_obj_end(j);
+}
+
+/* The ray_types object (issue 32; docs/report.md): per packet type its
+ * packets and rays, kd steps and triangle tests (per packet and per ray),
+ * the units' issue cycles it took (and its share of them) and, with
+ * caches, its L1 lookups and hit rates. */
+static void json_ray_types(jsonw *j, const chip *c, const hier_stats *hs, int have_h)
+{
+	char name[96];
+	double all = 0;
+	for (int t = 0; t < PKT_NTYPES; t++)
+		for (int k = 0; k < UNIT_NKINDS; k++)
+			all += (double)*c->env.ct[t][TC_BUSY + k];
+	jsonw_key(j, "ray_types");
+	jsonw_obj_begin(j);
+	for (int t = 0; t < PKT_NTYPES; t++) {
+		uint64_t *const *ct = c->env.ct[t];
+		snprintf(name, sizeof name, "packets.%s", pkt_type_name(t));
+		uint64_t pk = get(c, name);
+		snprintf(name, sizeof name, "rays.%s", pkt_type_name(t));
+		uint64_t rays = get(c, name);
+		jsonw_key(j, pkt_type_name(t));
+		jsonw_obj_begin(j);
+		kv(j, "packets", pk);
+		kv(j, "rays", rays);
+		kv(j, "kd_node_steps", *ct[TC_NODE_STEPS]);
+		kv(j, "leaf_visits", *ct[TC_LEAF_VISITS]);
+		kv(j, "list_entries", *ct[TC_LIST_ENTRIES]);
+		kv(j, "triangle_tests", *ct[TC_TRI_TESTS]);
+		kv(j, "ray_triangle_tests", *ct[TC_RAY_TRI_TESTS]);
+		kv(j, "ray_kd_steps", *ct[TC_RAYS + UNIT_TRAV]);
+		jsonw_knum(j, "kd_steps_per_packet", ratio((double)*ct[TC_NODE_STEPS], (double)pk));
+		jsonw_knum(j, "triangle_tests_per_packet",
+		           ratio((double)*ct[TC_TRI_TESTS], (double)pk));
+		jsonw_knum(j, "kd_steps_per_ray",
+		           ratio((double)*ct[TC_RAYS + UNIT_TRAV], (double)rays));
+		jsonw_knum(j, "triangle_tests_per_ray",
+		           ratio((double)*ct[TC_RAY_TRI_TESTS], (double)rays));
+		double busy = 0;
+		jsonw_key(j, "unit_busy_cycles");
+		jsonw_obj_begin(j);
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			kv(j, unit_table[k].name, *ct[TC_BUSY + k]);
+			busy += (double)*ct[TC_BUSY + k];
+		}
+		jsonw_obj_end(j);
+		jsonw_knum(j, "busy_cycles_per_ray", ratio(busy, (double)rays));
+		jsonw_knum(j, "busy_share", ratio(busy, all));
+		if (have_h) {
+			ray_type_l1(j, hs, t);
+		} else {
+			jsonw_key(j, "l1");
+			jsonw_null(j);
+		}
+		jsonw_obj_end(j);
+	}
+	jsonw_obj_end(j);
 }
 
 /* The memory object: requests per requester type, stall cycles per unit
@@ -728,12 +819,13 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	json_units(j, c);
 	json_threads(j, c);
 	json_rays(j, c);
-	kv_object(j, c, "skipped", skipped_map, sizeof skipped_map / sizeof *skipped_map);
-	kv_object(j, c, "shading", shading_map, sizeof shading_map / sizeof *shading_map);
 	hier_stats hs;
 	int have_h = !hier_get_stats(&c->mem, &hs);
 	if (have_h && hs.func_requests) /* the bytes of untimed stretches too */
 		hs.run_ticks = chip_cycles(c) * hs.core_period;
+	json_ray_types(j, c, &hs, have_h);
+	kv_object(j, c, "skipped", skipped_map, sizeof skipped_map / sizeof *skipped_map);
+	kv_object(j, c, "shading", shading_map, sizeof shading_map / sizeof *shading_map);
 	json_memory(j, c, &hs, have_h);
 	json_frames(j, c);
 	json_caches(j, &hs, have_h);

@@ -194,6 +194,42 @@ static void memory_rules(rc_list *o, const rc_figs *f)
 		     U(h->hostbus.busy_ticks + h->func_hostbus_busy_ticks), U(h->hostbus.bytes));
 }
 
+/* ray_types: every counter split by packet type adds up over the types
+ * to the total it splits (a count made under the wrong type still adds
+ * up; tests/test_drt.c compares the split with kernel-ref's), and with
+ * caches, each L1's lookups and hits by ray type add up to its own. */
+static void ray_type_rules(rc_list *o, const rc_figs *f)
+{
+	static const char *const what[TC_BUSY] = {"kd_node_steps", "leaf_visits", "list_entries",
+	                                          "triangle_tests", "ray_triangle_tests"};
+	for (int i = 0; i < TC_NCOUNTERS; i++) {
+		char w[64];
+		if (i < TC_BUSY)
+			snprintf(w, sizeof w, "%s", what[i]);
+		else
+			snprintf(w, sizeof w, "%s %s", chip_unit_name((i - TC_BUSY) % UNIT_NKINDS),
+			         i < TC_RAYS ? "busy cycles" : "op rays");
+		if (f->by_type[i] != f->total[i])
+			fail(o, "ray_types: %s add up over the types to the total (%llu != %llu)",
+			     w, U(f->by_type[i]), U(f->total[i]));
+	}
+	if (!f->hierarchy)
+		return;
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		uint64_t lk = 0, hit = 0;
+		for (int r = 0; r < MEM_RAY_TYPES; r++) {
+			lk += f->h.ray_lookups[r][t];
+			hit += f->h.ray_hits[r][t];
+		}
+		if (lk != f->h.l1[t].accesses || hit != f->h.l1[t].hits)
+			fail(o,
+			     "ray_types: %s's lookups and hits add up over the ray types to the "
+			     "L1's (%llu, %llu != %llu, %llu)",
+			     cache_name[t], U(lk), U(hit), U(f->h.l1[t].accesses),
+			     U(f->h.l1[t].hits));
+	}
+}
+
 int rc_check(const rc_figs *f, rc_list *o)
 {
 	memset(o, 0, sizeof *o);
@@ -255,7 +291,26 @@ int rc_check(const rc_figs *f, rc_list *o)
 		     pci, U(f->h.hostbus.bytes));
 	if (f->hierarchy)
 		memory_rules(o, f);
+	ray_type_rules(o, f);
 	return o->n;
+}
+
+/* The per-type counters summed over the types, and their totals. */
+static void ray_type_figs(const chip *c, rc_figs *f)
+{
+	for (int t = 0; t < PKT_NTYPES; t++)
+		for (int i = 0; i < TC_NCOUNTERS; i++)
+			f->by_type[i] += *c->env.ct[t][i];
+	f->total[TC_NODE_STEPS] = *c->env.c[C_NODE_STEPS];
+	f->total[TC_LEAF_VISITS] = *c->env.c[C_LEAF_VISITS];
+	f->total[TC_LIST_ENTRIES] = *c->env.c[C_LIST_ENTRIES];
+	f->total[TC_TRI_TESTS] = *c->env.c[C_TRI_TESTS];
+	f->total[TC_RAY_TRI_TESTS] = *c->env.c[C_RAY_TRI_TESTS];
+	for (int r = 0; r < c->nrtp; r++)
+		for (int k = 0; k < UNIT_NKINDS; k++) {
+			f->total[TC_BUSY + k] += *c->rtp[r].u[k].busy;
+			f->total[TC_RAYS + k] += *c->rtp[r].u[k].rays;
+		}
 }
 
 int rc_figs_get(const chip *c, rc_figs *f)
@@ -296,6 +351,7 @@ int rc_figs_get(const chip *c, rc_figs *f)
 			f->rtp_util[k * f->nrtp + r] = fig_util(c, k, r);
 	}
 	f->threads_timed = fig_thread_shares(c, f->share);
+	ray_type_figs(c, f);
 	return 0;
 }
 

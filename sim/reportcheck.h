@@ -11,7 +11,8 @@
  * the level below delivers, SDRAM bytes = the memory interface's, host-bus
  * bytes = the VMA's fetches and write-arounds; a bus that was busy moved
  * bytes; rates and shares lie in [0, 1]; fps = clock / cycles per frame;
- * per-frame figures add up to the totals. saarsim prints one
+ * per-frame figures add up to the totals; the figures split by ray type
+ * (ray_types) add up to the totals they split. saarsim prints one
  * "warning: report invariant failed: ..." line per violation and lists
  * them in the JSON report (invariants_failed); every test that runs the
  * chip asserts there are none.
@@ -28,7 +29,7 @@
 
 #define RC_MAX 64 /* violations kept (rc_list.n counts all of them) */
 
-    typedef struct rc_list {
+typedef struct rc_list {
 	int n;                 /* violations found */
 	char msg[RC_MAX][256]; /* the first RC_MAX: "what: rule (the numbers)" */
 } rc_list;
@@ -51,6 +52,10 @@ typedef struct rc_figs {
 	double *rtp_util;         /* units.*.per_rtp_utilisation: [kind * nrtp + rtp] */
 	int threads_timed;
 	double share[THR_NSTATES]; /* threads.* */
+	/* ray_types (issue 32): the per-type counters summed over the types,
+	 * and the totals they split (traversal.*, the units' busy cycles and
+	 * rays summed over the RTPs) */
+	uint64_t by_type[TC_NCOUNTERS], total[TC_NCOUNTERS];
 } rc_figs;
 
 /* Copies c's report figures into f (rc_figs_free releases it); -1 when out

@@ -159,10 +159,10 @@ Test(chip, fixed_memory_answers_after_latency_and_counts)
 	eng_clock clk = eng_clock_mhz(500);
 	memport m;
 	cr_assert_eq(mem_init_fixed(&m, e, clk, 20, NULL), 0);
-	mem_req r = {4096, 36, MEM_TRI, 0, 0, NULL};
+	mem_req r = {4096, 36, MEM_TRI, 0, 0, NULL, 0};
 	ndone = 0;
 	mem_access(&m, &r, on_done, NULL, 0);
-	mem_req wr = {8192, 524, MEM_KD, 1, 0, NULL};
+	mem_req wr = {8192, 524, MEM_KD, 1, 0, NULL, 0};
 	mem_access(&m, &wr, NULL, NULL, 0);
 	eng_run(e, ENG_FOREVER);
 	cr_assert_eq(ndone, 1);

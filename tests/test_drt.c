@@ -6,6 +6,7 @@
  * kernel-ref's. Each test names the mistake it catches; the oracles are
  * computed in double where they can be.
  */
+#include "kernel-ref/cone.h"
 #include "kernel-ref/drt.h"
 #include "kernel-ref/spd.h"
 #include "kernel-ref/sudoku.h"
@@ -618,4 +619,320 @@ Test(drt, chip_frame_equals_kernel_ref_on_the_drt_views)
 		chip_matches(&w, 24, CFG_FIDELITY_CYCLE, names[k]);
 		world_free(&w);
 	}
+}
+
+/* ---- the figures per ray type (issue 32 item 2) ---- */
+
+/* The chip's counts of packets of type t against kernel-ref's, which
+ * splits its own traversal counts by the type of the packet it traces
+ * (render_stats.trav_type). With caches, each kd-node step is one L1 kd
+ * lookup and each packet-triangle test one L1 tri lookup (an 8-byte node
+ * and a 36-byte record never straddle a line), so the L1 lookups by ray
+ * type must equal the type's own steps and tests. */
+static void types_match(const world *w, int fid, const char *what)
+{
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 24;
+	c.fidelity = fid;
+	render_stats st;
+	free(tu_reference(w, &c, &st));
+	chip *ch = tu_run_chip(w, &c);
+	hier_stats hs;
+	cr_assert_eq(hier_get_stats(&ch->mem, &hs), 0, "%s: the default memory has L1s", what);
+	int shadow_seen = 0;
+	for (int t = 0; t < PKT_NTYPES; t++) {
+		uint64_t *const *ct = ch->env.ct[t];
+		const trav_counts *k = &st.trav_type[t];
+		const char *tn = pkt_type_name(t);
+		cr_assert_eq(*ct[TC_NODE_STEPS], k->node_steps, "%s: %s kd steps", what, tn);
+		cr_assert_eq(*ct[TC_LEAF_VISITS], k->leaf_visits, "%s: %s leaves", what, tn);
+		/* kernel-ref counts a leaf's entries as its tests; the chip
+		 * tests them in turn and a shadow packet stops when every ray
+		 * is occluded, so only the entries compare for shadows */
+		cr_assert_eq(*ct[TC_LIST_ENTRIES], k->tri_tests, "%s: %s list entries", what, tn);
+		if (t == PKT_SHADOW) {
+			cr_assert_leq(*ct[TC_TRI_TESTS], k->tri_tests, "%s: %s tests", what, tn);
+			cr_assert_leq(*ct[TC_RAY_TRI_TESTS], k->ray_tri_tests, "%s: %s", what, tn);
+		} else {
+			cr_assert_eq(*ct[TC_TRI_TESTS], k->tri_tests, "%s: %s tests", what, tn);
+			cr_assert_eq(*ct[TC_RAY_TRI_TESTS], k->ray_tri_tests, "%s: %s ray tests",
+			             what, tn);
+		}
+		cr_assert_eq(hs.ray_lookups[t][MEM_KD], k->node_steps, "%s: %s kd lookups", what,
+		             tn);
+		cr_assert_eq(hs.ray_lookups[t][MEM_TRI], *ct[TC_TRI_TESTS], "%s: %s tri lookups",
+		             what, tn);
+		/* a type with packets took RGS cycles (generation or shading) */
+		cr_assert_eq(*ct[TC_BUSY + UNIT_RGS] > 0, st.packets[t] > 0, "%s: %s RGS cycles",
+		             what, tn);
+		shadow_seen |= t == PKT_SHADOW && k->node_steps > 0;
+	}
+	cr_assert(shadow_seen, "%s: the view has shadow packets that traverse", what);
+	chip_destroy(ch);
+}
+
+/* Mistakes: a count made under the wrong packet type (a shadow packet's
+ * kd steps or triangle tests counted as primary: the type not set as a
+ * packet enters, or a type counter indexed by the counter's id), or an
+ * L1 lookup tagged with the wrong ray type (the read's tag not taken from
+ * the thread's packet). The split is compared with kernel-ref's own,
+ * made per traced packet, in cycle and functional fidelity, on the room
+ * with every effect on (primary, shadow and glossy reflection packets). */
+Test(drt, counts_by_ray_type_equal_kernel_ref)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	types_match(&w, CFG_FIDELITY_CYCLE, "room, cycle");
+	types_match(&w, CFG_FIDELITY_FUNCTIONAL, "room, functional");
+	world_free(&w);
+}
+
+/* Mistake: a unit's issue cycles or an L1's hits left out of the split in
+ * one mode (the functional sink not counting them by type): the report's
+ * invariant (the split adds up to the totals) fails. Checked directly on
+ * a spoiled figure, then on a sampled run. */
+Test(drt, the_split_adds_up_to_the_totals)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 24;
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	chip *ch = tu_run_chip(&w, &c); /* its invariants hold */
+	rc_figs f;
+	rc_list l;
+	cr_assert_eq(rc_figs_get(ch, &f), 0);
+	cr_assert_eq(rc_check(&f, &l), 0, "%s", l.msg[0]);
+	f.by_type[TC_BUSY + UNIT_ISECT]--;
+	cr_assert_geq(rc_check(&f, &l), 1, "a lost issue cycle is seen");
+	f.by_type[TC_BUSY + UNIT_ISECT]++;
+	f.h.ray_hits[PKT_SHADOW][MEM_TRI]++;
+	cr_assert_geq(rc_check(&f, &l), 1, "an extra hit is seen");
+	rc_figs_free(&f);
+	chip_destroy(ch);
+	world_free(&w);
+}
+
+/* ---- cone culling (seed 004; issue 32 item 4) ---- */
+
+/* The ray p + t d (t >= 0) meets triangle tr, in double (Moller-Trumbore
+ * with a tolerance that counts grazing hits as hits). */
+static int ray_meets(const double *o, const double *d, const mimg_tri *tr)
+{
+	double e1[3], e2[3], s[3], pv[3], qv[3];
+	for (int k = 0; k < 3; k++) {
+		e1[k] = (double)tr->v[1][k] - tr->v[0][k];
+		e2[k] = (double)tr->v[2][k] - tr->v[0][k];
+		s[k] = o[k] - tr->v[0][k];
+	}
+	pv[0] = d[1] * e2[2] - d[2] * e2[1];
+	pv[1] = d[2] * e2[0] - d[0] * e2[2];
+	pv[2] = d[0] * e2[1] - d[1] * e2[0];
+	double det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
+	if (fabs(det) < 1e-12)
+		return 0;
+	double u = (s[0] * pv[0] + s[1] * pv[1] + s[2] * pv[2]) / det;
+	qv[0] = s[1] * e1[2] - s[2] * e1[1];
+	qv[1] = s[2] * e1[0] - s[0] * e1[2];
+	qv[2] = s[0] * e1[1] - s[1] * e1[0];
+	double v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) / det;
+	double t = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) / det;
+	return u >= -1e-6 && v >= -1e-6 && u + v <= 1 + 1e-6 && t >= -1e-6;
+}
+
+static double urand(uint64_t *s)
+{
+	*s = *s * 6364136223846793005ull + 1442695040888963407ull;
+	return (double)(*s >> 11) / 9007199254740992.0;
+}
+
+/* Mistakes: a cone that does not hold every ray (the apex left at the
+ * origins' centroid, ignoring their spread: lens and area-light rays
+ * start apart; the half angle taken from one ray only; the sphere test's
+ * sign or the triangle's radius wrong): some culled triangle is met by a
+ * ray of the packet. 2000 random packets (spread origins, directions in a
+ * random lobe) against triangles near them, the hits checked in double;
+ * and culling must happen (a cone that culls nothing passes trivially). */
+Test(drt, cone_culls_only_triangles_no_ray_meets)
+{
+	uint64_t seed = 12345;
+	int culled = 0, kept = 0;
+	for (int it = 0; it < 2000; it++) {
+		packet p;
+		pkt_clear(&p, PKT_PRIMARY, 0);
+		double spread = urand(&seed) * 0.5, lobe = urand(&seed) * 0.6;
+		for (int i = 0; i < PKT_RAYS; i++) {
+			p.ox[i] = (float)((urand(&seed) - 0.5) * spread);
+			p.oy[i] = (float)((urand(&seed) - 0.5) * spread);
+			p.oz[i] = (float)((urand(&seed) - 0.5) * spread);
+			p.dx[i] = (float)((urand(&seed) - 0.5) * lobe);
+			p.dy[i] = (float)((urand(&seed) - 0.5) * lobe);
+			p.dz[i] = 1.0f;
+		}
+		p.valid = ~0ull;
+		pkt_cone c;
+		cone_build(&c, &p, p.valid);
+		cr_assert(!c.all, "a lobe of %g spreads less than CONE_MAX_PHI", lobe);
+		for (int k = 0; k < 20; k++) {
+			mimg_tri tr;
+			double cx = (urand(&seed) - 0.5) * 6, cy = (urand(&seed) - 0.5) * 6,
+			       cz = urand(&seed) * 6 - 1, sz = urand(&seed) * 0.5;
+			for (int j = 0; j < 3; j++) {
+				tr.v[j][0] = (float)(cx + (urand(&seed) - 0.5) * sz);
+				tr.v[j][1] = (float)(cy + (urand(&seed) - 0.5) * sz);
+				tr.v[j][2] = (float)(cz + (urand(&seed) - 0.5) * sz);
+			}
+			if (!cone_culls_tri(&c, &tr)) {
+				kept++;
+				continue;
+			}
+			culled++;
+			for (int i = 0; i < PKT_RAYS; i++) {
+				double o[3] = {p.ox[i], p.oy[i], p.oz[i]},
+				       d[3] = {p.dx[i], p.dy[i], p.dz[i]};
+				cr_assert(!ray_meets(o, d, &tr),
+				          "packet %d: culled triangle %d is met by ray %d", it, k,
+				          i);
+			}
+		}
+	}
+	cr_assert(culled > 1000 && kept > 1000, "culled %d, kept %d", culled, kept);
+}
+
+/* The chip's frame and kernel-ref's with cone culling on w (cycle or
+ * functional fidelity): the chip's cone counts equal kernel-ref's, and
+ * the frame equals the one without culling. Returns the triangles
+ * culled. */
+static uint64_t cone_run(const world *w, int fid, const char *what)
+{
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 24;
+	c.fidelity = fid;
+	render_stats st;
+	uint8_t *off = tu_reference(w, &c, NULL);
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = ro.height = 24;
+	ro.max_depth = c.shading.max_depth;
+	ro.cone_cull = 1;
+	framebuf fb;
+	diag d;
+	cr_assert_eq(fb_init(&fb, 24, 24), 0);
+	cr_assert_eq(render_frame(&w->m, &w->v, &ro, &fb, &st, &d), 0, "%s", d.msg);
+	uint8_t *on = malloc(24 * 24 * 3);
+	cr_assert(on);
+	fb_to_rgb8(&fb, on, NULL);
+	fb_free(&fb);
+	cr_assert(!memcmp(on, off, 24 * 24 * 3), "%s: kernel-ref's frame changes with culling",
+	          what);
+	c.chip.cone_cull = true;
+	chip *ch = tu_run_chip(w, &c);
+	tu_assert_identical(ch, what);
+	uint64_t culled = stats_get(&ch->st, "cone.culled");
+	cr_assert_eq(culled, st.trav.cone_culled, "%s: triangles culled", what);
+	cr_assert_eq(stats_get(&ch->st, "cone.saved_ray_tests"), st.trav.cone_saved_ray_tests,
+	             "%s: ray tests saved", what);
+	/* every packet that entered the box built a cone; every triangle a
+	 * packet reached was tested against it */
+	cr_assert_eq(stats_get(&ch->st, "cone.tests"),
+	             stats_get(&ch->st, "isect.tri_tests") + culled, "%s: cone tests", what);
+	chip_destroy(ch);
+	free(on);
+	free(off);
+	return culled;
+}
+
+/* Mistakes: culling that changes the image (a non-conservative cone on
+ * the chip or in kernel-ref, or the chip testing the cone against the
+ * wrong triangle record), the chip culling other triangles than kernel-
+ * ref (its cone built from all valid rays instead of those that entered
+ * the box, or from the packet before it was clipped), and the cone tests
+ * not counted where they are made. On the room with every effect on and
+ * on the billiard table, cycle and functional fidelity. */
+Test(drt, cone_culling_keeps_the_image)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	uint64_t n = cone_run(&w, CFG_FIDELITY_CYCLE, "room, cycle");
+	n += cone_run(&w, CFG_FIDELITY_FUNCTIONAL, "room, functional");
+	world_free(&w);
+	tu_load_world(&w, NULL, "configs/drt-views.yaml", "billiard-drt");
+	n += cone_run(&w, CFG_FIDELITY_CYCLE, "billiard, cycle");
+	world_free(&w);
+	cr_assert(n > 0, "culling happened");
+}
+
+/* Mistake: the cone test charged as a ray op (64 rays' issue cycles on a
+ * masked chip) or not at all, or the cone's build not charged to the RGS:
+ * with culling on, the intersection unit's busy cycles are the packet
+ * tests' plus one cycle per cone test, and the RGS's grow by one op of
+ * the entering rays per packet. */
+Test(drt, cone_costs_are_charged_to_their_units)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 16;
+	c.fidelity = CFG_FIDELITY_FUNCTIONAL;
+	chip *a = tu_run_chip(&w, &c);
+	c.chip.cone_cull = true;
+	chip *b = tu_run_chip(&w, &c);
+	uint64_t ia = 0, ib = 0, ra = 0, rb = 0;
+	for (int r = 0; r < a->nrtp; r++) {
+		ia += *a->rtp[r].u[UNIT_ISECT].busy;
+		ib += *b->rtp[r].u[UNIT_ISECT].busy;
+		ra += *a->rtp[r].u[UNIT_RGS].busy;
+		rb += *b->rtp[r].u[UNIT_RGS].busy;
+	}
+	uint64_t per = thr_unit_issue(&a->rtp[0].u[UNIT_ISECT], PKT_RAYS);
+	uint64_t culled = stats_get(&b->st, "cone.culled");
+	cr_assert_eq(ib, ia - culled * per + stats_get(&b->st, "cone.tests"), "isect busy cycles");
+	cr_assert_eq(rb,
+	             ra + stats_get(&b->st, "cone.packets") *
+	                      thr_unit_issue(&a->rtp[0].u[UNIT_RGS], PKT_RAYS),
+	             "RGS busy cycles");
+	chip_destroy(a);
+	chip_destroy(b);
+	world_free(&w);
+}
+
+/* ---- sampled fidelity (issue 32 item 5) ---- */
+
+/* Mistakes: a tile's further samples lost beyond a fixed count (the spawn
+ * or the RTP queue sized for 16 samples: planted, 4096 pixels differ), or
+ * lost between the sampled mode's regions and functional stretches (they
+ * queue at the RTP like children). 64 samples per pixel with every effect
+ * on, units of 8 tiles so the frame is estimated (not every tile
+ * detailed): the frame is kernel-ref's and every primary ray is counted. */
+Test(drt, sampled_fidelity_with_many_samples)
+{
+	world w;
+	room(&w);
+	w.v.drt = all_on;
+	w.v.drt.spp = 64;
+	saar_config c;
+	cfg_defaults(&c);
+	c.frame.width = c.frame.height = 64;
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	/* 8 threads, so that 3 units of 8 tiles and their warm-ups leave
+	 * tiles to estimate (a unit holds a tile per thread at least) */
+	c.chip.threads_per_rtp = 2;
+	c.sampling.rate = 0.1;
+	c.sampling.unit_tiles = 8;
+	c.sampling.warmup_tiles = 2;
+	c.sampling.min_units = 3;
+	chip *ch = tu_run_chip(&w, &c);
+	cr_assert(!ch->fid.exact, "the frame is estimated, not every tile detailed");
+	tu_assert_identical(ch, "room, 64 spp, sampled");
+	cr_assert_eq(stats_get(&ch->st, "rays.primary"), 64u * 64u * 64u, "every sample traced");
+	chip_destroy(ch);
+	world_free(&w);
 }

@@ -20,7 +20,7 @@ static int build_and_read(const saar_config *cfg, const char *levels, int n, hie
 		return -1;
 	}
 	for (int i = 0; i < n; i++) {
-		mem_req q = {(uint64_t)(i % 64) * 8, 8, MEM_KD, 0, 0, NULL};
+		mem_req q = {(uint64_t)(i % 64) * 8, 8, MEM_KD, 0, 0, NULL, 0};
 		mem_access_func(&mp, &q);
 	}
 	cr_assert_eq(hier_get_stats(&mp, s), 0);

@@ -344,7 +344,7 @@ static uint64_t kd_hits_cyclic(const char *name, int rounds)
 	uint64_t nsets = kp.size_bytes / ((uint64_t)kp.ways * kp.line_bytes);
 	for (int r = 0; r < rounds; r++)
 		for (uint64_t k = 0; k < 5; k++) {
-			mem_req q = {k * nsets * kp.line_bytes, 8, MEM_KD, 0, 0, NULL};
+			mem_req q = {k * nsets * kp.line_bytes, 8, MEM_KD, 0, 0, NULL, 0};
 			mem_access_func(&mp, &q);
 		}
 	hier_stats s;
@@ -388,7 +388,7 @@ static void random_reads(memport *mp, int n)
 {
 	for (int i = 0; i < n; i++) {
 		int t = i % 2 ? MEM_KD : MEM_TRI;
-		mem_req q = {xr() % (256 << 10), t == MEM_KD ? 8 : 36, (uint8_t)t, 0, 0, NULL};
+		mem_req q = {xr() % (256 << 10), t == MEM_KD ? 8 : 36, (uint8_t)t, 0, 0, NULL, 0};
 		mem_access_func(mp, &q);
 	}
 }
@@ -482,7 +482,8 @@ static uint64_t vma_hits_cyclic(const char *key, const char *name, int onboard, 
 			             MEM_KD,
 			             0,
 			             0,
-			             NULL};
+			             NULL,
+			             0};
 			mem_access_func(&mp, &q);
 		}
 	hier_stats s;

@@ -158,6 +158,9 @@ SPOIL(sdram_mb_zero, f->per_frame[0].sdram_mb = 0)
 SPOIL(pci_mb_off, f->per_frame[1].pci_mb += 0.5)
 SPOIL(port_off, f->port.reads[MEM_TRI]++)
 SPOIL(l1_hits_off, f->h.l1[MEM_KD].hits++)
+SPOIL(type_steps_off, f->by_type[TC_NODE_STEPS]++)
+SPOIL(type_busy_off, f->total[TC_BUSY + UNIT_ISECT]--)
+SPOIL(ray_hits_off, f->h.ray_hits[PKT_SHADOW][MEM_TRI]++)
 SPOIL(l1_merges_over, f->h.l1[MEM_LIST].merges = f->h.l1[MEM_LIST].misses + 1)
 SPOIL(l2_fill_bytes_off, f->h.l2.fill_bytes += 1)
 SPOIL(tag_fills_off, f->h.tag_cache.fills -= 1; f->h.tag_cache.fill_bytes -= f->line[HR_TAG])
@@ -223,6 +226,10 @@ Test(reportcheck, each_invariant_can_fail, .timeout = 300)
 	    {writeback_uncharged, "memif.fill: bytes = the host fetches' + write-backs'",
 	     "a write-back without its traffic", 0},
 	    {memif_kd_off, "memif.kd: bytes = L1 fills + bypass reads + writes", "L1 to memif", 1},
+	    {type_steps_off, "ray_types: kd_node_steps add up over the types", "kd steps by type",
+	     1},
+	    {type_busy_off, "ray_types: isect busy cycles add up", "busy cycles by type", 0},
+	    {ray_hits_off, "ray_types: l1.tri's lookups and hits add up", "L1 hits by ray type", 1},
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++)
 		expect_failure(cases[i].plain ? p : v, cases[i].spoil, cases[i].want,

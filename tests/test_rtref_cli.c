@@ -43,6 +43,30 @@ Test(rtref_cli, good_run_writes_image_and_stats)
 		cr_assert(strstr(buf, keys[k]), "stats lack %s", keys[k]);
 }
 
+/* Mistake: --cone-cull ignored (render_opts.cone_cull not set: nothing
+ * culled) or culling that changes the frame. The DRT room (lens and area
+ * lights) with and without it: the same image bytes, and triangles culled
+ * only with it. */
+Test(rtref_cli, cone_cull_keeps_the_frame)
+{
+	char args[1024];
+	for (int on = 0; on < 2; on++) {
+		snprintf(args, sizeof args,
+		         "--size 48x48 --spp 4 --aperture 0.8 --light-size 1.5 --out %s/c%d.ppm "
+		         "--stats %s/c%d.json%s",
+		         dir, on, dir, on, on ? " --cone-cull" : "");
+		cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+	}
+	char cmd[1024];
+	snprintf(cmd, sizeof cmd, "cmp -s %s/c0.ppm %s/c1.ppm", dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "the frame changes with --cone-cull");
+	cr_assert(strstr(slurp("c0.json"), "\"cone_culled\": 0,"),
+	          "nothing culled without the flag");
+	const char *s1 = slurp("c1.json");
+	cr_assert(strstr(s1, "\"cone_culled\"") && !strstr(s1, "\"cone_culled\": 0,"),
+	          "triangles culled with it");
+}
+
 /* The stats say which camera and lights were rendered. */
 Test(rtref_cli, stats_describe_camera_and_lights)
 {

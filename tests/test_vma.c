@@ -37,7 +37,7 @@ static void issue(eng *e, void *ctx, uint64_t arg)
 	drv *d = ctx;
 	for (int k = 0; k < d->per_cycle && d->issued < d->n; k++, d->issued++) {
 		uint64_t a = d->base + (d->issued * d->stride) % d->span;
-		mem_req r = {a, d->bytes, (uint8_t)d->type, 0, 0, NULL};
+		mem_req r = {a, d->bytes, (uint8_t)d->type, 0, 0, NULL, 0};
 		mem_access(d->mp, &r, answered, d, 0);
 	}
 	if (d->issued < d->n)

@@ -91,7 +91,7 @@ static void feed(eng *e, void *ctx, uint64_t arg)
 	feeder *f = ctx;
 	uint64_t cyc = eng_now(e) / f->clk.period;
 	while (f->have && f->next.cycle <= cyc) {
-		mem_req r = {f->next.addr, f->next.bytes, f->next.type, f->next.write, 0, NULL};
+		mem_req r = {f->next.addr, f->next.bytes, f->next.type, f->next.write, 0, NULL, 0};
 		mem_access(f->mp, &r, r.write ? NULL : answered, f, 0);
 		f->issued++;
 		next_rec(f);

@@ -24,8 +24,32 @@ static void done(eng *e, void *ctx, uint64_t arg)
 	isu_next(t);
 }
 
+/* The triangle-cone test is done (chip.cone_cull): a triangle outside
+ * the packet's cone is skipped for every ray, else the rays test it. */
+static void cone_tested(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	thr_ctx *t = ctx;
+	if (cone_culls_tri(&t->cone, &t->tri)) {
+		thr_count(t, C_CONE_CULLED, 1);
+		thr_count(t, C_CONE_SAVED, (uint64_t)thr_pop(t->mask));
+		t->k++;
+		isu_next(t);
+		return;
+	}
+	thr_use(t, UNIT_ISECT, thr_pop(t->mask), done);
+}
+
 static void fetched(thr_ctx *t)
 {
+	if (t->env->cone_cull) {
+		/* seed 004 §4: one cone-sphere test for the packet, a few dot
+		 * products like one ray's triangle test: a packet-level op */
+		thr_count(t, C_CONE_TESTS, 1);
+		thr_use(t, UNIT_ISECT, THR_SCALAR_OP, cone_tested);
+		return;
+	}
 	thr_use(t, UNIT_ISECT, thr_pop(t->mask), done);
 }
 

@@ -248,7 +248,7 @@ static const void *chip_shade_read(void *ctx, uint64_t addr, uint32_t bytes, int
 	}
 	S->rd[S->n++] = (thr_shread){addr, bytes, off};
 	S->used += bytes;
-	mem_req r = {addr, bytes, MEM_SHADE, 0, (uint16_t)t->rtp->id, NULL};
+	mem_req r = {addr, bytes, MEM_SHADE, 0, (uint16_t)t->rtp->id, NULL, 0};
 	mem_peek(v->mem, &r, S->peek + off);
 	/* until its own read returns (a later round) */
 	memcpy(S->got + off, S->peek + off, bytes);

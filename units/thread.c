@@ -27,7 +27,7 @@ int thr_unit_init(thr_unit *u, eng *e, eng_clock clk, const unit_params *p, int 
 	u->ops_n = &u->own[0];
 	u->busy = &u->own[1];
 	u->rays = &u->own[2];
-	for (int r = 0; r <= PKT_RAYS; r++)
+	for (int r = 0; r <= THR_SCALAR_OP; r++)
 		u->issue[r] = (uint32_t)thr_unit_issue_div(u, r);
 	u->free_at = calloc((size_t)u->count, sizeof *u->free_at);
 	u->ops = calloc((size_t)max_waiters, sizeof *u->ops);
@@ -55,6 +55,8 @@ void thr_unit_free(thr_unit *u)
 
 uint64_t thr_unit_issue_div(const thr_unit *u, int rays)
 {
+	if (rays == THR_SCALAR_OP)
+		return 1;
 	int r = u->masked ? PKT_RAYS : rays;
 	uint64_t c = ((uint64_t)r + (uint64_t)u->width - 1) / (uint64_t)u->width;
 	return c ? c : 1;

@@ -36,6 +36,7 @@
 #include <stdint.h>
 
 #include "kernel-ref/camera.h"
+#include "kernel-ref/cone.h"
 #include "kernel-ref/packet.h"
 #include "kernel-ref/shade.h"
 #include "mem/memport.h"
@@ -64,6 +65,16 @@ enum thr_mutant {
 
 /* ---- pipelined units ---- */
 
+/* The `rays` of a packet-level op: one computation for the whole packet
+ * (the cone test of seed 004, units/intersection.c), one issue cycle and
+ * counted as one ray whether or not packets are masked. */
+#define THR_SCALAR_OP (PKT_RAYS + 1)
+/* The rays an op of `rays` counts (a packet-level op: one). */
+static inline int thr_op_rays(int rays)
+{
+	return rays == THR_SCALAR_OP ? 1 : rays;
+}
+
 typedef struct thr_op {
 	uint64_t age;
 	int rays;
@@ -89,7 +100,7 @@ typedef struct thr_unit {
 	/* issue cycles by active rays (thr_unit_issue), computed once: every
 	 * op, timed or functional, needs it, and a division per op showed in
 	 * functional runs' profiles */
-	uint32_t issue[PKT_RAYS + 1];
+	uint32_t issue[THR_SCALAR_OP + 1];
 } thr_unit;
 
 /* count/width/latency, masked (charge 64 rays per op) and sched (enum
@@ -103,7 +114,7 @@ uint64_t thr_unit_host_bytes(int count, int max_waiters);
 uint64_t thr_unit_issue_div(const thr_unit *u, int rays);
 static inline uint64_t thr_unit_issue(const thr_unit *u, int rays)
 {
-	return rays >= 0 && rays <= PKT_RAYS ? u->issue[rays] : thr_unit_issue_div(u, rays);
+	return rays >= 0 && rays <= THR_SCALAR_OP ? u->issue[rays] : thr_unit_issue_div(u, rays);
 }
 /* Counts (sign 1) or takes back (sign -1) one op of `rays` rays at u:
  * ops, issue cycles, rays. The one place an op's counts are made: at
@@ -115,7 +126,7 @@ static inline uint64_t thr_unit_count(thr_unit *u, int rays, int sign)
 	uint64_t issue = thr_unit_issue(u, rays), s = (uint64_t)(int64_t)sign;
 	*u->ops_n += s;
 	*u->busy += s * issue;
-	*u->rays += s * (uint64_t)rays;
+	*u->rays += s * (uint64_t)thr_op_rays(rays);
 	return issue;
 }
 /* Requests one op for requester id (at most one outstanding per id). done
@@ -145,9 +156,31 @@ enum thr_counter {
 	C_SPAWNED,
 	C_QUEUED,
 	C_MAX_QUEUE,
+	C_CONE_PACKETS, /* cone culling (chip.cone_cull): cones built, */
+	C_CONE_TESTS,   /* triangle-cone tests, */
+	C_CONE_CULLED,  /* triangles culled for the whole packet, */
+	C_CONE_SAVED,   /* and the ray-triangle tests they saved */
 	C_NCOUNTERS
 };
 _Static_assert(C_NCOUNTERS <= 32, "packet records (pktrec.h) hold 32 counters");
+
+/* Counters split by the type of the packet that made them (seed 000 §3
+ * groups packets by ray type; issue 32): kd steps, leaves, list entries
+ * and triangle tests, and each unit kind's issue cycles and op rays. They
+ * are not thr_counters (a packet record holds 32 of those): the sinks
+ * derive them where they count the totals, from the type of the thread's
+ * packet (thr_ctx.ptype), so a replayed record splits them as the
+ * recording run did. */
+enum thr_type_counter {
+	TC_NODE_STEPS,
+	TC_LEAF_VISITS,
+	TC_LIST_ENTRIES,
+	TC_TRI_TESTS,
+	TC_RAY_TRI_TESTS,
+	TC_BUSY,                         /* + kind: issue cycles of the kind's ops */
+	TC_RAYS = TC_BUSY + UNIT_NKINDS, /* + kind: active rays of the kind's ops */
+	TC_NCOUNTERS = TC_RAYS + UNIT_NKINDS
+};
 
 struct thr_ctx;
 struct thr_rtp;
@@ -185,6 +218,7 @@ typedef struct thr_env {
 	cam_frame cam;
 	drt_shade drt; /* distribution effects (sc.drt points here when on) */
 	int stack_depth, masked, nlights;
+	int cone_cull; /* chip.cone_cull: packets cull leaf triangles outside their cone */
 	/* a packet that takes more traversal steps than this has looped on
 	 * damaged node data (a correct walk visits each node at most once):
 	 * it is ended and the frame fails (damaged) */
@@ -200,6 +234,7 @@ typedef struct thr_env {
 	uint64_t spill_base;
 	uint64_t next_age;
 	uint64_t *c[C_NCOUNTERS];
+	uint64_t *ct[PKT_NTYPES][TC_NCOUNTERS]; /* enum thr_type_counter, by packet type */
 	shade_counts sh;
 	/* the pipeline's order: where a unit hands a thread on (set by the
 	 * chip's wiring, unit_table.h) */
@@ -243,6 +278,7 @@ typedef struct thr_ctx {
 	int state;
 	uint64_t since; /* tick of the last state change */
 	packet *p;
+	int ptype;         /* the packet's type (enum pkt_type), set as it enters */
 	uint64_t age;      /* packet sequence number: smaller = older */
 	trav_entry *stack; /* functional stack (PKT_STACK_MAX entries) */
 	int sp;            /* stack depth after the last step */
@@ -264,6 +300,7 @@ typedef struct thr_ctx {
 	packet *kids; /* shade_packet's output */
 	int nkids, made;
 	uint64_t steps; /* traversal steps of the current packet (thr_env.max_steps) */
+	pkt_cone cone;  /* the packet's enclosing cone (chip.cone_cull) */
 } thr_ctx;
 
 /* A queued secondary packet: the packet, or (p NULL) a replayed stream. */

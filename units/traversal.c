@@ -16,6 +16,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+static void cone_built(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	tu_step(ctx);
+}
+
 void tu_begin(thr_ctx *t)
 {
 	thr_env *v = t->env;
@@ -26,6 +33,14 @@ void tu_begin(thr_ctx *t)
 	if (!enter) {
 		thr_count(t, C_BOX_MISS_PACKETS, 1);
 		t->env->route.finish(t);
+		return;
+	}
+	if (v->cone_cull) {
+		/* seed 004 §4: the rays that entered, enclosed in a cone by the
+		 * RGS, which holds them (one op of those rays) */
+		cone_build(&t->cone, t->p, enter);
+		thr_count(t, C_CONE_PACKETS, 1);
+		thr_use(t, UNIT_RGS, thr_pop(enter), cone_built);
 		return;
 	}
 	tu_step(t);

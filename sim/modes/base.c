@@ -9,10 +9,41 @@
 #include "sim/modes/slot.h"
 #include "units/rgs.h"
 
+/* The per-type counter (enum thr_type_counter) a thr_counter also
+ * counts into, -1: none. */
+static int type_counter(int id)
+{
+	switch (id) {
+	case C_NODE_STEPS:
+		return TC_NODE_STEPS;
+	case C_LEAF_VISITS:
+		return TC_LEAF_VISITS;
+	case C_LIST_ENTRIES:
+		return TC_LIST_ENTRIES;
+	case C_TRI_TESTS:
+		return TC_TRI_TESTS;
+	case C_RAY_TRI_TESTS:
+		return TC_RAY_TRI_TESTS;
+	default:
+		return -1;
+	}
+}
+
 void mode_base_count(thr_sink *s, thr_ctx *t, int id, uint64_t n)
 {
 	(void)s;
-	*t->env->c[id] += n;
+	thr_env *v = t->env;
+	*v->c[id] += n;
+	int tc = type_counter(id);
+	if (tc >= 0)
+		*v->ct[t->ptype][tc] += n;
+}
+
+void mode_base_use(thr_ctx *t, int kind, int rays)
+{
+	thr_env *v = t->env;
+	*v->ct[t->ptype][TC_BUSY + kind] += thr_unit_issue(&t->rtp->u[kind], rays);
+	*v->ct[t->ptype][TC_RAYS + kind] += (uint64_t)thr_op_rays(rays);
 }
 
 void mode_base_count_max(thr_sink *s, thr_ctx *t, int id, uint64_t v)
@@ -36,6 +67,7 @@ void mode_base_enter(thr_sink *s, thr_ctx *t, int type, uint64_t rays)
 	(void)s;
 	thr_env *v = t->env;
 	t->age = v->next_age++;
+	t->ptype = type;
 	++*v->c[C_PKT_PRIMARY + type];
 	*v->c[C_RAYS_PRIMARY + type] += rays;
 }

@@ -9,7 +9,13 @@
 
 #include "units/thread.h"
 
+/* Counts into thr_env.c and, for the counters split by packet type, into
+ * thr_env.ct of the thread's packet type. */
 void mode_base_count(thr_sink *s, thr_ctx *t, int id, uint64_t n);
+/* The per-type issue cycles and op rays of an op of `rays` rays at the
+ * thread's unit of kind `kind` (the timed and functional sinks' use; the
+ * totals are the unit's own, thr_unit_count). */
+void mode_base_use(thr_ctx *t, int kind, int rays);
 void mode_base_count_max(thr_sink *s, thr_ctx *t, int id, uint64_t v);
 void mode_base_shade(thr_sink *s, thr_ctx *t, const shade_counts *add);
 void mode_base_enter(thr_sink *s, thr_ctx *t, int type, uint64_t rays);

@@ -9,7 +9,8 @@
 static void func_read(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
 {
 	(void)s;
-	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst};
+	mem_req r = {
+	    addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst, (uint8_t)(t->ptype + 1)};
 	mem_access_func(t->env->mem, &r);
 }
 
@@ -17,7 +18,13 @@ static void func_write(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_
                        const void *src)
 {
 	(void)s;
-	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id, (void *)src};
+	mem_req r = {addr,
+	             bytes,
+	             (uint8_t)type,
+	             1,
+	             (uint16_t)t->rtp->id,
+	             (void *)src,
+	             (uint8_t)(t->ptype + 1)};
 	mem_access_func(t->env->mem, &r);
 }
 
@@ -27,6 +34,7 @@ static void func_use(thr_sink *s, thr_ctx *t, int kind, int rays, eng_handler do
 	/* the op's counts as its issue makes them (thread.c start), without
 	 * its time */
 	thr_unit_count(&t->rtp->u[kind], rays, 1);
+	mode_base_use(t, kind, rays);
 	mode_slot_state *m = mode_slot(t);
 	m->fnext = done;
 	m->fkind = kind;

@@ -22,7 +22,8 @@ static void mem_done(eng *e, void *ctx, uint64_t arg)
 static void timed_read(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
 {
 	(void)s;
-	mem_req r = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst};
+	mem_req r = {
+	    addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst, (uint8_t)(t->ptype + 1)};
 	t->pending++;
 	mem_access(t->env->mem, &r, mem_done, t, 0);
 }
@@ -31,13 +32,20 @@ static void timed_write(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32
                         const void *src)
 {
 	(void)s;
-	mem_req r = {addr, bytes, (uint8_t)type, 1, (uint16_t)t->rtp->id, (void *)src};
+	mem_req r = {addr,
+	             bytes,
+	             (uint8_t)type,
+	             1,
+	             (uint16_t)t->rtp->id,
+	             (void *)src,
+	             (uint8_t)(t->ptype + 1)};
 	mem_access(t->env->mem, &r, NULL, NULL, 0);
 }
 
 static void timed_use(thr_sink *s, thr_ctx *t, int kind, int rays, eng_handler done)
 {
 	(void)s;
+	mode_base_use(t, kind, rays);
 	thr_set(t, THR_WAIT_UNIT);
 	thr_unit_request(&t->rtp->u[kind], t->id, t->age, rays, done, t, 0);
 }
