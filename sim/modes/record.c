@@ -28,7 +28,7 @@ static int read_sum(mode_rec *r, thr_ctx *t, int type, uint64_t addr, uint32_t b
 		r->buf = b;
 		r->cap = cap;
 	}
-	mem_req q = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, NULL};
+	mem_req q = {addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, NULL, 0};
 	mem_peek(t->env->mem, &q, r->buf);
 	*sum = pr_sum(r->buf, bytes);
 	return 0;
