@@ -398,7 +398,10 @@ static int apply_view_flags(world *w, const world_opts *o, diag *d)
 			int k = 0;
 			while (k < 5 && strcmp(keys[k], key))
 				k++;
-			return diag_set(d, drt_flags[k], 0, 0, "%s", prob);
+			char key_name[32];
+			snprintf(key_name, sizeof key_name, "drt.%s", keys[k]);
+			return diag_set(d, o->drt_from_config & (1u << k) ? key_name : drt_flags[k],
+			                0, 0, "%s", prob);
 		}
 		w->view_changed = 1;
 	}

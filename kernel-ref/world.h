@@ -27,6 +27,9 @@ typedef struct world_opts {
 	int no_lights;     /* --no-lights */
 	drt_params drt;    /* --spp --aperture --focus --light-size --gloss --motion */
 	unsigned have_drt; /* which of them were given (bit i: the i-th flag) */
+	/* which of them came from saarsim's drt.* config keys instead (a
+	 * problem is then named by the key, drt.<name>, not the flag) */
+	unsigned drt_from_config;
 	kd_params kd;
 	const char *cache_dir; /* --world-cache DIR, or NULL (worldcache.h) */
 	/* AFF scenes (aff.h): --anim-time T (default 0) and --anim-fps F;

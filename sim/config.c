@@ -13,8 +13,10 @@
  * scripts/calibrate.sh (docs/CALIBRATION.md) and say what was assumed before.
  */
 #include "sim/config.h"
+#include "kernel-ref/drt.h"
 #include "kernel-ref/infile.h"
 #include "kernel-ref/kdtree.h"
+#include "kernel-ref/world.h"
 #include "kernel-ref/yload.h"
 
 #include <errno.h>
@@ -237,6 +239,19 @@ static const cfg_key keys_src[] = {
     {INT("shading.max_depth", shading.max_depth, 3, 0, 64, "bounces"),
      .source = "deepest reflection depth in seed 002 Table 4 (Office)",
      .desc = "maximum recursion depth of reflection/refraction rays"},
+#define DRTKEY(f, flag, what)                                                                      \
+	{                                                                                          \
+		KEY("drt." #f, CFG_STR, drt.f, 0, 0, 0, ""),                                       \
+		    .sdef = "", .source = "a run setting (empty: the view's drt, docs/views.md)",  \
+		    .desc = what "; as the flag " flag " (which wins), its value checked alike"    \
+	}
+    DRTKEY(spp, "--spp", "samples per pixel: 1, 4, 16 or 64"),
+    DRTKEY(aperture, "--aperture", "thin-lens diameter in scene units; 0 = pinhole"),
+    DRTKEY(focus, "--focus", "focal distance along the view direction; 0 = |lookat - eye|"),
+    DRTKEY(light_size, "--light-size", "side of each light's square; 0 = point lights"),
+    DRTKEY(gloss, "--gloss", "Phong exponent of reflection rays; 0 = a mirror"),
+    DRTKEY(motion, "--motion", "camera displacement X,Y,Z over the shutter; 0,0,0 = still"),
+#undef DRTKEY
     {FLT("kdtree.cost_trav", kdtree.cost_trav, 1, KD_COST_MIN, KD_COST_MAX, ""),
      .source = "kernel-ref kd_params_default", .desc = "SAH cost of a traversal step (K_T)"},
     {FLT("kdtree.cost_isect", kdtree.cost_isect, 1.5, KD_COST_MIN, KD_COST_MAX, ""),
@@ -508,6 +523,39 @@ static void levels_apply(saar_config *c)
 	c->memory.vma.enabled = levels_has(l, "vma");
 }
 
+/* A drt.* key's value, checked where it is read (so a file's error has
+ * its line and column) as its flag's would be: parsed by the world's flag
+ * parser, its range by drt_problem; "" (the view's) is always good. */
+static int drt_value_ok(const cfg_key *k, const char *s, char *err, size_t n)
+{
+	static const char *const names[] = {"spp",        "aperture", "focus",
+	                                    "light_size", "gloss",    "motion"};
+	static const char *const flags[] = {"--spp",        "--aperture", "--focus",
+	                                    "--light-size", "--gloss",    "--motion"};
+	int i = 0;
+	while (i < 6 && strcmp(k->path + 4, names[i]))
+		i++;
+	if (!*s || i == 6)
+		return 0;
+	world_opts o;
+	memset(&o, 0, sizeof o);
+	char *argv[] = {(char *)flags[i], (char *)s};
+	int at = 0;
+	diag e = {{0}};
+	const char *why = NULL;
+	if (world_parse_arg(&o, 2, argv, &at, &e) != 1) {
+		size_t fl = strlen(flags[i]);
+		why = strncmp(e.msg, flags[i], fl) || strncmp(e.msg + fl, ": ", 2) ? e.msg
+		                                                                   : e.msg + fl + 2;
+	} else {
+		const char *key;
+		why = drt_problem(&o.drt, &key); /* the other fields 0: always good */
+	}
+	if (why)
+		snprintf(err, n, "%s: %.200s", k->path, why);
+	return why ? -1 : 0;
+}
+
 static int set_value(saar_config *c, const cfg_key *k, const char *s, char *err, size_t n)
 {
 	char *end;
@@ -569,6 +617,8 @@ static int set_value(saar_config *c, const cfg_key *k, const char *s, char *err,
 			snprintf(err, n, "%s: longer than %zu characters", k->path, k->size - 1);
 			return -1;
 		}
+		if (!strncmp(k->path, "drt.", 4) && drt_value_ok(k, s, err, n))
+			return -1;
 		snprintf(field(c, k), k->size, "%s", s);
 		if (field(c, k) == (void *)c->memory.levels)
 			levels_apply(c);
@@ -1033,18 +1083,21 @@ void cfg_write_markdown(FILE *f)
 			snprintf(sec, sizeof sec, "%.*s", tl, k->path);
 			if (tl)
 				fprintf(f, "\n## `%s`\n\n", sec);
-			if (!strcmp(sec, "shading"))
-				fputs(
-				    "Distribution ray tracing (samples per pixel, thin lens, area "
-				    "lights,\nglossy reflection, camera motion) is a property of "
-				    "the "
-				    "view, not of\nthe chip: the views file's `drt` key or the "
-				    "flags "
-				    "`--spp`, `--aperture`,\n`--focus`, `--light-size`, `--gloss` "
-				    "and "
-				    "`--motion`, which saarsim and\nrtref share, set it "
-				    "([views.md](views.md#distribution-ray-tracing-drt)).\n\n",
-				    f);
+			if (!strcmp(sec, "drt"))
+				fputs("Distribution ray tracing (samples per pixel, thin lens, "
+				      "area lights,\n"
+				      "glossy reflection, camera motion) is the view's (the views "
+				      "file's\n"
+				      "`drt` key, "
+				      "[views.md](views.md#distribution-ray-tracing-drt)); the\n"
+				      "flags `--spp`, `--aperture`, `--focus`, `--light-size`, "
+				      "`--gloss`,\n"
+				      "`--motion` override it, and so do these keys when set (a "
+				      "flag wins\n"
+				      "over its key), so `scripts/sweep --set "
+				      "drt.aperture=0,0.02,0.1`\n"
+				      "sweeps it. A key's value is checked as its flag's.\n\n",
+				      f);
 			if (!tl)
 				fputs("\n## Top level\n\n", f);
 			fputs("| key | type | default | range | unit | provenance | description |\n"

@@ -93,6 +93,12 @@ typedef struct saar_config {
 	struct {
 		int max_depth;
 	} shading;
+	/* Distribution ray tracing of the run, as the flags --spp ... --motion
+	 * write it ("" = the view's; sim/main.c hands a set key to the world
+	 * as its flag, so both are checked alike): a key for scripts/sweep. */
+	struct {
+		char spp[16], aperture[32], focus[32], light_size[32], gloss[32], motion[96];
+	} drt;
 	struct {
 		double cost_trav, cost_isect, empty_bonus;
 		int max_depth, leaf_size;

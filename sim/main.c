@@ -300,6 +300,40 @@ static int observe_args(cli *a, const saar_config *cfg, diag *d)
 	return 0;
 }
 
+/* The drt.* keys that are set go to the world as their flags would
+ * (world_parse_arg: the same parsing, and the same range checks with the
+ * view), unless the flag itself was given: the flag wins. */
+static int drt_from_config(const saar_config *cfg, world_opts *wo, diag *d)
+{
+	/* in the order of world_opts.have_drt's bits (kernel-ref/world.c) */
+	const struct {
+		const char *key, *flag, *val;
+	} k[] = {{"drt.spp", "--spp", cfg->drt.spp},
+	         {"drt.aperture", "--aperture", cfg->drt.aperture},
+	         {"drt.focus", "--focus", cfg->drt.focus},
+	         {"drt.light_size", "--light-size", cfg->drt.light_size},
+	         {"drt.gloss", "--gloss", cfg->drt.gloss},
+	         {"drt.motion", "--motion", cfg->drt.motion}};
+	for (int i = 0; i < 6; i++) {
+		if (!*k[i].val || (wo->have_drt & (1u << i)))
+			continue;
+		char *argv[] = {(char *)k[i].flag, (char *)k[i].val};
+		int at = 0;
+		diag e = {{0}};
+		if (world_parse_arg(wo, 2, argv, &at, &e) != 1) {
+			/* named by the key: "drt.motion: expected X,Y,Z, ..." */
+			size_t n = strlen(k[i].flag);
+			const char *why =
+			    strncmp(e.msg, k[i].flag, n) || strncmp(e.msg + n, ": ", 2)
+			        ? e.msg
+			        : e.msg + n + 2;
+			return diag_set(d, k[i].key, 0, 0, "%s", why);
+		}
+		wo->drt_from_config |= 1u << i;
+	}
+	return 0;
+}
+
 /* The config: defaults, file, --set and the key flags, --size, --frames;
  * validated; the host memory limit into *limit_mb and the kd-tree keys into
  * a->wo. Returns -1 to go on, else the exit status. */
@@ -338,6 +372,8 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	if (hm_limit_mb(a->mem_limit, limit_mb, d))
 		return cli_bad("saarsim", d->msg);
 	if (observe_args(a, cfg, d))
+		return cli_bad("saarsim", d->msg);
+	if (drt_from_config(cfg, &a->wo, d))
 		return cli_bad("saarsim", d->msg);
 	a->wo.kd.cost_trav = (float)cfg->kdtree.cost_trav;
 	a->wo.kd.cost_isect = (float)cfg->kdtree.cost_isect;

@@ -1355,3 +1355,42 @@ Test(saarsim_cli, import_limits_are_checked)
 	cr_assert_eq(saarsim_env("SAARSIM_IMPORT_CPU_S=30 SAARSIM_IMPORT_MEM_MB=2048", args, &secs),
 	             0, "%s", slurp("err"));
 }
+
+/* The drt.* keys are their flags (docs/config.md, "drt"): a sweep sets them
+ * with --set. Mistakes caught: the keys ignored (the frame of spp 1),
+ * a key winning over its flag, a key's value not checked as the flag's
+ * (exit 0), an error in a file without its line and column. */
+Test(saarsim_cli, drt_keys_are_their_flags)
+{
+	static const char *const runs[][2] = {
+	    {"a", "--spp 4 --aperture 0.1 --gloss 64"},
+	    {"b", "--set drt.spp=4 --set drt.aperture=0.1 --set drt.gloss=64"},
+	    {"c", "--set drt.spp=16 --spp 4 --aperture 0.1 --set drt.gloss=64"},
+	    {"d", ""}};
+	char args[1024], name[16];
+	double cyc[4], rays[4];
+	for (int i = 0; i < 4; i++) {
+		snprintf(args, sizeof args, "--size 32x24 %s --report %s/%s.json", runs[i][1], dir,
+		         runs[i][0]);
+		cr_assert_eq(saarsim(args), 0, "%s: %s", runs[i][1], slurp("err"));
+		snprintf(name, sizeof name, "%s.json", runs[i][0]);
+		char *r = tu_squeeze_json(slurp(name));
+		cyc[i] = json_num(r, "cycles_per_frame");
+		rays[i] = json_num(strstr(r, "\"rays\":"), "total");
+	}
+	cr_assert(cyc[1] == cyc[0] && rays[1] == rays[0], "keys differ from their flags");
+	cr_assert(cyc[2] == cyc[0] && rays[2] == rays[0], "a key won over its flag");
+	cr_assert(rays[3] < rays[0], "the keys changed nothing (%g rays, plain %g)", rays[0],
+	          rays[3]);
+	cr_assert_eq(saarsim("--size 8x8 --set drt.spp=3"), 2);
+	one_line_naming("drt.spp: spp must be 1, 4, 16 or 64");
+	char cfg[900];
+	snprintf(cfg, sizeof cfg, "%.800s/c.yaml", dir);
+	FILE *f = fopen(cfg, "w");
+	cr_assert(f);
+	fputs("drt:\n  spp: 16\n  gloss: 0.5\n", f);
+	fclose(f);
+	snprintf(args, sizeof args, "--config %s --size 8x8", cfg);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("c.yaml:3:10: drt.gloss: gloss must be 0");
+}
