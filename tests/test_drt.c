@@ -404,9 +404,12 @@ Test(drt, packets_hold_one_type_and_sample_of_one_tile)
 	framebuf fb;
 	cr_assert_eq(fb_init(&fb, 64, 64), 0);
 	shade_ctx sc = {&w.m, w.v.lights, w.v.nlights, 3, v3(0, 0, 0), &fb, NULL, &ds};
-	trav_entry *stack = aligned_alloc(64, PKT_STACK_MAX * sizeof(trav_entry));
-	packet *p = aligned_alloc(64, sizeof(packet)),
-	       *kids = aligned_alloc(64, (size_t)(w.v.nlights + 2) * sizeof(packet));
+	/* aligned_alloc wants sizes that are multiples of the alignment */
+#define A64(n) (((n) + 63) & ~(size_t)63)
+	trav_entry *stack = aligned_alloc(64, A64(PKT_STACK_MAX * sizeof(trav_entry)));
+	packet *p = aligned_alloc(64, A64(sizeof(packet))),
+	       *kids = aligned_alloc(64, A64((size_t)(w.v.nlights + 2) * sizeof(packet)));
+#undef A64
 	shade_counts cnt = {0};
 	for (int s = 0; s < 16; s += 5) {
 		cam_sample_packet(&c, 3, 4, s, p);
