@@ -28,12 +28,14 @@
 #include <unistd.h>
 
 #include "kernel-ref/worldcache.h"
+#include "sim/memconfig.h"
 #include "sim/modes/functional.h"
 #include "sim/modes/replay.h"
 #include "sim/modes/slot.h"
 #include "units/intersection.h"
 #include "units/list.h"
 #include "units/rgs.h"
+#include "units/toplevel.h"
 #include "units/traversal.h"
 
 /* ---- the unit kinds (units/unit_table.h) and the pipeline ----
@@ -51,6 +53,20 @@ static const unit_route pipeline = {
     .triangles = isu_next,
     .traverse = tu_step,
     .finish = rgs_finish,
+};
+
+/* A two-level scene (issue 33; units/toplevel.h): a packet walks the top
+ * level first; at an instance the transformation unit hands it to the
+ * object's traversal, whose end goes back to the top level; the walk's
+ * end goes to the RGS. */
+static const unit_route pipeline_two_level = {
+    .enter = tlu_enter,
+    .leaf = list_leaf,
+    .triangles = isu_next,
+    .traverse = tu_step,
+    .finish = tlu_finish,
+    .object = tu_begin,
+    .shade = rgs_finish,
 };
 
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
@@ -110,6 +126,11 @@ static const struct {
     {C_CONE_TESTS, "cone.tests", "ops", "triangle-cone tests (chip.cone_cull)"},
     {C_CONE_CULLED, "cone.culled", "ops", "packet-triangle tests the cone saved"},
     {C_CONE_SAVED, "cone.saved_ray_tests", "tests", "ray-triangle tests the cone saved"},
+    {C_TL_STEPS, "toplevel.node_steps", "ops", "two-level scenes: top-level (BVH) node steps"},
+    {C_TL_INST_TESTS, "toplevel.instance_tests", "ops", "instance box tests"},
+    {C_TL_INST_ENTERED, "xform.instances", "ops",
+     "instances entered: packets moved into object space by the transformation unit"},
+    {C_TL_MAP_READS, "toplevel.map_reads", "reads", "object-space hits named through the map"},
 };
 
 static const char *const shade_names[11] = {"shade.hits",
@@ -494,15 +515,45 @@ static int chip_base(chip *c, const saar_config *cfg, const world *w)
 	c->frame_port = calloc(nf, sizeof *c->frame_port);
 	if (cfg->memory.model == CFG_MEM_HIERARCHY)
 		c->frame_mem = calloc(nf, sizeof *c->frame_mem);
-	c->spill_base = (w->m.size + 4095) & ~(uint64_t)4095;
+	const uint8_t *image = w->m.bytes;
+	uint64_t image_size = w->m.size;
+	if (w->tl) { /* the objects, the map and the top level after the frame's image */
+		diag td;
+		if (tli_build(&c->tli, w->tl, &w->m, &td))
+			return -1;
+		image = c->tli.bytes;
+		image_size = c->tli.size;
+	}
+	c->spill_base = (image_size + 4095) & ~(uint64_t)4095;
 	c->regs = w->m;
 	c->regs.bytes = NULL;
 	uint64_t space =
 	    c->spill_base + (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
 	if (!c->e || !c->frame_cycles || !c->frame_port ||
 	    (cfg->memory.model == CFG_MEM_HIERARCHY && !c->frame_mem) ||
-	    ms_init(&c->store, w->m.bytes, w->m.size, space))
+	    ms_init(&c->store, image, image_size, space))
 		return -1;
+	return 0;
+}
+
+/* A two-level scene's per-frame update (issue 33): the host rebuilt the
+ * top level (kernel-ref tl_frame) and writes it, the BVH's nodes and the
+ * instance records with their transforms, to the board in one DMA
+ * transfer over the host bus (memory.hostbus; seed 002 §4.2: the board
+ * sits on PCI). Its bytes and its time on an idle bus are the frame's
+ * update; the objects' trees were written once, before the first frame.
+ * The frame's simulated cycles start after it (not included). */
+static int chip_update(chip *c, diag *d)
+{
+	if (!c->w->tl)
+		return 0;
+	hbus_params hp;
+	hbus h;
+	hier_hbus_params(&c->cfg, &hp);
+	if (hbus_init(&h, &hp, d))
+		return -1;
+	c->update_bytes = c->tli.top_bytes;
+	c->update_ms = (double)hbus_duration(&h, (uint32_t)c->update_bytes) * 1e-9;
 	return 0;
 }
 
@@ -547,6 +598,14 @@ static int chip_env(chip *c, diag *d)
 	v->nlights = w->v.nlights;
 	v->spill_base = c->spill_base;
 	v->route = pipeline;
+	if (w->tl) {
+		v->route = pipeline_two_level;
+		v->two_level = 1;
+		v->tl_nodes = c->tli.top_base;
+		v->tl_insts = c->tli.inst_base;
+		uint64_t n = c->tli.max_nodes > w->tl->nnode ? c->tli.max_nodes : w->tl->nnode;
+		v->max_steps = 2 * (n > w->m.nnodes ? n : w->m.nnodes) + 64;
+	}
 	v->on_free = on_free;
 	v->owner = c;
 	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr, c->replayed))
@@ -709,7 +768,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	chip *c = calloc(1, sizeof *c);
 	if (!c || chip_base(c, cfg, w))
 		goto oom;
-	if (chip_memory(c, d)) {
+	if (chip_memory(c, d) || chip_update(c, d)) {
 		chip_destroy(c);
 		return NULL;
 	}
@@ -746,6 +805,7 @@ void chip_destroy(chip *c)
 		free(rp->t);
 		free(rp->q);
 	}
+	tli_free(&c->tli);
 	free(c->rtp);
 	free(c->turn);
 	free(c->live);
@@ -999,6 +1059,8 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	ro.max_depth = c->cfg.shading.max_depth;
 	ro.threads = 1;
 	ro.cone_cull = c->cfg.chip.cone_cull;
+	if (c->w->tl) /* a two-level scene: kernel-ref traces the same trees */
+		ro.tracer = &c->w->tl->tracer;
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
 	int rc = a && b ? world_reference_rgb8(c->w, &ro, b, &out->ref, &out->cached, d)

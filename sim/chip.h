@@ -21,6 +21,7 @@
 
 #include "kernel-ref/framebuf.h"
 #include "kernel-ref/render.h"
+#include "kernel-ref/tlimage.h"
 #include "kernel-ref/world.h"
 #include "kernel-ref/worldcache.h"
 #include "mem/memport.h"
@@ -126,6 +127,14 @@ typedef struct chip {
 	/* what the units know of the image: its region bases and scene box
 	 * (the registers the host sets), no bytes */
 	mimg regs;
+	/* a two-level scene (world.tl, kernel-ref/tlimage.h): the chip's image
+	 * (the flattened frame's, the objects', the map and the top level), and
+	 * the host's per-frame update: the top level's bytes written to the
+	 * board over the host bus (memory.hostbus) before the frame, and how
+	 * long that takes on an idle bus */
+	tl_image tli;
+	uint64_t update_bytes;
+	double update_ms;
 	stats st;
 	thr_env env;
 	mode_sinks md; /* the sinks the units emit into (sim/modes/modes.h) */

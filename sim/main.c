@@ -323,10 +323,14 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	}
 	if (a->size && cli_parse_size(a->size, &cfg->frame.width, &cfg->frame.height, d))
 		return cli_bad("saarsim", d->msg);
-	if (a->wo.two_level)
-		return cli_bad("saarsim",
-		               "--two-level: kernel-ref (rtref) only; the chip traces one "
-		               "tree over the flattened frame (issue 33 item 3)");
+	/* --two-level (issue 33 item 3, units/toplevel.h): kernel-ref's
+	 * two-level tracer has neither reduced formats nor cone culling, and
+	 * sampled runs' packet records are not kept for AFF worlds */
+	if (a->wo.two_level && cfg->fidelity == CFG_FIDELITY_SAMPLED)
+		return cli_bad("saarsim", "--two-level: cycle or functional fidelity only");
+	if (a->wo.two_level && cfg->chip.cone_cull)
+		return cli_bad("saarsim", "--two-level: no chip.cone_cull (kernel-ref's two-level "
+		                          "tracer does not cull by cone)");
 	long nframes;
 	if (a->frames) {
 		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))

@@ -307,6 +307,14 @@ void report_text(FILE *f, const report_info *ri)
 		        c->frames_done, c->frames_done, ss.cycles, ss.fps);
 	}
 	fputc('\n', f);
+	if (c->w->tl)
+		fprintf(f,
+		        "  two-level: %u instances of %u objects; %llu top-level steps, %llu "
+		        "transformations; update %llu bytes = %.3f ms over the host bus\n",
+		        c->w->tl->ninst, c->w->tl->nobj,
+		        (unsigned long long)get(c, "toplevel.node_steps"),
+		        (unsigned long long)get(c, "xform.instances"),
+		        (unsigned long long)c->update_bytes, c->update_ms);
 	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++)
@@ -807,6 +815,38 @@ static void json_host(jsonw *j, const report_info *ri)
 	jsonw_obj_end(j);
 }
 
+/* A two-level scene (issue 33; units/toplevel.h): the scene's instances
+ * and objects, the top level's work on the chip, and the host's update of
+ * the frame (the top level's bytes over the host bus; chip.c
+ * chip_update). Absent for single-tree scenes. */
+static void json_two_level(jsonw *j, const chip *c)
+{
+	const tl_scene *t = c->w->tl;
+	if (!t)
+		return;
+	double frame_s = ratio(1.0, fig_fps(c));
+	jsonw_key(j, "two_level");
+	jsonw_obj_begin(j);
+	jsonw_kuint(j, "instances", t->ninst);
+	jsonw_kuint(j, "objects", t->nobj);
+	jsonw_kuint(j, "top_nodes", t->nnode);
+	jsonw_kuint(j, "top_node_steps", get(c, "toplevel.node_steps"));
+	jsonw_kuint(j, "instance_tests", get(c, "toplevel.instance_tests"));
+	jsonw_kuint(j, "transformations", get(c, "xform.instances"));
+	jsonw_kuint(j, "transformed_rays",
+	            get(c, "type.primary.xform.rays") + get(c, "type.shadow.xform.rays") +
+	                get(c, "type.reflection.xform.rays") +
+	                get(c, "type.refraction.xform.rays"));
+	jsonw_kuint(j, "map_reads", get(c, "toplevel.map_reads"));
+	jsonw_kuint(j, "update_bytes", c->update_bytes);
+	jsonw_knum(j, "update_mb", (double)c->update_bytes / (1 << 20));
+	jsonw_knum(j, "update_ms", c->update_ms);
+	jsonw_knum(j, "fps_with_update", ratio(1.0, frame_s + c->update_ms * 1e-3));
+	jsonw_knum(j, "host_top_level_ms", t->frame_ms);
+	jsonw_knum(j, "host_bottom_level_ms", t->build_ms);
+	jsonw_obj_end(j);
+}
+
 int report_json(const char *path, const report_info *ri, diag *d)
 {
 	const chip *c = ri->c;
@@ -828,6 +868,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	kv_object(j, c, "shading", shading_map, sizeof shading_map / sizeof *shading_map);
 	json_memory(j, c, &hs, have_h);
 	json_frames(j, c);
+	json_two_level(j, c);
 	json_caches(j, &hs, have_h);
 	json_check(j, ri);
 	json_counters(j, ri);
