@@ -800,6 +800,10 @@ static void json_host(jsonw *j, const report_info *ri)
 	jsonw_key(j, "host");
 	jsonw_obj_begin(j);
 	jsonw_knum(j, "load_s", ri->load_ms / 1e3);
+	/* of the load: the scene's kd-tree and memory image (for an animation,
+	 * this frame's) */
+	jsonw_knum(j, "kd_build_s", ri->w->kd_ms / 1e3);
+	jsonw_knum(j, "image_build_s", ri->w->image_ms / 1e3);
 	jsonw_knum(j, "sim_s", c->sim_ms / 1e3);
 	jsonw_knum(j, "check_s", checked ? ri->check->check_ms / 1e3 : 0.0);
 	jsonw_knum(j, "wall_s", ri->wall_ms / 1e3);
