@@ -238,7 +238,9 @@ const char *world_cache_name(int status)
 }
 
 /* The world's own kd-tree parameters: with --two-level the image serves
- * shading only (the two-level trees trace), so one split is enough. */
+ * shading only (the two-level trees trace), so one leaf is enough; it also
+ * keeps the image's layout the same at every time (a split would move
+ * the regions after the tree), which a warm chip's update needs. */
 static const kd_params *world_kd(const world_opts *o)
 {
 	static _Thread_local kd_params one;
@@ -246,6 +248,7 @@ static const kd_params *world_kd(const world_opts *o)
 		return &o->kd;
 	one = o->kd;
 	one.max_depth = 1;
+	one.leaf_size = INT_MAX; /* the root is a leaf */
 	return &one;
 }
 

@@ -28,6 +28,8 @@
 #include <unistd.h>
 
 #include "kernel-ref/worldcache.h"
+#include "mem/cache.h"
+#include "mem/hier.h"
 #include "sim/memconfig.h"
 #include "sim/modes/functional.h"
 #include "sim/modes/replay.h"
@@ -554,6 +556,80 @@ static int chip_update(chip *c, diag *d)
 		return -1;
 	c->update_bytes = c->tli.top_bytes;
 	c->update_ms = (double)hbus_duration(&h, (uint32_t)c->update_bytes) * 1e-9;
+	size_t nf = (size_t)c->cfg.frame.frames;
+	c->frame_update = calloc(nf, sizeof *c->frame_update);
+	c->frame_update_top = calloc(nf, sizeof *c->frame_update_top);
+	c->frame_stale = calloc(nf, sizeof *c->frame_stale);
+	c->frame_update_ms = calloc(nf, sizeof *c->frame_update_ms);
+	if (!c->frame_update || !c->frame_update_top || !c->frame_stale || !c->frame_update_ms)
+		return diag_set(d, "chip", 0, 0, "out of memory");
+	c->frame_update[0] = c->frame_update_top[0] = c->update_bytes;
+	c->frame_update_ms[0] = c->update_ms;
+	return 0;
+}
+
+#define ANIM_LINE 128u /* the update's unit: the VMA's line (MIMG_ALIGN) */
+
+/* Line [a, a + n) changed: dropped from every cache (hierarchy). */
+static uint64_t anim_stale(chip *c, uint64_t a, uint64_t n)
+{
+	if (!hier_is(&c->mem))
+		return 0;
+	cache *l1[MEM_NTYPES], *tag, *l2;
+	hier_caches(&c->mem, l1, &tag, &l2);
+	uint64_t k = 0;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		k += cache_invalidate(l1[t], a, n);
+	if (l2)
+		k += cache_invalidate(l2, a, n);
+	return k;
+}
+
+int chip_anim_update(chip *c, int f, diag *d)
+{
+	const world *w = c->w;
+	tl_image n;
+	if (!w->tl || tli_build(&n, w->tl, &w->m, d))
+		return w->tl ? -1 : diag_set(d, "chip", 0, 0, "a warm animation needs --two-level");
+	tl_image *o = &c->tli;
+	int same = n.size == o->size && n.top_base == o->top_base && n.map_base == o->map_base;
+	for (uint32_t k = 0; same && k < w->tl->nobj; k++)
+		same = n.obj_base[k] == o->obj_base[k];
+	if (!same) {
+		tli_free(&n);
+		return diag_set(
+		    d, "chip", 0, 0,
+		    "the two-level image's layout changed between frames: no warm update");
+	}
+	uint64_t bytes = 0, top = 0, stale = 0;
+	for (uint64_t a = 0; a < n.size; a += ANIM_LINE) {
+		uint64_t len = n.size - a < ANIM_LINE ? n.size - a : ANIM_LINE;
+		if (!memcmp(o->bytes + a, n.bytes + a, len))
+			continue;
+		/* the store reads the image in place: the line is written */
+		memcpy(o->bytes + a, n.bytes + a, len);
+		bytes += len;
+		top += a >= o->top_base ? len : 0;
+		stale += anim_stale(c, a, len);
+	}
+	tli_free(&n);
+	hbus_params hp;
+	hbus h;
+	hier_hbus_params(&c->cfg, &hp);
+	if (hbus_init(&h, &hp, d))
+		return -1;
+	c->frame_update[f] = bytes;
+	c->frame_update_top[f] = top;
+	c->frame_stale[f] = stale;
+	c->frame_update_ms[f] = (double)hbus_duration(&h, (uint32_t)bytes) * 1e-9;
+	/* the frame's registers: region bases (unchanged), camera and lights */
+	c->regs = w->m;
+	c->regs.bytes = NULL;
+	thr_env *v = &c->env;
+	cam_setup_view(&v->cam, &w->v, c->cfg.frame.width, c->cfg.frame.height);
+	v->sc.lights = w->v.lights;
+	v->sc.nlights = w->v.nlights;
+	v->nlights = w->v.nlights;
 	return 0;
 }
 
@@ -830,6 +906,10 @@ void chip_destroy(chip *c)
 	if (c->e)
 		eng_destroy(c->e);
 	free(c->frame_cycles);
+	free(c->frame_update);
+	free(c->frame_update_top);
+	free(c->frame_stale);
+	free(c->frame_update_ms);
 	free(c->frame_port);
 	free(c->frame_mem);
 	free(c->fid.unit_s);

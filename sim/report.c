@@ -271,6 +271,23 @@ static void check_text(FILE *f, const char *ref, const img_cmp *m, int cached)
 	        cached ? ", its frame from the world cache" : "");
 }
 
+/* The mean over the frames of a per-frame update figure. */
+static uint64_t anim_mean(const chip *c, const uint64_t *v)
+{
+	uint64_t s = 0;
+	for (int f = 0; f < c->frames_done; f++)
+		s += v[f];
+	return c->frames_done ? s / (uint64_t)c->frames_done : 0;
+}
+
+static double anim_mean_ms(const chip *c)
+{
+	double s = 0;
+	for (int f = 0; f < c->frames_done; f++)
+		s += c->frame_update_ms[f];
+	return ratio(s, c->frames_done);
+}
+
 void report_text(FILE *f, const report_info *ri)
 {
 	const chip *c = ri->c;
@@ -310,11 +327,12 @@ void report_text(FILE *f, const report_info *ri)
 	if (c->w->tl)
 		fprintf(f,
 		        "  two-level: %u instances of %u objects; %llu top-level steps, %llu "
-		        "transformations; update %llu bytes = %.3f ms over the host bus\n",
+		        "transformations; update %llu bytes = %.3f ms over the host bus%s\n",
 		        c->w->tl->ninst, c->w->tl->nobj,
 		        (unsigned long long)get(c, "toplevel.node_steps"),
 		        (unsigned long long)get(c, "xform.instances"),
-		        (unsigned long long)c->update_bytes, c->update_ms);
+		        (unsigned long long)anim_mean(c, c->frame_update), anim_mean_ms(c),
+		        c->frames_done > 1 ? " (mean per frame)" : "");
 	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++)
@@ -829,6 +847,15 @@ static void json_two_level(jsonw *j, const chip *c)
 	if (!t)
 		return;
 	double frame_s = ratio(1.0, fig_fps(c));
+	/* the update per frame: the mean over the frames (one frame: its top
+	 * level) */
+	double ub = 0, ums = 0;
+	for (int f = 0; f < c->frames_done; f++) {
+		ub += (double)c->frame_update[f];
+		ums += c->frame_update_ms[f];
+	}
+	ub = ratio(ub, c->frames_done);
+	ums = ratio(ums, c->frames_done);
 	jsonw_key(j, "two_level");
 	jsonw_obj_begin(j);
 	jsonw_kuint(j, "instances", t->ninst);
@@ -842,12 +869,31 @@ static void json_two_level(jsonw *j, const chip *c)
 	                get(c, "type.reflection.xform.rays") +
 	                get(c, "type.refraction.xform.rays"));
 	jsonw_kuint(j, "map_reads", get(c, "toplevel.map_reads"));
-	jsonw_kuint(j, "update_bytes", c->update_bytes);
-	jsonw_knum(j, "update_mb", (double)c->update_bytes / (1 << 20));
-	jsonw_knum(j, "update_ms", c->update_ms);
-	jsonw_knum(j, "fps_with_update", ratio(1.0, frame_s + c->update_ms * 1e-3));
+	jsonw_kuint(j, "update_bytes", (uint64_t)llround(ub));
+	jsonw_knum(j, "update_mb", ub / (1 << 20));
+	jsonw_knum(j, "update_ms", ums);
+	jsonw_knum(j, "fps_with_update", ratio(1.0, frame_s + ums * 1e-3));
 	jsonw_knum(j, "host_top_level_ms", t->frame_ms);
 	jsonw_knum(j, "host_bottom_level_ms", t->build_ms);
+	/* a warm animation (chip_anim_update): each frame's update; frame 1's
+	 * is the first top level (the objects were on the board before) */
+	jsonw_kbool(j, "warm", c->between != NULL);
+	jsonw_kint(j, "frames_checked_before_last", c->anim_checked);
+	jsonw_kint(j, "frames_identical_before_last", c->anim_identical);
+	jsonw_key(j, "per_frame");
+	jsonw_arr_begin(j);
+	for (int f = 0; f < c->frames_done; f++) {
+		jsonw_obj_begin(j);
+		jsonw_kint(j, "frame", f + 1);
+		jsonw_kuint(j, "update_bytes", c->frame_update[f]);
+		jsonw_kuint(j, "update_top_level_bytes", c->frame_update_top[f]);
+		jsonw_kuint(j, "update_world_bytes", c->frame_update[f] - c->frame_update_top[f]);
+		jsonw_knum(j, "update_mb", (double)c->frame_update[f] / (1 << 20));
+		jsonw_knum(j, "update_ms", c->frame_update_ms[f]);
+		jsonw_kuint(j, "stale_cache_lines", c->frame_stale[f]);
+		jsonw_obj_end(j);
+	}
+	jsonw_arr_end(j);
 	jsonw_obj_end(j);
 }
 
