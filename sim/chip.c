@@ -573,7 +573,7 @@ static int chip_update(chip *c, diag *d)
 /* Line [a, a + n) changed: dropped from every cache (hierarchy). */
 static uint64_t anim_stale(chip *c, uint64_t a, uint64_t n)
 {
-	if (!hier_is(&c->mem))
+	if (!hier_is(&c->mem) || c->anim_keep_stale)
 		return 0;
 	cache *l1[MEM_NTYPES], *tag, *l2;
 	hier_caches(&c->mem, l1, &tag, &l2);

@@ -146,6 +146,7 @@ typedef struct chip {
 	int (*between)(struct chip *c, int f, void *ctx, diag *d);
 	void *between_ctx;
 	int anim_checked, anim_identical; /* frames before the last checked, identical */
+	int anim_keep_stale; /* test hook: chip_anim_update leaves the caches as they are */
 	stats st;
 	thr_env env;
 	mode_sinks md; /* the sinks the units emit into (sim/modes/modes.h) */
