@@ -5,11 +5,13 @@
 #
 #   sh scripts/dynamic.sh [BUILD_DIR]        (default: build)
 #
-# Four saarsim animations of DYN_FRAMES frames at DYN_FPS frames per second
+# Six saarsim animations of DYN_FRAMES frames at DYN_FPS frames per second
 # of scene time from DYN_T0 (defaults 10, 1, 0), at DYN_SIZE (default
-# 160x120): flat and --two-level, each with configs/saarcor-std.yaml (scene
-# on the board) and configs/saarcor-vma.yaml (scene in host memory, read
-# over PCI). Every frame is its own chip run, checked against kernel-ref.
+# 160x120), each with configs/saarcor-std.yaml (scene on the board) and
+# configs/saarcor-vma.yaml (scene in host memory, read over PCI): flat (a
+# cold chip per frame), --two-level --anim-cold (the same, two-level) and
+# --two-level (one warm chip, the host's update written between frames).
+# Every frame is checked against kernel-ref.
 # scripts/dynamic-doc.py writes docs/DYNAMIC.md and docs/dynamic-fps.png
 # from the runs' JSON reports. Runs are kept in DYN_OUT (default out/dynamic).
 # About a minute on 2 shared cores at the defaults.
@@ -60,13 +62,14 @@ say "Robots, $FRAMES frames at $FPS fps from t = $T0, $SIZE: flat and two-level,
 pair() {
 	run "$1" "$2" &
 	p1=$!
-	run "$3" "$2" --two-level &
+	run "$3" "$2" --two-level --anim-cold &
 	p2=$!
 	wait $p1 || exit 2
 	wait $p2 || exit 2
+	run "$4" "$2" --two-level
 }
-pair flat-std saarcor-std tl-std
-pair flat-vma saarcor-vma tl-vma
+pair flat-std saarcor-std tl-std warm-std
+pair flat-vma saarcor-vma tl-vma warm-vma
 DY_OUT=$OUT DY_DOC=$DOC DY_SIZE=$SIZE DY_FRAMES=$FRAMES DY_FPS=$FPS DY_T0=$T0 \
 	DY_COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown) \
 	python3 "$ROOT/scripts/dynamic-doc.py"
