@@ -542,7 +542,7 @@ static int warm_between(chip *c, int f, void *ctx, diag *d)
 		c->anim_identical += chk.cmp.identical && chk.single.identical;
 		printf("  frame %d (%s): check vs kernel-ref: packets %s (%llu differing pixels), "
 		       "single rays %s\n",
-		       f - 1, x->w->scene_label, chk.cmp.identical ? "identical" : "DIFFERENT",
+		       f, x->w->scene_label, chk.cmp.identical ? "identical" : "DIFFERENT",
 		       (unsigned long long)chk.cmp.differing_pixels,
 		       chk.single.identical ? "identical" : "DIFFERENT");
 		fflush(stdout);

@@ -366,6 +366,11 @@ void report_text(FILE *f, const report_info *ri)
 			for (int k = 0; k < HR_N; k++)
 				if (k < MEM_NTYPES || g->memory.vma.enabled)
 					pct(f, fig_hit_name(k), m.hit[k]);
+			if (c->w->tl) /* a warm two-level animation: the frame's update */
+				fprintf(f, "; update %.3f MB (top level %.3f) = %.2f ms",
+				        (double)c->frame_update[fr] / (1 << 20),
+				        (double)c->frame_update_top[fr] / (1 << 20),
+				        c->frame_update_ms[fr]);
 			fputc('\n', f);
 		}
 	}
