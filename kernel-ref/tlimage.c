@@ -92,16 +92,15 @@ uint64_t tli_write_top(tl_image *im, const tl_scene *t)
 	return im->top_bytes;
 }
 
-int tli_build(tl_image *im, const tl_scene *t, const mimg *world, diag *d)
+/* The image's layout: the parts' bases and its size (obj_base NULL: the
+ * objects' bases are not kept). */
+static void layout(tl_image *im, const tl_scene *t, const mimg *world)
 {
-	memset(im, 0, sizeof *im);
-	im->obj_base = calloc((size_t)t->nobj + 1, sizeof *im->obj_base);
-	if (!im->obj_base)
-		return diag_set(d, "two-level image", 0, 0, "out of memory");
 	uint64_t at = align_up(world->size);
 	uint64_t ntri = 0;
 	for (uint32_t o = 0; o < t->nobj; o++) {
-		im->obj_base[o] = at;
+		if (im->obj_base)
+			im->obj_base[o] = at;
 		at = align_up(at + t->obj[o].m.size);
 		if (t->obj[o].m.nnodes > im->max_nodes)
 			im->max_nodes = t->obj[o].m.nnodes;
@@ -113,6 +112,23 @@ int tli_build(tl_image *im, const tl_scene *t, const mimg *world, diag *d)
 	im->inst_base = im->top_base + (uint64_t)t->nnode * TLI_NODE_BYTES;
 	im->top_bytes = im->inst_base + (uint64_t)t->ninst * TLI_INST_BYTES - im->top_base;
 	im->size = im->top_base + im->top_bytes;
+}
+
+uint64_t tli_size(const tl_scene *t, const mimg *world)
+{
+	tl_image im;
+	memset(&im, 0, sizeof im);
+	layout(&im, t, world);
+	return im.size;
+}
+
+int tli_build(tl_image *im, const tl_scene *t, const mimg *world, diag *d)
+{
+	memset(im, 0, sizeof *im);
+	im->obj_base = calloc((size_t)t->nobj + 1, sizeof *im->obj_base);
+	if (!im->obj_base)
+		return diag_set(d, "two-level image", 0, 0, "out of memory");
+	layout(im, t, world);
 	/* the image's addresses are 32-bit (list entries, records) */
 	if (im->size > UINT32_MAX || !(im->bytes = calloc(1, im->size))) {
 		tli_free(im);

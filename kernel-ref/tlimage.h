@@ -62,6 +62,8 @@ int tli_build(tl_image *im, const tl_scene *t, const mimg *world, diag *d);
  * returns its bytes. */
 uint64_t tli_write_top(tl_image *im, const tl_scene *t);
 void tli_free(tl_image *im);
+/* The size tli_build's image would have (nothing allocated). */
+uint64_t tli_size(const tl_scene *t, const mimg *world);
 
 void tli_node_decode(const uint8_t *b, tli_node *n);
 void tli_inst_decode(const uint8_t *b, tli_inst *in);
