@@ -82,7 +82,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity stress validate calibrate drt mutate install clean deps
+.PHONY: all run test bench bench-fidelity stress validate calibrate drt dynamic mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -153,6 +153,12 @@ validate: all
 # default 128x96; a few minutes on 2 cores: scripts/drt.sh).
 drt: all
 	sh scripts/drt.sh $(B)
+
+# writes docs/DYNAMIC.md and docs/dynamic-fps.png from BART Robots animated
+# flat and two-level (DYN_SIZE, DYN_FRAMES, DYN_FPS, DYN_T0; about a minute
+# on 2 cores: scripts/dynamic.sh).
+dynamic: all
+	sh scripts/dynamic.sh $(B)
 
 # Calibration of the assumed parameters against seed 002's figures (issue 31):
 # coordinate search on Conference, writes docs/CALIBRATION.md; about 30 min

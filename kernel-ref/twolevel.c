@@ -393,8 +393,7 @@ ray_hit tl_ray_trace(const tl_scene *t, vec3 o, vec3 d, float tmax, int any_hit,
 	return h;
 }
 
-/* The rays of mask whose box test with their own bound passes. */
-static uint64_t pkt_box(const aabb *b, const packet *p, uint64_t mask)
+uint64_t tl_pkt_box(const aabb *b, const packet *p, uint64_t mask)
 {
 	uint64_t r = 0;
 	for (uint64_t m = mask; m; m &= m - 1) {
@@ -408,12 +407,10 @@ static uint64_t pkt_box(const aabb *b, const packet *p, uint64_t mask)
 	return r;
 }
 
-/* One instance for the rays `mask` of p: a copy of them moved into object
- * space, traced with the object's tree, the better hits taken back. */
-static void pkt_inst(const tl_scene *t, const tl_inst *in, packet *p, uint64_t mask, packet *q,
-                     trav_entry *stack, int stack_max, trav_counts *c)
+void tl_pkt_to_object(const double inv[12], const packet *p, uint64_t mask, packet *q)
 {
-	const tl_object *ob = &t->obj[in->obj];
+	tl_inst in;
+	memcpy(in.inv, inv, sizeof in.inv);
 	int shadow = p->type == PKT_SHADOW;
 	memcpy(q, p, sizeof *q);
 	q->valid = mask;
@@ -422,7 +419,7 @@ static void pkt_inst(const tl_scene *t, const tl_inst *in, packet *p, uint64_t m
 		const float o[3] = {p->ox[i], p->oy[i], p->oz[i]},
 		            dir[3] = {p->dx[i], p->dy[i], p->dz[i]};
 		vec3 oo, od;
-		to_object(in, o, dir, &oo, &od);
+		to_object(&in, o, dir, &oo, &od);
 		q->ox[i] = oo.x;
 		q->oy[i] = oo.y;
 		q->oz[i] = oo.z;
@@ -431,22 +428,40 @@ static void pkt_inst(const tl_scene *t, const tl_inst *in, packet *p, uint64_t m
 		q->dz[i] = od.z;
 		q->tmax[i] = shadow ? p->tmax[i] : p->t[i];
 	}
-	pkt_trace(q, &ob->m, stack, stack_max, c);
+}
+
+void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g)
+{
 	for (uint64_t m = mask; m; m &= m - 1) {
 		int i = __builtin_ctzll(m);
 		if (q->tri[i] == PKT_NOHIT)
 			continue;
-		uint32_t g = world_addr(t, in, ob, q->tri[i]);
-		if (shadow) {
+		if (p->type == PKT_SHADOW) {
 			p->t[i] = -INFINITY; /* occluded, as the packet path marks it */
-			p->tri[i] = g;
-		} else if (isect_better(q->t[i], g, p->t[i], p->tri[i])) {
+			p->tri[i] = g[i];
+		} else if (isect_better(q->t[i], g[i], p->t[i], p->tri[i])) {
 			p->t[i] = q->t[i];
-			p->tri[i] = g;
+			p->tri[i] = g[i];
 			p->bu[i] = q->bu[i];
 			p->bv[i] = q->bv[i];
 		}
 	}
+}
+
+/* One instance for the rays `mask` of p: a copy of them moved into object
+ * space, traced with the object's tree, the better hits taken back. */
+static void pkt_inst(const tl_scene *t, const tl_inst *in, packet *p, uint64_t mask, packet *q,
+                     trav_entry *stack, int stack_max, trav_counts *c)
+{
+	const tl_object *ob = &t->obj[in->obj];
+	tl_pkt_to_object(in->inv, p, mask, q);
+	pkt_trace(q, &ob->m, stack, stack_max, c);
+	uint32_t g[PKT_RAYS];
+	for (uint64_t m = mask; m; m &= m - 1) {
+		int i = __builtin_ctzll(m);
+		g[i] = q->tri[i] == PKT_NOHIT ? PKT_NOHIT : world_addr(t, in, ob, q->tri[i]);
+	}
+	tl_pkt_merge(p, q, mask, g);
 }
 
 typedef struct tl_entry {
@@ -464,7 +479,7 @@ uint64_t tl_pkt_trace(const tl_scene *t, packet *p, trav_entry *stack, int stack
 	}
 	if (!t->ninst)
 		return 0;
-	uint64_t entered = pkt_box(&t->node[0].box, p, p->valid);
+	uint64_t entered = tl_pkt_box(&t->node[0].box, p, p->valid);
 	packet q; /* the rays in an object's space */
 	tl_entry stk[64];
 	int sp = 0;
@@ -472,7 +487,7 @@ uint64_t tl_pkt_trace(const tl_scene *t, packet *p, trav_entry *stack, int stack
 	while (sp > 0) {
 		sp--;
 		const tl_node *n = &t->node[stk[sp].node];
-		uint64_t mask = pkt_box(&n->box, p, stk[sp].mask);
+		uint64_t mask = tl_pkt_box(&n->box, p, stk[sp].mask);
 		if (!mask)
 			continue;
 		if (n->count == 0) {
@@ -482,7 +497,7 @@ uint64_t tl_pkt_trace(const tl_scene *t, packet *p, trav_entry *stack, int stack
 		}
 		for (uint32_t k = n->first; k < n->first + n->count; k++) {
 			const tl_inst *in = &t->inst[t->order[k]];
-			uint64_t im = pkt_box(&in->box, p, mask);
+			uint64_t im = tl_pkt_box(&in->box, p, mask);
 			if (im)
 				pkt_inst(t, in, p, im, &q, stack, stack_max, c);
 		}

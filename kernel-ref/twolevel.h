@@ -88,4 +88,15 @@ ray_hit tl_ray_trace(const tl_scene *t, vec3 o, vec3 d, float tmax, int any_hit,
 uint64_t tl_pkt_trace(const tl_scene *t, packet *p, trav_entry *stack, int stack_max,
                       trav_counts *c);
 
+/* The pieces of tl_pkt_trace the chip's units call (units/toplevel.c),
+ * so both make the same functional calls. The rays of mask whose box test
+ * against b with their own bound passes: */
+uint64_t tl_pkt_box(const aabb *b, const packet *p, uint64_t mask);
+/* q = p with the rays of mask moved into object space by inv (world ->
+ * object), q->valid = mask, each ray's bound its best t so far. */
+void tl_pkt_to_object(const double inv[12], const packet *p, uint64_t mask, packet *q);
+/* Takes q's hits (rays of mask) back into p by the single tree's rule; g[i]
+ * names lane i's hit triangle in the world image. */
+void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g);
+
 #endif

@@ -26,8 +26,9 @@ const char world_usage[] =
     "  --anim-time T         AFF scene: the animation time to render (default 0)\n"
     "  --anim-fps F          AFF scene: frames per second of animation time; frame i of a\n"
     "                        multi-frame run (--frames N) is at T + i/F\n"
-    "  --two-level           AFF scene, rtref: trace through a kd-tree per rigid object\n"
-    "                        (built once) under a tree of instances rebuilt per frame\n"
+    "  --two-level           AFF scene: trace through a kd-tree per rigid object (built\n"
+    "                        once) under a tree of instances rebuilt per frame; saarsim:\n"
+    "                        a transformation unit, animations on one warm chip\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
@@ -238,7 +239,9 @@ const char *world_cache_name(int status)
 }
 
 /* The world's own kd-tree parameters: with --two-level the image serves
- * shading only (the two-level trees trace), so one split is enough. */
+ * shading only (the two-level trees trace), so one leaf is enough; it also
+ * keeps the image's layout the same at every time (a split would move
+ * the regions after the tree), which a warm chip's update needs. */
 static const kd_params *world_kd(const world_opts *o)
 {
 	static _Thread_local kd_params one;
@@ -246,6 +249,7 @@ static const kd_params *world_kd(const world_opts *o)
 		return &o->kd;
 	one = o->kd;
 	one.max_depth = 1;
+	one.leaf_size = INT_MAX; /* the root is a leaf */
 	return &one;
 }
 

@@ -233,6 +233,25 @@ void cache_flush(cache *c)
 	c->mshr_used = 0;
 }
 
+uint64_t cache_invalidate(cache *c, uint64_t addr, uint64_t n)
+{
+	uint64_t dropped = 0;
+	if (!n)
+		return 0;
+	for (uint64_t l = cache_line_of(c, addr), e = cache_line_of(c, addr + n - 1); l <= e; l++) {
+		uint32_t set = cache_set_of(c, l);
+		cache_way *s = c->way + (size_t)set * c->p.ways;
+		for (uint32_t w = 0; w < c->p.ways; w++)
+			if (s[w].tag == l) {
+				s[w] = (cache_way){CACHE_INVALID, 0};
+				dropped++;
+				if (c->dirty)
+					c->dirty[set >> 6] |= 1ull << (set & 63);
+			}
+	}
+	return dropped;
+}
+
 /* XOR-fold: the line index folded onto itself in hash_bits-wide slices, so
  * strides that are multiples of nsets (regions 128-byte aligned, records of
  * equal size) spread over the sets instead of piling into one (seed 002 §4.2:

@@ -117,6 +117,11 @@ void cache_free(cache *c);
 /* Empties every line and MSHR; keeps the counters. */
 void cache_flush(cache *c);
 
+/* Drops the lines holding any of bytes [addr, addr + n) (their data is
+ * stale: the host wrote there between frames, issue 33); keeps the
+ * counters. Returns how many were present. */
+uint64_t cache_invalidate(cache *c, uint64_t addr, uint64_t n);
+
 /* Gives the cache line data (docs/memory.md, "Data"): line_bytes per way,
  * beside the tags. -1 when out of memory. */
 int cache_data_on(cache *c);

@@ -28,12 +28,16 @@
 #include <unistd.h>
 
 #include "kernel-ref/worldcache.h"
+#include "mem/cache.h"
+#include "mem/hier.h"
+#include "sim/memconfig.h"
 #include "sim/modes/functional.h"
 #include "sim/modes/replay.h"
 #include "sim/modes/slot.h"
 #include "units/intersection.h"
 #include "units/list.h"
 #include "units/rgs.h"
+#include "units/toplevel.h"
 #include "units/traversal.h"
 
 /* ---- the unit kinds (units/unit_table.h) and the pipeline ----
@@ -51,6 +55,20 @@ static const unit_route pipeline = {
     .triangles = isu_next,
     .traverse = tu_step,
     .finish = rgs_finish,
+};
+
+/* A two-level scene (issue 33; units/toplevel.h): a packet walks the top
+ * level first; at an instance the transformation unit hands it to the
+ * object's traversal, whose end goes back to the top level; the walk's
+ * end goes to the RGS. */
+static const unit_route pipeline_two_level = {
+    .enter = tlu_enter,
+    .leaf = list_leaf,
+    .triangles = isu_next,
+    .traverse = tu_step,
+    .finish = tlu_finish,
+    .object = tu_begin,
+    .shade = rgs_finish,
 };
 
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
@@ -110,6 +128,11 @@ static const struct {
     {C_CONE_TESTS, "cone.tests", "ops", "triangle-cone tests (chip.cone_cull)"},
     {C_CONE_CULLED, "cone.culled", "ops", "packet-triangle tests the cone saved"},
     {C_CONE_SAVED, "cone.saved_ray_tests", "tests", "ray-triangle tests the cone saved"},
+    {C_TL_STEPS, "toplevel.node_steps", "ops", "two-level scenes: top-level (BVH) node steps"},
+    {C_TL_INST_TESTS, "toplevel.instance_tests", "ops", "instance box tests"},
+    {C_TL_INST_ENTERED, "xform.instances", "ops",
+     "instances entered: packets moved into object space by the transformation unit"},
+    {C_TL_MAP_READS, "toplevel.map_reads", "reads", "object-space hits named through the map"},
 };
 
 static const char *const shade_names[11] = {"shade.hits",
@@ -494,15 +517,119 @@ static int chip_base(chip *c, const saar_config *cfg, const world *w)
 	c->frame_port = calloc(nf, sizeof *c->frame_port);
 	if (cfg->memory.model == CFG_MEM_HIERARCHY)
 		c->frame_mem = calloc(nf, sizeof *c->frame_mem);
-	c->spill_base = (w->m.size + 4095) & ~(uint64_t)4095;
+	const uint8_t *image = w->m.bytes;
+	uint64_t image_size = w->m.size;
+	if (w->tl) { /* the objects, the map and the top level after the frame's image */
+		diag td;
+		if (tli_build(&c->tli, w->tl, &w->m, &td))
+			return -1;
+		image = c->tli.bytes;
+		image_size = c->tli.size;
+	}
+	c->spill_base = (image_size + 4095) & ~(uint64_t)4095;
 	c->regs = w->m;
 	c->regs.bytes = NULL;
 	uint64_t space =
 	    c->spill_base + (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
 	if (!c->e || !c->frame_cycles || !c->frame_port ||
 	    (cfg->memory.model == CFG_MEM_HIERARCHY && !c->frame_mem) ||
-	    ms_init(&c->store, w->m.bytes, w->m.size, space))
+	    ms_init(&c->store, image, image_size, space))
 		return -1;
+	return 0;
+}
+
+/* A two-level scene's per-frame update (issue 33): the host rebuilt the
+ * top level (kernel-ref tl_frame) and writes it, the BVH's nodes and the
+ * instance records with their transforms, to the board in one DMA
+ * transfer over the host bus (memory.hostbus; seed 002 §4.2: the board
+ * sits on PCI). Its bytes and its time on an idle bus are the frame's
+ * update; the objects' trees were written once, before the first frame.
+ * The frame's simulated cycles start after it (not included). */
+static int chip_update(chip *c, diag *d)
+{
+	if (!c->w->tl)
+		return 0;
+	hbus_params hp;
+	hbus h;
+	hier_hbus_params(&c->cfg, &hp);
+	if (hbus_init(&h, &hp, d))
+		return -1;
+	c->update_bytes = c->tli.top_bytes;
+	c->update_ms = (double)hbus_duration(&h, (uint32_t)c->update_bytes) * 1e-9;
+	size_t nf = (size_t)c->cfg.frame.frames;
+	c->frame_update = calloc(nf, sizeof *c->frame_update);
+	c->frame_update_top = calloc(nf, sizeof *c->frame_update_top);
+	c->frame_stale = calloc(nf, sizeof *c->frame_stale);
+	c->frame_update_ms = calloc(nf, sizeof *c->frame_update_ms);
+	if (!c->frame_update || !c->frame_update_top || !c->frame_stale || !c->frame_update_ms)
+		return diag_set(d, "chip", 0, 0, "out of memory");
+	c->frame_update[0] = c->frame_update_top[0] = c->update_bytes;
+	c->frame_update_ms[0] = c->update_ms;
+	return 0;
+}
+
+#define ANIM_LINE 128u /* the update's unit: the VMA's line (MIMG_ALIGN) */
+
+/* Line [a, a + n) changed: dropped from every cache (hierarchy). */
+static uint64_t anim_stale(chip *c, uint64_t a, uint64_t n)
+{
+	if (!hier_is(&c->mem) || c->anim_keep_stale)
+		return 0;
+	cache *l1[MEM_NTYPES], *tag, *l2;
+	hier_caches(&c->mem, l1, &tag, &l2);
+	uint64_t k = 0;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		k += cache_invalidate(l1[t], a, n);
+	if (l2)
+		k += cache_invalidate(l2, a, n);
+	return k;
+}
+
+int chip_anim_update(chip *c, int f, diag *d)
+{
+	const world *w = c->w;
+	tl_image n;
+	if (!w->tl || tli_build(&n, w->tl, &w->m, d))
+		return w->tl ? -1 : diag_set(d, "chip", 0, 0, "a warm animation needs --two-level");
+	tl_image *o = &c->tli;
+	int same = n.size == o->size && n.top_base == o->top_base && n.map_base == o->map_base;
+	for (uint32_t k = 0; same && k < w->tl->nobj; k++)
+		same = n.obj_base[k] == o->obj_base[k];
+	if (!same) {
+		tli_free(&n);
+		return diag_set(
+		    d, "chip", 0, 0,
+		    "the two-level image's layout changed between frames: no warm update");
+	}
+	uint64_t bytes = 0, top = 0, stale = 0;
+	for (uint64_t a = 0; a < n.size; a += ANIM_LINE) {
+		uint64_t len = n.size - a < ANIM_LINE ? n.size - a : ANIM_LINE;
+		if (!memcmp(o->bytes + a, n.bytes + a, len))
+			continue;
+		/* the store reads the image in place: the line is written */
+		memcpy(o->bytes + a, n.bytes + a, len);
+		bytes += len;
+		top += a >= o->top_base ? len : 0;
+		stale += anim_stale(c, a, len);
+	}
+	tli_free(&n);
+	hbus_params hp;
+	hbus h;
+	hier_hbus_params(&c->cfg, &hp);
+	if (hbus_init(&h, &hp, d))
+		return -1;
+	c->frame_update[f] = bytes;
+	c->frame_update_top[f] = top;
+	c->frame_stale[f] = stale;
+	c->frame_update_ms[f] = (double)hbus_duration(&h, (uint32_t)bytes) * 1e-9;
+	/* the frame's registers: region bases (unchanged), camera and lights */
+	c->regs = w->m;
+	c->regs.bytes = NULL;
+	thr_env *v = &c->env;
+	cam_setup_view(&v->cam, &w->v, c->cfg.frame.width, c->cfg.frame.height);
+	v->sc.lights = w->v.lights;
+	v->sc.nlights = w->v.nlights;
+	v->nlights = w->v.nlights;
 	return 0;
 }
 
@@ -547,6 +674,14 @@ static int chip_env(chip *c, diag *d)
 	v->nlights = w->v.nlights;
 	v->spill_base = c->spill_base;
 	v->route = pipeline;
+	if (w->tl) {
+		v->route = pipeline_two_level;
+		v->two_level = 1;
+		v->tl_nodes = c->tli.top_base;
+		v->tl_insts = c->tli.inst_base;
+		uint64_t n = c->tli.max_nodes > w->tl->nnode ? c->tli.max_nodes : w->tl->nnode;
+		v->max_steps = 2 * (n > w->m.nnodes ? n : w->m.nnodes) + 64;
+	}
 	v->on_free = on_free;
 	v->owner = c;
 	if (mode_sinks_init(&c->md, v, c->nrtp * c->tpr, c->replayed))
@@ -709,7 +844,7 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d)
 	chip *c = calloc(1, sizeof *c);
 	if (!c || chip_base(c, cfg, w))
 		goto oom;
-	if (chip_memory(c, d)) {
+	if (chip_memory(c, d) || chip_update(c, d)) {
 		chip_destroy(c);
 		return NULL;
 	}
@@ -746,6 +881,7 @@ void chip_destroy(chip *c)
 		free(rp->t);
 		free(rp->q);
 	}
+	tli_free(&c->tli);
 	free(c->rtp);
 	free(c->turn);
 	free(c->live);
@@ -770,6 +906,10 @@ void chip_destroy(chip *c)
 	if (c->e)
 		eng_destroy(c->e);
 	free(c->frame_cycles);
+	free(c->frame_update);
+	free(c->frame_update_top);
+	free(c->frame_stale);
+	free(c->frame_update_ms);
 	free(c->frame_port);
 	free(c->frame_mem);
 	free(c->fid.unit_s);
@@ -999,6 +1139,8 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	ro.max_depth = c->cfg.shading.max_depth;
 	ro.threads = 1;
 	ro.cone_cull = c->cfg.chip.cone_cull;
+	if (c->w->tl) /* a two-level scene: kernel-ref traces the same trees */
+		ro.tracer = &c->w->tl->tracer;
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
 	int rc = a && b ? world_reference_rgb8(c->w, &ro, b, &out->ref, &out->cached, d)

@@ -21,6 +21,7 @@
 
 #include "kernel-ref/framebuf.h"
 #include "kernel-ref/render.h"
+#include "kernel-ref/tlimage.h"
 #include "kernel-ref/world.h"
 #include "kernel-ref/worldcache.h"
 #include "mem/memport.h"
@@ -126,6 +127,26 @@ typedef struct chip {
 	/* what the units know of the image: its region bases and scene box
 	 * (the registers the host sets), no bytes */
 	mimg regs;
+	/* a two-level scene (world.tl, kernel-ref/tlimage.h): the chip's image
+	 * (the flattened frame's, the objects', the map and the top level), and
+	 * the host's per-frame update: the top level's bytes written to the
+	 * board over the host bus (memory.hostbus) before the frame, and how
+	 * long that takes on an idle bus */
+	tl_image tli;
+	uint64_t update_bytes;
+	double update_ms;
+	/* a warm animation (chip_anim_update): per frame, the bytes the host
+	 * wrote before it (128-byte lines that changed: all of them, and of
+	 * those the top level's), their host-bus time, and the cache lines the
+	 * writes made stale; frame 0's are the first update (the top level) */
+	uint64_t *frame_update, *frame_update_top, *frame_stale;
+	double *frame_update_ms;
+	/* called before frame f > 0 of chip_run (NULL: none): a warm
+	 * animation moves the world and writes the update there */
+	int (*between)(struct chip *c, int f, void *ctx, diag *d);
+	void *between_ctx;
+	int anim_checked, anim_identical; /* frames before the last checked, identical */
+	int anim_keep_stale; /* test hook: chip_anim_update leaves the caches as they are */
 	stats st;
 	thr_env env;
 	mode_sinks md; /* the sinks the units emit into (sim/modes/modes.h) */
@@ -233,6 +254,15 @@ int chip_census_check(const saar_config *cfg, diag *d);
 /* Simulates cfg.frame.frames frames (the frame buffer holds the last;
  * sim/modes/frame.c). */
 int chip_run(chip *c, diag *d);
+/* A warm animation of a two-level scene (issue 33 item 4): the world was
+ * moved to the next frame's time (world_set_time); the chip's image is
+ * brought to it by writing the 128-byte lines that changed (the top level;
+ * the moved instances' world-space triangle and shading records), each
+ * dropped from every cache that held it, counted as frame f's update with
+ * its host-bus time. Caches, the VMA's state and SDRAM rows stay warm.
+ * The camera and lights are the frame's. -1 (diag) when the image's layout
+ * changed (no warm update possible). */
+int chip_anim_update(chip *c, int f, diag *d);
 /* Renders the same frame with kernel-ref (render_frame, 1 host thread),
  * with packets and with single rays (each from the world cache when it
  * has it), and compares the 8-bit images into c's check. */

@@ -25,10 +25,10 @@
 #include "kernel-ref/framebuf.h"
 #include "kernel-ref/packet.h"
 #include "mem/cache.h"
-#include "sim/memconfig.h"
 #include "mem/store.h"
 #include "mem/vma.h"
 #include "sim/chip.h"
+#include "sim/memconfig.h"
 #include "units/thread.h"
 
 /* Resident bytes of this process now (/proc/self/statm), 0 if unknown. */
@@ -82,14 +82,19 @@ void hm_estimate(const saar_config *cfg, const world *w, hm_est *e)
 	 * (chip.stack_depth below the tree's depth), the spilled entries read
 	 * back and its spill area's pages in the memory's store */
 	busy_slot += sizeof(thr_shade) + 2 * 8192 + 64 * sizeof(thr_shread);
-	uint64_t image = (w->m.size + 4095) / 4096 * 4096;
+	/* a two-level scene: the chip's own image (kernel-ref/tlimage.h), a
+	 * copy chip_create makes, and each busy slot's top-level walk */
+	uint64_t image_bytes = w->tl ? tli_size(w->tl, &w->m) : w->m.size;
+	if (w->tl)
+		busy_slot += sizeof(thr_tl);
+	uint64_t image = (image_bytes + 4095) / 4096 * 4096;
 	uint64_t space = image + slots * PKT_STACK_MAX * THR_SPILL_STRIDE, spill_pages = 0;
 	if ((uint64_t)cfg->chip.stack_depth < depth) {
 		busy_slot += PKT_STACK_MAX * THR_STACK_ENTRY_BYTES;
 		spill_pages = busy * (PKT_STACK_MAX * THR_SPILL_STRIDE / MS_PAGE + 1);
 	}
-	e->part[HM_THREADS] =
-	    slots * idle_slot + busy * busy_slot + ms_host_bytes(space, spill_pages);
+	e->part[HM_THREADS] = slots * idle_slot + busy * busy_slot +
+	                      ms_host_bytes(space, spill_pages) + (w->tl ? image_bytes : 0);
 	for (int k = 0; k < UNIT_NKINDS; k++)
 		e->part[HM_THREADS] +=
 		    (uint64_t)cfg->chip.rtps *
@@ -99,13 +104,13 @@ void hm_estimate(const saar_config *cfg, const world *w, hm_est *e)
 		 * into an L1; the on-board cache also takes spill lines */
 		for (int t = 0; t < MEM_NTYPES; t++) {
 			cache_params cp = hier_l1_params(cfg, t);
-			e->part[HM_L1] += cache_host_bytes(&cp) +
-			                  (uint64_t)cp.mshrs * cp.line_bytes +
-			                  cache_data_host_bytes(&cp, w->m.size / cp.line_bytes + 1);
+			e->part[HM_L1] +=
+			    cache_host_bytes(&cp) + (uint64_t)cp.mshrs * cp.line_bytes +
+			    cache_data_host_bytes(&cp, image_bytes / cp.line_bytes + 1);
 		}
 		if (cfg->memory.vma.enabled) {
 			vma_params vp = hier_vma_params(cfg);
-			uint64_t bytes = w->m.size + spill_pages * MS_PAGE;
+			uint64_t bytes = image_bytes + spill_pages * MS_PAGE;
 			e->part[HM_VMA] = vma_host_bytes((uint64_t)cfg->memory.sdram.mb << 20, &vp,
 			                                 bytes / vp.line + 1);
 		}

@@ -48,7 +48,10 @@ static void usage(FILE *f)
 	       "  --size WxH            frame size (sets frame.width and frame.height)\n"
 	       "  --frames N            frames of the same view, memory kept warm (frame.frames);\n"
 	       "                        with --anim-fps (AFF scene): N animation frames, one chip\n"
-	       "                        run each, outputs numbered FILE-0000.png, ...\n"
+	       "                        run each, outputs numbered FILE-0000.png, ...; with\n"
+	       "                        --two-level one warm chip runs them all (the host's\n"
+	       "                        update written between frames; one report)\n"
+	       "  --anim-cold           --two-level animation: a new (cold) chip per frame\n"
 	       "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
 	       "  --report FILE.json    write the JSON report (docs/report.md)\n"
 	       "  --csv FILE            append one CSV row (a header first if FILE is new)\n"
@@ -144,7 +147,7 @@ static const char *key_flag(const char *a)
 static int bare_flag(const char *a)
 {
 	static const char *const bare_flags[] = {"--no-check", "--list-config", "--config-doc",
-	                                         "--dry-run", "--quiet"};
+	                                         "--dry-run",  "--quiet",       "--anim-cold"};
 	for (int k = 0; k < (int)(sizeof bare_flags / sizeof *bare_flags); k++)
 		if (!strcmp(a, bare_flags[k]))
 			return k;
@@ -173,7 +176,8 @@ typedef struct cli {
 	const char *csv, *trace, *census, *mem_limit;
 	const char *timeline, *tl_window, *tl_max, *heatmap;
 	uint64_t tl_c0, tl_c1, tl_cap;
-	int check, list, doc, dry, quiet;
+	int check, list, doc, dry, quiet, anim_cold;
+	int warm; /* a warm two-level animation: frame.frames animation frames, one chip */
 } cli;
 
 /* The first pass: every argument checked, the world flags into a->wo, the
@@ -198,8 +202,8 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 		}
 		int b = bare_flag(f);
 		if (b >= 0) {
-			int *set[] = {&a->check, &a->list, &a->doc, &a->dry,
-			              &a->quiet}; /* bare_flags' order */
+			int *set[] = {&a->check, &a->list,  &a->doc,
+			              &a->dry,   &a->quiet, &a->anim_cold}; /* bare_flags' order */
 			*set[b] = b != 0;
 			i++;
 			continue;
@@ -357,10 +361,14 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	}
 	if (a->size && cli_parse_size(a->size, &cfg->frame.width, &cfg->frame.height, d))
 		return cli_bad("saarsim", d->msg);
-	if (a->wo.two_level)
-		return cli_bad("saarsim",
-		               "--two-level: kernel-ref (rtref) only; the chip traces one "
-		               "tree over the flattened frame (issue 33 item 3)");
+	/* --two-level (issue 33 item 3, units/toplevel.h): kernel-ref's
+	 * two-level tracer has neither reduced formats nor cone culling, and
+	 * sampled runs' packet records are not kept for AFF worlds */
+	if (a->wo.two_level && cfg->fidelity == CFG_FIDELITY_SAMPLED)
+		return cli_bad("saarsim", "--two-level: cycle or functional fidelity only");
+	if (a->wo.two_level && cfg->chip.cone_cull)
+		return cli_bad("saarsim", "--two-level: no chip.cone_cull (kernel-ref's two-level "
+		                          "tracer does not cull by cone)");
 	long nframes;
 	if (a->frames) {
 		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))
@@ -550,6 +558,36 @@ fail:
 /* One run of the chip: frame i of an animation (the world loaded for
  * frame 0, moved to its time after), or the only one. The world stays
  * with the caller. Returns the exit status. */
+/* A warm two-level animation (issue 33 item 4): before frame f, the frame
+ * that ended is checked against kernel-ref (its line printed), the world
+ * moves to frame f's time and the chip's image takes the host's update
+ * (chip_anim_update). The last frame is checked as every run's is. */
+typedef struct warm_ctx {
+	const cli *a;
+	world *w;
+} warm_ctx;
+
+static int warm_between(chip *c, int f, void *ctx, diag *d)
+{
+	warm_ctx *x = ctx;
+	if (x->a->check) {
+		chip_check chk;
+		if (chip_check_frame(c, &chk, d))
+			return -1;
+		c->anim_checked++;
+		c->anim_identical += chk.cmp.identical && chk.single.identical;
+		printf("  frame %d (%s): check vs kernel-ref: packets %s (%llu differing pixels), "
+		       "single rays %s\n",
+		       f, x->w->scene_label, chk.cmp.identical ? "identical" : "DIFFERENT",
+		       (unsigned long long)chk.cmp.differing_pixels,
+		       chk.single.identical ? "identical" : "DIFFERENT");
+		fflush(stdout);
+	}
+	if (world_set_time(x->w, &x->a->wo, world_frame_time(&x->a->wo, f), d))
+		return -1;
+	return chip_anim_update(c, f, d);
+}
+
 static int run_frame(const cli *a, const saar_config *cfg, world *w, int i, uint64_t limit_mb,
                      double t_start, diag *d)
 {
@@ -567,6 +605,11 @@ static int run_frame(const cli *a, const saar_config *cfg, world *w, int i, uint
 	chip *c = chip_create(cfg, w, d);
 	if (!c)
 		return cli_bad("saarsim", d->msg);
+	warm_ctx wx = {a, w};
+	if (a->warm) {
+		c->between = warm_between;
+		c->between_ctx = &wx;
+	}
 	const char *after = getenv("SAARSIM_PROGRESS_AFTER_MS");
 	progress pr = {now_ms(), after && *after ? atof(after) : 2000.0, 0, 0, c};
 	if (isatty(STDERR_FILENO) && !a->quiet) {
@@ -627,7 +670,15 @@ int main(int argc, char **argv)
 	 * times, each a chip run of its own (the chip's frame.frames repeat
 	 * one memory image; the animated chip is issue 33's item 3) */
 	int nanim = a.wo.have_anim_fps ? cfg.frame.frames : 1;
-	if (a.wo.have_anim_fps)
+	if (a.anim_cold && !(a.wo.two_level && nanim > 1))
+		return cli_bad("saarsim", "--anim-cold: for a --two-level animation (--anim-fps, "
+		                          "--frames N > 1) only");
+	/* a two-level animation runs warm: one chip, frame.frames animation
+	 * frames (chip_anim_update between them) */
+	a.warm = a.wo.two_level && nanim > 1 && !a.anim_cold;
+	if (a.warm)
+		nanim = 1;
+	else if (a.wo.have_anim_fps)
 		cfg.frame.frames = 1;
 	if (nanim > 1 && (a.trace || a.timeline || a.heatmap || a.census))
 		return cli_bad("saarsim",

@@ -271,6 +271,23 @@ static void check_text(FILE *f, const char *ref, const img_cmp *m, int cached)
 	        cached ? ", its frame from the world cache" : "");
 }
 
+/* The mean over the frames of a per-frame update figure. */
+static uint64_t anim_mean(const chip *c, const uint64_t *v)
+{
+	uint64_t s = 0;
+	for (int f = 0; f < c->frames_done; f++)
+		s += v[f];
+	return c->frames_done ? s / (uint64_t)c->frames_done : 0;
+}
+
+static double anim_mean_ms(const chip *c)
+{
+	double s = 0;
+	for (int f = 0; f < c->frames_done; f++)
+		s += c->frame_update_ms[f];
+	return ratio(s, c->frames_done);
+}
+
 void report_text(FILE *f, const report_info *ri)
 {
 	const chip *c = ri->c;
@@ -307,6 +324,15 @@ void report_text(FILE *f, const report_info *ri)
 		        c->frames_done, c->frames_done, ss.cycles, ss.fps);
 	}
 	fputc('\n', f);
+	if (c->w->tl)
+		fprintf(f,
+		        "  two-level: %u instances of %u objects; %llu top-level steps, %llu "
+		        "transformations; update %llu bytes = %.3f ms over the host bus%s\n",
+		        c->w->tl->ninst, c->w->tl->nobj,
+		        (unsigned long long)get(c, "toplevel.node_steps"),
+		        (unsigned long long)get(c, "xform.instances"),
+		        (unsigned long long)anim_mean(c, c->frame_update), anim_mean_ms(c),
+		        c->frames_done > 1 ? " (mean per frame)" : "");
 	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++)
@@ -340,6 +366,11 @@ void report_text(FILE *f, const report_info *ri)
 			for (int k = 0; k < HR_N; k++)
 				if (k < MEM_NTYPES || g->memory.vma.enabled)
 					pct(f, fig_hit_name(k), m.hit[k]);
+			if (c->w->tl) /* a warm two-level animation: the frame's update */
+				fprintf(f, "; update %.3f MB (top level %.3f) = %.2f ms",
+				        (double)c->frame_update[fr] / (1 << 20),
+				        (double)c->frame_update_top[fr] / (1 << 20),
+				        c->frame_update_ms[fr]);
 			fputc('\n', f);
 		}
 	}
@@ -792,6 +823,10 @@ static void json_host(jsonw *j, const report_info *ri)
 	jsonw_key(j, "host");
 	jsonw_obj_begin(j);
 	jsonw_knum(j, "load_s", ri->load_ms / 1e3);
+	/* of the load: the scene's kd-tree and memory image (for an animation,
+	 * this frame's) */
+	jsonw_knum(j, "kd_build_s", ri->w->kd_ms / 1e3);
+	jsonw_knum(j, "image_build_s", ri->w->image_ms / 1e3);
 	jsonw_knum(j, "sim_s", c->sim_ms / 1e3);
 	jsonw_knum(j, "check_s", checked ? ri->check->check_ms / 1e3 : 0.0);
 	jsonw_knum(j, "wall_s", ri->wall_ms / 1e3);
@@ -804,6 +839,66 @@ static void json_host(jsonw *j, const report_info *ri)
 	jsonw_knum(j, "peak_rss_mb", (double)hm_peak_rss() / (1 << 20));
 	jsonw_knum(j, "sim_cycles_per_s", ratio((double)chip_cycles(c), c->sim_ms / 1e3));
 	jsonw_knum(j, "sim_to_ref_ratio", checked ? ratio(c->sim_ms, ri->check->ref_ms) : 0.0);
+	jsonw_obj_end(j);
+}
+
+/* A two-level scene (issue 33; units/toplevel.h): the scene's instances
+ * and objects, the top level's work on the chip, and the host's update of
+ * the frame (the top level's bytes over the host bus; chip.c
+ * chip_update). Absent for single-tree scenes. */
+static void json_two_level(jsonw *j, const chip *c)
+{
+	const tl_scene *t = c->w->tl;
+	if (!t)
+		return;
+	double frame_s = ratio(1.0, fig_fps(c));
+	/* the update per frame: the mean over the frames (one frame: its top
+	 * level) */
+	double ub = 0, ums = 0;
+	for (int f = 0; f < c->frames_done; f++) {
+		ub += (double)c->frame_update[f];
+		ums += c->frame_update_ms[f];
+	}
+	ub = ratio(ub, c->frames_done);
+	ums = ratio(ums, c->frames_done);
+	jsonw_key(j, "two_level");
+	jsonw_obj_begin(j);
+	jsonw_kuint(j, "instances", t->ninst);
+	jsonw_kuint(j, "objects", t->nobj);
+	jsonw_kuint(j, "top_nodes", t->nnode);
+	jsonw_kuint(j, "top_node_steps", get(c, "toplevel.node_steps"));
+	jsonw_kuint(j, "instance_tests", get(c, "toplevel.instance_tests"));
+	jsonw_kuint(j, "transformations", get(c, "xform.instances"));
+	jsonw_kuint(j, "transformed_rays",
+	            get(c, "type.primary.xform.rays") + get(c, "type.shadow.xform.rays") +
+	                get(c, "type.reflection.xform.rays") +
+	                get(c, "type.refraction.xform.rays"));
+	jsonw_kuint(j, "map_reads", get(c, "toplevel.map_reads"));
+	jsonw_kuint(j, "update_bytes", (uint64_t)llround(ub));
+	jsonw_knum(j, "update_mb", ub / (1 << 20));
+	jsonw_knum(j, "update_ms", ums);
+	jsonw_knum(j, "fps_with_update", ratio(1.0, frame_s + ums * 1e-3));
+	jsonw_knum(j, "host_top_level_ms", t->frame_ms);
+	jsonw_knum(j, "host_bottom_level_ms", t->build_ms);
+	/* a warm animation (chip_anim_update): each frame's update; frame 1's
+	 * is the first top level (the objects were on the board before) */
+	jsonw_kbool(j, "warm", c->between != NULL);
+	jsonw_kint(j, "frames_checked_before_last", c->anim_checked);
+	jsonw_kint(j, "frames_identical_before_last", c->anim_identical);
+	jsonw_key(j, "per_frame");
+	jsonw_arr_begin(j);
+	for (int f = 0; f < c->frames_done; f++) {
+		jsonw_obj_begin(j);
+		jsonw_kint(j, "frame", f + 1);
+		jsonw_kuint(j, "update_bytes", c->frame_update[f]);
+		jsonw_kuint(j, "update_top_level_bytes", c->frame_update_top[f]);
+		jsonw_kuint(j, "update_world_bytes", c->frame_update[f] - c->frame_update_top[f]);
+		jsonw_knum(j, "update_mb", (double)c->frame_update[f] / (1 << 20));
+		jsonw_knum(j, "update_ms", c->frame_update_ms[f]);
+		jsonw_kuint(j, "stale_cache_lines", c->frame_stale[f]);
+		jsonw_obj_end(j);
+	}
+	jsonw_arr_end(j);
 	jsonw_obj_end(j);
 }
 
@@ -828,6 +923,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	kv_object(j, c, "shading", shading_map, sizeof shading_map / sizeof *shading_map);
 	json_memory(j, c, &hs, have_h);
 	json_frames(j, c);
+	json_two_level(j, c);
 	json_caches(j, &hs, have_h);
 	json_check(j, ri);
 	json_counters(j, ri);

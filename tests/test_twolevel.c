@@ -114,9 +114,9 @@ Test(twolevel, small_scene_frames, .timeout = 60)
 }
 
 /* rtref --two-level renders the frames through the two-level trees (its
- * stats say so) within the same tolerance of the flat frames; saarsim
- * refuses the flag (the chip traces one tree) and rtref refuses it on a
- * scene that is not AFF. Mistake caught: the flag accepted but ignored. */
+ * stats say so) within the same tolerance of the flat frames; rtref
+ * refuses it on a scene that is not AFF (saarsim's flag:
+ * test_chip_twolevel.c). Mistake caught: the flag accepted but ignored. */
 Test(twolevel, rtref_flag, .timeout = 60)
 {
 	char dir[128], p[1024], args[1400];
@@ -145,9 +145,6 @@ Test(twolevel, rtref_flag, .timeout = 60)
 		size_t n = tl_differ(x, y, 32 * 32);
 		cr_assert(n <= 10, "frame %d: %zu pixels differ", i, n);
 	}
-	snprintf(args, sizeof args, "--scene %s --two-level", p);
-	cr_assert_eq(tu_prog(dir, "saarsim", args), 2);
-	tu_one_line(dir, "saarsim", "--two-level: kernel-ref (rtref) only");
 	cr_assert_eq(tu_prog(dir, "rtref", "--scene spd:tetra --two-level"), 2);
 	tu_one_line(dir, "rtref", "--two-level: needs an AFF scene");
 }

@@ -53,7 +53,7 @@ void list_leaf(thr_ctx *t)
 	}
 	/* the entries (triangle addresses) as the read returns them */
 	thr_count(t, C_LIST_ENTRIES, t->r.leaf_count);
-	thr_read(t, MEM_LIST, mimg_list_addr(v->m, t->r.leaf_first),
+	thr_read(t, MEM_LIST, mimg_list_addr(thr_img(t), t->r.leaf_first),
 	         t->r.leaf_count * MIMG_LIST_BYTES, t->list);
 	thr_wait_mem(t, fetched);
 }

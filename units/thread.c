@@ -283,6 +283,8 @@ void thr_free_buffers(thr_ctx *t)
 {
 	free(t->list);
 	free(t->spill_in);
+	free(t->tl);
+	t->tl = NULL;
 	if (t->sh) {
 		free(t->sh->peek);
 		free(t->sh->got);

@@ -39,6 +39,7 @@
 #include "kernel-ref/cone.h"
 #include "kernel-ref/packet.h"
 #include "kernel-ref/shade.h"
+#include "kernel-ref/tlimage.h"
 #include "mem/memport.h"
 #include "sim/core/engine.h"
 #include "units/sink.h"
@@ -156,10 +157,14 @@ enum thr_counter {
 	C_SPAWNED,
 	C_QUEUED,
 	C_MAX_QUEUE,
-	C_CONE_PACKETS, /* cone culling (chip.cone_cull): cones built, */
-	C_CONE_TESTS,   /* triangle-cone tests, */
-	C_CONE_CULLED,  /* triangles culled for the whole packet, */
-	C_CONE_SAVED,   /* and the ray-triangle tests they saved */
+	C_CONE_PACKETS,    /* cone culling (chip.cone_cull): cones built, */
+	C_CONE_TESTS,      /* triangle-cone tests, */
+	C_CONE_CULLED,     /* triangles culled for the whole packet, */
+	C_CONE_SAVED,      /* and the ray-triangle tests they saved */
+	C_TL_STEPS,        /* two-level scenes: top-level node steps, */
+	C_TL_INST_TESTS,   /* instance box tests, */
+	C_TL_INST_ENTERED, /* instances entered (transformation ops), */
+	C_TL_MAP_READS,    /* hits named through the triangle map */
 	C_NCOUNTERS
 };
 _Static_assert(C_NCOUNTERS <= 32, "packet records (pktrec.h) hold 32 counters");
@@ -184,6 +189,27 @@ enum thr_type_counter {
 
 struct thr_ctx;
 struct thr_rtp;
+
+/* A thread's walk of a two-level scene's top level (units/toplevel.c):
+ * its stack of (node, rays), the leaf's instance records, the record and
+ * node as read, the packet moved into the object's space and the world
+ * packet it came from, the map entries its hits read. Allocated at the
+ * thread's first two-level packet. */
+#define THR_TL_STACK 64
+typedef struct thr_tl {
+	uint32_t node[THR_TL_STACK];
+	uint64_t mask[THR_TL_STACK];
+	int sp;
+	uint32_t k, end;   /* the leaf's records [k, end) */
+	uint64_t leaf, im; /* rays in the leaf; rays entering the instance */
+	uint8_t rec[TLI_INST_BYTES];
+	tli_node n;
+	tli_inst in;
+	packet q;
+	packet *wp;
+	uint32_t g[PKT_RAYS];
+	uint64_t steps;
+} thr_tl;
 
 /* One distinct shading read of a packet: its address, size and place in
  * the thread's shading buffers. */
@@ -257,6 +283,10 @@ typedef struct thr_env {
 	uint64_t *hkey;
 	uint32_t *hgen, *hidx, gen;
 	int oom; /* a thread's buffer found no memory: the frame fails */
+	/* a two-level scene (kernel-ref/tlimage.h): its top level's nodes and
+	 * instance records (the registers the host sets per frame); 0: none */
+	int two_level;
+	uint64_t tl_nodes, tl_insts;
 	/* test hooks: enum thr_mutant; shading decoded again from the
 	 * delivered bytes even when they equal those it found (units/rgs.c) */
 	int mutant, shade_redecode;
@@ -301,7 +331,18 @@ typedef struct thr_ctx {
 	int nkids, made;
 	uint64_t steps; /* traversal steps of the current packet (thr_env.max_steps) */
 	pkt_cone cone;  /* the packet's enclosing cone (chip.cone_cull) */
+	/* the image traversal, list and intersection read: NULL the scene's
+	 * (thr_env.m); inside an instance of a two-level scene its object's
+	 * (units/toplevel.c) */
+	const mimg *img;
+	struct thr_tl *tl; /* a two-level scene's walk (units/toplevel.c) */
 } thr_ctx;
+
+/* The image the thread's traversal reads now. */
+static inline const mimg *thr_img(const thr_ctx *t)
+{
+	return t->img ? t->img : t->env->m;
+}
 
 /* A queued secondary packet: the packet, or (p NULL) a replayed stream. */
 typedef struct thr_qitem {

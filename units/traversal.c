@@ -26,7 +26,8 @@ static void cone_built(eng *e, void *ctx, uint64_t arg)
 void tu_begin(thr_ctx *t)
 {
 	thr_env *v = t->env;
-	uint64_t enter = pkt_trav_begin_fp(&t->ts, t->p, v->m, t->stack, PKT_STACK_MAX, &v->prec);
+	uint64_t enter =
+	    pkt_trav_begin_fp(&t->ts, t->p, thr_img(t), t->stack, PKT_STACK_MAX, &v->prec);
 	t->sp = 0;
 	t->steps = 0;
 	thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
@@ -120,7 +121,7 @@ static void pop(thr_ctx *t)
 	uint32_t node = r->node;
 	if (v->mutant == THR_MUT_KD_SIBLING && node) /* test hook: the pair's other node */
 		node = node & 1 ? node + 1 : node - 1;
-	thr_read(t, MEM_KD, mimg_node_addr(v->m, node), MIMG_NODE_BYTES, &t->node);
+	thr_read(t, MEM_KD, mimg_node_addr(thr_img(t), node), MIMG_NODE_BYTES, &t->node);
 	thr_wait_mem(t, node_fetched);
 }
 

@@ -30,8 +30,7 @@
 #define WIDTH_CAL(w, was, why)                                                                     \
 	{                                                                                          \
 		w, 1, 64, 0, 0,                                                                    \
-		    "fitted to F1-F3 (docs/CALIBRATION.md); " why "; assumed before: " #was,       \
-		    1                                                                              \
+		    "fitted to F1-F3 (docs/CALIBRATION.md); " why "; assumed before: " #was, 1     \
 	}
 /* A latency fitted by scripts/calibrate.sh; was: the assumed value before. */
 #define LATENCY_CAL(l, was)                                                                        \
@@ -57,6 +56,13 @@ const unit_desc unit_table[UNIT_NKINDS] = {
     [UNIT_ISECT] = {"isect", "intersection", COUNT,
                     WIDTH_CAL(6, 4, "not published; 1/4 of trav width (§4.7: 4:1)"), LATENCY_CAL(80, 20),
                     MEM_TRI},
+    /* Schmittler et al., "Realtime Ray Tracing of Dynamic Scenes on an FPGA
+     * Chip" (GH 2004), add a transformation unit that moves a packet's rays
+     * into an object's space as it enters an instance (two-level scenes,
+     * units/toplevel.c); its width and latency are not taken from there */
+    [UNIT_XFORM] = {"xform", "transformation", COUNT,
+                    WIDTH(4, "assumed; GH 2004's transformation unit (a 3x4 matrix per ray)"),
+                    LATENCY(20), -1},
 };
 /* clang-format on */
 

@@ -23,7 +23,7 @@
 
 /* The unit kinds, in table order (the order of every derived list, the
  * report's included). */
-enum unit_kind { UNIT_RGS, UNIT_TRAV, UNIT_LIST, UNIT_ISECT, UNIT_NKINDS };
+enum unit_kind { UNIT_RGS, UNIT_TRAV, UNIT_LIST, UNIT_ISECT, UNIT_XFORM, UNIT_NKINDS };
 
 /* Which waiting thread a free unit serves next (chip.thread_sched). */
 enum unit_sched { UNIT_SCHED_ROUND_ROBIN, UNIT_SCHED_OLDEST_FIRST };
@@ -84,6 +84,11 @@ typedef struct unit_route {
 	unit_step triangles; /* the leaf's entries are in (intersection) */
 	unit_step traverse;  /* the next traversal step (after a leaf's triangles) */
 	unit_step finish;    /* traversal is over (shading, in the RGS) */
+	/* two-level scenes (units/toplevel.c, which takes enter and finish):
+	 * the packet moved into an instance's object space enters its tree
+	 * (traversal), and the top level's walk is over (shading) */
+	unit_step object;
+	unit_step shade;
 } unit_route;
 
 #endif

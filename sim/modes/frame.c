@@ -19,7 +19,9 @@ int chip_run(chip *c, diag *d)
 	mode_warm_open(c);
 	int stored = chip_warm_stored(c);
 	for (int f = 0; f < c->cfg.frame.frames; f++) {
-		if (f > 0) /* fb_init cleared it */
+		if (f > 0 && c->between && c->between(c, f, c->between_ctx, d))
+			return -1; /* a warm animation's next frame (chip_anim_update) */
+		if (f > 0)         /* fb_init cleared it */
 			fb_clear(&c->fb);
 		rgc_reset(&c->g);
 		c->tiles_given = 0;
