@@ -33,19 +33,8 @@
 # exit 2.
 set -eu
 
-say() { printf 'drt: %s\n' "$*" >&2; }
-bad() {
-	say "$*"
-	exit 2
-}
-
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-B=${1:-build}
-case $B in /*) ;; *) B=$ROOT/$B ;; esac
-SAARSIM=${SAARSIM:-$B/saarsim}
-[ -x "$SAARSIM" ] || bad "$SAARSIM not found; run 'make' first"
-command -v gnuplot >/dev/null 2>&1 || bad "gnuplot not found (sh scripts/install-deps.sh)"
-command -v python3 >/dev/null 2>&1 || bad "python3 not found (sh scripts/install-deps.sh)"
+. "$(dirname "$0")/doc-lib.sh"
+doc_init drt "${1:-build}"
 SIZE=${DRT_SIZE:-128x96}
 printf '%s\n' "$SIZE" | grep -Eq '^[1-9][0-9]{0,4}x[1-9][0-9]{0,4}$' || bad "DRT_SIZE must be WxH, got '$SIZE'"
 JOBS=${DRT_JOBS:-2}

@@ -17,19 +17,8 @@
 # About a minute on 2 shared cores at the defaults.
 set -eu
 
-say() { printf 'dynamic: %s\n' "$*" >&2; }
-bad() {
-	say "$*"
-	exit 2
-}
-
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-B=${1:-build}
-case $B in /*) ;; *) B=$ROOT/$B ;; esac
-SAARSIM=${SAARSIM:-$B/saarsim}
-[ -x "$SAARSIM" ] || bad "$SAARSIM not found; run 'make' first"
-command -v gnuplot >/dev/null 2>&1 || bad "gnuplot not found (sh scripts/install-deps.sh)"
-command -v python3 >/dev/null 2>&1 || bad "python3 not found (sh scripts/install-deps.sh)"
+. "$(dirname "$0")/doc-lib.sh"
+doc_init dynamic "${1:-build}"
 SCENES=${SAAR_SCENES:-$ROOT/../shared/scenes}
 AFF=$SCENES/bart_robots_aff/aff/Robot.aff
 [ -f "$AFF" ] || bad "$AFF not found (set SAAR_SCENES)"
