@@ -327,6 +327,9 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 		return cli_bad("saarsim",
 		               "--two-level: kernel-ref (rtref) only; the chip traces one "
 		               "tree over the flattened frame (issue 33 item 3)");
+	if (a->wo.accel != WORLD_ACCEL_KD)
+		return cli_bad("saarsim", "--accel grid: kernel-ref (rtref) only; the chip traces "
+		                          "the kd-tree (issue 34 item 4)");
 	long nframes;
 	if (a->frames) {
 		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))
