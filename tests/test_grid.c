@@ -255,3 +255,20 @@ Test(grid, rtref_flag, .timeout = 60)
 	cr_assert_eq(tu_prog(dir, "saarsim", "--accel grid --size 8x8"), 2);
 	tu_one_line(dir, "saarsim", "--accel");
 }
+
+/* scripts/accel-doc.py (make accel's writer) on runs that are not there:
+ * one line naming the file, status 2, no document. Mistake: a missing run
+ * written as an empty table or a traceback. */
+Test(grid, accel_doc_bad_input, .timeout = 60)
+{
+	char dir[128], cmd[1200];
+	tu_tmpdir(dir, sizeof dir);
+	const char *r = getenv("SAAR_ROOT");
+	snprintf(cmd, sizeof cmd,
+	         "python3 %s/scripts/accel-doc.py %s/none %s/A.md 8x8 cornell 0 cornell 32x32 "
+	         ">%s/out 2>%s/err",
+	         r && *r ? r : ".", dir, dir, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2);
+	tu_one_line(dir, "accel-doc", "cornell-kd.json");
+	cr_assert(!tu_exists(dir, "A.md"), "a document written from no runs");
+}
