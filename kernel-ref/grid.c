@@ -22,6 +22,7 @@ void grid_params_default(grid_params *p)
 	p->macro = 6;
 	p->packet = 8;
 	p->mailbox = 1;
+	p->cull = 1;
 }
 
 static ray_hit tracer_ray(const void *ctx, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)

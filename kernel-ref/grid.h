@@ -40,6 +40,7 @@ typedef struct grid_params {
 	int macro;     /* macrocell side M in cells (§2.4; default 6); 0: none */
 	int packet;    /* packet side traced as one frustum: 8 (default), 4, or 1 (3D DDA) */
 	int mailbox;   /* 1 (default): a packet tests a triangle once */
+	int cull;      /* 1 (default): frustum culling of triangles (§2.3) */
 } grid_params;
 
 void grid_params_default(grid_params *p);
@@ -52,6 +53,7 @@ typedef struct grid_counts {
 	uint64_t tri_tests;     /* triangle tests (one per packet and triangle) */
 	uint64_t ray_tri_tests; /* ray-triangle tests */
 	uint64_t mailbox_skips; /* triangle tests saved by the mailbox */
+	uint64_t culled;        /* triangles culled outside a frustum (§2.3) */
 	uint64_t dda_rays;      /* packet rays traced alone (sign or slope apart from the packet) */
 } grid_counts;
 

@@ -166,13 +166,18 @@ ray_hit grid_ray_trace(const grid *g, vec3 o, vec3 d, float tmax, int any_hit, g
 
 /* One frustum's rays in the slice frame: k along the major axis (flipped
  * so it grows along the rays), u and v across; a ray is at
- * u = au + k su, v = av + k sv, and at k = ok + t dk. */
+ * u = au + (k - kref) su, v = av + (k - kref) sv, and at k = ok + t dk.
+ * kref is the smallest origin's k: every ray point has k >= kref, where
+ * min(a + (k - kref) s) >= min a + (k - kref) min s (the frustum's lower
+ * planes; the upper likewise). For primary rays (one origin) the planes
+ * pass through the eye: the exact frustum. */
 typedef struct frustum {
 	int ax[3]; /* grid axes of k, u, v */
 	int flip;  /* k runs against the grid axis */
 	double ok[PKT_RAYS], dk[PKT_RAYS], kin[PKT_RAYS], kout[PKT_RAYS];
 	double amin[2], amax[2], smin[2], smax[2];
 	double k0, k1; /* first and last slice coordinate of any ray */
+	double kref;
 } frustum;
 
 /* Sets up f for the rays in mask; returns the rays it cannot hold (the
@@ -196,6 +201,8 @@ static uint64_t frustum_setup(const grid *g, const packet *p, const trav_state *
 		f->amin[j] = f->smin[j] = INFINITY;
 		f->amax[j] = f->smax[j] = -INFINITY;
 	}
+	double w[2][PKT_RAYS], sl[2][PKT_RAYS];
+	f->kref = INFINITY;
 	for (uint64_t b = mask; b; b &= b - 1) {
 		int i = __builtin_ctzll(b);
 		double o[3] = {p->ox[i], p->oy[i], p->oz[i]}, d[3] = {p->dx[i], p->dy[i], p->dz[i]};
@@ -210,19 +217,27 @@ static uint64_t frustum_setup(const grid *g, const packet *p, const trav_state *
 			alone |= 1ull << i;
 			continue;
 		}
-		double sl[2] = {su, sv}, a0[2] = {go[f->ax[1]] - ok * su, go[f->ax[2]] - ok * sv};
-		for (int j = 0; j < 2; j++) {
-			f->amin[j] = fmin(f->amin[j], a0[j]);
-			f->amax[j] = fmax(f->amax[j], a0[j]);
-			f->smin[j] = fmin(f->smin[j], sl[j]);
-			f->smax[j] = fmax(f->smax[j], sl[j]);
-		}
+		w[0][i] = go[f->ax[1]];
+		w[1][i] = go[f->ax[2]];
+		sl[0][i] = su;
+		sl[1][i] = sv;
 		f->ok[i] = ok;
 		f->dk[i] = dk;
 		f->kin[i] = ok + s->cur.tn[i] * dk;
 		f->kout[i] = ok + s->cur.tf[i] * dk;
 		f->k0 = fmin(f->k0, f->kin[i]);
 		f->k1 = fmax(f->k1, f->kout[i]);
+		f->kref = fmin(f->kref, ok);
+	}
+	for (uint64_t b = mask & ~alone; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		for (int j = 0; j < 2; j++) {
+			double a0 = w[j][i] + (f->kref - f->ok[i]) * sl[j][i];
+			f->amin[j] = fmin(f->amin[j], a0);
+			f->amax[j] = fmax(f->amax[j], a0);
+			f->smin[j] = fmin(f->smin[j], sl[j][i]);
+			f->smax[j] = fmax(f->smax[j], sl[j][i]);
+		}
 	}
 	return alone;
 }
@@ -235,6 +250,9 @@ static int frustum_span(const grid *g, const frustum *f, int j, double ka, doubl
 {
 	if (grid_fault == GRID_FAULT_NARROW_FRUSTUM)
 		kb = ka; /* the mistake: the slice's entry plane only */
+	/* no ray has a point before kref */
+	ka = fmax(ka - f->kref, 0.0);
+	kb = fmax(kb - f->kref, 0.0);
 	double l = fmin(f->amin[j] + ka * f->smin[j], f->amin[j] + kb * f->smin[j]) - g->eps;
 	double h = fmax(f->amax[j] + ka * f->smax[j], f->amax[j] + kb * f->smax[j]) + g->eps;
 	int n = g->n[f->ax[1 + j]];
@@ -280,9 +298,40 @@ static int macro_empty(const grid *g, const frustum *f, int ks)
 	return 1;
 }
 
+/* Frustum culling (§2.3): 1 when the triangle lies wholly outside one of
+ * the frustum's four bounding planes (by more than eps), so no ray of the
+ * frustum can hit it. Every ray keeps u >= amin + k smin, u <= amax +
+ * k smax (and so for v) at k >= 0 (k counted from kref); the planes are
+ * lines in (k, u), so a triangle whose three vertices lie beyond one of
+ * them lies beyond it whole. A vertex before kref keeps the triangle. The seed culls with the four
+ * corner rays' edge tests; the bounding planes are the same frustum, and exact for any packet. */
+static int frustum_culls(const grid *g, const frustum *f, const mimg_tri *t)
+{
+	double k[3], w[2][3];
+	for (int i = 0; i < 3; i++) {
+		double gk = (t->v[i][f->ax[0]] - g->lo[f->ax[0]]) * g->scale[f->ax[0]];
+		k[i] = (f->flip ? g->n[f->ax[0]] - gk : gk) - f->kref;
+		if (k[i] < 0)
+			return 0;
+		for (int j = 0; j < 2; j++)
+			w[j][i] =
+			    (t->v[i][f->ax[1 + j]] - g->lo[f->ax[1 + j]]) * g->scale[f->ax[1 + j]];
+	}
+	for (int j = 0; j < 2; j++) {
+		int below = 1, above = 1;
+		for (int i = 0; i < 3; i++) {
+			below &= w[j][i] < f->amin[j] + k[i] * f->smin[j] - g->eps;
+			above &= w[j][i] > f->amax[j] + k[i] * f->smax[j] + g->eps;
+		}
+		if (below || above)
+			return 1;
+	}
+	return 0;
+}
+
 /* Tests the rays in live against every triangle of one cell. */
-static void slice_cell_test(const grid *g, trav_state *s, packet *p, uint32_t c, uint64_t live,
-                            mbox *mb, grid_counts *gc)
+static void slice_cell_test(const grid *g, trav_state *s, packet *p, const frustum *f, uint32_t c,
+                            uint64_t live, mbox *mb, grid_counts *gc)
 {
 	for (uint32_t k = g->first[c]; k < g->first[c + 1]; k++) {
 		uint32_t ta = g->refs[k];
@@ -291,11 +340,19 @@ static void slice_cell_test(const grid *g, trav_state *s, packet *p, uint32_t c,
 				gc->mailbox_skips++;
 			continue;
 		}
+		const mimg_tri *tr = mimg_tri_at(g->m, ta);
+		/* a culled triangle stays culled: the frustum does not change,
+		 * so the mailbox may keep it */
+		if (g->p.cull && frustum_culls(g, f, tr)) {
+			if (gc)
+				gc->culled++;
+			continue;
+		}
 		if (gc) {
 			gc->tri_tests++;
 			gc->ray_tri_tests += (uint64_t)__builtin_popcountll(live);
 		}
-		pkt_isect_tri_v(s, p, mimg_tri_at(g->m, ta), live, ta);
+		pkt_isect_tri_v(s, p, tr, live, ta);
 	}
 }
 
@@ -344,8 +401,8 @@ static void frustum_trace(const grid *g, trav_state *s, packet *p, const frustum
 				for (int v = vl; v <= vh; v++) {
 					if (gc)
 						gc->cells++;
-					slice_cell_test(g, s, p, slice_cell(g, f, ks, u, v), live,
-					                &mb, gc);
+					slice_cell_test(g, s, p, f, slice_cell(g, f, ks, u, v),
+					                live, &mb, gc);
 				}
 		live = still_live(g, f, p, live, ks + 1);
 	}
@@ -364,6 +421,24 @@ static void ray_alone(const grid *g, packet *p, int i, grid_counts *gc)
 	p->tri[i] = h.tri;
 	p->bu[i] = h.bu;
 	p->bv[i] = h.bv;
+}
+
+/* 1 when the rays of mask start within one cell of each other (primary
+ * rays: one eye). A frustum over rays from scattered origins (shadow rays
+ * from a packet's hit points towards a light) spans far more cells than
+ * its rays cross (seed 003 §4.7: secondary packets lose the frustum's
+ * coherence), so those rays go one by one through the DDA. */
+static int one_origin(const grid *g, const packet *p, uint64_t mask)
+{
+	int f = __builtin_ctzll(mask);
+	for (uint64_t b = mask; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		if (fabs(((double)p->ox[i] - p->ox[f]) * g->scale[0]) > 1 ||
+		    fabs(((double)p->oy[i] - p->oy[f]) * g->scale[1]) > 1 ||
+		    fabs(((double)p->oz[i] - p->oz[f]) * g->scale[2]) > 1)
+			return 0;
+	}
+	return 1;
 }
 
 /* The lanes of sub-packet q of side `side` (lane = row * 8 + column). */
@@ -396,6 +471,11 @@ uint64_t grid_pkt_trace(const grid *g, packet *p, trav_entry *stack, int stack_m
 		uint64_t mask = entered & sub_lanes(side, q);
 		if (!mask)
 			continue;
+		if (!one_origin(g, p, mask)) {
+			for (uint64_t b = mask; b; b &= b - 1)
+				ray_alone(g, p, __builtin_ctzll(b), gc);
+			continue;
+		}
 		frustum f;
 		uint64_t alone = frustum_setup(g, p, &s, mask, &f);
 		for (uint64_t b = alone; b; b &= b - 1)

@@ -74,6 +74,7 @@ static void grid_stats(jsonw *j, const grid *g)
 	jsonw_kint(j, "macro", g->p.macro);
 	jsonw_kint(j, "packet", g->p.packet);
 	jsonw_kint(j, "mailbox", g->p.mailbox);
+	jsonw_kint(j, "cull", g->p.cull);
 	jsonw_kuint(j, "references", g->nrefs);
 	jsonw_knum(j, "build_ms", g->build_ms);
 	jsonw_obj_end(j);

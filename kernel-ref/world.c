@@ -30,9 +30,10 @@ const char world_usage[] =
     "                        (built once) under a tree of instances rebuilt per frame\n"
     "  --accel kd|grid       rtref: trace the kd-tree (default) or a uniform grid rebuilt with\n"
     "                        every frame (seed 003; the same image)\n"
-    "  --grid-lambda F --grid-macro N --grid-packet 1|4|8 --grid-mailbox 0|1\n"
+    "  --grid-lambda F --grid-macro N --grid-packet 1|4|8 --grid-mailbox 0|1 --grid-cull 0|1\n"
     "                        the grid: cells per triangle (5), macrocell side (6, 0: none),\n"
-    "                        rays per frustum side (8; 1: single rays), mailboxing (1)\n"
+    "                        rays per frustum side (8; 1: single rays), mailboxing (1),\n"
+    "                        frustum culling (1)\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
@@ -163,7 +164,7 @@ static int grid_flag(world_opts *o, const char *a, const char *v, diag *d)
 	} else {
 		if (cli_parse_int(a, v, 0, 1, &n, d))
 			return -1;
-		o->gp.mailbox = (int)n;
+		*(!strcmp(a, "--grid-cull") ? &o->gp.cull : &o->gp.mailbox) = (int)n;
 	}
 	return 0;
 }
@@ -197,7 +198,8 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	                                         "--grid-lambda",
 	                                         "--grid-macro",
 	                                         "--grid-packet",
-	                                         "--grid-mailbox"};
+	                                         "--grid-mailbox",
+	                                         "--grid-cull"};
 	int takes = 0;
 	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
 		takes |= strcmp(a, with_value[k]) == 0;

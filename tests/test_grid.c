@@ -33,7 +33,7 @@ static size_t grid_differ(const uint8_t *a, const uint8_t *b, int w, int h)
 }
 
 /* The grid's frames of world w under every traversal variant (packets of
- * 8x8 and 4x4, single rays; mailbox and macrocells on and off) against
+ * 8x8 and 4x4, single rays; mailbox, macrocells, culling on and off) against
  * the kd-tree's packet frame: the number of pixels the worst differs in. */
 static size_t grid_variants_differ(const world *w, int size)
 {
@@ -42,8 +42,9 @@ static size_t grid_variants_differ(const world *w, int size)
 	o.width = o.height = size;
 	render_stats st;
 	uint8_t *kd = grid_image(w, o, NULL, &st);
-	static const int var[][3] = {{8, 1, 6}, {4, 1, 6}, {1, 1, 6},
-	                             {8, 0, 6}, {8, 1, 0}, {8, 1, 2}};
+	/* packet side, mailbox, macrocell side, frustum culling */
+	static const int var[][4] = {{8, 1, 6, 1}, {4, 1, 6, 1}, {1, 1, 6, 1}, {8, 0, 6, 1},
+	                             {8, 1, 0, 1}, {8, 1, 2, 1}, {8, 1, 6, 0}};
 	size_t worst = 0;
 	for (size_t k = 0; k < sizeof var / sizeof *var; k++) {
 		grid_params gp;
@@ -51,6 +52,7 @@ static size_t grid_variants_differ(const world *w, int size)
 		gp.packet = var[k][0];
 		gp.mailbox = var[k][1];
 		gp.macro = var[k][2];
+		gp.cull = var[k][3];
 		grid g;
 		diag d = {{0}};
 		cr_assert_eq(grid_build(&g, &w->m, &gp, &d), 0, "%s", d.msg);
@@ -121,9 +123,10 @@ Test(grid, frames_equal_kd_shared_view, .timeout = 300)
 	world_free(&w);
 }
 
-/* Mailboxing and macrocells change the work, not the frame. Mistakes: a
- * mailbox that never skips (or a flag ignored), macrocells never skipped
- * (their flags all set, or the layer never consulted). */
+/* Mailboxing, macrocells and frustum culling change the work, not the
+ * frame. Mistakes: a mailbox that never skips (or a flag ignored),
+ * macrocells never skipped (their flags all set, or the layer never
+ * consulted), culling that never culls. */
 Test(grid, mailbox_and_macrocells_change_counts, .timeout = 60)
 {
 	world w;
@@ -158,6 +161,17 @@ Test(grid, mailbox_and_macrocells_change_counts, .timeout = 60)
 	cr_assert(on.trav.node_steps < off.trav.node_steps,
 	          "macrocells: %llu slice steps, without: %llu",
 	          (unsigned long long)on.trav.node_steps, (unsigned long long)off.trav.node_steps);
+	gp.macro = 6;
+	gp.cull = 0;
+	cr_assert_eq(grid_build(&g, &w.m, &gp, &d), 0, "%s", d.msg);
+	free(b);
+	b = grid_image(&w, o, &g.tracer, &off);
+	grid_free(&g);
+	cr_assert_eq(grid_differ(a, b, 64, 64), 0);
+	cr_assert(on.trav.ray_tri_tests < off.trav.ray_tri_tests,
+	          "culling: %llu ray-triangle tests, without: %llu",
+	          (unsigned long long)on.trav.ray_tri_tests,
+	          (unsigned long long)off.trav.ray_tri_tests);
 	free(a);
 	free(b);
 	world_free(&w);
