@@ -6,6 +6,8 @@
 #   make bench      benchmarks; writes docs/PERFORMANCE.md
 #   make calibrate  fit the assumed parameters to published figures; writes
 #                   docs/CALIBRATION.md (docs/calibration.md)
+#   make accel      kd-tree, uniform grid and two-level trees compared;
+#                   writes docs/ACCEL.md (scripts/accel.sh)
 #   make mutate     mutation tests: each tests/mutants/ patch must be caught
 #                   by the tests it names (docs/TESTING.md)
 #   make install    install binaries into $(PREFIX)/bin
@@ -82,7 +84,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity stress validate calibrate drt dynamic mutate install clean deps
+.PHONY: all run test bench bench-fidelity stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -159,6 +161,12 @@ drt: all
 # on 2 cores: scripts/dynamic.sh).
 dynamic: all
 	sh scripts/dynamic.sh $(B)
+
+# The acceleration structures compared (issue 34): kd-tree, uniform grid
+# and two-level trees, kernel-ref and chip, on the shared views and BART
+# Robots frames; writes docs/ACCEL.md (scripts/accel.sh; a few minutes).
+accel: all
+	sh scripts/accel.sh $(B)
 
 # Calibration of the assumed parameters against seed 002's figures (issue 31):
 # coordinate search on Conference, writes docs/CALIBRATION.md; about 30 min

@@ -3,6 +3,7 @@
  *
  *   rtref [--scene P | --views F --view N] [--size WxH] [--threads N]
  *         [--depth N] [--no-shadows] [--single-ray] [--cone-cull] [--out FILE]
+ *         [--accel kd|grid] [--grid-lambda F] [--grid-macro N] [--grid-packet N]
  *         [--stats FILE.json] [--anim-time T] [--anim-fps F --frames N]
  *         [--fp-trav E,M] [--fp-isect E,M] [--fp-shade E,M] [--fp-round MODE]
  *
@@ -17,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "kernel-ref/grid.h"
 #include "kernel-ref/image.h"
 #include "kernel-ref/jsonw.h"
 #include "kernel-ref/render.h"
@@ -55,6 +57,26 @@ static void two_level_stats(jsonw *j, const tl_scene *t)
 	jsonw_kuint(j, "objects", t->nobj);
 	jsonw_knum(j, "bottom_build_ms", t->build_ms);
 	jsonw_knum(j, "top_build_ms", t->frame_ms);
+	jsonw_obj_end(j);
+}
+
+/* --accel grid: the grid and its build time. */
+static void grid_stats(jsonw *j, const grid *g)
+{
+	jsonw_key(j, "grid");
+	jsonw_obj_begin(j);
+	jsonw_key(j, "resolution");
+	jsonw_arr_begin(j);
+	for (int a = 0; a < 3; a++)
+		jsonw_int(j, g->n[a]);
+	jsonw_arr_end(j);
+	jsonw_knum(j, "lambda", g->p.lambda);
+	jsonw_kint(j, "macro", g->p.macro);
+	jsonw_kint(j, "packet", g->p.packet);
+	jsonw_kint(j, "mailbox", g->p.mailbox);
+	jsonw_kint(j, "cull", g->p.cull);
+	jsonw_kuint(j, "references", g->nrefs);
+	jsonw_knum(j, "build_ms", g->build_ms);
 	jsonw_obj_end(j);
 }
 
@@ -134,6 +156,11 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_obj_end(j);
 	if (w->tl)
 		two_level_stats(j, w->tl);
+	/* with a grid, kd_node_visits counts slice (or DDA) steps and
+	 * leaf_visits the cells visited */
+	jsonw_kstr(j, "accel", w->grid ? "grid" : w->tl ? "two-level" : "kd");
+	if (w->grid)
+		grid_stats(j, w->grid);
 	jsonw_kuint(j, "memory_image_bytes", w->m.size);
 	jsonw_knum(j, "load_ms", w->load_ms);
 	jsonw_knum(j, "build_ms", w->kd_ms);
@@ -294,6 +321,10 @@ static void print_summary(const cli *a, const char *out, const world *w, const r
 		         "two-level: %u instances of %u objects (their trees built once in %.1f "
 		         "ms), top level built in %.2f ms",
 		         w->tl->ninst, w->tl->nobj, w->tl->build_ms, w->tl->frame_ms);
+	else if (w->grid)
+		snprintf(kd, sizeof kd, "grid %dx%dx%d with %u references built in %.1f ms",
+		         w->grid->n[0], w->grid->n[1], w->grid->n[2], w->grid->nrefs,
+		         w->grid->build_ms);
 	else if (w->cache == WORLD_CACHE_HIT)
 		snprintf(kd, sizeof kd, "kd-tree %u nodes from the world cache", w->kd.nnodes);
 	else
@@ -345,6 +376,14 @@ int main(int argc, char **argv)
 		return cli_bad("rtref", d.msg);
 	if (w.tl)
 		a.ro.tracer = &w.tl->tracer;
+	if (w.grid)
+		a.ro.tracer = &w.grid->tracer;
+	if (w.grid && (a.ro.prec || a.ro.cone_cull)) {
+		world_free(&w);
+		return cli_bad("rtref",
+		               "--accel grid: traces at full precision without cone culling "
+		               "(no --fp-*, --cone-cull)");
+	}
 	if (w.tl && a.ro.prec) {
 		world_free(&w);
 		return cli_bad("rtref", "--two-level: traces at full precision only (no --fp-*)");

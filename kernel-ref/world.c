@@ -29,6 +29,12 @@ const char world_usage[] =
     "  --two-level           AFF scene: trace through a kd-tree per rigid object (built\n"
     "                        once) under a tree of instances rebuilt per frame; saarsim:\n"
     "                        a transformation unit, animations on one warm chip\n"
+    "  --accel kd|grid       rtref: trace the kd-tree (default) or a uniform grid rebuilt with\n"
+    "                        every frame (seed 003; the same image)\n"
+    "  --grid-lambda F --grid-macro N --grid-packet 1|4|8 --grid-mailbox 0|1 --grid-cull 0|1\n"
+    "                        the grid: cells per triangle (5), macrocell side (6, 0: none),\n"
+    "                        rays per frustum side (8; 1: single rays), mailboxing (1),\n"
+    "                        frustum culling (1)\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
@@ -43,6 +49,7 @@ void world_opts_default(world_opts *o)
 {
 	memset(o, 0, sizeof *o);
 	kd_params_default(&o->kd);
+	grid_params_default(&o->gp);
 }
 
 static double now_ms(void)
@@ -132,6 +139,37 @@ static int anim_arg(world_opts *o, const char *a, const char *v, diag *d)
 	return 0;
 }
 
+/* --accel and the --grid-* flags. */
+static int grid_flag(world_opts *o, const char *a, const char *v, diag *d)
+{
+	long n;
+	double x;
+	if (!strcmp(a, "--accel")) {
+		if (strcmp(v, "kd") && strcmp(v, "grid"))
+			return diag_set(d, a, 0, 0, "expected kd or grid, got '%s'", v);
+		o->accel = !strcmp(v, "grid") ? WORLD_ACCEL_GRID : WORLD_ACCEL_KD;
+	} else if (!strcmp(a, "--grid-lambda")) {
+		if (parse_num(a, v, 1e-3, 1e3, &x, d))
+			return -1;
+		o->gp.lambda = x;
+	} else if (!strcmp(a, "--grid-macro")) {
+		if (cli_parse_int(a, v, 0, 64, &n, d))
+			return -1;
+		o->gp.macro = (int)n;
+	} else if (!strcmp(a, "--grid-packet")) {
+		if (cli_parse_int(a, v, 1, 8, &n, d))
+			return -1;
+		if (n != 1 && n != 4 && n != 8)
+			return diag_set(d, a, 0, 0, "expected 1, 4 or 8, got '%s'", v);
+		o->gp.packet = (int)n;
+	} else {
+		if (cli_parse_int(a, v, 0, 1, &n, d))
+			return -1;
+		*(!strcmp(a, "--grid-cull") ? &o->gp.cull : &o->gp.mailbox) = (int)n;
+	}
+	return 0;
+}
+
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 {
 	const char *a = argv[*i];
@@ -156,7 +194,13 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	                                         "--gloss",
 	                                         "--motion",
 	                                         "--anim-time",
-	                                         "--anim-fps"};
+	                                         "--anim-fps",
+	                                         "--accel",
+	                                         "--grid-lambda",
+	                                         "--grid-macro",
+	                                         "--grid-packet",
+	                                         "--grid-mailbox",
+	                                         "--grid-cull"};
 	int takes = 0;
 	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
 		takes |= strcmp(a, with_value[k]) == 0;
@@ -177,6 +221,8 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	int dk = drt_flag(o, a, v, d);
 	if (dk)
 		return dk;
+	if (!strncmp(a, "--accel", 7) || !strncmp(a, "--grid-", 7))
+		return grid_flag(o, a, v, d) ? -1 : 1;
 	if (!strcmp(a, "--scene"))
 		o->scene = v;
 	else if (!strcmp(a, "--views"))
@@ -251,6 +297,20 @@ static const kd_params *world_kd(const world_opts *o)
 	one.max_depth = 1;
 	one.leaf_size = INT_MAX; /* the root is a leaf */
 	return &one;
+}
+
+/* --accel grid: the grid over the world's image (again after every
+ * rebuild of the image: the grid's lists name its triangles). */
+static int world_grid(world *w, const world_opts *o, diag *d)
+{
+	if (o->two_level)
+		return diag_set(d, "--accel", 0, 0,
+		                "grid: not with --two-level (one or the other)");
+	if (w->grid)
+		grid_free(w->grid);
+	else if (!(w->grid = calloc(1, sizeof *w->grid)))
+		return diag_set(d, "--accel", 0, 0, "out of memory");
+	return grid_build(w->grid, &w->m, &o->gp, d);
 }
 
 /* --two-level: the objects' trees, once, and the instances at the
@@ -504,6 +564,8 @@ int world_load(world *w, const world_opts *o, diag *d)
 	}
 	if (o->two_level && two_level_build(w, o, d))
 		goto fail;
+	if (o->accel == WORLD_ACCEL_GRID && world_grid(w, o, d))
+		goto fail;
 	wc_files_free(&files);
 	free(ckey);
 	if (w->kd.nbudget_leaves) /* also from the cache: each run says so */
@@ -579,6 +641,11 @@ void world_free(world *w)
 		free(w->tl);
 		w->tl = NULL;
 	}
+	if (w->grid) {
+		grid_free(w->grid);
+		free(w->grid);
+		w->grid = NULL;
+	}
 }
 
 double world_frame_time(const world_opts *o, int i)
@@ -620,6 +687,8 @@ int world_set_time(world *w, const world_opts *o, double t, diag *d)
 	if (mimg_build(&w->m, &w->s, &w->kd, d))
 		return -1;
 	w->image_ms = now_ms() - t0;
+	if (w->grid && world_grid(w, o, d))
+		return -1;
 	return w->tl ? tl_frame(w->tl, w->aff, t, &w->m, d) : 0;
 }
 

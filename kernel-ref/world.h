@@ -10,6 +10,7 @@
 #define SAAR_KREF_WORLD_H
 
 #include "kernel-ref/diag.h"
+#include "kernel-ref/grid.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/memimage.h"
 #include "kernel-ref/render.h"
@@ -37,7 +38,14 @@ typedef struct world_opts {
 	int have_anim_time, have_anim_fps;
 	double anim_time, anim_fps;
 	int two_level; /* --two-level: trace through twolevel.h's trees (AFF, kernel-ref) */
+	/* --accel kd|grid: the acceleration structure rtref traces (WORLD_ACCEL_*);
+	 * grid: a uniform grid (grid.h) rebuilt with every world, parameters gp
+	 * (--grid-lambda, --grid-macro, --grid-packet, --grid-mailbox) */
+	int accel;
+	grid_params gp;
 } world_opts;
+
+enum { WORLD_ACCEL_KD, WORLD_ACCEL_GRID };
 
 /* What the world cache did for this world (host.world_cache). */
 enum { WORLD_CACHE_OFF, WORLD_CACHE_HIT, WORLD_CACHE_STORED, WORLD_CACHE_UNSTORED };
@@ -67,6 +75,9 @@ typedef struct world {
 	 * at anim_time; the render_opts.tracer for the frame is tl->tracer,
 	 * and kd is then a depth-1 tree (m serves only for shading). */
 	struct tl_scene *tl;
+	/* With --accel grid: the grid over m, rebuilt with it (the frame's
+	 * render_opts.tracer is grid->tracer); grid->build_ms its build. */
+	struct grid *grid;
 } world;
 
 void world_opts_default(world_opts *o);

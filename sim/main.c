@@ -369,6 +369,9 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	if (a->wo.two_level && cfg->chip.cone_cull)
 		return cli_bad("saarsim", "--two-level: no chip.cone_cull (kernel-ref's two-level "
 		                          "tracer does not cull by cone)");
+	if (a->wo.accel != WORLD_ACCEL_KD)
+		return cli_bad("saarsim", "--accel grid: kernel-ref (rtref) only; the chip traces "
+		                          "the kd-tree (issue 34 item 4)");
 	long nframes;
 	if (a->frames) {
 		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))
