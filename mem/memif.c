@@ -184,10 +184,7 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 		uint64_t next_ready;
 		if (m->sd->bus_free > now + m->lead) {
 			/* SDRAM busy: come back when issuing makes sense */
-			int any = 0;
-			for (int r = 0; r < MEMIF_NREQ; r++)
-				any |= m->q[r].n != 0;
-			if (any)
+			if (m->queued)
 				arm(m, m->sd->bus_free - m->lead);
 			return;
 		}
@@ -200,6 +197,7 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 			return;
 		}
 		memif_item it = take(&m->q[r], pos);
+		m->queued--;
 		m->last = r;
 		m->s.queue_ticks[r] += now - it.ready;
 		uint64_t done = sdram_access(m->sd, now, it.addr, it.bytes, it.write, NULL);
@@ -233,6 +231,7 @@ int memif_submit(memif *m, uint64_t t, int requester, uint64_t addr, uint32_t by
 	q->q[(q->head + q->n) & (q->cap - 1)] = (memif_item){
 	    m->seq++, t, addr, row, bytes, (uint16_t)bank, (uint8_t)write, done, ctx, arg};
 	q->n++;
+	m->queued++;
 	if (write)
 		m->s.writes[requester]++;
 	else

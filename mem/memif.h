@@ -68,6 +68,7 @@ typedef struct memif {
 	sdram *sd;
 	int policy;
 	memif_queue q[MEMIF_NREQ];
+	uint64_t queued; /* requests in all queues */
 	uint64_t seq;
 	int last;  /* requester served last (round robin) */
 	int armed; /* a dispatch event is queued */
