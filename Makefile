@@ -4,6 +4,9 @@
 #   make run        render the embedded default scene and print the report
 #   make test       build and run the Criterion test suite
 #   make bench      benchmarks; writes docs/PERFORMANCE.md
+#   make bench-profile  cycle mode under callgrind, top functions (PERFORMANCE.md)
+#   make bench-scale    the largest scene: memory and build time (PERFORMANCE.md)
+#   make bench-sampled  a sampled run's time with its defaults (PERFORMANCE.md)
 #   make calibrate  fit the assumed parameters to published figures; writes
 #                   docs/CALIBRATION.md (docs/calibration.md)
 #   make accel      kd-tree, uniform grid and two-level trees compared;
@@ -84,7 +87,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -142,6 +145,16 @@ bench: all
 # Run time against error of the fidelity modes; writes docs/FIDELITY.md.
 bench-fidelity: all
 	sh scripts/bench-fidelity.sh $(B)
+
+# issue 36: the profile builds its own valgrind-runnable copy (ARCH=-mavx2)
+bench-profile:
+	sh scripts/bench-profile.sh $(PROFILE_REVS)
+
+bench-scale: all
+	B=$(B) sh scripts/bench-scale.sh
+
+bench-sampled: all
+	B=$(B) sh scripts/bench-sampled.sh
 
 # Validation against the published SaarCOR results, like with like (seed 002
 # §4, Table 5; fit and held-out rows); writes docs/VALIDATION.md,

@@ -231,6 +231,7 @@ void cache_flush(cache *c)
 	for (uint32_t i = 0; i < c->p.mshrs; i++)
 		c->mshr_line[i] = CACHE_INVALID;
 	c->mshr_used = 0;
+	memset(c->mshr_cnt, 0, sizeof c->mshr_cnt);
 }
 
 uint64_t cache_invalidate(cache *c, uint64_t addr, uint64_t n)
@@ -277,9 +278,15 @@ static int find_way(const cache *c, uint32_t set, uint64_t line)
 	return -1;
 }
 
+/* The bucket of mshr_cnt a line counts in. */
+static inline uint32_t mshr_bucket(uint64_t line)
+{
+	return (uint32_t)((line ^ (line >> 6)) & (CACHE_MSHR_BUCKETS - 1));
+}
+
 int cache_mshr_find(const cache *c, uint64_t line)
 {
-	if (!c->mshr_used)
+	if (!c->mshr_cnt[mshr_bucket(line)])
 		return -1;
 	for (uint32_t i = 0; i < c->p.mshrs; i++)
 		if (c->mshr_line[i] == line)
@@ -328,6 +335,7 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 		if (c->mshr_line[i] == CACHE_INVALID) {
 			c->mshr_line[i] = line;
 			c->mshr_used++;
+			c->mshr_cnt[mshr_bucket(line)]++;
 			c->s.accesses++;
 			c->s.misses++;
 			c->s.bytes += bytes;
@@ -359,23 +367,12 @@ static uint32_t pick_victim(const cache *c, uint32_t set, const cache_way *s)
 	return c->rp->victim(&v);
 }
 
-uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
+/* Installs line (absent, in no MSHR) in set: an empty way (the lowest)
+ * or the policy's victim; returns its slot. */
+static uint32_t fill_absent(cache *c, uint32_t set, uint64_t line, uint64_t *victim)
 {
-	int m = cache_mshr_find(c, line);
-	if (m >= 0) {
-		c->mshr_line[m] = CACHE_INVALID;
-		c->mshr_used--;
-	}
-	if (victim)
-		*victim = CACHE_INVALID;
-	uint32_t set = cache_set_of(c, line);
 	size_t base = (size_t)set * c->p.ways;
 	cache_way *s = c->way + base;
-	int w = find_way(c, set, line);
-	if (w >= 0) { /* present: a hit for the policy */
-		cache_use(c, set, &s[w]);
-		return (uint32_t)(base + (size_t)w);
-	}
 	uint32_t best = pick_victim(c, set, s);
 	if (s[best].tag != CACHE_INVALID) {
 		c->s.evictions++;
@@ -393,6 +390,30 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 	}
 	cache_touch(c, set);
 	return (uint32_t)(base + best);
+}
+
+uint32_t cache_fill_mshr(cache *c, uint64_t line, int m, uint64_t *victim)
+{
+	if (m >= 0) {
+		c->mshr_line[m] = CACHE_INVALID;
+		c->mshr_used--;
+		c->mshr_cnt[mshr_bucket(line)]--;
+	}
+	if (victim)
+		*victim = CACHE_INVALID;
+	uint32_t set = cache_set_of(c, line);
+	int w = find_way(c, set, line);
+	if (w >= 0) { /* present: a hit for the policy */
+		size_t i = (size_t)set * c->p.ways + (size_t)w;
+		cache_use(c, set, &c->way[i]);
+		return (uint32_t)i;
+	}
+	return fill_absent(c, set, line, victim);
+}
+
+uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
+{
+	return cache_fill_mshr(c, line, cache_mshr_find(c, line), victim);
 }
 
 int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot, uint64_t *victim)
@@ -418,7 +439,8 @@ int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot
 		*slot = CACHE_NO_SLOT;
 		return 1;
 	}
-	*slot = cache_fill(c, line, victim);
+	/* absent and in no MSHR: fill it here, without searching again */
+	*slot = fill_absent(c, set, line, victim);
 	return 0;
 }
 

@@ -78,6 +78,8 @@ typedef struct cache_stats {
  * run's memory estimate counts before it builds anything (sim/hostmem). */
 uint64_t cache_host_bytes(const cache_params *p);
 
+#define CACHE_MSHR_BUCKETS 64u /* a power of two; mshrs <= 4096 fit a uint16_t count */
+
 typedef struct cache {
 	cache_params p;
 	uint32_t nsets;
@@ -91,6 +93,10 @@ typedef struct cache {
 	uint64_t *rst;                 /* rp->set_words per set; NULL: none */
 	uint64_t *mshr_line;           /* p.mshrs entries; CACHE_INVALID when free */
 	uint32_t mshr_used;
+	/* busy MSHRs per bucket of line numbers (cache_mshr_find): a miss
+	 * whose bucket is empty needs no scan of the MSHRs, which on a
+	 * memory-bound frame are mostly busy (docs/PERFORMANCE.md, "Profile") */
+	uint16_t mshr_cnt[CACHE_MSHR_BUCKETS];
 	cache_stats s;
 	/* sets changed since the last cache_dirty_clear, one bit each; NULL:
 	 * not tracked (cache_track). Stored warming (sim/warming.h) restores
@@ -211,6 +217,10 @@ int cache_probe(const cache *c, uint64_t line, uint32_t *slot);
  * *victim receives the evicted line or CACHE_INVALID. Filling a present
  * line is a hit for the policy. */
 uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim);
+/* The same with the line's MSHR already known (cache_mshr_find's answer,
+ * -1: none): what a timed fill that has just taken the MSHR's waiters
+ * (tcache_take) calls, so the MSHRs are searched once per fill. */
+uint32_t cache_fill_mshr(cache *c, uint64_t line, int mshr, uint64_t *victim);
 /* The in-flight MSHR holding line, or -1. */
 int cache_mshr_find(const cache *c, uint64_t line);
 static inline int cache_mshr_free(const cache *c)

@@ -202,7 +202,7 @@ static void l1_filled(eng *e, void *ctx, uint64_t line)
 	uint64_t now = eng_now(e);
 	int m;
 	tc_wait *w = tcache_take(&l->t, line, &m);
-	uint32_t slot = cache_fill(&l->t.c, line, NULL);
+	uint32_t slot = cache_fill_mshr(&l->t.c, line, m, NULL);
 	uint8_t *d = m >= 0 ? l1_data(h, l, slot) : NULL;
 	if (d) /* the line arrived in the MSHR's buffer */
 		memcpy(d, l->t.mbuf + (size_t)m * l->t.c.p.line_bytes, l->t.c.p.line_bytes);

@@ -96,44 +96,59 @@ static int pick(memif *m, uint64_t now, uint64_t *next_ready)
 	return best;
 }
 
-/* When the data of a request could start if issued at `now`: the bank's
- * open row decides between CAS only, ACTIVATE + CAS and PRECHARGE +
- * ACTIVATE + CAS (the same rules as sdram.c's segment(), bus aside). */
-static uint64_t data_start(const memif *m, uint64_t now, uint64_t addr)
+/* When the data of a request to one bank could start if issued at `now`:
+ * the bank's open row decides between CAS only (hit), ACTIVATE + CAS
+ * (the bank is precharged) and PRECHARGE + ACTIVATE + CAS (the same rules
+ * as sdram.c's segment(), bus aside). All but the row comparison depends on
+ * the bank alone, so one pick works it out once per bank it meets. */
+typedef struct bank_start {
+	uint64_t open_row, hit, miss;
+} bank_start;
+
+static void bank_start_at(const sdram *sd, uint32_t b, uint64_t now, bank_start *o)
 {
-	const sdram *sd = m->sd;
-	uint32_t b, col;
-	uint64_t row;
-	sdram_decode(sd, addr, &b, &row, &col);
 	const sdram_bank *k = &sd->bank[b];
 	uint64_t c = now > k->col_ok ? now : k->col_ok;
-	if (k->open_row == row)
-		return c + sd->t.cl;
-	if (k->open_row == SDRAM_NO_ROW)
-		return c + sd->t.trcd + sd->t.cl;
-	uint64_t pre = c > k->pre_ok ? c : k->pre_ok;
-	return pre + sd->t.trp + sd->t.trcd + sd->t.cl;
+	o->open_row = k->open_row;
+	o->hit = c + sd->t.cl;
+	if (k->open_row == SDRAM_NO_ROW) {
+		o->miss = c + sd->t.trcd + sd->t.cl;
+	} else {
+		uint64_t pre = c > k->pre_ok ? c : k->pre_ok;
+		o->miss = pre + sd->t.trp + sd->t.trcd + sd->t.cl;
+	}
 }
 
 /* FR-FCFS: over the first MEMIF_FRFCFS_WINDOW ready requests of every
  * queue, the one whose data can start soonest (oldest on ties). Returns the
- * requester (-1 if none is ready) and its offset from the queue head. */
+ * requester (-1 if none is ready) and its offset from the queue head.
+ * This scan is the simulator's hottest loop on memory-bound views
+ * (docs/PERFORMANCE.md, "Profile"): the bank and row come decoded with the
+ * item and each bank's start times are worked out once per pick. */
 static int pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready, uint32_t *pos)
 {
 	int best = -1;
 	uint64_t best_start = UINT64_MAX, best_seq = UINT64_MAX;
+	bank_start bs[SDRAM_MAX_BANKS];
+	uint64_t known = 0; /* banks whose bs[] entry is filled in */
 	*next_ready = UINT64_MAX;
 	for (int r = 0; r < MEMIF_NREQ; r++) {
 		const memif_queue *q = &m->q[r];
 		uint32_t w = q->n < MEMIF_FRFCFS_WINDOW ? q->n : MEMIF_FRFCFS_WINDOW;
+		uint32_t mask = q->cap - 1;
 		for (uint32_t i = 0; i < w; i++) {
-			const memif_item *it = &q->q[(q->head + i) % q->cap];
+			const memif_item *it = &q->q[(q->head + i) & mask];
 			if (it->ready > now) {
 				if (it->ready < *next_ready)
 					*next_ready = it->ready;
 				continue;
 			}
-			uint64_t st = data_start(m, now, it->addr);
+			uint32_t b = it->bank;
+			if (!(known >> b & 1)) {
+				bank_start_at(m->sd, b, now, &bs[b]);
+				known |= 1ull << b;
+			}
+			uint64_t st = bs[b].open_row == it->row ? bs[b].hit : bs[b].miss;
 			if (st < best_start || (st == best_start && it->seq < best_seq)) {
 				best = r;
 				*pos = i;
@@ -149,13 +164,11 @@ static int pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready, uint32_t *p
  * of the others (the ones before it move up one slot). */
 static memif_item take(memif_queue *q, uint32_t pos)
 {
-	uint32_t at = (q->head + pos) % q->cap;
-	memif_item it = q->q[at];
-	for (uint32_t i = pos; i > 0; i--) {
-		uint32_t to = (q->head + i) % q->cap, from = (q->head + i - 1) % q->cap;
-		q->q[to] = q->q[from];
-	}
-	q->head = (q->head + 1) % q->cap;
+	uint32_t mask = q->cap - 1;
+	memif_item it = q->q[(q->head + pos) & mask];
+	for (uint32_t i = pos; i > 0; i--)
+		q->q[(q->head + i) & mask] = q->q[(q->head + i - 1) & mask];
+	q->head = (q->head + 1) & mask;
 	q->n--;
 	return it;
 }
@@ -171,10 +184,7 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 		uint64_t next_ready;
 		if (m->sd->bus_free > now + m->lead) {
 			/* SDRAM busy: come back when issuing makes sense */
-			int any = 0;
-			for (int r = 0; r < MEMIF_NREQ; r++)
-				any |= m->q[r].n != 0;
-			if (any)
+			if (m->queued)
 				arm(m, m->sd->bus_free - m->lead);
 			return;
 		}
@@ -187,6 +197,7 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 			return;
 		}
 		memif_item it = take(&m->q[r], pos);
+		m->queued--;
 		m->last = r;
 		m->s.queue_ticks[r] += now - it.ready;
 		uint64_t done = sdram_access(m->sd, now, it.addr, it.bytes, it.write, NULL);
@@ -206,7 +217,7 @@ int memif_submit(memif *m, uint64_t t, int requester, uint64_t addr, uint32_t by
 		if (!nq)
 			return -1;
 		for (uint32_t i = 0; i < q->n; i++)
-			nq[i] = q->q[(q->head + i) % q->cap];
+			nq[i] = q->q[(q->head + i) & (q->cap - 1)];
 		free(q->q);
 		q->q = nq;
 		q->head = 0;
@@ -214,9 +225,13 @@ int memif_submit(memif *m, uint64_t t, int requester, uint64_t addr, uint32_t by
 	}
 	if (t < eng_now(m->e))
 		t = eng_now(m->e);
-	q->q[(q->head + q->n) % q->cap] =
-	    (memif_item){m->seq++, t, addr, bytes, (uint8_t)write, done, ctx, arg};
+	uint32_t bank, col;
+	uint64_t row;
+	sdram_decode(m->sd, addr, &bank, &row, &col);
+	q->q[(q->head + q->n) & (q->cap - 1)] = (memif_item){
+	    m->seq++, t, addr, row, bytes, (uint16_t)bank, (uint8_t)write, done, ctx, arg};
 	q->n++;
+	m->queued++;
 	if (write)
 		m->s.writes[requester]++;
 	else

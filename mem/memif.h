@@ -43,7 +43,9 @@ enum memif_policy { MEMIF_FIFO, MEMIF_ROUND_ROBIN, MEMIF_FRFCFS };
 
 typedef struct memif_item {
 	uint64_t seq, ready, addr;
+	uint64_t row; /* addr's SDRAM row and bank, decoded once at submit */
 	uint32_t bytes;
+	uint16_t bank;
 	uint8_t write;
 	eng_handler done;
 	void *ctx;
@@ -52,7 +54,7 @@ typedef struct memif_item {
 
 typedef struct memif_queue {
 	memif_item *q;
-	uint32_t head, n, cap;
+	uint32_t head, n, cap; /* cap is a power of two: ring indices are masked */
 } memif_queue;
 
 typedef struct memif_stats {
@@ -66,6 +68,7 @@ typedef struct memif {
 	sdram *sd;
 	int policy;
 	memif_queue q[MEMIF_NREQ];
+	uint64_t queued; /* requests in all queues */
 	uint64_t seq;
 	int last;  /* requester served last (round robin) */
 	int armed; /* a dispatch event is queued */

@@ -68,7 +68,8 @@ cache_result tcache_lookup(tcache *t, uint64_t line, uint32_t bytes, void *who, 
 /* Parks who at the tail of the stall FIFO (since: when, for its wait). */
 void tcache_stall(tcache *t, void *who, uint64_t since);
 /* Detaches the waiters of line (NULL if it has no MSHR); *mshr gets the
- * MSHR (-1: none) whose buffer holds the line. Call before cache_fill. */
+ * MSHR (-1: none) whose buffer holds the line. Call before the fill
+ * (cache_fill_mshr with that MSHR: the MSHRs are searched once). */
 tc_wait *tcache_take(tcache *t, uint64_t line, int *mshr);
 /* The next waiter of a taken list (NULL at its end); frees its record. */
 static inline void *tcache_pop(tcache *t, tc_wait **list)

@@ -340,8 +340,9 @@ static void tag_filled(eng *e, void *ctx, uint64_t set)
 {
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
-	tc_wait *w = tcache_take(&v->tag, set, NULL);
-	cache_fill(&v->tag.c, set, NULL);
+	int m;
+	tc_wait *w = tcache_take(&v->tag, set, &m);
+	cache_fill_mshr(&v->tag.c, set, m, NULL);
 	for (vma_piece *p; (p = tcache_pop(&v->tag, &w));)
 		data_phase(v, p, now);
 	tcache_resume(&v->tag, now, meta_retry, v);
@@ -390,9 +391,10 @@ static void dma_done(eng *e, void *ctx, uint64_t line)
 {
 	vma *v = ctx;
 	uint64_t now = eng_now(e);
-	tc_wait *w = tcache_take(&v->l2, line, NULL);
+	int m;
+	tc_wait *w = tcache_take(&v->l2, line, &m);
 	uint64_t victim;
-	uint32_t slot = cache_fill(&v->l2.c, line, &victim);
+	uint32_t slot = cache_fill_mshr(&v->l2.c, line, m, &victim);
 	uint32_t set = cache_set_of(&v->l2.c, line);
 	if (fill_slot(v, slot, line, victim)) {
 		/* the dirty victim leaves SDRAM for host memory */

@@ -248,3 +248,55 @@ Test(memif, frfcfs_serves_row_hits_before_older_requests)
 	cr_assert_gt(hit_done[0], conflict_done[0], "fifo: the hit waits for the older conflict");
 	cr_assert_lt(hit_done[1], conflict_done[1], "frfcfs: the row hit goes first");
 }
+
+/* Mistake: the memory interface decodes a request's bank and row once, at
+ * submit (a FR-FCFS pick compares them with every bank's open row), and
+ * gets them wrong: every request taken for bank 0, or the row read with the
+ * bank bits left in. Bank 1's row 1 is opened and closed out first; then
+ * an older request to idle bank 0 and a younger row hit in bank 1 wait
+ * together. The hit's data can start first (CAS only against ACTIVATE +
+ * CAS), so FR-FCFS serves it first; with either mistake both look like
+ * misses to an idle bank and the older one goes first. */
+Test(memif, frfcfs_finds_the_open_row_of_the_right_bank)
+{
+	memif_rig g;
+	rig_init(&g, MEMIF_FRFCFS);
+	memif *m = &g.m;
+	memset(done_at, 0, sizeof done_at);
+	/* row:bank:col: bank = bits 13-14, row = bits 15+ */
+	uint64_t b1r1 = (1ull << 15) | (1ull << 13), b0r5 = 5ull << 15;
+	memif_submit(m, 0, MEMIF_KD, b1r1, 8, 0, note, NULL, 0); /* opens bank 1, row 1 */
+	eng_run(g.e, ENG_FOREVER);
+	uint64_t t = done_at[0] + 1000000; /* long after: bank 1 is ready for a CAS */
+	memif_submit(m, t, MEMIF_KD, b0r5, 8, 0, note, NULL, 1);         /* older, idle bank 0 */
+	memif_submit(m, t, MEMIF_SHADE, b1r1 + 64, 8, 0, note, NULL, 2); /* younger, row hit */
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(g.s.s.row_hits, 1);
+	cr_assert_lt(done_at[2], done_at[1],
+	             "the row hit in bank 1 goes first: hit %llu, older %llu",
+	             (unsigned long long)done_at[2], (unsigned long long)done_at[1]);
+	rig_free(&g);
+}
+
+/* Mistake: the interface's count of queued requests (memif.queued, which
+ * spares a dispatch that finds the SDRAM busy a scan of every queue) is
+ * not taken down when a request issues: with the bus busy after the last
+ * one, the dispatch re-arms for queues that are empty, an event more than
+ * needed (the results stay the same; the report's event count and the
+ * host time do not). Four requests to one row, all at tick 0: each
+ * dispatch issues one and arms the next only while requests wait. */
+Test(memif, no_dispatch_is_armed_for_empty_queues)
+{
+	memif_rig g;
+	rig_init(&g, MEMIF_FRFCFS);
+	memif *m = &g.m;
+	memset(done_at, 0, sizeof done_at);
+	for (int i = 0; i < 4; i++)
+		memif_submit(m, 0, MEMIF_KD, 64 * (uint64_t)i, 64, 0, note, NULL, (uint64_t)i);
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(m->queued, 0);
+	cr_assert_eq(g.s.s.reads, 4);
+	/* four completions; the dispatches: one per request, none after */
+	cr_assert_eq(eng_events(g.e), 4 + 4, "%llu events", (unsigned long long)eng_events(g.e));
+	rig_free(&g);
+}

@@ -1,0 +1,231 @@
+#!/bin/sh
+# scripts/bench-profile.sh: where cycle mode spends its host time (issue 36).
+#
+#   sh scripts/bench-profile.sh [REV...]
+#
+# Counts instructions under callgrind (valgrind --tool=callgrind), which
+# other jobs on the machine cannot disturb, unlike wall-clock times: for
+# each view of PROFILE_VIEWS (default: conference bunny dragon2 sponza) at
+# SIZE (default 256x192), saarsim in cycle mode with the default config,
+# counting only chip_run (the simulation: --toggle-collect=chip_run; the
+# scene comes from a world cache filled by a first, uncounted run), and
+# rtref on the same frame with one host thread, counting only render_frame
+# (kernel-ref's packet render, the time saarsim's sim_to_ref_ratio divides
+# by). It writes the top TOP (default 12) functions of each saarsim profile
+# by exclusive and by inclusive count.
+#
+# With REVs (commits), each is built in a temporary worktree and its
+# chip_run counted on REV_VIEWS (default: dragon2, one of PROFILE_VIEWS):
+# the before/after of each change, from the same run; the table's last row
+# is the working tree (the profiles above).
+#
+# Valgrind cannot run AVX-512 code, so the builds are made with
+# ARCH=-mavx2 into B (default build-vg; the same images: docs/design.md,
+# the packet width follows the target and the frames are bit-identical).
+#
+# Writes the section between <!-- BEGIN profile --> and <!-- END profile -->
+# of docs/PERFORMANCE.md (other sections are kept; the file is replaced
+# atomically) and prints it. Needs POSIX sh, awk, sed, valgrind, git.
+set -eu
+say() { printf 'bench-profile: %s\n' "$*" >&2; }
+die() {
+	say "error: $*"
+	exit 1
+}
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+cd "$ROOT"
+SCENES=${SAAR_SCENES:-$ROOT/../shared/scenes}
+VIEWS=$SCENES/views.yaml
+[ -f "$VIEWS" ] || die "$VIEWS not found (set SAAR_SCENES)"
+command -v valgrind >/dev/null && command -v callgrind_annotate >/dev/null ||
+	die "valgrind (callgrind) not found"
+SIZE=${SIZE:-256x192}
+PROFILE_VIEWS=${PROFILE_VIEWS:-conference bunny dragon2 sponza}
+REV_VIEWS=${REV_VIEWS:-dragon2}
+TOP=${TOP:-12}
+case $TOP in '' | *[!0-9]* | 0) die "TOP must be a positive integer" ;; esac
+B=${B:-build-vg}
+DOC=docs/PERFORMANCE.md
+DOCTMP=$DOC.tmp.$$
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-prof.XXXXXX")
+WTS=
+cleanup() {
+	for w in $WTS; do git -C "$ROOT" worktree remove --force "$w" >/dev/null 2>&1 || :; done
+	rm -rf "$TMP"
+	rm -f "$DOCTMP"
+}
+trap cleanup EXIT
+load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
+t0=$(date +%s)
+
+say "building saarsim and rtref with ARCH=-mavx2 into $B"
+make -s -j2 ARCH=-mavx2 B="$B" "$B/saarsim" "$B/rtref" >&2 || die "build failed"
+SIM=$ROOT/$B/saarsim
+REF=$ROOT/$B/rtref
+
+# The instruction count of chip_run (saarsim) or render_frame (rtref) in a
+# callgrind output file.
+total() {
+	callgrind_annotate "$1" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1; exit }'
+}
+
+# Counts chip_run of saarsim binary $1 on view $2 into $3 (callgrind
+# output); the first run, not counted, fills the world cache.
+count_sim() {
+	"$1" --views "$VIEWS" --view "$2" --size "$SIZE" --no-check --quiet \
+		--world-cache "$TMP/wc" --report "$3.json" >/dev/null 2>"$TMP/err" ||
+		{ cat "$TMP/err" >&2; die "$1 failed on $2"; }
+	valgrind --tool=callgrind --callgrind-out-file="$3" --toggle-collect=chip_run \
+		"$1" --views "$VIEWS" --view "$2" --size "$SIZE" --no-check --quiet \
+		--world-cache "$TMP/wc" >/dev/null 2>"$TMP/err" ||
+		{ cat "$TMP/err" >&2; die "callgrind $1 failed on $2"; }
+}
+
+# The top $TOP rows of callgrind_annotate (exclusive, or inclusive with
+# $2 = yes) as markdown rows: function (repository-relative file), count,
+# share of chip_run. Inclusive lists start below the frame loop (the
+# callers every event passes through are left out: chip_run, the engine's
+# eng_run and main's chain); the exclusive lists keep eng_run (its own
+# count is the event queue's).
+top_rows() {
+	callgrind_annotate --inclusive="$2" "$1" 2>/dev/null | awk -v top="$TOP" -v tot="$3" \
+		-v root="$ROOT/" -v incl="$2" '
+	/PROGRAM TOTALS/ || !/^ *[0-9][0-9,]* +\(/ { next }
+	{
+		n = $1; gsub(",", "", n)
+		f = $0
+		sub(/^ *[0-9,]+ +\([^)]*\) +/, "", f)
+		sub(/ \[.*$/, "", f); gsub(root, "", f); sub(/^\.\//, "", f)
+		if (f ~ /^\?\?\?|csu\/|libc_start|:main$|below main/) next
+		if (incl == "yes" && f ~ /:chip_run$|:chip_run_region$|:eng_run$/) next
+		if (incl == "yes" && n + 0 >= 0.99 * tot) next
+		if (f in seen) next
+		seen[f] = 1
+		printf "| `%s` | %.0f | %.1f%% |\n", f, n, 100 * n / tot
+		if (++k >= top) exit
+	}'
+}
+
+# ---- the profiles ----
+ROWS=$TMP/rows
+: >"$ROWS"
+for v in $PROFILE_VIEWS; do
+	say "callgrind: saarsim cycle mode, $v $SIZE"
+	count_sim "$SIM" "$v" "$TMP/cg-$v"
+	say "callgrind: rtref, $v $SIZE"
+	"$REF" --views "$VIEWS" --view "$v" --size "$SIZE" --threads 1 --world-cache "$TMP/wcr" \
+		>/dev/null 2>"$TMP/err" || { cat "$TMP/err" >&2; die "rtref failed on $v"; }
+	valgrind --tool=callgrind --callgrind-out-file="$TMP/cgr-$v" --toggle-collect=render_frame \
+		"$REF" --views "$VIEWS" --view "$v" --size "$SIZE" --threads 1 --world-cache "$TMP/wcr" \
+		>/dev/null 2>"$TMP/err" ||
+		{ cat "$TMP/err" >&2; die "callgrind rtref failed on $v"; }
+	s=$(total "$TMP/cg-$v")
+	r=$(total "$TMP/cgr-$v")
+	cy=$(sed -n 's/^[[:space:]]*"cycles"[[:space:]]*:[[:space:]]*\([0-9]*\).*/\1/p' "$TMP/cg-$v.json" | head -n 1)
+	[ -n "$cy" ] || cy=$(tr ',{' '\n\n' <"$TMP/cg-$v.json" | sed -n 's/^[[:space:]]*"cycles"[[:space:]]*:[[:space:]]*//p' | head -n 1)
+	printf '%s %s %s %s\n' "$v" "$cy" "$s" "$r" >>"$ROWS"
+done
+
+# ---- the revisions ----
+REVROWS=$TMP/revrows
+: >"$REVROWS"
+for rev in "$@"; do
+	sha=$(git -C "$ROOT" rev-parse --short "$rev" 2>/dev/null) || die "no such revision: $rev"
+	subj=$(git -C "$ROOT" log -1 --format=%s "$sha" | cut -c1-90 | sed 's/|/\\|/g')
+	wt=$TMP/wt-$sha
+	say "building $sha in $wt"
+	git -C "$ROOT" worktree add --detach "$wt" "$sha" >/dev/null 2>&1 || die "worktree $sha"
+	WTS="$WTS $wt"
+	make -s -C "$wt" -j2 ARCH=-mavx2 B=build-vg build-vg/saarsim >&2 || die "build of $sha failed"
+	line="$sha|$subj"
+	for v in $REV_VIEWS; do
+		say "callgrind: $sha, $v $SIZE"
+		count_sim "$wt/build-vg/saarsim" "$v" "$TMP/cgv-$sha-$v"
+		line="$line|$(total "$TMP/cgv-$sha-$v")"
+	done
+	echo "$line" >>"$REVROWS"
+done
+if [ -s "$REVROWS" ]; then
+	line="working tree|the profiles above"
+	for v in $REV_VIEWS; do
+		[ -f "$TMP/cg-$v" ] || die "REV_VIEWS: $v is not in PROFILE_VIEWS"
+		line="$line|$(total "$TMP/cg-$v")"
+	done
+	echo "$line" >>"$REVROWS"
+fi
+
+elapsed=$(($(date +%s) - t0))
+load1=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
+GIT=$(git rev-parse --short HEAD)
+[ -z "$(git status --porcelain --untracked-files=no)" ] || GIT="$GIT (plus uncommitted changes)"
+SECTION=$TMP/section
+{
+	echo "<!-- BEGIN profile -->"
+	echo "## Profile of cycle mode (issue 36)"
+	echo
+	echo "Generated by scripts/bench-profile.sh; do not edit by hand."
+	echo
+	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (took $elapsed s); commit $GIT"
+	echo "- Machine: $(nproc) CPUs; load average $load0 at start, $load1 at the end (other jobs share the machine: wall-clock times there are noisy, instruction counts are not)"
+	echo "- Tool: $(valgrind --version) (callgrind), builds for \`-mavx2\` (valgrind runs no AVX-512)"
+	echo "- Run: \`saarsim --views views.yaml --view V --size $SIZE --no-check\` (cycle mode, default config), counting chip_run only (\`--toggle-collect=chip_run\`; the scene from a world cache); kernel-ref: \`rtref --threads 1\` on the same frame, counting render_frame only (the packet render that saarsim's \`sim_to_ref_ratio\` divides by)."
+	echo
+	echo "Instructions (Ir) per frame; *Ir ratio*: saarsim's chip_run over kernel-ref's render. The issue's target (at most 5 times kernel-ref's single-thread time at 1024x768) is a time ratio (saarsim's \`sim_to_ref_ratio\`); instructions per cycle differ between the two programs, so the instruction ratio shows where the time goes and how a change moves it, not the time ratio itself."
+	echo
+	echo "| view | cycles/frame | saarsim chip_run Ir | kernel-ref render Ir | Ir ratio |"
+	echo "|---|---:|---:|---:|---:|"
+	awk '{ printf "| %s | %s | %.0f | %.0f | %.1f |\n", $1, $2, $3, $4, ($4 > 0 ? $3 / $4 : 0) }' "$ROWS"
+	while read -r v cy s r; do
+		echo
+		echo "### $v $SIZE: top $TOP functions"
+		echo
+		echo "Exclusive (the function's own instructions; a header's inline code is listed under the header):"
+		echo
+		echo "| function | Ir | share of chip_run |"
+		echo "|---|---:|---:|"
+		top_rows "$TMP/cg-$v" no "$s"
+		echo
+		echo "Inclusive (with everything it calls; the frame loop and the event dispatcher, which hold everything, left out):"
+		echo
+		echo "| function | Ir | share of chip_run |"
+		echo "|---|---:|---:|"
+		top_rows "$TMP/cg-$v" yes "$s"
+	done <"$ROWS"
+	if [ -s "$REVROWS" ]; then
+		echo
+		echo "### chip_run instructions by commit ($SIZE)"
+		echo
+		printf '| commit | change |'
+		for v in $REV_VIEWS; do printf ' %s |' "$v"; done
+		echo
+		printf '|---|---|'
+		for v in $REV_VIEWS; do printf -- '---:|'; done
+		echo
+		awk -F'|' '{
+			printf "| %s | %s |", $1, $2
+			for (i = 3; i <= NF; i++) {
+				if (NR > 1 && p[i] > 0) printf " %.0f (%+.1f%%) |", $i, 100 * ($i - p[i]) / p[i]
+				else printf " %.0f |", $i
+				p[i] = $i
+			}
+			printf "\n"
+		}' "$REVROWS"
+		echo
+		echo "No change between the rows changes a figure (scripts/refmatrix.sh: 64 reports identical against a recording of the first); the percentage is against the row above."
+	fi
+	echo "<!-- END profile -->"
+} >"$SECTION"
+
+if [ -f "$DOC" ]; then
+	awk -v sec="$SECTION" -v b="<!-- BEGIN profile -->" -v e="<!-- END profile -->" '
+	BEGIN { while ((getline l < sec) > 0) s = s l "\n" }
+	index($0, b) { printf "%s", s; skip = 1; done = 1; next }
+	index($0, e) { skip = 0; next }
+	!skip { print }
+	END { if (!done) printf "\n%s", s }' "$DOC" >"$DOCTMP"
+	mv -f "$DOCTMP" "$DOC"
+else
+	cp "$SECTION" "$DOC"
+fi
+say "wrote $DOC (section profile)"
+cat "$SECTION"
