@@ -53,6 +53,13 @@ for tool in rsync patch make timeout; do
 	command -v "$tool" >/dev/null 2>&1 || die "$tool is needed"
 done
 case $SCENES in /*) ;; *) SCENES=$(pwd)/$SCENES ;; esac
+# Files in the repository name the shared scenes by a path relative to the
+# repository (configs/drt-views.yaml: ../../shared/scenes/...): beside the
+# copy, as beside the repository, ../shared is the shared folder.
+mkdir -p "$WORK"
+if [ -d "$SCENES" ] && [ ! -e "$WORK/shared" ]; then
+	ln -s "$(cd "$SCENES/.." && pwd)" "$WORK/shared" || die "cannot link $WORK/shared"
+fi
 
 # Mirrors the repository into $SRC: changed files only (-c: by content, so
 # a file a mutant touched is copied back and, with a fresh mtime, rebuilt);
