@@ -842,6 +842,36 @@ static void json_host(jsonw *j, const report_info *ri)
 	jsonw_obj_end(j);
 }
 
+/* A uniform grid (issue 34; units/gridtrav.h): what the traversal unit
+ * walked, the grid's image and the host's build. Absent for the kd-tree
+ * (whose reports are as before). */
+static void json_grid(jsonw *j, const chip *c)
+{
+	const grid *g = c->w->grid;
+	if (!g)
+		return;
+	const grid_image *im = &c->gimg;
+	jsonw_key(j, "grid");
+	jsonw_obj_begin(j);
+	jsonw_key(j, "resolution");
+	jsonw_arr_begin(j);
+	for (int a = 0; a < 3; a++)
+		jsonw_int(j, g->n[a]);
+	jsonw_arr_end(j);
+	jsonw_knum(j, "lambda", g->p.lambda);
+	jsonw_kint(j, "macro", g->p.macro);
+	jsonw_kint(j, "packet", g->p.packet);
+	jsonw_kint(j, "mailbox", g->p.mailbox);
+	jsonw_kint(j, "cull", g->p.cull);
+	jsonw_kuint(j, "references", g->nrefs);
+	jsonw_kuint(j, "cells_base", im->cells_base);
+	jsonw_kuint(j, "refs_base", im->refs_base);
+	jsonw_kuint(j, "macro_base", im->macro_base);
+	jsonw_kuint(j, "grid_bytes", im->grid_bytes);
+	jsonw_knum(j, "host_build_ms", g->build_ms);
+	jsonw_obj_end(j);
+}
+
 /* A two-level scene (issue 33; units/toplevel.h): the scene's instances
  * and objects, the top level's work on the chip, and the host's update of
  * the frame (the top level's bytes over the host bus; chip.c
@@ -924,6 +954,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	json_memory(j, c, &hs, have_h);
 	json_frames(j, c);
 	json_two_level(j, c);
+	json_grid(j, c);
 	json_caches(j, &hs, have_h);
 	json_check(j, ri);
 	json_counters(j, ri);

@@ -196,3 +196,32 @@ Test(chip_grid, packet_record_is_not_the_kd_trees, .timeout = 120)
 		world_free(&w);
 	}
 }
+
+/* The report names the grid (config.chip.accel, the `grid` section with
+ * its image's bases) with --accel grid, and a kd run's has no `grid`
+ * section (default reports as before). Mistakes caught: the section never
+ * written (planted, seen failing), written for kd runs, bases out of
+ * order. */
+Test(chip_grid, report_names_the_grid, .timeout = 60)
+{
+	char dir[128], args[400];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(args, sizeof args, "--size 16x16 --accel grid --quiet --report %s/g.json", dir);
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 0);
+	snprintf(args, sizeof args, "--size 16x16 --quiet --report %s/k.json", dir);
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 0);
+	char *g = tu_slurp(dir, "g.json"), *k = tu_slurp(dir, "k.json");
+	cr_assert(strstr(g, "\"accel\": \"grid\""), "config.chip.accel is not grid");
+	cr_assert(strstr(k, "\"accel\": \"kd\""), "config.chip.accel is not kd");
+	cr_assert_null(strstr(k, "\"grid\": {"), "a kd report with a grid section");
+	char *s = strstr(g, "\"grid\": {");
+	cr_assert(s, "no grid section");
+	unsigned long long cb = 0, rb = 0, mb = 0;
+	char *p = strstr(s, "\"cells_base\": "), *q = strstr(s, "\"refs_base\": "),
+	     *r = strstr(s, "\"macro_base\": ");
+	cr_assert(p && q && r);
+	cb = strtoull(p + 14, NULL, 10);
+	rb = strtoull(q + 13, NULL, 10);
+	mb = strtoull(r + 14, NULL, 10);
+	cr_assert(cb > 0 && cb < rb && rb < mb, "bases %llu %llu %llu", cb, rb, mb);
+}
