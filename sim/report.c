@@ -333,6 +333,12 @@ void report_text(FILE *f, const report_info *ri)
 		        (unsigned long long)get(c, "xform.instances"),
 		        (unsigned long long)anim_mean(c, c->frame_update), anim_mean_ms(c),
 		        c->frames_done > 1 ? " (mean per frame)" : "");
+	if (c->w->grid) /* the rays line's kd steps are then the grid's slice steps */
+		fprintf(f,
+		        "  grid: %dx%dx%d cells, %u references, %llu bytes after the frame's "
+		        "image; kd steps below are slice steps, leaves cells\n",
+		        c->w->grid->n[0], c->w->grid->n[1], c->w->grid->n[2], c->w->grid->nrefs,
+		        (unsigned long long)c->gimg.grid_bytes);
 	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++)
