@@ -225,3 +225,35 @@ Test(chip_grid, report_names_the_grid, .timeout = 60)
 	mb = strtoull(r + 14, NULL, 10);
 	cr_assert(cb > 0 && cb < rb && rb < mb, "bases %llu %llu %llu", cb, rb, mb);
 }
+
+/* Damaged grid data in the chip's memory (every cell's list offsets set
+ * to 0xff..: ranges past the cell lists) fails the frame with one message
+ * naming the grid, in cycle and functional fidelity, instead of reading
+ * lists out of bounds or drawing a wrong frame as if memory were sound.
+ * Mistake caught (planted, seen failing): the range not checked against
+ * the references (here the cells then read as empty: the frame ends
+ * without a word). */
+Test(chip_grid, damaged_cells_fail_the_frame, .timeout = 120)
+{
+	world w;
+	load_grid(&w, NULL, NULL, NULL, NULL);
+	const char *modes[] = {"cycle", "functional"};
+	for (int m = 0; m < 2; m++) {
+		saar_config c;
+		cfg_small(&c, 32, modes[m], 0);
+		diag d = {{0}};
+		chip *ch = chip_create(&c, &w, &d);
+		cr_assert(ch, "%s", d.msg);
+		uint64_t n = ch->gimg.refs_base - ch->gimg.cells_base;
+		uint8_t *ff = malloc(n);
+		cr_assert(ff);
+		memset(ff, 0xff, n);
+		cr_assert_eq(ms_write(&ch->store, ch->gimg.cells_base, n, ff), 0);
+		free(ff);
+		cr_assert_eq(chip_run(ch, &d), -1, "%s: the frame ended", modes[m]);
+		cr_assert(strstr(d.msg, "grid") && strstr(d.msg, "damaged"), "%s: %s", modes[m],
+		          d.msg);
+		chip_destroy(ch);
+	}
+	world_free(&w);
+}
