@@ -24,35 +24,23 @@
 #include <string.h>
 
 #include "kernel-ref/grid.h"
+#include "kernel-ref/gridtrav.h"
 #include "kernel-ref/isect.h"
-
-#define GAMMA3    (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f))
-#define T_WIDEN   1e-5 /* relative slack on a hit's t when deciding to stop */
-#define MAX_SLOPE 1e4  /* a ray steeper than this to the slices goes alone (DDA) */
-#define MBOX_BITS 10
 
 int grid_fault = GRID_FAULT_NONE;
 
-/* The per-packet mailbox (§2.3): the triangle addresses a packet has
- * tested, in a small open-addressed set. A full set stops recording (the
- * repeated tests are then merely redundant). */
-typedef struct mbox {
-	uint32_t slot[1u << MBOX_BITS];
-	uint32_t used;
-} mbox;
-
 /* 1 when addr was already tested; records it otherwise. */
-static int mbox_seen(mbox *b, uint32_t addr)
+int grid_mbox_seen(grid_mbox *b, uint32_t addr)
 {
-	uint32_t key = addr + 1, mask = (1u << MBOX_BITS) - 1;
-	uint32_t h = (key * 2654435761u) >> (32 - MBOX_BITS);
+	uint32_t key = addr + 1, mask = (1u << GRID_MBOX_BITS) - 1;
+	uint32_t h = (key * 2654435761u) >> (32 - GRID_MBOX_BITS);
 	for (;; h = (h + 1) & mask) {
 		if (b->slot[h] == key)
 			return 1;
 		if (b->slot[h] == 0)
 			break;
 	}
-	if (b->used < (3u << MBOX_BITS) / 4) {
+	if (b->used < (3u << GRID_MBOX_BITS) / 4) {
 		b->slot[h] = key;
 		b->used++;
 	}
@@ -60,7 +48,7 @@ static int mbox_seen(mbox *b, uint32_t addr)
 }
 
 /* The ray clipped to the scene box, exactly as ray_trace clips it. */
-static int clip_box(const grid *g, vec3 o, vec3 d, float tmax, float *tn, float *tf)
+int grid_clip_box(const grid *g, vec3 o, vec3 d, float tmax, float *tn, float *tf)
 {
 	const aabb *b = &g->m->bounds;
 	float oa[3] = {o.x, o.y, o.z}, id[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
@@ -70,8 +58,8 @@ static int clip_box(const grid *g, vec3 o, vec3 d, float tmax, float *tn, float 
 	for (int a = 0; a < 3; a++) {
 		float t0 = (lo[a] - oa[a]) * id[a], t1 = (hi[a] - oa[a]) * id[a];
 		float n = fminf(t0, t1), f = fmaxf(t0, t1);
-		n -= fabsf(n) * GAMMA3;
-		f += fabsf(f) * GAMMA3;
+		n -= fabsf(n) * GRID_GAMMA3;
+		f += fabsf(f) * GRID_GAMMA3;
 		if (n > *tn)
 			*tn = n;
 		if (f < *tf)
@@ -80,18 +68,18 @@ static int clip_box(const grid *g, vec3 o, vec3 d, float tmax, float *tn, float 
 	return *tn <= *tf;
 }
 
-static int clampi(double x, int n)
+int grid_clampi(double x, int n)
 {
 	return x < 0 ? 0 : x >= n ? n - 1 : (int)x;
 }
 
 /* Tests a cell's triangles against one ray; 1 when an any-hit ray is done. */
 static int dda_cell(const grid *g, uint32_t c, const isect_ray *ir, vec3 o, int any_hit, float tmax,
-                    ray_hit *h, mbox *mb, grid_counts *gc)
+                    ray_hit *h, grid_mbox *mb, grid_counts *gc)
 {
 	for (uint32_t k = g->first[c]; k < g->first[c + 1]; k++) {
 		uint32_t ta = g->refs[k];
-		if (g->p.mailbox && mbox_seen(mb, ta)) {
+		if (g->p.mailbox && grid_mbox_seen(mb, ta)) {
 			if (gc)
 				gc->mailbox_skips++;
 			continue;
@@ -120,7 +108,7 @@ ray_hit grid_ray_trace(const grid *g, vec3 o, vec3 d, float tmax, int any_hit, g
 {
 	ray_hit h = {tmax, 0, 0, PKT_NOHIT};
 	float tn, tf;
-	if (!g->m->ntris || !clip_box(g, o, d, tmax, &tn, &tf))
+	if (!g->m->ntris || !grid_clip_box(g, o, d, tmax, &tn, &tf))
 		return h;
 	isect_ray ir = isect_prepare(d);
 	double go[3], gd[3], oa[3] = {o.x, o.y, o.z}, da[3] = {d.x, d.y, d.z}, gmax = 0;
@@ -130,13 +118,13 @@ ray_hit grid_ray_trace(const grid *g, vec3 o, vec3 d, float tmax, int any_hit, g
 		go[a] = (oa[a] - g->lo[a]) * g->scale[a];
 		gd[a] = da[a] * g->scale[a];
 		gmax = fmax(gmax, fabs(gd[a]));
-		cell[a] = clampi(floor(go[a] + tn * gd[a]), g->n[a]);
+		cell[a] = grid_clampi(floor(go[a] + tn * gd[a]), g->n[a]);
 		step[a] = gd[a] > 0 ? 1 : gd[a] < 0 ? -1 : 0;
 		tdelta[a] = step[a] ? 1.0 / fabs(gd[a]) : INFINITY;
 		tnext[a] = step[a] ? ((cell[a] + (step[a] > 0)) - go[a]) / gd[a] : INFINITY;
 	}
 	double eps_t = g->eps / gmax;
-	static _Thread_local mbox mb;
+	static _Thread_local grid_mbox mb;
 	memset(&mb, 0, sizeof mb);
 	for (;;) {
 		if (gc) {
@@ -150,7 +138,8 @@ ray_hit grid_ray_trace(const grid *g, vec3 o, vec3 d, float tmax, int any_hit, g
 		                            : (tnext[1] < tnext[2] ? 1 : 2);
 		double texit = tnext[a];
 		/* done when the segment or the best hit ends before the exit */
-		double tend = fmin((double)tf, h.tri == PKT_NOHIT ? INFINITY : h.t * (1 + T_WIDEN));
+		double tend =
+		    fmin((double)tf, h.tri == PKT_NOHIT ? INFINITY : h.t * (1 + GRID_T_WIDEN));
 		if (grid_fault == GRID_FAULT_EARLY_STOP && h.tri != PKT_NOHIT)
 			return h;
 		if (tend < texit - eps_t)
@@ -164,26 +153,10 @@ ray_hit grid_ray_trace(const grid *g, vec3 o, vec3 d, float tmax, int any_hit, g
 
 /* ---- packets: slice traversal ---------------------------------------- */
 
-/* One frustum's rays in the slice frame: k along the major axis (flipped
- * so it grows along the rays), u and v across; a ray is at
- * u = au + (k - kref) su, v = av + (k - kref) sv, and at k = ok + t dk.
- * kref is the smallest origin's k: every ray point has k >= kref, where
- * min(a + (k - kref) s) >= min a + (k - kref) min s (the frustum's lower
- * planes; the upper likewise). For primary rays (one origin) the planes
- * pass through the eye: the exact frustum. */
-typedef struct frustum {
-	int ax[3]; /* grid axes of k, u, v */
-	int flip;  /* k runs against the grid axis */
-	double ok[PKT_RAYS], dk[PKT_RAYS], kin[PKT_RAYS], kout[PKT_RAYS];
-	double amin[2], amax[2], smin[2], smax[2];
-	double k0, k1; /* first and last slice coordinate of any ray */
-	double kref;
-} frustum;
-
 /* Sets up f for the rays in mask; returns the rays it cannot hold (the
  * wrong sign along k, or too steep), which go alone. */
-static uint64_t frustum_setup(const grid *g, const packet *p, const trav_state *s, uint64_t mask,
-                              frustum *f)
+uint64_t grid_frustum_setup(const grid *g, const packet *p, const trav_state *s, uint64_t mask,
+                            grid_frustum *f)
 {
 	int first = __builtin_ctzll(mask);
 	double d0[3] = {p->dx[first] * g->scale[0], p->dy[first] * g->scale[1],
@@ -213,7 +186,7 @@ static uint64_t frustum_setup(const grid *g, const packet *p, const trav_state *
 		}
 		double ok = f->flip ? g->n[k] - go[k] : go[k], dk = f->flip ? -gd[k] : gd[k];
 		double su = gd[f->ax[1]] / dk, sv = gd[f->ax[2]] / dk;
-		if (!(dk > 0) || !(fabs(su) < MAX_SLOPE) || !(fabs(sv) < MAX_SLOPE)) {
+		if (!(dk > 0) || !(fabs(su) < GRID_MAX_SLOPE) || !(fabs(sv) < GRID_MAX_SLOPE)) {
 			alone |= 1ull << i;
 			continue;
 		}
@@ -245,8 +218,8 @@ static uint64_t frustum_setup(const grid *g, const packet *p, const trav_state *
 /* The cells [lo, hi] across axis j (0: u, 1: v) the frustum overlaps
  * between slice coordinates ka and kb (0 <= ka <= kb), widened by eps and
  * divided by div (1, or M for macrocells). 0 when none is in the grid. */
-static int frustum_span(const grid *g, const frustum *f, int j, double ka, double kb, int div,
-                        int *lo, int *hi)
+int grid_frustum_span(const grid *g, const grid_frustum *f, int j, double ka, double kb, int div,
+                      int *lo, int *hi)
 {
 	if (grid_fault == GRID_FAULT_NARROW_FRUSTUM)
 		kb = ka; /* the mistake: the slice's entry plane only */
@@ -258,13 +231,13 @@ static int frustum_span(const grid *g, const frustum *f, int j, double ka, doubl
 	int n = g->n[f->ax[1 + j]];
 	if (h < 0 || l >= n)
 		return 0;
-	*lo = clampi(floor(l), n) / div;
-	*hi = clampi(floor(h), n) / div;
+	*lo = grid_clampi(floor(l), n) / div;
+	*hi = grid_clampi(floor(h), n) / div;
 	return 1;
 }
 
 /* Grid coordinates of slice coordinate ks, across coordinates u, v. */
-static uint32_t slice_cell(const grid *g, const frustum *f, int ks, int u, int v)
+uint32_t grid_slice_cell(const grid *g, const grid_frustum *f, int ks, int u, int v)
 {
 	int c[3];
 	c[f->ax[0]] = f->flip ? g->n[f->ax[0]] - 1 - ks : ks;
@@ -275,11 +248,11 @@ static uint32_t slice_cell(const grid *g, const frustum *f, int ks, int u, int v
 
 /* 1 when the M slices from ks hold nothing the frustum overlaps: every
  * macrocell they touch is empty (§2.4), so they can be skipped. */
-static int macro_empty(const grid *g, const frustum *f, int ks)
+static int macro_empty(const grid *g, const grid_frustum *f, int ks)
 {
 	int m = g->p.macro, ul, uh, vl, vh, nk = g->n[f->ax[0]];
-	if (!frustum_span(g, f, 0, ks, ks + m, m, &ul, &uh) ||
-	    !frustum_span(g, f, 1, ks, ks + m, m, &vl, &vh))
+	if (!grid_frustum_span(g, f, 0, ks, ks + m, m, &ul, &uh) ||
+	    !grid_frustum_span(g, f, 1, ks, ks + m, m, &vl, &vh))
 		return 1;
 	/* the fine cells ks .. ks + M - 1 along k, in grid order, lie in one
 	 * or (flipped, when M does not divide n) two blocks */
@@ -305,7 +278,7 @@ static int macro_empty(const grid *g, const frustum *f, int ks)
  * lines in (k, u), so a triangle whose three vertices lie beyond one of
  * them lies beyond it whole. A vertex before kref keeps the triangle. The seed culls with the four
  * corner rays' edge tests; the bounding planes are the same frustum, and exact for any packet. */
-static int frustum_culls(const grid *g, const frustum *f, const mimg_tri *t)
+int grid_frustum_culls(const grid *g, const grid_frustum *f, const mimg_tri *t)
 {
 	double k[3], w[2][3];
 	for (int i = 0; i < 3; i++) {
@@ -330,12 +303,12 @@ static int frustum_culls(const grid *g, const frustum *f, const mimg_tri *t)
 }
 
 /* Tests the rays in live against every triangle of one cell. */
-static void slice_cell_test(const grid *g, trav_state *s, packet *p, const frustum *f, uint32_t c,
-                            uint64_t live, mbox *mb, grid_counts *gc)
+static void slice_cell_test(const grid *g, trav_state *s, packet *p, const grid_frustum *f,
+                            uint32_t c, uint64_t live, grid_mbox *mb, grid_counts *gc)
 {
 	for (uint32_t k = g->first[c]; k < g->first[c + 1]; k++) {
 		uint32_t ta = g->refs[k];
-		if (g->p.mailbox && mbox_seen(mb, ta)) {
+		if (g->p.mailbox && grid_mbox_seen(mb, ta)) {
 			if (gc)
 				gc->mailbox_skips++;
 			continue;
@@ -343,7 +316,7 @@ static void slice_cell_test(const grid *g, trav_state *s, packet *p, const frust
 		const mimg_tri *tr = mimg_tri_at(g->m, ta);
 		/* a culled triangle stays culled: the frustum does not change,
 		 * so the mailbox may keep it */
-		if (g->p.cull && frustum_culls(g, f, tr)) {
+		if (g->p.cull && grid_frustum_culls(g, f, tr)) {
 			if (gc)
 				gc->culled++;
 			continue;
@@ -358,13 +331,13 @@ static void slice_cell_test(const grid *g, trav_state *s, packet *p, const frust
 
 /* The rays of live still unfinished after the slice ending at kend: their
  * segment and best hit reach past kend - eps. */
-static uint64_t still_live(const grid *g, const frustum *f, const packet *p, uint64_t live,
-                           double kend)
+uint64_t grid_still_live(const grid *g, const grid_frustum *f, const packet *p, uint64_t live,
+                         double kend)
 {
 	uint64_t r = 0;
 	for (uint64_t b = live; b; b &= b - 1) {
 		int i = __builtin_ctzll(b);
-		double t = p->tri[i] == PKT_NOHIT ? INFINITY : (double)p->t[i] * (1 + T_WIDEN);
+		double t = p->tri[i] == PKT_NOHIT ? INFINITY : (double)p->t[i] * (1 + GRID_T_WIDEN);
 		if (p->t[i] == -INFINITY)
 			continue; /* an occluded shadow ray */
 		if (grid_fault == GRID_FAULT_EARLY_STOP && p->tri[i] != PKT_NOHIT)
@@ -377,34 +350,35 @@ static uint64_t still_live(const grid *g, const frustum *f, const packet *p, uin
 }
 
 /* One frustum of rays (mask) slice by slice. */
-static void frustum_trace(const grid *g, trav_state *s, packet *p, const frustum *f, uint64_t live,
-                          grid_counts *gc)
+static void frustum_trace(const grid *g, trav_state *s, packet *p, const grid_frustum *f,
+                          uint64_t live, grid_counts *gc)
 {
 	int nk = g->n[f->ax[0]], m = g->macro ? g->p.macro : 0;
-	int ks = clampi(floor(f->k0 - g->eps), nk), kl = clampi(floor(f->k1 + g->eps), nk);
-	static _Thread_local mbox mb;
+	int ks = grid_clampi(floor(f->k0 - g->eps), nk),
+	    kl = grid_clampi(floor(f->k1 + g->eps), nk);
+	static _Thread_local grid_mbox mb;
 	memset(&mb, 0, sizeof mb);
 	for (; ks <= kl && live; ks++) {
 		if (m && ks % m == 0 && macro_empty(g, f, ks)) {
 			if (gc)
 				gc->macro_skips++;
 			ks += m - 1;
-			live = still_live(g, f, p, live, ks + 1);
+			live = grid_still_live(g, f, p, live, ks + 1);
 			continue;
 		}
 		if (gc)
 			gc->slices++;
 		int ul, uh, vl, vh;
-		if (frustum_span(g, f, 0, ks, ks + 1, 1, &ul, &uh) &&
-		    frustum_span(g, f, 1, ks, ks + 1, 1, &vl, &vh))
+		if (grid_frustum_span(g, f, 0, ks, ks + 1, 1, &ul, &uh) &&
+		    grid_frustum_span(g, f, 1, ks, ks + 1, 1, &vl, &vh))
 			for (int u = ul; u <= uh; u++)
 				for (int v = vl; v <= vh; v++) {
 					if (gc)
 						gc->cells++;
-					slice_cell_test(g, s, p, f, slice_cell(g, f, ks, u, v),
+					slice_cell_test(g, s, p, f, grid_slice_cell(g, f, ks, u, v),
 					                live, &mb, gc);
 				}
-		live = still_live(g, f, p, live, ks + 1);
+		live = grid_still_live(g, f, p, live, ks + 1);
 	}
 }
 
@@ -428,7 +402,7 @@ static void ray_alone(const grid *g, packet *p, int i, grid_counts *gc)
  * from a packet's hit points towards a light) spans far more cells than
  * its rays cross (seed 003 §4.7: secondary packets lose the frustum's
  * coherence), so those rays go one by one through the DDA. */
-static int one_origin(const grid *g, const packet *p, uint64_t mask)
+int grid_one_origin(const grid *g, const packet *p, uint64_t mask)
 {
 	int f = __builtin_ctzll(mask);
 	for (uint64_t b = mask; b; b &= b - 1) {
@@ -442,7 +416,7 @@ static int one_origin(const grid *g, const packet *p, uint64_t mask)
 }
 
 /* The lanes of sub-packet q of side `side` (lane = row * 8 + column). */
-static uint64_t sub_lanes(int side, int q)
+uint64_t grid_sub_lanes(int side, int q)
 {
 	uint64_t r = 0;
 	int per = 8 / side, qx = q % per, qy = q / per;
@@ -468,16 +442,16 @@ uint64_t grid_pkt_trace(const grid *g, packet *p, trav_entry *stack, int stack_m
 	}
 	int nsub = (8 / side) * (8 / side);
 	for (int q = 0; q < nsub; q++) {
-		uint64_t mask = entered & sub_lanes(side, q);
+		uint64_t mask = entered & grid_sub_lanes(side, q);
 		if (!mask)
 			continue;
-		if (!one_origin(g, p, mask)) {
+		if (!grid_one_origin(g, p, mask)) {
 			for (uint64_t b = mask; b; b &= b - 1)
 				ray_alone(g, p, __builtin_ctzll(b), gc);
 			continue;
 		}
-		frustum f;
-		uint64_t alone = frustum_setup(g, p, &s, mask, &f);
+		grid_frustum f;
+		uint64_t alone = grid_frustum_setup(g, p, &s, mask, &f);
 		for (uint64_t b = alone; b; b &= b - 1)
 			ray_alone(g, p, __builtin_ctzll(b), gc);
 		if (mask & ~alone)

@@ -86,22 +86,29 @@ def static_section(out, views):
                  f"{fmt(per_ray(g, 'ray_triangle_tests'))} | "
                  f"{yes(same_image(out, f'{v}-kd.ppm', f'{v}-grid.ppm'))} |")
     L.append("")
-    L.append("The chip (saarsim, default config, cycle fidelity) traces the kd-tree only: "
-             "it has no grid traversal unit yet (issue 34 item 4), so these are its kd "
-             "figures for the same views. *SDRAM*: bytes read from SDRAM per frame; "
-             "*L1 hit rate*: all L1 caches together; *check*: the chip's frame equals "
-             "kernel-ref's.")
+    L.append("The chip (saarsim, default config, cycle fidelity) on the kd-tree and on the "
+             "grid (`--accel grid`: the grid traversal unit, units/gridtrav.c; its memory "
+             "image is the frame's plus the grid's cells, lists and macrocell flags, "
+             "docs/memory-map.md \"Uniform grid\"). *SDRAM*: bytes read from SDRAM per "
+             "frame; *L1 hit rate*: all L1 caches together; *steps*: kd-node steps, or "
+             "the grid's slice steps (DDA cell steps for rays alone); *check*: the chip's "
+             "frame equals kernel-ref's (for the grid: kernel-ref's grid frame).")
     L.append("")
-    L.append("| view | chip fps | SDRAM KB/frame | L1 hit rate | kd steps/ray | tests/ray | check |")
-    L.append("|---|---:|---:|---:|---:|---:|---|")
+    L.append("| view | kd chip fps | grid chip fps | kd SDRAM KB/frame | grid SDRAM KB/frame | "
+             "kd L1 hit rate | grid L1 hit rate | kd steps/ray | grid steps/ray | "
+             "kd tests/ray | grid tests/ray | kd check | grid check |")
+    L.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|")
     for v in views:
         c = load(out, f"{v}-chip.json")
-        pr = c["ray_types"]["primary"]
-        L.append(f"| {v} | {fmt(c['fps'], 0)} | "
+        cg = load(out, f"{v}-chip-grid.json")
+        pr, pg = c["ray_types"]["primary"], cg["ray_types"]["primary"]
+        L.append(f"| {v} | {fmt(c['fps'], 0)} | {fmt(cg['fps'], 0)} | "
                  f"{fmt(c['memory']['hierarchy']['sdram']['bytes'] / 1024, 1)} | "
-                 f"{fmt(l1_hit_rate(c), 3)} | {fmt(pr['kd_steps_per_ray'])} | "
-                 f"{fmt(pr['triangle_tests_per_ray'])} | "
-                 f"{yes(c['check']['identical_8bit'])} |")
+                 f"{fmt(cg['memory']['hierarchy']['sdram']['bytes'] / 1024, 1)} | "
+                 f"{fmt(l1_hit_rate(c), 3)} | {fmt(l1_hit_rate(cg), 3)} | "
+                 f"{fmt(pr['kd_steps_per_ray'])} | {fmt(pg['kd_steps_per_ray'])} | "
+                 f"{fmt(pr['triangle_tests_per_ray'])} | {fmt(pg['triangle_tests_per_ray'])} | "
+                 f"{yes(c['check']['identical_8bit'])} | {yes(cg['check']['identical_8bit'])} |")
     L.append("")
     L.append("(The chip's steps and tests per ray are its primary rays'.)")
     L.append("")
@@ -189,13 +196,17 @@ def robots_section(out, times):
     L.append("")
     L.append("| t | triangles | kd build ms | grid build ms | two-level top ms | "
              "bottom ms | kd trace ms | grid trace ms | two-level trace ms | grid tests/ray | "
-             "kd tests/ray | same image | chip fps | chip SDRAM KB | chip L1 hit rate | check |")
-    L.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---|")
+             "kd tests/ray | same image | kd chip fps | grid chip fps | kd chip SDRAM KB | "
+             "grid chip SDRAM KB | kd chip L1 hit rate | grid chip L1 hit rate | kd check | "
+             "grid check |")
+    L.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|"
+             "---:|---:|---|---|")
     for t in times:
         k = load(out, f"robots-{t}-kd.json")
         g = load(out, f"robots-{t}-grid.json")
         tl = load(out, f"robots-{t}-two-level.json")
         c = load(out, f"robots-{t}-chip.json")
+        cg = load(out, f"robots-{t}-chip-grid.json")
         L.append(f"| {t} | {k['triangles']:,} | {fmt(k['build_ms'], 1)} | "
                  f"{fmt(g['grid']['build_ms'], 1)} | "
                  f"{fmt(tl['two_level']['top_build_ms'], 2)} | "
@@ -204,12 +215,16 @@ def robots_section(out, times):
                  f"{fmt(per_ray(g, 'ray_triangle_tests'))} | "
                  f"{fmt(per_ray(k, 'ray_triangle_tests'))} | "
                  f"{yes(same_image(out, f'robots-{t}-kd.ppm', f'robots-{t}-grid.ppm'))} | "
-                 f"{fmt(c['fps'], 0)} | "
+                 f"{fmt(c['fps'], 0)} | {fmt(cg['fps'], 0)} | "
                  f"{fmt(c['memory']['hierarchy']['sdram']['bytes'] / 1024, 1)} | "
-                 f"{fmt(l1_hit_rate(c), 3)} | {yes(c['check']['identical_8bit'])} |")
+                 f"{fmt(cg['memory']['hierarchy']['sdram']['bytes'] / 1024, 1)} | "
+                 f"{fmt(l1_hit_rate(c), 3)} | {fmt(l1_hit_rate(cg), 3)} | "
+                 f"{yes(c['check']['identical_8bit'])} | {yes(cg['check']['identical_8bit'])} |")
     L.append("")
-    L.append("The chip's columns are the kd-tree's (no grid unit on the chip yet); its "
-             "per-frame kd build is the host's *kd build* column.")
+    L.append("The chip's columns: on the kd-tree and on the grid (the grid traversal "
+             "unit); the per-frame builds are the host's *kd build* and *grid build* "
+             "columns (each frame a fresh world and chip: the grid's image written "
+             "with the frame's).")
     L.append("")
     return L
 

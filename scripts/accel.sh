@@ -10,8 +10,9 @@
 # kernel-ref trace time (one thread), triangle tests per ray; seed 003's
 # Table 4 experiment (cells visited and triangle tests of single rays, 4x4
 # and 8x8 packets, primary rays, no macrocells); and the chip's frame rate,
-# SDRAM traffic and L1 hit rates (saarsim, default config: the chip traces
-# the kd-tree only, it has no grid unit yet). Every run is `nice`, one
+# SDRAM traffic and L1 hit rates (saarsim, default config) on the kd-tree
+# and on the grid (saarsim --accel grid: the grid traversal unit, issue 34
+# item 4). Every run is `nice`, one
 # host thread, at ACCEL_SIZE (default 128x96: a few minutes on 2 shared
 # cores). The document is written by scripts/accel-doc.py from the runs'
 # JSON: every number in it comes from a run.
@@ -74,6 +75,7 @@ for v in $VIEWS; do
 	run "$v-kd.json" rtref $W --out "$OUT/$v-kd.ppm"
 	run "$v-grid.json" rtref $W --accel grid --out "$OUT/$v-grid.ppm"
 	run "$v-chip.json" saarsim $W
+	run "$v-chip-grid.json" saarsim $W --accel grid
 	# seed 003 Table 4: primary rays, no macrocells
 	P="$W --no-shadows --depth 0"
 	run "$v-t4-kd.json" rtref $P
@@ -96,6 +98,7 @@ for t in $TIMES; do
 	run "robots-$t-grid.json" rtref $R --accel grid --out "$OUT/robots-$t-grid.ppm"
 	run "robots-$t-two-level.json" rtref $R --two-level --out "$OUT/robots-$t-two-level.ppm"
 	run "robots-$t-chip.json" saarsim $R
+	run "robots-$t-chip-grid.json" saarsim $R --accel grid
 done
 
 python3 "$ROOT/scripts/accel-doc.py" "$OUT" "$DOC" "$SIZE" "$VIEWS" "$TIMES" "$BIG" "$BS"

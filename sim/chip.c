@@ -34,6 +34,7 @@
 #include "sim/modes/functional.h"
 #include "sim/modes/replay.h"
 #include "sim/modes/slot.h"
+#include "units/gridtrav.h"
 #include "units/intersection.h"
 #include "units/list.h"
 #include "units/rgs.h"
@@ -69,6 +70,15 @@ static const unit_route pipeline_two_level = {
     .finish = tlu_finish,
     .object = tu_begin,
     .shade = rgs_finish,
+};
+
+/* A uniform grid (issue 34; units/gridtrav.h): a packet's walk through the
+ * grid unit does its cells, lists and triangles itself (with the list and
+ * intersection unit kinds' ops); its end goes to the RGS. */
+static const unit_route pipeline_grid = {
+    .enter = gtu_begin,
+    .traverse = gtu_begin,
+    .finish = rgs_finish,
 };
 
 static const char *const state_names[THR_NSTATES] = {"idle", "running", "waiting_memory",
@@ -525,6 +535,12 @@ static int chip_base(chip *c, const saar_config *cfg, const world *w)
 			return -1;
 		image = c->tli.bytes;
 		image_size = c->tli.size;
+	} else if (w->grid) { /* the grid's cells, lists and flags after it */
+		diag gd;
+		if (gimg_build(&c->gimg, w->grid, &w->m, &gd))
+			return -1;
+		image = c->gimg.bytes;
+		image_size = c->gimg.size;
 	}
 	c->spill_base = (image_size + 4095) & ~(uint64_t)4095;
 	c->regs = w->m;
@@ -681,6 +697,23 @@ static int chip_env(chip *c, diag *d)
 		v->tl_insts = c->tli.inst_base;
 		uint64_t n = c->tli.max_nodes > w->tl->nnode ? c->tli.max_nodes : w->tl->nnode;
 		v->max_steps = 2 * (n > w->m.nnodes ? n : w->m.nnodes) + 64;
+	} else if (w->grid) {
+		const grid *g = w->grid;
+		v->route = pipeline_grid;
+		c->gregs = *g;
+		c->gregs.m = &c->regs;
+		c->gregs.first = c->gregs.refs = NULL;
+		c->gregs.macro = NULL;
+		v->grid = &c->gregs;
+		v->grid_cells = c->gimg.cells_base;
+		v->grid_refs = c->gimg.refs_base;
+		v->grid_macro = c->gimg.macro_base;
+		v->grid_nrefs = g->nrefs;
+		/* a packet asks at most, per frustum (16 of 4x4) and per ray
+		 * alone (64), for every flag, cell, range and entry once */
+		uint64_t cells = (uint64_t)g->n[0] * (uint64_t)g->n[1] * (uint64_t)g->n[2],
+		         flags = (uint64_t)g->mn[0] * (uint64_t)g->mn[1] * (uint64_t)g->mn[2];
+		v->max_steps = 80 * (2 * cells + (uint64_t)g->nrefs + flags) + 64;
 	}
 	v->on_free = on_free;
 	v->owner = c;
@@ -882,6 +915,7 @@ void chip_destroy(chip *c)
 		free(rp->q);
 	}
 	tli_free(&c->tli);
+	gimg_free(&c->gimg);
 	free(c->rtp);
 	free(c->turn);
 	free(c->live);
@@ -1141,6 +1175,8 @@ int chip_check_frame(chip *c, chip_check *out, diag *d)
 	ro.cone_cull = c->cfg.chip.cone_cull;
 	if (c->w->tl) /* a two-level scene: kernel-ref traces the same trees */
 		ro.tracer = &c->w->tl->tracer;
+	if (c->w->grid) /* a grid: kernel-ref traces the same grid */
+		ro.tracer = &c->w->grid->tracer;
 	size_t n = (size_t)ro.width * (size_t)ro.height * 3;
 	uint8_t *a = malloc(n), *b = malloc(n);
 	int rc = a && b ? world_reference_rgb8(c->w, &ro, b, &out->ref, &out->cached, d)

@@ -20,6 +20,7 @@
 #include <stdint.h>
 
 #include "kernel-ref/framebuf.h"
+#include "kernel-ref/gridimage.h"
 #include "kernel-ref/render.h"
 #include "kernel-ref/tlimage.h"
 #include "kernel-ref/world.h"
@@ -133,6 +134,12 @@ typedef struct chip {
 	 * board over the host bus (memory.hostbus) before the frame, and how
 	 * long that takes on an idle bus */
 	tl_image tli;
+	/* a uniform grid (chip.accel grid, world.grid; kernel-ref/gridimage.h):
+	 * the chip's image (the frame's, then the grid's cells, lists and
+	 * macrocell flags), and the grid's header as the registers hold it
+	 * (no arrays; its image is regs) */
+	grid_image gimg;
+	grid gregs;
 	uint64_t update_bytes;
 	double update_ms;
 	/* a warm animation (chip_anim_update): per frame, the bytes the host

@@ -33,6 +33,7 @@
 /* ======================== the schema ======================== */
 
 static const char *const thread_sched_names[] = {"round_robin", "oldest_first", NULL};
+static const char *const accel_names[] = {"kd", "grid", NULL};
 static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
 static const char *const warming_names[] = {"full", "stored", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
@@ -214,6 +215,12 @@ static const cfg_key keys_src[] = {
              "against it (a one-cycle packet-level op of the intersection unit); a "
              "triangle outside is skipped for the whole packet (kernel-ref/cone.h). The "
              "image is the same"},
+    {ENUM("chip.accel", chip.accel, accel_names),
+     .source = "a run setting (issue 34): the kd-tree of seed 002, or seed 003's uniform grid",
+     .desc = "the acceleration structure the traversal unit walks: kd (the kd-tree), or grid "
+             "(a uniform grid built by the host over the frame's triangles, walked by the "
+             "grid traversal unit, units/gridtrav.c; the same as saarsim --accel grid; "
+             "docs/design.md, \"The chip on a uniform grid\"). The image is the same"},
     {KEY("chip.thread_sched", CFG_ENUM, chip.thread_sched, CFG_SCHED_OLDEST_FIRST, 0, 0, ""),
      .names = thread_sched_names, TIMING,
      CAL "not published; assumed before: round_robin (the simplest fair policy)",

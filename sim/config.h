@@ -30,6 +30,8 @@
 
 /* Enum values; the names in the YAML are in config.c's tables, same order. */
 typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
+/* chip.accel: what the traversal unit walks (issue 34) */
+typedef enum { CFG_ACCEL_KD, CFG_ACCEL_GRID } cfg_accel;
 /* sampling.demand_model (docs/fidelity.md "Demand models") */
 typedef enum { CFG_DEMAND_AUTO, CFG_DEMAND_MAX, CFG_DEMAND_LINEAR } cfg_demand_model;
 /* sampling.warming (docs/fidelity.md "Stored warming") */
@@ -79,6 +81,7 @@ typedef struct saar_config {
 		int packet_w, packet_h;
 		bool masked_packets;
 		bool cone_cull;
+		cfg_accel accel;
 		cfg_thread_sched thread_sched;
 		cfg_tile_order tile_order;
 		cfg_unit unit[UNIT_NKINDS]; /* by enum unit_kind: chip.<name>.* */

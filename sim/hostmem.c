@@ -23,6 +23,8 @@
 #include <unistd.h>
 
 #include "kernel-ref/framebuf.h"
+#include "kernel-ref/gridimage.h"
+#include "kernel-ref/gridwalk.h"
 #include "kernel-ref/packet.h"
 #include "mem/cache.h"
 #include "mem/store.h"
@@ -87,6 +89,12 @@ void hm_estimate(const saar_config *cfg, const world *w, hm_est *e)
 	uint64_t image_bytes = w->tl ? tli_size(w->tl, &w->m) : w->m.size;
 	if (w->tl)
 		busy_slot += sizeof(thr_tl);
+	/* a uniform grid: the chip's image (kernel-ref/gridimage.h), a copy
+	 * chip_create makes, and each busy slot's walk (units/gridtrav.c) */
+	if (w->grid) {
+		image_bytes = gimg_size(w->grid, &w->m);
+		busy_slot += sizeof(grid_walk) + sizeof(grid_ask) + 64;
+	}
 	uint64_t image = (image_bytes + 4095) / 4096 * 4096;
 	uint64_t space = image + slots * PKT_STACK_MAX * THR_SPILL_STRIDE, spill_pages = 0;
 	if ((uint64_t)cfg->chip.stack_depth < depth) {
@@ -94,7 +102,8 @@ void hm_estimate(const saar_config *cfg, const world *w, hm_est *e)
 		spill_pages = busy * (PKT_STACK_MAX * THR_SPILL_STRIDE / MS_PAGE + 1);
 	}
 	e->part[HM_THREADS] = slots * idle_slot + busy * busy_slot +
-	                      ms_host_bytes(space, spill_pages) + (w->tl ? image_bytes : 0);
+	                      ms_host_bytes(space, spill_pages) +
+	                      (w->tl || w->grid ? image_bytes : 0);
 	for (int k = 0; k < UNIT_NKINDS; k++)
 		e->part[HM_THREADS] +=
 		    (uint64_t)cfg->chip.rtps *

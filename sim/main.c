@@ -369,9 +369,23 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	if (a->wo.two_level && cfg->chip.cone_cull)
 		return cli_bad("saarsim", "--two-level: no chip.cone_cull (kernel-ref's two-level "
 		                          "tracer does not cull by cone)");
-	if (a->wo.accel != WORLD_ACCEL_KD)
-		return cli_bad("saarsim", "--accel grid: kernel-ref (rtref) only; the chip traces "
-		                          "the kd-tree (issue 34 item 4)");
+	/* chip.accel grid or --accel grid (the same): the world builds the
+	 * grid, the chip walks it (units/gridtrav.h) */
+	if (a->wo.accel == WORLD_ACCEL_GRID)
+		cfg->chip.accel = CFG_ACCEL_GRID;
+	if (cfg->chip.accel == CFG_ACCEL_GRID)
+		a->wo.accel = WORLD_ACCEL_GRID;
+	if (a->wo.accel == WORLD_ACCEL_GRID && a->wo.two_level)
+		return cli_bad("saarsim", "--accel grid: not with --two-level (one or the other)");
+	/* kernel-ref's grid tracer has neither cones nor reduced formats (its
+	 * rays alone take the full-precision single-ray test) */
+	if (a->wo.accel == WORLD_ACCEL_GRID && cfg->chip.cone_cull)
+		return cli_bad("saarsim", "--accel grid: no chip.cone_cull");
+	if (a->wo.accel == WORLD_ACCEL_GRID &&
+	    (cfg->chip.fp.trav.exp != 8 || cfg->chip.fp.trav.mant != 23 ||
+	     cfg->chip.fp.isect.exp != 8 || cfg->chip.fp.isect.mant != 23))
+		return cli_bad("saarsim",
+		               "--accel grid: chip.fp trav and isect full precision only");
 	long nframes;
 	if (a->frames) {
 		if (cli_parse_int("--frames", a->frames, 1, 1000000, &nframes, d))

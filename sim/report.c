@@ -333,6 +333,12 @@ void report_text(FILE *f, const report_info *ri)
 		        (unsigned long long)get(c, "xform.instances"),
 		        (unsigned long long)anim_mean(c, c->frame_update), anim_mean_ms(c),
 		        c->frames_done > 1 ? " (mean per frame)" : "");
+	if (c->w->grid) /* the rays line's kd steps are then the grid's slice steps */
+		fprintf(f,
+		        "  grid: %dx%dx%d cells, %u references, %llu bytes after the frame's "
+		        "image; kd steps below are slice steps, leaves cells\n",
+		        c->w->grid->n[0], c->w->grid->n[1], c->w->grid->n[2], c->w->grid->nrefs,
+		        (unsigned long long)c->gimg.grid_bytes);
 	fidelity_text(f, c);
 	fputs("  units:", f);
 	for (int k = 0; k < UNIT_NKINDS; k++)
@@ -842,6 +848,36 @@ static void json_host(jsonw *j, const report_info *ri)
 	jsonw_obj_end(j);
 }
 
+/* A uniform grid (issue 34; units/gridtrav.h): what the traversal unit
+ * walked, the grid's image and the host's build. Absent for the kd-tree
+ * (whose reports are as before). */
+static void json_grid(jsonw *j, const chip *c)
+{
+	const grid *g = c->w->grid;
+	if (!g)
+		return;
+	const grid_image *im = &c->gimg;
+	jsonw_key(j, "grid");
+	jsonw_obj_begin(j);
+	jsonw_key(j, "resolution");
+	jsonw_arr_begin(j);
+	for (int a = 0; a < 3; a++)
+		jsonw_int(j, g->n[a]);
+	jsonw_arr_end(j);
+	jsonw_knum(j, "lambda", g->p.lambda);
+	jsonw_kint(j, "macro", g->p.macro);
+	jsonw_kint(j, "packet", g->p.packet);
+	jsonw_kint(j, "mailbox", g->p.mailbox);
+	jsonw_kint(j, "cull", g->p.cull);
+	jsonw_kuint(j, "references", g->nrefs);
+	jsonw_kuint(j, "cells_base", im->cells_base);
+	jsonw_kuint(j, "refs_base", im->refs_base);
+	jsonw_kuint(j, "macro_base", im->macro_base);
+	jsonw_kuint(j, "grid_bytes", im->grid_bytes);
+	jsonw_knum(j, "host_build_ms", g->build_ms);
+	jsonw_obj_end(j);
+}
+
 /* A two-level scene (issue 33; units/toplevel.h): the scene's instances
  * and objects, the top level's work on the chip, and the host's update of
  * the frame (the top level's bytes over the host bus; chip.c
@@ -924,6 +960,7 @@ int report_json(const char *path, const report_info *ri, diag *d)
 	json_memory(j, c, &hs, have_h);
 	json_frames(j, c);
 	json_two_level(j, c);
+	json_grid(j, c);
 	json_caches(j, &hs, have_h);
 	json_check(j, ri);
 	json_counters(j, ri);

@@ -241,7 +241,7 @@ Test(grid, robots_frames_equal_kd, .timeout = 300)
 
 /* rtref --accel grid traces the grid (the stats say so, with other
  * counts) and writes the kd-tree's image; bad values are one line and
- * status 2; saarsim refuses it. Mistake: the flag parsed but the kd-tree
+ * status 2; saarsim takes it (and chip.accel grid). Mistake: the flag parsed but the kd-tree
  * traced. */
 Test(grid, rtref_flag, .timeout = 60)
 {
@@ -265,9 +265,14 @@ Test(grid, rtref_flag, .timeout = 60)
 	tu_one_line(dir, "rtref", "--accel");
 	cr_assert_eq(tu_prog(dir, "rtref", "--accel grid --grid-packet 3"), 2);
 	cr_assert_eq(tu_prog(dir, "rtref", "--accel grid --cone-cull"), 2);
-	/* the chip has no grid unit yet: saarsim refuses rather than trace the kd-tree */
-	cr_assert_eq(tu_prog(dir, "saarsim", "--accel grid --size 8x8"), 2);
-	tu_one_line(dir, "saarsim", "--accel");
+	/* the chip's grid unit (issue 34 item 4): saarsim takes it, and
+	 * refuses what kernel-ref's grid tracer cannot check */
+	cr_assert_eq(tu_prog(dir, "saarsim", "--accel grid --size 8x8"), 0);
+	cr_assert_eq(tu_prog(dir, "saarsim", "--set chip.accel=grid --size 8x8"), 0);
+	cr_assert_eq(tu_prog(dir, "saarsim", "--accel grid --size 8x8 --set chip.cone_cull=true"),
+	             2);
+	cr_assert_eq(tu_prog(dir, "saarsim", "--set chip.accel=octree --size 8x8"), 2);
+	tu_one_line(dir, "saarsim", "chip.accel");
 }
 
 /* scripts/accel-doc.py (make accel's writer) on runs that are not there:

@@ -285,6 +285,8 @@ void thr_free_buffers(thr_ctx *t)
 	free(t->spill_in);
 	free(t->tl);
 	t->tl = NULL;
+	free(t->grid);
+	t->grid = NULL;
 	if (t->sh) {
 		free(t->sh->peek);
 		free(t->sh->got);

@@ -62,6 +62,8 @@ enum thr_mutant {
 	/* packet-record replay (sim/modes/replay.c) reads each triangle
 	 * record at the next one's address: the replay's checksums must see it */
 	THR_MUT_REPLAY_NEXT_TRI,
+	/* the grid unit reads a cell's list one entry further on */
+	THR_MUT_GRID_LIST_NEXT,
 };
 
 /* ---- pipelined units ---- */
@@ -287,6 +289,13 @@ typedef struct thr_env {
 	 * instance records (the registers the host sets per frame); 0: none */
 	int two_level;
 	uint64_t tl_nodes, tl_insts;
+	/* a uniform grid (chip.accel grid; kernel-ref/gridimage.h): its header
+	 * (the registers: resolution, box, scale, margin, parameters; no
+	 * arrays) and the bases of its cells' list offsets, cell lists and
+	 * macrocell flags; grid NULL: the kd-tree */
+	const struct grid *grid;
+	uint64_t grid_cells, grid_refs, grid_macro;
+	uint32_t grid_nrefs;
 	/* test hooks: enum thr_mutant; shading decoded again from the
 	 * delivered bytes even when they equal those it found (units/rgs.c) */
 	int mutant, shade_redecode;
@@ -335,7 +344,8 @@ typedef struct thr_ctx {
 	 * (thr_env.m); inside an instance of a two-level scene its object's
 	 * (units/toplevel.c) */
 	const mimg *img;
-	struct thr_tl *tl; /* a two-level scene's walk (units/toplevel.c) */
+	struct thr_tl *tl;     /* a two-level scene's walk (units/toplevel.c) */
+	struct thr_grid *grid; /* a grid walk (units/gridtrav.c), allocated at the first */
 } thr_ctx;
 
 /* The image the thread's traversal reads now. */

@@ -57,6 +57,12 @@ int chip_run(chip *c, diag *d)
 		mode_rec_store(c);
 		if (c->oom || c->env.oom || mem_failed(&c->mem))
 			return diag_set(d, "chip", 0, 0, "out of memory during the frame");
+		if (c->env.damaged && c->env.grid)
+			return diag_set(d, "chip", 0, 0,
+			                "the grid the grid traversal unit read is damaged: a cell "
+			                "range past the cell lists, or a packet's walk longer than "
+			                "%llu steps (damaged board memory or a wrong address)",
+			                (unsigned long long)c->env.max_steps);
 		if (c->env.damaged)
 			return diag_set(
 			    d, "chip", 0, 0,

@@ -17,7 +17,10 @@
  * traces/pktrec.h): kernel-ref's frame key for this view and size
  * (the memory image by its CRC, camera, lights, shading depth) and what
  * else changes a packet's work on the chip: the datapath formats and the
- * stack depth (spills). Thread counts, units and memory do not. */
+ * stack depth (spills), and with a uniform grid (chip.accel grid) its
+ * parameters (a kd record's reads hit the same bytes of the frame's
+ * image: only the key keeps it from standing for a grid run). Thread
+ * counts, units and memory do not. */
 static char *rec_key(const chip *c)
 {
 	const saar_config *g = &c->cfg;
@@ -30,13 +33,19 @@ static char *rec_key(const chip *c)
 	     *key;
 	if (!fk)
 		return NULL;
-	int n =
-	    asprintf(&key,
-	             "saarsim packet record 2\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
-	             "counters %d shade %zu\n",
-	             fk, g->chip.fp.trav.exp, g->chip.fp.trav.mant, g->chip.fp.isect.exp,
-	             g->chip.fp.isect.mant, g->chip.fp.shade.exp, g->chip.fp.shade.mant,
-	             g->chip.fp.round, g->chip.stack_depth, (int)C_NCOUNTERS, sizeof(shade_counts));
+	/* the kd-tree's key is as before the grid (its records stay valid) */
+	char gk[160] = "";
+	const grid *gr = c->w->grid;
+	if (gr)
+		snprintf(gk, sizeof gk, "grid %a %d %d %d %d\n", gr->p.lambda, gr->p.macro,
+		         gr->p.packet, gr->p.mailbox, gr->p.cull);
+	int n = asprintf(&key,
+	                 "saarsim packet record 2\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
+	                 "counters %d shade %zu\n%s",
+	                 fk, g->chip.fp.trav.exp, g->chip.fp.trav.mant, g->chip.fp.isect.exp,
+	                 g->chip.fp.isect.mant, g->chip.fp.shade.exp, g->chip.fp.shade.mant,
+	                 g->chip.fp.round, g->chip.stack_depth, (int)C_NCOUNTERS,
+	                 sizeof(shade_counts), gk);
 	free(fk);
 	return n < 0 ? NULL : key;
 }
