@@ -201,6 +201,8 @@ static void to_world(const shade_reader *rdr, const shade_tl *tl, uint32_t k, mi
 {
 	double x[21];
 	uint64_t a = tl->base + (uint64_t)k * tl->stride;
+	/* logged as tree data (MIMG_NODES): the top level's records lie past
+	 * the shading image's regions */
 	for (uint32_t off = 0; off < SHADE_XF_BYTES; off += 48) {
 		uint32_t n = SHADE_XF_BYTES - off < 48 ? SHADE_XF_BYTES - off : 48;
 		rd_get(rdr, a + off, n, MIMG_NODES, (uint8_t *)x + off);
