@@ -12,6 +12,7 @@
 
 #include "kernel-ref/image.h"
 #include "kernel-ref/infile.h"
+#include "kernel-ref/xform.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -1030,46 +1031,6 @@ void aff_matrices(const aff_scene *a, double t, double *m)
 	}
 }
 
-/* The normal matrix of m: the cofactors of its 3x3 part (the inverse
- * transpose times the determinant), sign-corrected for a mirroring m. */
-static void normal_matrix(const double m[12], double nm[9])
-{
-	const double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9],
-	             i = m[10];
-	nm[0] = e * i - f * h;
-	nm[1] = f * g - d * i;
-	nm[2] = d * h - e * g;
-	nm[3] = c * h - b * i;
-	nm[4] = a * i - c * g;
-	nm[5] = b * g - a * h;
-	nm[6] = b * f - c * e;
-	nm[7] = c * d - a * f;
-	nm[8] = a * e - b * d;
-	double det = a * nm[0] + b * nm[1] + c * nm[2];
-	if (det < 0)
-		for (int k = 0; k < 9; k++)
-			nm[k] = -nm[k];
-}
-
-static vec3 xf_point(const double m[12], const float *p)
-{
-	double r[3];
-	for (int i = 0; i < 3; i++)
-		r[i] = m[4 * i] * p[0] + m[4 * i + 1] * p[1] + m[4 * i + 2] * p[2] + m[4 * i + 3];
-	return v3((float)r[0], (float)r[1], (float)r[2]);
-}
-
-static vec3 xf_normal(const double nm[9], const float *n)
-{
-	double r[3];
-	for (int i = 0; i < 3; i++)
-		r[i] = nm[3 * i] * n[0] + nm[3 * i + 1] * n[1] + nm[3 * i + 2] * n[2];
-	double len = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-	if (!(len > 0.0))
-		return v3(0, 0, 0); /* scene_finish puts the face normal here */
-	return v3((float)(r[0] / len), (float)(r[1] / len), (float)(r[2] / len));
-}
-
 /* The scene material of (fm, texture) pair: one per distinct pair, found
  * through a hash table over the pairs' values (tab: 2^k slots holding
  * scene material + 1). */
@@ -1142,7 +1103,7 @@ static void add_mesh_tris(const aff_scene *a, const aff_mesh *me, const double m
                           scene *s)
 {
 	double nm[9];
-	normal_matrix(m, nm);
+	xf_normal_matrix(m, nm);
 	for (uint32_t i = 0; i < me->ntris; i++) {
 		const uint32_t *r = a->idx + 9 * (uint64_t)(me->t0 + i);
 		vec3 p[3], n[3];
@@ -1162,7 +1123,8 @@ static void add_mesh_tris(const aff_scene *a, const aff_mesh *me, const double m
 		s->has_uv = 1;
 }
 
-int aff_flatten(const aff_scene *a, double t, int textures, scene *s, diag *d)
+/* aff_flatten, or with `local` every mesh in its own node's frame. */
+static int flatten(const aff_scene *a, double t, int textures, int local, scene *s, diag *d)
 {
 	scene_init(s, a->path);
 	double *m = malloc(12 * ((size_t)a->nxf + 1) * sizeof *m);
@@ -1186,7 +1148,8 @@ int aff_flatten(const aff_scene *a, double t, int textures, scene *s, diag *d)
 	for (uint32_t i = 0; i < a->nmesh; i++) {
 		const aff_mesh *me = &a->mesh[i];
 		uint32_t mat = scene_mat(s, &mm, a, me, textures ? texmap : NULL);
-		add_mesh_tris(a, me, me->xform >= 0 ? m + 12 * (size_t)me->xform : id, mat, s);
+		add_mesh_tris(a, me, me->xform >= 0 && !local ? m + 12 * (size_t)me->xform : id,
+		              mat, s);
 	}
 	rc = scene_finish(s, a->path, d);
 done:
@@ -1200,6 +1163,16 @@ done:
 		scene_init(s, a->path);
 	}
 	return rc;
+}
+
+int aff_flatten(const aff_scene *a, double t, int textures, scene *s, diag *d)
+{
+	return flatten(a, t, textures, 0, s, d);
+}
+
+int aff_flatten_local(const aff_scene *a, int textures, scene *s, diag *d)
+{
+	return flatten(a, 0.0, textures, 1, s, d);
 }
 
 int aff_view(const aff_scene *a, double t, view *v, diag *d)

@@ -143,6 +143,11 @@ void aff_matrices(const aff_scene *a, double t, double *m);
  * (fm, texture) pair, textures read when `textures` is set. */
 int aff_flatten(const aff_scene *a, double t, int textures, scene *s, diag *d);
 
+/* The same soup, triangles in the same order, with every mesh in its own
+ * transform node's frame (no transform applied): the two-level scenes'
+ * shading image (twolevel.h), the same at every time. */
+int aff_flatten_local(const aff_scene *a, int textures, scene *s, diag *d);
+
 /* The camera at time t: the `k camera` block's translation as the eye and
  * its rotation R as the orientation (view direction -R[:,2], up R[:,1]),
  * over the static `v` (which gives the field of view, and eye and

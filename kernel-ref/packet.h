@@ -61,8 +61,13 @@ typedef struct packet {
 	float t[PKT_RAYS];
 	uint32_t tri[PKT_RAYS];           /* triangle record address, PKT_NOHIT if none */
 	float bu[PKT_RAYS], bv[PKT_RAYS]; /* barycentrics of v1 and v2 */
-	uint64_t valid;                   /* rays present */
-	uint32_t n;                       /* number of rays (lanes 0..n-1 may be valid) */
+	/* two-level scenes (twolevel.h): the hit's instance, the index of its
+	 * record in the top level (BVH leaf order), whose transforms the
+	 * shader moves the object-space hit into the world with; unused (0)
+	 * for a single tree */
+	uint32_t inst[PKT_RAYS];
+	uint64_t valid; /* rays present */
+	uint32_t n;     /* number of rays (lanes 0..n-1 may be valid) */
 	uint8_t type, depth;
 	uint16_t sample; /* the pixels' sample index (drt.h); children inherit it */
 } __attribute__((aligned(32))) packet;
@@ -203,7 +208,8 @@ uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max
 /* ---- single-ray path, for checking ---- */
 typedef struct ray_hit {
 	float t, bu, bv;
-	uint32_t tri; /* PKT_NOHIT if none */
+	uint32_t tri;  /* PKT_NOHIT if none */
+	uint32_t inst; /* two-level: the hit's instance record (packet.inst); else 0 */
 } ray_hit;
 
 /* Closest hit (or, with any_hit, the first occluder) in (0, tmax) by plain

@@ -69,6 +69,7 @@ static void trace_single(const mimg *m, packet *p, trav_counts *c, const pkt_pre
 		               : ray_trace_fp(m, o, d, p->tmax[i], any, c, prec);
 		p->t[i] = h.t;
 		p->tri[i] = h.tri;
+		p->inst[i] = h.inst;
 		p->bu[i] = h.bu;
 		p->bv[i] = h.bv;
 	}
@@ -191,6 +192,7 @@ int render_frame(const mimg *m, const view *v, const render_opts *o, framebuf *f
 	j.sc.max_depth = o->max_depth;
 	j.sc.background = o->background;
 	j.sc.fb = fb;
+	j.sc.tl = o->tracer ? o->tracer->shade : NULL;
 	cam_setup_view(&j.cam, v, o->width, o->height);
 	if (!drt_is_off(&v->drt)) {
 		drt_shade_setup(&j.drt, &v->drt, v->cam.up, (uint32_t)o->width);

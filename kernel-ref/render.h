@@ -27,6 +27,9 @@ typedef struct render_tracer {
 	ray_hit (*ray)(const void *ctx, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c);
 	uint64_t (*packet)(const void *ctx, packet *p, trav_entry *stack, int stack_max,
 	                   trav_counts *c);
+	/* non-NULL: the image's records are in object space and hits carry
+	 * their instance; the shader moves them with these (shade_ctx.tl) */
+	const shade_tl *shade;
 } render_tracer;
 
 typedef struct render_opts {

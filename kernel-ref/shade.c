@@ -11,6 +11,7 @@
 #include "kernel-ref/shade.h"
 
 #include "kernel-ref/sudoku.h"
+#include "kernel-ref/xform.h"
 
 #include <float.h>
 #include <math.h>
@@ -29,9 +30,10 @@ static void log_read(shade_log *log, uint64_t addr, uint32_t bytes, int region)
 }
 
 /* kernel-ref's reader: the memory image itself (addresses past it read
- * as zero), every read logged. */
+ * as zero) and a two-level scene's shading transforms, every read logged. */
 typedef struct mimg_rd {
 	const mimg *m;
+	const shade_tl *tl;
 	shade_log *log;
 } mimg_rd;
 
@@ -40,6 +42,10 @@ static const void *mimg_read(void *ctx, uint64_t addr, uint32_t bytes, int regio
 	static const uint8_t zero[MIMG_SHADE_BYTES];
 	const mimg_rd *r = ctx;
 	log_read(r->log, addr, bytes, region);
+	const shade_tl *tl = r->tl;
+	if (tl && tl->bytes && addr >= tl->base && addr - tl->base <= tl->size &&
+	    bytes <= tl->size - (addr - tl->base))
+		return tl->bytes + (addr - tl->base);
 	if (addr > r->m->size || bytes > r->m->size - addr || bytes > sizeof zero)
 		return zero;
 	return r->m->bytes + addr;
@@ -156,7 +162,7 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet *out, int max_out,
                     shade_log *log, shade_counts *cnt)
 {
-	mimg_rd r = {c->m, log};
+	mimg_rd r = {c->m, c->tl, log};
 	shade_reader rd = {mimg_read, &r};
 	return shade_packet_rd(c, fp, &rd, p, out, max_out, cnt);
 }
@@ -180,16 +186,64 @@ typedef struct spawn {
 	int nl, can_recurse;
 } spawn;
 
-/* Reads lane i's records (triangle, shading, material, in that order)
- * and computes its hit point, normals and texture coordinates. */
-static void hit_surface(const shade_reader *rdr, const mimg *m, const packet *p, int i, vec3 d,
+/* Planted mistakes for tests (docs/TESTING.md "Checks that can fail");
+ * programs leave it at 0. SHADE_FAULT_NO_NORMAL_XF: a two-level hit's
+ * shading normals are left in object space (the normal transform
+ * skipped). */
+int shade_fault;
+
+/* A two-level hit (shade_ctx.tl): instance k's shading transform (read in
+ * SHADE_XF_READS pieces of at most 48 bytes), then the triangle's corners
+ * and shading normals moved by it into the world, as aff_flatten places
+ * them (xform.h; scene_finish's renormalisation). */
+static void to_world(const shade_reader *rdr, const shade_tl *tl, uint32_t k, mimg_tri *tr,
+                     mimg_shade *sh)
+{
+	double x[21];
+	uint64_t a = tl->base + (uint64_t)k * tl->stride;
+	/* logged as tree data (MIMG_NODES): the top level's records lie past
+	 * the shading image's regions */
+	for (uint32_t off = 0; off < SHADE_XF_BYTES; off += 48) {
+		uint32_t n = SHADE_XF_BYTES - off < 48 ? SHADE_XF_BYTES - off : 48;
+		rd_get(rdr, a + off, n, MIMG_NODES, (uint8_t *)x + off);
+	}
+	const double *fwd = x, *nm = x + 12;
+	for (int c = 0; c < 3; c++) {
+		vec3 v = xf_point(fwd, tr->v[c]);
+		tr->v[c][0] = v.x;
+		tr->v[c][1] = v.y;
+		tr->v[c][2] = v.z;
+	}
+	if (shade_fault == SHADE_FAULT_NO_NORMAL_XF)
+		return;
+	vec3 p0 = arr3(tr->v[0]), p1 = arr3(tr->v[1]), p2 = arr3(tr->v[2]);
+	vec3 fn = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
+	float fl = v3_len(fn);
+	fn = fl > 0.0f ? v3_scale(fn, 1.0f / fl) : v3(0, 0, 1);
+	for (int c = 0; c < 3; c++) {
+		vec3 n = xf_normal(nm, sh->n[c]);
+		float l = v3_len(n);
+		n = (isfinite(l) && l > 0.0f) ? v3_scale(n, 1.0f / l) : fn;
+		sh->n[c][0] = n.x;
+		sh->n[c][1] = n.y;
+		sh->n[c][2] = n.z;
+	}
+}
+
+/* Reads lane i's records (triangle, shading, material, in that order, and
+ * on a two-level scene its instance's shading transform) and computes its hit point,
+ * normals and texture coordinates. */
+static void hit_surface(const shade_reader *rdr, const shade_ctx *c, const packet *p, int i, vec3 d,
                         hit *h)
 {
+	const mimg *m = c->m;
 	uint32_t ta = p->tri[i], tri = mimg_tri_index(m, ta);
 	mimg_tri trd;
 	rd_get(rdr, ta, MIMG_TRI_BYTES, MIMG_TRIS, &trd);
 	rd_get(rdr, mimg_shade_addr(m, tri), MIMG_SHADE_BYTES, MIMG_SHADE, &h->sh);
 	rd_get(rdr, mimg_mat_addr(m, h->sh.mat), MIMG_MAT_BYTES, MIMG_MATS, &h->mt);
+	if (c->tl)
+		to_world(rdr, c->tl, p->inst[i], &trd, &h->sh);
 	const mimg_tri *tr = &trd;
 	const mimg_shade *sh = &h->sh;
 
@@ -364,7 +418,7 @@ static void shade_lane(const shade_ctx *c, const fpfmt *fq, const shade_reader *
 	}
 	cnt->hits++;
 	hit h;
-	hit_surface(rdr, c->m, p, i, d, &h);
+	hit_surface(rdr, c, p, i, d, &h);
 	vec3 kd, ka;
 	textures(rdr, c->m, fq, &h, cnt, &kd, &ka);
 

@@ -46,6 +46,27 @@ typedef struct shade_adds {
 	shade_add e[PKT_RAYS];
 } shade_adds;
 
+/* Two-level scenes (twolevel.h, docs/design.md "The chip on two-level
+ * scenes"): the image's triangle and shading records are in each
+ * instance's object space, and every hit carries its instance (packet.inst).
+ * The shader reads the instance's shading transform, SHADE_XF_BYTES at
+ * base + inst * stride: the forward matrix (object -> world, 12 doubles,
+ * row-major 3x4) and the normal matrix (its inverse transpose, 9 doubles,
+ * xform.h), in SHADE_XF_READS reads after the material; it moves
+ * the triangle's corners and shading normals into the world with them.
+ * bytes (kernel-ref's reader only) holds the records from base on, size
+ * bytes; the chip's reader reads them from its memory. */
+#define SHADE_XF_BYTES 168u
+#define SHADE_XF_READS 4
+enum shade_fault { SHADE_FAULT_NONE, SHADE_FAULT_NO_NORMAL_XF };
+extern int shade_fault; /* shade.c: planted mistakes, tests only */
+typedef struct shade_tl {
+	uint64_t base;   /* the first instance's shading transform */
+	uint32_t stride; /* bytes from one instance's to the next */
+	const uint8_t *bytes;
+	uint64_t size;
+} shade_tl;
+
 typedef struct shade_ctx {
 	const mimg *m; /* the region bases (the bytes come from the reader) */
 	const light *lights;
@@ -59,6 +80,9 @@ typedef struct shade_ctx {
 	/* distribution effects (drt.h): area-light points and glossy
 	 * reflection from the packet's sample; NULL: point lights, mirrors */
 	const drt_shade *drt;
+	/* two-level scenes: the instances' shading transforms; NULL: a single
+	 * tree, records in world space */
+	const shade_tl *tl;
 } shade_ctx;
 
 /* Where the shader's scene data comes from: read(ctx, addr, bytes, region)
@@ -82,8 +106,9 @@ typedef struct shade_log {
 } shade_log;
 
 /* Upper bound of reads for one packet: per ray a triangle record, a shading
- * record, a material, and per texture a header and 3 texels. */
-#define SHADE_LOG_CAP (PKT_RAYS * (3 + 2 * 4))
+ * record, a material, per texture a header and 3 texels, and on a
+ * two-level scene its instance's shading transform. */
+#define SHADE_LOG_CAP (PKT_RAYS * (3 + SHADE_XF_READS + 2 * 4))
 
 typedef struct shade_counts {
 	uint64_t hits, misses;     /* rays shaded */
@@ -115,8 +140,9 @@ int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet
 
 /* The same with the scene's bytes from reader rd (the memory image's
  * reader is what shade_packet_fp passes). The reads, in order, per hit:
- * triangle record, shading record, material; per texture lookup its
- * header and texel (map_Kd once, bump map three times). */
+ * triangle record, shading record, material, on a two-level scene the
+ * instance's shading transform (shade_tl); per texture lookup its header
+ * and texel (map_Kd once, bump map three times). */
 int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rd, const packet *p,
                     packet *out, int max_out, shade_counts *cnt);
 

@@ -88,6 +88,7 @@ uint64_t tli_write_top(tl_image *im, const tl_scene *t)
 		put32(b + 148, o + ob->m.base[MIMG_LISTS]);
 		put32(b + 152, o + ob->m.base[MIMG_TRIS]);
 		put32(b + 156, im->map_base + 4 * (uint64_t)in->first);
+		memcpy(b + TLI_INST_WALK_BYTES, t->xf + (size_t)k * SHADE_XF_BYTES, SHADE_XF_BYTES);
 	}
 	return im->top_bytes;
 }
@@ -112,6 +113,7 @@ static void layout(tl_image *im, const tl_scene *t, const mimg *world)
 	im->inst_base = im->top_base + (uint64_t)t->nnode * TLI_NODE_BYTES;
 	im->top_bytes = im->inst_base + (uint64_t)t->ninst * TLI_INST_BYTES - im->top_base;
 	im->size = im->top_base + im->top_bytes;
+	im->shade = (shade_tl){im->inst_base + TLI_INST_WALK_BYTES, TLI_INST_BYTES, NULL, 0};
 }
 
 uint64_t tli_size(const tl_scene *t, const mimg *world)

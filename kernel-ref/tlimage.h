@@ -2,9 +2,12 @@
  * tlimage.h: the chip's memory image of a two-level scene (twolevel.h;
  * docs/memory-map.md, "Two-level scenes").
  *
- * The frame's flattened image (memimage.h) comes first, unchanged: the
- * shader reads its shading records, materials and textures at the same
- * addresses as for a single tree. After it, on 4 KB boundaries:
+ * The shading image (memimage.h; the scene flattened in its instances' own
+ * frames, aff_flatten_local) comes first: the shader reads its triangle
+ * and shading records, materials and textures at the same addresses as
+ * for a single tree, and moves a hit's records into the world by its
+ * instance record's shading transform (shade.h, shade_tl). After it, on
+ * 4 KB boundaries:
  *
  *  - every object's image (its kd-nodes, lists and triangle records, as
  *    mimg_build laid them out) moved to its offset, the list entries
@@ -14,7 +17,10 @@
  *    where a hit in object space is named for the shader;
  *  - the top level (written per frame, the host's update): the BVH's nodes
  *    (TLI_NODE_BYTES each) then the instance records (TLI_INST_BYTES each)
- *    in the BVH's leaf order, so a leaf's instances are consecutive.
+ *    in the BVH's leaf order, so a leaf's instances are consecutive (a
+ *    hit's packet.inst is its record's index). The walk reads a record's
+ *    first TLI_INST_WALK_BYTES; the shader its forward and normal
+ *    matrices after them.
  *
  * Records are little-endian as the host is; tli_node / tli_inst are their
  * decoded forms, tli_*_decode the units' decoders of the bytes a read
@@ -27,9 +33,12 @@
 
 #include "kernel-ref/twolevel.h"
 
-#define TLI_NODE_BYTES 32u  /* box (6 floats), left or first (4), count (4; 0: inner) */
-#define TLI_INST_BYTES 160u /* inverse (12 doubles), world box, object box, 4 bases */
-#define TLI_ALIGN      4096u
+#define TLI_NODE_BYTES 32u /* box (6 floats), left or first (4), count (4; 0: inner) */
+/* an instance record: the walk's part (inverse: 12 doubles, world box,
+ * object box, 4 bases), then the shader's (forward and normal matrices) */
+#define TLI_INST_WALK_BYTES 160u
+#define TLI_INST_BYTES      (TLI_INST_WALK_BYTES + SHADE_XF_BYTES)
+#define TLI_ALIGN           4096u
 
 typedef struct tli_node {
 	aabb box;
@@ -53,6 +62,7 @@ typedef struct tl_image {
 	uint64_t top_bytes; /* the top level's size: the per-frame update */
 	uint64_t inst_base; /* the instance records */
 	uint32_t max_nodes; /* the largest object's kd-nodes */
+	shade_tl shade;     /* the shader's view of the records (shade_ctx.tl) */
 } tl_image;
 
 /* The image of t's frame (tl_frame) over the frame's flattened image

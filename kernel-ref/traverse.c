@@ -687,7 +687,7 @@ ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, tra
 {
 	const fpfmt *ft = prec && !prec->trav.full ? &prec->trav : NULL;
 	const fpfmt *fi = prec && !prec->isect.full ? &prec->isect : NULL;
-	ray_hit h = {tmax, 0, 0, PKT_NOHIT};
+	ray_hit h = {tmax, 0, 0, PKT_NOHIT, 0};
 	isect_ray ir = isect_prepare(d);
 	float oa[3] = {o.x, o.y, o.z};
 	float id[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};

@@ -5,6 +5,7 @@
 #include "kernel-ref/twolevel.h"
 
 #include "kernel-ref/isect.h"
+#include "kernel-ref/xform.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -146,8 +147,9 @@ static int build_objects(tl_scene *t, const aff_scene *a, const uint32_t *tmesh,
 	t->obj = calloc((size_t)t->ninst + 1, sizeof *t->obj);
 	t->order = calloc((size_t)t->ninst + 1, sizeof *t->order);
 	t->node = calloc(2 * (size_t)t->ninst + 1, sizeof *t->node);
+	t->xf = calloc((size_t)t->ninst + 1, SHADE_XF_BYTES);
 	int rc = 0;
-	if (!kept || !slot || !hashes || !t->obj || !t->order || !t->node)
+	if (!kept || !slot || !hashes || !t->obj || !t->order || !t->node || !t->xf)
 		rc = diag_set(d, a->path, 0, 0, "out of memory for the two-level trees");
 	for (uint32_t k = 0; !rc && k < t->ninst; k++) {
 		uint32_t end = k + 1 < t->ninst ? t->inst[k + 1].first : a->ntris;
@@ -177,7 +179,7 @@ int tl_build(tl_scene *t, const aff_scene *a, const kd_params *kp, diag *d)
 	if (!rc)
 		rc = build_objects(t, a, tmesh, kp, d);
 	free(tmesh);
-	t->tracer = (render_tracer){t, tracer_ray, tracer_packet};
+	t->tracer = (render_tracer){t, tracer_ray, tracer_packet, &t->shade};
 	t->build_ms = now_ms() - t0;
 	if (rc)
 		tl_free(t);
@@ -195,6 +197,7 @@ void tl_free(tl_scene *t)
 	free(t->gtri);
 	free(t->order);
 	free(t->node);
+	free(t->xf);
 	memset(t, 0, sizeof *t);
 }
 
@@ -287,6 +290,8 @@ int tl_frame(tl_scene *t, const aff_scene *a, double time, const mimg *world, di
 		tl_inst *in = &t->inst[k];
 		const double *w = in->xform >= 0 ? m + 12 * (size_t)in->xform : id;
 		affine_inverse(w, in->inv);
+		memcpy(in->fwd, w, sizeof in->fwd);
+		xf_normal_matrix(w, in->nrm);
 		in->box = world_box(w, t->obj[in->obj].m.bounds);
 		t->order[k] = k;
 	}
@@ -294,6 +299,16 @@ int tl_frame(tl_scene *t, const aff_scene *a, double time, const mimg *world, di
 	t->nnode = 1;
 	if (t->ninst)
 		bvh_build(t, 0, 0, t->ninst);
+	/* the shading transforms in record order; kernel-ref's shader finds
+	 * them past the shading image */
+	for (uint32_t k = 0; k < t->ninst; k++) {
+		const tl_inst *in = &t->inst[t->order[k]];
+		memcpy(t->xf + (size_t)k * SHADE_XF_BYTES, in->fwd, sizeof in->fwd);
+		memcpy(t->xf + (size_t)k * SHADE_XF_BYTES + sizeof in->fwd, in->nrm,
+		       sizeof in->nrm);
+	}
+	t->shade = (shade_tl){(world->size + 4095) / 4096 * 4096, SHADE_XF_BYTES, t->xf,
+	                      (uint64_t)t->ninst * SHADE_XF_BYTES};
 	t->world = world;
 	t->frame_ms = now_ms() - t0;
 	return 0;
@@ -343,9 +358,10 @@ static uint32_t world_addr(const tl_scene *t, const tl_inst *in, const tl_object
 /* One instance for one ray: traced in object space with the best t so far
  * as its bound; *h keeps the better hit by the single tree's rule.
  * Returns 1 when a shadow ray (any) found an occluder. */
-static int ray_inst(const tl_scene *t, const tl_inst *in, const float o[3], const float dir[3],
-                    int any, ray_hit *h, trav_counts *c)
+static int ray_inst(const tl_scene *t, uint32_t k, const float o[3], const float dir[3], int any,
+                    ray_hit *h, trav_counts *c)
 {
+	const tl_inst *in = &t->inst[t->order[k]];
 	vec3 oo, od;
 	to_object(in, o, dir, &oo, &od);
 	const tl_object *ob = &t->obj[in->obj];
@@ -360,6 +376,7 @@ static int ray_inst(const tl_scene *t, const tl_inst *in, const float o[3], cons
 	}
 	if (isect_better(r.t, g, h->t, h->tri)) {
 		r.tri = g;
+		r.inst = k;
 		*h = r;
 	}
 	return 0;
@@ -367,7 +384,7 @@ static int ray_inst(const tl_scene *t, const tl_inst *in, const float o[3], cons
 
 ray_hit tl_ray_trace(const tl_scene *t, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)
 {
-	ray_hit h = {tmax, 0, 0, PKT_NOHIT};
+	ray_hit h = {tmax, 0, 0, PKT_NOHIT, 0};
 	const float of[3] = {o.x, o.y, o.z}, df[3] = {d.x, d.y, d.z};
 	const float id[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
 	uint32_t stack[64];
@@ -386,7 +403,7 @@ ray_hit tl_ray_trace(const tl_scene *t, vec3 o, vec3 d, float tmax, int any_hit,
 		for (uint32_t k = n->first; k < n->first + n->count; k++) {
 			const tl_inst *in = &t->inst[t->order[k]];
 			if (box_hit(&in->box, of, id, h.t) &&
-			    ray_inst(t, in, of, df, any_hit, &h, c))
+			    ray_inst(t, k, of, df, any_hit, &h, c))
 				return h;
 		}
 	}
@@ -430,7 +447,7 @@ void tl_pkt_to_object(const double inv[12], const packet *p, uint64_t mask, pack
 	}
 }
 
-void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g)
+void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g, uint32_t inst)
 {
 	for (uint64_t m = mask; m; m &= m - 1) {
 		int i = __builtin_ctzll(m);
@@ -442,6 +459,7 @@ void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g)
 		} else if (isect_better(q->t[i], g[i], p->t[i], p->tri[i])) {
 			p->t[i] = q->t[i];
 			p->tri[i] = g[i];
+			p->inst[i] = inst;
 			p->bu[i] = q->bu[i];
 			p->bv[i] = q->bv[i];
 		}
@@ -450,9 +468,10 @@ void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g)
 
 /* One instance for the rays `mask` of p: a copy of them moved into object
  * space, traced with the object's tree, the better hits taken back. */
-static void pkt_inst(const tl_scene *t, const tl_inst *in, packet *p, uint64_t mask, packet *q,
+static void pkt_inst(const tl_scene *t, uint32_t k, packet *p, uint64_t mask, packet *q,
                      trav_entry *stack, int stack_max, trav_counts *c)
 {
+	const tl_inst *in = &t->inst[t->order[k]];
 	const tl_object *ob = &t->obj[in->obj];
 	tl_pkt_to_object(in->inv, p, mask, q);
 	pkt_trace(q, &ob->m, stack, stack_max, c);
@@ -461,7 +480,7 @@ static void pkt_inst(const tl_scene *t, const tl_inst *in, packet *p, uint64_t m
 		int i = __builtin_ctzll(m);
 		g[i] = q->tri[i] == PKT_NOHIT ? PKT_NOHIT : world_addr(t, in, ob, q->tri[i]);
 	}
-	tl_pkt_merge(p, q, mask, g);
+	tl_pkt_merge(p, q, mask, g, k);
 }
 
 typedef struct tl_entry {
@@ -499,7 +518,7 @@ uint64_t tl_pkt_trace(const tl_scene *t, packet *p, trav_entry *stack, int stack
 			const tl_inst *in = &t->inst[t->order[k]];
 			uint64_t im = tl_pkt_box(&in->box, p, mask);
 			if (im)
-				pkt_inst(t, in, p, im, &q, stack, stack_max, c);
+				pkt_inst(t, k, p, im, &q, stack, stack_max, c);
 		}
 	}
 	return entered;

@@ -18,9 +18,11 @@
  * matrix, the direction not normalised, so t is the world t) and traced in
  * the object's tree with kernel-ref's own traversal and triangle test (the
  * single-ray path or the packet path). Hits carry the triangle's address in
- * the world memory image the frame was flattened into (aff_flatten, same
- * triangle order), so the shader reads world-space normals and materials
- * from it as for a single tree. The hit rule is the single tree's (smallest
+ * the shading image (aff_flatten_local: the scene's triangles in aff_flatten's
+ * order, each in its instance's object space, the same at every time) and
+ * the instance (its record's index in leaf order); the shader moves the
+ * triangle's corners and normals into the world by the instance's forward
+ * and normal matrices (shade.h, shade_tl). The hit rule is the single tree's (smallest
  * t, then smallest world triangle address), and an instance is traced with
  * the best t so far as its bound, so the result does not depend on the
  * order instances are visited in: the packet and single-ray paths agree
@@ -47,6 +49,8 @@ typedef struct tl_inst {
 	int32_t xform;  /* its AFF transform node (-1: the root) */
 	uint32_t first; /* its triangles' indices in the flattened scene: gtri[first..] */
 	double inv[12]; /* world -> object, row-major 3x4 */
+	double fwd[12]; /* object -> world (the node's world matrix) */
+	double nrm[9];  /* fwd's normal matrix (xform.h): the inverse transpose */
 	aabb box;       /* world box, widened */
 } tl_inst;
 
@@ -65,7 +69,12 @@ typedef struct tl_scene {
 	uint32_t *order;
 	tl_node *node;
 	uint32_t nnode;
-	const mimg *world;    /* the frame's flattened image: hit addresses name its triangles */
+	const mimg *world; /* the shading image: hit addresses name its triangles */
+	/* per instance record (BVH leaf order, packet.inst): its shading
+	 * transform, SHADE_XF_BYTES (fwd, then nrm); kernel-ref's shader
+	 * reads them through shade (shade.h) */
+	uint8_t *xf;
+	shade_tl shade;
 	double build_ms;      /* bottom level (tl_build) */
 	double frame_ms;      /* last top level (tl_frame) */
 	render_tracer tracer; /* hands tl_ray_trace / tl_pkt_trace to render_frame */
@@ -75,8 +84,8 @@ typedef struct tl_scene {
  * per distinct object. */
 int tl_build(tl_scene *t, const aff_scene *a, const kd_params *kp, diag *d);
 
-/* The top level at time `time`: instances and their BVH. world is the
- * scene flattened at the same time (its image: aff_flatten, mimg_build). */
+/* The top level at time `time`: instances, their BVH and shading
+ * transforms. world is the shading image (aff_flatten_local, mimg_build). */
 int tl_frame(tl_scene *t, const aff_scene *a, double time, const mimg *world, diag *d);
 void tl_free(tl_scene *t);
 
@@ -96,7 +105,8 @@ uint64_t tl_pkt_box(const aabb *b, const packet *p, uint64_t mask);
  * object), q->valid = mask, each ray's bound its best t so far. */
 void tl_pkt_to_object(const double inv[12], const packet *p, uint64_t mask, packet *q);
 /* Takes q's hits (rays of mask) back into p by the single tree's rule; g[i]
- * names lane i's hit triangle in the world image. */
-void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g);
+ * names lane i's hit triangle in the world image, inst the instance
+ * record (packet.inst). */
+void tl_pkt_merge(packet *p, const packet *q, uint64_t mask, const uint32_t *g, uint32_t inst);
 
 #endif

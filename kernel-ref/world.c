@@ -324,15 +324,35 @@ static int two_level_build(world *w, const world_opts *o, diag *d)
 	return tl_frame(w->tl, w->aff, w->anim_time, &w->m, d);
 }
 
-/* An AFF scene read and flattened at o's time; its own view (if the file
- * has one) to *sv, *has_view set. */
+/* Frames the view on the scene's box at time t: the world's own scene's,
+ * or with two_level (whose scene is in object space) that of the scene
+ * flattened at t. */
+static int frame_bbox(world *w, int two_level, double t, diag *d)
+{
+	if (!two_level) {
+		view_frame_bbox(&w->v, w->s.bounds);
+		return 0;
+	}
+	scene s;
+	if (aff_flatten(w->aff, t, 0, &s, d))
+		return -1;
+	view_frame_bbox(&w->v, s.bounds);
+	scene_free(&s);
+	return 0;
+}
+
+/* An AFF scene read and flattened at o's time (--two-level: in its
+ * instances' own frames, aff_flatten_local, the same at every time); its
+ * own view (if the file has one) to *sv, *has_view set. */
 static int load_aff(world *w, const world_opts *o, const char *path, view *sv, int *has_view,
                     diag *d)
 {
 	if (!(w->aff = calloc(1, sizeof *w->aff)))
 		return diag_set(d, path, 0, 0, "out of memory");
 	w->anim_time = world_frame_time(o, 0);
-	if (aff_load(w->aff, path, NULL, NULL, d) || aff_flatten(w->aff, w->anim_time, 1, &w->s, d))
+	if (aff_load(w->aff, path, NULL, NULL, d) ||
+	    (o->two_level ? aff_flatten_local(w->aff, 1, &w->s, d)
+	                  : aff_flatten(w->aff, w->anim_time, 1, &w->s, d)))
 		return -1;
 	int r = aff_view(w->aff, w->anim_time, sv, d);
 	*has_view = r > 0;
@@ -541,8 +561,9 @@ int world_load(world *w, const world_opts *o, diag *d)
 		w->v = sv;
 	/* a scene file without a view: framed by its bounding box (the
 	 * embedded room's camera showed a model as a few pixels) */
-	if (path && !spd && !aff_has_view && !o->views)
-		view_frame_bbox(&w->v, w->s.bounds);
+	if (path && !spd && !aff_has_view && !o->views &&
+	    frame_bbox(w, o->two_level, w->anim_time, d))
+		goto fail;
 	if (aff)
 		snprintf(w->scene_label, sizeof w->scene_label, "%.990s@t=%g", path, w->anim_time);
 	else
@@ -657,13 +678,17 @@ int world_set_time(world *w, const world_opts *o, double t, diag *d)
 {
 	if (!w->aff)
 		return diag_set(d, "--anim-time", 0, 0, "needs an AFF scene (--scene FILE.aff)");
-	mimg_free(&w->m);
-	kd_free(&w->kd);
-	scene_free(&w->s);
 	double t0 = now_ms();
 	w->anim_time = t;
-	if (aff_flatten(w->aff, t, 1, &w->s, d))
-		return -1;
+	/* two-level: the shading image is the same at every time; only the
+	 * top level moves */
+	if (!w->tl) {
+		mimg_free(&w->m);
+		kd_free(&w->kd);
+		scene_free(&w->s);
+		if (aff_flatten(w->aff, t, 1, &w->s, d))
+			return -1;
+	}
 	view sv;
 	int r = aff_view(w->aff, t, &sv, d);
 	if (r < 0)
@@ -671,14 +696,18 @@ int world_set_time(world *w, const world_opts *o, double t, diag *d)
 	if (!o->views) {
 		if (r)
 			w->v = sv;
-		else
-			view_frame_bbox(&w->v, w->s.bounds);
+		else if (frame_bbox(w, w->tl != NULL, t, d))
+			return -1;
 	}
 	snprintf(w->scene_label, sizeof w->scene_label, "%.990s@t=%g", w->aff->path, t);
 	w->load_ms = now_ms() - t0;
 	w->view_changed = 0;
 	if (apply_view_flags(w, o, d))
 		return -1;
+	if (w->tl) {
+		w->kd_ms = w->image_ms = 0;
+		return tl_frame(w->tl, w->aff, t, &w->m, d);
+	}
 	t0 = now_ms();
 	if (kd_build(&w->kd, &w->s, world_kd(o), d))
 		return -1;
@@ -689,7 +718,7 @@ int world_set_time(world *w, const world_opts *o, double t, diag *d)
 	w->image_ms = now_ms() - t0;
 	if (w->grid && world_grid(w, o, d))
 		return -1;
-	return w->tl ? tl_frame(w->tl, w->aff, t, &w->m, d) : 0;
+	return 0;
 }
 
 /* ---- command-line helpers ---- */

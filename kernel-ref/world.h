@@ -73,7 +73,9 @@ typedef struct world {
 	double anim_time;
 	/* With --two-level: the objects' trees (built once) and the instances
 	 * at anim_time; the render_opts.tracer for the frame is tl->tracer,
-	 * and kd is then a depth-1 tree (m serves only for shading). */
+	 * and kd is then a depth-1 tree (m serves only for shading; s is then
+	 * in the instances' own frames, aff_flatten_local, and s, kd and m
+	 * stay the same at every time). */
 	struct tl_scene *tl;
 	/* With --accel grid: the grid over m, rebuilt with it (the frame's
 	 * render_opts.tracer is grid->tracer); grid->build_ms its build. */

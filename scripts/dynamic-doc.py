@@ -57,8 +57,7 @@ def steps(r):
 
 def host_ms(r):
     """The host's per-frame build: the flat scene's kd-tree and image, or
-    the two-level scene's top level (its world image serves shading and is
-    counted beside)."""
+    the two-level scene's top level (its shading image is built once)."""
     h = r["host"]
     if "two_level" in r:
         return r["two_level"]["host_top_level_ms"]
@@ -171,7 +170,7 @@ def warm_summary(cfg):
     ms = mean([x["update_ms"] for x in later])
     return (
         "steady state (frames 2..%d) %.1f fps, %.2f MB %s per frame; update per frame %.3f MB "
-        "(top level %.3f MB, world-space records of moved parts %.3f MB), %.1f ms on the host bus"
+        "(top level %.3f MB, the rest of the image %.3f MB), %.1f ms on the host bus"
         % (FRAMES, ss["fps"], ss["pci_mb"] if cfg == "vma" else ss["sdram_mb"],
            "PCI" if cfg == "vma" else "SDRAM", mb(up), mb(top), mb(up - top), ms)
     )
@@ -207,7 +206,8 @@ def main():
         "between frames. Traversal steps: kd-node "
         "steps, plus top-level node steps for the two-level tree (the same cold and "
         "warm). Transformations: packets moved into an instance's space by the "
-        "transformation unit. fps warm + update: the frame and its update's transfer over "
+        "transformation unit (which also moves each shaded packet's hits back into the "
+        "world: `normal_transformations` in the reports). fps warm + update: the frame and its update's transfer over "
         "the host bus one after the other. Frame 1's warm update is the top level alone "
         "(the objects and the first frame's records were on the board before)."
         % (R["flat-std"][0]["triangles"], FRAMES, FPS, T0, SIZE,
@@ -235,12 +235,12 @@ def main():
         "",
         "## What this shows and what it does not",
         "",
-        "The warm update is dominated by the world-space triangle and shading records "
-        "of the robot parts that moved: the two-level chip's shader reads the frame's "
-        "flattened records (normals in world space, kernel-ref's shader), so every moved "
-        "part's records are rewritten each frame. With object-space records and normals "
-        "transformed back by the transformation unit (not built) the update would be the "
-        "top level alone. The host times are single measurements on a shared machine.",
+        "The warm update is the top level alone (BVH nodes and instance records): the "
+        "two-level shading image holds every part's triangle and shading records in its "
+        "own frame, the same at every time, and the shader (kernel-ref's and the chip's "
+        "RGS, after a transformation-unit op) moves a hit's corners and normals into the "
+        "world by the forward and normal matrices of its instance record. The host times "
+        "are single measurements on a shared machine.",
         "",
     ]
     tmp = DOC + ".tmp"

@@ -723,7 +723,10 @@ static int chip_env(chip *c, diag *d)
 	render_opts ro;
 	render_opts_default(&ro);
 	v->sc = (shade_ctx){&c->regs,      w->v.lights, w->v.nlights, cfg->shading.max_depth,
-	                    ro.background, &c->fb,      NULL,         NULL};
+	                    ro.background, &c->fb,      NULL,         NULL,
+	                    NULL};
+	if (w->tl) /* object-space records, moved back by the instance records */
+		v->sc.tl = &c->tli.shade;
 	cam_setup_view(&v->cam, &w->v, cfg->frame.width, cfg->frame.height);
 	if (!drt_is_off(&w->v.drt)) { /* distribution effects (kernel-ref/drt.h) */
 		drt_shade_setup(&v->drt, &w->v.drt, w->v.cam.up, (uint32_t)cfg->frame.width);

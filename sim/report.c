@@ -325,14 +325,17 @@ void report_text(FILE *f, const report_info *ri)
 	}
 	fputc('\n', f);
 	if (c->w->tl)
-		fprintf(f,
-		        "  two-level: %u instances of %u objects; %llu top-level steps, %llu "
-		        "transformations; update %llu bytes = %.3f ms over the host bus%s\n",
-		        c->w->tl->ninst, c->w->tl->nobj,
-		        (unsigned long long)get(c, "toplevel.node_steps"),
-		        (unsigned long long)get(c, "xform.instances"),
-		        (unsigned long long)anim_mean(c, c->frame_update), anim_mean_ms(c),
-		        c->frames_done > 1 ? " (mean per frame)" : "");
+		fprintf(
+		    f,
+		    "  two-level: %u instances of %u objects; %llu top-level steps, %llu "
+		    "transformations, %llu to the world; update %llu bytes = %.3f ms over the host "
+		    "bus%s\n",
+		    c->w->tl->ninst, c->w->tl->nobj,
+		    (unsigned long long)get(c, "toplevel.node_steps"),
+		    (unsigned long long)get(c, "xform.instances"),
+		    (unsigned long long)(chip_rtp_sum(c, "xform.ops") - get(c, "xform.instances")),
+		    (unsigned long long)anim_mean(c, c->frame_update), anim_mean_ms(c),
+		    c->frames_done > 1 ? " (mean per frame)" : "");
 	if (c->w->grid) /* the rays line's kd steps are then the grid's slice steps */
 		fprintf(f,
 		        "  grid: %dx%dx%d cells, %u references, %llu bytes after the frame's "
@@ -905,6 +908,9 @@ static void json_two_level(jsonw *j, const chip *c)
 	jsonw_kuint(j, "top_node_steps", get(c, "toplevel.node_steps"));
 	jsonw_kuint(j, "instance_tests", get(c, "toplevel.instance_tests"));
 	jsonw_kuint(j, "transformations", get(c, "xform.instances"));
+	/* the unit's other ops: shaded packets moved back (units/rgs.c) */
+	jsonw_kuint(j, "normal_transformations",
+	            chip_rtp_sum(c, "xform.ops") - get(c, "xform.instances"));
 	jsonw_kuint(j, "transformed_rays",
 	            get(c, "type.primary.xform.rays") + get(c, "type.shadow.xform.rays") +
 	                get(c, "type.reflection.xform.rays") +

@@ -102,8 +102,8 @@ static void walk_frame(walk *k, const world *w, const saar_config *c)
 	cr_assert_eq(fb_init(&fb, W, H), 0);
 	render_opts ro;
 	render_opts_default(&ro);
-	shade_ctx sc = {&w->m,         w->v.lights, w->v.nlights, c->shading.max_depth,
-	                ro.background, &fb,         NULL,         NULL};
+	shade_ctx sc = {&w->m, w->v.lights, w->v.nlights, c->shading.max_depth, ro.background, &fb,
+	                NULL,  NULL,        NULL};
 	int nk = w->v.nlights + 2, cap = (c->shading.max_depth + 2) * nk + 1;
 	packet *work = hm_alloc((size_t)cap * sizeof *work), *kids = hm_alloc(nk * sizeof *kids);
 	trav_entry *stack = hm_alloc(PKT_STACK_MAX * sizeof *stack);

@@ -403,7 +403,7 @@ Test(drt, packets_hold_one_type_and_sample_of_one_tile)
 	drt_shade_setup(&ds, &w.v.drt, w.v.cam.up, 64);
 	framebuf fb;
 	cr_assert_eq(fb_init(&fb, 64, 64), 0);
-	shade_ctx sc = {&w.m, w.v.lights, w.v.nlights, 3, v3(0, 0, 0), &fb, NULL, &ds};
+	shade_ctx sc = {&w.m, w.v.lights, w.v.nlights, 3, v3(0, 0, 0), &fb, NULL, &ds, NULL};
 	/* aligned_alloc wants sizes that are multiples of the alignment */
 #define A64(n) (((n) + 63) & ~(size_t)63)
 	trav_entry *stack = aligned_alloc(64, A64(PKT_STACK_MAX * sizeof(trav_entry)));

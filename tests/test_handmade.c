@@ -19,7 +19,7 @@
  * triangle test and the hit rule (smallest t, then smaller address). */
 static ray_hit brute_force(const mimg *m, vec3 o, vec3 d)
 {
-	ray_hit h = {INFINITY, 0, 0, PKT_NOHIT};
+	ray_hit h = {INFINITY, 0, 0, PKT_NOHIT, 0};
 	isect_ray ir = isect_prepare(d);
 	for (uint32_t k = 0; k < m->ntris; k++) {
 		uint32_t ta = (uint32_t)mimg_tri_addr(m, k);

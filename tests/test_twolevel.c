@@ -31,42 +31,51 @@ static size_t tl_differ(const uint8_t *a, const uint8_t *b, size_t npix)
 
 /* Every frame of world o (an AFF scene) at the times ts: the two-level
  * image by packets equals its single-ray image exactly, and differs from
- * the flattened single tree's in at most max_share of the pixels. */
+ * the flattened single tree's in at most max_share of the pixels. The
+ * two-level world (--two-level) shades from its object-space image, the
+ * flat one from the scene flattened at the time. */
 static void tl_check_frames(world_opts *o, const double *ts, int nt, int w, int h, double max_share)
 {
-	world wd;
+	world wd, wt;
 	diag d = {{0}};
 	o->have_anim_time = 1;
 	o->anim_time = ts[0];
+	o->two_level = 0;
 	cr_assert_eq(world_load(&wd, o, &d), 0, "%s", d.msg);
-	tl_scene t;
-	cr_assert_eq(tl_build(&t, wd.aff, &o->kd, &d), 0, "%s", d.msg);
+	world_opts ot = *o;
+	ot.two_level = 1;
+	cr_assert_eq(world_load(&wt, &ot, &d), 0, "%s", d.msg);
+	cr_assert(wt.tl);
 	render_opts ro;
 	render_opts_default(&ro);
 	ro.width = w;
 	ro.height = h;
 	size_t npix = (size_t)w * (size_t)h;
 	for (int k = 0; k < nt; k++) {
-		if (k > 0)
+		if (k > 0) {
 			cr_assert_eq(world_set_time(&wd, o, ts[k], &d), 0, "%s", d.msg);
-		cr_assert_eq(tl_frame(&t, wd.aff, ts[k], &wd.m, &d), 0, "%s", d.msg);
+			cr_assert_eq(world_set_time(&wt, &ot, ts[k], &d), 0, "%s", d.msg);
+		}
 		ro.tracer = NULL;
 		ro.single_ray = 0;
 		uint8_t *flat = tl_image(&wd, &ro);
-		ro.tracer = &t.tracer;
-		uint8_t *pk = tl_image(&wd, &ro);
+		ro.tracer = &wt.tl->tracer;
+		uint8_t *pk = tl_image(&wt, &ro);
 		ro.single_ray = 1;
-		uint8_t *sr = tl_image(&wd, &ro);
+		uint8_t *sr = tl_image(&wt, &ro);
 		size_t ps = tl_differ(pk, sr, npix), pf = tl_differ(pk, flat, npix);
 		cr_assert_eq(ps, 0, "t=%g: two-level packets and single rays differ in %zu pixels",
 		             ts[k], ps);
 		cr_assert((double)pf <= max_share * (double)npix,
 		          "t=%g: two-level and flat differ in %zu of %zu pixels", ts[k], pf, npix);
+		if (getenv("TL_SHOW_DIFF"))
+			fprintf(stderr, "t=%g: two-level and flat differ in %zu of %zu pixels\n",
+			        ts[k], pf, npix);
 		free(flat);
 		free(pk);
 		free(sr);
 	}
-	tl_free(&t);
+	world_free(&wt);
 	world_free(&wd);
 }
 
@@ -188,4 +197,84 @@ Test(twolevel, instances_share_objects, .timeout = 60)
 	o.scene = p;
 	const double ts[] = {0, 0.5, 1};
 	tl_check_frames(&o, ts, 3, 48, 48, 0.01);
+}
+
+/* Pixels in which the two-level frame of SPIN at time t (shade_fault
+ * fault planted) differs from the flat frame, of 48 x 48. */
+static size_t spin_differ(double t, int fault)
+{
+	char dir[128], p[1024];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "spin.aff", SPIN);
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = p;
+	o.have_anim_time = 1;
+	o.anim_time = t;
+	world wd, wt;
+	diag d = {{0}};
+	cr_assert_eq(world_load(&wd, &o, &d), 0, "%s", d.msg);
+	o.two_level = 1;
+	cr_assert_eq(world_load(&wt, &o, &d), 0, "%s", d.msg);
+	render_opts ro;
+	render_opts_default(&ro);
+	ro.width = ro.height = 48;
+	uint8_t *flat = tl_image(&wd, &ro);
+	ro.tracer = &wt.tl->tracer;
+	shade_fault = fault;
+	uint8_t *two = tl_image(&wt, &ro);
+	shade_fault = SHADE_FAULT_NONE;
+	size_t n = tl_differ(flat, two, 48 * 48);
+	free(flat);
+	free(two);
+	world_free(&wt);
+	world_free(&wd);
+	return n;
+}
+
+/* The two-level shading image is in object space, the same at every time
+ * (its records do not move with the frame), and the shader moves a hit's
+ * corners and normals into the world by its instance's matrices. Mistake
+ * planted: the normals left in object space (the normal transform
+ * skipped; the corners still moved): the spinning part is lit as if it
+ * had not turned, so the frame differs from the flat one in far more
+ * than the edge pixels the object-space test's rounding moves. */
+Test(twolevel, normals_moved_back, .timeout = 60)
+{
+	const double ts[] = {1.7, 3};
+	for (int k = 0; k < 2; k++) {
+		size_t ok = spin_differ(ts[k], SHADE_FAULT_NONE);
+		size_t bad = spin_differ(ts[k], SHADE_FAULT_NO_NORMAL_XF);
+		cr_assert(ok <= 23, "t=%g: %zu pixels differ from the flat frame", ts[k], ok);
+		cr_assert(bad > 100,
+		          "t=%g: normals left in object space, yet only %zu pixels differ", ts[k],
+		          bad);
+	}
+}
+
+/* The shading image does not change between frames: world_set_time
+ * moves only the top level. Mistake caught: the image rebuilt from the
+ * scene flattened at the frame's time (world-space records: the warm
+ * update would carry every moved part's records again). */
+Test(twolevel, shading_image_is_the_same_at_every_time, .timeout = 60)
+{
+	char dir[128], p[1024];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(p, sizeof p, dir, "spin.aff", SPIN);
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = p;
+	o.two_level = 1;
+	world w;
+	diag d = {{0}};
+	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
+	uint64_t n = w.m.size;
+	uint8_t *b0 = malloc(n);
+	cr_assert(b0);
+	memcpy(b0, w.m.bytes, n);
+	cr_assert_eq(world_set_time(&w, &o, 1.7, &d), 0, "%s", d.msg);
+	cr_assert_eq(w.m.size, n);
+	cr_assert(memcmp(b0, w.m.bytes, n) == 0, "the shading image changed with the time");
+	free(b0);
+	world_free(&w);
 }

@@ -284,6 +284,14 @@ static void issue_reads(thr_ctx *t)
 	S->issued = S->n;
 }
 
+static void normals_moved(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	thr_ctx *t = ctx;
+	thr_use(t, UNIT_RGS, (int)thr_rays(t->p), shade_done);
+}
+
 static void shade_fetched(thr_ctx *t)
 {
 	thr_env *v = t->env;
@@ -303,6 +311,13 @@ static void shade_fetched(thr_ctx *t)
 	/* the pass's results are made */
 	shade_adds_apply(&S->adds, v->sc.fb);
 	thr_shade_count(t, &S->cnt);
+	/* a two-level scene's hits: their corners and normals moved into the
+	 * world by the transformation unit (Schmittler et al. GH 2004), one op
+	 * of the hit rays, before the shader's op */
+	if (v->sc.tl && S->cnt.hits) {
+		thr_use(t, UNIT_XFORM, (int)S->cnt.hits, normals_moved);
+		return;
+	}
 	thr_use(t, UNIT_RGS, (int)thr_rays(t->p), shade_done);
 }
 

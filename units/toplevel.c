@@ -140,7 +140,8 @@ static void inst_next(thr_ctx *t)
 		next(t);
 		return;
 	}
-	thr_read(t, MEM_KD, v->tl_insts + (uint64_t)L->k * TLI_INST_BYTES, TLI_INST_BYTES, L->rec);
+	thr_read(t, MEM_KD, v->tl_insts + (uint64_t)L->k * TLI_INST_BYTES, TLI_INST_WALK_BYTES,
+	         L->rec);
 	thr_wait_mem(t, inst_fetched);
 }
 
@@ -148,7 +149,7 @@ static void inst_next(thr_ctx *t)
 static void merged(thr_ctx *t)
 {
 	thr_tl *L = t->tl;
-	tl_pkt_merge(t->p, &L->q, L->im, L->g);
+	tl_pkt_merge(t->p, &L->q, L->im, L->g, L->k);
 	L->k++;
 	inst_next(t);
 }
