@@ -175,7 +175,7 @@ int grid_build(grid *g, const mimg *m, const grid_params *p, diag *d)
 	memset(g, 0, sizeof *g);
 	g->p = *p;
 	g->m = m;
-	g->tracer = (render_tracer){g, tracer_ray, tracer_packet};
+	g->tracer = (render_tracer){g, tracer_ray, tracer_packet, NULL};
 	double lambda = p->lambda;
 	uint64_t total;
 	/* overlapping triangles can reference far more cells than lambda N:
