@@ -98,7 +98,7 @@ static int dda_cell(const grid *g, uint32_t c, const isect_ray *ir, vec3 o, int 
 				return 1;
 			}
 		} else if (isect_better(t, ta, h->t, h->tri)) {
-			*h = (ray_hit){t, bu, bv, ta};
+			*h = (ray_hit){t, bu, bv, ta, 0};
 		}
 	}
 	return 0;
@@ -106,7 +106,7 @@ static int dda_cell(const grid *g, uint32_t c, const isect_ray *ir, vec3 o, int 
 
 ray_hit grid_ray_trace(const grid *g, vec3 o, vec3 d, float tmax, int any_hit, grid_counts *gc)
 {
-	ray_hit h = {tmax, 0, 0, PKT_NOHIT};
+	ray_hit h = {tmax, 0, 0, PKT_NOHIT, 0};
 	float tn, tf;
 	if (!g->m->ntris || !grid_clip_box(g, o, d, tmax, &tn, &tf))
 		return h;

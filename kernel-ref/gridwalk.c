@@ -60,7 +60,7 @@ static int dda_start(grid_walk *w, int i)
 	w->o = o;
 	w->tmax = p->tmax[i];
 	w->any_hit = p->type == PKT_SHADOW;
-	w->h = (ray_hit){w->tmax, 0, 0, PKT_NOHIT};
+	w->h = (ray_hit){w->tmax, 0, 0, PKT_NOHIT, 0};
 	float tn;
 	if (!grid_clip_box(g, o, d, w->tmax, &tn, &w->tf))
 		return 0;
@@ -388,7 +388,7 @@ int grid_walk_tri(grid_walk *w, const mimg_tri *tri)
 				dda_end(w); /* an occluder: the ray is done */
 			}
 		} else if (isect_better(t, w->ta, w->h.t, w->h.tri))
-			w->h = (ray_hit){t, bu, bv, w->ta};
+			w->h = (ray_hit){t, bu, bv, w->ta, 0};
 		return 1;
 	}
 	/* a culled triangle stays culled (the frustum does not change) */
