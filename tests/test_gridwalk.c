@@ -70,7 +70,7 @@ static void gw_frames(const world *w, int size, gw_check *out)
 		diag d = {{0}};
 		cr_assert_eq(grid_build(&g, &w->m, &gp, &d), 0, "%s", d.msg);
 		gw_check k = {.g = &g};
-		render_tracer tr = {&k, gw_ray, gw_packet};
+		render_tracer tr = {&k, gw_ray, gw_packet, NULL};
 		render_opts o;
 		render_opts_default(&o);
 		o.width = o.height = size;
