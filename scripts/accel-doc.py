@@ -69,7 +69,11 @@ def static_section(out, views):
              "DDA); *trace*: kernel-ref's traversal and "
              "intersection time; *steps/ray*: kd-node steps (kd) or slice steps (grid) "
              "per ray; *tests/ray*: ray-triangle tests per ray; *same image*: the grid's "
-             "frame equals the kd-tree's byte for byte.")
+             "frame equals the kd-tree's byte for byte. Two-level trees need a scene "
+             "of rigid objects placed by transforms (an AFF scene): a static OBJ is one "
+             "object, whose two-level tree would be its kd-tree under one instance, so "
+             "they are compared on the Robots below (the `robots` view here is the same "
+             "scene frozen at t = 0 as an OBJ).")
     L.append("")
     L.append("| view | triangles | kd build ms | grid build ms | grid cells | kd trace ms | "
              "grid trace ms | kd steps/ray | grid steps/ray | kd tests/ray | grid tests/ray "
@@ -225,6 +229,30 @@ def robots_section(out, times):
              "unit); the per-frame builds are the host's *kd build* and *grid build* "
              "columns (each frame a fresh world and chip: the grid's image written "
              "with the frame's).")
+    L.append("")
+    L.append("The chip on the two-level trees (`saarsim --two-level`: the top level "
+             "walked by the traversal unit, rays moved into object space and normals "
+             "back by the transformation unit; docs/design.md \"The chip on two-level "
+             "scenes\"), each frame a fresh chip as above, beside its kd-tree run. "
+             "*update KB*: the top level the host writes per frame (warm animations "
+             "write only this: docs/DYNAMIC.md).")
+    L.append("")
+    L.append("| t | kd chip fps | two-level chip fps | kd chip SDRAM KB | two-level chip "
+             "SDRAM KB | kd chip L1 hit rate | two-level chip L1 hit rate | top-level "
+             "steps/ray | transformations | update KB | two-level check |")
+    L.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    for t in times:
+        c = load(out, f"robots-{t}-chip.json")
+        ct = load(out, f"robots-{t}-chip-two-level.json")
+        tl = ct["two_level"]
+        L.append(f"| {t} | {fmt(c['fps'], 0)} | {fmt(ct['fps'], 0)} | "
+                 f"{fmt(c['memory']['hierarchy']['sdram']['bytes'] / 1024, 1)} | "
+                 f"{fmt(ct['memory']['hierarchy']['sdram']['bytes'] / 1024, 1)} | "
+                 f"{fmt(l1_hit_rate(c), 3)} | {fmt(l1_hit_rate(ct), 3)} | "
+                 f"{fmt(tl['top_node_steps'] / rays(ct))} | "
+                 f"{tl['transformations']:,} | "
+                 f"{fmt(tl['update_bytes'] / 1024, 1)} | "
+                 f"{yes(ct['check']['identical_8bit'])} |")
     L.append("")
     return L
 

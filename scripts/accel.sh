@@ -19,8 +19,8 @@
 #
 # Environment:
 #   ACCEL_SIZE    frame size (default 128x96)
-#   ACCEL_VIEWS   static views of the shared views file (default: cornell
-#                 teapot bunny conference sponza sibenik)
+#   ACCEL_VIEWS   static views of the shared views file (default: every
+#                 view it names)
 #   ACCEL_TIMES   Robots animation times (default: 0 10 20 30)
 #   ACCEL_T4_VIEW the view of the Table 4 runs at 4x the size (conference)
 #   ACCEL_OUT     run folder (default out/accel; runs already there are kept)
@@ -44,7 +44,10 @@ SAARSIM=$B/saarsim
 command -v python3 >/dev/null 2>&1 || bad "python3 not found (sh scripts/install-deps.sh)"
 SIZE=${ACCEL_SIZE:-128x96}
 printf '%s\n' "$SIZE" | grep -Eq '^[1-9][0-9]{0,4}x[1-9][0-9]{0,4}$' || bad "ACCEL_SIZE must be WxH, got '$SIZE'"
-VIEWS=${ACCEL_VIEWS:-cornell teapot bunny conference sponza sibenik}
+# every view of views.yaml (its names: two-space-indented keys under views:)
+VIEWS=${ACCEL_VIEWS:-$(awk '/^views:/ { v = 1; next } /^[^ #]/ { v = 0 }
+	v && /^  [A-Za-z0-9_.-]+:[ \t]*$/ { n = $1; sub(/:$/, "", n); printf "%s ", n }' \
+	"${SAAR_SCENES:-$ROOT/../shared/scenes}/views.yaml" 2>/dev/null)}
 TIMES=${ACCEL_TIMES:-0 10 20 30}
 SC=${SAAR_SCENES:-$ROOT/../shared/scenes}
 VF=$SC/views.yaml
@@ -99,6 +102,7 @@ for t in $TIMES; do
 	run "robots-$t-two-level.json" rtref $R --two-level --out "$OUT/robots-$t-two-level.ppm"
 	run "robots-$t-chip.json" saarsim $R
 	run "robots-$t-chip-grid.json" saarsim $R --accel grid
+	run "robots-$t-chip-two-level.json" saarsim $R --two-level
 done
 
 python3 "$ROOT/scripts/accel-doc.py" "$OUT" "$DOC" "$SIZE" "$VIEWS" "$TIMES" "$BIG" "$BS"
