@@ -122,16 +122,7 @@ SECTION=$TMP/section
 	echo "<!-- END scale -->"
 } >"$SECTION"
 
-if [ -f "$DOC" ]; then
-	awk -v sec="$SECTION" -v b="<!-- BEGIN scale -->" -v e="<!-- END scale -->" '
-	BEGIN { while ((getline l < sec) > 0) s = s l "\n" }
-	index($0, b) { printf "%s", s; skip = 1; done = 1; next }
-	index($0, e) { skip = 0; next }
-	!skip { print }
-	END { if (!done) printf "\n%s", s }' "$DOC" >"$DOCTMP"
-	mv -f "$DOCTMP" "$DOC"
-else
-	cp "$SECTION" "$DOC"
-fi
+. "$(dirname "$0")/doc-section.sh"
+doc_section scale "$SECTION" "$DOC" # its temporary is $DOCTMP
 say "wrote $DOC (section scale)"
 cat "$SECTION"
