@@ -28,6 +28,7 @@
 #include <stdint.h>
 
 #include "kernel-ref/diag.h"
+#include "kernel-ref/jsonw.h"
 #include "kernel-ref/memimage.h"
 #include "kernel-ref/packet.h"
 #include "kernel-ref/render.h"
@@ -103,5 +104,10 @@ extern int grid_fault;
 /* grid_counts as render_frame's trav_counts: node_steps = slices,
  * leaf_visits = cells, tri_tests, ray_tri_tests. */
 void grid_counts_add(trav_counts *t, const grid_counts *c);
+
+/* The grid's fields as both reports give them (rtref's stats, saarsim's
+ * report; the caller opens and closes the object): resolution, lambda,
+ * macro, packet, mailbox, cull, references. */
+void grid_json_fields(jsonw *j, const grid *g);
 
 #endif

@@ -65,17 +65,7 @@ static void grid_stats(jsonw *j, const grid *g)
 {
 	jsonw_key(j, "grid");
 	jsonw_obj_begin(j);
-	jsonw_key(j, "resolution");
-	jsonw_arr_begin(j);
-	for (int a = 0; a < 3; a++)
-		jsonw_int(j, g->n[a]);
-	jsonw_arr_end(j);
-	jsonw_knum(j, "lambda", g->p.lambda);
-	jsonw_kint(j, "macro", g->p.macro);
-	jsonw_kint(j, "packet", g->p.packet);
-	jsonw_kint(j, "mailbox", g->p.mailbox);
-	jsonw_kint(j, "cull", g->p.cull);
-	jsonw_kuint(j, "references", g->nrefs);
+	grid_json_fields(j, g);
 	jsonw_knum(j, "build_ms", g->build_ms);
 	jsonw_obj_end(j);
 }
