@@ -75,6 +75,24 @@ static void trace_single(const mimg *m, packet *p, trav_counts *c, const pkt_pre
 	}
 }
 
+/* a += b - sub (sub NULL: a += b), every counter of trav_counts but the
+ * stack depth (a maximum, merged by the caller): one list of the fields
+ * for the per-type split and the workers' merge (a field left out of one
+ * of three hand-written lists lost the workers' cone savings per type). */
+_Static_assert(sizeof(trav_counts) == 7 * sizeof(uint64_t), "trav_add: add the new field");
+static void trav_add(trav_counts *a, const trav_counts *b, const trav_counts *sub)
+{
+	const trav_counts z = {0};
+	if (!sub)
+		sub = &z;
+	a->node_steps += b->node_steps - sub->node_steps;
+	a->leaf_visits += b->leaf_visits - sub->leaf_visits;
+	a->tri_tests += b->tri_tests - sub->tri_tests;
+	a->ray_tri_tests += b->ray_tri_tests - sub->ray_tri_tests;
+	a->cone_culled += b->cone_culled - sub->cone_culled;
+	a->cone_saved_ray_tests += b->cone_saved_ray_tests - sub->cone_saved_ray_tests;
+}
+
 /* Traces sample s of a tile: its primary packet and, depth first, every
  * packet it spawns. */
 static void do_sample(worker *w, int tile, int s)
@@ -104,14 +122,7 @@ static void do_sample(worker *w, int tile, int s)
 			w->st.box_miss_packets += entered == 0;
 		}
 		w->st.trace_ms += now_ms() - t0;
-		trav_counts *by = &w->st.trav_type[p->type];
-		by->node_steps += w->st.trav.node_steps - before.node_steps;
-		by->leaf_visits += w->st.trav.leaf_visits - before.leaf_visits;
-		by->tri_tests += w->st.trav.tri_tests - before.tri_tests;
-		by->ray_tri_tests += w->st.trav.ray_tri_tests - before.ray_tri_tests;
-		by->cone_culled += w->st.trav.cone_culled - before.cone_culled;
-		by->cone_saved_ray_tests +=
-		    w->st.trav.cone_saved_ray_tests - before.cone_saved_ray_tests;
+		trav_add(&w->st.trav_type[p->type], &w->st.trav, &before);
 		if (p->type == PKT_SHADOW) {
 			shade_shadow_done(&j->sc, p, &w->st.shade);
 			continue;
@@ -154,21 +165,12 @@ static void add_stats(render_stats *a, const render_stats *b)
 	for (int t = 0; t < PKT_NTYPES; t++) {
 		a->rays[t] += b->rays[t];
 		a->packets[t] += b->packets[t];
-		a->trav_type[t].node_steps += b->trav_type[t].node_steps;
-		a->trav_type[t].leaf_visits += b->trav_type[t].leaf_visits;
-		a->trav_type[t].tri_tests += b->trav_type[t].tri_tests;
-		a->trav_type[t].ray_tri_tests += b->trav_type[t].ray_tri_tests;
-		a->trav_type[t].cone_culled += b->trav_type[t].cone_culled;
+		trav_add(&a->trav_type[t], &b->trav_type[t], NULL);
 	}
 	a->box_miss_packets += b->box_miss_packets;
 	a->box_miss_rays += b->box_miss_rays;
 	a->trace_ms += b->trace_ms;
-	a->trav.node_steps += b->trav.node_steps;
-	a->trav.leaf_visits += b->trav.leaf_visits;
-	a->trav.tri_tests += b->trav.tri_tests;
-	a->trav.ray_tri_tests += b->trav.ray_tri_tests;
-	a->trav.cone_culled += b->trav.cone_culled;
-	a->trav.cone_saved_ray_tests += b->trav.cone_saved_ray_tests;
+	trav_add(&a->trav, &b->trav, NULL);
 	if (b->trav.max_sp > a->trav.max_sp)
 		a->trav.max_sp = b->trav.max_sp;
 	/* shade_counts is all uint64_t counters: add them field by field */
