@@ -6,11 +6,6 @@
 
 #include <stdlib.h>
 
-static uint64_t align_up(uint64_t x)
-{
-	return (x + GIMG_ALIGN - 1) & ~(uint64_t)(GIMG_ALIGN - 1);
-}
-
 static uint64_t ncells(const grid *g)
 {
 	return (uint64_t)g->n[0] * (uint64_t)g->n[1] * (uint64_t)g->n[2];
@@ -24,9 +19,11 @@ static uint64_t nmacro(const grid *g)
 /* The bases of the parts after world's bytes; the image's size. */
 static uint64_t layout(const grid *g, const mimg *world, grid_image *im)
 {
-	im->cells_base = align_up(world->size);
-	im->refs_base = align_up(im->cells_base + (ncells(g) + 1) * GIMG_CELL_BYTES);
-	im->macro_base = align_up(im->refs_base + (uint64_t)g->nrefs * GIMG_REF_BYTES);
+	im->cells_base = mimg_align_up(world->size, GIMG_ALIGN);
+	im->refs_base =
+	    mimg_align_up(im->cells_base + (ncells(g) + 1) * GIMG_CELL_BYTES, GIMG_ALIGN);
+	im->macro_base =
+	    mimg_align_up(im->refs_base + (uint64_t)g->nrefs * GIMG_REF_BYTES, GIMG_ALIGN);
 	return im->macro_base + nmacro(g) * GIMG_FLAG_BYTES;
 }
 

@@ -49,11 +49,6 @@ const char *mimg_region_name(int region)
 	return region >= 0 && region < MIMG_NREGIONS ? names[region] : "?";
 }
 
-static uint64_t align_up(uint64_t x)
-{
-	return (x + MIMG_ALIGN - 1) / MIMG_ALIGN * MIMG_ALIGN;
-}
-
 /* The regions' bases and lengths into m from the scene's and the tree's
  * sizes; the image's size into *size. Checks only sizes, so an oversized
  * scene fails without allocating. */
@@ -85,7 +80,7 @@ static int layout(mimg *m, const scene *s, const kdtree *t, const char *file, ui
 			at = (at + MIMG_TRI_ALIGN - 1) / MIMG_TRI_ALIGN * MIMG_TRI_ALIGN;
 		m->base[r] = at;
 		m->len[r] = len[r];
-		at = align_up(at + len[r]);
+		at = mimg_align_up(at + len[r], MIMG_ALIGN);
 	}
 	if (at > MIMG_4GIB)
 		return diag_set(d, file, 0, 0,

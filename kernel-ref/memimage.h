@@ -40,6 +40,13 @@ enum mimg_region {
 #define MIMG_MAT_BYTES    64u
 #define MIMG_TEXHDR_BYTES 16u
 #define MIMG_ALIGN        128u
+
+/* x rounded up to a multiple of a (> 0): the regions' and the appended
+ * images' bases (memimage.c, tlimage.c, gridimage.c, twolevel.c). */
+static inline uint64_t mimg_align_up(uint64_t x, uint64_t a)
+{
+	return (x + a - 1) / a * a;
+}
 /* The triangle region starts on a multiple of this, the least common
  * multiple of MIMG_ALIGN and MIMG_TRI_BYTES: the triangle cache's 36-byte
  * lines are numbered address / 36, so only a region starting on a multiple

@@ -6,11 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static uint64_t align_up(uint64_t x)
-{
-	return (x + TLI_ALIGN - 1) & ~(uint64_t)(TLI_ALIGN - 1);
-}
-
 static void put_box(uint8_t *b, aabb x)
 {
 	const float f[6] = {x.lo.x, x.lo.y, x.lo.z, x.hi.x, x.hi.y, x.hi.z};
@@ -97,19 +92,19 @@ uint64_t tli_write_top(tl_image *im, const tl_scene *t)
  * objects' bases are not kept). */
 static void layout(tl_image *im, const tl_scene *t, const mimg *world)
 {
-	uint64_t at = align_up(world->size);
+	uint64_t at = mimg_align_up(world->size, TLI_ALIGN);
 	uint64_t ntri = 0;
 	for (uint32_t o = 0; o < t->nobj; o++) {
 		if (im->obj_base)
 			im->obj_base[o] = at;
-		at = align_up(at + t->obj[o].m.size);
+		at = mimg_align_up(at + t->obj[o].m.size, TLI_ALIGN);
 		if (t->obj[o].m.nnodes > im->max_nodes)
 			im->max_nodes = t->obj[o].m.nnodes;
 	}
 	for (uint32_t k = 0; k < t->ninst; k++)
 		ntri += t->obj[t->inst[k].obj].ntris;
 	im->map_base = at;
-	im->top_base = align_up(at + 4 * ntri);
+	im->top_base = mimg_align_up(at + 4 * ntri, TLI_ALIGN);
 	im->inst_base = im->top_base + (uint64_t)t->nnode * TLI_NODE_BYTES;
 	im->top_bytes = im->inst_base + (uint64_t)t->ninst * TLI_INST_BYTES - im->top_base;
 	im->size = im->top_base + im->top_bytes;

@@ -38,7 +38,7 @@
  * object box, 4 bases), then the shader's (forward and normal matrices) */
 #define TLI_INST_WALK_BYTES 160u
 #define TLI_INST_BYTES      (TLI_INST_WALK_BYTES + SHADE_XF_BYTES)
-#define TLI_ALIGN           4096u
+#define TLI_ALIGN           TL_ALIGN
 
 typedef struct tli_node {
 	aabb box;

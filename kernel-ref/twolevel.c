@@ -307,7 +307,7 @@ int tl_frame(tl_scene *t, const aff_scene *a, double time, const mimg *world, di
 		memcpy(t->xf + (size_t)k * SHADE_XF_BYTES + sizeof in->fwd, in->nrm,
 		       sizeof in->nrm);
 	}
-	t->shade = (shade_tl){(world->size + 4095) / 4096 * 4096, SHADE_XF_BYTES, t->xf,
+	t->shade = (shade_tl){mimg_align_up(world->size, TL_ALIGN), SHADE_XF_BYTES, t->xf,
 	                      (uint64_t)t->ninst * SHADE_XF_BYTES};
 	t->world = world;
 	t->frame_ms = now_ms() - t0;

@@ -38,6 +38,10 @@
 #include "kernel-ref/packet.h"
 #include "kernel-ref/render.h"
 
+/* The objects' images begin this aligned after the frame's image (tlimage.c
+ * lays them out; the shading records' base, twolevel.c, must agree). */
+#define TL_ALIGN 4096u
+
 typedef struct tl_object {
 	kdtree kd;
 	mimg m; /* the object's triangles in its own frame */

@@ -2,6 +2,7 @@
  * gridtrav.c: the grid traversal unit (see gridtrav.h).
  */
 #include "units/gridtrav.h"
+#include "units/list.h"
 
 #include <stdlib.h>
 
@@ -100,22 +101,6 @@ static void tri_in(thr_ctx *t)
 	thr_count(t, C_TRI_TESTS, 1);
 	thr_count(t, C_RAY_TRI_TESTS, (uint64_t)n);
 	thr_use(t, UNIT_ISECT, n, stepped);
-}
-
-/* Room for n list entries in the thread's buffer (as the list unit's). */
-static int list_room(thr_ctx *t, uint32_t n)
-{
-	if (n <= t->list_cap)
-		return 0;
-	uint32_t cap = t->list_cap ? t->list_cap : 64;
-	while (cap < n)
-		cap = cap > UINT32_MAX / 2 ? n : 2 * cap;
-	uint32_t *l = realloc(t->list, (size_t)cap * sizeof *l);
-	if (!l)
-		return -1;
-	t->list = l;
-	t->list_cap = cap;
-	return 0;
 }
 
 /* The walk's next ask as a read, then the unit's op. */

@@ -20,9 +20,7 @@ static void fetched(thr_ctx *t)
 	thr_use(t, UNIT_LIST, thr_pop(t->r.mask), done);
 }
 
-/* Room for n list entries in the thread's buffer (it grows to the
- * largest leaf). */
-static int list_room(thr_ctx *t, uint32_t n)
+int list_room(thr_ctx *t, uint32_t n)
 {
 	if (n <= t->list_cap)
 		return 0;

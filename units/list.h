@@ -17,4 +17,9 @@
 /* The thread's last traversal step reached a leaf (t->r). */
 void list_leaf(thr_ctx *t);
 
+/* Room for n list entries in the thread's buffer t->list (it grows to the
+ * largest leaf or grid cell read; the grid unit's cell reads use it too).
+ * 0, or -1 when memory ran out. */
+int list_room(thr_ctx *t, uint32_t n);
+
 #endif
