@@ -535,25 +535,23 @@ static void levels_apply(saar_config *c)
  * parser, its range by drt_problem; "" (the view's) is always good. */
 static int drt_value_ok(const cfg_key *k, const char *s, char *err, size_t n)
 {
-	static const char *const names[] = {"spp",        "aperture", "focus",
-	                                    "light_size", "gloss",    "motion"};
-	static const char *const flags[] = {"--spp",        "--aperture", "--focus",
-	                                    "--light-size", "--gloss",    "--motion"};
-	int i = 0;
-	while (i < 6 && strcmp(k->path + 4, names[i]))
-		i++;
-	if (!*s || i == 6)
+	if (!*s)
 		return 0;
+	/* the flag is the key's name: drt.light_size is --light-size */
+	char flag[32];
+	snprintf(flag, sizeof flag, "--%.20s", k->path + 4);
+	for (char *c = flag; *c; c++)
+		*c = *c == '_' ? '-' : *c;
 	world_opts o;
 	memset(&o, 0, sizeof o);
-	char *argv[] = {(char *)flags[i], (char *)s};
+	char *argv[] = {flag, (char *)s};
 	int at = 0;
 	diag e = {{0}};
 	const char *why = NULL;
 	if (world_parse_arg(&o, 2, argv, &at, &e) != 1) {
-		size_t fl = strlen(flags[i]);
-		why = strncmp(e.msg, flags[i], fl) || strncmp(e.msg + fl, ": ", 2) ? e.msg
-		                                                                   : e.msg + fl + 2;
+		size_t fl = strlen(flag);
+		why = strncmp(e.msg, flag, fl) || strncmp(e.msg + fl, ": ", 2) ? e.msg
+		                                                               : e.msg + fl + 2;
 	} else {
 		const char *key;
 		why = drt_problem(&o.drt, &key); /* the other fields 0: always good */

@@ -883,13 +883,10 @@ static void json_two_level(jsonw *j, const chip *c)
 	double frame_s = ratio(1.0, fig_fps(c));
 	/* the update per frame: the mean over the frames (one frame: its top
 	 * level) */
-	double ub = 0, ums = 0;
-	for (int f = 0; f < c->frames_done; f++) {
+	double ub = 0, ums = anim_mean_ms(c);
+	for (int f = 0; f < c->frames_done; f++)
 		ub += (double)c->frame_update[f];
-		ums += c->frame_update_ms[f];
-	}
 	ub = ratio(ub, c->frames_done);
-	ums = ratio(ums, c->frames_done);
 	jsonw_key(j, "two_level");
 	jsonw_obj_begin(j);
 	jsonw_kuint(j, "instances", t->ninst);
@@ -901,10 +898,7 @@ static void json_two_level(jsonw *j, const chip *c)
 	/* the unit's other ops: shaded packets moved back (units/rgs.c) */
 	jsonw_kuint(j, "normal_transformations",
 	            chip_rtp_sum(c, "xform.ops") - get(c, "xform.instances"));
-	jsonw_kuint(j, "transformed_rays",
-	            get(c, "type.primary.xform.rays") + get(c, "type.shadow.xform.rays") +
-	                get(c, "type.reflection.xform.rays") +
-	                get(c, "type.refraction.xform.rays"));
+	jsonw_kuint(j, "transformed_rays", chip_rtp_sum(c, "xform.rays"));
 	jsonw_kuint(j, "map_reads", get(c, "toplevel.map_reads"));
 	jsonw_kuint(j, "update_bytes", (uint64_t)llround(ub));
 	jsonw_knum(j, "update_mb", ub / (1 << 20));
