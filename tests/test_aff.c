@@ -418,6 +418,13 @@ Test(aff_world, set_time_equals_load_at_time, .init = setup_dir)
 	cr_assert_eq(w.m.size, w1.m.size);
 	cr_assert(!memcmp(w.m.bytes, w1.m.bytes, w.m.size), "the memory images differ");
 	cr_assert_str_eq(w.scene_label, w1.scene_label);
+	/* and the time is not ignored by both: t = 0 is another frame (mistake:
+	 * load and set_time both placing the scene at t = 0) */
+	world w0;
+	o.anim_time = 0;
+	cr_assert_eq(world_load(&w0, &o, &d), 0, "%s", d.msg);
+	cr_assert(memcmp(w0.s.v, w1.s.v, 3 * sizeof *w.s.v), "t = 0 and t = 0.75 are the same");
+	world_free(&w0);
 	world_free(&w);
 	world_free(&w1);
 }

@@ -31,6 +31,8 @@ static uint64_t gw_packet(const void *ctx, packet *p, trav_entry *stack, int sta
 	uint64_t ea = grid_pkt_trace(k->g, p, stack, stack_max, &a);
 	uint64_t eb = grid_walk_trace(k->g, &q, stack, stack_max, &b);
 	k->packets++;
+	if (p->valid != q.valid) /* mistake: the walk drops or adds rays */
+		k->lanes_differ++;
 	for (int i = 0; i < PKT_RAYS; i++)
 		if ((p->valid >> i & 1) &&
 		    (memcmp(&p->t[i], &q.t[i], sizeof p->t[i]) || p->tri[i] != q.tri[i] ||
