@@ -167,7 +167,8 @@ def table4_section(out, views):
     r = {k: load(out, f"{big}-big-t4-{k}.json") for k in ("1", "4", "8")}
     c1, c4, c8 = (r[k]["leaf_visits"] for k in ("1", "4", "8"))
     t1, t4, t8 = (r[k]["ray_triangle_tests"] for k in ("1", "4", "8"))
-    L.append(f"The same on {big} at {bsize} (16 times the rays):")
+    (w0, h0), (w1, h1) = (map(int, x.split("x")) for x in (SIZE_NOTE[0], bsize))
+    L.append(f"The same on {big} at {bsize} ({w1 * h1 / (w0 * h0):g} times the rays):")
     L.append("")
     L.append("| size | cells 1 | cells 4x4 | cells 8x8 | ratio 4x4 | ratio 8x8 | ray tests 1 | "
              "ray tests 4x4 | ray tests 8x8 |")

@@ -139,8 +139,8 @@ for n, t, fs, ms, fv, mv, pci in T5:
       (n, t, fs, ms, fv, mv, pci, 100 * (1 - fv / fs), mv / ms, 100 * fs * ms / PEAK))
 P()
 P("Bandwidth = fps x MB/frame / (16 B x 133 MHz = %.0f MB/s). Cruiser's fps may also read 170 "
-  "and 121: its loss and traffic ratio stay the same and its bandwidth share (49%%) stays inside "
-  "4-74%%." % PEAK)
+  "and 121: its loss and traffic ratio stay the same and its bandwidth share (%.0f%%) stays inside "
+  "4-74%%." % (PEAK, 100 * 10 * T5[0][2] * T5[0][3] / PEAK))
 P()
 P("## Search space")
 P()

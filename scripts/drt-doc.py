@@ -228,9 +228,11 @@ def main():
       "the main source of divergence. Tests per packet here count every test a masked "
       "op makes, active rays or not; *tests/ray* (active rays) hardly moves at all, "
       "because a ray's own path through the kd-tree does not depend on its packet." % SIZE)
+    rf = base["ray_types"]["reflection"]
     w("- *Reflection packets.* They are small (a tile's few rays that hit the balls or "
-      "rails: about 17 of 64 lanes) and already diverge with mirrors, so the lens adds "
-      "nothing measurable to them; the seed's reflection rays started coherent.")
+      "rails: %.1f of 64 lanes in the pinhole run) and already diverge with mirrors, so "
+      "the lens adds nothing measurable to them; the seed's reflection rays started "
+      "coherent." % (rf["rays"] / rf["packets"] if rf["packets"] else 0.0))
     w("- *Camera motion, not object motion.* The seed's motion blur moves the balls: the "
       "acceleration structure's boxes grow to hold every position, so every ray type "
       "tests more. The chip has camera motion over the shutter only (dynamic scenes do "
