@@ -219,5 +219,12 @@ ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_c
  * the same formats. */
 ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c,
                      const pkt_precision *prec);
+/* The same walk over m's kd-tree (full precision) with another leaf test:
+ * leaf(ctx, list, count, h) tests the leaf's triangle addresses, keeps
+ * the better hit in *h by isect_better, and returns 1 to end the walk.
+ * tlflat.c tests each triangle in its object's space this way. */
+typedef int (*ray_leaf_fn)(void *ctx, const uint32_t *list, uint32_t count, ray_hit *h);
+ray_hit ray_trace_leaves(const mimg *m, vec3 o, vec3 d, float tmax, trav_counts *c,
+                         ray_leaf_fn leaf, void *ctx);
 
 #endif

@@ -677,18 +677,17 @@ static int ray_step(kd_node n, const float *oa, const float *id, uint32_t *node,
 	return 1;
 }
 
-ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)
+/* The single-ray walk: the ray clipped to the scene box, then near child
+ * first with the far one stacked; leaf() tests a leaf's list against *h
+ * and returns 1 to end the walk (an occluder found). Entries that start
+ * beyond the best hit are skipped. ray_trace_fp inlines it with its own
+ * leaf test; ray_trace_leaves hands it another (tlflat.c). */
+static inline __attribute__((always_inline)) ray_hit ray_walk(const mimg *m, vec3 o, vec3 d,
+                                                              float tmax, trav_counts *c,
+                                                              const fpfmt *ft, ray_leaf_fn leaf,
+                                                              void *ctx)
 {
-	return ray_trace_fp(m, o, d, tmax, any_hit, c, NULL);
-}
-
-ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c,
-                     const pkt_precision *prec)
-{
-	const fpfmt *ft = prec && !prec->trav.full ? &prec->trav : NULL;
-	const fpfmt *fi = prec && !prec->isect.full ? &prec->isect : NULL;
 	ray_hit h = {tmax, 0, 0, PKT_NOHIT, 0};
-	isect_ray ir = isect_prepare(d);
 	float oa[3] = {o.x, o.y, o.z};
 	float id[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
 	float lo[3] = {m->bounds.lo.x, m->bounds.lo.y, m->bounds.lo.z};
@@ -727,26 +726,8 @@ ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, tra
 				c->tri_tests += kd_count(n);
 				c->ray_tri_tests += kd_count(n);
 			}
-			for (uint32_t k = 0; k < kd_count(n); k++) {
-				uint32_t ta = lists[kd_first(n) + k];
-				float t, bu, bv;
-				const float(*tv)[3] = mimg_tri_at(m, ta)->v;
-				if (!(fi ? isect_tri_fp(fi, &ir, o, tv, &t, &bu, &bv)
-				         : isect_tri(&ir, o, tv, &t, &bu, &bv)))
-					continue;
-				if (any_hit) {
-					if (t < tmax) {
-						h.t = t;
-						h.tri = ta;
-						return h;
-					}
-				} else if (isect_better(t, ta, h.t, h.tri)) {
-					h.t = t;
-					h.tri = ta;
-					h.bu = bu;
-					h.bv = bv;
-				}
-			}
+			if (leaf(ctx, lists + kd_first(n), kd_count(n), &h))
+				return h;
 		} else {
 			if (ray_step(n, oa, id, &node, &tn, &tf, stack, &sp, ft, g))
 				continue;
@@ -761,4 +742,60 @@ ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, tra
 		tn = stack[sp].tn;
 		tf = stack[sp].tf;
 	}
+}
+
+typedef struct ray_tris {
+	const mimg *m;
+	const fpfmt *fi;
+	isect_ray ir;
+	vec3 o;
+	float tmax;
+	int any_hit;
+} ray_tris;
+
+/* ray_trace_fp's leaf: the image's own triangles by the scalar test. */
+static inline int ray_leaf_tris(void *ctx, const uint32_t *list, uint32_t count, ray_hit *h)
+{
+	const ray_tris *r = ctx;
+	for (uint32_t k = 0; k < count; k++) {
+		uint32_t ta = list[k];
+		float t, bu, bv;
+		const float(*tv)[3] = mimg_tri_at(r->m, ta)->v;
+		if (!(r->fi ? isect_tri_fp(r->fi, &r->ir, r->o, tv, &t, &bu, &bv)
+		            : isect_tri(&r->ir, r->o, tv, &t, &bu, &bv)))
+			continue;
+		if (r->any_hit) {
+			if (t < r->tmax) {
+				h->t = t;
+				h->tri = ta;
+				return 1;
+			}
+		} else if (isect_better(t, ta, h->t, h->tri)) {
+			h->t = t;
+			h->tri = ta;
+			h->bu = bu;
+			h->bv = bv;
+		}
+	}
+	return 0;
+}
+
+ray_hit ray_trace(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c)
+{
+	return ray_trace_fp(m, o, d, tmax, any_hit, c, NULL);
+}
+
+ray_hit ray_trace_fp(const mimg *m, vec3 o, vec3 d, float tmax, int any_hit, trav_counts *c,
+                     const pkt_precision *prec)
+{
+	const fpfmt *ft = prec && !prec->trav.full ? &prec->trav : NULL;
+	ray_tris r = {
+	    m, prec && !prec->isect.full ? &prec->isect : NULL, isect_prepare(d), o, tmax, any_hit};
+	return ray_walk(m, o, d, tmax, c, ft, ray_leaf_tris, &r);
+}
+
+ray_hit ray_trace_leaves(const mimg *m, vec3 o, vec3 d, float tmax, trav_counts *c,
+                         ray_leaf_fn leaf, void *ctx)
+{
+	return ray_walk(m, o, d, tmax, c, NULL, leaf, ctx);
 }

@@ -316,10 +316,10 @@ int tl_frame(tl_scene *t, const aff_scene *a, double time, const mimg *world, di
 
 /* ---- tracing ---- */
 
-/* The ray (o, d) in instance in's object space. */
-static void to_object(const tl_inst *in, const float o[3], const float dir[3], vec3 *oo, vec3 *od)
+void tl_ray_to_object(const double inv[12], const float o[3], const float dir[3], vec3 *oo,
+                      vec3 *od)
 {
-	const double *r = in->inv;
+	const double *r = inv;
 	double x[3], y[3];
 	for (int k = 0; k < 3; k++) {
 		x[k] = r[4 * k] * o[0] + r[4 * k + 1] * o[1] + r[4 * k + 2] * o[2] + r[4 * k + 3];
@@ -363,7 +363,7 @@ static int ray_inst(const tl_scene *t, uint32_t k, const float o[3], const float
 {
 	const tl_inst *in = &t->inst[t->order[k]];
 	vec3 oo, od;
-	to_object(in, o, dir, &oo, &od);
+	tl_ray_to_object(in->inv, o, dir, &oo, &od);
 	const tl_object *ob = &t->obj[in->obj];
 	ray_hit r = ray_trace(&ob->m, oo, od, h->t, any, c);
 	if (r.tri == PKT_NOHIT)
@@ -426,8 +426,6 @@ uint64_t tl_pkt_box(const aabb *b, const packet *p, uint64_t mask)
 
 void tl_pkt_to_object(const double inv[12], const packet *p, uint64_t mask, packet *q)
 {
-	tl_inst in;
-	memcpy(in.inv, inv, sizeof in.inv);
 	int shadow = p->type == PKT_SHADOW;
 	memcpy(q, p, sizeof *q);
 	q->valid = mask;
@@ -436,7 +434,7 @@ void tl_pkt_to_object(const double inv[12], const packet *p, uint64_t mask, pack
 		const float o[3] = {p->ox[i], p->oy[i], p->oz[i]},
 		            dir[3] = {p->dx[i], p->dy[i], p->dz[i]};
 		vec3 oo, od;
-		to_object(&in, o, dir, &oo, &od);
+		tl_ray_to_object(inv, o, dir, &oo, &od);
 		q->ox[i] = oo.x;
 		q->oy[i] = oo.y;
 		q->oz[i] = oo.z;

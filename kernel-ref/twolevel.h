@@ -27,7 +27,8 @@
  * the best t so far as its bound, so the result does not depend on the
  * order instances are visited in: the packet and single-ray paths agree
  * exactly. Against one tree over the flattened scene they agree up to the
- * rounding of the object-space test (docs/design.md, "Two-level trees").
+ * rounding of the object-space test, and exactly when that tree tests in
+ * object space too (tlflat.h; docs/design.md, "Two-level trees").
  */
 #ifndef SAAR_KREF_TWOLEVEL_H
 #define SAAR_KREF_TWOLEVEL_H
@@ -100,6 +101,13 @@ ray_hit tl_ray_trace(const tl_scene *t, vec3 o, vec3 d, float tmax, int any_hit,
  * scene's box. stack: as pkt_trace's. */
 uint64_t tl_pkt_trace(const tl_scene *t, packet *p, trav_entry *stack, int stack_max,
                       trav_counts *c);
+
+/* The ray (o, dir) in object space by inv (world -> object), in double,
+ * rounded to float: every path that tests a triangle in its object's
+ * space moves rays by this (tlflat.c too, so their tests agree bit for
+ * bit). */
+void tl_ray_to_object(const double inv[12], const float o[3], const float dir[3], vec3 *oo,
+                      vec3 *od);
 
 /* The pieces of tl_pkt_trace the chip's units call (units/toplevel.c),
  * so both make the same functional calls. The rays of mask whose box test
