@@ -50,7 +50,8 @@ static void usage(FILE *f)
 	       "                        with --anim-fps (AFF scene): N animation frames, one chip\n"
 	       "                        run each, outputs numbered FILE-0000.png, ...; with\n"
 	       "                        --two-level one warm chip runs them all (the host's\n"
-	       "                        update written between frames; one report)\n"
+	       "                        update written between frames; every frame's image\n"
+	       "                        numbered, one report)\n"
 	       "  --anim-cold           --two-level animation: a new (cold) chip per frame\n"
 	       "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
 	       "  --report FILE.json    write the JSON report (docs/report.md)\n"
@@ -178,6 +179,7 @@ typedef struct cli {
 	uint64_t tl_c0, tl_c1, tl_cap;
 	int check, list, doc, dry, quiet, anim_cold;
 	int warm; /* a warm two-level animation: frame.frames animation frames, one chip */
+	const char *warm_out; /* then --out as given; out names the last frame */
 } cli;
 
 /* The first pass: every argument checked, the world flags into a->wo, the
@@ -576,13 +578,33 @@ fail:
  * frame 0, moved to its time after), or the only one. The world stays
  * with the caller. Returns the exit status. */
 /* A warm two-level animation (issue 33 item 4): before frame f, the frame
- * that ended is checked against kernel-ref (its line printed), the world
- * moves to frame f's time and the chip's image takes the host's update
- * (chip_anim_update). The last frame is checked as every run's is. */
+ * that ended is checked against kernel-ref (its line printed) and written
+ * (--out FILE: FILE-NNNN, numbered as a cold animation's; the last frame
+ * is written with the report), the world moves to frame f's time and the
+ * chip's image takes the host's update (chip_anim_update). The last frame
+ * is checked as every run's is. */
 typedef struct warm_ctx {
 	const cli *a;
 	world *w;
+	const char *out; /* the user's --out (unnumbered), or NULL */
+	int frames;
 } warm_ctx;
+
+/* Frame f - 1's image, numbered, written and committed at once: a run
+ * that fails later keeps the frames before it, as a cold animation does. */
+static int warm_write(const warm_ctx *x, const chip *c, int f, diag *d)
+{
+	if (!x->out || !strcmp(x->out, "-"))
+		return 0;
+	char buf[4096];
+	af_group g = {0};
+	const char *p = cli_frame_path(x->out, x->frames, f - 1, buf, sizeof buf);
+	if (fb_write(&c->fb, p, &g, d) || af_group_commit(&g, d)) {
+		af_group_abort(&g);
+		return -1;
+	}
+	return 0;
+}
 
 static int warm_between(chip *c, int f, void *ctx, diag *d)
 {
@@ -600,6 +622,8 @@ static int warm_between(chip *c, int f, void *ctx, diag *d)
 		       chk.single.identical ? "identical" : "DIFFERENT");
 		fflush(stdout);
 	}
+	if (warm_write(x, c, f, d))
+		return -1;
 	if (world_set_time(x->w, &x->a->wo, world_frame_time(&x->a->wo, f), d))
 		return -1;
 	return chip_anim_update(c, f, d);
@@ -622,7 +646,7 @@ static int run_frame(const cli *a, const saar_config *cfg, world *w, int i, uint
 	chip *c = chip_create(cfg, w, d);
 	if (!c)
 		return cli_bad("saarsim", d->msg);
-	warm_ctx wx = {a, w};
+	warm_ctx wx = {a, w, a->warm_out, cfg->frame.frames};
 	if (a->warm) {
 		c->between = warm_between;
 		c->between_ctx = &wx;
@@ -703,7 +727,7 @@ int main(int argc, char **argv)
 		               "--heatmap and --census take one frame (use --anim-time)");
 	cli fa = a;
 	char ob[4096], rb[4096];
-	fa.out = cli_frame_path(a.out, nanim, 0, ob, sizeof ob);
+	fa.out = cli_frame_path(a.out, a.warm ? cfg.frame.frames : nanim, 0, ob, sizeof ob);
 	fa.report = cli_frame_path(a.report, nanim, 0, rb, sizeof rb);
 	if (reserve_outputs(&fa, &cfg, &d))
 		return cli_bad("saarsim", d.msg);
@@ -715,6 +739,11 @@ int main(int argc, char **argv)
 	for (int i = 0; i < nanim && !rc; i++) {
 		fa.out = cli_frame_path(a.out, nanim, i, ob, sizeof ob);
 		fa.report = cli_frame_path(a.report, nanim, i, rb, sizeof rb);
+		if (a.warm && a.out && strcmp(a.out, "-")) {
+			fa.warm_out = a.out;
+			fa.out = cli_frame_path(a.out, cfg.frame.frames, cfg.frame.frames - 1, ob,
+			                        sizeof ob);
+		}
 		rc = run_frame(&fa, &cfg, &w, i, limit_mb, t_start, &d);
 	}
 	world_free(&w);

@@ -291,7 +291,10 @@ Test(chip_twolevel, update_is_counted, .timeout = 60)
  * checked, one report with each frame's update; --anim-cold runs a chip
  * per frame (numbered reports); sampled fidelity is refused in one line.
  * Mistakes caught: the flag refused, or accepted and ignored (no
- * two_level in the report); frames before the last not checked. */
+ * two_level in the report); frames before the last not checked; a warm
+ * run's --out writing the last frame only, or a frame's image written
+ * after the world moved on (each must equal rtref --two-level's frame of
+ * the same number). */
 Test(chip_twolevel, saarsim_flag, .timeout = 120)
 {
 	char p[1024], args[1400];
@@ -299,9 +302,21 @@ Test(chip_twolevel, saarsim_flag, .timeout = 120)
 	char dir[128];
 	tu_tmpdir(dir, sizeof dir);
 	snprintf(args, sizeof args,
-	         "--scene %s --two-level --size 32x32 --anim-fps 2 --frames 3 --report %s/w.json",
-	         p, dir);
+	         "--scene %s --two-level --size 32x32 --anim-fps 2 --frames 3 --report %s/w.json "
+	         "--out %s/w.ppm",
+	         p, dir, dir);
 	cr_assert_eq(tu_prog(dir, "saarsim", args), 0);
+	snprintf(args, sizeof args,
+	         "--scene %s --two-level --size 32x32 --anim-fps 2 --frames 3 --out %s/k.ppm", p,
+	         dir);
+	cr_assert_eq(tu_prog(dir, "rtref", args), 0);
+	for (int i = 0; i < 3; i++) {
+		char a[32], b[32];
+		snprintf(a, sizeof a, "w-%04d.ppm", i);
+		snprintf(b, sizeof b, "k-%04d.ppm", i);
+		const char *x = tu_slurp(dir, a), *y = tu_slurp(dir, b);
+		cr_assert(!memcmp(x, y, 13 + 32 * 32 * 3), "warm frame %d differs from rtref's", i);
+	}
 	char *r = tu_squeeze_json(tu_slurp(dir, "w.json"));
 	cr_assert(strstr(r, "\"warm\":true,\"frames_checked_before_last\":2,"
 	                    "\"frames_identical_before_last\":2"),
