@@ -89,17 +89,9 @@ static int dda_cell(const grid *g, uint32_t c, const isect_ray *ir, vec3 o, int 
 			gc->ray_tri_tests++;
 		}
 		float t, bu, bv;
-		if (!isect_tri(ir, o, mimg_tri_at(g->m, ta)->v, &t, &bu, &bv))
-			continue;
-		if (any_hit) {
-			if (t < tmax) {
-				h->t = t;
-				h->tri = ta;
-				return 1;
-			}
-		} else if (isect_better(t, ta, h->t, h->tri)) {
-			*h = (ray_hit){t, bu, bv, ta, 0};
-		}
+		if (isect_tri(ir, o, mimg_tri_at(g->m, ta)->v, &t, &bu, &bv) &&
+		    isect_take(h, t, bu, bv, ta, 0, any_hit, tmax))
+			return 1;
 	}
 	return 0;
 }

@@ -379,16 +379,9 @@ int grid_walk_tri(grid_walk *w, const mimg_tri *tri)
 		w->c.tri_tests++;
 		w->c.ray_tri_tests++;
 		float t, bu, bv;
-		if (!isect_tri(&w->ir, w->o, tri->v, &t, &bu, &bv))
-			return 1;
-		if (w->any_hit) {
-			if (t < w->tmax) {
-				w->h.t = t;
-				w->h.tri = w->ta;
-				dda_end(w); /* an occluder: the ray is done */
-			}
-		} else if (isect_better(t, w->ta, w->h.t, w->h.tri))
-			w->h = (ray_hit){t, bu, bv, w->ta, 0};
+		if (isect_tri(&w->ir, w->o, tri->v, &t, &bu, &bv) &&
+		    isect_take(&w->h, t, bu, bv, w->ta, 0, w->any_hit, w->tmax))
+			dda_end(w); /* an occluder: the ray is done */
 		return 1;
 	}
 	/* a culled triangle stays culled (the frustum does not change) */

@@ -18,6 +18,7 @@
 #define SAAR_KREF_ISECT_H
 
 #include "kernel-ref/fpfmt.h"
+#include "kernel-ref/packet.h"
 #include "kernel-ref/vecmath.h"
 
 /* gamma(n) = n u / (1 - n u), u = 2^-24: the relative error bound of n
@@ -237,6 +238,25 @@ static inline int isect_tri_fp(const fpfmt *f, const isect_ray *r, vec3 o, const
 static inline int isect_better(float t, unsigned tri, float best_t, unsigned best_tri)
 {
 	return t < best_t || (t == best_t && tri < best_tri);
+}
+
+/* A single ray's hit (t, bu, bv) on triangle ta (of instance inst), kept
+ * in *h by that rule; with any_hit an occluder before tmax ends the
+ * search: returns 1 then. Every scalar path (ray_trace, the grid's DDA,
+ * the flat two-level reference) takes its hits through this. */
+static inline int isect_take(ray_hit *h, float t, float bu, float bv, uint32_t ta, uint32_t inst,
+                             int any_hit, float tmax)
+{
+	if (any_hit) {
+		if (!(t < tmax))
+			return 0;
+		h->t = t;
+		h->tri = ta;
+		return 1;
+	}
+	if (isect_better(t, ta, h->t, h->tri))
+		*h = (ray_hit){t, bu, bv, ta, inst};
+	return 0;
 }
 
 #endif

@@ -99,18 +99,10 @@ static int flat_leaf(void *ctx, const uint32_t *list, uint32_t count, ray_hit *h
 		}
 		float tt, bu, bv;
 		const float(*tv)[3] = mimg_tri_at(&t->obj[in->obj].m, r->f->local[g])->v;
-		if (!isect_tri(&r->ir, r->oo, tv, &tt, &bu, &bv))
-			continue;
-		uint32_t wa = (uint32_t)mimg_tri_addr(t->world, g);
-		if (r->any_hit) {
-			if (tt < r->tmax) {
-				h->t = tt;
-				h->tri = wa;
-				return 1;
-			}
-		} else if (isect_better(tt, wa, h->t, h->tri)) {
-			*h = (ray_hit){tt, bu, bv, wa, rec};
-		}
+		if (isect_tri(&r->ir, r->oo, tv, &tt, &bu, &bv) &&
+		    isect_take(h, tt, bu, bv, (uint32_t)mimg_tri_addr(t->world, g), rec, r->any_hit,
+		               r->tmax))
+			return 1;
 	}
 	return 0;
 }

@@ -761,21 +761,10 @@ static inline int ray_leaf_tris(void *ctx, const uint32_t *list, uint32_t count,
 		uint32_t ta = list[k];
 		float t, bu, bv;
 		const float(*tv)[3] = mimg_tri_at(r->m, ta)->v;
-		if (!(r->fi ? isect_tri_fp(r->fi, &r->ir, r->o, tv, &t, &bu, &bv)
-		            : isect_tri(&r->ir, r->o, tv, &t, &bu, &bv)))
-			continue;
-		if (r->any_hit) {
-			if (t < r->tmax) {
-				h->t = t;
-				h->tri = ta;
-				return 1;
-			}
-		} else if (isect_better(t, ta, h->t, h->tri)) {
-			h->t = t;
-			h->tri = ta;
-			h->bu = bu;
-			h->bv = bv;
-		}
+		if ((r->fi ? isect_tri_fp(r->fi, &r->ir, r->o, tv, &t, &bu, &bv)
+		           : isect_tri(&r->ir, r->o, tv, &t, &bu, &bv)) &&
+		    isect_take(h, t, bu, bv, ta, 0, r->any_hit, r->tmax))
+			return 1;
 	}
 	return 0;
 }
