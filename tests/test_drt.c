@@ -263,25 +263,28 @@ Test(drt, lens_rays_meet_on_the_focal_plane)
 	cr_assert(maxr > 0.8, "lens points only within %g of the centre (radius 1)", maxr);
 }
 
-/* Mistake: an area light of size 0 that is not the point light (its
- * point moved, its colour scaled by the area), so soft shadows could not
- * shrink to hard ones. */
+/* Mistake: an area light of size 0 whose points are not the point light
+ * (moved off it, say by u instead of u - 1/2 with the square's edges
+ * still applied), so soft shadows could not shrink to hard ones. Every
+ * sample's point is the light's, bit for bit, for each of its lights. */
 Test(drt, light_size_zero_is_the_point_light)
 {
 	world w;
 	room(&w);
+	cr_assert(w.v.nlights > 0, "the room has no light");
 	w.v.drt.spp = 4;
-	uint8_t *pt = frame(&w, &w.v, 40, 1, NULL);
 	w.v.drt.light_size = 0;
 	w.v.drt.gloss = 0;
 	drt_shade ds;
 	drt_shade_setup(&ds, &w.v.drt, w.v.cam.up, 40);
-	for (int s = 0; s < 4; s++) {
-		vec3 q = drt_light_point(&ds, w.v.lights[0].pos, 77, s, 0);
-		cr_assert(!memcmp(&q, &w.v.lights[0].pos, sizeof q), "size 0 moved the light");
-	}
+	for (int l = 0; l < w.v.nlights; l++)
+		for (int s = 0; s < 4; s++)
+			for (uint32_t px = 0; px < 40 * 40; px += 77) {
+				vec3 q = drt_light_point(&ds, w.v.lights[l].pos, px, s, l);
+				cr_assert(!memcmp(&q, &w.v.lights[l].pos, sizeof q),
+				          "size 0 moved light %d (pixel %u, sample %d)", l, px, s);
+			}
 	world_free(&w);
-	free(pt);
 }
 
 /* Mistake: light points off the square (not centred on the light: u
@@ -438,7 +441,7 @@ Test(drt, packets_hold_one_type_and_sample_of_one_tile)
  * moved by the whole displacement at every time (a shifted frame), or
  * not at all. Oracle: with motion m each primary ray starts at eye + t m,
  * t a stratified time in [0, 1) whose 16 samples per pixel average 1/2;
- * and a still camera at 16 spp equals motion (0, 0, 0). */
+ * and a frame with motion differs from the still one. */
 Test(drt, motion_moves_the_camera_over_the_shutter)
 {
 	view v;
@@ -460,15 +463,17 @@ Test(drt, motion_moves_the_camera_over_the_shutter)
 	}
 	for (int lane = 0; lane < 64; lane++)
 		cr_assert(fabs(sum[lane] - 0.5) < 1e-5, "mean time %g, not 1/2", sum[lane]);
+	/* and the frame loop uses it: a render whose camera is set up
+	 * without the view's motion draws the still frame */
 	world w;
 	room(&w);
 	w.v.drt.spp = 16;
 	uint8_t *still = frame(&w, &w.v, 32, 1, NULL);
-	w.v.drt.motion = v3(0, 0, 0);
-	uint8_t *zero = frame(&w, &w.v, 32, 1, NULL);
-	assert_same(still, zero, 32, "motion 0");
+	w.v.drt.motion = v3(0.5f, 0, 0);
+	uint8_t *moved = frame(&w, &w.v, 32, 1, NULL);
+	cr_assert(memcmp(still, moved, 32 * 32 * 3), "motion (0.5, 0, 0) left the frame still");
 	free(still);
-	free(zero);
+	free(moved);
 	world_free(&w);
 }
 
