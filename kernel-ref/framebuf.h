@@ -25,6 +25,12 @@ typedef struct framebuf {
 	uint64_t *acc; /* 3 per pixel, fixed point */
 } framebuf;
 
+/* 8-bit sRGB of one channel's fixed-point sum: fb_srgb8 by table (what
+ * fb_to_rgb8 uses), fb_srgb8_formula by the transfer function itself (the
+ * same byte at every sum; tests compare them). */
+uint8_t fb_srgb8(uint64_t acc);
+uint8_t fb_srgb8_formula(uint64_t acc);
+
 /* A cleared frame buffer. */
 int fb_init(framebuf *fb, int w, int h);
 void fb_free(framebuf *fb);

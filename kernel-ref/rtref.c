@@ -156,6 +156,7 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_knum(j, "build_ms", w->kd_ms);
 	jsonw_knum(j, "image_ms", w->image_ms);
 	jsonw_kstr(j, "world_cache", world_cache_name(w->cache));
+	world_cache_json(j, w);
 	jsonw_knum(j, "render_ms", st->render_ms);
 	jsonw_knum(j, "mrays_per_s", st->render_ms > 0 ? (double)total / (st->render_ms * 1e3) : 0);
 	/* tracing only (traversal + intersection, no ray generation or shading),

@@ -195,6 +195,9 @@ static size_t prec_views(char *t, size_t cap, int res, const char *views, double
 	for (int v = -1; v < nv; v++) {
 		world_opts o;
 		world_opts_default(&o);
+		/* no default world-cache folder (issue 36): built as before, its
+		 * arrays whole, nothing written into the user's home */
+		o.cache_dir = "off";
 		if (v >= 0) {
 			o.views = views;
 			o.view = names[v];

@@ -42,14 +42,20 @@ const char world_usage[] =
     "  --spp N (1|4|16|64) --aperture F --focus F --light-size F --gloss F --motion X,Y,Z\n"
     "                        distribution ray tracing (override the view's drt; docs/views.md)\n"
     "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n"
-    "  --world-cache DIR     keep built worlds (scene, kd-tree, memory image) in DIR and\n"
-    "                        reuse them while the program and scene files are unchanged\n";
+    "  --world-cache DIR|off keep built worlds (scene, kd-tree, memory image), reference\n"
+    "                        frames, packet records and warming runs in DIR and reuse them\n"
+    "                        while the program and scene files are unchanged; default:\n"
+    "                        $SAARSIM_CACHE_DIR (a folder or off), else\n"
+    "                        $XDG_CACHE_HOME/saarsim, else $HOME/.cache/saarsim; off: none\n"
+    "  --world-cache-max MB  cap on the folder's entries, least recently used removed\n"
+    "                        first (default $SAARSIM_CACHE_MAX_MB, else 4096; 0: no cap)\n";
 
 void world_opts_default(world_opts *o)
 {
 	memset(o, 0, sizeof *o);
 	kd_params_default(&o->kd);
 	grid_params_default(&o->gp);
+	o->cache_max_mb = -1;
 }
 
 static double now_ms(void)
@@ -187,6 +193,7 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	                                         "--kd-leaf-size",
 	                                         "--kd-empty-bonus",
 	                                         "--world-cache",
+	                                         "--world-cache-max",
 	                                         "--spp",
 	                                         "--aperture",
 	                                         "--focus",
@@ -231,7 +238,11 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->view = v;
 	else if (!strcmp(a, "--world-cache"))
 		o->cache_dir = v;
-	else if (!strncmp(a, "--anim-", 7))
+	else if (!strcmp(a, "--world-cache-max")) {
+		if (cli_parse_int(a, v, 0, WC_MAX_MB, &n, d))
+			return -1;
+		o->cache_max_mb = n;
+	} else if (!strncmp(a, "--anim-", 7))
 		return anim_arg(o, a, v, d) ? -1 : 1;
 	else if (!strcmp(a, "--eye")) {
 		o->have_eye = 1;
@@ -413,19 +424,93 @@ static int load_view(world *w, const world_opts *o, diag *d)
 	return 0;
 }
 
+/* The world cache's folder (wc_choose): w->cache_dir set when there is
+ * one to use. A folder named by --world-cache that cannot be made or
+ * written is an error; a default one is not (the run goes on without a
+ * cache, cache_note and a warning say why): a default must not stop a run
+ * in a read-only home. */
+static int cache_open(world *w, const world_opts *o, diag *d)
+{
+	w->cache_from = wc_choose(o->cache_dir, w->cache_path, sizeof w->cache_path);
+	if (w->cache_from == WC_FROM_OFF)
+		return 0;
+	if (w->cache_from == WC_FROM_NONE) {
+		if (o->cache_dir)
+			return diag_set(d, "--world-cache", 0, 0, "folder name too long");
+		snprintf(w->cache_note, sizeof w->cache_note, "%s",
+		         "no default folder: SAARSIM_CACHE_DIR, XDG_CACHE_HOME and HOME are unset "
+		         "(or the name is too long)");
+		return 0;
+	}
+	if (wc_cap(o->cache_max_mb, &w->cache_cap, d))
+		return -1;
+	diag e;
+	int dflt = w->cache_from != WC_FROM_FLAG;
+	if (wc_prepare(w->cache_path, dflt, w->cache_prog, sizeof w->cache_prog, &e)) {
+		if (!dflt) {
+			*d = e;
+			return -1;
+		}
+		snprintf(w->cache_note, sizeof w->cache_note, "%s", e.msg);
+		fprintf(stderr,
+		        "warning: world cache off: %s (the default folder, from %s; "
+		        "--world-cache DIR or SAARSIM_CACHE_DIR picks another, off turns it off)\n",
+		        e.msg, wc_from_name(w->cache_from));
+		return 0;
+	}
+	w->cache_dir = w->cache_path;
+	return 0;
+}
+
+int world_cache_is_default(const world *w)
+{
+	return w->cache_from != WC_FROM_FLAG;
+}
+
+void world_cache_json(jsonw *j, const world *w)
+{
+	jsonw_key(j, "world_cache_dir");
+	if (w->cache_dir)
+		jsonw_str(j, w->cache_dir);
+	else
+		jsonw_null(j);
+	jsonw_kbool(j, "world_cache_default", world_cache_is_default(w));
+	jsonw_kstr(j, "world_cache_from", wc_from_name(w->cache_from));
+	jsonw_knum(j, "world_cache_max_mb", (double)(w->cache_cap >> 20));
+	jsonw_kstr(j, "world_cache_note", w->cache_note);
+}
+
+int world_cache_put(const world *w, const char *file, const char *key, const wc_files *f,
+                    const wc_part *parts, int nparts, const void *tail, size_t ntail, diag *d)
+{
+	/* the head: the key, the files' names and the parts (a bound) */
+	uint64_t need = ntail + strlen(key) + 4096;
+	for (int i = 0; i < nparts; i++)
+		need += parts[i].n;
+	for (int i = 0; f && i < f->n; i++)
+		need += strlen(f->path[i]) + 32;
+	if (wc_make_room(w->cache_dir, need, w->cache_cap))
+		return diag_set(d, file, 0, 0,
+		                "world cache: not stored: the entry (%.1f MB) alone passes the "
+		                "folder's cap (%llu MB; --world-cache-max, SAARSIM_CACHE_MAX_MB)",
+		                (double)need / (1 << 20), (unsigned long long)(w->cache_cap >> 20));
+	return wc_put(file, key, f, parts, nparts, tail, ntail, d);
+}
+
 /* The world cache's file (cfile) and key (*ckey, malloc'd) for the scene
  * at path; the stored world into parts and w->m.bytes when there is one
- * (w->cache = WORLD_CACHE_HIT). */
+ * (w->cache = WORLD_CACHE_HIT). Nothing without a folder. */
 static int cache_lookup(world *w, const world_opts *o, const char *path, wc_part *parts,
                         char *cfile, size_t ncfile, char **ckey, diag *d)
 {
-	if (wc_prepare(o->cache_dir, w->cache_prog, sizeof w->cache_prog, d))
+	if (cache_open(w, o, d))
 		return -1;
+	if (!w->cache_dir)
+		return 0;
 	if (!(*ckey = wc_world_key(w->cache_prog, path, &o->kd)))
-		return diag_set(d, o->cache_dir, 0, 0, "--world-cache: out of memory");
-	if (wc_file(cfile, ncfile, o->cache_dir, "world", *ckey))
-		return diag_set(d, o->cache_dir, 0, 0, "--world-cache: folder name too long");
-	w->cache_dir = o->cache_dir;
+		return diag_set(d, w->cache_dir, 0, 0, "--world-cache: out of memory");
+	if (wc_file(cfile, ncfile, w->cache_dir, "world", *ckey))
+		return diag_set(d, w->cache_dir, 0, 0, "--world-cache: folder name too long");
 	void *bytes;
 	size_t n;
 	if (wc_get(cfile, *ckey, parts, WORLD_PARTS, &bytes, &n)) {
@@ -520,7 +605,8 @@ static void cache_store(world *w, view *sv, const char *cfile, const char *ckey,
 	world_parts(put, &s0, &k0, &m0, sv, &w->image_crc);
 	diag wd;
 	w->cache = WORLD_CACHE_STORED;
-	if (wc_put(cfile, ckey, files, put, WORLD_PARTS, w->m.bytes, (size_t)w->m.size, &wd)) {
+	if (world_cache_put(w, cfile, ckey, files, put, WORLD_PARTS, w->m.bytes, (size_t)w->m.size,
+	                    &wd)) {
 		fprintf(stderr, "warning: %s\n", wd.msg);
 		w->cache = WORLD_CACHE_UNSTORED;
 	}
@@ -547,13 +633,12 @@ int world_load(world *w, const world_opts *o, diag *d)
 	wc_part parts[WORLD_PARTS];
 	world_parts(parts, &w->s, &w->kd, &w->m, &sv, &w->image_crc);
 	/* an AFF world is not cached: it is rebuilt per animation time */
-	if (o->cache_dir && !aff &&
-	    cache_lookup(w, o, path, parts, cfile, sizeof cfile, &ckey, d)) {
+	if (!aff && cache_lookup(w, o, path, parts, cfile, sizeof cfile, &ckey, d)) {
 		free(ckey);
 		return -1;
 	}
 	if (aff ? load_aff(w, o, path, &sv, &aff_has_view, d)
-	        : !w->cache && load_scene(w, path, &sv, o->cache_dir ? &files : NULL, d))
+	        : !w->cache && load_scene(w, path, &sv, w->cache_dir ? &files : NULL, d))
 		goto fail;
 	/* a procedural scene brings its standard view, an AFF scene its
 	 * camera at the time, unless a views file gave one */
@@ -580,7 +665,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 		if (mimg_build(&w->m, &w->s, &w->kd, d))
 			goto fail;
 		w->image_ms = now_ms() - t0;
-		if (o->cache_dir && !aff)
+		if (w->cache_dir && !aff)
 			cache_store(w, &sv, cfile, ckey, &files);
 	}
 	if (o->two_level && two_level_build(w, o, d))
@@ -639,7 +724,7 @@ int world_reference_rgb8(const world *w, const render_opts *o, uint8_t *rgb, ren
 	if (!rc) {
 		fb_to_rgb8(&ref, rgb, NULL);
 		diag wd;
-		if (key && wc_put(file, key, NULL, parts, 1, rgb, n, &wd))
+		if (key && world_cache_put(w, file, key, NULL, parts, 1, rgb, n, &wd))
 			fprintf(stderr, "warning: %s\n", wd.msg);
 	}
 	fb_free(&ref);

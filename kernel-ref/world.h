@@ -11,11 +11,13 @@
 
 #include "kernel-ref/diag.h"
 #include "kernel-ref/grid.h"
+#include "kernel-ref/jsonw.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/memimage.h"
 #include "kernel-ref/render.h"
 #include "kernel-ref/scene.h"
 #include "kernel-ref/view.h"
+#include "kernel-ref/worldcache.h"
 
 typedef struct world_opts {
 	const char *scene; /* path, or NULL: from the view, else embedded default */
@@ -32,7 +34,10 @@ typedef struct world_opts {
 	 * problem is then named by the key, drt.<name>, not the flag) */
 	unsigned drt_from_config;
 	kd_params kd;
-	const char *cache_dir; /* --world-cache DIR, or NULL (worldcache.h) */
+	/* --world-cache DIR (or "off"), or NULL: the default folder, from the
+	 * environment (wc_choose in worldcache.h) */
+	const char *cache_dir;
+	long cache_max_mb; /* --world-cache-max MB (0: no cap), or -1: wc_cap's default */
 	/* AFF scenes (aff.h): --anim-time T (default 0) and --anim-fps F;
 	 * frame i of a multi-frame run is at anim_time + i / anim_fps */
 	int have_anim_time, have_anim_fps;
@@ -63,7 +68,15 @@ typedef struct world {
 	 * bounds; the arrays are NULL: nothing after the build reads them)
 	 * and m is whole. */
 	int cache;
-	const char *cache_dir; /* o->cache_dir, for the reference frame's entry */
+	/* The world cache's folder in use (cache_path), or NULL: none (off,
+	 * or a default folder that could not be made or written: cache_note
+	 * says why). cache_from: WC_FROM_* (where the folder's name came
+	 * from); cache_cap: the cap on its entries in bytes (0: none). */
+	const char *cache_dir;
+	char cache_path[4096];
+	int cache_from;
+	uint64_t cache_cap;
+	char cache_note[sizeof(diag)];
 	uint32_t
 	    image_crc; /* with a cache: CRC-32 of m's bytes (frame keys name the image by it) */
 	char cache_prog[64]; /* this program's identity in cache keys */
@@ -90,7 +103,8 @@ void world_opts_default(world_opts *o);
  * --lookat x,y,z, --up x,y,z, --fov deg, --light x,y,z (repeatable),
  * --no-lights, --spp n, --aperture f, --focus f, --light-size f, --gloss f,
  * --motion x,y,z (override the view's drt), --kd-cost-trav f, --kd-cost-isect f, --kd-max-depth n,
- * --kd-leaf-size n, --kd-empty-bonus f, --world-cache DIR. */
+ * --kd-leaf-size n, --kd-empty-bonus f, --world-cache DIR|off,
+ * --world-cache-max MB. */
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
 
 /* Usage lines for those flags. */
@@ -124,6 +138,22 @@ double world_frame_time(const world_opts *o, int i);
  * height x 3 bytes into rgb) and its counts into st: from the world cache
  * when w has one and it holds this frame (*cached = 1), else rendered
  * (and stored there; a failed store is a warning). */
+/* wc_put into w's cache folder after making room under its cap
+ * (wc_make_room); -1 with diag when the entry alone passes the cap or the
+ * store fails. */
+int world_cache_put(const world *w, const char *file, const char *key, const wc_files *f,
+                    const wc_part *parts, int nparts, const void *tail, size_t ntail, diag *d);
+
+/* Whether the world's cache folder was chosen by default (no
+ * --world-cache flag: SAARSIM_CACHE_DIR, XDG_CACHE_HOME or HOME). */
+int world_cache_is_default(const world *w);
+
+/* The report's keys on the world cache's folder (host.world_cache_*):
+ * dir (the folder in use, else null), default (chosen without the flag),
+ * from (wc_from_name), max_mb (its cap; 0: none) and note (why a
+ * default folder is not in use; "" when it is). */
+void world_cache_json(jsonw *j, const world *w);
+
 int world_reference_rgb8(const world *w, const render_opts *o, uint8_t *rgb, render_stats *st,
                          int *cached, diag *d);
 void world_free(world *w);

@@ -40,6 +40,7 @@
 #include "kernel-ref/atomicfile.h"
 #include "kernel-ref/spd.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -54,6 +55,8 @@
 
 #define WC_MAGIC     "SAARWC2\n"
 #define WC_MAGIC_LEN 8
+/* entries a folder's eviction looks at (a folder of more is not ours) */
+#define WC_MAX_ENTRIES 100000
 
 /* ---- the files a scene came from ---- */
 
@@ -116,9 +119,27 @@ static int exe_identity(unsigned long *crc, long long *size)
 	return bad ? -1 : 0;
 }
 
-int wc_prepare(const char *dir, char *prog, size_t nprog, diag *d)
+/* mkdir -p: every missing folder on the way to dir (the last one too). */
+static int mkdirs(const char *dir)
 {
-	if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+	char p[PATH_MAX];
+	if (snprintf(p, sizeof p, "%s", dir) >= (int)sizeof p) {
+		errno = ENAMETOOLONG;
+		return -1;
+	}
+	for (char *s = p + 1; *s; s++)
+		if (*s == '/') {
+			*s = '\0';
+			if (mkdir(p, 0777) != 0 && errno != EEXIST)
+				return -1;
+			*s = '/';
+		}
+	return mkdir(p, 0777) != 0 && errno != EEXIST ? -1 : 0;
+}
+
+int wc_prepare(const char *dir, int parents, char *prog, size_t nprog, diag *d)
+{
+	if ((parents ? mkdirs(dir) : mkdir(dir, 0777)) != 0 && errno != EEXIST)
 		return diag_set(d, dir, 0, 0, "--world-cache: cannot create the folder: %s",
 		                strerror(errno));
 	struct stat st;
@@ -133,6 +154,166 @@ int wc_prepare(const char *dir, char *prog, size_t nprog, diag *d)
 		return diag_set(d, "/proc/self/exe", 0, 0,
 		                "--world-cache: cannot read the program's own file");
 	snprintf(prog, nprog, "program %08lx %lld", crc, size);
+	return 0;
+}
+
+/* ---- the folder and its cap ---- */
+
+const char *wc_from_name(int from)
+{
+	static const char *const n[] = {
+	    "off", "--world-cache", "SAARSIM_CACHE_DIR", "XDG_CACHE_HOME", "HOME", "none"};
+	return from >= 0 && from <= WC_FROM_NONE ? n[from] : "?";
+}
+
+/* A variable's value, NULL when unset or empty. */
+static const char *env(const char *name)
+{
+	const char *v = getenv(name);
+	return v && *v ? v : NULL;
+}
+
+int wc_choose(const char *flag, char *out, size_t n)
+{
+	out[0] = '\0';
+	const char *v, *suffix = "", *xdg = env("XDG_CACHE_HOME");
+	int from;
+	if ((v = flag))
+		from = WC_FROM_FLAG;
+	else if ((v = env("SAARSIM_CACHE_DIR")))
+		from = WC_FROM_ENV;
+	else if (xdg && xdg[0] == '/') { /* the spec: a relative one is ignored */
+		v = xdg;
+		from = WC_FROM_XDG;
+		suffix = "/saarsim";
+	} else if ((v = env("HOME"))) {
+		from = WC_FROM_HOME;
+		suffix = "/.cache/saarsim";
+	} else
+		return WC_FROM_NONE;
+	if ((from == WC_FROM_FLAG || from == WC_FROM_ENV) && !strcmp(v, "off"))
+		return WC_FROM_OFF;
+	int k = snprintf(out, n, "%s%s", v, suffix);
+	if (k < 0 || (size_t)k >= n) {
+		out[0] = '\0';
+		return WC_FROM_NONE;
+	}
+	return from;
+}
+
+int wc_cap(long mb, uint64_t *bytes, diag *d)
+{
+	if (mb < 0) {
+		const char *v = getenv("SAARSIM_CACHE_MAX_MB");
+		mb = WC_DEFAULT_MAX_MB;
+		if (v) {
+			char *end;
+			errno = 0;
+			long long x = strtoll(v, &end, 10);
+			if (!*v || *v < '0' || *v > '9' || *end || errno || x > WC_MAX_MB)
+				return diag_set(
+				    d, "SAARSIM_CACHE_MAX_MB", 0, 0,
+				    "'%.40s' is not a size in MB (a whole number, 0 to %d; "
+				    "0: no cap)",
+				    v, WC_MAX_MB);
+			mb = (long)x;
+		}
+	}
+	*bytes = (uint64_t)mb << 20;
+	return 0;
+}
+
+/* An entry of the folder: KIND-HASH.bin, one of the four kinds. */
+static int is_entry(const char *name)
+{
+	static const char *const kinds[] = {"world-", "frame-", "packets-", "warming-"};
+	for (size_t k = 0; k < sizeof kinds / sizeof *kinds; k++) {
+		size_t n = strlen(kinds[k]);
+		if (strncmp(name, kinds[k], n))
+			continue;
+		const char *h = name + n;
+		if (strlen(h) != 16 + 4 || strcmp(h + 16, ".bin"))
+			return 0;
+		for (int i = 0; i < 16; i++)
+			if (!((h[i] >= '0' && h[i] <= '9') || (h[i] >= 'a' && h[i] <= 'f')))
+				return 0;
+		return 1;
+	}
+	return 0;
+}
+
+typedef struct wc_ent {
+	char name[32];
+	uint64_t size;
+	struct timespec used;
+} wc_ent;
+
+static int by_use(const void *a, const void *b)
+{
+	const struct timespec *x = &((const wc_ent *)a)->used, *y = &((const wc_ent *)b)->used;
+	if (x->tv_sec != y->tv_sec)
+		return x->tv_sec < y->tv_sec ? -1 : 1;
+	return x->tv_nsec < y->tv_nsec ? -1 : x->tv_nsec > y->tv_nsec;
+}
+
+/* The folder's entries (at most WC_MAX_ENTRIES) into *out, their total
+ * size into *total; -1 when it cannot be read. */
+static int list_entries(const char *dir, wc_ent **out, size_t *nout, uint64_t *total)
+{
+	DIR *dp = opendir(dir);
+	if (!dp)
+		return -1;
+	wc_ent *e = NULL;
+	size_t n = 0, cap = 0;
+	*total = 0;
+	struct dirent *de;
+	while ((de = readdir(dp)) && n < WC_MAX_ENTRIES) {
+		struct stat st;
+		if (!is_entry(de->d_name) || fstatat(dirfd(dp), de->d_name, &st, 0) != 0 ||
+		    !S_ISREG(st.st_mode))
+			continue;
+		if (n == cap) {
+			size_t c = cap ? 2 * cap : 64;
+			wc_ent *q = realloc(e, c * sizeof *q);
+			if (!q)
+				break;
+			e = q;
+			cap = c;
+		}
+		memcpy(e[n].name, de->d_name, strlen(de->d_name) + 1); /* is_entry: < 32 */
+		e[n].size = (uint64_t)st.st_size;
+		e[n].used = st.st_mtim;
+		*total += e[n].size;
+		n++;
+	}
+	closedir(dp);
+	*out = e;
+	*nout = n;
+	return 0;
+}
+
+int wc_make_room(const char *dir, uint64_t need, uint64_t cap)
+{
+	if (!cap)
+		return 0;
+	if (need > cap)
+		return -1;
+	wc_ent *e;
+	size_t n;
+	uint64_t total;
+	if (list_entries(dir, &e, &n, &total))
+		return 0; /* the store will say what is wrong */
+	if (total + need > cap) {
+		qsort(e, n, sizeof *e, by_use);
+		char path[PATH_MAX];
+		/* another run may remove the same entry at once: gone is gone */
+		for (size_t i = 0; i < n && total + need > cap; i++)
+			if (snprintf(path, sizeof path, "%s/%s", dir, e[i].name) <
+			        (int)sizeof path &&
+			    (unlink(path) == 0 || errno == ENOENT))
+				total -= e[i].size;
+	}
+	free(e);
 	return 0;
 }
 
@@ -382,6 +563,9 @@ int wc_get_mapped(const char *file, const char *key, const wc_part *parts, int n
 	    hash != tail_hash(r.p + r.at, n))
 		goto out;
 	hit = 1;
+	/* a hit marks the entry used: a capped folder evicts the least
+	 * recently used first (wc_make_room); a read-only folder keeps it old */
+	utimensat(AT_FDCWD, file, NULL, 0);
 	if (tail) {
 		*tail = r.p + r.at;
 		*ntail = n;

@@ -29,10 +29,39 @@ typedef struct wc_files {
 void wc_files_add(void *ctx, const char *path);
 void wc_files_free(wc_files *f);
 
-/* Makes DIR (its last component) if missing and checks it can be
- * written; fills prog (>= 48 bytes) with this program's identity, the
- * CRC-32 and size of its own file. Fails with diag naming DIR. */
-int wc_prepare(const char *dir, char *prog, size_t nprog, diag *d);
+/* Makes DIR (its last component; with parents, every missing folder
+ * on its way, as mkdir -p) if missing and checks it can be written;
+ * fills prog (>= 48 bytes) with this program's identity, the CRC-32 and
+ * size of its own file. Fails with diag naming DIR. */
+int wc_prepare(const char *dir, int parents, char *prog, size_t nprog, diag *d);
+
+/* Where the folder came from (wc_choose). */
+enum { WC_FROM_OFF, WC_FROM_FLAG, WC_FROM_ENV, WC_FROM_XDG, WC_FROM_HOME, WC_FROM_NONE };
+/* Its name in reports: "off", "--world-cache", "SAARSIM_CACHE_DIR",
+ * "XDG_CACHE_HOME", "HOME", "none". */
+const char *wc_from_name(int from);
+
+/* The world cache's folder: flag (--world-cache DIR; "off": none), else
+ * $SAARSIM_CACHE_DIR (likewise; empty is unset), else
+ * $XDG_CACHE_HOME/saarsim (an absolute XDG_CACHE_HOME only, as the XDG
+ * base directory spec says), else $HOME/.cache/saarsim. The folder into
+ * out (n bytes; "" for none); returns WC_FROM_*: OFF when turned off,
+ * NONE when no variable names a folder or the name does not fit. */
+int wc_choose(const char *flag, char *out, size_t n);
+
+/* The cap on a folder's entries, bytes: mb >= 0 (--world-cache-max),
+ * else $SAARSIM_CACHE_MAX_MB, else WC_DEFAULT_MAX_MB; 0 MB: no cap. -1
+ * with diag for a bad variable's value. */
+#define WC_DEFAULT_MAX_MB 4096
+#define WC_MAX_MB         1073741824 /* the largest cap, MB (1 PiB) */
+int wc_cap(long mb, uint64_t *bytes, diag *d);
+
+/* Room for an entry of need bytes under the cap: while the folder's
+ * entries (KIND-HASH.bin of the four kinds) and need pass cap, removes
+ * the least recently used entry (by modification time: a hit touches
+ * its file). -1 when need alone passes the cap (the entry is then not
+ * stored); cap 0: nothing to do. */
+int wc_make_room(const char *dir, uint64_t need, uint64_t cap);
 
 /* A stored object: fixed-size parts read into caller's memory, then a
  * tail of any length (NULL/0: none). */

@@ -28,6 +28,11 @@
 #   SAAR_SCENES   the shared scenes (default ../shared/scenes)
 # Needs POSIX sh and python3. Bad input: one line, exit 2.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 
 say() { printf 'accel: %s\n' "$*" >&2; }
 bad() {

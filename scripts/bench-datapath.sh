@@ -18,6 +18,11 @@
 # <!-- END datapath --> of docs/PERFORMANCE.md (other sections are kept;
 # the file is replaced atomically) and prints it. Needs POSIX sh, awk, sed.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 say() { printf 'bench-datapath: %s\n' "$*" >&2; }
 die() {
 	say "error: $*"

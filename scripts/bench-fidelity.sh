@@ -23,6 +23,11 @@
 # cornell, threads 16, rates 0.05 0.1). The DRT rows (BENCH_DRT_*, and
 # BENCH_ONLY=drt to run them alone) follow the rest.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 B=${1:-build}
 SIM="$B/saarsim"
 SC=${SAAR_SCENES:-../shared/scenes}
@@ -121,7 +126,9 @@ drt_rows() { # appends rows to $1
 			if [ "$mode" = functional ]; then
 				run pt "$@" --fidelity functional >"$TMP/dpt.kv" || continue
 			else
-				run pt "$@" --fidelity sampled --sample-rate "$mode" >"$TMP/dpt.kv" || continue
+				# full warming, as before auto chose stored with a cache
+				run pt "$@" --fidelity sampled --sample-rate "$mode" --set sampling.warming=full \
+					>"$TMP/dpt.kv" || continue
 			fi
 			python3 - "$TMP/dtruth.kv" "$TMP/dpt.kv" "$view" "$spp" "$mode" "$DRT_SIZE" >>"$drows" <<'EOF'
 import sys
@@ -328,7 +335,7 @@ replicas() {
 	for r in $rates; do
 		for o in 0.05 0.15 0.25 0.35 0.45 0.55 0.65 0.75 0.85 0.95; do
 			"$SIM" "$@" --no-check --world-cache "$TMP/wc" --fidelity sampled --sample-rate "$r" \
-				--set sampling.offset="$o" --report "$TMP/rp_$o.json" >/dev/null 2>&1 ||
+				--set sampling.offset="$o" --set sampling.warming=full --report "$TMP/rp_$o.json" >/dev/null 2>&1 ||
 				rm -f "$TMP/rp_$o.json"
 		done
 		python3 - "$TMP" "$label" "$r" "$truth" >>"$rout" <<'EOF'

@@ -27,6 +27,11 @@
 # of docs/PERFORMANCE.md (other sections are kept; the file is replaced
 # atomically) and prints it. Needs POSIX sh, awk, sed, valgrind, git.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 say() { printf 'bench-profile: %s\n' "$*" >&2; }
 die() {
 	say "error: $*"

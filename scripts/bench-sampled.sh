@@ -1,18 +1,27 @@
 #!/bin/sh
-# scripts/bench-sampled.sh: where a sampled run's time goes with its
-# defaults (issue 36, target 3).
+# scripts/bench-sampled.sh: what a sampled run costs against a cycle run
+# with their defaults (issue 36, target 3).
 #
 #   sh scripts/bench-sampled.sh
 #
 # Conference at SIZE (default 1024x768), the default config (16 threads
-# per RTP), the default check: cycle mode and sampled mode without a world
-# cache, then both again with one (`--world-cache`: the first run stores,
-# the second hits), and sampled with stored warming on the warm cache.
-# Each run once (RUNS=n: the minimum of n); the report's host figures
-# split the time: load (scene, kd-tree, memory image), simulation, check
-# (kernel-ref's packet and single-ray reference frames and the
-# comparisons), whole run. Other jobs may share the machine: times are
-# noisy, ratios between runs made together less so.
+# per RTP), the default check. The headline pairs: a default cycle run
+# against a default sampled run, both with the default world-cache
+# folder (here SAARSIM_CACHE_DIR names a fresh temporary one for each
+# mode, so "cold" is a first run into an empty folder and "warm" the
+# run after it), and sampling.warming at its default, auto (stored
+# warming, since there is a cache). The rows from before the default
+# folder that still mean something: both modes without a cache
+# (`--world-cache off`; auto then means full warming) and sampled with
+# full warming on the warm cache. Then every shared view at SIZE with
+# the defaults and a warm cache: the fps error and the whole-run
+# speed-up of the default sampled run (ALL_VIEWS=0 leaves it out).
+# Each run once (RUNS=n: the minimum of n; a cold run gets a fresh
+# folder each time); the report's host figures split the time: load
+# (scene, kd-tree, memory image), simulation, check (kernel-ref's packet
+# and single-ray reference frames and the comparisons), whole run. Other
+# jobs may share the machine: times are noisy, ratios between runs made
+# together less so.
 #
 # Writes the section between <!-- BEGIN sampled --> and <!-- END sampled -->
 # of docs/PERFORMANCE.md and prints it. Needs POSIX sh, awk, sed.
@@ -47,36 +56,65 @@ load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
 t0=$(date +%s)
 ROWS=$TMP/rows
 : >"$ROWS"
-# one row: label, then saarsim arguments; the run with the least whole time
+# one row: label, the label of the row it is compared with, the cache
+# folder (a path, "fresh:PATH" for an empty one at every run, or "-" for
+# the flag's own), the view, then saarsim arguments; the run with the
+# least whole time
 point() {
-	label=$1
-	shift
+	label=$1 ref=$2 cache=$3 view=$4
+	shift 4
 	best=
 	i=0
 	while [ "$i" -lt "$RUNS" ]; do
 		i=$((i + 1))
-		say "$label ($i/$RUNS)"
-		"$SIM" --views "$VIEWS" --view "$VIEW" --size "$SIZE" --quiet --report "$TMP/r.json" "$@" \
-			>"$TMP/r.txt" 2>&1 || { cat "$TMP/r.txt" >&2; die "saarsim failed: $label"; }
+		say "$label $view ($i/$RUNS)"
+		case $cache in
+		fresh:*)
+			dir=${cache#fresh:}
+			rm -rf "$dir"
+			;;
+		-) dir=off ;;
+		*) dir=$cache ;;
+		esac
+		SAARSIM_CACHE_DIR=$dir "$SIM" --views "$VIEWS" --view "$view" --size "$SIZE" --quiet \
+			--report "$TMP/r.json" "$@" >"$TMP/r.txt" 2>&1 ||
+			{ cat "$TMP/r.txt" >&2; die "saarsim failed: $label"; }
 		w=$(jget "$TMP/r.json" wall_s)
 		if [ -z "$best" ] || awk -v a="$w" -v b="$best" 'BEGIN { exit !(a < b) }'; then
 			best=$w
 			cp "$TMP/r.json" "$TMP/best.json"
 		fi
 	done
-	printf '%s %s %s %s %s %s %s %s\n' "$label" "$(jget "$TMP/best.json" fps)" \
-		"$(jget "$TMP/best.json" load_s)" "$(jget "$TMP/best.json" sim_s)" \
-		"$(jget "$TMP/best.json" check_s)" "$(jget "$TMP/best.json" wall_s)" \
-		"$(jget "$TMP/best.json" world_cache | tr ' ' _)" \
-		"$(jget "$TMP/best.json" stored_warming | tr ' ' _)" >>"$ROWS"
+	printf '%s %s %s %s %s %s %s %s %s %s %s\n' "$label" "$ref" "$view" \
+		"$(jget "$TMP/best.json" fps)" "$(jget "$TMP/best.json" load_s)" \
+		"$(jget "$TMP/best.json" sim_s)" "$(jget "$TMP/best.json" check_s)" \
+		"$(jget "$TMP/best.json" wall_s)" "$(jget "$TMP/best.json" world_cache | tr ' ' _)" \
+		"$(jget "$TMP/best.json" stored_warming | tr ' ' _)" \
+		"$(jget "$TMP/best.json" warming | tr ' ' _)" >>"$ROWS"
 }
-point cycle
-point sampled --fidelity sampled
-point cycle_cache_store --world-cache "$TMP/wc"
-point cycle_cache_hit --world-cache "$TMP/wc"
-point sampled_cache_hit --fidelity sampled --world-cache "$TMP/wc"
-point sampled_stored_store --fidelity sampled --set sampling.warming=stored --world-cache "$TMP/wc"
-point sampled_stored_hit --fidelity sampled --set sampling.warming=stored --world-cache "$TMP/wc"
+C=$TMP/cache-cycle
+S=$TMP/cache-sampled
+point cycle_cold cycle_cold "fresh:$C" "$VIEW"
+point sampled_cold cycle_cold "fresh:$S" "$VIEW" --fidelity sampled
+point cycle_warm cycle_warm "$C" "$VIEW"
+point sampled_warm cycle_warm "$S" "$VIEW" --fidelity sampled
+point sampled_full_warm cycle_warm "$S" "$VIEW" --fidelity sampled --set sampling.warming=full
+point cycle_nocache cycle_nocache - "$VIEW" --world-cache off
+point sampled_nocache cycle_nocache - "$VIEW" --world-cache off --fidelity sampled
+VROWS=$TMP/vrows
+: >"$VROWS"
+if [ "${ALL_VIEWS:-1}" != 0 ]; then
+	mv "$ROWS" "$TMP/rows.main"
+	: >"$ROWS"
+	for v in $(sed -n 's/^  \([A-Za-z0-9_-]*\):[[:space:]]*$/\1/p' "$VIEWS"); do
+		point cycle cycle "$TMP/cache-views" "$v" # stores
+		point cycle cycle "$TMP/cache-views" "$v"
+		point sampled cycle "$TMP/cache-views" "$v" --fidelity sampled # stores
+		point sampled cycle "$TMP/cache-views" "$v" --fidelity sampled
+	done
+	mv "$ROWS" "$VROWS"
+	mv "$TMP/rows.main" "$ROWS"
+fi
 elapsed=$(($(date +%s) - t0))
 load1=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
 GIT=$(git rev-parse --short HEAD)
@@ -90,23 +128,38 @@ SECTION=$TMP/section
 	echo
 	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (took $elapsed s); commit $GIT"
 	echo "- Machine: $(nproc) CPUs; load average $load0 at start, $load1 at the end (other jobs share the machine: times are noisy)"
-	echo "- Run: \`saarsim --views views.yaml --view $VIEW --size $SIZE\` with the default config (4 RTPs x 16 threads) and the default check, best of $RUNS by whole time; *cache*: \`--world-cache DIR\`, first storing, then hitting; *stored*: \`--set sampling.warming=stored\`."
+	echo "- Run: \`saarsim --views views.yaml --view $VIEW --size $SIZE\` with the default config (4 RTPs x 16 threads), the default check and the default world-cache folder (\`SAARSIM_CACHE_DIR\` naming a fresh one per mode: *cold* is the first run into it, *warm* the next), best of $RUNS by whole time; sampled runs at their defaults (\`--fidelity sampled\`: rate 0.1, \`sampling.warming\` auto, which chose *warming* below); *full*: \`--set sampling.warming=full\`; *nocache*: \`--world-cache off\`. Each row's speed-up and fps error are against the cycle row it names."
 	echo
-	echo "| run | fps | fps error vs cycle | load s | sim s | check s | whole s | whole-run speed-up vs cycle | world cache | stored warming |"
-	echo "|---|---:|---:|---:|---:|---:|---:|---:|---|---|"
-	awk 'NR == 1 { f0 = $2; w0 = $6 }
-	{ printf "| %s | %.1f | %+.2f%% | %.3f | %.3f | %.3f | %.3f | %.2f | %s | %s |\n", $1, $2, 100 * ($2 - f0) / f0, $3, $4, $5, $6, w0 / $6, $7, $8 }' "$ROWS"
+	echo "| run | against | fps | fps error | load s | sim s | check s | whole s | whole-run speed-up | sim speed-up | world cache | warming | stored warming |"
+	echo "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|"
+	awk '{ f[$1] = $4; w[$1] = $8; s[$1] = $6 }
+	{ printf "| %s | %s | %.1f | %+.2f%% | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %s | %s | %s |\n", $1, $2, $4, 100 * ($4 - f[$2]) / f[$2], $5, $6, $7, $8, w[$2] / $8, s[$2] / $6, $9, $11, $10 }' "$ROWS"
 	echo
-	awk 'NR == 1 { l = $3; s = $4; c = $5; w = $6 }
-	NR == 2 { ls = $3; ss = $4; cs = $5; ws = $6 }
-	$1 == "cycle_cache_hit" { wch = $6; sch = $4 }
-	$1 == "sampled_stored_hit" { wsh = $6; ssh = $4; fsh = $2 }
-	NR == 1 { f0 = $2 }
+	awk '{ l[$1] = $5; s[$1] = $6; c[$1] = $7; w[$1] = $8; f[$1] = $4 }
 	END {
-		printf "Where the default sampled run spends its time: %.0f%% loading, %.0f%% simulating, %.0f%% in the check (cycle mode: %.0f%%, %.0f%%, %.0f%%). ", 100 * ls / ws, 100 * ss / ws, 100 * cs / ws, 100 * l / w, 100 * s / w, 100 * c / w
-		printf "Load and check cost the same in both modes, so they bound the whole-run speed-up at %.1fx however fast the simulation; without them sampling makes the simulation %.1fx faster. ", w / (ls + cs), s / ss
-		printf "With a warm world cache (the scene, its kd-tree and image, and the reference frames the check compares with come from the cache) the cycle run takes %.3f s and sampled with stored warming %.3f s (%.1fx, simulation %.1fx, fps error %+.2f%%).\n", wch, wsh, wch / wsh, sch / ssh, 100 * (fsh - f0) / f0
+		printf "With its defaults a sampled run is %.2fx faster than a cycle run as a whole run on a cold cache (%.3f s against %.3f s: the sampled run builds the packet record and the warming run on top of the world and the reference frames) and %.2fx on a warm one (%.3f s against %.3f s), at %+.2f%% fps error. ", w["cycle_cold"] / w["sampled_cold"], w["sampled_cold"], w["cycle_cold"], w["cycle_warm"] / w["sampled_warm"], w["sampled_warm"], w["cycle_warm"], 100 * (f["sampled_warm"] - f["cycle_warm"]) / f["cycle_warm"]
+		printf "Warm, load and check take %.3f s of the cycle run and %.3f s of the sampled one; the simulation alone is %.2fx faster (%.3f s against %.3f s). ", l["cycle_warm"] + c["cycle_warm"], l["sampled_warm"] + c["sampled_warm"], s["cycle_warm"] / s["sampled_warm"], s["sampled_warm"], s["cycle_warm"]
+		printf "Without a cache (the defaults before issue 36'"'"'s default folder) the sampled run is %.2fx faster (%+.2f%% fps error).\n", w["cycle_nocache"] / w["sampled_nocache"], 100 * (f["sampled_nocache"] - f["cycle_nocache"]) / f["cycle_nocache"]
 	}' "$ROWS"
+	if [ -s "$VROWS" ]; then
+		echo
+		echo "Every shared view at $SIZE with the defaults on a warm cache (the second run of each mode; one run each):"
+		echo
+		echo "| view | cycle fps | sampled fps | fps error | cycle whole s | sampled whole s | whole-run speed-up | sim speed-up | warming |"
+		echo "|---|---:|---:|---:|---:|---:|---:|---:|---|"
+		awk '{ k = $1 "/" $3 } $1 == "cycle" { cf[$3] = $4; cw[$3] = $8; cs[$3] = $6 }
+		$1 == "sampled" { sf[$3] = $4; sw[$3] = $8; ss[$3] = $6; wm[$3] = $11; if (!($3 in seen)) { seen[$3] = 1; order[n++] = $3 } }
+		END {
+			for (i = 0; i < n; i++) {
+				v = order[i]
+				e = 100 * (sf[v] - cf[v]) / cf[v]
+				printf "| %s | %.1f | %.1f | %+.2f%% | %.3f | %.3f | %.2f | %.2f | %s |\n", v, cf[v], sf[v], e, cw[v], sw[v], cw[v] / sw[v], cs[v] / ss[v], wm[v]
+				if (e < 0) e = -e
+				if (e <= 2) ok++
+			}
+			printf "\nWithin 2%% fps error: %d of %d views.\n", ok, n
+		}' "$VROWS"
+	fi
 	echo "<!-- END sampled -->"
 } >"$SECTION"
 

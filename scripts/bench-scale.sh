@@ -17,6 +17,11 @@
 # Writes the section between <!-- BEGIN scale --> and <!-- END scale --> of
 # docs/PERFORMANCE.md and prints it. Needs POSIX sh, awk, sed, GNU time.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 say() { printf 'bench-scale: %s\n' "$*" >&2; }
 die() {
 	say "error: $*"

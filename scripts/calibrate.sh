@@ -40,6 +40,11 @@
 # (replaces the KNOBS list below: "key v1,v2,..." lines).
 # Runs under nice. Exit status: 0 done, 1 a run failed, 2 bad input.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SAARSIM=${SAARSIM:-$ROOT/build/saarsim}

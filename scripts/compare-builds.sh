@@ -13,6 +13,11 @@
 # Exits 1 when any pair of reports differs. Written for issue 29 (the
 # data-carrying memory must leave every figure as it was).
 set -u
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 old=${1:?usage: compare-builds.sh OLD_SAARSIM NEW_SAARSIM [OUT_DIR]}
 new=${2:?usage: compare-builds.sh OLD_SAARSIM NEW_SAARSIM [OUT_DIR]}
 out=${3:-$(mktemp -d)}

@@ -32,6 +32,11 @@
 # Needs POSIX sh, python3, GNU parallel and gnuplot. Bad input: one line,
 # exit 2.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 
 . "$(dirname "$0")/doc-lib.sh"
 doc_init drt "${1:-build}"

@@ -16,6 +16,11 @@
 # from the runs' JSON reports. Runs are kept in DYN_OUT (default out/dynamic).
 # About a minute on 2 shared cores at the defaults.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 
 . "$(dirname "$0")/doc-lib.sh"
 doc_init dynamic "${1:-build}"

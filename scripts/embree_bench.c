@@ -293,6 +293,10 @@ int main(int argc, char **argv)
 	}
 
 	world w;
+	/* Embree needs the scene's triangles, which a world from the cache
+	 * does not hold (world.h): no default world-cache folder (issue 36) */
+	if (!wo.cache_dir)
+		wo.cache_dir = "off";
 	if (world_load(&w, &wo, &d)) {
 		fprintf(stderr, "embree_bench: %s\n", d.msg);
 		return DIAG_EXIT;

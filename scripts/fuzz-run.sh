@@ -6,6 +6,11 @@
 # repository). Limits per input: 10 s, 2 GB resident, 1 GB in one malloc.
 # Exit 1 on the first finding (its input is FZ_B/NAME-crash-* or similar).
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 FZ_B=$1
 SECS=$2
 BUILD=$3

@@ -9,6 +9,11 @@
 #
 #   sh scripts/precision-chip.sh [BUILD_DIR]     (PREC_SIZE=WxH, PREC_VIEWS="a b")
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 B=${1:-build}
 SIZE=${PREC_SIZE:-256x192}
 DOC=docs/NUMERICS.md

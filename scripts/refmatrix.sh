@@ -17,8 +17,16 @@
 # both tile orders. Reports are compared by scripts/report-diff.py: every
 # figure but the host's (times, memory) must be equal exactly, and every
 # frame must match kernel-ref's. Exit 0 when identical, 1 when not, 2 on
-# bad use.
+# bad use. Every run names its world cache (OUT/wc) and its warming (the
+# sampled-full runs pass sampling.warming=full: the default, auto, would
+# choose stored warming with a cache), so the matrix runs as it did
+# before the default cache folder and auto warming (issue 36).
 set -u
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 SCENES=$(cd "${SAAR_SCENES:-$root/../shared/scenes}" && pwd) || exit 2
@@ -64,7 +72,7 @@ record() {
 			if [ "$v" = default ]; then vw=""; else vw="--views $VIEWS --view $v"; fi
 			for m in cycle functional sampled-full sampled-stored; do
 				case $m in
-				sampled-full) f="--fidelity sampled --sample-rate 0.2" ;;
+				sampled-full) f="--fidelity sampled --sample-rate 0.2 --set sampling.warming=full" ;;
 				sampled-stored) f="--fidelity sampled --sample-rate 0.2 --set sampling.warming=stored" ;;
 				*) f="--fidelity $m" ;;
 				esac

@@ -56,6 +56,11 @@
 # Needs POSIX sh, awk, python3, GNU parallel (optional) and gnuplot.
 # Bad input (size, views, missing binary or config): one line, exit 2.
 set -eu
+# No default world-cache folder (issue 36): these runs measure or compare
+# builds, renders and sampled warming as they were, and write nothing into
+# the user's home; a run that wants a cache names its own (--world-cache).
+SAARSIM_CACHE_DIR=off
+export SAARSIM_CACHE_DIR
 
 say() { printf 'validate: %s\n' "$*" >&2; }
 die() {

@@ -517,6 +517,17 @@ static int chip_base(chip *c, const saar_config *cfg, const world *w)
 {
 	c->cfg = *cfg;
 	c->w = w;
+	/* sampling.warming auto (the default): stored warming whenever the
+	 * world cache can hold the frame's checkpoints (a folder in use), which
+	 * leaves a sampled run only its regions to simulate (docs/fidelity.md
+	 * "Stored warming"); full warming otherwise. Every other mode and
+	 * warming ignores the key: they keep full, as before auto. */
+	if (cfg->sampling.warming == CFG_WARMING_AUTO) {
+		c->warm_auto = 1;
+		c->cfg.sampling.warming = CFG_WARMING_STORED;
+		if (!w->cache_dir || !chip_estimates(&c->cfg)) /* (every tile detailed: none) */
+			c->cfg.sampling.warming = CFG_WARMING_FULL;
+	}
 	c->nrtp = cfg->chip.rtps;
 	c->tpr = cfg->chip.threads_per_rtp;
 	c->clk = eng_clock_mhz(cfg->chip.clock_mhz);

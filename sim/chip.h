@@ -216,6 +216,7 @@ typedef struct chip {
 	wc_map warm_map;
 	void *warm_own;
 	int warm_state;
+	int warm_auto; /* sampling.warming was auto (cfg holds what chip_create chose) */
 	char warm_file[1200];
 	double warm_ms; /* host time loading or building them */
 	int warm_err;   /* a checkpoint could not be restored */

@@ -35,7 +35,7 @@
 static const char *const thread_sched_names[] = {"round_robin", "oldest_first", NULL};
 static const char *const accel_names[] = {"kd", "grid", NULL};
 static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
-static const char *const warming_names[] = {"full", "stored", NULL};
+static const char *const warming_names[] = {"auto", "full", "stored", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
 /* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
 static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};
@@ -174,12 +174,14 @@ static const cfg_key keys_src[] = {
              "leave-one-out error over the units is below the max model's residual variance"},
     {ENUM("sampling.warming", sampling.warming, warming_names),
      .source = "a run setting (docs/fidelity.md)",
-     .desc = "fidelity sampled: full = the functional stretches between regions run, "
-             "warming the caches as they go; stored = a warming run of the whole frame "
+     .desc = "fidelity sampled: auto = stored when the run has a world cache (a folder in "
+             "use: --world-cache DIR or the default one), else full (the report's "
+             "fidelity.warming says which); full = the functional stretches between regions "
+             "run, warming the caches as they go; stored = a warming run of the whole frame "
              "(functional, replaying the packet record) is stored once in the world cache "
              "with checkpoints of the chip's state, and each region starts from the "
              "checkpoint at its start, so a run simulates only its regions (needs "
-             "--world-cache; regions start at checkpoints, one in every "
+             "a world cache; regions start at checkpoints, one in every "
              "1/" NUM_STR(
                  CFG_WARM_FULL_PER_FRAME) " of the frame). A warming run is reused by every run "
                                           "whose config differs only in its name, "

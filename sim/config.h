@@ -35,7 +35,9 @@ typedef enum { CFG_ACCEL_KD, CFG_ACCEL_GRID } cfg_accel;
 /* sampling.demand_model (docs/fidelity.md "Demand models") */
 typedef enum { CFG_DEMAND_AUTO, CFG_DEMAND_MAX, CFG_DEMAND_LINEAR } cfg_demand_model;
 /* sampling.warming (docs/fidelity.md "Stored warming") */
-typedef enum { CFG_WARMING_FULL, CFG_WARMING_STORED } cfg_warming;
+/* auto: stored when the run has a world cache (chip_create resolves it:
+ * a chip's cfg holds FULL or STORED) */
+typedef enum { CFG_WARMING_AUTO, CFG_WARMING_FULL, CFG_WARMING_STORED } cfg_warming;
 typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
 typedef enum { CFG_MEM_FIXED, CFG_MEM_HIERARCHY } cfg_mem_model;
 typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN, CFG_MEMIF_FRFCFS } cfg_memif_policy;
@@ -150,7 +152,7 @@ typedef struct saar_config {
 		double bias_bound; /* share of the estimate added to the interval for window bias */
 		double sdram_factor; /* k on SDRAM time in the demand; 0 = fitted per frame */
 		cfg_demand_model demand_model; /* how a chunk's demand follows its resources */
-		cfg_warming warming; /* functional stretches run (full) or restored (stored) */
+		cfg_warming warming; /* functional stretches run (full), restored (stored), auto */
 	} sampling;
 } saar_config;
 

@@ -114,7 +114,9 @@ static void fidelity_text(FILE *f, const chip *c)
 		        model_str(F, ms, sizeof ms), x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
 		        (unsigned long long)F->detailed_tiles,
 		        (unsigned long long)F->functional_tiles,
-		        chip_warm_stored(c) ? " (stored warming)" : "",
+		        chip_warm_stored(c)
+		            ? c->warm_auto ? " (stored warming, auto)" : " (stored warming)"
+		            : "",
 		        (unsigned long long)F->replayed_tiles);
 	} else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
@@ -153,6 +155,9 @@ static void fidelity_json(jsonw *j, const chip *c)
 		jsonw_kint(j, "warmup_tiles", F->warmup_tiles);
 		jsonw_knum(j, "sample_rate", c->cfg.sampling.rate);
 		jsonw_kstr(j, "demand_model", model_name(F));
+		/* the warming that ran, and whether sampling.warming auto chose it */
+		jsonw_kstr(j, "warming", chip_warm_stored(c) ? "stored" : "full");
+		jsonw_kbool(j, "warming_auto", c->warm_auto);
 		jsonw_key(j, "sdram_factor");
 		if (F->exact || F->model.linear)
 			jsonw_null(j);
@@ -423,8 +428,13 @@ void report_text(FILE *f, const report_info *ri)
 	}
 	fprintf(f, "  host: %.3f s simulating (%.3g cycles/s), %.3f s loading", c->sim_ms / 1e3,
 	        ratio((double)cyc, c->sim_ms / 1e3), ri->load_ms / 1e3);
-	if (ri->w->cache != WORLD_CACHE_OFF)
+	if (ri->w->cache != WORLD_CACHE_OFF && world_cache_is_default(ri->w))
+		fprintf(f, " (world cache: %s in %s, the default folder)",
+		        world_cache_name(ri->w->cache), ri->w->cache_dir);
+	else if (ri->w->cache != WORLD_CACHE_OFF)
 		fprintf(f, " (world cache: %s)", world_cache_name(ri->w->cache));
+	else if (ri->w->cache_note[0])
+		fprintf(f, " (world cache off: %s)", ri->w->cache_note);
 	if (c->rec_state != REC_OFF)
 		fprintf(f, "; packet record %s (%.3f s of the simulating)",
 		        chip_rec_name(c->rec_state), c->rec_ms / 1e3);
@@ -840,6 +850,7 @@ static void json_host(jsonw *j, const report_info *ri)
 	jsonw_knum(j, "check_s", checked ? ri->check->check_ms / 1e3 : 0.0);
 	jsonw_knum(j, "wall_s", ri->wall_ms / 1e3);
 	jsonw_kstr(j, "world_cache", world_cache_name(ri->w->cache));
+	world_cache_json(j, ri->w);
 	jsonw_kstr(j, "packet_record", chip_rec_name(c->rec_state));
 	jsonw_knum(j, "packet_record_s", c->rec_ms / 1e3);
 	jsonw_kstr(j, "stored_warming", chip_warm_name(c->warm_state));

@@ -36,6 +36,14 @@ ReportHook(POST_ALL)(struct criterion_global_stats *stats)
 
 int main(int argc, char *argv[])
 {
+	/* Every run the tests make (in process, and saarsim, rtref and the
+	 * scripts they start) is without a world cache unless the test names
+	 * one (--world-cache DIR, or SAARSIM_CACHE_DIR in tu_run_env): the
+	 * default folder would write into the user's home (CI's may be
+	 * unwritable or absent) and carry entries from one test, or one run
+	 * of the suite, into the next. Overwritten, so the caller's own
+	 * setting cannot change what a test tests. */
+	setenv("SAARSIM_CACHE_DIR", "off", 1);
 	struct criterion_test_set *tests = criterion_initialize();
 	int result = 0;
 	if (criterion_handle_args(argc, argv, true))

@@ -26,6 +26,10 @@ static void cfg_for(saar_config *c, int size, const char *mode, const char *cons
 	/* few threads: a sampled frame of 256 tiles is sampled, not exact */
 	c->chip.rtps = 1;
 	c->chip.threads_per_rtp = 4;
+	/* full warming: the sampled runs here record and replay in their own
+	 * stretches (auto would choose stored warming with the cache, whose
+	 * record a helper chip makes from the undamaged board) */
+	c->sampling.warming = CFG_WARMING_FULL;
 	diag d;
 	char kv[128];
 	snprintf(kv, sizeof kv, "fidelity=%s", mode);

@@ -204,6 +204,7 @@ Test(modes, replay_emits_what_was_recorded)
 	for (int i = 0; i < 2; i++) {
 		c.fidelity = fid[i];
 		c.sampling.rate = 0.1;
+		c.sampling.warming = CFG_WARMING_FULL; /* the stretches replay too (auto: stored) */
 		if (fid[i] == CFG_FIDELITY_SAMPLED)
 			c.frame.width = c.frame.height = 256;
 		tally a, b;

@@ -637,3 +637,22 @@ Test(oracles, textured_quad_shows_its_texels)
 	free(img);
 	world_free(&w);
 }
+
+/* The sRGB byte by table (fb_srgb8, what every frame's conversion uses)
+ * equals the transfer function's (fb_srgb8_formula) at every fixed-point
+ * sum below 1.0 and just above it: the table stands for the formula only
+ * because the formula is a step function it reproduces exactly. Mistakes
+ * caught: a threshold one sum off (a level's first sum converted to the
+ * level below), a coarse index rounding up (the levels near 0, many per
+ * coarse step, skipped), sums at or past 1.0 not saturating. */
+Test(oracles, srgb_table_equals_the_transfer_function_at_every_sum)
+{
+	uint64_t bad = 0, first = 0;
+	for (uint64_t a = 0; a <= ((uint64_t)1 << FB_FRAC_BITS) + 64; a++)
+		if (fb_srgb8(a) != fb_srgb8_formula(a) && !bad++)
+			first = a;
+	cr_assert_eq(bad, 0, "%llu sums differ, the first %llu (table %d, formula %d)",
+	             (unsigned long long)bad, (unsigned long long)first, fb_srgb8(first),
+	             fb_srgb8_formula(first));
+	cr_assert_eq(fb_srgb8(UINT64_MAX / 2), 255);
+}

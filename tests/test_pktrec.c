@@ -128,6 +128,7 @@ Test(pktrec, replay_equals_the_math)
 	 * the functional stretches left in flight */
 	c.frame.width = c.frame.height = 256;
 	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.warming = CFG_WARMING_FULL; /* replay in the stretches (auto: stored) */
 	c.sampling.rate = 0.1;
 	n = record_then_replay(&plain, &cached, &c, "sampled, 4 threads per RTP");
 	cr_assert_eq(n, tiles_of(&c),
@@ -159,6 +160,7 @@ Test(pktrec, timed_replay_waits_where_the_math_waits)
 	c.chip.threads_per_rtp = 2;
 	c.chip.stack_depth = 2;
 	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.warming = CFG_WARMING_FULL; /* replay in the stretches (auto: stored) */
 	c.sampling.rate = 0.3;
 	record_then_replay(&plain, &cached, &c, "sampled, 2-entry stack");
 	chip *rep = tu_run_chip(&cached, &c);
@@ -184,6 +186,7 @@ Test(pktrec, replay_through_the_vma_and_frames)
 	c.memory.vma.enabled = true;
 	c.memory.sdram.mb = 1;
 	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.warming = CFG_WARMING_FULL; /* replay in the stretches (auto: stored) */
 	c.sampling.rate = 0.2;
 	c.chip.threads_per_rtp = 2;
 	record_then_replay(&plain, &cached, &c, "sampled through the VMA");

@@ -323,3 +323,40 @@ Test(warming, conference_one_thread_unbiased, .timeout = 300)
 	chip_destroy(t);
 	world_free(&w);
 }
+
+/* sampling.warming auto (the default) picks stored warming when the run
+ * has a world cache and full warming, silently, when it has none. The
+ * mistakes this catches: auto treated as full (a default sampled run
+ * never restores checkpoints: warm_state WARM_OFF with a cache), auto
+ * treated as stored (the no-cache run warns about a missing
+ * --world-cache the user never asked for and reports stored), and
+ * chip_create not resolving auto (the plan's rounding and the warming's
+ * key see a value that is neither). */
+Test(warming, auto_picks_stored_when_cached)
+{
+	char dir[64];
+	world w;
+	cached(&w, NULL, dir, sizeof dir);
+	saar_config c;
+	config(&c, 256, 0);
+	c.sampling.warming = CFG_WARMING_AUTO;
+	chip *a = tu_run_chip(&w, &c);
+	cr_assert(a->warm_auto);
+	cr_assert_eq(a->cfg.sampling.warming, CFG_WARMING_STORED);
+	cr_assert_eq(a->warm_state, WARM_BUILT, "%s", chip_warm_name(a->warm_state));
+	chip *b = tu_run_chip(&w, &c); /* the second run loads what the first stored */
+	cr_assert_eq(b->warm_state, WARM_LOADED, "%s", chip_warm_name(b->warm_state));
+	chip_destroy(a);
+	chip_destroy(b);
+	world_free(&w);
+
+	tu_load_world(&w, NULL, NULL, NULL); /* no cache (the suite runs with it off) */
+	tu_capture cap = tu_stderr_begin();
+	chip *f = tu_run_chip(&w, &c);
+	const char *err = tu_stderr_end(cap);
+	cr_assert_str_eq(err, "", "auto without a cache warned: %s", err);
+	cr_assert_eq(f->cfg.sampling.warming, CFG_WARMING_FULL);
+	cr_assert_eq(f->warm_state, WARM_OFF, "%s", chip_warm_name(f->warm_state));
+	chip_destroy(f);
+	world_free(&w);
+}

@@ -346,3 +346,176 @@ Test(worldcache_cli, second_run_takes_world_and_frame_from_the_cache)
 	cr_assert(strstr(dj, "\"world_cache\": \"hit\"") &&
 	          strstr(dj, "\"reference\": \"rendered\""));
 }
+
+/* ---- the default folder (no --world-cache flag) and its cap ---- */
+
+/* The folder comes from the flag, else SAARSIM_CACHE_DIR, else an
+ * absolute XDG_CACHE_HOME plus /saarsim, else HOME plus /.cache/saarsim;
+ * "off" (flag or variable) turns it off; empty variables count as unset.
+ * Mistakes caught: the variables consulted in another order (XDG before
+ * SAARSIM_CACHE_DIR, HOME before XDG), the flag losing to a variable, a
+ * relative XDG_CACHE_HOME taken (the spec says ignore it), "off" taken
+ * as a folder named off, an empty SAARSIM_CACHE_DIR taken as the current
+ * folder. */
+Test(worldcache, default_folder_follows_the_environment_in_order)
+{
+	char out[256];
+	setenv("SAARSIM_CACHE_DIR", "/s", 1);
+	setenv("XDG_CACHE_HOME", "/x", 1);
+	setenv("HOME", "/h", 1);
+	cr_assert_eq(wc_choose("/f", out, sizeof out), WC_FROM_FLAG);
+	cr_assert_str_eq(out, "/f");
+	cr_assert_eq(wc_choose(NULL, out, sizeof out), WC_FROM_ENV);
+	cr_assert_str_eq(out, "/s");
+	setenv("SAARSIM_CACHE_DIR", "", 1);
+	cr_assert_eq(wc_choose(NULL, out, sizeof out), WC_FROM_XDG);
+	cr_assert_str_eq(out, "/x/saarsim");
+	setenv("XDG_CACHE_HOME", "relative", 1);
+	cr_assert_eq(wc_choose(NULL, out, sizeof out), WC_FROM_HOME);
+	cr_assert_str_eq(out, "/h/.cache/saarsim");
+	unsetenv("XDG_CACHE_HOME");
+	cr_assert_eq(wc_choose(NULL, out, sizeof out), WC_FROM_HOME);
+	unsetenv("HOME");
+	cr_assert_eq(wc_choose(NULL, out, sizeof out), WC_FROM_NONE);
+	cr_assert_str_eq(out, "");
+	setenv("SAARSIM_CACHE_DIR", "off", 1);
+	setenv("HOME", "/h", 1);
+	cr_assert_eq(wc_choose(NULL, out, sizeof out), WC_FROM_OFF);
+	cr_assert_eq(wc_choose("off", out, sizeof out), WC_FROM_OFF);
+	cr_assert_eq(wc_choose("/f", out, sizeof out), WC_FROM_FLAG, "the flag wins over off");
+}
+
+/* An entry of size bytes in dir, last used `age` seconds ago. */
+static void aged_entry(const char *dir, const char *name, size_t size, int age)
+{
+	char p[512];
+	snprintf(p, sizeof p, "%s/%s", dir, name);
+	FILE *f = fopen(p, "wb");
+	cr_assert(f);
+	for (size_t i = 0; i < size; i++)
+		fputc('x', f);
+	fclose(f);
+	touch_ahead(dir, name, -age);
+}
+
+/* A store that would pass the cap removes the least recently used
+ * entries first, only as many as it must, and only the cache's own
+ * (KIND-HASH.bin); an entry larger than the cap is refused. Mistakes
+ * caught: evicting the newest first (the entry just used goes), evicting
+ * everything, removing files that are not entries, no cap at all. */
+Test(worldcache, cap_evicts_least_recently_used_first)
+{
+	char dir[64];
+	tu_tmpdir(dir, sizeof dir);
+	aged_entry(dir, "world-00000000000000a1.bin", 400, 300);  /* oldest */
+	aged_entry(dir, "frame-00000000000000a2.bin", 400, 200);  /* next */
+	aged_entry(dir, "packets-00000000000000a3.bin", 400, 10); /* recent */
+	aged_entry(dir, "notes.txt", 4000, 1000);                 /* not ours */
+	/* 1200 bytes held, cap 1600: 600 more need 200 freed: one entry */
+	cr_assert_eq(wc_make_room(dir, 600, 1600), 0);
+	cr_assert_not(tu_exists(dir, "world-00000000000000a1.bin"), "the oldest stayed");
+	cr_assert(tu_exists(dir, "frame-00000000000000a2.bin"), "more was evicted than needed");
+	cr_assert(tu_exists(dir, "packets-00000000000000a3.bin"), "the recent one went");
+	cr_assert(tu_exists(dir, "notes.txt"), "a file that is no entry went");
+	cr_assert_eq(wc_make_room(dir, 2000, 1600), -1, "an entry above the cap was accepted");
+	cr_assert_eq(wc_make_room(dir, 1 << 30, 0), 0, "cap 0 is no cap");
+	cr_assert(tu_exists(dir, "frame-00000000000000a2.bin"));
+}
+
+/* A hit marks its entry used, so the cap keeps what runs read. Mistake
+ * caught: a hit not touching its file (a world read at every run, stored
+ * long ago, is evicted first). */
+Test(worldcache, hit_marks_the_entry_used)
+{
+	char dir[256], cache[300], obj[512], p[700];
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
+	world w;
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED);
+	world_free(&w);
+	cr_assert_eq(tu_find_files(cache, "world-", p, sizeof p), 1);
+	const char *name = strrchr(p, '/') + 1;
+	touch_ahead(cache, name, -1000);
+	struct stat a, b;
+	cr_assert_eq(stat(p, &a), 0);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
+	world_free(&w);
+	cr_assert_eq(stat(p, &b), 0);
+	cr_assert_gt(b.st_mtime, a.st_mtime + 500, "the hit left the entry's time as it was");
+}
+
+/* Without the flag a run caches in the default folder (here HOME's, the
+ * variables before it empty); SAARSIM_CACHE_DIR=off and --world-cache off
+ * write nothing; the report names the folder and says it was the
+ * default. saarsim and rtref alike (world_opts). Mistakes caught: the
+ * default not applied (nothing under HOME), off ignored (a folder made
+ * anyway, or one named "off"), the report not saying where. */
+Test(worldcache_cli, default_folder_is_used_and_off_turns_it_off)
+{
+	char env[1024], args[1024], dir[512];
+	const char *home_env = "SAARSIM_CACHE_DIR= XDG_CACHE_HOME=";
+	snprintf(env, sizeof env, "%s HOME=%s/h", home_env, cdir);
+	snprintf(args, sizeof args, "--scene spd:tetra:1 --size 16x16 --report %s/r.json", cdir);
+	cr_assert_eq(tu_run_env(env, cdir, "saarsim", args), 0, "%s", tu_slurp(cdir, "err"));
+	snprintf(dir, sizeof dir, "%s/h/.cache/saarsim", cdir);
+	char p[1200];
+	cr_assert_eq(tu_find_files(dir, "world-", p, sizeof p), 1, "nothing in the default folder");
+	char *r = tu_squeeze_json(tu_slurp(cdir, "r.json"));
+	char want[1200];
+	snprintf(want, sizeof want, "\"world_cache_dir\":\"%s\"", dir);
+	cr_assert(strstr(r, want) && strstr(r, "\"world_cache_default\":true") &&
+	              strstr(r, "\"world_cache_from\":\"HOME\"") &&
+	              strstr(r, "\"world_cache\":\"stored\""),
+	          "%s", r);
+	snprintf(args, sizeof args, "--scene spd:tetra:1 --size 16x16 --stats %s/s.json", cdir);
+	cr_assert_eq(tu_run_env(env, cdir, "rtref", args), 0, "%s", tu_slurp(cdir, "err"));
+	r = tu_squeeze_json(tu_slurp(cdir, "s.json"));
+	/* rtref's own entry (a key names its program) beside saarsim's */
+	cr_assert(strstr(r, want) && strstr(r, "\"world_cache\":\"stored\""), "rtref: %s", r);
+	cr_assert_eq(tu_find_files(dir, "world-", p, sizeof p), 2, "rtref stored elsewhere");
+
+	/* off, by the variable and by the flag: nothing made */
+	snprintf(env, sizeof env, "SAARSIM_CACHE_DIR=off HOME=%s/h2", cdir);
+	snprintf(args, sizeof args, "--scene spd:tetra:1 --size 16x16 --report %s/o.json", cdir);
+	cr_assert_eq(tu_run_env(env, cdir, "saarsim", args), 0);
+	cr_assert_not(tu_exists(cdir, "h2"), "SAARSIM_CACHE_DIR=off made a folder");
+	snprintf(env, sizeof env, "%s HOME=%s/h3", home_env, cdir);
+	snprintf(args, sizeof args,
+	         "--scene spd:tetra:1 --size 16x16 --world-cache off --report %s/o.json", cdir);
+	cr_assert_eq(tu_run_env(env, cdir, "saarsim", args), 0);
+	cr_assert_not(tu_exists(cdir, "h3"), "--world-cache off made the default folder");
+	r = tu_squeeze_json(tu_slurp(cdir, "o.json"));
+	cr_assert(strstr(r, "\"world_cache\":\"off\"") && strstr(r, "\"world_cache_dir\":null"),
+	          "%s", r);
+}
+
+/* A default folder that cannot be made is no error: the run completes
+ * without a cache and the report (and one warning line) says why; the
+ * same folder named by --world-cache stays bad input (exit 2, one line).
+ * Mistakes caught: the default's failure stopping the run (a read-only
+ * or absent home would break every run), an explicit folder's failure
+ * passed over silently. */
+Test(worldcache_cli, unusable_default_folder_is_no_error_but_explicit_one_is)
+{
+	char env[1024], args[1024], p[512];
+	tu_write(p, sizeof p, cdir, "plain", "not a folder\n");
+	/* HOME is a file: HOME/.cache cannot be made */
+	snprintf(env, sizeof env, "SAARSIM_CACHE_DIR= XDG_CACHE_HOME= HOME=%s", p);
+	snprintf(args, sizeof args,
+	         "--scene spd:tetra:1 --size 16x16 --report %s/r.json --out %s/f.ppm", cdir, cdir);
+	cr_assert_eq(tu_run_env(env, cdir, "saarsim", args), 0, "%s", tu_slurp(cdir, "err"));
+	cr_assert(tu_exists(cdir, "f.ppm"));
+	const char *err = tu_slurp(cdir, "err");
+	cr_assert(!strncmp(err, "warning: world cache off: ", 26) && strchr(err, '\n')[1] == 0,
+	          "not one warning line: %s", err);
+	char *r = tu_squeeze_json(tu_slurp(cdir, "r.json"));
+	cr_assert(strstr(r, "\"world_cache\":\"off\"") &&
+	              strstr(r, "\"world_cache_from\":\"HOME\"") &&
+	              strstr(r, "cannot create the folder"),
+	          "%s", r);
+	snprintf(args, sizeof args, "--scene spd:tetra:1 --size 16x16 --world-cache %s/.cache/x",
+	         p);
+	cr_assert_eq(tu_prog(cdir, "saarsim", args), 2);
+	tu_one_line(cdir, "saarsim", "cannot create");
+	cr_assert_eq(tu_prog(cdir, "rtref", args), 2);
+	tu_one_line(cdir, "rtref", "cannot create");
+}

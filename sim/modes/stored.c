@@ -100,7 +100,7 @@ void mode_rec_store(chip *c)
 	if (rc)
 		return;
 	diag d;
-	if (wc_put(c->rec_file, c->rec_key, NULL, NULL, 0, b, n, &d))
+	if (world_cache_put(c->w, c->rec_file, c->rec_key, NULL, NULL, 0, b, n, &d))
 		fprintf(stderr, "warning: %s\n", d.msg);
 	else
 		c->rec_state = REC_STORED;
@@ -265,7 +265,7 @@ void mode_warm_open(chip *c)
 		if (h && !warm_build(h, gl, gf, &b, &n)) {
 			diag d;
 			c->warm_state = WARM_UNSTORED;
-			if (wc_put(c->warm_file, key, NULL, NULL, 0, b, n, &d))
+			if (world_cache_put(c->w, c->warm_file, key, NULL, NULL, 0, b, n, &d))
 				fprintf(stderr, "warning: %s\n", d.msg);
 			else
 				c->warm_state = WARM_BUILT;
