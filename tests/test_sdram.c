@@ -300,3 +300,66 @@ Test(memif, no_dispatch_is_armed_for_empty_queues)
 	cr_assert_eq(eng_events(g.e), 4 + 4, "%llu events", (unsigned long long)eng_events(g.e));
 	rig_free(&g);
 }
+
+/* FR-FCFS keeps the window requests in one list per SDRAM bank, in submit
+ * order (mem/memif.c). Mistake: a request that enters its queue's window
+ * late (when one ahead of it issues) is put at the end of its bank's list,
+ * behind younger requests of other queues, so oldest-first among equal
+ * starts breaks. Seventeen kd requests (one more than the window) and then
+ * one shade request, every one to another row of bank 0: each is a row
+ * conflict with the same start, so all go in submit order and the
+ * seventeenth kd request (entering the window after the first issues) goes
+ * before the younger shade request. */
+static uint64_t win_done[18];
+static void win_note(eng *e, void *ctx, uint64_t arg)
+{
+	(void)ctx;
+	win_done[arg] = eng_now(e);
+}
+
+Test(memif, frfcfs_request_entering_the_window_late_keeps_its_age)
+{
+	memif_rig g;
+	rig_init(&g, MEMIF_FRFCFS);
+	memif *m = &g.m;
+	cr_assert_eq(MEMIF_FRFCFS_WINDOW, 16, "the test fills a window of 16");
+	/* row:bank:col: bank = bits 13-14, row = bits 15+; all in bank 0 */
+	for (uint64_t i = 0; i < 17; i++)
+		memif_submit(m, 0, MEMIF_KD, (10 + i) << 15, 8, 0, win_note, NULL, i);
+	memif_submit(m, 0, MEMIF_SHADE, 50ull << 15, 8, 0, win_note, NULL, 17);
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(g.s.s.reads, 18);
+	for (int i = 0; i < 17; i++)
+		cr_assert_lt(win_done[i], win_done[i + 1], "request %d before %d: %llu %llu", i,
+		             i + 1, (unsigned long long)win_done[i],
+		             (unsigned long long)win_done[i + 1]);
+	rig_free(&g);
+}
+
+/* FR-FCFS counts, per bank, the waiting requests to its open row, so that
+ * a pick looks for a row hit only where there is one (mem/memif.c).
+ * Mistake: a request submitted while its row is open is not counted, so
+ * the pick takes the bank's oldest request instead of the hit. Two
+ * requests open bank 0's row 1 and are served (the pick has counted row
+ * 1's requests); long after, an older row conflict and a younger row hit
+ * wait together: the hit goes first. */
+Test(memif, frfcfs_counts_a_hit_submitted_while_its_row_is_open)
+{
+	memif_rig g;
+	rig_init(&g, MEMIF_FRFCFS);
+	memif *m = &g.m;
+	memset(done_at, 0, sizeof done_at);
+	uint64_t r1 = 1ull << 15, r2 = 2ull << 15;
+	memif_submit(m, 0, MEMIF_KD, r1, 8, 0, note, NULL, 0);
+	memif_submit(m, 0, MEMIF_KD, r1 + 64, 8, 0, note, NULL, 1);
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(g.s.s.row_hits, 1);
+	uint64_t t = done_at[1] + 1000000;
+	memif_submit(m, t, MEMIF_KD, r2, 8, 0, note, NULL, 2);          /* older: conflict */
+	memif_submit(m, t, MEMIF_SHADE, r1 + 128, 8, 0, note, NULL, 3); /* younger: hit */
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(g.s.s.row_hits, 2);
+	cr_assert_lt(done_at[3], done_at[2], "the row hit goes first: hit %llu, older %llu",
+	             (unsigned long long)done_at[3], (unsigned long long)done_at[2]);
+	rig_free(&g);
+}
