@@ -34,11 +34,12 @@ typedef struct hent {
 } hent;
 
 struct eng {
+	struct eng_head hd; /* first: eng_now (engine.h) reads it */
 	hent *heap;
 	uint32_t cap, n; /* slots, entries (with `hole`, heap[0] is one, vacant) */
 	int hole;        /* the running event's root slot is still taken */
 	size_t live;
-	uint64_t now, seq, dispatched;
+	uint64_t seq, dispatched;
 	int stop;
 };
 
@@ -154,9 +155,9 @@ static void drop_root(eng *e)
 
 eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
 {
-	assert(when >= e->now && "event scheduled into the past");
-	if (when < e->now)
-		when = e->now;
+	assert(when >= e->hd.now && "event scheduled into the past");
+	if (when < e->hd.now)
+		when = e->hd.now;
 	hent x = {when, e->seq, h, ctx, arg};
 	if (e->hole) {
 		e->hole = 0;
@@ -203,7 +204,7 @@ eng_status eng_run(eng *e, uint64_t limit)
 		eng_handler h = top->h;
 		void *ctx = top->ctx;
 		uint64_t arg = top->arg;
-		e->now = top->when;
+		e->hd.now = top->when;
 		e->live--;
 		e->dispatched++;
 		e->hole = 1;
@@ -221,11 +222,6 @@ eng_status eng_run(eng *e, uint64_t limit)
 void eng_stop(eng *e)
 {
 	e->stop = 1;
-}
-
-uint64_t eng_now(const eng *e)
-{
-	return e->now;
 }
 
 uint64_t eng_events(const eng *e)
