@@ -27,6 +27,29 @@ const char *memif_requester_name(int r)
 	return r >= 0 && r < MEMIF_NREQ ? n[r] : "?";
 }
 
+/* Links pool items [from, to) into the free list in index order. */
+static void link_free(memif *m, uint32_t from, uint32_t to)
+{
+	for (uint32_t i = from; i < to; i++)
+		m->pool[i].qnext = i + 1 < to ? i + 1 : m->free_head;
+	if (from < to)
+		m->free_head = from;
+}
+
+static int grow(memif *m)
+{
+	uint32_t want = m->cap ? 2 * m->cap : 64;
+	if (want > MEMIF_NIL / 2)
+		return -1;
+	memif_item *p = realloc(m->pool, (size_t)want * sizeof *p);
+	if (!p)
+		return -1;
+	m->pool = p;
+	link_free(m, m->cap, want);
+	m->cap = want;
+	return 0;
+}
+
 int memif_init(memif *m, eng *e, sdram *sd, int policy)
 {
 	memset(m, 0, sizeof *m);
@@ -38,23 +61,25 @@ int memif_init(memif *m, eng *e, sdram *sd, int policy)
 	 * one bank overlaps the data transfer of another: the SDRAM model keeps
 	 * per-bank state and serializes the data bus itself */
 	m->lead = sd->t.trp + sd->t.trcd + sd->t.cl;
-	for (int r = 0; r < MEMIF_NREQ; r++) {
-		m->q[r].cap = 64;
-		m->q[r].q = malloc(64 * sizeof(memif_item));
-		if (!m->q[r].q) {
-			memif_free(m);
-			return -1;
-		}
+	m->free_head = MEMIF_NIL;
+	for (int r = 0; r < MEMIF_NREQ; r++)
+		m->q[r] = (memif_queue){{MEMIF_NIL, MEMIF_NIL}, 0, 0, MEMIF_NIL};
+	for (int b = 0; b < SDRAM_MAX_BANKS; b++) {
+		m->bank[b] = (memif_list){MEMIF_NIL, MEMIF_NIL};
+		m->hrow[b] = SDRAM_NO_ROW; /* no item's row: hits[b] = 0 is right */
+	}
+	if (grow(m)) {
+		memif_free(m);
+		return -1;
 	}
 	return 0;
 }
 
 void memif_free(memif *m)
 {
-	for (int r = 0; r < MEMIF_NREQ; r++) {
-		free(m->q[r].q);
-		m->q[r].q = NULL;
-	}
+	free(m->pool);
+	m->pool = NULL;
+	m->cap = 0;
 }
 
 static void dispatch(eng *e, void *ctx, uint64_t arg);
@@ -72,17 +97,18 @@ static void arm(memif *m, uint64_t when)
 	eng_schedule(m->e, when, dispatch, m, 0);
 }
 
-/* The requester to serve now, or -1; *next_ready: earliest head not ready. */
-static int pick(memif *m, uint64_t now, uint64_t *next_ready)
+/* fifo and round_robin: the requester to serve now (its queue head), or
+ * -1; *next_ready: earliest head not ready. */
+static int pick(const memif *m, uint64_t now, uint64_t *next_ready)
 {
 	int best = -1;
 	*next_ready = UINT64_MAX;
 	for (int i = 0; i < MEMIF_NREQ; i++) {
 		int r = m->policy == MEMIF_ROUND_ROBIN ? (m->last + 1 + i) % MEMIF_NREQ : i;
-		memif_queue *q = &m->q[r];
+		const memif_queue *q = &m->q[r];
 		if (!q->n)
 			continue;
-		const memif_item *it = &q->q[q->head];
+		const memif_item *it = &m->pool[q->l.head];
 		if (it->ready > now) {
 			if (it->ready < *next_ready)
 				*next_ready = it->ready;
@@ -90,7 +116,7 @@ static int pick(memif *m, uint64_t now, uint64_t *next_ready)
 		}
 		if (m->policy == MEMIF_ROUND_ROBIN)
 			return r;
-		if (best < 0 || it->seq < m->q[best].q[m->q[best].head].seq)
+		if (best < 0 || it->seq < m->pool[m->q[best].l.head].seq)
 			best = r;
 	}
 	return best;
@@ -119,58 +145,169 @@ static void bank_start_at(const sdram *sd, uint32_t b, uint64_t now, bank_start 
 	}
 }
 
-/* FR-FCFS: over the first MEMIF_FRFCFS_WINDOW ready requests of every
- * queue, the one whose data can start soonest (oldest on ties). Returns the
- * requester (-1 if none is ready) and its offset from the queue head.
- * This scan is the simulator's hottest loop on memory-bound views
- * (docs/PERFORMANCE.md, "Profile"): the bank and row come decoded with the
- * item and each bank's start times are worked out once per pick. */
-static int pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready, uint32_t *pos)
+/* Counts bank b's window items in `row`, the bank's open row (kept in
+ * memif.hrow, .hits, and updated as items come and go, so that a pick
+ * walks a bank's list for a row hit only when it holds one). */
+static void count_hits(memif *m, uint32_t b, uint64_t row)
 {
-	int best = -1;
+	uint32_t n = 0;
+	for (uint32_t i = m->bank[b].head; i != MEMIF_NIL; i = m->pool[i].bnext)
+		n += m->pool[i].row == row;
+	m->hrow[b] = row;
+	m->hits[b] = n;
+}
+
+/* Bank b's best window item at `now` under FR-FCFS, or MEMIF_NIL if none
+ * is ready (*start: when its data could start). Every item of the bank
+ * starts at bs->hit (its row is open) or at bs->miss >= bs->hit, so the
+ * smallest (start, seq) is the oldest ready row hit when hit < miss and
+ * one is queued, else the oldest ready item: the walk, in submit order,
+ * stops at the first ready hit, or at the first ready item when no hit can
+ * beat it. Items not ready lower *next_ready (complete when none is ready). */
+static uint32_t bank_best(memif *m, uint32_t b, const bank_start *bs, uint64_t now, uint64_t *start,
+                          uint64_t *next_ready)
+{
+	if (m->hrow[b] != bs->open_row)
+		count_hits(m, b, bs->open_row);
+	int hits_win = m->hits[b] && bs->hit < bs->miss; /* a hit beats an older miss */
+	uint32_t cand = MEMIF_NIL;
+	for (uint32_t i = m->bank[b].head; i != MEMIF_NIL; i = m->pool[i].bnext) {
+		const memif_item *it = &m->pool[i];
+		if (it->ready > now) {
+			if (it->ready < *next_ready)
+				*next_ready = it->ready;
+			continue;
+		}
+		if (it->row == bs->open_row) {
+			if (cand == MEMIF_NIL || hits_win) {
+				*start = bs->hit;
+				return i;
+			}
+			continue;
+		}
+		if (cand == MEMIF_NIL) {
+			cand = i;
+			*start = bs->miss;
+			if (!hits_win)
+				break;
+		}
+	}
+	return cand;
+}
+
+/* FR-FCFS: over the first MEMIF_FRFCFS_WINDOW requests of every queue,
+ * the ready one whose data can start soonest (oldest on ties). Returns the
+ * item (MEMIF_NIL if none is ready). This pick is the simulator's hottest
+ * loop on memory-bound views (docs/PERFORMANCE.md, "Profile"): the window
+ * items are kept in one list per bank, in submit order, so each bank's
+ * best comes from bank_best without looking at every request, and a bank
+ * whose row hits cannot start as soon as the best so far is skipped. */
+static uint32_t pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready)
+{
+	uint32_t best = MEMIF_NIL;
 	uint64_t best_start = UINT64_MAX, best_seq = UINT64_MAX;
-	bank_start bs[SDRAM_MAX_BANKS];
-	uint64_t known = 0; /* banks whose bs[] entry is filled in */
 	*next_ready = UINT64_MAX;
-	for (int r = 0; r < MEMIF_NREQ; r++) {
-		const memif_queue *q = &m->q[r];
-		uint32_t w = q->n < MEMIF_FRFCFS_WINDOW ? q->n : MEMIF_FRFCFS_WINDOW;
-		uint32_t mask = q->cap - 1;
-		for (uint32_t i = 0; i < w; i++) {
-			const memif_item *it = &q->q[(q->head + i) & mask];
-			if (it->ready > now) {
-				if (it->ready < *next_ready)
-					*next_ready = it->ready;
-				continue;
-			}
-			uint32_t b = it->bank;
-			if (!(known >> b & 1)) {
-				bank_start_at(m->sd, b, now, &bs[b]);
-				known |= 1ull << b;
-			}
-			uint64_t st = bs[b].open_row == it->row ? bs[b].hit : bs[b].miss;
-			if (st < best_start || (st == best_start && it->seq < best_seq)) {
-				best = r;
-				*pos = i;
-				best_start = st;
-				best_seq = it->seq;
-			}
+	for (uint64_t used = m->banks_used; used; used &= used - 1) {
+		uint32_t b = (uint32_t)__builtin_ctzll(used);
+		bank_start bs;
+		bank_start_at(m->sd, b, now, &bs);
+		if (bs.hit > best_start)
+			continue;
+		uint64_t st = 0;
+		uint32_t i = bank_best(m, b, &bs, now, &st, next_ready);
+		if (i == MEMIF_NIL)
+			continue;
+		uint64_t seq = m->pool[i].seq;
+		if (st < best_start || (st == best_start && seq < best_seq)) {
+			best = i;
+			best_start = st;
+			best_seq = seq;
 		}
 	}
 	return best;
 }
 
-/* Takes the item `pos` places after the head out of q, keeping the order
- * of the others (the ones before it move up one slot). */
-static memif_item take(memif_queue *q, uint32_t pos)
+/* Appends item i to a queue list (bank = 0) or a bank list (bank = 1). */
+static void list_append(memif_item *pool, memif_list *l, uint32_t i, int bank)
 {
-	uint32_t mask = q->cap - 1;
-	memif_item it = q->q[(q->head + pos) & mask];
-	for (uint32_t i = pos; i > 0; i--)
-		q->q[(q->head + i) & mask] = q->q[(q->head + i - 1) & mask];
-	q->head = (q->head + 1) & mask;
+	if (bank) {
+		pool[i].bprev = l->tail;
+		pool[i].bnext = MEMIF_NIL;
+		if (l->tail != MEMIF_NIL)
+			pool[l->tail].bnext = i;
+	} else {
+		pool[i].qprev = l->tail;
+		pool[i].qnext = MEMIF_NIL;
+		if (l->tail != MEMIF_NIL)
+			pool[l->tail].qnext = i;
+	}
+	if (l->head == MEMIF_NIL)
+		l->head = i;
+	l->tail = i;
+}
+
+/* Puts item i into its bank's list at its place in submit order (an item
+ * entering its queue's window late is older than the last ones of other
+ * queues). */
+static void bank_insert(memif *m, uint32_t i)
+{
+	memif_item *it = &m->pool[i];
+	memif_list *l = &m->bank[it->bank];
+	m->banks_used |= 1ull << it->bank;
+	m->hits[it->bank] += it->row == m->hrow[it->bank];
+	uint32_t after = l->tail;
+	while (after != MEMIF_NIL && m->pool[after].seq > it->seq)
+		after = m->pool[after].bprev;
+	if (after == l->tail) {
+		list_append(m->pool, l, i, 1);
+		return;
+	}
+	uint32_t before = after == MEMIF_NIL ? l->head : m->pool[after].bnext;
+	it->bprev = after;
+	it->bnext = before;
+	m->pool[before].bprev = i;
+	if (after == MEMIF_NIL)
+		l->head = i;
+	else
+		m->pool[after].bnext = i;
+}
+
+/* Takes item i (inside its queue's window) out of its queue and its bank's
+ * list; the first item after the window, if any, moves into it. */
+static void take(memif *m, uint32_t i)
+{
+	memif_item *it = &m->pool[i];
+	memif_queue *q = &m->q[it->req];
+	memif_list *bl = &m->bank[it->bank];
+	if (it->qprev == MEMIF_NIL)
+		q->l.head = it->qnext;
+	else
+		m->pool[it->qprev].qnext = it->qnext;
+	if (it->qnext == MEMIF_NIL)
+		q->l.tail = it->qprev;
+	else
+		m->pool[it->qnext].qprev = it->qprev;
+	if (it->bprev == MEMIF_NIL)
+		bl->head = it->bnext;
+	else
+		m->pool[it->bprev].bnext = it->bnext;
+	if (it->bnext == MEMIF_NIL)
+		bl->tail = it->bprev;
+	else
+		m->pool[it->bnext].bprev = it->bprev;
+	if (bl->head == MEMIF_NIL)
+		m->banks_used &= ~(1ull << it->bank);
+	m->hits[it->bank] -= it->row == m->hrow[it->bank];
 	q->n--;
-	return it;
+	q->nwin--;
+	if (q->wend != MEMIF_NIL) {
+		uint32_t w = q->wend;
+		q->wend = m->pool[w].qnext;
+		q->nwin++;
+		bank_insert(m, w);
+	}
+	it->qnext = m->free_head;
+	m->free_head = i;
 }
 
 static void dispatch(eng *e, void *ctx, uint64_t arg)
@@ -188,15 +325,21 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 				arm(m, m->sd->bus_free - m->lead);
 			return;
 		}
-		uint32_t pos = 0;
-		int r = m->policy == MEMIF_FRFCFS ? pick_frfcfs(m, now, &next_ready, &pos)
-		                                  : pick(m, now, &next_ready);
-		if (r < 0) {
+		uint32_t i;
+		if (m->policy == MEMIF_FRFCFS) {
+			i = pick_frfcfs(m, now, &next_ready);
+		} else {
+			int q = pick(m, now, &next_ready);
+			i = q < 0 ? MEMIF_NIL : m->q[q].l.head;
+		}
+		if (i == MEMIF_NIL) {
 			if (next_ready != UINT64_MAX)
 				arm(m, next_ready);
 			return;
 		}
-		memif_item it = take(&m->q[r], pos);
+		memif_item it = m->pool[i];
+		int r = it.req;
+		take(m, i);
 		m->queued--;
 		m->last = r;
 		m->s.queue_ticks[r] += now - it.ready;
@@ -211,26 +354,36 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 int memif_submit(memif *m, uint64_t t, int requester, uint64_t addr, uint32_t bytes, int write,
                  eng_handler done, void *ctx, uint64_t arg)
 {
-	memif_queue *q = &m->q[requester];
-	if (q->n == q->cap) {
-		memif_item *nq = malloc(2 * (size_t)q->cap * sizeof *nq);
-		if (!nq)
-			return -1;
-		for (uint32_t i = 0; i < q->n; i++)
-			nq[i] = q->q[(q->head + i) & (q->cap - 1)];
-		free(q->q);
-		q->q = nq;
-		q->head = 0;
-		q->cap *= 2;
-	}
+	if (m->free_head == MEMIF_NIL && grow(m))
+		return -1;
 	if (t < eng_now(m->e))
 		t = eng_now(m->e);
 	uint32_t bank, col;
 	uint64_t row;
 	sdram_decode(m->sd, addr, &bank, &row, &col);
-	q->q[(q->head + q->n) & (q->cap - 1)] = (memif_item){
-	    m->seq++, t, addr, row, bytes, (uint16_t)bank, (uint8_t)write, done, ctx, arg};
+	uint32_t i = m->free_head;
+	memif_item *it = &m->pool[i];
+	m->free_head = it->qnext;
+	*it = (memif_item){.seq = m->seq++,
+	                   .ready = t,
+	                   .addr = addr,
+	                   .row = row,
+	                   .bytes = bytes,
+	                   .bank = (uint16_t)bank,
+	                   .write = (uint8_t)write,
+	                   .req = (uint8_t)requester,
+	                   .done = done,
+	                   .ctx = ctx,
+	                   .arg = arg};
+	memif_queue *q = &m->q[requester];
+	list_append(m->pool, &q->l, i, 0);
 	q->n++;
+	if (q->nwin < MEMIF_FRFCFS_WINDOW) {
+		q->nwin++;
+		bank_insert(m, i);
+	} else if (q->wend == MEMIF_NIL) {
+		q->wend = i;
+	}
 	m->queued++;
 	if (write)
 		m->s.writes[requester]++;

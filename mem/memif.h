@@ -12,8 +12,8 @@
  * "Can take a new request": the interface looks ahead of the data bus by
  * tRCD + CL, so a row hit issued now lands right behind the current
  * transfer and requests arriving meanwhile still compete. Completions are
- * engine events at the tick SDRAM returns. Queues are rings that double when
- * full (amortized; the steady state never allocates).
+ * engine events at the tick SDRAM returns. Requests come from a pool that
+ * doubles when full (amortized; the steady state never allocates).
  */
 #ifndef SAAR_MEM_MEMIF_H
 #define SAAR_MEM_MEMIF_H
@@ -41,20 +41,36 @@ enum memif_requester {
 enum memif_policy { MEMIF_FIFO, MEMIF_ROUND_ROBIN, MEMIF_FRFCFS };
 #define MEMIF_FRFCFS_WINDOW 16
 
+/* A queued request. Items live in one pool (memif.pool, indices, MEMIF_NIL
+ * ending a list) and are linked into two lists, both in submit order: their
+ * requester's queue and, while inside that queue's FR-FCFS window, the
+ * list of window items that go to the same SDRAM bank (so a pick looks at
+ * one bank's requests at a time: mem/memif.c, pick_frfcfs). */
 typedef struct memif_item {
 	uint64_t seq, ready, addr;
 	uint64_t row; /* addr's SDRAM row and bank, decoded once at submit */
 	uint32_t bytes;
 	uint16_t bank;
-	uint8_t write;
+	uint8_t write, req;
+	uint32_t qnext, qprev; /* the requester's queue */
+	uint32_t bnext, bprev; /* the bank's window items */
 	eng_handler done;
 	void *ctx;
 	uint64_t arg;
 } memif_item;
 
+#define MEMIF_NIL UINT32_MAX
+
+typedef struct memif_list {
+	uint32_t head, tail;
+} memif_list;
+
+/* One requester's FIFO: n items, of which the first nwin (at most
+ * MEMIF_FRFCFS_WINDOW) are in the window; wend is the first item after it
+ * (MEMIF_NIL when every item is inside). */
 typedef struct memif_queue {
-	memif_item *q;
-	uint32_t head, n, cap; /* cap is a power of two: ring indices are masked */
+	memif_list l;
+	uint32_t n, nwin, wend;
 } memif_queue;
 
 typedef struct memif_stats {
@@ -68,7 +84,13 @@ typedef struct memif {
 	sdram *sd;
 	int policy;
 	memif_queue q[MEMIF_NREQ];
-	uint64_t queued; /* requests in all queues */
+	memif_item *pool;
+	uint32_t cap, free_head;          /* pool size (doubles when full), its free list */
+	memif_list bank[SDRAM_MAX_BANKS]; /* window items by SDRAM bank */
+	uint64_t banks_used;              /* banks whose list is not empty */
+	uint64_t hrow[SDRAM_MAX_BANKS];   /* per bank: the row hits[] counts, */
+	uint32_t hits[SDRAM_MAX_BANKS];   /* its window items in that row */
+	uint64_t queued;                  /* requests in all queues */
 	uint64_t seq;
 	int last;  /* requester served last (round robin) */
 	int armed; /* a dispatch event is queued */

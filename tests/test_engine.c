@@ -119,6 +119,55 @@ Test(engine, deterministic)
 		cr_assert_geq(a.trace[i] >> 20, a.trace[i - 1] >> 20);
 }
 
+/* Mistake: the first event a handler schedules takes the slot of the event
+ * being run (the root of the heap) without sinking below the events that
+ * come before it, or an unused slot is refilled out of order: events then
+ * run out of (time, scheduling order). Handlers schedule up to three events
+ * each, at their own tick and at ticks shared with queued events; every
+ * event must run in the order of (tick, the count of schedule calls before
+ * it), which the test keeps itself. */
+typedef struct ordmodel {
+	uint64_t rng, next;       /* LCG state; schedule calls so far */
+	uint64_t when[6000];      /* tick of each scheduled event, by label */
+	uint64_t ran[6000], nran; /* labels in the order they ran */
+} ordmodel;
+
+static void ord_ev(eng *e, void *ctx, uint64_t arg)
+{
+	ordmodel *o = ctx;
+	cr_assert_eq(eng_now(e), o->when[arg]);
+	o->ran[o->nran++] = arg;
+	int k = (int)(lcg(&o->rng) % 4);
+	for (int j = 0; j < k && o->next < 6000; j++) {
+		uint64_t t = eng_now(e) + lcg(&o->rng) % 3 * 5;
+		o->when[o->next] = t;
+		eng_schedule(e, t, ord_ev, o, o->next++);
+	}
+}
+
+Test(engine, events_scheduled_by_handlers_run_in_time_then_schedule_order)
+{
+	static ordmodel o;
+	memset(&o, 0, sizeof o);
+	o.rng = 9;
+	eng *e = mk(0);
+	for (; o.next < 20; o.next++) {
+		o.when[o.next] = lcg(&o.rng) % 4 * 5;
+		eng_schedule(e, o.when[o.next], ord_ev, &o, o.next);
+	}
+	eng_run(e, ENG_FOREVER);
+	cr_assert_eq(o.nran, o.next);
+	cr_assert_gt(o.nran, 1000);
+	for (uint64_t i = 1; i < o.nran; i++) {
+		uint64_t a = o.ran[i - 1], b = o.ran[i];
+		cr_assert(o.when[a] < o.when[b] || (o.when[a] == o.when[b] && a < b),
+		          "event %llu (tick %llu) ran before %llu (tick %llu)",
+		          (unsigned long long)a, (unsigned long long)o.when[a],
+		          (unsigned long long)b, (unsigned long long)o.when[b]);
+	}
+	eng_destroy(e);
+}
+
 Test(engine, cancel)
 {
 	eng *e = mk(0);

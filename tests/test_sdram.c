@@ -300,3 +300,314 @@ Test(memif, no_dispatch_is_armed_for_empty_queues)
 	cr_assert_eq(eng_events(g.e), 4 + 4, "%llu events", (unsigned long long)eng_events(g.e));
 	rig_free(&g);
 }
+
+/* FR-FCFS keeps the window requests in one list per SDRAM bank, in submit
+ * order (mem/memif.c). Mistake: a request that enters its queue's window
+ * late (when one ahead of it issues) is put at the end of its bank's list,
+ * behind younger requests of other queues, so oldest-first among equal
+ * starts breaks. Seventeen kd requests (one more than the window) and then
+ * one shade request, every one to another row of bank 0: each is a row
+ * conflict with the same start, so all go in submit order and the
+ * seventeenth kd request (entering the window after the first issues) goes
+ * before the younger shade request. */
+static uint64_t win_done[18];
+static void win_note(eng *e, void *ctx, uint64_t arg)
+{
+	(void)ctx;
+	win_done[arg] = eng_now(e);
+}
+
+Test(memif, frfcfs_request_entering_the_window_late_keeps_its_age)
+{
+	memif_rig g;
+	rig_init(&g, MEMIF_FRFCFS);
+	memif *m = &g.m;
+	cr_assert_eq(MEMIF_FRFCFS_WINDOW, 16, "the test fills a window of 16");
+	/* row:bank:col: bank = bits 13-14, row = bits 15+; all in bank 0 */
+	for (uint64_t i = 0; i < 17; i++)
+		memif_submit(m, 0, MEMIF_KD, (10 + i) << 15, 8, 0, win_note, NULL, i);
+	memif_submit(m, 0, MEMIF_SHADE, 50ull << 15, 8, 0, win_note, NULL, 17);
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(g.s.s.reads, 18);
+	for (int i = 0; i < 17; i++)
+		cr_assert_lt(win_done[i], win_done[i + 1], "request %d before %d: %llu %llu", i,
+		             i + 1, (unsigned long long)win_done[i],
+		             (unsigned long long)win_done[i + 1]);
+	rig_free(&g);
+}
+
+/* FR-FCFS counts, per bank, the waiting requests to its open row, so that
+ * a pick looks for a row hit only where there is one (mem/memif.c).
+ * Mistake: a request submitted while its row is open is not counted, so
+ * the pick takes the bank's oldest request instead of the hit. Two
+ * requests open bank 0's row 1 and are served (the pick has counted row
+ * 1's requests); long after, an older row conflict and a younger row hit
+ * wait together: the hit goes first. */
+Test(memif, frfcfs_counts_a_hit_submitted_while_its_row_is_open)
+{
+	memif_rig g;
+	rig_init(&g, MEMIF_FRFCFS);
+	memif *m = &g.m;
+	memset(done_at, 0, sizeof done_at);
+	uint64_t r1 = 1ull << 15, r2 = 2ull << 15;
+	memif_submit(m, 0, MEMIF_KD, r1, 8, 0, note, NULL, 0);
+	memif_submit(m, 0, MEMIF_KD, r1 + 64, 8, 0, note, NULL, 1);
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(g.s.s.row_hits, 1);
+	uint64_t t = done_at[1] + 1000000;
+	memif_submit(m, t, MEMIF_KD, r2, 8, 0, note, NULL, 2);          /* older: conflict */
+	memif_submit(m, t, MEMIF_SHADE, r1 + 128, 8, 0, note, NULL, 3); /* younger: hit */
+	eng_run(g.e, ENG_FOREVER);
+	cr_assert_eq(g.s.s.row_hits, 2);
+	cr_assert_lt(done_at[3], done_at[2], "the row hit goes first: hit %llu, older %llu",
+	             (unsigned long long)done_at[3], (unsigned long long)done_at[2]);
+	rig_free(&g);
+}
+
+/* ---- FR-FCFS against the plain scan ----
+ *
+ * Mistake: the memory interface's per-bank lists (mem/memif.c) pick a
+ * different request than FR-FCFS's rules say: a request entering its
+ * queue's window late placed out of age order, a bank's count of open-row
+ * requests gone stale, a request not yet ready taken, or the next
+ * dispatch armed for the wrong tick. The reference below is the rule
+ * written the simple way (each pick scans the first MEMIF_FRFCFS_WINDOW
+ * requests of every queue, as the interface did before the lists), with
+ * the same dispatch and arming; both run the same random submissions
+ * (bursts longer than the window, a trickle of requests ready only later,
+ * lone pairs whose second request waits for the dispatch the first arms;
+ * reads and writes over few rows of every bank) on their own engine and
+ * SDRAM, and every completion must come at the same tick, in the same
+ * order, with the same number of events. */
+enum { NSUB = 700, REFCAP = NSUB };
+
+static uint64_t lcg_next(uint64_t *s)
+{
+	*s = *s * 6364136223846793005ull + 1442695040888963407ull;
+	return *s >> 33;
+}
+
+typedef struct ref_item {
+	uint64_t seq, ready, addr, row, arg;
+	uint32_t bank, bytes;
+	int write;
+} ref_item;
+
+typedef struct ref_mi {
+	eng *e;
+	sdram *sd;
+	ref_item q[MEMIF_NREQ][REFCAP];
+	uint32_t n[MEMIF_NREQ], max_n;
+	uint64_t seq, queued, lead, armed_at, not_ready_seen;
+	int armed;
+	eng_handler done;
+	void *done_ctx;
+} ref_mi;
+
+static void ref_dispatch(eng *e, void *ctx, uint64_t arg);
+
+static void ref_arm(ref_mi *m, uint64_t when)
+{
+	if (when < eng_now(m->e))
+		when = eng_now(m->e);
+	if (m->armed && m->armed_at <= when)
+		return;
+	m->armed = 1;
+	m->armed_at = when;
+	eng_schedule(m->e, when, ref_dispatch, m, 0);
+}
+
+static int ref_pick(ref_mi *m, uint64_t now, uint64_t *next_ready, uint32_t *pos)
+{
+	const sdram_timing *T = &m->sd->t;
+	int best = -1;
+	uint64_t best_start = UINT64_MAX, best_seq = UINT64_MAX;
+	*next_ready = UINT64_MAX;
+	for (int r = 0; r < MEMIF_NREQ; r++) {
+		uint32_t w = m->n[r] < MEMIF_FRFCFS_WINDOW ? m->n[r] : MEMIF_FRFCFS_WINDOW;
+		for (uint32_t i = 0; i < w; i++) {
+			const ref_item *it = &m->q[r][i];
+			if (it->ready > now) {
+				m->not_ready_seen++;
+				if (it->ready < *next_ready)
+					*next_ready = it->ready;
+				continue;
+			}
+			const sdram_bank *k = &m->sd->bank[it->bank];
+			uint64_t c = now > k->col_ok ? now : k->col_ok, st;
+			if (k->open_row == it->row)
+				st = c + T->cl;
+			else if (k->open_row == SDRAM_NO_ROW)
+				st = c + T->trcd + T->cl;
+			else
+				st = (c > k->pre_ok ? c : k->pre_ok) + T->trp + T->trcd + T->cl;
+			if (st < best_start || (st == best_start && it->seq < best_seq)) {
+				best = r;
+				*pos = i;
+				best_start = st;
+				best_seq = it->seq;
+			}
+		}
+	}
+	return best;
+}
+
+static void ref_dispatch(eng *e, void *ctx, uint64_t arg)
+{
+	(void)arg;
+	ref_mi *m = ctx;
+	uint64_t now = eng_now(e);
+	if (m->armed && m->armed_at == now)
+		m->armed = 0;
+	for (;;) {
+		if (m->sd->bus_free > now + m->lead) {
+			if (m->queued)
+				ref_arm(m, m->sd->bus_free - m->lead);
+			return;
+		}
+		uint64_t next_ready;
+		uint32_t pos = 0;
+		int r = ref_pick(m, now, &next_ready, &pos);
+		if (r < 0) {
+			if (next_ready != UINT64_MAX)
+				ref_arm(m, next_ready);
+			return;
+		}
+		ref_item it = m->q[r][pos];
+		memmove(&m->q[r][pos], &m->q[r][pos + 1], (m->n[r] - pos - 1) * sizeof it);
+		m->n[r]--;
+		m->queued--;
+		uint64_t done = sdram_access(m->sd, now, it.addr, it.bytes, it.write, NULL);
+		eng_schedule(e, done, m->done, m->done_ctx, it.arg);
+	}
+}
+
+static void ref_submit(ref_mi *m, uint64_t t, int r, uint64_t addr, uint32_t bytes, int write,
+                       uint64_t arg)
+{
+	cr_assert_lt(m->n[r], REFCAP);
+	if (t < eng_now(m->e))
+		t = eng_now(m->e);
+	uint32_t bank, col;
+	uint64_t row;
+	sdram_decode(m->sd, addr, &bank, &row, &col);
+	m->q[r][m->n[r]++] = (ref_item){m->seq++, t, addr, row, arg, bank, bytes, write};
+	if (m->n[r] > m->max_n)
+		m->max_n = m->n[r];
+	m->queued++;
+	ref_arm(m, t);
+}
+
+/* One side of the comparison: its engine, SDRAM, and what completed when. */
+typedef struct diff_side {
+	eng *e;
+	sdram s;
+	memif m;     /* side 0 */
+	ref_mi *ref; /* side 1 */
+	uint64_t order[NSUB], at[NSUB];
+	size_t n;
+	const struct diff_load *load;
+} diff_side;
+
+typedef struct diff_load {
+	uint64_t tick[NSUB], delay[NSUB], addr[NSUB];
+	uint32_t bytes[NSUB];
+	int req[NSUB], write[NSUB];
+} diff_load;
+
+static void diff_done(eng *e, void *ctx, uint64_t arg)
+{
+	diff_side *s = ctx;
+	s->order[s->n] = arg;
+	s->at[s->n++] = eng_now(e);
+}
+
+static void diff_sub(eng *e, void *ctx, uint64_t i)
+{
+	diff_side *s = ctx;
+	const diff_load *l = s->load;
+	uint64_t t = eng_now(e) + l->delay[i];
+	if (s->ref)
+		ref_submit(s->ref, t, l->req[i], l->addr[i], l->bytes[i], l->write[i], i);
+	else
+		cr_assert_eq(memif_submit(&s->m, t, l->req[i], l->addr[i], l->bytes[i], l->write[i],
+		                          diff_done, s, i),
+		             0);
+}
+
+Test(memif, frfcfs_picks_as_the_plain_scan_of_every_window)
+{
+	static diff_load l;
+	static diff_side side[2];
+	static ref_mi ref;
+	uint64_t rng = 12345;
+	for (int i = 0; i < NSUB; i++) {
+		if (i < NSUB / 2) {
+			/* bursts: groups of 40 share a tick and mostly a queue, more
+			 * than the SDRAM serves before the next group */
+			l.tick[i] = (uint64_t)(i / 40) * 150000 +
+			            (i % 40 < 30 ? 0 : lcg_next(&rng) % 50000);
+			l.req[i] = lcg_next(&rng) % 3 ? (int)(i / 40 % MEMIF_NREQ)
+			                              : (int)(lcg_next(&rng) % MEMIF_NREQ);
+			l.delay[i] = lcg_next(&rng) % 5 == 0 ? lcg_next(&rng) % 300000 : 0;
+		} else if (i >= NSUB - 40) {
+			/* last, pairs alone on the bus, ready 100 and 200 ns after they
+			 * come: the second one's dispatch is the one the first one's
+			 * dispatch arms (for the earliest tick a waiting request is
+			 * ready) */
+			l.tick[i] = 30000000 + (uint64_t)(i / 2) * 1000000;
+			l.req[i] = (int)(lcg_next(&rng) % MEMIF_NREQ);
+			l.delay[i] = i % 2 ? 200000 : 100000;
+		} else {
+			/* then a trickle, with many requests ready only later, so that
+			 * picks meet them before they are ready */
+			l.tick[i] = 4000000 + (uint64_t)i * 20000 + lcg_next(&rng) % 20000;
+			l.req[i] = (int)(lcg_next(&rng) % MEMIF_NREQ);
+			l.delay[i] = lcg_next(&rng) % 3 == 0 ? lcg_next(&rng) % 100000 : 0;
+		}
+		uint64_t row = lcg_next(&rng) % 6, bank = lcg_next(&rng) % 4;
+		l.addr[i] = row << 15 | bank << 13 | (lcg_next(&rng) % 64) * 64;
+		l.bytes[i] = 8u << (lcg_next(&rng) % 4);
+		l.write[i] = lcg_next(&rng) % 8 == 0;
+	}
+	for (int k = 0; k < 2; k++) {
+		diff_side *s = &side[k];
+		memset(s, 0, sizeof *s);
+		s->load = &l;
+		s->e = eng_create(64);
+		diag d;
+		sdram_params p = std_params();
+		cr_assert_eq(sdram_init(&s->s, &p, &d), 0, "%s", d.msg);
+		if (k == 0) {
+			cr_assert_eq(memif_init(&s->m, s->e, &s->s, MEMIF_FRFCFS), 0);
+		} else {
+			memset(&ref, 0, sizeof ref);
+			ref = (ref_mi){.e = s->e,
+			               .sd = &s->s,
+			               .lead = s->s.t.trp + s->s.t.trcd + s->s.t.cl,
+			               .done = diff_done,
+			               .done_ctx = s};
+			s->ref = &ref;
+		}
+		for (uint64_t i = 0; i < NSUB; i++)
+			eng_schedule(s->e, l.tick[i], diff_sub, s, i);
+		eng_run(s->e, ENG_FOREVER);
+	}
+	cr_assert_gt(ref.max_n, 2 * MEMIF_FRFCFS_WINDOW, "queues outgrow the window");
+	cr_assert_gt(ref.not_ready_seen, 0,
+	             "some requests wait in the window before they are ready");
+	cr_assert_eq(side[0].n, (size_t)NSUB);
+	cr_assert_eq(side[1].n, (size_t)NSUB);
+	for (int i = 0; i < NSUB; i++)
+		cr_assert(
+		    side[0].order[i] == side[1].order[i] && side[0].at[i] == side[1].at[i],
+		    "completion %d: request %llu at %llu, the plain scan: request %llu at %llu", i,
+		    (unsigned long long)side[0].order[i], (unsigned long long)side[0].at[i],
+		    (unsigned long long)side[1].order[i], (unsigned long long)side[1].at[i]);
+	cr_assert_eq(eng_events(side[0].e), eng_events(side[1].e));
+	cr_assert_eq(side[0].s.s.row_hits, side[1].s.s.row_hits);
+	cr_assert_gt(side[0].s.s.row_hits, 0);
+	memif_free(&side[0].m);
+	for (int k = 0; k < 2; k++)
+		eng_destroy(side[k].e);
+}

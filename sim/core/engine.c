@@ -1,15 +1,24 @@
 /*
  * engine.c: the event queue (see engine.h for the contract).
  *
- * Two arrays. The pool holds one record per scheduled event (handler, ctx,
- * arg, generation, state); free records are chained through `next_free`. The
- * heap holds (when, seq, slot) triples, so sift operations compare keys
- * without touching the pool. Both grow by doubling; the heap never holds more
- * entries than the pool has records, so it is sized with the pool.
+ * One array, a binary min-heap of event records ordered by (when, seq);
+ * each record carries its handler, context and argument, so the heap is
+ * all there is (no side pool to allocate from and free to). It grows by
+ * doubling. The sequence number doubles as the event's id: it is never
+ * reused, so an id is stale once its event ran or was cancelled.
  *
- * Invariants: heap[i] <= heap[2i+1], heap[2i+2] by (when, seq); a record is
- * LIVE or CANCELLED exactly while one heap entry names it, and FREE
- * otherwise; `live` counts LIVE records.
+ * The running event keeps its root slot while its handler runs (`hole`):
+ * the first event the handler schedules takes that slot and sinks from the
+ * root, one heap operation where a pop and a push take two; if the
+ * handler schedules nothing, the slot is refilled from the last entry after
+ * it returns. Either way the heap pops in (when, seq) order, and since no
+ * two records share a sequence number the order of events is the same as
+ * with any other priority queue.
+ *
+ * Invariants: heap[i] <= heap[2i+1], heap[2i+2] by (when, seq) for the
+ * entries present (with `hole` set, heap[0] is vacant and counts as
+ * smallest); a record with h == NULL is cancelled; `live` counts the
+ * records with a handler.
  */
 #include "sim/core/engine.h"
 
@@ -17,58 +26,35 @@
 #include <math.h>
 #include <stdlib.h>
 
-enum { FREE, LIVE, CANCELLED };
-
-typedef struct ev {
-	eng_handler h;
-	void *ctx;
-	uint64_t arg;
-	uint32_t gen; /* bumped when the record is freed: stale ids stop matching */
-	uint32_t state;
-	uint32_t next_free;
-} ev;
-
 typedef struct hent {
 	uint64_t when, seq;
-	uint32_t slot;
+	eng_handler h; /* NULL: cancelled, dropped when it reaches the root */
+	void *ctx;
+	uint64_t arg;
 } hent;
 
 struct eng {
-	ev *pool;
+	struct eng_head hd; /* first: eng_now (engine.h) reads it */
 	hent *heap;
-	uint32_t cap, nheap, free_head, live;
-	uint64_t now, seq, dispatched;
+	uint32_t cap, n; /* slots, entries (with `hole`, heap[0] is one, vacant) */
+	int hole;        /* the running event's root slot is still taken */
+	size_t live;
+	uint64_t seq, dispatched;
 	int stop;
 };
 
-#define NIL UINT32_MAX
-
-/* Links records [from, to) into the free list in index order. */
-static void link_free(eng *e, uint32_t from, uint32_t to)
-{
-	for (uint32_t i = from; i < to; i++) {
-		e->pool[i] =
-		    (ev){.gen = 1, .state = FREE, .next_free = i + 1 < to ? i + 1 : e->free_head};
-	}
-	if (from < to)
-		e->free_head = from;
-}
+#define MAX_CAP (UINT32_MAX / 2)
 
 static int grow(eng *e, uint32_t want)
 {
 	if (want <= e->cap)
 		return 0;
-	if (want > NIL / 2)
+	if (want > MAX_CAP)
 		return -1;
-	ev *p = realloc(e->pool, (size_t)want * sizeof *p);
-	if (!p)
-		return -1;
-	e->pool = p;
 	hent *h = realloc(e->heap, (size_t)want * sizeof *h);
 	if (!h)
-		return -1; /* pool is larger but cap unchanged: still consistent */
+		return -1;
 	e->heap = h;
-	link_free(e, e->cap, want);
 	e->cap = want;
 	return 0;
 }
@@ -78,8 +64,8 @@ eng *eng_create(size_t capacity)
 	eng *e = calloc(1, sizeof *e);
 	if (!e)
 		return NULL;
-	e->free_head = NIL;
-	uint32_t c = capacity < 64 ? 64 : capacity > NIL / 2 ? NIL / 2 : (uint32_t)capacity;
+	e->seq = 1; /* ids are sequence numbers; 0 is ENG_NONE */
+	uint32_t c = capacity < 64 ? 64 : capacity > MAX_CAP ? MAX_CAP : (uint32_t)capacity;
 	if (grow(e, c)) {
 		eng_destroy(e);
 		return NULL;
@@ -91,7 +77,6 @@ void eng_destroy(eng *e)
 {
 	if (!e)
 		return;
-	free(e->pool);
 	free(e->heap);
 	free(e);
 }
@@ -99,6 +84,32 @@ void eng_destroy(eng *e)
 static int before(const hent *a, const hent *b)
 {
 	return a->when < b->when || (a->when == b->when && a->seq < b->seq);
+}
+
+/* Puts x into the vacant root of heap[0..n): the vacancy moves down to a
+ * leaf along the smaller children (one comparison a level), then x rises
+ * from there (the last entry, which refills the root, is mostly late: it
+ * rises little). */
+static void fill_root(hent *h, uint32_t n, const hent *x)
+{
+	uint32_t i = 0;
+	for (;;) {
+		uint32_t c = 2 * i + 1;
+		if (c >= n)
+			break;
+		if (c + 1 < n && before(&h[c + 1], &h[c]))
+			c++;
+		h[i] = h[c];
+		i = c;
+	}
+	while (i > 0) {
+		uint32_t p = (i - 1) / 2;
+		if (!before(x, &h[p]))
+			break;
+		h[i] = h[p];
+		i = p;
+	}
+	h[i] = *x;
 }
 
 static void sift_up(hent *h, uint32_t i)
@@ -114,88 +125,92 @@ static void sift_up(hent *h, uint32_t i)
 	h[i] = x;
 }
 
-static void sift_down(hent *h, uint32_t n, uint32_t i)
+/* Puts x into the vacant root of heap[0..n), sinking it while a child
+ * comes before it (an event scheduled by a handler is often among the
+ * next few: it stops early). */
+static void sink_root(hent *h, uint32_t n, const hent *x)
 {
-	hent x = h[i];
+	uint32_t i = 0;
 	for (;;) {
 		uint32_t c = 2 * i + 1;
 		if (c >= n)
 			break;
 		if (c + 1 < n && before(&h[c + 1], &h[c]))
 			c++;
-		if (!before(&h[c], &x))
+		if (!before(&h[c], x))
 			break;
 		h[i] = h[c];
 		i = c;
 	}
-	h[i] = x;
+	h[i] = *x;
+}
+
+/* Takes out the root (vacant or not): the last entry fills it. */
+static void drop_root(eng *e)
+{
+	e->hole = 0;
+	if (--e->n)
+		fill_root(e->heap, e->n, &e->heap[e->n]);
 }
 
 eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
 {
-	assert(when >= e->now && "event scheduled into the past");
-	if (when < e->now)
-		when = e->now;
-	if (e->free_head == NIL && grow(e, e->cap * 2))
-		return ENG_NONE;
-	uint32_t s = e->free_head;
-	ev *v = &e->pool[s];
-	e->free_head = v->next_free;
-	v->h = h;
-	v->ctx = ctx;
-	v->arg = arg;
-	v->state = LIVE;
-	e->heap[e->nheap] = (hent){when, e->seq++, s};
-	sift_up(e->heap, e->nheap++);
+	assert(when >= e->hd.now && "event scheduled into the past");
+	if (when < e->hd.now)
+		when = e->hd.now;
+	hent x = {when, e->seq, h, ctx, arg};
+	if (e->hole) {
+		e->hole = 0;
+		sink_root(e->heap, e->n, &x);
+	} else {
+		if (e->n == e->cap && grow(e, e->cap * 2))
+			return ENG_NONE;
+		e->heap[e->n] = x;
+		sift_up(e->heap, e->n++);
+	}
+	e->seq++;
 	e->live++;
-	return (eng_id)v->gen << 32 | s;
+	return (eng_id)x.seq;
 }
 
+/* O(n) in the queued events: the simulator never cancels (the tests do). */
 int eng_cancel(eng *e, eng_id id)
 {
-	uint32_t s = (uint32_t)id, gen = (uint32_t)(id >> 32);
-	if (s >= e->cap || e->pool[s].gen != gen || e->pool[s].state != LIVE)
-		return -1;
-	e->pool[s].state = CANCELLED;
-	e->live--;
-	return 0;
-}
-
-static void release(eng *e, uint32_t s)
-{
-	ev *v = &e->pool[s];
-	v->state = FREE;
-	if (++v->gen == 0) /* keep ids non-zero after wrap-around */
-		v->gen = 1;
-	v->next_free = e->free_head;
-	e->free_head = s;
+	for (uint32_t i = e->hole ? 1 : 0; i < e->n; i++) {
+		if (e->heap[i].seq == id) {
+			if (!e->heap[i].h)
+				return -1;
+			e->heap[i].h = NULL;
+			e->live--;
+			return 0;
+		}
+	}
+	return -1;
 }
 
 eng_status eng_run(eng *e, uint64_t limit)
 {
 	e->stop = 0;
-	while (e->nheap > 0) {
-		hent top = e->heap[0];
-		ev *v = &e->pool[top.slot];
-		if (v->state == LIVE && top.when > limit)
-			return ENG_LIMIT;
-		e->heap[0] = e->heap[--e->nheap];
-		if (e->nheap)
-			sift_down(e->heap, e->nheap, 0);
-		if (v->state == CANCELLED) {
-			release(e, top.slot);
+	while (e->n > 0) {
+		const hent *top = &e->heap[0];
+		if (!top->h) {
+			drop_root(e); /* cancelled: not run, counted or timed */
 			continue;
 		}
-		/* Copy out and free before the call: the handler may schedule (and
-		 * so reuse this record or move the pool) or cancel its own id. */
-		eng_handler h = v->h;
-		void *ctx = v->ctx;
-		uint64_t arg = v->arg;
-		release(e, top.slot);
+		if (top->when > limit)
+			return ENG_LIMIT;
+		/* Copy out before the call: the handler may schedule (and so take
+		 * the root slot or move the heap) or cancel. */
+		eng_handler h = top->h;
+		void *ctx = top->ctx;
+		uint64_t arg = top->arg;
+		e->hd.now = top->when;
 		e->live--;
-		e->now = top.when;
 		e->dispatched++;
+		e->hole = 1;
 		h(e, ctx, arg);
+		if (e->hole)
+			drop_root(e);
 		if (e->stop) {
 			e->stop = 0;
 			return ENG_STOPPED;
@@ -207,11 +222,6 @@ eng_status eng_run(eng *e, uint64_t limit)
 void eng_stop(eng *e)
 {
 	e->stop = 1;
-}
-
-uint64_t eng_now(const eng *e)
-{
-	return e->now;
 }
 
 uint64_t eng_events(const eng *e)

@@ -17,20 +17,23 @@
  * scheduled (FIFO). With a deterministic model the dispatch order is
  * therefore a pure function of the schedule calls: runs are reproducible.
  *
- * Cost. The queue is a binary min-heap: eng_schedule and each dispatch are
- * O(log n) for n queued events; eng_cancel is O(1) (see below). Event records
- * come from a pool that doubles when full, so steady state never mallocs.
+ * Cost. The queue is a binary min-heap of the event records themselves:
+ * eng_schedule and each dispatch are O(log n) for n queued events, and the
+ * first event a handler schedules takes the slot of the event being run (one
+ * heap operation for the pop and the push). The heap doubles when full, so
+ * steady state never mallocs. eng_cancel is O(n) (see below).
  *
  * Same-tick events. A handler may schedule an event for eng_now(): it runs in
  * the same eng_run, after every event already queued for that tick (its
  * sequence number is larger). Scheduling before eng_now() is a bug: it
  * asserts in debug builds and is clamped to eng_now() under NDEBUG.
  *
- * Cancellation is lazy (like Redis' AE_DELETED_EVENT_ID): eng_cancel only
- * marks the record; the heap entry is dropped when it reaches the top, without
- * running, counting, or advancing time. An id names one scheduling: once the
- * event ran or was cancelled, the id is stale and eng_cancel on it is a no-op,
- * even after the record is reused (ids carry a generation count).
+ * Cancellation is lazy (like Redis' AE_DELETED_EVENT_ID): eng_cancel finds
+ * the record (a scan of the queue: the simulator itself never cancels) and
+ * marks it; it is dropped when it reaches the top, without running, counting,
+ * or advancing time. An id names one scheduling: once the event ran or was
+ * cancelled, the id is stale and eng_cancel on it is a no-op (an id is the
+ * event's sequence number, never reused).
  */
 #ifndef SAAR_SIM_ENGINE_H
 #define SAAR_SIM_ENGINE_H
@@ -59,7 +62,7 @@ eng *eng_create(size_t capacity);
 void eng_destroy(eng *e);
 
 /* Queues handler(e, ctx, arg) at tick `when`. Returns its id, or ENG_NONE
- * when the pool cannot grow (out of memory). */
+ * when the queue cannot grow (out of memory). */
 eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg);
 /* Returns 0 if the event was pending and is now cancelled, -1 if the id is
  * stale (already ran, already cancelled) or was never issued. */
@@ -75,7 +78,16 @@ eng_status eng_run(eng *e, uint64_t limit);
  * handler it has no effect (eng_run clears the flag when it starts). */
 void eng_stop(eng *e);
 
-uint64_t eng_now(const eng *e);    /* tick of the event being/last dispatched */
+/* The first member of struct eng (engine.c), read by the inline eng_now: it
+ * is called for nearly every event, from other files. */
+struct eng_head {
+	uint64_t now; /* tick of the event being/last dispatched */
+};
+static inline uint64_t eng_now(const eng *e)
+{
+	return ((const struct eng_head *)(const void *)e)->now;
+}
+
 uint64_t eng_events(const eng *e); /* events dispatched so far (not cancelled ones) */
 size_t eng_pending(const eng *e);  /* live events queued */
 
