@@ -205,6 +205,17 @@ uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, t
 uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
                       const pkt_precision *prec);
 
+/* The per-lane traversal loop of pkt_trace_cone after pkt_trav_begin_fp
+ * (cone: the packet's cone when culling, else NULL), and its leaf step:
+ * the rays of mask tested against the leaf's list entries first..
+ * first+count-1 (a shadow ray stops at its first occluder), counted into c
+ * (optional). frustum.c's interval traversal shares the leaf step. */
+struct pkt_cone;
+void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
+                    uint64_t mask, const struct pkt_cone *cone, trav_counts *c);
+void pkt_trace_run(trav_state *s, packet *p, const mimg *m, const struct pkt_cone *cone,
+                   trav_counts *c);
+
 /* ---- single-ray path, for checking ---- */
 typedef struct ray_hit {
 	float t, bu, bv;

@@ -1,0 +1,222 @@
+/*
+ * frustum.c: the per-lane packet traversal with a packet-wide shortcut
+ * (see frustum.h).
+ *
+ * Why the shortcut is exact. For ray i with 1/d of the packet's sign on
+ * the split axis, the per-lane step (traverse.c, pkt_trav_node) makes the
+ * near child [tn_i, min(tf_i, hi_i)] and the far child [max(tn_i, lo_i),
+ * tf_i], where [lo_i, hi_i] is ts_i = (split - o_i) * (1/d_i) widened by
+ * gamma(3) |ts_i|, so lo_i <= hi_i. If lo_i > tf_i the far segment is empty
+ * and the near one is [tn_i, tf_i] unchanged (min picks tf_i, bit for
+ * bit); if hi_i < tn_i the near one is empty and the far one unchanged.
+ * The mask stays the same too: a ray in the current mask already has
+ * tn_i <= tf_i and tn_i <= its best hit, which does not change between
+ * two leaves. So when LO > TF or HI < TN for bounds LO <= every lo_i,
+ * HI >= every hi_i, TN <= every tn_i, TF >= every tf_i, only the node
+ * changes.
+ *
+ * The bounds. With o_i in [olo, ohi] and 1/d_i in [idlo, idhi] (one
+ * sign), ts_i lies between the smallest and the largest of the four
+ * corner products, since a rounded subtraction and a rounded product are
+ * monotone in each operand; widening by four times gamma(3) covers the
+ * per-ray widening and its rounding. The segment bounds start as the
+ * rays' extremes after the scene-box clip and follow each step: the near
+ * child's segments lie within [TN, min(TF, HI)], the far child's within
+ * [max(TN, LO), TF] (any axis: the parent's [TN, TF]); a stack entry
+ * keeps its bounds, and popping only drops rays.
+ */
+#include "kernel-ref/frustum.h"
+
+#include <math.h>
+
+#include "kernel-ref/cone.h"
+#include "kernel-ref/kdtree.h"
+#include "kernel-ref/simd.h"
+
+#define NGROUPS (PKT_RAYS / SIMD_W)
+
+/* Four times traverse.c's gamma(3): the per-ray widening plus room for
+ * the rounding of the widened bounds. */
+#define FRU_MARGIN (4.0f * 3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f))
+
+int fru_fault = FRU_FAULT_NONE;
+
+/* The packet's bounds: origin and 1/d intervals per axis; pos[a]: every
+ * ray's 1/d is positive on axis a (the near child is the one below), ok[a]:
+ * the rays' 1/d on axis a are finite and of one sign (else every step on
+ * that axis is per lane). */
+typedef struct fru_box {
+	float olo[3], ohi[3];
+	float idlo[3], idhi[3];
+	int pos[3], ok[3];
+} fru_box;
+
+/* Smallest and largest x over the lanes of mask; returns the lanes of
+ * mask where x is NaN (the bounds ignore them). */
+static uint64_t lane_range(const float *x, uint64_t mask, float *lo, float *hi)
+{
+	fv mn = fv_set1(INFINITY), mx = fv_set1(-INFINITY);
+	uint64_t nan = 0;
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(mask, g);
+		if (!gb)
+			continue;
+		iv on = iv_from_bits(gb);
+		fv v = fv_load(x + SIMD_W * g);
+		mn = fv_sel(on & (v < mn), v, mn);
+		mx = fv_sel(on & (v > mx), v, mx);
+		nan |= (uint64_t)(iv_bits(v != v) & gb) << (SIMD_W * g);
+	}
+	float a = INFINITY, b = -INFINITY;
+	for (int l = 0; l < SIMD_W; l++) {
+		a = mn[l] < a ? mn[l] : a;
+		b = mx[l] > b ? mx[l] : b;
+	}
+	*lo = a;
+	*hi = b;
+	return nan;
+}
+
+/* Fills b from the state pkt_trav_begin_fp left; 0 when no axis can take
+ * the packet step (or a ray has a NaN origin or direction). */
+static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t entered)
+{
+	const float *id[3] = {s->rc.idx, s->rc.idy, s->rc.idz};
+	const float *org[3] = {p->ox, p->oy, p->oz};
+	uint64_t nan = 0;
+	int any = 0;
+	for (int a = 0; a < 3; a++) {
+		nan |= lane_range(id[a], entered, &b->idlo[a], &b->idhi[a]);
+		nan |= lane_range(org[a], entered, &b->olo[a], &b->ohi[a]);
+		b->pos[a] = b->idlo[a] > 0.0f;
+		b->ok[a] =
+		    b->pos[a] ? b->idhi[a] < INFINITY : b->idhi[a] < 0.0f && b->idlo[a] > -INFINITY;
+		any |= b->ok[a];
+		if (fru_fault == FRU_FAULT_ONE_DIRECTION) {
+			int first = __builtin_ctzll(entered);
+			b->idlo[a] = b->idhi[a] = id[a][first];
+		}
+	}
+	return nan == 0 && any;
+}
+
+int fru_coherent(const trav_state *s, const packet *p, uint64_t entered)
+{
+	fru_box b;
+	return entered && !s->fpt && !s->fpi && pkt_trav_fault == PKT_FAULT_NONE &&
+	       s->stack_max <= PKT_STACK_MAX && fru_setup(&b, s, p, entered);
+}
+
+/* min and max of two floats that are not NaN (no libm call) */
+static inline float mn2(float a, float b)
+{
+	return a < b ? a : b;
+}
+static inline float mx2(float a, float b)
+{
+	return a > b ? a : b;
+}
+
+/* [lo, hi] holding every ray's widened distance to the plane split on the
+ * axis (the whole line if a bound overflows). */
+static void fru_plane(const fru_box *b, int axis, float split, float *lo, float *hi)
+{
+	float clo = split - b->ohi[axis], chi = split - b->olo[axis];
+	float p0 = clo * b->idlo[axis], p1 = clo * b->idhi[axis];
+	float p2 = chi * b->idlo[axis], p3 = chi * b->idhi[axis];
+	float tl = mn2(mn2(p0, p1), mn2(p2, p3)), th = mx2(mx2(p0, p1), mx2(p2, p3));
+	if (!(fabsf(tl) < INFINITY && fabsf(th) < INFINITY)) {
+		*lo = -INFINITY;
+		*hi = INFINITY;
+		return;
+	}
+	*lo = tl - fabsf(tl) * FRU_MARGIN;
+	*hi = th + fabsf(th) * FRU_MARGIN;
+}
+
+/* The per-lane step with its packet shortcut, on the inner node n whose
+ * rays' segments lie within [*tn, *tf]. When the plane's distances [lo,
+ * hi] lie beyond every segment (lo > tf: the near child only) or before
+ * it (hi < tn: the far child only), the per-lane step would leave every
+ * segment and the mask as they are (file comment), so only the node
+ * changes. Otherwise pkt_trav_node steps lane by lane. Either way the
+ * bounds follow the child without a pass over the lanes: the near child's
+ * segments are [tn_i, min(tf_i, hi_i)], within [tn, min(tf, hi)], the far
+ * child's within [max(tn, lo), tf]; bt, bf: the far child's, if pushed. */
+static void fru_step(const fru_box *b, trav_state *s, packet *p, kd_node n, float *tn, float *tf,
+                     float *bt, float *bf)
+{
+	int axis = kd_axis(n);
+	float lo = -INFINITY, hi = INFINITY;
+	if (b->ok[axis])
+		fru_plane(b, axis, kd_split(n), &lo, &hi);
+	uint32_t left = kd_left(n), near = b->pos[axis] ? left : left + 1;
+	uint32_t far = b->pos[axis] ? left + 1 : left;
+	if (lo > *tf) { /* the near child only */
+		s->cur.node = near;
+		return;
+	}
+	if (hi < *tn) { /* the far child only */
+		s->cur.node = fru_fault == FRU_FAULT_ALWAYS_NEAR ? near : far;
+		return;
+	}
+	trav_result r;
+	pkt_trav_node(s, p, n, &r);
+	float ftn = mx2(*tn, lo), ntf = mn2(*tf, hi);
+	if (r.pushed) {
+		*bt = ftn;
+		*bf = *tf;
+	}
+	if (s->cur.node == near)
+		*tf = ntf;
+	else
+		*tn = ftn;
+}
+
+/* pkt_trace_run with the packet shortcut (fru_step); pops and leaves as
+ * pkt_trace_run, so the counts are the same. bt[k], bf[k]: the segment
+ * bounds of stack slot k. */
+static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
+                     const pkt_cone *cone, trav_counts *c)
+{
+	const kd_node *nodes = mimg_nodes(m);
+	float bt[PKT_STACK_MAX], bf[PKT_STACK_MAX], tn, tf, lo, hi;
+	lane_range(s->cur.tn, s->cur.mask, &tn, &hi);
+	lane_range(s->cur.tf, s->cur.mask, &lo, &tf);
+	trav_result r;
+	while (pkt_trav_pop(s, p, &r)) {
+		if (r.popped) { /* a popped entry's rays are a subset: its bounds hold */
+			tn = bt[s->sp];
+			tf = bf[s->sp];
+		}
+		kd_node n = nodes[r.node];
+		if (kd_is_leaf(n)) {
+			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), r.mask, cone, c);
+			s->cur.mask = 0; /* pop next */
+		} else
+			fru_step(b, s, p, n, &tn, &tf, &bt[s->sp], &bf[s->sp]);
+		if (c) { /* as pkt_trace_run: the depth after the step */
+			c->node_steps++;
+			c->max_sp = (uint64_t)s->sp > c->max_sp ? (uint64_t)s->sp : c->max_sp;
+		}
+	}
+}
+
+uint64_t fru_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                   const pkt_precision *prec, int cull)
+{
+	trav_state st;
+	uint64_t entered = pkt_trav_begin_fp(&st, p, m, stack, stack_max, prec);
+	if (!entered)
+		return 0;
+	pkt_cone cone;
+	if (cull) /* the rays that entered the box (seed 004 §4) */
+		cone_build(&cone, p, entered);
+	fru_box b;
+	if (!st.fpt && !st.fpi && pkt_trav_fault == PKT_FAULT_NONE && stack_max <= PKT_STACK_MAX &&
+	    fru_setup(&b, &st, p, entered))
+		fru_walk(&b, &st, p, m, cull ? &cone : NULL, c);
+	else
+		pkt_trace_run(&st, p, m, cull ? &cone : NULL, c);
+	return entered;
+}
