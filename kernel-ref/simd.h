@@ -101,13 +101,19 @@ static inline unsigned grp_bits(uint64_t mask, int g)
 	return (unsigned)(mask >> (SIMD_W * g)) & SIMD_MASK;
 }
 
-/* Bit i of b becomes lane i (all-ones or zero). */
+/* Bit i of b becomes lane i (all-ones or zero): b in every lane, tested
+ * against each lane's own bit. */
 static inline iv iv_from_bits(unsigned b)
 {
-	iv v = iv_set1(0);
-	for (int i = 0; i < SIMD_W; i++)
-		v[i] = -(int32_t)((b >> i) & 1u);
-	return v;
+#if SIMD_W == 16
+	const iv bit = {1,   2,   4,    8,    16,   32,   64,    128,
+	                256, 512, 1024, 2048, 4096, 8192, 16384, 32768};
+#elif SIMD_W == 8
+	const iv bit = {1, 2, 4, 8, 16, 32, 64, 128};
+#else
+	const iv bit = {1, 2, 4, 8};
+#endif
+	return (iv_set1((int32_t)b) & bit) != 0;
 }
 
 /* Lane i of m (all-ones or zero) becomes bit i. */
