@@ -49,7 +49,21 @@ typedef struct fru_box {
 	float olo[3], ohi[3];
 	float idlo[3], idhi[3];
 	int pos[3], ok[3];
+	/* one origin (olo = ohi): the rays' directions lie in [dlo, dhi],
+	 * each component at most dmax in size (fru_tri_missed) */
+	int one;
+	float dlo[3], dhi[3], dmax;
 } fru_box;
+
+/* min and max of two floats that are not NaN (no libm call) */
+static inline float mn2(float a, float b)
+{
+	return a < b ? a : b;
+}
+static inline float mx2(float a, float b)
+{
+	return a > b ? a : b;
+}
 
 /* Smallest and largest x over the lanes of mask; returns the lanes of
  * mask where x is NaN (the bounds ignore them). */
@@ -97,6 +111,14 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 			b->idlo[a] = b->idhi[a] = id[a][first];
 		}
 	}
+	const float *dir[3] = {p->dx, p->dy, p->dz};
+	b->one = 1;
+	b->dmax = 0.0f;
+	for (int a = 0; a < 3; a++) {
+		nan |= lane_range(dir[a], entered, &b->dlo[a], &b->dhi[a]);
+		b->one &= b->olo[a] == b->ohi[a];
+		b->dmax = mx2(b->dmax, mx2(fabsf(b->dlo[a]), fabsf(b->dhi[a])));
+	}
 	return nan == 0 && any;
 }
 
@@ -105,16 +127,6 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered)
 	fru_box b;
 	return entered && !s->fpt && !s->fpi && pkt_trav_fault == PKT_FAULT_NONE &&
 	       s->stack_max <= PKT_STACK_MAX && fru_setup(&b, s, p, entered);
-}
-
-/* min and max of two floats that are not NaN (no libm call) */
-static inline float mn2(float a, float b)
-{
-	return a < b ? a : b;
-}
-static inline float mx2(float a, float b)
-{
-	return a > b ? a : b;
 }
 
 /* [lo, hi] holding every ray's widened distance to the plane split on the
@@ -132,6 +144,47 @@ static void fru_plane(const fru_box *b, int axis, float split, float *lo, float 
 	}
 	*lo = tl - fabsf(tl) * FRU_MARGIN;
 	*hi = th + fabsf(th) * FRU_MARGIN;
+}
+
+/* Triangle culling for a packet from one origin (Reshetov et al. 2005 §3
+ * cull a leaf's triangles by the packet's frustum): 1 when no ray of the
+ * packet can hit t. With the corners relative to the origin, ray d passes
+ * inside the triangle only if the three triple products d . (a_k x
+ * a_k+1) do not have both signs; over the box of the rays' directions each
+ * product's range is an interval sum. If one edge's products are above
+ * +margin for every ray and another's below -margin, every ray's Woop
+ * test (isect.h) sees two edge functions of opposite sign and rejects:
+ * they are these products over d[kz] (one factor for all three), computed
+ * with an error within a few float roundings of |a_k|_1 |a_k+1|_1, far
+ * inside margin = 1e-4 |a_k|_1 |a_k+1|_1 dmax (also above the rounding of
+ * this test itself). So skipping t changes no hit. */
+static int fru_tri_missed(const void *ctx, const mimg_tri *t)
+{
+	const fru_box *b = ctx;
+	float a[3][3], l1[3];
+	for (int k = 0; k < 3; k++) {
+		for (int j = 0; j < 3; j++)
+			a[k][j] = t->v[k][j] - b->olo[j];
+		l1[k] = fabsf(a[k][0]) + fabsf(a[k][1]) + fabsf(a[k][2]);
+	}
+	int pos = 0, neg = 0;
+	for (int e = 0; e < 3; e++) {
+		const float *u = a[e], *v = a[(e + 1) % 3];
+		float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+		              u[0] * v[1] - u[1] * v[0]};
+		float lo = 0.0f, hi = 0.0f;
+		for (int j = 0; j < 3; j++) {
+			float x = n[j] * b->dlo[j], y = n[j] * b->dhi[j];
+			lo += mn2(x, y);
+			hi += mx2(x, y);
+		}
+		float margin = 1e-4f * l1[e] * l1[(e + 1) % 3] * b->dmax;
+		pos |= lo > margin;
+		neg |= hi < -margin;
+	}
+	if (fru_fault == FRU_FAULT_CULL_ONE_SIGN)
+		return neg;
+	return pos && neg;
 }
 
 /* The per-lane step with its packet shortcut, on the inner node n whose
@@ -191,7 +244,11 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 		}
 		kd_node n = nodes[r.node];
 		if (kd_is_leaf(n)) {
-			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), r.mask, cone, c);
+			/* triangle culling pays when many rays would test */
+			int many = b->one && __builtin_popcountll(r.mask) >= 16;
+			pkt_skip sk = {fru_tri_missed, b};
+			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), r.mask, cone, c,
+			               many ? &sk : NULL);
 			s->cur.mask = 0; /* pop next */
 		} else
 			fru_step(b, s, p, n, &tn, &tf, &bt[s->sp], &bf[s->sp]);

@@ -51,8 +51,16 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered);
  *     every ray needs only the far one (they lose their hits there);
  *   FRU_FAULT_ONE_DIRECTION: the plane-distance interval uses the first
  *     ray's 1/d for all (the packet segment then misses the other rays'
- *     crossings: rays lose hits in children it wrongly skips). */
-enum fru_fault { FRU_FAULT_NONE, FRU_FAULT_ALWAYS_NEAR, FRU_FAULT_ONE_DIRECTION };
+ *     crossings: rays lose hits in children it wrongly skips);
+ *   FRU_FAULT_CULL_ONE_SIGN: triangle culling skips a triangle when one
+ *     edge has every ray on its negative side (a triangle facing the other
+ *     way has all three there for the rays that hit it). */
+enum fru_fault {
+	FRU_FAULT_NONE,
+	FRU_FAULT_ALWAYS_NEAR,
+	FRU_FAULT_ONE_DIRECTION,
+	FRU_FAULT_CULL_ONE_SIGN
+};
 extern int fru_fault;
 
 #endif

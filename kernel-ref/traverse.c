@@ -572,7 +572,7 @@ uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max
 }
 
 void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
-                    uint64_t mask, const pkt_cone *cone, trav_counts *c)
+                    uint64_t mask, const pkt_cone *cone, trav_counts *c, const pkt_skip *skip)
 {
 	const uint32_t *lists = mimg_lists(m);
 	if (c) {
@@ -589,6 +589,8 @@ void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uin
 			}
 			continue;
 		}
+		if (skip && skip->missed(skip->ctx, mimg_tri_at(m, ta)))
+			continue;
 		pkt_isect_tri(s, p, m, mask, ta);
 		if (s->shadow)
 			for (uint64_t b = mask; b; b &= b - 1) {
@@ -612,7 +614,7 @@ void pkt_trace_run(trav_state *s, packet *p, const mimg *m, const pkt_cone *cone
 				c->max_sp = (uint64_t)r.sp;
 		}
 		if (r.op == TRAV_LEAF)
-			pkt_trace_leaf(s, p, m, r.leaf_first, r.leaf_count, r.mask, cone, c);
+			pkt_trace_leaf(s, p, m, r.leaf_first, r.leaf_count, r.mask, cone, c, NULL);
 	}
 }
 

@@ -9,7 +9,8 @@
  * to fail): FRU_FAULT_ALWAYS_NEAR (the shortcut enters the near child
  * where every ray needs only the far one) and FRU_FAULT_ONE_DIRECTION
  * (the plane-distance interval from one ray's direction: the shortcut
- * skips children other rays need).
+ * skips children other rays need), FRU_FAULT_CULL_ONE_SIGN (triangle
+ * culling on one edge's sign alone).
  */
 #include <math.h>
 #include <string.h>
@@ -163,8 +164,9 @@ Test(frustum, same_hits_and_counts_as_per_lane, .init = setup_soup, .fini = tear
 /* Each planted mistake must show up as mismatches (the check can fail). */
 Test(frustum, planted_mistakes_are_caught, .init = setup_soup, .fini = teardown_soup)
 {
-	static const int faults[] = {FRU_FAULT_ALWAYS_NEAR, FRU_FAULT_ONE_DIRECTION};
-	for (int f = 0; f < 2; f++) {
+	static const int faults[] = {FRU_FAULT_ALWAYS_NEAR, FRU_FAULT_ONE_DIRECTION,
+	                             FRU_FAULT_CULL_ONE_SIGN};
+	for (int f = 0; f < 3; f++) {
 		fru_fault = faults[f];
 		uint64_t coh = 0, bad = 0;
 		for (int k = 0; k < NKINDS; k++)
