@@ -65,21 +65,27 @@ static inline float mx2(float a, float b)
 	return a > b ? a : b;
 }
 
-/* Smallest and largest x over the lanes of mask; returns the lanes of
- * mask where x is NaN (the bounds ignore them). */
-static uint64_t lane_range(const float *x, uint64_t mask, float *lo, float *hi)
+/* Smallest and largest x over the lanes of mask; returns nonzero when x
+ * is NaN in one of them (the bounds are then meaningless). A group with
+ * all lanes in mask needs no selects. */
+static unsigned lane_range(const float *x, uint64_t mask, float *lo, float *hi)
 {
-	fv mn = fv_set1(INFINITY), mx = fv_set1(-INFINITY);
-	uint64_t nan = 0;
+	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
+	fv mn = pinf, mx = ninf;
+	unsigned nan = 0;
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
 		if (!gb)
 			continue;
-		iv on = iv_from_bits(gb);
-		fv v = fv_load(x + SIMD_W * g);
-		mn = fv_sel(on & (v < mn), v, mn);
-		mx = fv_sel(on & (v > mx), v, mx);
-		nan |= (uint64_t)(iv_bits(v != v) & gb) << (SIMD_W * g);
+		fv v = fv_load(x + SIMD_W * g), vl = v, vh = v;
+		if (gb != SIMD_MASK) {
+			iv on = iv_from_bits(gb);
+			vl = fv_sel(on, v, pinf);
+			vh = fv_sel(on, v, ninf);
+		}
+		nan |= iv_bits(v != v) & gb;
+		mn = fv_min(mn, vl);
+		mx = fv_max(mx, vh);
 	}
 	float a = INFINITY, b = -INFINITY;
 	for (int l = 0; l < SIMD_W; l++) {
@@ -97,7 +103,7 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 {
 	const float *id[3] = {s->rc.idx, s->rc.idy, s->rc.idz};
 	const float *org[3] = {p->ox, p->oy, p->oz};
-	uint64_t nan = 0;
+	unsigned nan = 0;
 	int any = 0;
 	for (int a = 0; a < 3; a++) {
 		nan |= lane_range(id[a], entered, &b->idlo[a], &b->idhi[a]);
