@@ -48,7 +48,7 @@ enum pkt_type { PKT_PRIMARY, PKT_SHADOW, PKT_REFLECT, PKT_REFRACT, PKT_NTYPES };
 
 /* A packet of up to 64 self-contained rays. Secondary rays carry their
  * pixel and weight, so a packet can finish in any order. Arrays are 32-byte
- * aligned, laid out lane by lane for the 8-wide SIMD groups. */
+ * aligned, laid out lane by lane for the SIMD groups (simd.h). */
 typedef struct packet {
 	float ox[PKT_RAYS], oy[PKT_RAYS], oz[PKT_RAYS];
 	float dx[PKT_RAYS], dy[PKT_RAYS], dz[PKT_RAYS];

@@ -2,7 +2,7 @@
  * simd.h: native-width float vectors for the packet tracer.
  *
  * GCC/Clang vector extensions give portable vectors. The width matches the
- * target's registers: 8 lanes with AVX, 4 lanes otherwise (SSE2 on
+ * target's registers: 16 lanes with AVX-512, 8 with AVX, 4 otherwise (SSE2 on
  * baseline x86-64, NEON on ARM, plain scalar code elsewhere). Wider
  * generic vectors are split by the compiler, and some operations
  * (integer compares, selects) then fall back to element-by-element code,
