@@ -43,8 +43,8 @@ OPT      := -O2 -g
 endif
 
 # ARCH: the packet tracer's SIMD width follows the target (4 lanes with
-# SSE2, 8 with AVX). `make ARCH=` builds for baseline x86-64. Images are
-# bit-identical either way (exact selects, no FMA contraction).
+# SSE2, 8 with AVX, 16 with AVX-512). `make ARCH=` builds for baseline
+# x86-64. Images are bit-identical either way (exact selects, no FMA contraction).
 ARCH     ?= $(shell $(CC) -march=native -E -x c /dev/null >/dev/null 2>&1 && echo -march=native)
 WARN     := -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter -Wno-psabi
 # Our flags first; the user's CFLAGS/CXXFLAGS (make CFLAGS=...) add to them.

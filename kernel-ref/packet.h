@@ -48,7 +48,7 @@ enum pkt_type { PKT_PRIMARY, PKT_SHADOW, PKT_REFLECT, PKT_REFRACT, PKT_NTYPES };
 
 /* A packet of up to 64 self-contained rays. Secondary rays carry their
  * pixel and weight, so a packet can finish in any order. Arrays are 32-byte
- * aligned, laid out lane by lane for the 8-wide SIMD groups. */
+ * aligned, laid out lane by lane for the SIMD groups (simd.h). */
 typedef struct packet {
 	float ox[PKT_RAYS], oy[PKT_RAYS], oz[PKT_RAYS];
 	float dx[PKT_RAYS], dy[PKT_RAYS], dz[PKT_RAYS];
@@ -204,6 +204,24 @@ typedef struct trav_counts {
 uint64_t pkt_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c);
 uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
                       const pkt_precision *prec);
+
+/* The per-lane traversal loop of pkt_trace_cone after pkt_trav_begin_fp
+ * (cone: the packet's cone when culling, else NULL), and its leaf step:
+ * the rays of mask tested against the leaf's list entries first..
+ * first+count-1 (a shadow ray stops at its first occluder), counted into c
+ * (optional). frustum.c's loop shares the leaf step; its skip (NULL: none)
+ * names triangles no ray of the packet can hit, which are then not tested
+ * (the same hits; counted as tested, as the per-lane loop tests them). */
+struct pkt_cone;
+typedef struct pkt_skip {
+	int (*missed)(const void *ctx, const mimg_tri *t);
+	const void *ctx;
+} pkt_skip;
+void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
+                    uint64_t mask, const struct pkt_cone *cone, trav_counts *c,
+                    const pkt_skip *skip);
+void pkt_trace_run(trav_state *s, packet *p, const mimg *m, const struct pkt_cone *cone,
+                   trav_counts *c);
 
 /* ---- single-ray path, for checking ---- */
 typedef struct ray_hit {

@@ -3,6 +3,7 @@
  */
 #include "kernel-ref/render.h"
 #include "kernel-ref/cone.h"
+#include "kernel-ref/frustum.h"
 
 #include <pthread.h>
 #include <stdatomic.h>
@@ -115,8 +116,11 @@ static void do_sample(worker *w, int tile, int s)
 			 * culling there); the image's kd-tree may cull by cone */
 			uint64_t entered =
 			    tr ? tr->packet(tr->ctx, p, w->stack, PKT_STACK_MAX, &w->st.trav)
-			       : pkt_trace_cone(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav,
-			                        j->o->prec, j->o->cone_cull);
+			    : j->o->frustum
+			        ? fru_trace(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav,
+			                    j->o->prec, j->o->cone_cull)
+			        : pkt_trace_cone(p, j->m, w->stack, PKT_STACK_MAX, &w->st.trav,
+			                         j->o->prec, j->o->cone_cull);
 			/* rays that miss the scene box skip traversal */
 			w->st.box_miss_rays += (uint64_t)__builtin_popcountll(p->valid & ~entered);
 			w->st.box_miss_packets += entered == 0;

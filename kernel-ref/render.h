@@ -46,6 +46,11 @@ typedef struct render_opts {
 	/* cull leaf triangles outside each packet's enclosing cone (cone.h,
 	 * seed 004); the image is the same, the work less */
 	int cone_cull;
+	/* trace coherent packets of the image's kd-tree by the packet interval
+	 * walk (frustum.h; rtref's default): the same image, kernel-ref's own
+	 * work counts. 0 (render_opts_default): the per-lane traversal the chip
+	 * steps through, whose counts the chip's must equal. */
+	int frustum;
 } render_opts;
 
 typedef struct render_stats {

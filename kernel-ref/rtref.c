@@ -2,7 +2,8 @@
  * rtref.c: the reference packet tracer's command line.
  *
  *   rtref [--scene P | --views F --view N] [--size WxH] [--threads N]
- *         [--depth N] [--no-shadows] [--single-ray] [--cone-cull] [--out FILE]
+ *         [--depth N] [--no-shadows] [--single-ray] [--cone-cull] [--per-lane]
+ *         [--out FILE]
  *         [--accel kd|grid] [--grid-lambda F] [--grid-macro N] [--grid-packet N]
  *         [--stats FILE.json] [--anim-time T] [--anim-fps F --frames N]
  *         [--fp-trav E,M] [--fp-isect E,M] [--fp-shade E,M] [--fp-round MODE]
@@ -36,6 +37,8 @@ static void usage(FILE *f)
 	        "  --single-ray          trace with the scalar single-ray path (for checking)\n"
 	        "  --cone-cull           packets skip leaf triangles outside their rays' cone\n"
 	        "                        (seed 004; the same frame; packet path only)\n"
+	        "  --per-lane            trace packets by the chip's per-lane traversal instead\n"
+	        "                        of the packet interval walk (frustum.h; the same frame)\n"
 	        "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
 	        "  --stats FILE.json     write statistics as JSON\n"
 	        "  --frames N            AFF scene with --anim-fps: N frames (1..100000) at\n"
@@ -91,7 +94,10 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kint(j, "threads", o->threads);
 	jsonw_kint(j, "max_depth", o->max_depth);
 	jsonw_kint(j, "lights", w->v.nlights);
-	jsonw_kstr(j, "path", o->single_ray ? "single-ray" : "packet");
+	jsonw_kstr(j, "path",
+	           o->single_ray ? "single-ray"
+	           : o->frustum  ? "packet-frustum"
+	                         : "packet");
 	if (o->prec) {
 		char buf[64];
 		jsonw_key(j, "precision");
@@ -228,6 +234,7 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 	a->frames = 1;
 	world_opts_default(&a->wo);
 	render_opts_default(&a->ro);
+	a->ro.frustum = 1;
 	a->fp_mode = FPR_NEAREST;
 	pkt_precision_full(&a->prec);
 	for (int i = 1; i < argc;) {
@@ -241,8 +248,8 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 			usage(stdout);
 			return 0;
 		}
-		if (!strcmp(f, "--cone-cull")) {
-			a->ro.cone_cull = 1;
+		if (!strcmp(f, "--cone-cull") || !strcmp(f, "--per-lane")) {
+			*(f[2] == 'c' ? &a->ro.cone_cull : &a->ro.frustum) = f[2] == 'c';
 			i++;
 			continue;
 		}

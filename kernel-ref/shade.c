@@ -231,8 +231,8 @@ static void to_world(const shade_reader *rdr, const shade_tl *tl, uint32_t k, mi
 }
 
 /* Reads lane i's records (triangle, shading, material, in that order, and
- * on a two-level scene its instance's shading transform) and computes its hit point,
- * normals and texture coordinates. */
+ * on a two-level scene its instance's shading transform) and computes its
+ * corners and texture coordinates; hit_geometry computes the rest. */
 static void hit_surface(const shade_reader *rdr, const shade_ctx *c, const packet *p, int i, vec3 d,
                         hit *h)
 {
@@ -244,15 +244,26 @@ static void hit_surface(const shade_reader *rdr, const shade_ctx *c, const packe
 	rd_get(rdr, mimg_mat_addr(m, h->sh.mat), MIMG_MAT_BYTES, MIMG_MATS, &h->mt);
 	if (c->tl)
 		to_world(rdr, c->tl, p->inst[i], &trd, &h->sh);
-	const mimg_tri *tr = &trd;
+	h->p0 = arr3(trd.v[0]);
+	h->p1 = arr3(trd.v[1]);
+	h->p2 = arr3(trd.v[2]);
 	const mimg_shade *sh = &h->sh;
-
-	/* hit point from barycentrics, with its error bound */
 	float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
-	vec3 p0 = arr3(tr->v[0]), p1 = arr3(tr->v[1]), p2 = arr3(tr->v[2]);
-	h->p0 = p0;
-	h->p1 = p1;
-	h->p2 = p2;
+	h->uv = (vec2){b0 * sh->uv[0][0] + b1 * sh->uv[1][0] + b2 * sh->uv[2][0],
+	               b0 * sh->uv[0][1] + b1 * sh->uv[1][1] + b2 * sh->uv[2][1]};
+	h->hp = h->err = h->ng = h->ns = v3(0, 0, 0);
+	h->entering = 0;
+}
+
+/* The rest of the hit: the hit point from the barycentrics with its error
+ * bound, both normals (face-forwarded towards the viewer) and the facing.
+ * Only shadow rays, secondary rays and bump mapping use them, so a lane
+ * that spawns no ray and has no bump map skips it (the same pixels). */
+static void hit_geometry(const packet *p, int i, vec3 d, hit *h)
+{
+	const mimg_shade *sh = &h->sh;
+	float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
+	vec3 p0 = h->p0, p1 = h->p1, p2 = h->p2;
 	h->hp = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, b1)), v3_scale(p2, b2));
 	h->err = v3_scale(v3_add(v3_add(v3(fabsf(b0 * p0.x), fabsf(b0 * p0.y), fabsf(b0 * p0.z)),
 	                                v3(fabsf(b1 * p1.x), fabsf(b1 * p1.y), fabsf(b1 * p1.z))),
@@ -261,8 +272,6 @@ static void hit_surface(const shade_reader *rdr, const shade_ctx *c, const packe
 	vec3 ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
 	vec3 ns = v3_norm(v3_add(v3_add(v3_scale(arr3(sh->n[0]), b0), v3_scale(arr3(sh->n[1]), b1)),
 	                         v3_scale(arr3(sh->n[2]), b2)));
-	h->uv = (vec2){b0 * sh->uv[0][0] + b1 * sh->uv[1][0] + b2 * sh->uv[2][0],
-	               b0 * sh->uv[0][1] + b1 * sh->uv[1][1] + b2 * sh->uv[2][1]};
 	h->entering = v3_dot(d, ng) < 0.0f;
 	/* face-forward both normals towards the viewer */
 	if (!h->entering)
@@ -336,8 +345,10 @@ static void shadow_rays(const shade_ctx *c, const fpfmt *fq, const hit *h, const
 	vec3 ns = h->ns, ng = h->ng;
 	if (c->nlights == 0 && kl > 0.0f)
 		cnt->shadow_skip_nolight++;
+	if (sp->nl == 0 || kl <= 0.0f)
+		return;
 	vec3 vdir = v3_scale(v3_norm(d), -1.0f);
-	for (int l = 0; l < sp->nl && kl > 0.0f; l++) {
+	for (int l = 0; l < sp->nl; l++) {
 		vec3 lp = c->lights[l].pos;
 		if (c->drt) /* the light's point for this sample (seed 000 §3.2) */
 			lp = drt_light_point(c->drt, lp, pixel, sample, l);
@@ -419,13 +430,16 @@ static void shade_lane(const shade_ctx *c, const fpfmt *fq, const shade_reader *
 	cnt->hits++;
 	hit h;
 	hit_surface(rdr, c, p, i, d, &h);
-	vec3 kd, ka;
-	textures(rdr, c->m, fq, &h, cnt, &kd, &ka);
-
 	float kr = h.mt.reflect, kt = h.mt.transmit;
 	float kl = 1.0f - kr - kt;
 	if (kl < 0.0f)
 		kl = 0.0f;
+	if ((sp->nl > 0 && kl > 0.0f) || ((kr > 0.0f || kt > 0.0f) && sp->can_recurse) ||
+	    h.mt.tex_bump >= 0)
+		hit_geometry(p, i, d, &h);
+	vec3 kd, ka;
+	textures(rdr, c->m, fq, &h, cnt, &kd, &ka);
+
 	vec3 wl = v3_scale(w, kl);
 	vec3 amb = rnd3(fq, v3_scale(v3_mul(wl, ka), SHADE_AMBIENT));
 	add(c, p->pixel[i], amb);
@@ -450,8 +464,11 @@ int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr
 	spawn sp = {out, out + nl, out + nl + 1, nl, p->depth < c->max_depth};
 	for (int l = 0; l < nl; l++)
 		pkt_clear(&sp.shadow[l], PKT_SHADOW, p->depth);
-	pkt_clear(sp.refl, PKT_REFLECT, p->depth + 1);
-	pkt_clear(sp.refr, PKT_REFRACT, p->depth + 1);
+	if (sp.can_recurse) {
+		pkt_clear(sp.refl, PKT_REFLECT, p->depth + 1);
+		pkt_clear(sp.refr, PKT_REFRACT, p->depth + 1);
+	} else /* they stay empty, and compacting drops them */
+		sp.refl->valid = sp.refr->valid = 0;
 	for (int l = 0; l < nl + 2; l++)
 		out[l].sample = p->sample; /* children keep the pixels' sample */
 	for (uint64_t b = p->valid; b; b &= b - 1)

@@ -2,7 +2,7 @@
  * simd.h: native-width float vectors for the packet tracer.
  *
  * GCC/Clang vector extensions give portable vectors. The width matches the
- * target's registers: 8 lanes with AVX, 4 lanes otherwise (SSE2 on
+ * target's registers: 16 lanes with AVX-512, 8 with AVX, 4 otherwise (SSE2 on
  * baseline x86-64, NEON on ARM, plain scalar code elsewhere). Wider
  * generic vectors are split by the compiler, and some operations
  * (integer compares, selects) then fall back to element-by-element code,
@@ -18,7 +18,10 @@
 #include <stdint.h>
 #include <string.h>
 
-#if defined(__AVX__)
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#define SIMD_W 16
+#elif defined(__AVX__)
 #include <immintrin.h>
 #define SIMD_W 8
 #elif defined(__SSE__)
@@ -31,12 +34,15 @@
 typedef float fv __attribute__((vector_size(SIMD_W * 4)));
 typedef int32_t iv __attribute__((vector_size(SIMD_W * 4)));
 
-#define SIMD_MASK ((1u << SIMD_W) - 1u)
+#define SIMD_MASK ((unsigned)((1ull << SIMD_W) - 1u))
 
 static inline fv fv_set1(float x)
 {
 	fv v;
-#if defined(__AVX__)
+#if defined(__AVX512F__)
+	__m512 b = _mm512_set1_ps(x);
+	memcpy(&v, &b, sizeof v);
+#elif defined(__AVX__)
 	__m256 b = _mm256_set1_ps(x);
 	memcpy(&v, &b, sizeof v);
 #elif defined(__SSE__)
@@ -50,7 +56,7 @@ static inline fv fv_set1(float x)
 }
 static inline iv iv_set1(int32_t x)
 {
-	iv v;
+	iv v = {0};
 	for (int i = 0; i < SIMD_W; i++)
 		v[i] = x;
 	return v;
@@ -89,10 +95,35 @@ static inline fv fv_abs(fv a)
 	return (fv)((iv)a & iv_set1(0x7fffffff));
 }
 
+/* Bits SIMD_W g .. SIMD_W g + SIMD_W - 1 of a packet mask: group g's lanes. */
+static inline unsigned grp_bits(uint64_t mask, int g)
+{
+	return (unsigned)(mask >> (SIMD_W * g)) & SIMD_MASK;
+}
+
+/* Bit i of b becomes lane i (all-ones or zero): b in every lane, tested
+ * against each lane's own bit. */
+static inline iv iv_from_bits(unsigned b)
+{
+#if SIMD_W == 16
+	const iv bit = {1,   2,   4,    8,    16,   32,   64,    128,
+	                256, 512, 1024, 2048, 4096, 8192, 16384, 32768};
+#elif SIMD_W == 8
+	const iv bit = {1, 2, 4, 8, 16, 32, 64, 128};
+#else
+	const iv bit = {1, 2, 4, 8};
+#endif
+	return (iv_set1((int32_t)b) & bit) != 0;
+}
+
 /* Lane i of m (all-ones or zero) becomes bit i. */
 static inline unsigned iv_bits(iv m)
 {
-#if defined(__AVX__)
+#if defined(__AVX512F__)
+	__m512i x;
+	memcpy(&x, &m, sizeof x);
+	return (unsigned)_mm512_cmplt_epi32_mask(x, _mm512_setzero_si512());
+#elif defined(__AVX__)
 	__m256 x;
 	memcpy(&x, &m, sizeof x);
 	return (unsigned)_mm256_movemask_ps(x);

@@ -2,7 +2,8 @@
  * traverse.c: packet kd-tree traversal and triangle tests (see packet.h),
  * plus the scalar single-ray path used to check them.
  *
- * The packet code works on 8 groups of 8 lanes (simd.h). A group whose
+ * The packet code works on groups of SIMD_W lanes (simd.h: 16 with
+ * AVX-512, 8 with AVX). A group whose
  * lanes are all inactive is skipped, so masked packets cost little. All
  * segment arithmetic is written once as a lane operation and once as a
  * scalar one with the same operation order, so the two paths agree to the
@@ -107,11 +108,6 @@ static inline void trav_cut(int pos, float tn, float tf, float lo, float hi, flo
 	*a_f = pos ? tf : dn;
 }
 
-static inline unsigned grp_bits(uint64_t mask, int g)
-{
-	return (unsigned)(mask >> (SIMD_W * g)) & SIMD_MASK;
-}
-
 /* ---- setup ------------------------------------------------------------ */
 
 /* fminf/fmaxf semantics lane by lane (a NaN operand yields the other), so
@@ -193,9 +189,7 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		int o = SIMD_W * g;
 		unsigned gb = grp_bits(p->valid, g);
 		/* invalid lanes: all-zero constants, empty segment, no hit */
-		iv valid = iv_set1(0);
-		for (int l = 0; l < SIMD_W; l++)
-			valid[l] = -(int32_t)((gb >> l) & 1u);
+		iv valid = iv_from_bits(gb);
 		fv dx = fv_load(p->dx + o), dy = fv_load(p->dy + o), dz = fv_load(p->dz + o);
 		/* Woop's permutation, as isect_prepare: kz = dominant axis,
 		 * kx, ky the next ones cyclically, swapped when d[kz] < 0 */
@@ -417,7 +411,7 @@ void pkt_trav_node(trav_state *s, packet *p, kd_node n, trav_result *r)
 	r->sp = s->sp;
 }
 
-/* ---- triangle test, 8 lanes at a time ----------------------------------- */
+/* ---- triangle test, SIMD_W lanes at a time ------------------------------- */
 
 /* Updates lane i's result with a hit (t, bu, bv) on tri_addr by the hit
  * rule; returns 1 when the result changed. */
@@ -577,18 +571,38 @@ uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max
 	return pkt_trace_cone(p, m, stack, stack_max, c, prec, 0);
 }
 
-uint64_t pkt_trace_cone(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
-                        const pkt_precision *prec, int cull)
+void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
+                    uint64_t mask, const pkt_cone *cone, trav_counts *c, const pkt_skip *skip)
 {
-	trav_state st;
-	trav_state *s = &st;
-	uint64_t entered = pkt_trav_begin_fp(s, p, m, stack, stack_max, prec);
-	if (!entered)
-		return 0;
-	pkt_cone cone;
-	if (cull) /* the rays that entered the box (seed 004 §4) */
-		cone_build(&cone, p, entered);
 	const uint32_t *lists = mimg_lists(m);
+	if (c) {
+		c->leaf_visits++;
+		c->tri_tests += count;
+		c->ray_tri_tests += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
+	}
+	for (uint32_t k = 0; k < count && mask; k++) {
+		uint32_t ta = lists[first + k];
+		if (cone && cone_culls_tri(cone, mimg_tri_at(m, ta))) {
+			if (c) {
+				c->cone_culled++;
+				c->cone_saved_ray_tests += (uint64_t)__builtin_popcountll(mask);
+			}
+			continue;
+		}
+		if (skip && skip->missed(skip->ctx, mimg_tri_at(m, ta)))
+			continue;
+		pkt_isect_tri(s, p, m, mask, ta);
+		if (s->shadow)
+			for (uint64_t b = mask; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				if (p->tri[i] != PKT_NOHIT)
+					mask &= ~(1ull << i);
+			}
+	}
+}
+
+void pkt_trace_run(trav_state *s, packet *p, const mimg *m, const pkt_cone *cone, trav_counts *c)
+{
 	trav_result r;
 	for (;;) {
 		pkt_trav_next(s, p, m, &r);
@@ -599,34 +613,22 @@ uint64_t pkt_trace_cone(packet *p, const mimg *m, trav_entry *stack, int stack_m
 			if ((uint64_t)r.sp > c->max_sp)
 				c->max_sp = (uint64_t)r.sp;
 		}
-		if (r.op == TRAV_LEAF) {
-			if (c) {
-				c->leaf_visits++;
-				c->tri_tests += r.leaf_count;
-				c->ray_tri_tests +=
-				    (uint64_t)r.leaf_count * (uint64_t)__builtin_popcountll(r.mask);
-			}
-			uint64_t mask = r.mask;
-			for (uint32_t k = 0; k < r.leaf_count && mask; k++) {
-				uint32_t ta = lists[r.leaf_first + k];
-				if (cull && cone_culls_tri(&cone, mimg_tri_at(m, ta))) {
-					if (c) {
-						c->cone_culled++;
-						c->cone_saved_ray_tests +=
-						    (uint64_t)__builtin_popcountll(mask);
-					}
-					continue;
-				}
-				pkt_isect_tri(s, p, m, mask, ta);
-				if (s->shadow)
-					for (uint64_t b = mask; b; b &= b - 1) {
-						int i = __builtin_ctzll(b);
-						if (p->tri[i] != PKT_NOHIT)
-							mask &= ~(1ull << i);
-					}
-			}
-		}
+		if (r.op == TRAV_LEAF)
+			pkt_trace_leaf(s, p, m, r.leaf_first, r.leaf_count, r.mask, cone, c, NULL);
 	}
+}
+
+uint64_t pkt_trace_cone(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                        const pkt_precision *prec, int cull)
+{
+	trav_state st;
+	uint64_t entered = pkt_trav_begin_fp(&st, p, m, stack, stack_max, prec);
+	if (!entered)
+		return 0;
+	pkt_cone cone;
+	if (cull) /* the rays that entered the box (seed 004 §4) */
+		cone_build(&cone, p, entered);
+	pkt_trace_run(&st, p, m, cull ? &cone : NULL, c);
 	return entered;
 }
 

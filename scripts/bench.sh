@@ -368,7 +368,7 @@ SECTION=$TMP/section
 		echo
 		echo "### Embree cross-check"
 		echo
-		echo "The same harness also times our packet traversal alone (\`pkt_trace\`, no shading," \
+		echo "The same harness also times our packet traversal alone (\`fru_trace\`, rtref's packet loop, no shading," \
 		    "single thread) and compares the closest hit of every pixel. *same t* counts pixels where" \
 		    "the two pick different triangles at the same distance (within 1e-4 relative: ties on" \
 		    "shared edges or duplicated triangles); *other t* where the distances differ, and in how many" \

@@ -5,7 +5,8 @@
  * Owns one measurement: the primary rays of one frame, traced single
  * threaded (a) by Embree 3 with 16-wide packets (rtcIntersect16), each 8x8
  * tile as four 4x4 packets, and (b) by our packet tracer's traversal alone
- * (pkt_trace on the 64-ray tile packet, no shading), both on exactly the
+ * (fru_trace, rtref's packet traversal, on the 64-ray tile packet, no
+ * shading), both on exactly the
  * same rays: the scene, view and camera come from world_load() and the rays
  * from cam_primary_packet(), as in rtref. Each is timed best of N passes
  * (ray generation included, shading excluded), and the per-pixel hits of
@@ -29,6 +30,7 @@
 #include <time.h>
 
 #include "kernel-ref/camera.h"
+#include "kernel-ref/frustum.h"
 #include "kernel-ref/packet.h"
 #include "kernel-ref/world.h"
 
@@ -179,7 +181,7 @@ static uint64_t ours_frame(const mimg *m, const cam_frame *cf, packet *p, trav_e
 		for (int tx = 0; tx < tw; tx++) {
 			if (cam_primary_packet(cf, tx, ty, p) == 0)
 				continue;
-			pkt_trace(p, m, stack, PKT_STACK_MAX, NULL);
+			fru_trace(p, m, stack, PKT_STACK_MAX, NULL, NULL, 0);
 			for (int lane = 0; lane < PKT_RAYS; lane++) {
 				if (!((p->valid >> lane) & 1))
 					continue;

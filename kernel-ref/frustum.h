@@ -1,0 +1,66 @@
+/*
+ * frustum.h: kernel-ref's own packet traversal loop: the per-lane kd-tree
+ * traversal of packet.h with a packet-wide shortcut by interval
+ * arithmetic (rtref's default packet path; the chip steps through
+ * packet.h's functions alone).
+ *
+ * At an inner node the per-lane step cuts each of the 64 rays' segments
+ * [tn_i, tf_i] at the split plane. Often the plane cuts none of them: it
+ * lies beyond every segment (each ray stays in the near child) or before
+ * every segment (each ray is in the far child only). Whether it does is
+ * decided for the whole packet from intervals, without per-ray work: the
+ * rays' distances to the plane lie within the interval that their origins'
+ * and inverse directions' intervals give, and their segments within
+ * bounds [tn, tf] carried along the walk (Wald, "Realtime Ray Tracing and
+ * Interactive Global Illumination", PhD thesis 2004, §7.2 on packet
+ * traversal; Reshetov, Soupikov, Hurley, "Multi-Level Ray Tracing
+ * Algorithm", SIGGRAPH 2005, §3; interval arithmetic over rays of
+ * different origins as in Wald, Boulos, Shirley 2006 [WBS06], which seed
+ * 000 "Interactive Distribution Ray Tracing" §3 builds on). Then only the node index changes;
+ * otherwise (the plane cuts some segment, or the rays' directions on the
+ * split axis have both signs or a zero) the per-lane step runs
+ * (pkt_trav_node).
+ *
+ * Exactly the per-lane traversal: where the shortcut applies the per-lane
+ * step would have left every segment and the mask as they are, so the
+ * same nodes are visited with the same rays and segments, the same
+ * triangles tested, the same hits found and the same work counted
+ * (trav_counts); only the time differs. tests/test_frustum.c checks it
+ * hit for hit and count for count.
+ */
+#ifndef SAAR_KREF_FRUSTUM_H
+#define SAAR_KREF_FRUSTUM_H
+
+#include "kernel-ref/packet.h"
+
+/* Traces p exactly as pkt_trace_cone does (same arguments, the same
+ * returned mask of rays that entered the scene box, the same hits and
+ * counts), with the packet shortcut where fru_coherent allows it. */
+uint64_t fru_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                   const pkt_precision *prec, int cull);
+
+/* Whether fru_trace may take the shortcut for p, given the state
+ * pkt_trav_begin_fp left (entered: its result): full precision, no
+ * planted pkt_trav_fault, and some axis on which every entered ray's
+ * direction has one sign and no zero. For tests. */
+int fru_coherent(const trav_state *s, const packet *p, uint64_t entered);
+
+/* Mistakes planted on purpose (docs/TESTING.md "Checks that can fail"),
+ * set only by tests, in their own process:
+ *   FRU_FAULT_ALWAYS_NEAR: the packet shortcut takes the near child where
+ *     every ray needs only the far one (they lose their hits there);
+ *   FRU_FAULT_ONE_DIRECTION: the plane-distance interval uses the first
+ *     ray's 1/d for all (the packet segment then misses the other rays'
+ *     crossings: rays lose hits in children it wrongly skips);
+ *   FRU_FAULT_CULL_ONE_SIGN: triangle culling skips a triangle when one
+ *     edge has every ray on its negative side (a triangle facing the other
+ *     way has all three there for the rays that hit it). */
+enum fru_fault {
+	FRU_FAULT_NONE,
+	FRU_FAULT_ALWAYS_NEAR,
+	FRU_FAULT_ONE_DIRECTION,
+	FRU_FAULT_CULL_ONE_SIGN
+};
+extern int fru_fault;
+
+#endif

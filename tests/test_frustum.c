@@ -1,0 +1,177 @@
+/*
+ * test_frustum.c: kernel-ref's packet shortcut (frustum.h, fru_trace)
+ * against the per-lane traversal (pkt_trace_cone), hit for hit and count
+ * for count, on generated packets: camera packets, packets from one point
+ * with zero direction components and partial masks, mixed-direction
+ * packets, and shadow packets from a light and from surfaces.
+ *
+ * The mistakes it is written to catch (planted with fru_fault, and seen
+ * to fail): FRU_FAULT_ALWAYS_NEAR (the shortcut enters the near child
+ * where every ray needs only the far one) and FRU_FAULT_ONE_DIRECTION
+ * (the plane-distance interval from one ray's direction: the shortcut
+ * skips children other rays need), FRU_FAULT_CULL_ONE_SIGN (triangle
+ * culling on one edge's sign alone).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "kernel-ref/camera.h"
+#include "kernel-ref/cone.h"
+#include "kernel-ref/frustum.h"
+#include "kernel-ref/world.h"
+#include "tests/testutil.h"
+
+static uint32_t rng_next(uint32_t *s)
+{
+	*s ^= *s << 13;
+	*s ^= *s >> 17;
+	*s ^= *s << 5;
+	return *s;
+}
+
+static float rng_unit(uint32_t *s)
+{
+	return (float)(rng_next(s) >> 8) * 0x1p-24f;
+}
+
+/* Random small triangles in [-1, 1]^3 and axis-aligned quads on planes a
+ * kd-tree splits at (faces in split planes, rays grazing them). */
+static void make_soup(world *w)
+{
+	scene s;
+	scene_init(&s, "test:soup");
+	material mt = material_default("m");
+	scene_add_material(&s, &mt);
+	uint32_t seed = 12345;
+	for (int k = 0; k < 3000; k++) {
+		vec3 c =
+		    v3(2 * rng_unit(&seed) - 1, 2 * rng_unit(&seed) - 1, 2 * rng_unit(&seed) - 1);
+		vec3 t[3];
+		for (int j = 0; j < 3; j++)
+			t[j] = v3_add(c, v3(0.1f * rng_unit(&seed), 0.1f * rng_unit(&seed),
+			                    0.1f * rng_unit(&seed)));
+		scene_add_triangle(&s, t, NULL, NULL, 0);
+	}
+	for (int k = 0; k < 8; k++) {
+		float q = -0.75f + 0.25f * (float)k;
+		vec3 a[3] = {v3(q, -1, -1), v3(q, 1, -1), v3(q, 1, 1)};
+		vec3 b[3] = {v3(-1, q, -1), v3(1, q, 1), v3(1, q, -1)};
+		scene_add_triangle(&s, a, NULL, NULL, 0);
+		scene_add_triangle(&s, b, NULL, NULL, 0);
+	}
+	diag d;
+	cr_assert_eq(scene_finish(&s, "soup", &d), 0);
+	tu_build_world(w, &s);
+}
+
+enum { KIND_CAMERA, KIND_POINT, KIND_MIXED, KIND_LIGHT, KIND_SURFACE, NKINDS };
+
+/* Packet number n of the given kind. */
+static void make_packet(packet *p, int kind, int n, uint32_t *seed)
+{
+	pkt_clear(p, kind >= KIND_LIGHT ? PKT_SHADOW : PKT_PRIMARY, 0);
+	vec3 o = v3(3 * rng_unit(seed) - 1.5f, 3 * rng_unit(seed) - 1.5f, 2.5f + rng_unit(seed));
+	vec3 aim = v3(rng_unit(seed) - 0.5f, rng_unit(seed) - 0.5f, -1);
+	for (int i = 0; i < PKT_RAYS; i++) {
+		vec3 d =
+		    v3_add(aim, v3(0.3f * rng_unit(seed) - 0.15f, 0.3f * rng_unit(seed) - 0.15f,
+		                   0.3f * rng_unit(seed) - 0.15f));
+		if (kind == KIND_MIXED || kind == KIND_SURFACE)
+			d = v3(rng_unit(seed) - 0.5f, rng_unit(seed) - 0.5f, rng_unit(seed) - 0.5f);
+		if (kind == KIND_POINT && (i % 7) == 0)
+			*((i % 3) == 0   ? &d.x
+			  : (i % 3) == 1 ? &d.y
+			                 : &d.z) = 0.0f; /* zero component */
+		/* mixed: from one point inside the scene, every sign on every axis */
+		vec3 oi = kind == KIND_SURFACE ? v3(2 * rng_unit(seed) - 1, 2 * rng_unit(seed) - 1,
+		                                    2 * rng_unit(seed) - 1)
+		          : kind == KIND_MIXED ? v3_scale(o, 0.2f)
+		                               : o;
+		p->ox[i] = oi.x, p->oy[i] = oi.y, p->oz[i] = oi.z;
+		p->dx[i] = d.x, p->dy[i] = d.y, p->dz[i] = d.z;
+		p->tmax[i] = kind >= KIND_LIGHT ? 0.5f + 3 * rng_unit(seed) : INFINITY;
+		p->pixel[i] = (uint32_t)i;
+	}
+	p->n = PKT_RAYS;
+	/* every third packet partly valid */
+	p->valid = n % 3 ? ~0ull : ((uint64_t)rng_next(seed) << 32 | rng_next(seed));
+}
+
+/* Rays whose results differ between the two paths, plus 1 per packet
+ * whose counts differ; coherent: packets the shortcut took. */
+static uint64_t mismatches(const world *w, int kind, int npk, int cull, uint64_t *coherent)
+{
+	static trav_entry stack[PKT_STACK_MAX];
+	static packet a, b;
+	uint32_t seed = 777u + (uint32_t)kind * 1000u;
+	uint64_t bad = 0;
+	for (int n = 0; n < npk; n++) {
+		if (kind == KIND_CAMERA) {
+			camera cam = {v3(0.3f, 0.2f, 3), v3(0, 0, 0), v3(0, 1, 0), 50.0f};
+			cam_frame cf;
+			cam_setup(&cf, &cam, 128, 128);
+			cam_primary_packet(&cf, n % 16, (n / 16) % 16, &a);
+		} else
+			make_packet(&a, kind, n, &seed);
+		b = a;
+		trav_counts ca = {0}, cb = {0};
+		uint64_t ea = pkt_trace_cone(&a, &w->m, stack, PKT_STACK_MAX, &ca, NULL, cull);
+		trav_state st;
+		packet probe = b;
+		uint64_t eb = pkt_trav_begin(&st, &probe, &w->m, stack, PKT_STACK_MAX);
+		*coherent += (uint64_t)fru_coherent(&st, &probe, eb);
+		eb = fru_trace(&b, &w->m, stack, PKT_STACK_MAX, &cb, NULL, cull);
+		bad += ea != eb || memcmp(&ca, &cb, sizeof ca) != 0;
+		for (uint64_t v = a.valid; v; v &= v - 1) {
+			int i = __builtin_ctzll(v);
+			bad += memcmp(&a.t[i], &b.t[i], 4) || a.tri[i] != b.tri[i] ||
+			       memcmp(&a.bu[i], &b.bu[i], 4) || memcmp(&a.bv[i], &b.bv[i], 4);
+		}
+	}
+	return bad;
+}
+
+static world soup;
+
+static void setup_soup(void)
+{
+	make_soup(&soup);
+}
+
+static void teardown_soup(void)
+{
+	world_free(&soup);
+}
+
+Test(frustum, same_hits_and_counts_as_per_lane, .init = setup_soup, .fini = teardown_soup)
+{
+	static const char *names[NKINDS] = {"camera", "one point", "mixed", "light", "surface"};
+	for (int cull = 0; cull < 2; cull++)
+		for (int k = 0; k < NKINDS; k++) {
+			uint64_t coh = 0, bad = mismatches(&soup, k, 256, cull, &coh);
+			cr_assert_eq(bad, 0, "%s packets (cull %d): %llu mismatches", names[k],
+			             cull, (unsigned long long)bad);
+			/* the shortcut is taken where it should be, and only there */
+			if (k == KIND_CAMERA || k == KIND_LIGHT || k == KIND_POINT)
+				cr_assert_gt(coh, 100, "%s: %llu of 256 coherent", names[k],
+				             (unsigned long long)coh);
+			if (k == KIND_MIXED)
+				cr_assert_eq(coh, 0, "mixed: %llu coherent",
+				             (unsigned long long)coh);
+		}
+}
+
+/* Each planted mistake must show up as mismatches (the check can fail). */
+Test(frustum, planted_mistakes_are_caught, .init = setup_soup, .fini = teardown_soup)
+{
+	static const int faults[] = {FRU_FAULT_ALWAYS_NEAR, FRU_FAULT_ONE_DIRECTION,
+	                             FRU_FAULT_CULL_ONE_SIGN};
+	for (int f = 0; f < 3; f++) {
+		fru_fault = faults[f];
+		uint64_t coh = 0, bad = 0;
+		for (int k = 0; k < NKINDS; k++)
+			bad += mismatches(&soup, k, 256, 0, &coh);
+		fru_fault = FRU_FAULT_NONE;
+		cr_assert_gt(bad, 0, "fault %d went unnoticed", faults[f]);
+	}
+}
