@@ -269,13 +269,15 @@ for view in $ALL_VIEWS; do
 			em=$(kget "$TMP/e.txt" embree_mrays)
 			say "[$i/$nviews] $view: Embree 16-wide, 1 thread: $em Mrays/s" \
 			    "(our traversal alone: $(kget "$TMP/e.txt" ours_trace_mrays) Mrays/s)"
-			printf '%s %s %s %s %s %s %s %s %s %s %s\n' "$view" "$(kget "$TMP/e.txt" rays)" \
+			printf '%s %s %s %s %s %s %s %s %s %s %s %s %s\n' "$view" "$(kget "$TMP/e.txt" rays)" \
 			    "$em" "$(kget "$TMP/e.txt" ours_trace_mrays)" \
 			    "$(kget "$TMP/e.txt" embree_hits)" "$(kget "$TMP/e.txt" ours_hits)" \
 			    "$(kget "$TMP/e.txt" hit_only_embree)" "$(kget "$TMP/e.txt" hit_only_ours)" \
 			    "$(kget "$TMP/e.txt" diff_triangle)" \
 			    "$(kget "$TMP/e.txt" diff_triangle_and_t)" \
-			    "$(kget "$TMP/e.txt" diff_t_ours_closer)" >>"$ECHK"
+			    "$(kget "$TMP/e.txt" diff_t_ours_closer)" \
+			    "$(kget "$TMP/e.txt" embree_trav_only_mrays)" \
+			    "$(kget "$TMP/e.txt" ours_trav_only_mrays)" >>"$ECHK"
 			EMBREE_VERSION=$(kget "$TMP/e.txt" embree_version)
 		else
 			cat "$TMP/e.err" >&2
@@ -348,36 +350,51 @@ SECTION=$TMP/section
 		echo
 	fi
 	if [ "$EMBREE" = ok ]; then
-		# The like-for-like comparison is tracing only on both sides (Embree
-		# traces; rtref's frame time also generates rays and shades), timed
-		# in one process by the harness: that decides the target. The
-		# whole-frame ratio of the table above is reported beside it.
+		# Issue 36's target 1: traversal alone (the rays made before the
+		# clock starts, on both sides) at least Embree's speed on every
+		# view, and rtref's whole primary frame (ray generation, traversal,
+		# shading) at least 0.6 of Embree's rays per second with ray
+		# generation (the harness's first timing). Issue 2's weaker
+		# target (1/3, tracing with ray generation) is kept beside them.
 		awk '
-		$3 > 0 { n++; r = $4 / $3; if (r >= 1 / 3) ok++; if (n == 1 || r < lo) lo = r; if (n == 1 || r > hi) hi = r }
+		$12 > 0 { n++; r = $13 / $12; if (r >= 1) ok++; if (n == 1 || r < lo) lo = r; if (n == 1 || r > hi) hi = r }
 		END {
-			printf "Target (issue 2): single-thread primary rays >= 1/3 of Embree 3'"'"'s 16-wide packets"
-			printf " on the same view, tracing only on both sides (traversal/Embree below, %.2f to %.2f): ", lo, hi
+			printf "Target 1 of issue 36, traversal alone: our packet traversal >= Embree 3'"'"'s 16-wide packets"
+			printf " on the same rays, made before the clock starts (*alone* ratio below, %.2f to %.2f): ", lo, hi
 			printf "%s on %d of %d views.\n", (ok == n ? "met" : "NOT met"), ok, n
 		}' "$ECHK"
+		echo
 		awk '
-		$12 ~ /^[0-9.]+$/ && $12 + 0 > 0 { n++; if ($4 / $12 >= 1 / 3) ok++ }
+		$12 ~ /^[0-9.]+$/ && $12 + 0 > 0 { n++; r = $4 / $12; if (r >= 0.6) ok++; if (n == 1 || r < lo) lo = r; if (n == 1 || r > hi) hi = r }
 		END {
-			printf "With ray generation and shading included on our side only (ours/Embree above),"
-			printf " the ratio is >= 1/3 on %d of %d views.\n", ok, n
+			printf "Target 1 of issue 36, with ray generation and shading: rtref'"'"'s primary frame >= 0.6 of"
+			printf " Embree'"'"'s rays per second (ours/Embree above, %.2f to %.2f): ", lo, hi
+			printf "%s on %d of %d views.\n", (ok == n ? "met" : "NOT met"), ok, n
 		}' "$ROWS"
+		echo
+		awk '
+		$3 > 0 { n++; r = $4 / $3; if (r >= 1 / 3) ok++ }
+		END {
+			printf "Issue 2'"'"'s target (tracing with ray generation on both sides >= 1/3 of Embree): "
+			printf "%s on %d of %d views.\n", (ok == n ? "met" : "NOT met"), ok, n
+		}' "$ECHK"
 		echo
 		echo "### Embree cross-check"
 		echo
 		echo "The same harness also times our packet traversal alone (\`fru_trace\`, rtref's packet loop, no shading," \
-		    "single thread) and compares the closest hit of every pixel. *same t* counts pixels where" \
+		    "single thread) and compares the closest hit of every pixel. *Embree* and *ours, traversal only*" \
+		    "include making each tile's rays (\`cam_primary_packet\`, in the loop as rtref makes them);" \
+		    "*alone* times both on the frame's rays made before the clock starts (each side still copies a" \
+		    "tile's rays into its packets). *same t* counts pixels where" \
 		    "the two pick different triangles at the same distance (within 1e-4 relative: ties on" \
 		    "shared edges or duplicated triangles); *other t* where the distances differ, and in how many" \
 		    "of those ours is the closer hit."
 		echo
-		echo "| view | rays | Embree Mrays/s | ours, traversal only | traversal/Embree | hits Embree | hits ours | hit only by Embree | hit only by ours | other triangle, same t | other triangle, other t (ours closer) |"
-		echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-		awk '{ printf "| %s | %s | %.2f | %.2f | %.2f | %s | %s | %s | %s | %d | %s (%s) |\n",
-			$1, $2, $3, $4, ($3 > 0 ? $4 / $3 : 0), $5, $6, $7, $8, $9 - $10, $10, $11 }' "$ECHK"
+		echo "| view | rays | Embree Mrays/s | ours, traversal only | traversal/Embree | Embree alone | ours alone | alone: ours/Embree | hits Embree | hits ours | hit only by Embree | hit only by ours | other triangle, same t | other triangle, other t (ours closer) |"
+		echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+		awk '{ printf "| %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %s | %s | %s | %s | %d | %s (%s) |\n",
+			$1, $2, $3, $4, ($3 > 0 ? $4 / $3 : 0), $12, $13, ($12 > 0 ? $13 / $12 : 0),
+			$5, $6, $7, $8, $9 - $10, $10, $11 }' "$ECHK"
 	else
 		echo "$EMBREE_NOTE"
 	fi
