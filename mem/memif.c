@@ -343,7 +343,8 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 		m->queued--;
 		m->last = r;
 		m->s.queue_ticks[r] += now - it.ready;
-		uint64_t done = sdram_access(m->sd, now, it.addr, it.bytes, it.write, NULL);
+		uint64_t done =
+		    sdram_access_in(m->sd, now, it.addr, it.bytes, it.write, NULL, it.bank, it.row);
 		if (!it.write)
 			m->s.latency_ticks[r] += done - it.ready;
 		if (it.done)
