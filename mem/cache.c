@@ -290,9 +290,18 @@ uint32_t cache_set_fold(const cache *c, uint64_t line)
 	return (uint32_t)(c->set_mask ? h & c->set_mask : h % c->nsets);
 }
 
+/* The way of set holding line, or -1. Four ways (every L1 of the
+ * standard configs) are tested without a loop: the search runs for every
+ * lookup and fill. */
 static int find_way(const cache *c, uint32_t set, uint64_t line)
 {
 	const cache_way *s = c->way + (size_t)set * c->p.ways;
+	if (c->p.ways == 4)
+		return s[0].tag == line   ? 0
+		       : s[1].tag == line ? 1
+		       : s[2].tag == line ? 2
+		       : s[3].tag == line ? 3
+		                          : -1;
 	for (uint32_t w = 0; w < c->p.ways; w++)
 		if (s[w].tag == line)
 			return (int)w;
@@ -393,6 +402,15 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 static uint32_t pick_victim(const cache *c, uint32_t set, const cache_way *s)
 {
 	uint32_t best = 0;
+	if (!c->rp->victim && c->p.ways == 4) {
+		/* unrolled (see find_way): the first empty way, else the
+		 * smallest stamp, the lowest way on ties */
+		for (uint32_t i = 0; i < 4; i++)
+			if (s[i].tag == CACHE_INVALID)
+				return i;
+		uint32_t b01 = s[1].use < s[0].use, b23 = 2 + (s[3].use < s[2].use);
+		return s[b23].use < s[b01].use ? b23 : b01;
+	}
 	if (!c->rp->victim) {
 		for (uint32_t i = 0; i < c->p.ways; i++) {
 			if (s[i].tag == CACHE_INVALID)
