@@ -3,7 +3,8 @@
  *
  * Storage is one flat array of nsets*ways ways (tag and replacement word
  * side by side, set by set), the policy's per-set words if it has any, and
- * one of MSHR lines, allocated once in cache_init. LRU keeps a 64-bit use
+ * the MSHRs (their lines, bucket chains and free bitmask), allocated once
+ * in cache_init. LRU keeps a 64-bit use
  * stamp per way: the victim is the way with the smallest stamp (empty ways
  * first), which is exact LRU and needs no list manipulation; 2^64 accesses
  * never wrap. Stamp policies (LRU, FIFO) are updated inline; others
@@ -13,6 +14,12 @@
 
 #include <stdlib.h>
 #include <string.h>
+
+/* Words of the free-MSHR bitmask. */
+static size_t mshr_words(uint32_t mshrs)
+{
+	return ((size_t)mshrs + 63) / 64;
+}
 
 int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 {
@@ -47,9 +54,12 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 	size_t bytes = (size_t)c->nsets * p->ways * sizeof(cache_way);
 	c->way = aligned_alloc(64, (bytes + 63) / 64 * 64);
 	c->mshr_line = malloc(p->mshrs * sizeof *c->mshr_line);
+	c->mshr_next = malloc(p->mshrs * sizeof *c->mshr_next);
+	c->mshr_free = malloc(mshr_words(p->mshrs) * sizeof *c->mshr_free);
 	if (rp->set_words)
 		c->rst = malloc((size_t)c->nsets * rp->set_words * sizeof *c->rst);
-	if (!c->way || !c->mshr_line || (rp->set_words && !c->rst)) {
+	if (!c->way || !c->mshr_line || !c->mshr_next || !c->mshr_free ||
+	    (rp->set_words && !c->rst)) {
 		cache_free(c);
 		return diag_set(d, "config", 0, 0, "%s: out of memory", what);
 	}
@@ -63,13 +73,16 @@ uint64_t cache_host_bytes(const cache_params *p)
 	uint64_t nsets = per_set ? p->size_bytes / per_set : 0;
 	uint64_t words = p->repl ? p->repl->set_words : 0;
 	return nsets * p->ways * sizeof(cache_way) + nsets * words * sizeof(uint64_t) +
-	       (uint64_t)p->mshrs * sizeof(uint64_t);
+	       (uint64_t)p->mshrs * (sizeof(uint64_t) + sizeof(uint32_t)) +
+	       mshr_words(p->mshrs) * sizeof(uint64_t);
 }
 
 void cache_free(cache *c)
 {
 	free(c->way);
 	free(c->mshr_line);
+	free(c->mshr_next);
+	free(c->mshr_free);
 	free(c->rst);
 	free(c->dirty);
 	free(c->didx);
@@ -78,6 +91,8 @@ void cache_free(cache *c)
 	free(c->dchunk);
 	c->way = NULL;
 	c->mshr_line = NULL;
+	c->mshr_next = NULL;
+	c->mshr_free = NULL;
 	c->rst = NULL;
 	c->dirty = NULL;
 	c->didx = NULL;
@@ -231,7 +246,13 @@ void cache_flush(cache *c)
 	for (uint32_t i = 0; i < c->p.mshrs; i++)
 		c->mshr_line[i] = CACHE_INVALID;
 	c->mshr_used = 0;
-	memset(c->mshr_cnt, 0, sizeof c->mshr_cnt);
+	for (uint32_t b = 0; b < CACHE_MSHR_BUCKETS; b++)
+		c->mshr_head[b] = CACHE_MSHR_NIL;
+	size_t nw = mshr_words(c->p.mshrs);
+	for (size_t w = 0; w < nw; w++) {
+		uint32_t left = c->p.mshrs - (uint32_t)(w * 64);
+		c->mshr_free[w] = left >= 64 ? UINT64_MAX : (1ull << left) - 1;
+	}
 }
 
 uint64_t cache_invalidate(cache *c, uint64_t addr, uint64_t n)
@@ -269,9 +290,18 @@ uint32_t cache_set_fold(const cache *c, uint64_t line)
 	return (uint32_t)(c->set_mask ? h & c->set_mask : h % c->nsets);
 }
 
+/* The way of set holding line, or -1. Four ways (every L1 of the
+ * standard configs) are tested without a loop: the search runs for every
+ * lookup and fill. */
 static int find_way(const cache *c, uint32_t set, uint64_t line)
 {
 	const cache_way *s = c->way + (size_t)set * c->p.ways;
+	if (c->p.ways == 4)
+		return s[0].tag == line   ? 0
+		       : s[1].tag == line ? 1
+		       : s[2].tag == line ? 2
+		       : s[3].tag == line ? 3
+		                          : -1;
 	for (uint32_t w = 0; w < c->p.ways; w++)
 		if (s[w].tag == line)
 			return (int)w;
@@ -286,12 +316,39 @@ static inline uint32_t mshr_bucket(uint64_t line)
 
 int cache_mshr_find(const cache *c, uint64_t line)
 {
-	if (!c->mshr_cnt[mshr_bucket(line)])
-		return -1;
-	for (uint32_t i = 0; i < c->p.mshrs; i++)
+	for (uint32_t i = c->mshr_head[mshr_bucket(line)]; i != CACHE_MSHR_NIL; i = c->mshr_next[i])
 		if (c->mshr_line[i] == line)
 			return (int)i;
 	return -1;
+}
+
+/* Takes the lowest free MSHR for line (one is free). */
+static uint32_t mshr_take(cache *c, uint64_t line)
+{
+	uint32_t w = 0;
+	while (!c->mshr_free[w])
+		w++;
+	uint32_t i = w * 64 + (uint32_t)__builtin_ctzll(c->mshr_free[w]);
+	c->mshr_free[w] &= c->mshr_free[w] - 1;
+	c->mshr_line[i] = line;
+	c->mshr_used++;
+	uint32_t b = mshr_bucket(line);
+	c->mshr_next[i] = c->mshr_head[b];
+	c->mshr_head[b] = i;
+	return i;
+}
+
+/* Frees MSHR m (busy, holding line). */
+static void mshr_release(cache *c, uint64_t line, uint32_t m)
+{
+	uint32_t *p = &c->mshr_head[mshr_bucket(line)];
+	while (*p != m && *p != CACHE_MSHR_NIL)
+		p = &c->mshr_next[*p];
+	if (*p == m)
+		*p = c->mshr_next[m];
+	c->mshr_line[m] = CACHE_INVALID;
+	c->mshr_used--;
+	c->mshr_free[m / 64] |= 1ull << (m % 64);
 }
 
 int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
@@ -331,19 +388,13 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 		c->s.mshr_full++;
 		return CACHE_MSHR_FULL;
 	}
-	for (uint32_t i = 0; i < c->p.mshrs; i++)
-		if (c->mshr_line[i] == CACHE_INVALID) {
-			c->mshr_line[i] = line;
-			c->mshr_used++;
-			c->mshr_cnt[mshr_bucket(line)]++;
-			c->s.accesses++;
-			c->s.misses++;
-			c->s.bytes += bytes;
-			if (mshr)
-				*mshr = (int)i;
-			return CACHE_MISS_NEW;
-		}
-	return CACHE_MSHR_FULL; /* unreachable: mshr_used < mshrs */
+	uint32_t i = mshr_take(c, line);
+	c->s.accesses++;
+	c->s.misses++;
+	c->s.bytes += bytes;
+	if (mshr)
+		*mshr = (int)i;
+	return CACHE_MISS_NEW;
 }
 
 /* The way a fill of set (ways s) takes: an empty way first (the lowest),
@@ -351,6 +402,15 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 static uint32_t pick_victim(const cache *c, uint32_t set, const cache_way *s)
 {
 	uint32_t best = 0;
+	if (!c->rp->victim && c->p.ways == 4) {
+		/* unrolled (see find_way): the first empty way, else the
+		 * smallest stamp, the lowest way on ties */
+		for (uint32_t i = 0; i < 4; i++)
+			if (s[i].tag == CACHE_INVALID)
+				return i;
+		uint32_t b01 = s[1].use < s[0].use, b23 = 2 + (s[3].use < s[2].use);
+		return s[b23].use < s[b01].use ? b23 : b01;
+	}
 	if (!c->rp->victim) {
 		for (uint32_t i = 0; i < c->p.ways; i++) {
 			if (s[i].tag == CACHE_INVALID)
@@ -394,11 +454,8 @@ static uint32_t fill_absent(cache *c, uint32_t set, uint64_t line, uint64_t *vic
 
 uint32_t cache_fill_mshr(cache *c, uint64_t line, int m, uint64_t *victim)
 {
-	if (m >= 0) {
-		c->mshr_line[m] = CACHE_INVALID;
-		c->mshr_used--;
-		c->mshr_cnt[mshr_bucket(line)]--;
-	}
+	if (m >= 0)
+		mshr_release(c, line, (uint32_t)m);
 	if (victim)
 		*victim = CACHE_INVALID;
 	uint32_t set = cache_set_of(c, line);

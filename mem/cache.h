@@ -22,7 +22,8 @@
  * Invariant: a line is never both present and in an MSHR; each set holds at
  * most `ways` valid lines, no two equal. LRU is exact (per-way use stamps);
  * other policies are chosen by cache_params.repl (mem/repl.h).
- * cache_lookup and cache_fill are O(ways + mshrs) and never allocate.
+ * cache_lookup and cache_fill are O(ways + mshrs / 64 + the busy MSHRs in
+ * the line's bucket) and never allocate.
  */
 #ifndef SAAR_MEM_CACHE_H
 #define SAAR_MEM_CACHE_H
@@ -78,7 +79,8 @@ typedef struct cache_stats {
  * run's memory estimate counts before it builds anything (sim/hostmem). */
 uint64_t cache_host_bytes(const cache_params *p);
 
-#define CACHE_MSHR_BUCKETS 64u /* a power of two; mshrs <= 4096 fit a uint16_t count */
+#define CACHE_MSHR_BUCKETS 64u /* a power of two */
+#define CACHE_MSHR_NIL     UINT32_MAX
 
 typedef struct cache {
 	cache_params p;
@@ -93,10 +95,15 @@ typedef struct cache {
 	uint64_t *rst;                 /* rp->set_words per set; NULL: none */
 	uint64_t *mshr_line;           /* p.mshrs entries; CACHE_INVALID when free */
 	uint32_t mshr_used;
-	/* busy MSHRs per bucket of line numbers (cache_mshr_find): a miss
-	 * whose bucket is empty needs no scan of the MSHRs, which on a
-	 * memory-bound frame are mostly busy (docs/PERFORMANCE.md, "Profile") */
-	uint16_t mshr_cnt[CACHE_MSHR_BUCKETS];
+	/* The busy MSHRs in chains by bucket of line number (mshr_head, then
+	 * mshr_next; CACHE_MSHR_NIL ends a chain): cache_mshr_find walks its
+	 * line's bucket only, never all MSHRs, which on a memory-bound frame
+	 * are mostly busy (docs/PERFORMANCE.md, "Profile"). mshr_free holds
+	 * one bit per free MSHR, so a miss takes the lowest free one from the
+	 * first non-zero word instead of scanning the lines. */
+	uint32_t mshr_head[CACHE_MSHR_BUCKETS];
+	uint32_t *mshr_next; /* p.mshrs entries */
+	uint64_t *mshr_free; /* (p.mshrs + 63) / 64 words */
 	cache_stats s;
 	/* sets changed since the last cache_dirty_clear, one bit each; NULL:
 	 * not tracked (cache_track). Stored warming (sim/warming.h) restores

@@ -113,14 +113,11 @@ static uint64_t max64(uint64_t a, uint64_t b)
 	return a > b ? a : b;
 }
 
-/* One row's worth of a request. */
+/* One row's worth of a request, to bank b's row `row` (addr's). */
 static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
-                        uint64_t *first)
+                        uint64_t *first, uint32_t b, uint64_t row)
 {
 	const sdram_timing *T = &s->t;
-	uint32_t b, col;
-	uint64_t row;
-	sdram_decode(s, addr, &b, &row, &col);
 	sdram_bank *k = &s->bank[b];
 	uint64_t c = eng_next_edge(T->clk, max64(t, k->col_ok));
 	uint64_t colcmd;
@@ -164,8 +161,10 @@ static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int
 	return end;
 }
 
-uint64_t sdram_access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
-                      uint64_t *data_start)
+/* sdram_access and sdram_access_in: b0 and row0 are addr's bank and row
+ * when known (known = 1); later segments start a row of their own. */
+static uint64_t access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
+                       uint64_t *data_start, int known, uint32_t b0, uint64_t row0)
 {
 	if (write) {
 		s->s.writes++;
@@ -180,8 +179,12 @@ uint64_t sdram_access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int w
 		/* split at row boundaries: each segment stays in one row */
 		uint32_t in_row = s->p.row_bytes - (uint32_t)(addr % s->p.row_bytes);
 		uint32_t n = left < in_row ? left : in_row;
-		uint64_t f;
-		end = segment(s, t, addr, n, write, &f);
+		uint32_t b = b0, col;
+		uint64_t row = row0, f;
+		if (!known)
+			sdram_decode(s, addr, &b, &row, &col);
+		known = 0;
+		end = segment(s, t, addr, n, write, &f, b, row);
 		if (f < first)
 			first = f;
 		addr += n;
@@ -190,4 +193,16 @@ uint64_t sdram_access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int w
 	if (data_start)
 		*data_start = first;
 	return end;
+}
+
+uint64_t sdram_access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
+                      uint64_t *data_start)
+{
+	return access(s, t, addr, bytes, write, data_start, 0, 0, 0);
+}
+
+uint64_t sdram_access_in(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
+                         uint64_t *data_start, uint32_t bank, uint64_t row)
+{
+	return access(s, t, addr, bytes, write, data_start, 1, bank, row);
 }

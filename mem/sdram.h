@@ -100,6 +100,10 @@ void sdram_decode(const sdram *s, uint64_t addr, uint32_t *bank, uint64_t *row, 
  * *data_start (may be NULL) receives the tick its first beat starts. */
 uint64_t sdram_access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
                       uint64_t *data_start);
+/* The same with addr's bank and row already decoded (sdram_decode's
+ * answer: the memory interface decodes each request once, at submit). */
+uint64_t sdram_access_in(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
+                         uint64_t *data_start, uint32_t bank, uint64_t row);
 /* Beats a transfer of bytes occupies (bus width, burst rounding). */
 uint64_t sdram_beats(const sdram *s, uint32_t bytes);
 /* Peak bandwidth in bytes per second. */

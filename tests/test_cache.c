@@ -209,6 +209,81 @@ Test(cache, mshr_merge_and_full)
 	cache_free(&c);
 }
 
+/* The MSHRs against a plain scan of their lines (how cache.c found them
+ * before the bucket chains and the free bitmask): random misses and fills
+ * in random order over 100 MSHRs (two bitmask words), on few lines so
+ * that merges, refusals and bucket collisions are frequent. Every lookup
+ * must give the same result and MSHR index as the scan: a new miss the
+ * lowest free MSHR. Fails when a release leaves the MSHR's free bit clear
+ * (refused or a higher index too early), leaves it in its bucket's chain
+ * (a merge into a freed MSHR), a miss takes another free MSHR than the
+ * lowest, or the bitmask's second word is not searched. */
+Test(cache, mshrs_as_a_plain_scan)
+{
+	enum { NM = 100 };
+	cache c;
+	diag d;
+	cache_params p = {1 << 20, 4, 8, NM, 1, 1, CACHE_HASH_NONE, NULL};
+	cr_assert_eq(cache_init(&c, &p, "t", &d), 0);
+	uint64_t scan[NM];
+	for (int i = 0; i < NM; i++)
+		scan[i] = CACHE_INVALID;
+	int busy = 0, news = 0, merges = 0, fulls = 0;
+	for (int step = 0; step < 200000; step++) {
+		/* phases of mostly misses (the MSHRs fill up) and of mostly
+		 * fills */
+		if (busy && xr() % 100 < (step / 3000 % 2 ? 70u : 15u)) {
+			int k = (int)(xr() % NM);
+			while (scan[k] == CACHE_INVALID)
+				k = (k + 1) % NM;
+			cache_fill_mshr(&c, scan[k], k, NULL);
+			scan[k] = CACHE_INVALID;
+			busy--;
+			continue;
+		}
+		/* lines 64 apart share a bucket; flush now and then so that
+		 * lines miss again */
+		uint64_t line = (xr() % 160) * (xr() % 2 ? 64 : 1);
+		if (step % 5000 == 0)
+			cache_invalidate(&c, 0, 160 * 64 * 8);
+		int m = -1;
+		if (cache_probe(&c, line, NULL)) {
+			cr_assert_eq(cache_lookup(&c, line, 8, &m, NULL), CACHE_HIT);
+			continue;
+		}
+		int want = -1, lowest = -1;
+		for (int i = NM - 1; i >= 0; i--) {
+			if (scan[i] == line)
+				want = i;
+			if (scan[i] == CACHE_INVALID)
+				lowest = i;
+		}
+		cache_result r = cache_lookup(&c, line, 8, &m, NULL);
+		if (want >= 0) {
+			cr_assert_eq(r, CACHE_MISS_MERGED, "step %d: line %llu in MSHR %d", step,
+			             (unsigned long long)line, want);
+			cr_assert_eq(m, want, "step %d", step);
+			merges++;
+		} else if (lowest < 0) {
+			cr_assert_eq(r, CACHE_MSHR_FULL, "step %d", step);
+			fulls++;
+		} else {
+			cr_assert_eq(r, CACHE_MISS_NEW, "step %d: line %llu", step,
+			             (unsigned long long)line);
+			cr_assert_eq(m, lowest, "step %d: the lowest free MSHR", step);
+			scan[m] = line;
+			busy++;
+			news++;
+		}
+		cr_assert_eq(c.mshr_used, (uint32_t)busy);
+	}
+	cr_assert_gt(news, 1000);
+	cr_assert_gt(merges, 1000);
+	cr_assert_gt(fulls, 100);
+	cr_log_info("%d new, %d merged, %d refused", news, merges, fulls);
+	cache_free(&c);
+}
+
 /* Functional lookups while timed misses are in flight (a sampled region
  * handing its packets to a functional stretch): a line in an MSHR is on
  * its way (a merge, no fill), a missing one is filled at once without
