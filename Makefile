@@ -7,6 +7,7 @@
 #   make bench-profile  cycle mode under callgrind, top functions (PERFORMANCE.md)
 #   make bench-scale    the largest scene: memory and build time (PERFORMANCE.md)
 #   make bench-sampled  a sampled run's time with its defaults (PERFORMANCE.md)
+#   make bench-ratio    cycle mode against kernel-ref on every view at 1024x768 (PERFORMANCE.md)
 #   make calibrate  fit the assumed parameters to published figures; writes
 #                   docs/CALIBRATION.md (docs/calibration.md)
 #   make accel      kd-tree, uniform grid and two-level trees compared;
@@ -87,7 +88,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -155,6 +156,9 @@ bench-scale: all
 
 bench-sampled: all
 	B=$(B) sh scripts/bench-sampled.sh
+
+bench-ratio: all
+	B=$(B) sh scripts/bench-ratio.sh
 
 # Validation against the published SaarCOR results, like with like (seed 002
 # §4, Table 5; fit and held-out rows); writes docs/VALIDATION.md,
