@@ -48,6 +48,27 @@ Test(runner, no_stray_warning_lines)
 	cr_assert_not(strstr(tu_slurp(dir, "out"), "warning:"), "%s", tu_slurp(dir, "out"));
 }
 
+/* A run's test folders and the temporaries of what its tests start go
+ * into one folder under $TMPDIR, removed when the run ends. Mistake
+ * caught: test folders left in /tmp (tu_tmpdir made them there and
+ * nothing removed them: 36,000 folders, 75 GB, a full disk). The runner
+ * is run with TMPDIR set to an empty folder, on a test that makes a
+ * folder and starts saarsim: the folder must be empty again after. */
+Test(runner, test_folders_are_removed_after_the_run, .timeout = 120)
+{
+	char dir[256], cmd[4096];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cmd, sizeof cmd,
+	         "mkdir %s/tmp && env -u BXFI_MAP -u IS_SANDBOX TMPDIR=%s/tmp "
+	         "%s/saarsim-tests --filter 'chip_twolevel/saarsim_flag' >%s/out 2>&1",
+	         dir, dir, tu_bin_dir(), dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s", tu_slurp(dir, "out"));
+	snprintf(cmd, sizeof cmd, "test -z \"$(ls -A %s/tmp)\"", dir);
+	cr_assert_eq(tu_run(cmd), 0, "the run left files in its TMPDIR: %s",
+	             (snprintf(cmd, sizeof cmd, "ls -A %s/tmp > %s/ls 2>&1", dir, dir), tu_run(cmd),
+	              tu_slurp(dir, "ls")));
+}
+
 /* `make fuzz` compiles the library with clang under -Werror, which
  * refuses what gcc's `make test` build accepts: a unit-table initialiser
  * one field short (clang's -Wmissing-field-initializers) broke `make fuzz`

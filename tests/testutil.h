@@ -65,9 +65,13 @@ static inline void tu_build_world(world *w, const scene *s)
 }
 
 /* A fresh temporary directory for a test's files (not removed: /tmp). */
+/* A fresh folder for one test, inside the run's folder (tests/main.c makes
+ * it, names it in SAARSIM_TEST_TMP and removes it after the run), else in
+ * /tmp. */
 static inline void tu_tmpdir(char *buf, size_t n)
 {
-	snprintf(buf, n, "/tmp/saarsim-test-XXXXXX");
+	const char *run = getenv("SAARSIM_TEST_TMP");
+	snprintf(buf, n, "%s/t-XXXXXX", run && *run ? run : "/tmp");
 	if (!mkdtemp(buf))
 		cr_assert_fail("mkdtemp failed");
 }
