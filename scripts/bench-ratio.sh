@@ -13,30 +13,13 @@
 # <!-- BEGIN ratio --> and <!-- END ratio --> of docs/PERFORMANCE.md and
 # prints it. Takes a few minutes; run it alone.
 set -eu
-SAARSIM_CACHE_DIR=off
-export SAARSIM_CACHE_DIR
-say() { printf 'bench-ratio: %s\n' "$*" >&2; }
-die() {
-	say "error: $*"
-	exit 1
-}
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-cd "$ROOT"
-B=${B:-build}
-SIM=$ROOT/$B/saarsim
-[ -x "$SIM" ] || die "$B/saarsim not found; run 'make' first"
-SCENES=$(cd "${SAAR_SCENES:-$ROOT/../shared/scenes}" && pwd) || die "no shared scenes"
-VIEWS=$SCENES/views.yaml
+. "$(dirname "$0")/bench-lib.sh"
+bench_init bench-ratio
 SIZE=${SIZE:-1024x768}
 RUNS=${RUNS:-3}
 DOC=docs/PERFORMANCE.md
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-ratio.XXXXXX")
 trap 'rm -rf "$TMP"; rm -f "$DOC.tmp.$$"' EXIT
-jget() {
-	# shellcheck disable=SC2020
-	tr ',{}[]' '\n\n\n\n\n' <"$1" |
-		sed -n "s/^[[:space:]]*\"$2\"[[:space:]]*:[[:space:]]*//p" | head -n 1 | tr -d '"'
-}
 load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
 t0=$(date +%s)
 VLIST=$(awk '/^views:/ { v = 1; next } v && /^[^[:space:]#]/ { v = 0 }

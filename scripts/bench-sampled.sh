@@ -26,19 +26,8 @@
 # Writes the section between <!-- BEGIN sampled --> and <!-- END sampled -->
 # of docs/PERFORMANCE.md and prints it. Needs POSIX sh, awk, sed.
 set -eu
-say() { printf 'bench-sampled: %s\n' "$*" >&2; }
-die() {
-	say "error: $*"
-	exit 1
-}
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-cd "$ROOT"
-B=${B:-build}
-SIM=$ROOT/$B/saarsim
-[ -x "$SIM" ] || die "$SIM not found; run 'make' first"
-SCENES=${SAAR_SCENES:-$ROOT/../shared/scenes}
-VIEWS=$SCENES/views.yaml
-[ -f "$VIEWS" ] || die "$VIEWS not found (set SAAR_SCENES)"
+. "$(dirname "$0")/bench-lib.sh"
+bench_init bench-sampled
 SIZE=${SIZE:-1024x768}
 VIEW=${VIEW:-conference}
 RUNS=${RUNS:-1}
@@ -47,11 +36,6 @@ DOC=docs/PERFORMANCE.md
 DOCTMP=$DOC.tmp.$$
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-smp.XXXXXX")
 trap 'rm -rf "$TMP"; rm -f "$DOCTMP"' EXIT
-jget() {
-	# shellcheck disable=SC2020
-	tr ',{}[]' '\n\n\n\n\n' <"$1" |
-		sed -n "s/^[[:space:]]*\"$2\"[[:space:]]*:[[:space:]]*//p" | head -n 1 | tr -d '"'
-}
 load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
 t0=$(date +%s)
 ROWS=$TMP/rows

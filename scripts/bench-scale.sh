@@ -17,22 +17,10 @@
 # Writes the section between <!-- BEGIN scale --> and <!-- END scale --> of
 # docs/PERFORMANCE.md and prints it. Needs POSIX sh, awk, sed, GNU time.
 set -eu
-# No default world-cache folder (issue 36): these runs measure or compare
-# builds, renders and sampled warming as they were, and write nothing into
-# the user's home; a run that wants a cache names its own (--world-cache).
-SAARSIM_CACHE_DIR=off
-export SAARSIM_CACHE_DIR
-say() { printf 'bench-scale: %s\n' "$*" >&2; }
-die() {
-	say "error: $*"
-	exit 1
-}
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-cd "$ROOT"
-B=${B:-build}
-SIM=$ROOT/$B/saarsim
+. "$(dirname "$0")/bench-lib.sh"
+bench_init bench-scale
 REF=$ROOT/$B/rtref
-[ -x "$SIM" ] && [ -x "$REF" ] || die "$B/saarsim or $B/rtref not found; run 'make' first"
+[ -x "$REF" ] || die "$B/rtref not found; run 'make' first"
 [ -x /usr/bin/time ] || die "/usr/bin/time (GNU time) not found"
 SMALL=${SMALL:-spd:balls:4:14}
 LARGE=${LARGE:-spd:balls:5:14}
@@ -42,11 +30,6 @@ DOC=docs/PERFORMANCE.md
 DOCTMP=$DOC.tmp.$$
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-scale.XXXXXX")
 trap 'rm -rf "$TMP"; rm -f "$DOCTMP"' EXIT
-jget() {
-	# shellcheck disable=SC2020
-	tr ',{}[]' '\n\n\n\n\n' <"$1" |
-		sed -n "s/^[[:space:]]*\"$2\"[[:space:]]*:[[:space:]]*//p" | head -n 1 | tr -d '"'
-}
 tget() { sed -n "s/^[[:space:]]*$2:[[:space:]]*//p" "$1" | head -n 1; }
 load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
 t0=$(date +%s)

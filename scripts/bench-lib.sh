@@ -1,0 +1,40 @@
+# scripts/bench-lib.sh: the common start of the bench-*.sh scripts that
+# measure saarsim and write one section of docs/PERFORMANCE.md. Sourced,
+# not run:
+#
+#   . "$(dirname "$0")/bench-lib.sh"
+#   bench_init NAME
+#
+# Sets ROOT (the repository; the script runs from it), B (the build folder,
+# default build), SIM (B/saarsim, checked), SCENES and VIEWS (the shared
+# scenes and views.yaml, checked); say and die print "NAME: ..." on
+# stderr (die exits 1). Turns the default world-cache folder off (issue
+# 36): these runs measure builds, renders and warming as they are and
+# write nothing into the user's home; a run that wants a cache names its
+# own (--world-cache). jget FILE KEY: the first value of KEY in a JSON
+# report, quotes removed.
+BENCH_NAME=bench
+say() { printf '%s: %s\n' "$BENCH_NAME" "$*" >&2; }
+die() {
+	say "error: $*"
+	exit 1
+}
+bench_init() {
+	BENCH_NAME=$1
+	SAARSIM_CACHE_DIR=off
+	export SAARSIM_CACHE_DIR
+	ROOT=$(cd "$(dirname "$0")/.." && pwd)
+	cd "$ROOT"
+	B=${B:-build}
+	SIM=$ROOT/$B/saarsim
+	[ -x "$SIM" ] || die "$SIM not found; run 'make' first"
+	SCENES=$(cd "${SAAR_SCENES:-$ROOT/../shared/scenes}" 2>/dev/null && pwd) ||
+		die "the shared scenes are not at ${SAAR_SCENES:-$ROOT/../shared/scenes} (set SAAR_SCENES)"
+	VIEWS=$SCENES/views.yaml
+	[ -f "$VIEWS" ] || die "$VIEWS not found (set SAAR_SCENES)"
+}
+jget() {
+	# shellcheck disable=SC2020
+	tr ',{}[]' '\n\n\n\n\n' <"$1" |
+		sed -n "s/^[[:space:]]*\"$2\"[[:space:]]*:[[:space:]]*//p" | head -n 1 | tr -d '"'
+}
