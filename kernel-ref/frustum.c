@@ -128,11 +128,18 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 	return nan == 0 && any;
 }
 
+/* The shortcut applies (full precision, no planted fault, the packet's
+ * box set up into b). */
+static int fru_applies(fru_box *b, const trav_state *s, const packet *p, uint64_t entered)
+{
+	return entered && !s->fpt && !s->fpi && pkt_trav_fault == PKT_FAULT_NONE &&
+	       s->stack_max <= PKT_STACK_MAX && fru_setup(b, s, p, entered);
+}
+
 int fru_coherent(const trav_state *s, const packet *p, uint64_t entered)
 {
 	fru_box b;
-	return entered && !s->fpt && !s->fpi && pkt_trav_fault == PKT_FAULT_NONE &&
-	       s->stack_max <= PKT_STACK_MAX && fru_setup(&b, s, p, entered);
+	return fru_applies(&b, s, p, entered);
 }
 
 /* [lo, hi] holding every ray's widened distance to the plane split on the
@@ -265,21 +272,20 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	}
 }
 
+/* pkt_trace_with's run: the shortcut where it applies (full precision,
+ * no planted fault, the packet's box set up), else 0: the per-lane loop. */
+static int fru_run(trav_state *s, packet *p, const mimg *m, const struct pkt_cone *cone,
+                   uint64_t entered, trav_counts *c)
+{
+	fru_box b;
+	if (!fru_applies(&b, s, p, entered))
+		return 0;
+	fru_walk(&b, s, p, m, cone, c);
+	return 1;
+}
+
 uint64_t fru_trace(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
                    const pkt_precision *prec, int cull)
 {
-	trav_state st;
-	uint64_t entered = pkt_trav_begin_fp(&st, p, m, stack, stack_max, prec);
-	if (!entered)
-		return 0;
-	pkt_cone cone;
-	if (cull) /* the rays that entered the box (seed 004 §4) */
-		cone_build(&cone, p, entered);
-	fru_box b;
-	if (!st.fpt && !st.fpi && pkt_trav_fault == PKT_FAULT_NONE && stack_max <= PKT_STACK_MAX &&
-	    fru_setup(&b, &st, p, entered))
-		fru_walk(&b, &st, p, m, cull ? &cone : NULL, c);
-	else
-		pkt_trace_run(&st, p, m, cull ? &cone : NULL, c);
-	return entered;
+	return pkt_trace_with(p, m, stack, stack_max, c, prec, cull, fru_run);
 }

@@ -222,6 +222,15 @@ void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uin
                     const pkt_skip *skip);
 void pkt_trace_run(trav_state *s, packet *p, const mimg *m, const struct pkt_cone *cone,
                    trav_counts *c);
+/* pkt_trace_cone with another loop: the packet enters the scene's box
+ * (pkt_trav_begin_fp) and gets its cone when culling, then run (entered:
+ * the rays that entered) walks the tree and returns 1, or returns 0 to
+ * leave the packet to pkt_trace_run. run NULL: pkt_trace_run. frustum.c's
+ * fru_trace is pkt_trace_cone with its own run. */
+typedef int (*pkt_runner)(trav_state *s, packet *p, const mimg *m, const struct pkt_cone *cone,
+                          uint64_t entered, trav_counts *c);
+uint64_t pkt_trace_with(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                        const pkt_precision *prec, int cull, pkt_runner run);
 
 /* ---- single-ray path, for checking ---- */
 typedef struct ray_hit {

@@ -618,8 +618,8 @@ void pkt_trace_run(trav_state *s, packet *p, const mimg *m, const pkt_cone *cone
 	}
 }
 
-uint64_t pkt_trace_cone(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
-                        const pkt_precision *prec, int cull)
+uint64_t pkt_trace_with(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                        const pkt_precision *prec, int cull, pkt_runner run)
 {
 	trav_state st;
 	uint64_t entered = pkt_trav_begin_fp(&st, p, m, stack, stack_max, prec);
@@ -628,8 +628,15 @@ uint64_t pkt_trace_cone(packet *p, const mimg *m, trav_entry *stack, int stack_m
 	pkt_cone cone;
 	if (cull) /* the rays that entered the box (seed 004 §4) */
 		cone_build(&cone, p, entered);
-	pkt_trace_run(&st, p, m, cull ? &cone : NULL, c);
+	if (!run || !run(&st, p, m, cull ? &cone : NULL, entered, c))
+		pkt_trace_run(&st, p, m, cull ? &cone : NULL, c);
 	return entered;
+}
+
+uint64_t pkt_trace_cone(packet *p, const mimg *m, trav_entry *stack, int stack_max, trav_counts *c,
+                        const pkt_precision *prec, int cull)
+{
+	return pkt_trace_with(p, m, stack, stack_max, c, prec, cull, NULL);
 }
 
 /* ---- single-ray path ------------------------------------------------------ */
