@@ -194,28 +194,23 @@ static uint32_t first_used(const eng *e, uint32_t s)
 	return w * 64 + (uint32_t)__builtin_ctzll(m);
 }
 
-/* Queues x in its slot, after every event of the slot at or before its
- * tick (x's sequence number is the largest). -1: out of memory. */
-static int wheel_put(eng *e, const hent *x)
+/* Links pool record i (its event set) into its slot, after every event of
+ * the slot at or before its tick (its sequence number is the largest). */
+static inline void wheel_link(eng *e, uint32_t i)
 {
-	if (e->pfree == ENG_NIL && grow_pool(e, e->pcap * 2))
-		return -1;
-	uint32_t i = e->pfree, s = slot_of(x->when);
 	wrec *p = e->pool;
-	e->pfree = p[i].next;
-	p[i].ev = *x;
-	uint32_t t = e->tail[s];
+	uint64_t when = p[i].ev.when;
+	uint32_t s = slot_of(when), t = e->tail[s];
+	p[i].next = ENG_NIL;
 	if (t == ENG_NIL) {
-		p[i].next = ENG_NIL;
 		e->head[s] = e->tail[s] = i;
 		e->used[s / 64] |= (uint64_t)1 << (s % 64);
-	} else if (p[t].ev.when <= x->when) {
-		p[i].next = ENG_NIL;
+	} else if (p[t].ev.when <= when) {
 		p[t].next = i;
 		e->tail[s] = i;
 	} else { /* an earlier tick than the slot's last: walk (the tail stops it) */
 		uint32_t prev = ENG_NIL, c = e->head[s];
-		while (p[c].ev.when <= x->when) {
+		while (p[c].ev.when <= when) {
 			prev = c;
 			c = p[c].next;
 		}
@@ -226,7 +221,6 @@ static int wheel_put(eng *e, const hent *x)
 			p[prev].next = i;
 	}
 	e->wn++;
-	return 0;
 }
 
 /* Takes out the first record of slot s. */
@@ -245,26 +239,49 @@ static void wheel_pop(eng *e, uint32_t s)
 	e->wn--;
 }
 
+/* eng_schedule's rare cases, out of line: an event past the wheel's
+ * window (into the heap), or a full pool. */
+static __attribute__((noinline)) eng_id schedule_slow(eng *e, const hent *x, int far)
+{
+	if (far) {
+		if (e->n == e->cap && grow_heap(e, e->cap * 2))
+			return ENG_NONE;
+		e->heap[e->n] = *x;
+		sift_up(e->heap, e->n++);
+	} else {
+		if (grow_pool(e, e->pcap * 2))
+			return ENG_NONE;
+		uint32_t i = e->pfree;
+		e->pfree = e->pool[i].next;
+		e->pool[i].ev = *x;
+		wheel_link(e, i);
+	}
+	e->seq++;
+	e->live++;
+	return (eng_id)x->seq;
+}
+
 eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
 {
 	assert(when >= e->hd.now && "event scheduled into the past");
 	if (when < e->hd.now)
 		when = e->hd.now;
-	hent x = {when, e->seq, h, ctx, arg};
+	uint64_t seq = e->seq;
 	/* the window: the ENG_SLOTS slots from the start of eng_now's */
 	uint64_t base = e->hd.now & ~(ENG_SLOT_TICKS - 1);
-	if (when - base < ENG_SLOTS * ENG_SLOT_TICKS) {
-		if (wheel_put(e, &x))
-			return ENG_NONE;
-	} else {
-		if (e->n == e->cap && grow_heap(e, e->cap * 2))
-			return ENG_NONE;
-		e->heap[e->n] = x;
-		sift_up(e->heap, e->n++);
+	int far = when - base >= ENG_SLOTS * ENG_SLOT_TICKS;
+	if (__builtin_expect(far || e->pfree == ENG_NIL, 0)) {
+		hent x = {when, seq, h, ctx, arg};
+		return schedule_slow(e, &x, far);
 	}
-	e->seq++;
+	uint32_t i = e->pfree;
+	wrec *r = &e->pool[i];
+	e->pfree = r->next;
+	r->ev = (hent){when, seq, h, ctx, arg};
+	wheel_link(e, i);
+	e->seq = seq + 1;
 	e->live++;
-	return (eng_id)x.seq;
+	return (eng_id)seq;
 }
 
 /* O(n) in the queued events: the simulator never cancels (the tests do). */
