@@ -216,7 +216,7 @@ SECTION=$TMP/section
 			printf "\n"
 		}' "$REVROWS"
 		echo
-		echo "No change between the rows changes a figure (scripts/refmatrix.sh: 64 reports identical against a recording of the first); the percentage is against the row above."
+		echo "No change between the rows changes a figure (scripts/refmatrix.sh: every report of its matrix identical against a recording of the first); the percentage is against the row above."
 	fi
 	echo "<!-- END profile -->"
 } >"$SECTION"

@@ -119,40 +119,55 @@ Test(engine, deterministic)
 		cr_assert_geq(a.trace[i] >> 20, a.trace[i - 1] >> 20);
 }
 
-/* Mistake: the first event a handler schedules takes the slot of the event
- * being run (the root of the heap) without sinking below the events that
- * come before it, or an unused slot is refilled out of order: events then
- * run out of (time, scheduling order). Handlers schedule up to three events
+/* Mistake: a queue that loses the order of (time, scheduling order), e.g.
+ * an event of a tick already queued put before that tick's earlier
+ * events, or a later tick before an earlier one. Handlers schedule up to three events
  * each, at their own tick and at ticks shared with queued events; every
  * event must run in the order of (tick, the count of schedule calls before
  * it), which the test keeps itself. */
 typedef struct ordmodel {
 	uint64_t rng, next;       /* LCG state; schedule calls so far */
+	int spread;               /* steps near and far (ord_step) */
 	uint64_t when[6000];      /* tick of each scheduled event, by label */
 	uint64_t ran[6000], nran; /* labels in the order they ran */
 } ordmodel;
+
+/* The tick step of a scheduled event: 0, 5 or 10 ticks; with spread,
+ * also steps inside one slot of the engine's wheel but at another tick
+ * (700: an event queued behind a later one of its slot), steps across
+ * slots, near the end of the wheel's window and past it (the overflow
+ * heap: 4.5e6 and 1e9 ticks). */
+static uint64_t ord_step(ordmodel *o)
+{
+	static const uint64_t far[] = {0, 5, 700, 1500, 4000000, 4500000, 1000000000};
+	uint64_t r = lcg(&o->rng);
+	if (!o->spread || r % 2)
+		return r / 2 % 3 * 5;
+	return far[r / 2 % (sizeof far / sizeof far[0])];
+}
 
 static void ord_ev(eng *e, void *ctx, uint64_t arg)
 {
 	ordmodel *o = ctx;
 	cr_assert_eq(eng_now(e), o->when[arg]);
 	o->ran[o->nran++] = arg;
-	int k = (int)(lcg(&o->rng) % 4);
+	int k = o->spread ? 1 : (int)(lcg(&o->rng) % 4); /* spread: 20 long chains */
 	for (int j = 0; j < k && o->next < 6000; j++) {
-		uint64_t t = eng_now(e) + lcg(&o->rng) % 3 * 5;
+		uint64_t t = eng_now(e) + ord_step(o);
 		o->when[o->next] = t;
 		eng_schedule(e, t, ord_ev, o, o->next++);
 	}
 }
 
-Test(engine, events_scheduled_by_handlers_run_in_time_then_schedule_order)
+static void ord_run(int spread)
 {
 	static ordmodel o;
 	memset(&o, 0, sizeof o);
 	o.rng = 9;
+	o.spread = spread;
 	eng *e = mk(0);
 	for (; o.next < 20; o.next++) {
-		o.when[o.next] = lcg(&o.rng) % 4 * 5;
+		o.when[o.next] = spread && o.next % 3 ? ord_step(&o) : lcg(&o.rng) % 4 * 5;
 		eng_schedule(e, o.when[o.next], ord_ev, &o, o.next);
 	}
 	eng_run(e, ENG_FOREVER);
@@ -166,6 +181,21 @@ Test(engine, events_scheduled_by_handlers_run_in_time_then_schedule_order)
 		          (unsigned long long)b, (unsigned long long)o.when[b]);
 	}
 	eng_destroy(e);
+}
+
+Test(engine, events_scheduled_by_handlers_run_in_time_then_schedule_order)
+{
+	ord_run(0);
+}
+
+/* Mistake: the wheel appends an event at its slot's tail although the slot
+ * holds a later tick, searches its slots from the wrong one, or a pop takes
+ * the wheel's first event without comparing it with the overflow heap's
+ * (or the other way round): events then run out of (tick, schedule order).
+ * Steps reach within a slot, across slots, and past the wheel's window. */
+Test(engine, near_and_far_events_run_in_time_then_schedule_order)
+{
+	ord_run(1);
 }
 
 Test(engine, cancel)

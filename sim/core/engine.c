@@ -1,43 +1,70 @@
 /*
  * engine.c: the event queue (see engine.h for the contract).
  *
- * One array, a binary min-heap of event records ordered by (when, seq);
- * each record carries its handler, context and argument, so the heap is
- * all there is (no side pool to allocate from and free to). It grows by
- * doubling. The sequence number doubles as the event's id: it is never
- * reused, so an id is stale once its event ran or was cancelled.
+ * Two queues, both ordered by (when, seq); a pop takes the smaller of
+ * their firsts, so events run in (when, seq) order whichever holds them.
  *
- * The running event keeps its root slot while its handler runs (`hole`):
- * the first event the handler schedules takes that slot and sinks from the
- * root, one heap operation where a pop and a push take two; if the
- * handler schedules nothing, the slot is refilled from the last entry after
- * it returns. Either way the heap pops in (when, seq) order, and since no
- * two records share a sequence number the order of events is the same as
- * with any other priority queue.
+ * The wheel holds the near future: ENG_SLOTS slots of ENG_SLOT_TICKS
+ * ticks each, covering the ENG_SLOTS * ENG_SLOT_TICKS ticks from the
+ * start of the slot of eng_now (about 2200 cycles of a 533 MHz core).
+ * A slot is a list of event records sorted by (when, seq); since a new
+ * event's sequence number is larger than any queued one's, it goes after
+ * every queued event of its tick, mostly at the slot's tail (a slot spans
+ * about one core cycle, so it rarely holds more than one tick). A bitmask
+ * of the slots that hold events finds the first one from eng_now's slot
+ * on, wrapping round. Every queued event lies at or after eng_now and was
+ * inside the window when queued, so the slots from eng_now's on, in
+ * order, hold the wheel's events in (when, seq) order. Records come from
+ * a pool (indices; a free list) that doubles when full.
  *
- * Invariants: heap[i] <= heap[2i+1], heap[2i+2] by (when, seq) for the
- * entries present (with `hole` set, heap[0] is vacant and counts as
- * smallest); a record with h == NULL is cancelled; `live` counts the
- * records with a handler.
+ * Events further away go to a binary min-heap of records (the overflow;
+ * few events are that far ahead). The sequence number doubles as the
+ * event's id: it is never reused, so an id is stale once its event ran or
+ * was cancelled. Both queues keep a cancelled record (h == NULL) until it
+ * comes first; `live` counts the records with a handler.
+ *
+ * Why a wheel (docs/PERFORMANCE.md, "Profile"): the heap alone spent about
+ * a fifth of cycle mode's instructions sinking and refilling its root,
+ * log n levels of (when, seq) comparisons per event, where a slot takes an
+ * event in a few instructions.
  */
 #include "sim/core/engine.h"
 
 #include <assert.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
+
+#define ENG_SLOT_BITS  10 /* a slot spans 1024 ticks (ps) */
+#define ENG_SLOT_TICKS ((uint64_t)1 << ENG_SLOT_BITS)
+#define ENG_SLOTS      4096 /* a power of two, a multiple of 64 */
+#define ENG_WORDS      (ENG_SLOTS / 64)
+#define ENG_NIL        UINT32_MAX
 
 typedef struct hent {
 	uint64_t when, seq;
-	eng_handler h; /* NULL: cancelled, dropped when it reaches the root */
+	eng_handler h; /* NULL: cancelled, dropped when it comes first */
 	void *ctx;
 	uint64_t arg;
 } hent;
 
+/* A wheel record: an event and the next of its slot (seq 0: free). */
+typedef struct wrec {
+	hent ev;
+	uint32_t next;
+} wrec;
+
 struct eng {
 	struct eng_head hd; /* first: eng_now (engine.h) reads it */
+	/* the wheel */
+	wrec *pool;
+	uint32_t pcap, pfree; /* records, the first free one */
+	uint32_t wn;          /* events in the wheel */
+	uint32_t head[ENG_SLOTS], tail[ENG_SLOTS];
+	uint64_t used[ENG_WORDS]; /* slots that hold events */
+	/* the overflow heap: heap[i] <= heap[2i+1], heap[2i+2] by (when, seq) */
 	hent *heap;
-	uint32_t cap, n; /* slots, entries (with `hole`, heap[0] is one, vacant) */
-	int hole;        /* the running event's root slot is still taken */
+	uint32_t cap, n;
 	size_t live;
 	uint64_t seq, dispatched;
 	int stop;
@@ -45,7 +72,7 @@ struct eng {
 
 #define MAX_CAP (UINT32_MAX / 2)
 
-static int grow(eng *e, uint32_t want)
+static int grow_heap(eng *e, uint32_t want)
 {
 	if (want <= e->cap)
 		return 0;
@@ -59,14 +86,37 @@ static int grow(eng *e, uint32_t want)
 	return 0;
 }
 
+/* Pool records [pcap, want) join the free list (seq 0: not queued). */
+static int grow_pool(eng *e, uint32_t want)
+{
+	if (want <= e->pcap)
+		return 0;
+	if (want > MAX_CAP)
+		return -1;
+	wrec *p = realloc(e->pool, (size_t)want * sizeof *p);
+	if (!p)
+		return -1;
+	e->pool = p;
+	for (uint32_t i = want; i-- > e->pcap;) {
+		p[i].ev.seq = 0;
+		p[i].next = e->pfree;
+		e->pfree = i;
+	}
+	e->pcap = want;
+	return 0;
+}
+
 eng *eng_create(size_t capacity)
 {
 	eng *e = calloc(1, sizeof *e);
 	if (!e)
 		return NULL;
 	e->seq = 1; /* ids are sequence numbers; 0 is ENG_NONE */
+	e->pfree = ENG_NIL;
+	memset(e->head, 0xff, sizeof e->head);
+	memset(e->tail, 0xff, sizeof e->tail);
 	uint32_t c = capacity < 64 ? 64 : capacity > MAX_CAP ? MAX_CAP : (uint32_t)capacity;
-	if (grow(e, c)) {
+	if (grow_pool(e, c) || grow_heap(e, 64)) {
 		eng_destroy(e);
 		return NULL;
 	}
@@ -78,6 +128,7 @@ void eng_destroy(eng *e)
 	if (!e)
 		return;
 	free(e->heap);
+	free(e->pool);
 	free(e);
 }
 
@@ -86,31 +137,7 @@ static int before(const hent *a, const hent *b)
 	return a->when < b->when || (a->when == b->when && a->seq < b->seq);
 }
 
-/* Puts x into the vacant root of heap[0..n): the vacancy moves down to a
- * leaf along the smaller children (one comparison a level), then x rises
- * from there (the last entry, which refills the root, is mostly late: it
- * rises little). */
-static void fill_root(hent *h, uint32_t n, const hent *x)
-{
-	uint32_t i = 0;
-	for (;;) {
-		uint32_t c = 2 * i + 1;
-		if (c >= n)
-			break;
-		if (c + 1 < n && before(&h[c + 1], &h[c]))
-			c++;
-		h[i] = h[c];
-		i = c;
-	}
-	while (i > 0) {
-		uint32_t p = (i - 1) / 2;
-		if (!before(x, &h[p]))
-			break;
-		h[i] = h[p];
-		i = p;
-	}
-	h[i] = *x;
-}
+/* ---- the overflow heap ---- */
 
 static void sift_up(hent *h, uint32_t i)
 {
@@ -125,32 +152,113 @@ static void sift_up(hent *h, uint32_t i)
 	h[i] = x;
 }
 
-/* Puts x into the vacant root of heap[0..n), sinking it while a child
- * comes before it (an event scheduled by a handler is often among the
- * next few: it stops early). */
-static void sink_root(hent *h, uint32_t n, const hent *x)
+/* Takes out the root: the last entry sinks from there. */
+static void heap_pop(eng *e)
 {
-	uint32_t i = 0;
+	hent *h = e->heap;
+	uint32_t n = --e->n, i = 0;
+	if (!n)
+		return;
+	hent x = h[n];
 	for (;;) {
 		uint32_t c = 2 * i + 1;
 		if (c >= n)
 			break;
 		if (c + 1 < n && before(&h[c + 1], &h[c]))
 			c++;
-		if (!before(&h[c], x))
+		if (!before(&h[c], &x))
 			break;
 		h[i] = h[c];
 		i = c;
 	}
-	h[i] = *x;
+	h[i] = x;
 }
 
-/* Takes out the root (vacant or not): the last entry fills it. */
-static void drop_root(eng *e)
+/* ---- the wheel ---- */
+
+static uint32_t slot_of(uint64_t when)
 {
-	e->hole = 0;
-	if (--e->n)
-		fill_root(e->heap, e->n, &e->heap[e->n]);
+	return (uint32_t)(when >> ENG_SLOT_BITS) & (ENG_SLOTS - 1);
+}
+
+/* The first slot from s on (wrapping round) that holds events; the
+ * wheel must hold one. */
+static uint32_t first_used(const eng *e, uint32_t s)
+{
+	uint32_t w = s / 64;
+	uint64_t m = e->used[w] & (~(uint64_t)0 << (s % 64));
+	while (!m) {
+		w = (w + 1) % ENG_WORDS;
+		m = e->used[w];
+	}
+	return w * 64 + (uint32_t)__builtin_ctzll(m);
+}
+
+/* Links pool record i (its event set) into its slot, after every event of
+ * the slot at or before its tick (its sequence number is the largest). */
+static inline void wheel_link(eng *e, uint32_t i)
+{
+	wrec *p = e->pool;
+	uint64_t when = p[i].ev.when;
+	uint32_t s = slot_of(when), t = e->tail[s];
+	p[i].next = ENG_NIL;
+	if (t == ENG_NIL) {
+		e->head[s] = e->tail[s] = i;
+		e->used[s / 64] |= (uint64_t)1 << (s % 64);
+	} else if (p[t].ev.when <= when) {
+		p[t].next = i;
+		e->tail[s] = i;
+	} else { /* an earlier tick than the slot's last: walk (the tail stops it) */
+		uint32_t prev = ENG_NIL, c = e->head[s];
+		while (p[c].ev.when <= when) {
+			prev = c;
+			c = p[c].next;
+		}
+		p[i].next = c;
+		if (prev == ENG_NIL)
+			e->head[s] = i;
+		else
+			p[prev].next = i;
+	}
+	e->wn++;
+}
+
+/* Takes out the first record of slot s. */
+static void wheel_pop(eng *e, uint32_t s)
+{
+	wrec *p = e->pool;
+	uint32_t i = e->head[s];
+	e->head[s] = p[i].next;
+	if (e->head[s] == ENG_NIL) {
+		e->tail[s] = ENG_NIL;
+		e->used[s / 64] &= ~((uint64_t)1 << (s % 64));
+	}
+	p[i].ev.seq = 0;
+	p[i].next = e->pfree;
+	e->pfree = i;
+	e->wn--;
+}
+
+/* eng_schedule's rare cases, out of line: an event past the wheel's
+ * window (into the heap), or a full pool. */
+static __attribute__((noinline)) eng_id schedule_slow(eng *e, const hent *x, int far)
+{
+	if (far) {
+		if (e->n == e->cap && grow_heap(e, e->cap * 2))
+			return ENG_NONE;
+		e->heap[e->n] = *x;
+		sift_up(e->heap, e->n++);
+	} else {
+		if (grow_pool(e, e->pcap * 2))
+			return ENG_NONE;
+		uint32_t i = e->pfree;
+		e->pfree = e->pool[i].next;
+		e->pool[i].ev = *x;
+		wheel_link(e, i);
+	}
+	e->seq++;
+	e->live++;
+	return (eng_id)x->seq;
 }
 
 eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
@@ -158,59 +266,72 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	assert(when >= e->hd.now && "event scheduled into the past");
 	if (when < e->hd.now)
 		when = e->hd.now;
-	hent x = {when, e->seq, h, ctx, arg};
-	if (e->hole) {
-		e->hole = 0;
-		sink_root(e->heap, e->n, &x);
-	} else {
-		if (e->n == e->cap && grow(e, e->cap * 2))
-			return ENG_NONE;
-		e->heap[e->n] = x;
-		sift_up(e->heap, e->n++);
+	uint64_t seq = e->seq;
+	/* the window: the ENG_SLOTS slots from the start of eng_now's */
+	uint64_t base = e->hd.now & ~(ENG_SLOT_TICKS - 1);
+	int far = when - base >= ENG_SLOTS * ENG_SLOT_TICKS;
+	if (__builtin_expect(far || e->pfree == ENG_NIL, 0)) {
+		hent x = {when, seq, h, ctx, arg};
+		return schedule_slow(e, &x, far);
 	}
-	e->seq++;
+	uint32_t i = e->pfree;
+	wrec *r = &e->pool[i];
+	e->pfree = r->next;
+	r->ev = (hent){when, seq, h, ctx, arg};
+	wheel_link(e, i);
+	e->seq = seq + 1;
 	e->live++;
-	return (eng_id)x.seq;
+	return (eng_id)seq;
 }
 
 /* O(n) in the queued events: the simulator never cancels (the tests do). */
 int eng_cancel(eng *e, eng_id id)
 {
-	for (uint32_t i = e->hole ? 1 : 0; i < e->n; i++) {
-		if (e->heap[i].seq == id) {
-			if (!e->heap[i].h)
-				return -1;
-			e->heap[i].h = NULL;
-			e->live--;
-			return 0;
-		}
-	}
-	return -1;
+	hent *x = NULL;
+	for (uint32_t i = 0; i < e->n && !x; i++)
+		if (e->heap[i].seq == id)
+			x = &e->heap[i];
+	for (uint32_t i = 0; i < e->pcap && !x && id; i++)
+		if (e->pool[i].ev.seq == id)
+			x = &e->pool[i].ev;
+	if (!x || !x->h)
+		return -1;
+	x->h = NULL;
+	e->live--;
+	return 0;
 }
 
 eng_status eng_run(eng *e, uint64_t limit)
 {
 	e->stop = 0;
-	while (e->n > 0) {
-		const hent *top = &e->heap[0];
-		if (!top->h) {
-			drop_root(e); /* cancelled: not run, counted or timed */
-			continue;
+	while (e->wn || e->n) {
+		/* the first event: the wheel's or the overflow's, by (when, seq) */
+		uint32_t s = 0;
+		const hent *top = NULL;
+		if (e->wn) {
+			s = first_used(e, slot_of(e->hd.now));
+			top = &e->pool[e->head[s]].ev;
 		}
-		if (top->when > limit)
+		int wheel = top && !(e->n && before(&e->heap[0], top));
+		if (!wheel)
+			top = &e->heap[0];
+		if (top->h && top->when > limit)
 			return ENG_LIMIT;
-		/* Copy out before the call: the handler may schedule (and so take
-		 * the root slot or move the heap) or cancel. */
+		/* copy out, then take it out: the handler may schedule (and so
+		 * move the heap or the pool) or cancel */
 		eng_handler h = top->h;
 		void *ctx = top->ctx;
-		uint64_t arg = top->arg;
-		e->hd.now = top->when;
+		uint64_t arg = top->arg, when = top->when;
+		if (wheel)
+			wheel_pop(e, s);
+		else
+			heap_pop(e);
+		if (!h)
+			continue; /* cancelled: not run, counted or timed */
+		e->hd.now = when;
 		e->live--;
 		e->dispatched++;
-		e->hole = 1;
 		h(e, ctx, arg);
-		if (e->hole)
-			drop_root(e);
 		if (e->stop) {
 			e->stop = 0;
 			return ENG_STOPPED;

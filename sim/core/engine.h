@@ -17,11 +17,13 @@
  * scheduled (FIFO). With a deterministic model the dispatch order is
  * therefore a pure function of the schedule calls: runs are reproducible.
  *
- * Cost. The queue is a binary min-heap of the event records themselves:
- * eng_schedule and each dispatch are O(log n) for n queued events, and the
- * first event a handler schedules takes the slot of the event being run (one
- * heap operation for the pop and the push). The heap doubles when full, so
- * steady state never mallocs. eng_cancel is O(n) (see below).
+ * Cost. Events of the near future (about 4.2 million ticks from eng_now's)
+ * go into a wheel of slots of 1024 ticks, each a list sorted by (when,
+ * sequence), with a bitmask of the slots in use: eng_schedule and each
+ * dispatch take a few steps whatever the number of queued events. Events
+ * further ahead go into a binary min-heap (O(log n)); a dispatch takes the
+ * first of the two (engine.c). Both grow by doubling, so steady state never
+ * mallocs. eng_cancel is O(n) (see below).
  *
  * Same-tick events. A handler may schedule an event for eng_now(): it runs in
  * the same eng_run, after every event already queued for that tick (its
