@@ -3,6 +3,7 @@
  */
 #include "units/gridtrav.h"
 #include "units/list.h"
+#include "units/traversal.h"
 
 #include <stdlib.h>
 
@@ -45,16 +46,9 @@ void gtu_begin(thr_ctx *t)
 		t->env->route.finish(t);
 		return;
 	}
-	uint64_t enter =
-	    pkt_trav_begin_fp(&t->ts, t->p, thr_img(t), t->stack, PKT_STACK_MAX, &v->prec);
-	t->sp = 0;
-	t->steps = 0;
-	thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
-	if (!enter) {
-		thr_count(t, C_BOX_MISS_PACKETS, 1);
-		t->env->route.finish(t);
+	uint64_t enter = tu_enter(t);
+	if (!enter)
 		return;
-	}
 	grid_walk_begin(&t->grid->w, v->grid, &t->ts, t->p, enter);
 	next(t);
 }

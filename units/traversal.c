@@ -23,19 +23,26 @@ static void cone_built(eng *e, void *ctx, uint64_t arg)
 	tu_step(ctx);
 }
 
-void tu_begin(thr_ctx *t)
+uint64_t tu_enter(thr_ctx *t)
 {
-	thr_env *v = t->env;
 	uint64_t enter =
-	    pkt_trav_begin_fp(&t->ts, t->p, thr_img(t), t->stack, PKT_STACK_MAX, &v->prec);
+	    pkt_trav_begin_fp(&t->ts, t->p, thr_img(t), t->stack, PKT_STACK_MAX, &t->env->prec);
 	t->sp = 0;
 	t->steps = 0;
 	thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
 	if (!enter) {
 		thr_count(t, C_BOX_MISS_PACKETS, 1);
 		t->env->route.finish(t);
-		return;
 	}
+	return enter;
+}
+
+void tu_begin(thr_ctx *t)
+{
+	thr_env *v = t->env;
+	uint64_t enter = tu_enter(t);
+	if (!enter)
+		return;
 	if (v->cone_cull) {
 		/* seed 004 §4: the rays that entered, enclosed in a cone by the
 		 * RGS, which holds them (one op of those rays) */

@@ -30,6 +30,11 @@
 
 /* The thread's packet enters the ray-tracing core. */
 void tu_begin(thr_ctx *t);
+/* The packet's rays clipped to the scene's box (the traversal state set
+ * up, the box misses counted); none entered: the packet went on to
+ * shading (route.finish) and 0 is returned. The kd and grid traversal
+ * units both start this way. */
+uint64_t tu_enter(thr_ctx *t);
 /* The next traversal step (after a leaf's triangles, or a node). */
 void tu_step(thr_ctx *t);
 
