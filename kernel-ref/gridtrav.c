@@ -29,6 +29,15 @@
 
 int grid_fault = GRID_FAULT_NONE;
 
+int grid_mbox_skip(const grid *g, grid_mbox *b, uint32_t addr, uint64_t *skips)
+{
+	if (!g->p.mailbox || !grid_mbox_seen(b, addr))
+		return 0;
+	if (skips)
+		(*skips)++;
+	return 1;
+}
+
 /* 1 when addr was already tested; records it otherwise. */
 int grid_mbox_seen(grid_mbox *b, uint32_t addr)
 {
@@ -79,11 +88,8 @@ static int dda_cell(const grid *g, uint32_t c, const isect_ray *ir, vec3 o, int 
 {
 	for (uint32_t k = g->first[c]; k < g->first[c + 1]; k++) {
 		uint32_t ta = g->refs[k];
-		if (g->p.mailbox && grid_mbox_seen(mb, ta)) {
-			if (gc)
-				gc->mailbox_skips++;
+		if (grid_mbox_skip(g, mb, ta, gc ? &gc->mailbox_skips : NULL))
 			continue;
-		}
 		if (gc) {
 			gc->tri_tests++;
 			gc->ray_tri_tests++;
@@ -300,11 +306,8 @@ static void slice_cell_test(const grid *g, trav_state *s, packet *p, const grid_
 {
 	for (uint32_t k = g->first[c]; k < g->first[c + 1]; k++) {
 		uint32_t ta = g->refs[k];
-		if (g->p.mailbox && grid_mbox_seen(mb, ta)) {
-			if (gc)
-				gc->mailbox_skips++;
+		if (grid_mbox_skip(g, mb, ta, gc ? &gc->mailbox_skips : NULL))
 			continue;
-		}
 		const mimg_tri *tr = mimg_tri_at(g->m, ta);
 		/* a culled triangle stays culled: the frustum does not change,
 		 * so the mailbox may keep it */

@@ -39,6 +39,10 @@ typedef struct grid_frustum {
 } grid_frustum;
 
 int grid_mbox_seen(grid_mbox *b, uint32_t addr);
+/* 1 when g mailboxes and addr was already tested for this ray or packet
+ * (counted into *skips, optional): the triangle is skipped. Every walk of
+ * a cell's list asks this before a test. */
+int grid_mbox_skip(const grid *g, grid_mbox *b, uint32_t addr, uint64_t *skips);
 /* The ray clipped to the scene box, exactly as ray_trace clips it. */
 int grid_clip_box(const grid *g, vec3 o, vec3 d, float tmax, float *tn, float *tf);
 int grid_clampi(double x, int n);

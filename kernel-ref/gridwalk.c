@@ -227,10 +227,8 @@ static int entry_ask(grid_walk *w, grid_ask *a)
 {
 	while (w->k < w->n) {
 		uint32_t ta = w->list[w->k++];
-		if (w->g->p.mailbox && grid_mbox_seen(&w->mb, ta)) {
-			w->c.mailbox_skips++;
+		if (grid_mbox_skip(w->g, &w->mb, ta, &w->c.mailbox_skips))
 			continue;
-		}
 		w->ta = ta;
 		a->op = GW_TRI;
 		a->addr = ta;
