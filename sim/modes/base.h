@@ -26,4 +26,19 @@ int mode_base_wait(thr_sink *s, thr_ctx *t, void (*cont)(thr_ctx *t));
  * the thread is idle. */
 void mode_base_end(thr_ctx *t, int shaded);
 
+/* Thread t's request to memory type `type` (mem/memport.h): its RTP is
+ * the port, its packet type (+1) the ray type, data the bytes' source or
+ * destination. */
+static inline mem_req mode_base_req(const thr_ctx *t, int type, uint64_t addr, uint32_t bytes,
+                                    int write, void *data)
+{
+	return (mem_req){.addr = addr,
+	                 .bytes = bytes,
+	                 .type = (uint8_t)type,
+	                 .write = (uint8_t)write,
+	                 .rtp = (uint16_t)t->rtp->id,
+	                 .data = data,
+	                 .ray = (uint8_t)(t->ptype + 1)};
+}
+
 #endif

@@ -9,8 +9,7 @@
 static void func_read(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
 {
 	(void)s;
-	mem_req r = {
-	    addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst, (uint8_t)(t->ptype + 1)};
+	mem_req r = mode_base_req(t, type, addr, bytes, 0, dst);
 	mem_access_func(t->env->mem, &r);
 }
 
@@ -18,13 +17,7 @@ static void func_write(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_
                        const void *src)
 {
 	(void)s;
-	mem_req r = {addr,
-	             bytes,
-	             (uint8_t)type,
-	             1,
-	             (uint16_t)t->rtp->id,
-	             (void *)src,
-	             (uint8_t)(t->ptype + 1)};
+	mem_req r = mode_base_req(t, type, addr, bytes, 1, (void *)src);
 	mem_access_func(t->env->mem, &r);
 }
 

@@ -22,8 +22,7 @@ static void mem_done(eng *e, void *ctx, uint64_t arg)
 static void timed_read(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32_t bytes, void *dst)
 {
 	(void)s;
-	mem_req r = {
-	    addr, bytes, (uint8_t)type, 0, (uint16_t)t->rtp->id, dst, (uint8_t)(t->ptype + 1)};
+	mem_req r = mode_base_req(t, type, addr, bytes, 0, dst);
 	t->pending++;
 	mem_access(t->env->mem, &r, mem_done, t, 0);
 }
@@ -32,13 +31,7 @@ static void timed_write(thr_sink *s, thr_ctx *t, int type, uint64_t addr, uint32
                         const void *src)
 {
 	(void)s;
-	mem_req r = {addr,
-	             bytes,
-	             (uint8_t)type,
-	             1,
-	             (uint16_t)t->rtp->id,
-	             (void *)src,
-	             (uint8_t)(t->ptype + 1)};
+	mem_req r = mode_base_req(t, type, addr, bytes, 1, (void *)src);
 	mem_access(t->env->mem, &r, NULL, NULL, 0);
 }
 
