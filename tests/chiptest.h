@@ -19,6 +19,22 @@ static inline void tu_assert_report_ok(const chip *ch)
 		cr_assert_fail("%d report invariants failed; first: %s", l.n, l.msg[0]);
 }
 
+/* A small chip (2 RTPs x 4 threads) for size x size frames in fidelity
+ * mode, with the VMA when with_vma. */
+static inline void tu_cfg_small(saar_config *c, int size, const char *mode, int with_vma)
+{
+	cfg_defaults(c);
+	c->frame.width = c->frame.height = size;
+	c->chip.rtps = 2;
+	c->chip.threads_per_rtp = 4;
+	diag d;
+	char kv[64];
+	snprintf(kv, sizeof kv, "fidelity=%s", mode);
+	cr_assert_eq(cfg_set(c, kv, &d), 0, "%s", d.msg);
+	if (with_vma)
+		cr_assert_eq(cfg_set(c, "memory.vma.enabled=true", &d), 0, "%s", d.msg);
+}
+
 /* Loads the scene at path (NULL: the view's, else the embedded room) with view vname of
  * the views file (NULL: the default view), through a world cache in cache_dir (NULL:
  * none). */

@@ -25,19 +25,11 @@ static void load_grid(world *w, const char *path, const char *views, const char 
 	cr_assert(w->grid, "no grid");
 }
 
+/* tu_cfg_small's chip walking the grid. */
 static void cfg_small(saar_config *c, int size, const char *mode, int with_vma)
 {
-	cfg_defaults(c);
-	c->frame.width = c->frame.height = size;
-	c->chip.rtps = 2;
-	c->chip.threads_per_rtp = 4;
+	tu_cfg_small(c, size, mode, with_vma);
 	c->chip.accel = CFG_ACCEL_GRID;
-	diag d;
-	char kv[64];
-	snprintf(kv, sizeof kv, "fidelity=%s", mode);
-	cr_assert_eq(cfg_set(c, kv, &d), 0, "%s", d.msg);
-	if (with_vma)
-		cr_assert_eq(cfg_set(c, "memory.vma.enabled=true", &d), 0, "%s", d.msg);
 }
 
 /* kernel-ref's grid frame's counts (one thread: the frame's packets). */

@@ -47,19 +47,17 @@ static void load_two_level(world *w, const char *path, double t)
 	cr_assert(w->tl, "no two-level trees");
 }
 
-static void cfg_small(saar_config *c, int size, const char *mode, int with_vma)
+/* Moves two-level world w (AFF scene path) to time t. */
+static void move_to(world *w, const char *path, double t)
 {
-	cfg_defaults(c);
-	c->frame.width = c->frame.height = size;
-	c->chip.rtps = 2;
-	c->chip.threads_per_rtp = 4;
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = path;
+	o.two_level = 1;
 	diag d;
-	char kv[64];
-	snprintf(kv, sizeof kv, "fidelity=%s", mode);
-	cr_assert_eq(cfg_set(c, kv, &d), 0, "%s", d.msg);
-	if (with_vma)
-		cr_assert_eq(cfg_set(c, "memory.vma.enabled=true", &d), 0, "%s", d.msg);
+	cr_assert_eq(world_set_time(w, &o, t, &d), 0, "%s", d.msg);
 }
+
 
 /* Runs the chip; 1 when its frame is kernel-ref's two-level frame (packets
  * and single rays). */
@@ -71,6 +69,22 @@ static int run_identical(chip *ch)
 	chip_check k;
 	cr_assert_eq(chip_check_frame(ch, &k, &d), 0, "%s", d.msg);
 	return k.cmp.identical && k.single.identical;
+}
+
+/* A small cycle chip on w, its top level overwritten with the n bytes
+ * top (none when NULL) before it runs: run_identical's answer. */
+static int identical_with_top(world *w, const void *top, uint64_t n)
+{
+	saar_config c;
+	tu_cfg_small(&c, 48, "cycle", 0);
+	diag d;
+	chip *ch = chip_create(&c, w, &d);
+	cr_assert(ch, "%s", d.msg);
+	if (top)
+		cr_assert_eq(ms_write(&ch->store, ch->tli.top_base, n, top), 0);
+	int same = run_identical(ch);
+	chip_destroy(ch);
+	return same;
 }
 
 /* Every frame, in cycle and functional fidelity, with and without the
@@ -93,7 +107,7 @@ Test(chip_twolevel, frames_match_kernel_ref, .timeout = 120)
 		for (int m = 0; m < 2; m++)
 			for (int v = 0; v < 2; v++) {
 				saar_config c;
-				cfg_small(&c, 48, modes[m], v);
+				tu_cfg_small(&c, 48, modes[m], v);
 				diag d;
 				chip *ch = chip_create(&c, &w, &d);
 				cr_assert(ch, "%s", d.msg);
@@ -122,7 +136,7 @@ Test(chip_twolevel, robots_frames_match_kernel_ref, .timeout = 300)
 		world w;
 		load_two_level(&w, aff, ts[k]);
 		saar_config c;
-		cfg_small(&c, 64, "cycle", 0);
+		tu_cfg_small(&c, 64, "cycle", 0);
 		diag d;
 		chip *ch = chip_create(&c, &w, &d);
 		cr_assert(ch, "%s", d.msg);
@@ -168,11 +182,7 @@ Test(chip_twolevel, stale_transform_changes_the_frame, .timeout = 120)
 	tl_image im;
 	diag d;
 	cr_assert_eq(tli_build(&im, w.tl, &w.m, &d), 0, "%s", d.msg);
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = p;
-	o.two_level = 1;
-	cr_assert_eq(world_set_time(&w, &o, 2.5, &d), 0, "%s", d.msg);
+	move_to(&w, p, 2.5);
 	cr_assert_eq(tli_write_top(&im, w.tl), n0);
 	uint8_t *now = top_bytes(&w, &n1);
 	cr_assert_eq(n0, n1);
@@ -180,13 +190,8 @@ Test(chip_twolevel, stale_transform_changes_the_frame, .timeout = 120)
 	cr_assert(memcmp(im.bytes + im.top_base, now, n1) == 0,
 	          "the update differs from the frame's top level");
 	tli_free(&im);
-	saar_config c;
-	cfg_small(&c, 48, "cycle", 0);
-	chip *ch = chip_create(&c, &w, &d);
-	cr_assert(ch, "%s", d.msg);
-	cr_assert_eq(ms_write(&ch->store, ch->tli.top_base, n0, old), 0);
-	cr_assert_not(run_identical(ch), "a stale top level in memory gave the new frame");
-	chip_destroy(ch);
+	cr_assert_not(identical_with_top(&w, old, n0),
+	              "a stale top level in memory gave the new frame");
 	free(old);
 	free(now);
 	world_free(&w);
@@ -210,20 +215,10 @@ Test(chip_twolevel, stale_forward_matrix_changes_the_frame, .timeout = 120)
 	load_two_level(&w, p, 0);
 	uint64_t n0, n1;
 	uint8_t *old = top_bytes(&w, &n0);
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = p;
-	o.two_level = 1;
-	diag d;
-	cr_assert_eq(world_set_time(&w, &o, 2.5, &d), 0, "%s", d.msg);
+	move_to(&w, p, 2.5);
 	uint8_t *now = top_bytes(&w, &n1);
 	cr_assert_eq(n0, n1);
-	saar_config c;
-	cfg_small(&c, 48, "cycle", 0);
-	chip *ch = chip_create(&c, &w, &d);
-	cr_assert(ch, "%s", d.msg);
-	cr_assert(run_identical(ch), "the frame at 2.5 differs");
-	chip_destroy(ch);
+	cr_assert(identical_with_top(&w, NULL, 0), "the frame at 2.5 differs");
 	/* t = 0's shading transforms, record for record in 2.5's order */
 	uint64_t nodes = (uint64_t)w.tl->nnode * TLI_NODE_BYTES;
 	for (uint32_t k = 0; k < w.tl->ninst; k++) {
@@ -239,11 +234,8 @@ Test(chip_twolevel, stale_forward_matrix_changes_the_frame, .timeout = 120)
 				memcpy(now + r, old + q + TLI_INST_WALK_BYTES, SHADE_XF_BYTES);
 		}
 	}
-	ch = chip_create(&c, &w, &d);
-	cr_assert(ch, "%s", d.msg);
-	cr_assert_eq(ms_write(&ch->store, ch->tli.top_base, n1, now), 0);
-	cr_assert_not(run_identical(ch), "stale forward matrices in memory gave the new frame");
-	chip_destroy(ch);
+	cr_assert_not(identical_with_top(&w, now, n1),
+	              "stale forward matrices in memory gave the new frame");
 	free(old);
 	free(now);
 	world_free(&w);
@@ -260,7 +252,7 @@ Test(chip_twolevel, update_is_counted, .timeout = 60)
 	world w;
 	load_two_level(&w, p, 1);
 	saar_config c;
-	cfg_small(&c, 32, "cycle", 0);
+	tu_cfg_small(&c, 32, "cycle", 0);
 	diag d;
 	chip *ch = chip_create(&c, &w, &d);
 	cr_assert(ch, "%s", d.msg);
@@ -377,11 +369,7 @@ static int warm_step(chip *c, int f, void *ctx, diag *d)
 	x->identical += k.cmp.identical && k.single.identical;
 	tl_image before, after;
 	cr_assert_eq(tli_build(&before, x->w->tl, &x->w->m, d), 0);
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = x->path;
-	o.two_level = 1;
-	cr_assert_eq(world_set_time(x->w, &o, x->ts[f], d), 0, "%s", d->msg);
+	move_to(x->w, x->path, x->ts[f]);
 	cr_assert_eq(tli_build(&after, x->w->tl, &x->w->m, d), 0);
 	x->want[f] = changed_bytes(&before, &after);
 	tli_free(&before);
@@ -397,7 +385,7 @@ static int run_warm(const char *path, const double *ts, int n, const char *mode,
 	world w;
 	load_two_level(&w, path, ts[0]);
 	saar_config c;
-	cfg_small(&c, 48, mode, with_vma);
+	tu_cfg_small(&c, 48, mode, with_vma);
 	c.frame.frames = n;
 	diag d;
 	chip *ch = chip_create(&c, &w, &d);
