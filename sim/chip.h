@@ -105,8 +105,11 @@ typedef struct chip_fidelity {
 	uint64_t replayed_tiles; /* all frames: tiles whose packets were replayed */
 	uint64_t detailed_tiles, functional_tiles, detailed_cycles; /* all frames */
 	double *est, *half; /* per frame: cycles (estimate or measured), 95% half-width */
-	double *floor;      /* per frame: the busiest-resource bound (cycles can't be lower) */
-	double *unit_rate;  /* last frame: cycles per unit of demand of each unit */
+	/* sampled, last frame: the measured head (to the first unit's end)
+	 * and tail (from the last region's start), cycles */
+	double head_cyc, tail_cyc;
+	double *floor;     /* per frame: the busiest-resource bound (cycles can't be lower) */
+	double *unit_rate; /* last frame: cycles per unit of demand of each unit */
 	/* busiest-resource bound, last frame: cycles each resource needs */
 	double res_cycles[RES_N];
 	int bound_by; /* enum chip_res */
