@@ -25,25 +25,56 @@ import sys
 class Bad(Exception):
     """Bad input: one line, exit status 2."""
 
+# The census's columns (docs/report.md, "Census"), found by name in its
+# header: a column added to the census (the transformation unit's xform
+# came after this script was written, read by position it shifted the
+# SDRAM and host-bus times by one) must not move what the script reads.
+FIXED = ("frame", "first_tile", "tiles", "cycles")
+MEMORY = ("sdram", "hostbus")
+
+def columns(path, no, line):
+    """The header's column indices: frame, first_tile, tiles, cycles, the
+    compute resources (every other column before sdram: units and L1s),
+    sdram and hostbus."""
+    h = [x.strip() for x in line.strip().split(",")]
+    missing = [n for n in FIXED + MEMORY if n not in h]
+    if missing:
+        raise Bad("%s:%d: not a census header (saarsim --census): no column %s"
+                  % (path, no, ", ".join(missing)))
+    if len(set(h)) != len(h):
+        raise Bad("%s:%d: a column named twice in the census header" % (path, no))
+    at = {n: h.index(n) for n in FIXED + MEMORY}
+    comp = [i for i, n in enumerate(h) if n not in FIXED + MEMORY]
+    if not comp:
+        raise Bad("%s:%d: no compute resource columns in the census header" % (path, no))
+    return at, comp, len(h)
+
 def analyse(path, RW, hard_share=0.6):
     rows = []
     try:
         f = open(path)
     except OSError as e:
         raise Bad("%s: cannot read: %s" % (path, e.strerror))
+    cols = None
     with f:
         for no, l in enumerate(f, 1):
-            if l.startswith("frame"):
+            if cols is None:
+                cols = columns(path, no, l)
                 continue
+            at, comp, width = cols
             v = l.strip().split(",")
-            if v[0] != "1":
+            if v[at["frame"]] != "1":
                 continue
             try:
-                if len(v) < 14:
-                    raise ValueError("%d fields" % len(v))
-                rows.append((int(v[1]), int(v[2]), float(v[3]), [float(x) for x in v[4:]]))
+                if len(v) != width:
+                    raise ValueError("%d fields, the header has %d" % (len(v), width))
+                rows.append((int(v[at["first_tile"]]), int(v[at["tiles"]]), float(v[at["cycles"]]),
+                             max(float(v[i]) for i in comp), float(v[at["sdram"]]),
+                             float(v[at["hostbus"]])))
             except ValueError as e:
                 raise Bad("%s:%d: not a census row (saarsim --census): %s" % (path, no, e))
+    if cols is None:
+        raise Bad("%s: empty (no census header)" % path)
     N = sum(r[1] for r in rows)
     T = sum(r[2] for r in rows)
     mid = [r for r in rows if r[0] >= RW and r[0] + r[1] <= N - RW]
@@ -52,9 +83,9 @@ def analyse(path, RW, hard_share=0.6):
                   "need at least 2" % (path, len(mid), RW))
     c = [r[2] for r in mid]
     M = sum(c)
-    comp = [max(r[3][:8]) for r in mid]
-    sdr = [r[3][8] for r in mid]
-    hb = [r[3][9] for r in mid]
+    comp = [r[3] for r in mid]
+    sdr = [r[4] for r in mid]
+    hb = [r[5] for r in mid]
     def xs(k):
         return [max(a, k * b, h) for a, b, h in zip(comp, sdr, hb)]
     best = None
