@@ -30,6 +30,7 @@
 #include <math.h>
 
 #include "kernel-ref/cone.h"
+#include "kernel-ref/isect.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/simd.h"
 
@@ -65,35 +66,71 @@ static inline float mx2(float a, float b)
 	return a > b ? a : b;
 }
 
-/* Smallest and largest x over the lanes of mask; returns nonzero when x
- * is NaN in one of them (the bounds are then meaningless). A group with
- * all lanes in mask needs no selects. */
-static unsigned lane_range(const float *x, uint64_t mask, float *lo, float *hi)
+/* Smallest and largest lane of v (no NaN lanes): a reduction tree with
+ * AVX-512, else lane by lane. */
+static inline float fv_hmin(fv v)
+{
+#if SIMD_W == 16 && defined(__AVX512F__)
+	__m512 x;
+	memcpy(&x, &v, sizeof x);
+	return _mm512_reduce_min_ps(x);
+#else
+	float a = v[0];
+	for (int l = 1; l < SIMD_W; l++)
+		a = v[l] < a ? v[l] : a;
+	return a;
+#endif
+}
+static inline float fv_hmax(fv v)
+{
+#if SIMD_W == 16 && defined(__AVX512F__)
+	__m512 x;
+	memcpy(&x, &v, sizeof x);
+	return _mm512_reduce_max_ps(x);
+#else
+	float a = v[0];
+	for (int l = 1; l < SIMD_W; l++)
+		a = v[l] > a ? v[l] : a;
+	return a;
+#endif
+}
+
+#define FRU_RANGES 9 /* at most, in one pass (fru_setup) */
+
+/* Smallest and largest x[j][i] over the lanes i of mask, for j < n, in one
+ * pass over the lane groups; returns nonzero when one is NaN (the bounds
+ * are then meaningless). A group with all lanes in mask needs no
+ * selects. Which zero a range of +0 and -0 ends on does not matter: the
+ * bounds only decide shortcuts (file comment), by value. */
+static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *lo, float *hi)
 {
 	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
-	fv mn = pinf, mx = ninf;
+	fv mn[FRU_RANGES], mx[FRU_RANGES];
+	for (int j = 0; j < n; j++) {
+		mn[j] = pinf;
+		mx[j] = ninf;
+	}
 	unsigned nan = 0;
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
 		if (!gb)
 			continue;
-		fv v = fv_load(x + SIMD_W * g), vl = v, vh = v;
-		if (gb != SIMD_MASK) {
-			iv on = iv_from_bits(gb);
-			vl = fv_sel(on, v, pinf);
-			vh = fv_sel(on, v, ninf);
+		iv on = iv_from_bits(gb);
+		for (int j = 0; j < n; j++) {
+			fv v = fv_load(x[j] + SIMD_W * g), vl = v, vh = v;
+			if (gb != SIMD_MASK) {
+				vl = fv_sel(on, v, pinf);
+				vh = fv_sel(on, v, ninf);
+			}
+			nan |= iv_bits(v != v) & gb;
+			mn[j] = fv_min(mn[j], vl);
+			mx[j] = fv_max(mx[j], vh);
 		}
-		nan |= iv_bits(v != v) & gb;
-		mn = fv_min(mn, vl);
-		mx = fv_max(mx, vh);
 	}
-	float a = INFINITY, b = -INFINITY;
-	for (int l = 0; l < SIMD_W; l++) {
-		a = mn[l] < a ? mn[l] : a;
-		b = mx[l] > b ? mx[l] : b;
+	for (int j = 0; j < n; j++) {
+		lo[j] = fv_hmin(mn[j]);
+		hi[j] = fv_hmax(mx[j]);
 	}
-	*lo = a;
-	*hi = b;
 	return nan;
 }
 
@@ -102,12 +139,20 @@ static unsigned lane_range(const float *x, uint64_t mask, float *lo, float *hi)
 static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t entered)
 {
 	const float *id[3] = {s->rc.idx, s->rc.idy, s->rc.idz};
-	const float *org[3] = {p->ox, p->oy, p->oz};
-	unsigned nan = 0;
+	const float *x[FRU_RANGES] = {s->rc.idx, s->rc.idy, s->rc.idz, p->ox, p->oy,
+	                              p->oz,     p->dx,     p->dy,     p->dz};
+	float lo[FRU_RANGES], hi[FRU_RANGES];
+	unsigned nan = lane_ranges(x, FRU_RANGES, entered, lo, hi);
 	int any = 0;
+	b->one = 1;
+	b->dmax = 0.0f;
 	for (int a = 0; a < 3; a++) {
-		nan |= lane_range(id[a], entered, &b->idlo[a], &b->idhi[a]);
-		nan |= lane_range(org[a], entered, &b->olo[a], &b->ohi[a]);
+		b->idlo[a] = lo[a];
+		b->idhi[a] = hi[a];
+		b->olo[a] = lo[3 + a];
+		b->ohi[a] = hi[3 + a];
+		b->dlo[a] = lo[6 + a];
+		b->dhi[a] = hi[6 + a];
 		b->pos[a] = b->idlo[a] > 0.0f;
 		b->ok[a] =
 		    b->pos[a] ? b->idhi[a] < INFINITY : b->idhi[a] < 0.0f && b->idlo[a] > -INFINITY;
@@ -116,12 +161,6 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 			int first = __builtin_ctzll(entered);
 			b->idlo[a] = b->idhi[a] = id[a][first];
 		}
-	}
-	const float *dir[3] = {p->dx, p->dy, p->dz};
-	b->one = 1;
-	b->dmax = 0.0f;
-	for (int a = 0; a < 3; a++) {
-		nan |= lane_range(dir[a], entered, &b->dlo[a], &b->dhi[a]);
 		b->one &= b->olo[a] == b->ohi[a];
 		b->dmax = mx2(b->dmax, mx2(fabsf(b->dlo[a]), fabsf(b->dhi[a])));
 	}
@@ -394,6 +433,122 @@ static uint32_t fru_step(fru_walker *w, kd_node n)
 	return pushed;
 }
 
+/* pkt_isect_tri_v for a packet whose rays share one axis permutation
+ * (pkt_rayc.uniform, full precision), the same operations in the same
+ * order: the barycentrics' divisions are left to the lanes whose hit is
+ * taken (a division is correctly rounded, in a lane or alone), which the
+ * packet test spends on every lane of a group with a candidate. */
+static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
+                      uint32_t tri_addr)
+{
+	const pkt_rayc *rc = &s->rc;
+	const fv zero = fv_set1(0.0f);
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(mask, g);
+		if (!gb)
+			continue;
+		int o = SIMD_W * g;
+		fv sx = fv_load(rc->sx + o), sy = fv_load(rc->sy + o);
+		fv okx = fv_load(rc->okx + o), oky = fv_load(rc->oky + o);
+		fv okz = fv_load(rc->okz + o);
+		fv vx[3], vy[3], vkz[3];
+		for (int k = 0; k < 3; k++) {
+			vkz[k] = fv_set1(tr->v[k][rc->ukz]) - okz;
+			vx[k] = (fv_set1(tr->v[k][rc->ukx]) - okx) - sx * vkz[k];
+			vy[k] = (fv_set1(tr->v[k][rc->uky]) - oky) - sy * vkz[k];
+		}
+		fv u = vx[2] * vy[1] - vy[2] * vx[1];
+		fv v = vx[0] * vy[2] - vy[0] * vx[2];
+		fv w = vx[1] * vy[0] - vy[1] * vx[0];
+		unsigned dbl = iv_bits((u == zero) | (v == zero) | (w == zero)) & gb;
+		for (unsigned k = dbl; k; k &= k - 1) {
+			int l = __builtin_ctz(k);
+			float uu, vv, ww;
+			isect_uvw_double(vx[0][l], vy[0][l], vx[1][l], vy[1][l], vx[2][l], vy[2][l],
+			                 &uu, &vv, &ww);
+			u[l] = uu;
+			v[l] = vv;
+			w[l] = ww;
+		}
+		iv neg = (u < zero) | (v < zero) | (w < zero);
+		iv posv = (u > zero) | (v > zero) | (w > zero);
+		fv det = u + v + w;
+		unsigned okb = iv_bits(~(neg & posv) & (det != zero)) & gb;
+		if (!okb)
+			continue;
+		fv sz = fv_load(rc->sz + o);
+		fv az = sz * vkz[0], bz = sz * vkz[1], cz = sz * vkz[2];
+		fv t = (u * az + v * bz + w * cz) / det;
+		/* conservative t > 0, as in isect_tri (pbrt's deltaT) */
+		fv mzt = fv_max(fv_abs(az), fv_max(fv_abs(bz), fv_abs(cz)));
+		fv mxt = fv_max(fv_abs(vx[0]), fv_max(fv_abs(vx[1]), fv_abs(vx[2])));
+		fv myt = fv_max(fv_abs(vy[0]), fv_max(fv_abs(vy[1]), fv_abs(vy[2])));
+		fv dz = fv_set1(ISECT_GAMMA(3)) * mzt;
+		fv dx = fv_set1(ISECT_GAMMA(5)) * (mxt + mzt),
+		   dy = fv_set1(ISECT_GAMMA(5)) * (myt + mzt);
+		fv de = fv_set1(2.0f) * (fv_set1(ISECT_GAMMA(2)) * mxt * myt + dy * mxt + dx * myt);
+		fv me = fv_max(fv_abs(u), fv_max(fv_abs(v), fv_abs(w)));
+		fv dt = fv_set1(3.0f) * (fv_set1(ISECT_GAMMA(3)) * me * mzt + de * mzt + dz * me) /
+		        fv_abs(det);
+		okb &= iv_bits(t > dt);
+		for (unsigned k = okb; k; k &= k - 1) {
+			int l = __builtin_ctz(k), i = o + l;
+			if (s->shadow) {
+				if (t[l] < p->tmax[i] && p->tri[i] == PKT_NOHIT) {
+					p->t[i] = -INFINITY; /* occluded: every filter drops it */
+					p->tri[i] = tri_addr;
+				}
+			} else if (isect_better(t[l], tri_addr, p->t[i], p->tri[i])) {
+				p->t[i] = t[l];
+				p->tri[i] = tri_addr;
+				p->bu[i] = fru_fault == FRU_FAULT_BARY_SWAP ? w[l] / det[l]
+				                                            : v[l] / det[l];
+				p->bv[i] = w[l] / det[l];
+			}
+		}
+	}
+}
+
+/* pkt_trace_leaf (the same counts, cone culling and shadow-ray drops),
+ * its triangles fetched ahead and tested by fru_isect where the rays share
+ * one permutation; skip as there. */
+static void fru_leaf(trav_state *s, packet *p, const mimg *m, kd_node n, uint64_t mask,
+                     const pkt_cone *cone, trav_counts *c, const pkt_skip *skip)
+{
+	const uint32_t *list = mimg_lists(m) + kd_first(n);
+	uint32_t count = kd_count(n);
+	if (!s->rc.uniform) {
+		pkt_trace_leaf(s, p, m, kd_first(n), count, mask, cone, c, skip);
+		return;
+	}
+	for (uint32_t k = 0; k < count; k++)
+		__builtin_prefetch(mimg_tri_at(m, list[k]));
+	if (c) {
+		c->leaf_visits++;
+		c->tri_tests += count;
+		c->ray_tri_tests += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
+	}
+	for (uint32_t k = 0; k < count && mask; k++) {
+		const mimg_tri *tr = mimg_tri_at(m, list[k]);
+		if (cone && cone_culls_tri(cone, tr)) {
+			if (c) {
+				c->cone_culled++;
+				c->cone_saved_ray_tests += (uint64_t)__builtin_popcountll(mask);
+			}
+			continue;
+		}
+		if (skip && skip->missed(skip->ctx, tr))
+			continue;
+		fru_isect(s, p, tr, mask, list[k]);
+		if (s->shadow)
+			for (uint64_t b = mask; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				if (p->tri[i] != PKT_NOHIT)
+					mask &= ~(1ull << i);
+			}
+	}
+}
+
 /* pkt_trace_run with the packet shortcut (fru_step), the same pops
  * (fru_pop) and leaves, so the same counts; the segments change hands
  * instead of being copied (fru_walker). The next node's data is fetched
@@ -404,7 +559,6 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
                      const pkt_cone *cone, trav_counts *c)
 {
 	const kd_node *nodes = mimg_nodes(m);
-	const uint32_t *lists = mimg_lists(m);
 	fru_walker *w = &(fru_walker){.b = b, .s = s, .p = p};
 	for (int k = 0; k < s->stack_max; k++)
 		w->stk[k].seg = &s->stack[k];
@@ -412,19 +566,18 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	w->spare = &s->spare;
 	w->node = s->cur.node;
 	w->mask = s->cur.mask;
-	float lo, hi;
-	lane_range(s->cur.tn, w->mask, &w->tn, &hi);
-	lane_range(s->cur.tf, w->mask, &lo, &w->tf);
+	const float *seg[2] = {s->cur.tn, s->cur.tf};
+	float lo[2], hi[2];
+	lane_ranges(seg, 2, w->mask, lo, hi);
+	w->tn = lo[0];
+	w->tf = hi[1];
 	while (fru_pop(w)) {
 		kd_node n = nodes[w->node];
 		if (kd_is_leaf(n)) {
-			uint32_t first = kd_first(n), count = kd_count(n);
-			for (uint32_t k = 0; k < count; k++)
-				__builtin_prefetch(mimg_tri_at(m, lists[first + k]));
 			/* triangle culling pays when many rays would test */
 			int many = b->one && __builtin_popcountll(w->mask) >= 16;
 			pkt_skip sk = {fru_tri_missed, b};
-			pkt_trace_leaf(s, p, m, first, count, w->mask, cone, c, many ? &sk : NULL);
+			fru_leaf(s, p, m, n, w->mask, cone, c, many ? &sk : NULL);
 			w->mask = 0; /* pop next */
 		} else {
 			__builtin_prefetch(&nodes[kd_left(n)]);

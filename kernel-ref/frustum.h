@@ -64,14 +64,17 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered);
  *   FRU_FAULT_STALE_SEGMENTS: a pop takes the entry's node and rays but
  *     leaves the current segment buffer in place of the entry's (the
  *     buffers change hands instead of being copied: rays step with
- *     another node's segments). */
+ *     another node's segments);
+ *   FRU_FAULT_BARY_SWAP: the leaf test's late barycentric division
+ *     divides the wrong edge function for bu (w in place of v). */
 enum fru_fault {
 	FRU_FAULT_NONE,
 	FRU_FAULT_ALWAYS_NEAR,
 	FRU_FAULT_ONE_DIRECTION,
 	FRU_FAULT_CULL_ONE_SIGN,
 	FRU_FAULT_POP_ALL,
-	FRU_FAULT_STALE_SEGMENTS
+	FRU_FAULT_STALE_SEGMENTS,
+	FRU_FAULT_BARY_SWAP
 };
 extern int fru_fault;
 
