@@ -159,12 +159,15 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 	return shade_packet_fp(c, NULL, p, out, max_out, log, cnt);
 }
 
+static int shade_packet_in(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr,
+                           const packet *p, packet *out, int max_out, shade_counts *cnt, int lean);
+
 int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet *out, int max_out,
                     shade_log *log, shade_counts *cnt)
 {
 	mimg_rd r = {c->m, c->tl, log};
 	shade_reader rd = {mimg_read, &r};
-	return shade_packet_rd(c, fp, &rd, p, out, max_out, cnt);
+	return shade_packet_in(c, fp, &rd, p, out, max_out, cnt, !log && !c->tl);
 }
 
 /* A hit's surface as the shader uses it: the records the reader gave, the
@@ -454,8 +457,67 @@ static void shade_lane(const shade_ctx *c, const fpfmt *fq, const shade_reader *
 	secondary_rays(c, fq, &h, sp, i, p, d, w, kr, kt);
 }
 
-int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr, const packet *p,
-                    packet *out, int max_out, shade_counts *cnt)
+/* A record of the image at addr straight from its bytes, as mimg_read
+ * gives it; 0 where mimg_read would give zeros (past the image). */
+static int lean_get(const mimg *m, uint64_t addr, uint32_t bytes, void *out)
+{
+	if (addr > m->size || bytes > m->size - addr)
+		return 0;
+	memcpy(out, m->bytes + addr, bytes);
+	return 1;
+}
+
+/* shade_lane for a hit that spawns no ray (no shadow packets, and no
+ * reflection or refraction: none in the material, or the depth cut) and
+ * has no bump map, read from kernel-ref's image without a log (full
+ * precision, a single tree): the same pixel add and counts, from the two
+ * records and the operations that decide them (the ambient term of
+ * textures and shade_lane, the uv of hit_surface), without the hit's
+ * geometry, the reader's calls and the records' copies a spawning lane
+ * needs. Returns 0, having done nothing, for a lane it does not cover. */
+static int shade_lane_lean(const shade_ctx *c, const shade_reader *rdr, const packet *p, int i,
+                           const spawn *sp, shade_counts *cnt)
+{
+	const mimg *m = c->m;
+	uint32_t ta = p->tri[i];
+	mimg_shade sh;
+	mimg_mat mt;
+	if (ta == PKT_NOHIT ||
+	    !lean_get(m, mimg_shade_addr(m, mimg_tri_index(m, ta)), MIMG_SHADE_BYTES, &sh))
+		return 0;
+	if (!lean_get(m, mimg_mat_addr(m, sh.mat), MIMG_MAT_BYTES, &mt) || mt.tex_bump >= 0)
+		return 0;
+	float kr = mt.reflect, kt = mt.transmit;
+	if ((kr > 0.0f || kt > 0.0f) && sp->can_recurse)
+		return 0;
+	cnt->hits++;
+	vec3 ka = arr3(mt.ka);
+	if (mt.tex_kd >= 0) {
+		float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
+		vec2 uv = {b0 * sh.uv[0][0] + b1 * sh.uv[1][0] + b2 * sh.uv[2][0],
+		           b0 * sh.uv[0][1] + b1 * sh.uv[1][1] + b2 * sh.uv[2][1]};
+		mimg_texhdr th;
+		vec3 tx = texel(rdr, m, mt.tex_kd, uv, 0, 0, cnt, &th);
+		if (shade_fault != SHADE_FAULT_LEAN_NO_TEXTURE)
+			ka = v3_mul(ka, tx);
+	} else
+		cnt->untextured_hits++;
+	float kl = 1.0f - kr - kt;
+	if (kl < 0.0f)
+		kl = 0.0f;
+	vec3 w = v3(p->wr[i], p->wg[i], p->wb[i]);
+	add(c, p->pixel[i], v3_scale(v3_mul(v3_scale(w, kl), ka), SHADE_AMBIENT));
+	if (c->nlights == 0 && kl > 0.0f)
+		cnt->shadow_skip_nolight++;
+	cnt->depth_cut += (kr > 0.0f) + (kt > 0.0f);
+	return 1;
+}
+
+/* shade_packet_rd; lean: the reader is kernel-ref's image without a log
+ * and the records are a single tree's (shade_packet_fp), so lanes that
+ * spawn nothing may take shade_lane_lean. */
+static int shade_packet_in(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr,
+                           const packet *p, packet *out, int max_out, shade_counts *cnt, int lean)
 {
 	if (c->defer)
 		c->defer->n = 0;
@@ -471,8 +533,12 @@ int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr
 		sp.refl->valid = sp.refr->valid = 0;
 	for (int l = 0; l < nl + 2; l++)
 		out[l].sample = p->sample; /* children keep the pixels' sample */
-	for (uint64_t b = p->valid; b; b &= b - 1)
-		shade_lane(c, fq, rdr, p, __builtin_ctzll(b), &sp, cnt);
+	lean = lean && !fq && sp.nl == 0;
+	for (uint64_t b = p->valid; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		if (!lean || !shade_lane_lean(c, rdr, p, i, &sp, cnt))
+			shade_lane(c, fq, rdr, p, i, &sp, cnt);
+	}
 	if (!sp.refl->valid && !sp.refr->valid && p->type != PKT_SHADOW)
 		cnt->secondary_skip++;
 	/* compact: keep only packets that carry rays */
@@ -486,6 +552,12 @@ int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr
 		k++;
 	}
 	return k;
+}
+
+int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr, const packet *p,
+                    packet *out, int max_out, shade_counts *cnt)
+{
+	return shade_packet_in(c, fp, rdr, p, out, max_out, cnt, 0);
 }
 
 void shade_shadow_done(const shade_ctx *c, const packet *p, shade_counts *cnt)

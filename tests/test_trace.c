@@ -332,3 +332,108 @@ Test(trace, textures_and_bump_maps_are_shaded)
 	fb_free(&plain);
 	fb_free(&bumped);
 }
+
+/* Five quads side by side, each with its own material: plain, a map_Kd
+ * checker, a bump map, a mirror (illum 3) and glass (d 0.5); the
+ * background shows around them. */
+static void lean_scene(const char *dir, world *w)
+{
+	uint8_t px[2 * 2 * 3] = {255, 0, 0, 0, 0, 255, 0, 0, 255, 255, 0, 0};
+	uint8_t bump[4 * 4 * 3];
+	for (int i = 0; i < 16; i++)
+		memset(bump + 3 * i, (i * 53) % 256, 3);
+	char path[512], obj[512], mtl[512], text[2048];
+	diag d;
+	snprintf(path, sizeof path, "%s/checker.png", dir);
+	cr_assert_eq(img_write(path, 2, 2, px, NULL, NULL, &d), 0, "%s", d.msg);
+	snprintf(path, sizeof path, "%s/bump.png", dir);
+	cr_assert_eq(img_write(path, 4, 4, bump, NULL, NULL, &d), 0, "%s", d.msg);
+	tu_write(mtl, sizeof mtl, dir, "five.mtl",
+	         "newmtl plain\nKd 0.8 0.6 0.4\nKa 0.7 0.5 0.3\nKs 0 0 0\n"
+	         "newmtl tex\nKd 1 1 1\nKa 0.9 0.8 0.7\nKs 0 0 0\nmap_Kd checker.png\n"
+	         "newmtl bumpy\nKd 1 1 1\nKa 1 1 1\nKs 0 0 0\nbump bump.png\n"
+	         "newmtl mirror\nKd 0.2 0.2 0.2\nKa 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum 3\n"
+	         "newmtl glass\nKd 0.1 0.2 0.3\nKa 0.4 0.4 0.4\nKs 0 0 0\nd 0.5\n");
+	int n = snprintf(text, sizeof text, "mtllib five.mtl\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
+	static const char *const mats[5] = {"plain", "tex", "bumpy", "mirror", "glass"};
+	for (int q = 0; q < 5; q++) {
+		float x0 = -5.0f + 2.0f * (float)q, x1 = x0 + 1.8f;
+		n += snprintf(text + n, sizeof text - (size_t)n,
+		              "v %g -1 0\nv %g -1 0\nv %g 1 0\nv %g 1 0\nusemtl %s\n"
+		              "f %d/1 %d/2 %d/3\nf %d/1 %d/3 %d/4\n",
+		              x0, x1, x1, x0, mats[q], 4 * q + 1, 4 * q + 2, 4 * q + 3, 4 * q + 1,
+		              4 * q + 3, 4 * q + 4);
+	}
+	tu_write(obj, sizeof obj, dir, "five.obj", text);
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = obj;
+	o.have_eye = o.have_lookat = o.have_up = o.have_fov = 1;
+	o.cam = (camera){v3(0.2f, 0.3f, 6), v3(0, 0, 0), v3(0, 1, 0), 90.0f};
+	o.nlights = 1;
+	o.lights[0] = (light){v3(0.3f, 0.2f, 2.0f), v3(1, 1, 1)};
+	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+}
+
+/* kernel-ref's shading without a read log (shade_packet_fp: lanes that
+ * spawn no ray take shade.c's lean lane) against the shader with one
+ * (shade_packet: every lane the general way): the same frame-buffer words,
+ * child packets and counts, with no lights and depth 0 (where lean lanes
+ * run: plain and textured hits, mirror and glass cut by the depth, misses,
+ * the bump map left to the general lane), depth 1 (mirror and glass spawn
+ * rays: general) and a light (shadow rays: general). Written to catch
+ * SHADE_FAULT_LEAN_NO_TEXTURE (the lean lane without the map_Kd texel),
+ * planted below. */
+static uint64_t lean_mismatches(const world *w, int depth, int nlights)
+{
+	static trav_entry stack[PKT_STACK_MAX];
+	static packet p, ka[8], kb[8];
+	framebuf fa, fb;
+	cr_assert_eq(fb_init(&fa, 64, 64), 0);
+	cr_assert_eq(fb_init(&fb, 64, 64), 0);
+	shade_ctx sa = {.m = &w->m,
+	                .lights = w->v.lights,
+	                .nlights = nlights,
+	                .max_depth = depth,
+	                .background = v3(0.1f, 0.2f, 0.3f),
+	                .fb = &fa};
+	shade_ctx sb = sa;
+	sb.fb = &fb;
+	cam_frame cf;
+	cam_setup(&cf, &w->v.cam, 64, 64);
+	shade_read log_e[SHADE_LOG_CAP];
+	shade_counts ca = {0}, cb = {0};
+	uint64_t bad = 0;
+	for (int t = 0; t < 64; t++) {
+		cam_primary_packet(&cf, t % 8, t / 8, &p);
+		pkt_trace(&p, &w->m, stack, PKT_STACK_MAX, NULL);
+		shade_log log = {log_e, 0, SHADE_LOG_CAP, 0};
+		int na = shade_packet(&sa, &p, ka, nlights + 2, &log, &ca);
+		int nb = shade_packet_fp(&sb, NULL, &p, kb, nlights + 2, NULL, &cb);
+		bad += na != nb;
+		for (int k = 0; k < na && k < nb; k++)
+			bad += memcmp(&ka[k], &kb[k], sizeof ka[k]) != 0;
+	}
+	bad += memcmp(&ca, &cb, sizeof ca) != 0;
+	bad += memcmp(fa.acc, fb.acc, 64 * 64 * 3 * sizeof *fa.acc) != 0;
+	fb_free(&fa);
+	fb_free(&fb);
+	return bad;
+}
+
+Test(trace, lean_shading_equals_the_general_shader)
+{
+	char dir[256];
+	tu_tmpdir(dir, sizeof dir);
+	world w;
+	lean_scene(dir, &w);
+	for (int depth = 0; depth < 2; depth++)
+		for (int nl = 0; nl < 2; nl++)
+			cr_assert_eq(lean_mismatches(&w, depth, nl), 0, "depth %d, %d lights",
+			             depth, nl);
+	shade_fault = SHADE_FAULT_LEAN_NO_TEXTURE;
+	uint64_t planted = lean_mismatches(&w, 0, 0);
+	shade_fault = SHADE_FAULT_NONE;
+	cr_assert_gt(planted, 0, "the lean lane's planted mistake went unnoticed");
+	world_free(&w);
+}
