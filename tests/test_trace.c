@@ -437,3 +437,42 @@ Test(trace, lean_shading_equals_the_general_shader)
 	cr_assert_gt(planted, 0, "the lean lane's planted mistake went unnoticed");
 	world_free(&w);
 }
+
+/* A full tile's pinhole rays (camera.c's pinhole_packet, SIMD_W lanes at
+ * a time) against the pixel-centre arithmetic written out per ray in one
+ * order: the same floats, bit for bit, for cameras looking along every
+ * axis sign. Written to catch the vector code summing or scaling in
+ * another order than the per-ray path (sample_ray) rounds, e.g.
+ * dx * dx + (dy * dy + dz * dz), or d / len for d * (1 / len). */
+Test(trace, pinhole_packet_is_the_per_ray_arithmetic)
+{
+	static packet p;
+	static const float eyes[4][3] = {{0, 0, 5}, {3, -2, 1}, {-1, 7, -4}, {0.1f, 0.2f, 0.3f}};
+	for (int e = 0; e < 4; e++) {
+		camera cam = {v3(eyes[e][0], eyes[e][1], eyes[e][2]), v3(0.3f, -0.1f, 0.2f),
+		              v3(0, 1, 0), 20.0f + 25.0f * (float)e};
+		cam_frame c;
+		cam_setup(&c, &cam, 24 + 8 * e, 16);
+		for (int t = 0; t < (c.width / 8) * 2; t++) {
+			int tx = t % (c.width / 8), ty = t / (c.width / 8);
+			cr_assert_eq(cam_primary_packet(&c, tx, ty, &p), PKT_RAYS);
+			for (int l = 0; l < PKT_RAYS; l++) {
+				float x = (float)(tx * 8 + l % 8), y = (float)(ty * 8 + l / 8);
+				float px = (2.0f * (x + 0.5f) / (float)c.width - 1.0f) * c.sx;
+				float py = (1.0f - 2.0f * (y + 0.5f) / (float)c.height) * c.sy;
+				float d[3] = {c.w.x + (c.u.x * px + c.v.x * py),
+				              c.w.y + (c.u.y * px + c.v.y * py),
+				              c.w.z + (c.u.z * px + c.v.z * py)};
+				float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+				float inv = 1.0f / len;
+				float got[3] = {p.dx[l], p.dy[l], p.dz[l]};
+				for (int k = 0; k < 3; k++) {
+					float want = len > 0.0f ? d[k] * inv : d[k];
+					cr_assert(memcmp(&want, &got[k], 4) == 0,
+					          "camera %d tile %d lane %d axis %d: %a, want %a",
+					          e, t, l, k, got[k], want);
+				}
+			}
+		}
+	}
+}
