@@ -9,6 +9,7 @@
  * triangle's plane, so a secondary ray cannot hit its own surface.
  */
 #include "kernel-ref/shade.h"
+#include "kernel-ref/simd.h"
 
 #include "kernel-ref/sudoku.h"
 #include "kernel-ref/xform.h"
@@ -192,7 +193,9 @@ typedef struct spawn {
 /* Planted mistakes for tests (docs/TESTING.md "Checks that can fail");
  * programs leave it at 0. SHADE_FAULT_NO_NORMAL_XF: a two-level hit's
  * shading normals are left in object space (the normal transform
- * skipped). */
+ * skipped). SHADE_FAULT_LEAN_NO_TEXTURE: the lean lane leaves out the
+ * map_Kd texel; SHADE_FAULT_LEAN_NO_CLAMP: the lean adds convert to
+ * fixed point without fb_fixed's clamp. */
 int shade_fault;
 
 /* A two-level hit (shade_ctx.tl): instance k's shading transform (read in
@@ -474,9 +477,10 @@ static int lean_get(const mimg *m, uint64_t addr, uint32_t bytes, void *out)
  * records and the operations that decide them (the ambient term of
  * textures and shade_lane, the uv of hit_surface), without the hit's
  * geometry, the reader's calls and the records' copies a spawning lane
- * needs. Returns 0, having done nothing, for a lane it does not cover. */
+ * needs; the add is left to lean_adds, which gets kl and ka. Returns 0,
+ * having done nothing, for a lane it does not cover. */
 static int shade_lane_lean(const shade_ctx *c, const shade_reader *rdr, const packet *p, int i,
-                           const spawn *sp, shade_counts *cnt)
+                           const spawn *sp, shade_counts *cnt, float *klo, vec3 *kao)
 {
 	const mimg *m = c->m;
 	uint32_t ta = p->tri[i];
@@ -505,12 +509,56 @@ static int shade_lane_lean(const shade_ctx *c, const shade_reader *rdr, const pa
 	float kl = 1.0f - kr - kt;
 	if (kl < 0.0f)
 		kl = 0.0f;
-	vec3 w = v3(p->wr[i], p->wg[i], p->wb[i]);
-	add(c, p->pixel[i], v3_scale(v3_mul(v3_scale(w, kl), ka), SHADE_AMBIENT));
+	*klo = kl;
+	*kao = ka;
 	if (c->nlights == 0 && kl > 0.0f)
 		cnt->shadow_skip_nolight++;
 	cnt->depth_cut += (kr > 0.0f) + (kt > 0.0f);
 	return 1;
+}
+
+/* fb_fixed in SIMD_W lanes: the same operations (a sum below 2^31
+ * converts to the same integer through int32 as through uint64). */
+static inline iv fixed_v(fv c)
+{
+	iv pos = c > fv_set1(0.0f);
+	fv x = shade_fault == SHADE_FAULT_LEAN_NO_CLAMP
+	           ? c
+	           : fv_sel(c > fv_set1(FB_MAX_CONTRIB), fv_set1(FB_MAX_CONTRIB), c);
+	x = x * fv_set1((float)(1u << FB_FRAC_BITS)) + fv_set1(0.5f);
+	return __builtin_convertvector(x, iv) & pos;
+}
+
+/* The frame-buffer adds of a lean packet's misses (shade_lane's
+ * background, w * background) and lean hits (shade_lane_lean's ambient
+ * term, ((w kl) ka) SHADE_AMBIENT), SIMD_W lanes at a time, then each
+ * lane's three fixed-point words added into its pixel. */
+static void lean_adds(const shade_ctx *c, const packet *p, uint64_t miss, uint64_t lit,
+                      const float *kl, const float (*ka)[PKT_RAYS])
+{
+	int32_t fx[3][PKT_RAYS];
+	const float *w[3] = {p->wr, p->wg, p->wb};
+	const float bg[3] = {c->background.x, c->background.y, c->background.z};
+	for (int g = 0; g < PKT_RAYS / SIMD_W; g++) {
+		if (!grp_bits(miss | lit, g))
+			continue;
+		int o = SIMD_W * g;
+		iv ish = iv_from_bits(grp_bits(lit, g));
+		fv l = fv_load(kl + o);
+		for (int k = 0; k < 3; k++) {
+			fv wk = fv_load(w[k] + o);
+			fv h = ((wk * l) * fv_load(ka[k] + o)) * fv_set1(SHADE_AMBIENT);
+			iv f = fixed_v(fv_sel(ish, h, wk * fv_set1(bg[k])));
+			memcpy(fx[k] + o, &f, sizeof f);
+		}
+	}
+	for (uint64_t b = miss | lit; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		uint64_t *a = c->fb->acc + 3 * (uint64_t)p->pixel[i];
+		a[0] += (uint64_t)fx[0][i];
+		a[1] += (uint64_t)fx[1][i];
+		a[2] += (uint64_t)fx[2][i];
+	}
 }
 
 /* shade_packet_rd; lean: the reader is kernel-ref's image without a log
@@ -533,12 +581,30 @@ static int shade_packet_in(const shade_ctx *c, const fpfmt *fp, const shade_read
 		sp.refl->valid = sp.refr->valid = 0;
 	for (int l = 0; l < nl + 2; l++)
 		out[l].sample = p->sample; /* children keep the pixels' sample */
-	lean = lean && !fq && sp.nl == 0;
-	for (uint64_t b = p->valid; b; b &= b - 1) {
-		int i = __builtin_ctzll(b);
-		if (!lean || !shade_lane_lean(c, rdr, p, i, &sp, cnt))
-			shade_lane(c, fq, rdr, p, i, &sp, cnt);
-	}
+	if (lean && !fq && !c->defer && c->fb) {
+		/* misses and (no shadow packets) lean hits: adds in lean_adds */
+		float kl[PKT_RAYS] = {0}, ka[3][PKT_RAYS] = {{0}};
+		uint64_t miss = 0, lit = 0;
+		for (uint64_t b = p->valid; b; b &= b - 1) {
+			int i = __builtin_ctzll(b);
+			vec3 a;
+			if (p->tri[i] == PKT_NOHIT) {
+				miss |= 1ull << i;
+				continue;
+			}
+			if (sp.nl == 0 && shade_lane_lean(c, rdr, p, i, &sp, cnt, &kl[i], &a)) {
+				lit |= 1ull << i;
+				ka[0][i] = a.x;
+				ka[1][i] = a.y;
+				ka[2][i] = a.z;
+			} else
+				shade_lane(c, fq, rdr, p, i, &sp, cnt);
+		}
+		cnt->misses += (uint64_t)__builtin_popcountll(miss);
+		lean_adds(c, p, miss, lit, kl, ka);
+	} else
+		for (uint64_t b = p->valid; b; b &= b - 1)
+			shade_lane(c, fq, rdr, p, __builtin_ctzll(b), &sp, cnt);
 	if (!sp.refl->valid && !sp.refr->valid && p->type != PKT_SHADOW)
 		cnt->secondary_skip++;
 	/* compact: keep only packets that carry rays */

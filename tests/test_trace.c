@@ -382,9 +382,10 @@ static void lean_scene(const char *dir, world *w)
  * run: plain and textured hits, mirror and glass cut by the depth, misses,
  * the bump map left to the general lane), depth 1 (mirror and glass spawn
  * rays: general) and a light (shadow rays: general). Written to catch
- * SHADE_FAULT_LEAN_NO_TEXTURE (the lean lane without the map_Kd texel),
- * planted below. */
-static uint64_t lean_mismatches(const world *w, int depth, int nlights)
+ * SHADE_FAULT_LEAN_NO_TEXTURE (the lean lane without the map_Kd texel)
+ * and SHADE_FAULT_LEAN_NO_CLAMP (the packet's fixed-point conversion
+ * without fb_fixed's clamp), planted below. */
+static uint64_t lean_mismatches(const world *w, int depth, int nlights, vec3 background)
 {
 	static trav_entry stack[PKT_STACK_MAX];
 	static packet p, ka[8], kb[8];
@@ -395,7 +396,7 @@ static uint64_t lean_mismatches(const world *w, int depth, int nlights)
 	                .lights = w->v.lights,
 	                .nlights = nlights,
 	                .max_depth = depth,
-	                .background = v3(0.1f, 0.2f, 0.3f),
+	                .background = background,
 	                .fb = &fa};
 	shade_ctx sb = sa;
 	sb.fb = &fb;
@@ -427,14 +428,21 @@ Test(trace, lean_shading_equals_the_general_shader)
 	tu_tmpdir(dir, sizeof dir);
 	world w;
 	lean_scene(dir, &w);
-	for (int depth = 0; depth < 2; depth++)
-		for (int nl = 0; nl < 2; nl++)
-			cr_assert_eq(lean_mismatches(&w, depth, nl), 0, "depth %d, %d lights",
-			             depth, nl);
-	shade_fault = SHADE_FAULT_LEAN_NO_TEXTURE;
-	uint64_t planted = lean_mismatches(&w, 0, 0);
-	shade_fault = SHADE_FAULT_NONE;
-	cr_assert_gt(planted, 0, "the lean lane's planted mistake went unnoticed");
+	/* a background beyond the frame buffer's clamp on red and below zero
+	 * on green: the misses' adds clamp and drop as fb_fixed does */
+	const vec3 bgs[2] = {v3(0.1f, 0.2f, 0.3f), v3(5000.0f, -1.0f, 0.3f)};
+	for (int k = 0; k < 2; k++)
+		for (int depth = 0; depth < 2; depth++)
+			for (int nl = 0; nl < 2; nl++)
+				cr_assert_eq(lean_mismatches(&w, depth, nl, bgs[k]), 0,
+				             "background %d, depth %d, %d lights", k, depth, nl);
+	static const int faults[] = {SHADE_FAULT_LEAN_NO_TEXTURE, SHADE_FAULT_LEAN_NO_CLAMP};
+	for (int f = 0; f < 2; f++) {
+		shade_fault = faults[f];
+		uint64_t planted = lean_mismatches(&w, 0, 0, bgs[1]);
+		shade_fault = SHADE_FAULT_NONE;
+		cr_assert_gt(planted, 0, "planted mistake %d went unnoticed", faults[f]);
+	}
 	world_free(&w);
 }
 
