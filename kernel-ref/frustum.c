@@ -276,7 +276,9 @@ static inline void swap_seg(trav_entry **a, trav_entry **b)
 }
 
 /* Rays of an entry still worth visiting: those whose entry distance is
- * not beyond their best hit (traverse.c's live_mask). */
+ * not beyond their best hit (traverse.c's live_mask). Every lane group is
+ * compared, active or not (a branch per group, taken at random with
+ * sparse masks, cost more than the compares; fru_lanes likewise). */
 static uint64_t fru_live(const packet *p, const trav_entry *seg, uint64_t mask)
 {
 	if (fru_fault == FRU_FAULT_POP_ALL)
@@ -284,8 +286,6 @@ static uint64_t fru_live(const packet *p, const trav_entry *seg, uint64_t mask)
 	uint64_t live = 0;
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
-		if (!gb)
-			continue;
 		iv keep = fv_load(seg->tn + SIMD_W * g) <= fv_load(p->t + SIMD_W * g);
 		live |= (uint64_t)(iv_bits(keep) & gb) << (SIMD_W * g);
 	}
@@ -335,8 +335,6 @@ static uint64_t fru_lanes(fru_walker *w, kd_node n, int near_below, int uni, tra
 	uint64_t nm = 0, fm = 0;
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(w->mask, g);
-		if (!gb)
-			continue;
 		int o = SIMD_W * g;
 		fv tn = fv_load(w->cur->tn + o), tf = fv_load(w->cur->tf + o);
 		fv id = fv_load(idv + o);
