@@ -195,7 +195,9 @@ typedef struct spawn {
  * shading normals are left in object space (the normal transform
  * skipped). SHADE_FAULT_LEAN_NO_TEXTURE: the lean lane leaves out the
  * map_Kd texel; SHADE_FAULT_LEAN_NO_CLAMP: the lean adds convert to
- * fixed point without fb_fixed's clamp. */
+ * fixed point without fb_fixed's clamp; SHADE_FAULT_LEAN_MEMO_TEXTURED:
+ * a textured hit's result is reused for the next lane on its triangle
+ * (whose texel differs). */
 int shade_fault;
 
 /* A two-level hit (shade_ctx.tl): instance k's shading transform (read in
@@ -480,7 +482,7 @@ static int lean_get(const mimg *m, uint64_t addr, uint32_t bytes, void *out)
  * needs; the add is left to lean_adds, which gets kl and ka. Returns 0,
  * having done nothing, for a lane it does not cover. */
 static int shade_lane_lean(const shade_ctx *c, const shade_reader *rdr, const packet *p, int i,
-                           const spawn *sp, shade_counts *cnt, float *klo, vec3 *kao)
+                           const spawn *sp, shade_counts *cnt, float *klo, vec3 *kao, int *cut)
 {
 	const mimg *m = c->m;
 	uint32_t ta = p->tri[i];
@@ -506,15 +508,17 @@ static int shade_lane_lean(const shade_ctx *c, const shade_reader *rdr, const pa
 			ka = v3_mul(ka, tx);
 	} else
 		cnt->untextured_hits++;
+	int untextured = mt.tex_kd < 0;
 	float kl = 1.0f - kr - kt;
 	if (kl < 0.0f)
 		kl = 0.0f;
 	*klo = kl;
 	*kao = ka;
+	*cut = (kr > 0.0f) + (kt > 0.0f);
 	if (c->nlights == 0 && kl > 0.0f)
 		cnt->shadow_skip_nolight++;
-	cnt->depth_cut += (kr > 0.0f) + (kt > 0.0f);
-	return 1;
+	cnt->depth_cut += (uint64_t)*cut;
+	return untextured ? 2 : 1;
 }
 
 /* fb_fixed in SIMD_W lanes: the same operations (a sum below 2^31
@@ -585,20 +589,40 @@ static int shade_packet_in(const shade_ctx *c, const fpfmt *fp, const shade_read
 		/* misses and (no shadow packets) lean hits: adds in lean_adds */
 		float kl[PKT_RAYS] = {0}, ka[3][PKT_RAYS] = {{0}};
 		uint64_t miss = 0, lit = 0;
+		/* the last untextured lean hit: a lane on the same triangle has
+		 * the same kl, ka and counts (neighbouring rays mostly do) */
+		uint32_t last = PKT_NOHIT;
+		float lkl = 0.0f;
+		vec3 lka = v3(0, 0, 0);
+		int lcut = 0;
 		for (uint64_t b = p->valid; b; b &= b - 1) {
-			int i = __builtin_ctzll(b);
+			int i = __builtin_ctzll(b), cut, r;
 			vec3 a;
 			if (p->tri[i] == PKT_NOHIT) {
 				miss |= 1ull << i;
 				continue;
 			}
-			if (sp.nl == 0 && shade_lane_lean(c, rdr, p, i, &sp, cnt, &kl[i], &a)) {
-				lit |= 1ull << i;
-				ka[0][i] = a.x;
-				ka[1][i] = a.y;
-				ka[2][i] = a.z;
-			} else
+			if (p->tri[i] == last) {
+				cnt->hits++;
+				cnt->untextured_hits++;
+				cnt->shadow_skip_nolight += c->nlights == 0 && lkl > 0.0f;
+				cnt->depth_cut += (uint64_t)lcut;
+				kl[i] = lkl;
+				a = lka;
+			} else if (sp.nl > 0 || !(r = shade_lane_lean(c, rdr, p, i, &sp, cnt,
+			                                              &kl[i], &a, &cut))) {
 				shade_lane(c, fq, rdr, p, i, &sp, cnt);
+				continue;
+			} else if (r == 2 || shade_fault == SHADE_FAULT_LEAN_MEMO_TEXTURED) {
+				last = p->tri[i];
+				lkl = kl[i];
+				lka = a;
+				lcut = cut;
+			}
+			lit |= 1ull << i;
+			ka[0][i] = a.x;
+			ka[1][i] = a.y;
+			ka[2][i] = a.z;
 		}
 		cnt->misses += (uint64_t)__builtin_popcountll(miss);
 		lean_adds(c, p, miss, lit, kl, ka);

@@ -383,8 +383,9 @@ static void lean_scene(const char *dir, world *w)
  * the bump map left to the general lane), depth 1 (mirror and glass spawn
  * rays: general) and a light (shadow rays: general). Written to catch
  * SHADE_FAULT_LEAN_NO_TEXTURE (the lean lane without the map_Kd texel)
- * and SHADE_FAULT_LEAN_NO_CLAMP (the packet's fixed-point conversion
- * without fb_fixed's clamp), planted below. */
+ * SHADE_FAULT_LEAN_NO_CLAMP (the packet's fixed-point conversion
+ * without fb_fixed's clamp) and SHADE_FAULT_LEAN_MEMO_TEXTURED (a textured
+ * hit's result reused for the next lane on the triangle), planted below. */
 static uint64_t lean_mismatches(const world *w, int depth, int nlights, vec3 background)
 {
 	static trav_entry stack[PKT_STACK_MAX];
@@ -436,8 +437,9 @@ Test(trace, lean_shading_equals_the_general_shader)
 			for (int nl = 0; nl < 2; nl++)
 				cr_assert_eq(lean_mismatches(&w, depth, nl, bgs[k]), 0,
 				             "background %d, depth %d, %d lights", k, depth, nl);
-	static const int faults[] = {SHADE_FAULT_LEAN_NO_TEXTURE, SHADE_FAULT_LEAN_NO_CLAMP};
-	for (int f = 0; f < 2; f++) {
+	static const int faults[] = {SHADE_FAULT_LEAN_NO_TEXTURE, SHADE_FAULT_LEAN_NO_CLAMP,
+	                             SHADE_FAULT_LEAN_MEMO_TEXTURED};
+	for (int f = 0; f < 3; f++) {
 		shade_fault = faults[f];
 		uint64_t planted = lean_mismatches(&w, 0, 0, bgs[1]);
 		shade_fault = SHADE_FAULT_NONE;
