@@ -2,6 +2,7 @@
  * camera.c: primary rays for tiles (see camera.h).
  */
 #include "kernel-ref/camera.h"
+#include "kernel-ref/simd.h"
 
 #include "kernel-ref/sudoku.h"
 
@@ -79,8 +80,10 @@ int cam_primary_packet(const cam_frame *c, int tx, int ty, packet *p)
 /* A pinhole camera's packet (one sample per pixel, no lens, no motion):
  * sample_ray's arithmetic for the pixel centres, the same operations in
  * the same order lane by lane (so the same floats), as loops over the
- * packet's arrays that the compiler runs as vectors. The tile lies wholly
- * inside the frame. */
+ * packet's arrays, the directions in SIMD_W-lane vectors (a square
+ * root and a division are correctly rounded in a lane as alone;
+ * tests/test_trace.c checks the floats). The tile lies wholly inside the
+ * frame. */
 static void pinhole_packet(const cam_frame *c, int tx, int ty, packet *p)
 {
 	float px[PKT_RAYS], py[PKT_RAYS];
@@ -89,15 +92,20 @@ static void pinhole_packet(const cam_frame *c, int tx, int ty, packet *p)
 		px[l] = (2.0f * (x + 0.5f) / (float)c->width - 1.0f) * c->sx;
 		py[l] = (1.0f - 2.0f * (y + 0.5f) / (float)c->height) * c->sy;
 	}
+	/* the directions SIMD_W lanes at a time: the same operations, each
+	 * correctly rounded in a lane as alone */
+	for (int o = 0; o < PKT_RAYS; o += SIMD_W) {
+		fv x = fv_load(px + o), y = fv_load(py + o);
+		fv dx = fv_set1(c->w.x) + (fv_set1(c->u.x) * x + fv_set1(c->v.x) * y);
+		fv dy = fv_set1(c->w.y) + (fv_set1(c->u.y) * x + fv_set1(c->v.y) * y);
+		fv dz = fv_set1(c->w.z) + (fv_set1(c->u.z) * x + fv_set1(c->v.z) * y);
+		fv len = fv_sqrt(dx * dx + dy * dy + dz * dz), inv = fv_set1(1.0f) / len;
+		iv pos = len > fv_set1(0.0f);
+		fv_store(p->dx + o, fv_sel(pos, dx * inv, dx));
+		fv_store(p->dy + o, fv_sel(pos, dy * inv, dy));
+		fv_store(p->dz + o, fv_sel(pos, dz * inv, dz));
+	}
 	for (int l = 0; l < PKT_RAYS; l++) {
-		float dx = c->w.x + (c->u.x * px[l] + c->v.x * py[l]);
-		float dy = c->w.y + (c->u.y * px[l] + c->v.y * py[l]);
-		float dz = c->w.z + (c->u.z * px[l] + c->v.z * py[l]);
-		float len = sqrtf(dx * dx + dy * dy + dz * dz), inv = 1.0f / len;
-		int pos = len > 0.0f;
-		p->dx[l] = pos ? dx * inv : dx;
-		p->dy[l] = pos ? dy * inv : dy;
-		p->dz[l] = pos ? dz * inv : dz;
 		p->ox[l] = c->eye.x;
 		p->oy[l] = c->eye.y;
 		p->oz[l] = c->eye.z;

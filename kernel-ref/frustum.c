@@ -30,6 +30,7 @@
 #include <math.h>
 
 #include "kernel-ref/cone.h"
+#include "kernel-ref/isect.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/simd.h"
 
@@ -65,35 +66,71 @@ static inline float mx2(float a, float b)
 	return a > b ? a : b;
 }
 
-/* Smallest and largest x over the lanes of mask; returns nonzero when x
- * is NaN in one of them (the bounds are then meaningless). A group with
- * all lanes in mask needs no selects. */
-static unsigned lane_range(const float *x, uint64_t mask, float *lo, float *hi)
+/* Smallest and largest lane of v (no NaN lanes): a reduction tree with
+ * AVX-512, else lane by lane. */
+static inline float fv_hmin(fv v)
+{
+#if SIMD_W == 16 && defined(__AVX512F__)
+	__m512 x;
+	memcpy(&x, &v, sizeof x);
+	return _mm512_reduce_min_ps(x);
+#else
+	float a = v[0];
+	for (int l = 1; l < SIMD_W; l++)
+		a = v[l] < a ? v[l] : a;
+	return a;
+#endif
+}
+static inline float fv_hmax(fv v)
+{
+#if SIMD_W == 16 && defined(__AVX512F__)
+	__m512 x;
+	memcpy(&x, &v, sizeof x);
+	return _mm512_reduce_max_ps(x);
+#else
+	float a = v[0];
+	for (int l = 1; l < SIMD_W; l++)
+		a = v[l] > a ? v[l] : a;
+	return a;
+#endif
+}
+
+#define FRU_RANGES 9 /* at most, in one pass (fru_setup) */
+
+/* Smallest and largest x[j][i] over the lanes i of mask, for j < n, in one
+ * pass over the lane groups; returns nonzero when one is NaN (the bounds
+ * are then meaningless). A group with all lanes in mask needs no
+ * selects. Which zero a range of +0 and -0 ends on does not matter: the
+ * bounds only decide shortcuts (file comment), by value. */
+static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *lo, float *hi)
 {
 	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
-	fv mn = pinf, mx = ninf;
+	fv mn[FRU_RANGES], mx[FRU_RANGES];
+	for (int j = 0; j < n; j++) {
+		mn[j] = pinf;
+		mx[j] = ninf;
+	}
 	unsigned nan = 0;
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
 		if (!gb)
 			continue;
-		fv v = fv_load(x + SIMD_W * g), vl = v, vh = v;
-		if (gb != SIMD_MASK) {
-			iv on = iv_from_bits(gb);
-			vl = fv_sel(on, v, pinf);
-			vh = fv_sel(on, v, ninf);
+		iv on = iv_from_bits(gb);
+		for (int j = 0; j < n; j++) {
+			fv v = fv_load(x[j] + SIMD_W * g), vl = v, vh = v;
+			if (gb != SIMD_MASK) {
+				vl = fv_sel(on, v, pinf);
+				vh = fv_sel(on, v, ninf);
+			}
+			nan |= iv_bits(v != v) & gb;
+			mn[j] = fv_min(mn[j], vl);
+			mx[j] = fv_max(mx[j], vh);
 		}
-		nan |= iv_bits(v != v) & gb;
-		mn = fv_min(mn, vl);
-		mx = fv_max(mx, vh);
 	}
-	float a = INFINITY, b = -INFINITY;
-	for (int l = 0; l < SIMD_W; l++) {
-		a = mn[l] < a ? mn[l] : a;
-		b = mx[l] > b ? mx[l] : b;
+	for (int j = 0; j < n; j++) {
+		lo[j] = fv_hmin(mn[j]);
+		hi[j] = fv_hmax(mx[j]);
 	}
-	*lo = a;
-	*hi = b;
 	return nan;
 }
 
@@ -102,12 +139,20 @@ static unsigned lane_range(const float *x, uint64_t mask, float *lo, float *hi)
 static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t entered)
 {
 	const float *id[3] = {s->rc.idx, s->rc.idy, s->rc.idz};
-	const float *org[3] = {p->ox, p->oy, p->oz};
-	unsigned nan = 0;
+	const float *x[FRU_RANGES] = {s->rc.idx, s->rc.idy, s->rc.idz, p->ox, p->oy,
+	                              p->oz,     p->dx,     p->dy,     p->dz};
+	float lo[FRU_RANGES], hi[FRU_RANGES];
+	unsigned nan = lane_ranges(x, FRU_RANGES, entered, lo, hi);
 	int any = 0;
+	b->one = 1;
+	b->dmax = 0.0f;
 	for (int a = 0; a < 3; a++) {
-		nan |= lane_range(id[a], entered, &b->idlo[a], &b->idhi[a]);
-		nan |= lane_range(org[a], entered, &b->olo[a], &b->ohi[a]);
+		b->idlo[a] = lo[a];
+		b->idhi[a] = hi[a];
+		b->olo[a] = lo[3 + a];
+		b->ohi[a] = hi[3 + a];
+		b->dlo[a] = lo[6 + a];
+		b->dhi[a] = hi[6 + a];
 		b->pos[a] = b->idlo[a] > 0.0f;
 		b->ok[a] =
 		    b->pos[a] ? b->idhi[a] < INFINITY : b->idhi[a] < 0.0f && b->idlo[a] > -INFINITY;
@@ -116,12 +161,6 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 			int first = __builtin_ctzll(entered);
 			b->idlo[a] = b->idhi[a] = id[a][first];
 		}
-	}
-	const float *dir[3] = {p->dx, p->dy, p->dz};
-	b->one = 1;
-	b->dmax = 0.0f;
-	for (int a = 0; a < 3; a++) {
-		nan |= lane_range(dir[a], entered, &b->dlo[a], &b->dhi[a]);
 		b->one &= b->olo[a] == b->ohi[a];
 		b->dmax = mx2(b->dmax, mx2(fabsf(b->dlo[a]), fabsf(b->dhi[a])));
 	}
@@ -200,74 +239,353 @@ static int fru_tri_missed(const void *ctx, const mimg_tri *t)
 	return pos && neg;
 }
 
-/* The per-lane step with its packet shortcut, on the inner node n whose
- * rays' segments lie within [*tn, *tf]. When the plane's distances [lo,
- * hi] lie beyond every segment (lo > tf: the near child only) or before
- * it (hi < tn: the far child only), the per-lane step would leave every
- * segment and the mask as they are (file comment), so only the node
- * changes. Otherwise pkt_trav_node steps lane by lane. Either way the
- * bounds follow the child without a pass over the lanes: the near child's
- * segments are [tn_i, min(tf_i, hi_i)], within [tn, min(tf, hi)], the far
- * child's within [max(tn, lo), tf]; bt, bf: the far child's, if pushed. */
-static void fru_step(const fru_box *b, trav_state *s, packet *p, kd_node n, float *tn, float *tf,
-                     float *bt, float *bf)
+/* traverse.c's gamma(3): the per-ray widening of a split distance */
+#define FRU_GAMMA3 (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f))
+
+/* The walk's own state (fru_walk). The segments [tn_i, tf_i] of the node
+ * being worked on and of each stack entry live in buffers that change
+ * hands instead of being copied: a pop or a step into the far child only
+ * (pkt_trav_pop's and pkt_trav_node's copies of 512 bytes) swaps the
+ * current buffer with the entry's. The buffers are the caller's stack
+ * entries, the state's cur and its spare (the far child's scratch when
+ * the stack is full, as in pkt_trav_node). */
+typedef struct fru_entry {
+	uint32_t node;
+	uint64_t mask;
+	trav_entry *seg; /* this slot's buffer: its tn and tf */
+	float bt, bf;    /* bounds of the entry's segments */
+} fru_entry;
+
+typedef struct fru_walker {
+	const fru_box *b;
+	trav_state *s; /* the rays' constants (rc), shadow flag and buffers */
+	packet *p;
+	fru_entry stk[PKT_STACK_MAX];
+	int sp;
+	uint32_t node;
+	uint64_t mask;
+	trav_entry *cur, *spare; /* the current node's segments; the scratch */
+	float tn, tf;            /* bounds of the current segments */
+} fru_walker;
+
+static inline void swap_seg(trav_entry **a, trav_entry **b)
 {
+	trav_entry *t = *a;
+	*a = *b;
+	*b = t;
+}
+
+/* Rays of an entry still worth visiting: those whose entry distance is
+ * not beyond their best hit (traverse.c's live_mask). Every lane group is
+ * compared, active or not (a branch per group, taken at random with
+ * sparse masks, cost more than the compares; fru_lanes likewise). */
+static uint64_t fru_live(const packet *p, const trav_entry *seg, uint64_t mask)
+{
+	if (fru_fault == FRU_FAULT_POP_ALL)
+		return mask;
+	uint64_t live = 0;
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(mask, g);
+		iv keep = fv_load(seg->tn + SIMD_W * g) <= fv_load(p->t + SIMD_W * g);
+		live |= (uint64_t)(iv_bits(keep) & gb) << (SIMD_W * g);
+	}
+	return live;
+}
+
+/* pkt_trav_pop: pops until an entry has live rays; 0 when none is left.
+ * The popped entry's buffer becomes the current one (no copy), and its
+ * bounds the current bounds (a popped entry's rays are a subset). */
+static int fru_pop(fru_walker *w)
+{
+	if (w->mask)
+		return 1;
+	for (;;) {
+		if (w->sp == 0)
+			return 0;
+		fru_entry *e = &w->stk[--w->sp];
+		w->mask = fru_live(w->p, e->seg, e->mask);
+		if (w->mask)
+			break;
+	}
+	fru_entry *e = &w->stk[w->sp];
+	w->node = e->node;
+	w->tn = e->bt;
+	w->tf = e->bf;
+	if (fru_fault != FRU_FAULT_STALE_SEGMENTS)
+		swap_seg(&w->cur, &e->seg);
+	return 1;
+}
+
+/* pkt_trav_node's full-precision lane arithmetic for the rays of w->mask
+ * on the inner node n, near child below when near_below: the near
+ * child's segments written in place, the far child's into far; returns
+ * the near child's live rays and sets *fmask to the far child's. Where
+ * every ray's 1/d on the axis has one sign (uni) both signs give the
+ * near child [tn, min(tf, hi)] and the far one [max(tn, lo), tf] (the
+ * per-lane selects, resolved once): the same values, fewer operations. */
+static uint64_t fru_lanes(fru_walker *w, kd_node n, int near_below, int uni, trav_entry *far,
+                          uint64_t *fmask)
+{
+	int axis = kd_axis(n);
+	const packet *p = w->p;
+	const float *org = axis == 0 ? p->ox : axis == 1 ? p->oy : p->oz;
+	const float *idv = axis == 0 ? w->s->rc.idx : axis == 1 ? w->s->rc.idy : w->s->rc.idz;
+	fv split = fv_set1(kd_split(n));
+	iv nb = iv_set1(near_below ? -1 : 0);
+	uint64_t nm = 0, fm = 0;
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(w->mask, g);
+		int o = SIMD_W * g;
+		fv tn = fv_load(w->cur->tn + o), tf = fv_load(w->cur->tf + o);
+		fv id = fv_load(idv + o);
+		fv ts = (split - fv_load(org + o)) * id;
+		fv err = fv_abs(ts) * fv_set1(FRU_GAMMA3);
+		iv nan = ts != ts;
+		fv lo = fv_sel(nan, fv_set1(-INFINITY), ts - err);
+		fv hi = fv_sel(nan, fv_set1(INFINITY), ts + err);
+		fv n_n, n_f, f_n, f_f;
+		if (uni) {
+			n_n = tn;
+			n_f = fv_min(tf, hi);
+			f_n = fv_max(tn, lo);
+			f_f = tf;
+		} else {
+			iv pos = id > fv_set1(0.0f);
+			fv b_n = fv_sel(pos, tn, fv_max(tn, lo)),
+			   b_f = fv_sel(pos, fv_min(tf, hi), tf);
+			fv a_n = fv_sel(pos, fv_max(tn, lo), tn),
+			   a_f = fv_sel(pos, tf, fv_min(tf, hi));
+			n_n = fv_sel(nb, b_n, a_n), n_f = fv_sel(nb, b_f, a_f);
+			f_n = fv_sel(nb, a_n, b_n), f_f = fv_sel(nb, a_f, b_f);
+			fv_store(w->cur->tn + o, n_n);
+		}
+		fv best = fv_load(p->t + o);
+		fv_store(w->cur->tf + o, n_f);
+		fv_store(far->tn + o, f_n);
+		fv_store(far->tf + o, f_f);
+		nm |= (uint64_t)(iv_bits((n_n <= n_f) & (n_n <= best)) & gb) << o;
+		fm |= (uint64_t)(iv_bits((f_n <= f_f) & (f_n <= best)) & gb) << o;
+	}
+	*fmask = fm;
+	return nm;
+}
+
+/* One inner-node step on n: pkt_trav_node with the packet shortcut. When
+ * the plane's distances [lo, hi] lie beyond every segment (lo > tf: the
+ * near child only) or before it (hi < tn: the far child only), the
+ * per-lane step would leave every segment and the mask as they are (file
+ * comment), so only the node changes. Otherwise the lanes step
+ * (fru_lanes): the near child next, the far child pushed when some ray
+ * needs it, or entered when no ray needs the near one. Either way the
+ * bounds follow the child without a pass over the lanes: the near
+ * child's segments lie within [tn, min(tf, hi)], the far child's within
+ * [max(tn, lo), tf]. Returns the far child's node when it was pushed,
+ * else UINT32_MAX. */
+static uint32_t fru_step(fru_walker *w, kd_node n)
+{
+	const fru_box *b = w->b;
 	int axis = kd_axis(n);
 	float lo = -INFINITY, hi = INFINITY;
 	if (b->ok[axis])
 		fru_plane(b, axis, kd_split(n), &lo, &hi);
 	uint32_t left = kd_left(n), near = b->pos[axis] ? left : left + 1;
 	uint32_t far = b->pos[axis] ? left + 1 : left;
-	if (lo > *tf) { /* the near child only */
-		s->cur.node = near;
-		return;
+	if (lo > w->tf) { /* the near child only */
+		w->node = near;
+		return UINT32_MAX;
 	}
-	if (hi < *tn) { /* the far child only */
-		s->cur.node = fru_fault == FRU_FAULT_ALWAYS_NEAR ? near : far;
-		return;
+	if (hi < w->tn) { /* the far child only */
+		w->node = fru_fault == FRU_FAULT_ALWAYS_NEAR ? near : far;
+		return UINT32_MAX;
 	}
-	trav_result r;
-	pkt_trav_node(s, p, n, &r);
-	float ftn = mx2(*tn, lo), ntf = mn2(*tf, hi);
-	if (r.pushed) {
-		*bt = ftn;
-		*bf = *tf;
+	/* one sign on the axis: the near side is the packet's; else, as
+	 * pkt_trav_node, the first active ray's */
+	const float *idv = axis == 0 ? w->s->rc.idx : axis == 1 ? w->s->rc.idy : w->s->rc.idz;
+	int near_below = b->ok[axis] ? b->pos[axis] : !signbit(idv[__builtin_ctzll(w->mask)]);
+	uint32_t nnode = near_below ? left : left + 1, fnode = near_below ? left + 1 : left;
+	int room = w->sp < w->s->stack_max;
+	trav_entry *fseg = room ? w->stk[w->sp].seg : w->spare;
+	uint64_t fmask, nmask = fru_lanes(w, n, near_below, b->ok[axis], fseg, &fmask);
+	float ftn = mx2(w->tn, lo), ntf = mn2(w->tf, hi), otf = w->tf;
+	uint32_t pushed = UINT32_MAX;
+	if (!nmask) { /* no ray needs the near child: continue in the far one (rare) */
+		w->node = fnode;
+		w->mask = fmask;
+		swap_seg(&w->cur, room ? &w->stk[w->sp].seg : &w->spare);
+	} else {
+		if (fmask && room) { /* a full stack (damaged tree) drops the far child */
+			fru_entry *e = &w->stk[w->sp++];
+			e->node = fnode;
+			e->mask = fmask;
+			e->bt = ftn;
+			e->bf = otf;
+			pushed = fnode;
+		}
+		w->node = nnode;
+		w->mask = nmask;
 	}
-	if (s->cur.node == near)
-		*tf = ntf;
+	if (w->node == near)
+		w->tf = ntf;
 	else
-		*tn = ftn;
+		w->tn = ftn;
+	return pushed;
 }
 
-/* pkt_trace_run with the packet shortcut (fru_step); pops and leaves as
- * pkt_trace_run, so the counts are the same. bt[k], bf[k]: the segment
- * bounds of stack slot k. */
+/* pkt_isect_tri_v for a packet whose rays share one axis permutation
+ * (pkt_rayc.uniform, full precision), the same operations in the same
+ * order: the barycentrics' divisions are left to the lanes whose hit is
+ * taken (a division is correctly rounded, in a lane or alone), which the
+ * packet test spends on every lane of a group with a candidate. */
+static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
+                      uint32_t tri_addr)
+{
+	const pkt_rayc *rc = &s->rc;
+	const fv zero = fv_set1(0.0f);
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(mask, g);
+		if (!gb)
+			continue;
+		int o = SIMD_W * g;
+		fv sx = fv_load(rc->sx + o), sy = fv_load(rc->sy + o);
+		fv okx = fv_load(rc->okx + o), oky = fv_load(rc->oky + o);
+		fv okz = fv_load(rc->okz + o);
+		fv vx[3], vy[3], vkz[3];
+		for (int k = 0; k < 3; k++) {
+			vkz[k] = fv_set1(tr->v[k][rc->ukz]) - okz;
+			vx[k] = (fv_set1(tr->v[k][rc->ukx]) - okx) - sx * vkz[k];
+			vy[k] = (fv_set1(tr->v[k][rc->uky]) - oky) - sy * vkz[k];
+		}
+		fv u = vx[2] * vy[1] - vy[2] * vx[1];
+		fv v = vx[0] * vy[2] - vy[0] * vx[2];
+		fv w = vx[1] * vy[0] - vy[1] * vx[0];
+		unsigned dbl = iv_bits((u == zero) | (v == zero) | (w == zero)) & gb;
+		for (unsigned k = dbl; k; k &= k - 1) {
+			int l = __builtin_ctz(k);
+			float uu, vv, ww;
+			isect_uvw_double(vx[0][l], vy[0][l], vx[1][l], vy[1][l], vx[2][l], vy[2][l],
+			                 &uu, &vv, &ww);
+			u[l] = uu;
+			v[l] = vv;
+			w[l] = ww;
+		}
+		iv neg = (u < zero) | (v < zero) | (w < zero);
+		iv posv = (u > zero) | (v > zero) | (w > zero);
+		fv det = u + v + w;
+		unsigned okb = iv_bits(~(neg & posv) & (det != zero)) & gb;
+		if (!okb)
+			continue;
+		fv sz = fv_load(rc->sz + o);
+		fv az = sz * vkz[0], bz = sz * vkz[1], cz = sz * vkz[2];
+		fv t = (u * az + v * bz + w * cz) / det;
+		/* conservative t > 0, as in isect_tri (pbrt's deltaT) */
+		fv mzt = fv_max(fv_abs(az), fv_max(fv_abs(bz), fv_abs(cz)));
+		fv mxt = fv_max(fv_abs(vx[0]), fv_max(fv_abs(vx[1]), fv_abs(vx[2])));
+		fv myt = fv_max(fv_abs(vy[0]), fv_max(fv_abs(vy[1]), fv_abs(vy[2])));
+		fv dz = fv_set1(ISECT_GAMMA(3)) * mzt;
+		fv dx = fv_set1(ISECT_GAMMA(5)) * (mxt + mzt),
+		   dy = fv_set1(ISECT_GAMMA(5)) * (myt + mzt);
+		fv de = fv_set1(2.0f) * (fv_set1(ISECT_GAMMA(2)) * mxt * myt + dy * mxt + dx * myt);
+		fv me = fv_max(fv_abs(u), fv_max(fv_abs(v), fv_abs(w)));
+		fv dt = fv_set1(3.0f) * (fv_set1(ISECT_GAMMA(3)) * me * mzt + de * mzt + dz * me) /
+		        fv_abs(det);
+		okb &= iv_bits(t > dt);
+		for (unsigned k = okb; k; k &= k - 1) {
+			int l = __builtin_ctz(k), i = o + l;
+			if (s->shadow) {
+				if (t[l] < p->tmax[i] && p->tri[i] == PKT_NOHIT) {
+					p->t[i] = -INFINITY; /* occluded: every filter drops it */
+					p->tri[i] = tri_addr;
+				}
+			} else if (isect_better(t[l], tri_addr, p->t[i], p->tri[i])) {
+				p->t[i] = t[l];
+				p->tri[i] = tri_addr;
+				p->bu[i] = fru_fault == FRU_FAULT_BARY_SWAP ? w[l] / det[l]
+				                                            : v[l] / det[l];
+				p->bv[i] = w[l] / det[l];
+			}
+		}
+	}
+}
+
+/* pkt_trace_leaf (the same counts, cone culling and shadow-ray drops),
+ * its triangles fetched ahead and tested by fru_isect where the rays share
+ * one permutation; skip as there. */
+static void fru_leaf(trav_state *s, packet *p, const mimg *m, kd_node n, uint64_t mask,
+                     const pkt_cone *cone, trav_counts *c, const pkt_skip *skip)
+{
+	const uint32_t *list = mimg_lists(m) + kd_first(n);
+	uint32_t count = kd_count(n);
+	if (!s->rc.uniform) {
+		pkt_trace_leaf(s, p, m, kd_first(n), count, mask, cone, c, skip);
+		return;
+	}
+	for (uint32_t k = 0; k < count; k++)
+		__builtin_prefetch(mimg_tri_at(m, list[k]));
+	if (c) {
+		c->leaf_visits++;
+		c->tri_tests += count;
+		c->ray_tri_tests += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
+	}
+	for (uint32_t k = 0; k < count && mask; k++) {
+		const mimg_tri *tr = mimg_tri_at(m, list[k]);
+		if (cone && cone_culls_tri(cone, tr)) {
+			if (c) {
+				c->cone_culled++;
+				c->cone_saved_ray_tests += (uint64_t)__builtin_popcountll(mask);
+			}
+			continue;
+		}
+		if (skip && skip->missed(skip->ctx, tr))
+			continue;
+		fru_isect(s, p, tr, mask, list[k]);
+		if (s->shadow)
+			for (uint64_t b = mask; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				if (p->tri[i] != PKT_NOHIT)
+					mask &= ~(1ull << i);
+			}
+	}
+}
+
+/* pkt_trace_run with the packet shortcut (fru_step), the same pops
+ * (fru_pop) and leaves, so the same counts; the segments change hands
+ * instead of being copied (fru_walker). The next node's data is fetched
+ * ahead: an inner node's children while its lanes step, a pushed far
+ * child's node, a leaf's triangles before the first is tested (the
+ * scenes' trees and triangles are far larger than the caches). */
 static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
                      const pkt_cone *cone, trav_counts *c)
 {
 	const kd_node *nodes = mimg_nodes(m);
-	float bt[PKT_STACK_MAX], bf[PKT_STACK_MAX], tn, tf, lo, hi;
-	lane_range(s->cur.tn, s->cur.mask, &tn, &hi);
-	lane_range(s->cur.tf, s->cur.mask, &lo, &tf);
-	trav_result r;
-	while (pkt_trav_pop(s, p, &r)) {
-		if (r.popped) { /* a popped entry's rays are a subset: its bounds hold */
-			tn = bt[s->sp];
-			tf = bf[s->sp];
-		}
-		kd_node n = nodes[r.node];
+	fru_walker *w = &(fru_walker){.b = b, .s = s, .p = p};
+	for (int k = 0; k < s->stack_max; k++)
+		w->stk[k].seg = &s->stack[k];
+	w->cur = &s->cur;
+	w->spare = &s->spare;
+	w->node = s->cur.node;
+	w->mask = s->cur.mask;
+	const float *seg[2] = {s->cur.tn, s->cur.tf};
+	float lo[2], hi[2];
+	lane_ranges(seg, 2, w->mask, lo, hi);
+	w->tn = lo[0];
+	w->tf = hi[1];
+	while (fru_pop(w)) {
+		kd_node n = nodes[w->node];
 		if (kd_is_leaf(n)) {
 			/* triangle culling pays when many rays would test */
-			int many = b->one && __builtin_popcountll(r.mask) >= 16;
+			int many = b->one && __builtin_popcountll(w->mask) >= 16;
 			pkt_skip sk = {fru_tri_missed, b};
-			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), r.mask, cone, c,
-			               many ? &sk : NULL);
-			s->cur.mask = 0; /* pop next */
-		} else
-			fru_step(b, s, p, n, &tn, &tf, &bt[s->sp], &bf[s->sp]);
+			fru_leaf(s, p, m, n, w->mask, cone, c, many ? &sk : NULL);
+			w->mask = 0; /* pop next */
+		} else {
+			__builtin_prefetch(&nodes[kd_left(n)]);
+			uint32_t pushed = fru_step(w, n);
+			if (pushed != UINT32_MAX)
+				__builtin_prefetch(&nodes[pushed]);
+		}
 		if (c) { /* as pkt_trace_run: the depth after the step */
 			c->node_steps++;
-			c->max_sp = (uint64_t)s->sp > c->max_sp ? (uint64_t)s->sp : c->max_sp;
+			c->max_sp = (uint64_t)w->sp > c->max_sp ? (uint64_t)w->sp : c->max_sp;
 		}
 	}
 }

@@ -18,8 +18,12 @@
  * different origins as in Wald, Boulos, Shirley 2006 [WBS06], which seed
  * 000 "Interactive Distribution Ray Tracing" §3 builds on). Then only the node index changes;
  * otherwise (the plane cuts some segment, or the rays' directions on the
- * split axis have both signs or a zero) the per-lane step runs
- * (pkt_trav_node).
+ * split axis have both signs or a zero) the per-lane step runs: the
+ * arithmetic of pkt_trav_node, with its selects resolved once where the
+ * rays' directions have one sign on the axis. The walk is frustum.c's
+ * own (pkt_trav_pop's and pkt_trav_node's order of pops and steps, with
+ * the segment buffers changing hands instead of being copied, and the
+ * next nodes and a leaf's triangles fetched ahead).
  *
  * Exactly the per-lane traversal: where the shortcut applies the per-lane
  * step would have left every segment and the mask as they are, so the
@@ -54,12 +58,23 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered);
  *     crossings: rays lose hits in children it wrongly skips);
  *   FRU_FAULT_CULL_ONE_SIGN: triangle culling skips a triangle when one
  *     edge has every ray on its negative side (a triangle facing the other
- *     way has all three there for the rays that hit it). */
+ *     way has all three there for the rays that hit it);
+ *   FRU_FAULT_POP_ALL: a pop keeps every ray of the entry, also those
+ *     whose best hit lies before its segment (more work counted);
+ *   FRU_FAULT_STALE_SEGMENTS: a pop takes the entry's node and rays but
+ *     leaves the current segment buffer in place of the entry's (the
+ *     buffers change hands instead of being copied: rays step with
+ *     another node's segments);
+ *   FRU_FAULT_BARY_SWAP: the leaf test's late barycentric division
+ *     divides the wrong edge function for bu (w in place of v). */
 enum fru_fault {
 	FRU_FAULT_NONE,
 	FRU_FAULT_ALWAYS_NEAR,
 	FRU_FAULT_ONE_DIRECTION,
-	FRU_FAULT_CULL_ONE_SIGN
+	FRU_FAULT_CULL_ONE_SIGN,
+	FRU_FAULT_POP_ALL,
+	FRU_FAULT_STALE_SEGMENTS,
+	FRU_FAULT_BARY_SWAP
 };
 extern int fru_fault;
 

@@ -9,6 +9,7 @@
  * triangle's plane, so a secondary ray cannot hit its own surface.
  */
 #include "kernel-ref/shade.h"
+#include "kernel-ref/simd.h"
 
 #include "kernel-ref/sudoku.h"
 #include "kernel-ref/xform.h"
@@ -159,12 +160,15 @@ int shade_packet(const shade_ctx *c, const packet *p, packet *out, int max_out, 
 	return shade_packet_fp(c, NULL, p, out, max_out, log, cnt);
 }
 
+static int shade_packet_in(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr,
+                           const packet *p, packet *out, int max_out, shade_counts *cnt, int lean);
+
 int shade_packet_fp(const shade_ctx *c, const fpfmt *fp, const packet *p, packet *out, int max_out,
                     shade_log *log, shade_counts *cnt)
 {
 	mimg_rd r = {c->m, c->tl, log};
 	shade_reader rd = {mimg_read, &r};
-	return shade_packet_rd(c, fp, &rd, p, out, max_out, cnt);
+	return shade_packet_in(c, fp, &rd, p, out, max_out, cnt, !log && !c->tl);
 }
 
 /* A hit's surface as the shader uses it: the records the reader gave, the
@@ -189,7 +193,11 @@ typedef struct spawn {
 /* Planted mistakes for tests (docs/TESTING.md "Checks that can fail");
  * programs leave it at 0. SHADE_FAULT_NO_NORMAL_XF: a two-level hit's
  * shading normals are left in object space (the normal transform
- * skipped). */
+ * skipped). SHADE_FAULT_LEAN_NO_TEXTURE: the lean lane leaves out the
+ * map_Kd texel; SHADE_FAULT_LEAN_NO_CLAMP: the lean adds convert to
+ * fixed point without fb_fixed's clamp; SHADE_FAULT_LEAN_MEMO_TEXTURED:
+ * a textured hit's result is reused for the next lane on its triangle
+ * (whose texel differs). */
 int shade_fault;
 
 /* A two-level hit (shade_ctx.tl): instance k's shading transform (read in
@@ -454,8 +462,114 @@ static void shade_lane(const shade_ctx *c, const fpfmt *fq, const shade_reader *
 	secondary_rays(c, fq, &h, sp, i, p, d, w, kr, kt);
 }
 
-int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr, const packet *p,
-                    packet *out, int max_out, shade_counts *cnt)
+/* A record of the image at addr straight from its bytes, as mimg_read
+ * gives it; 0 where mimg_read would give zeros (past the image). */
+static int lean_get(const mimg *m, uint64_t addr, uint32_t bytes, void *out)
+{
+	if (addr > m->size || bytes > m->size - addr)
+		return 0;
+	memcpy(out, m->bytes + addr, bytes);
+	return 1;
+}
+
+/* shade_lane for a hit that spawns no ray (no shadow packets, and no
+ * reflection or refraction: none in the material, or the depth cut) and
+ * has no bump map, read from kernel-ref's image without a log (full
+ * precision, a single tree): the same pixel add and counts, from the two
+ * records and the operations that decide them (the ambient term of
+ * textures and shade_lane, the uv of hit_surface), without the hit's
+ * geometry, the reader's calls and the records' copies a spawning lane
+ * needs; the add is left to lean_adds, which gets kl and ka. Returns 0,
+ * having done nothing, for a lane it does not cover. */
+static int shade_lane_lean(const shade_ctx *c, const shade_reader *rdr, const packet *p, int i,
+                           const spawn *sp, shade_counts *cnt, float *klo, vec3 *kao, int *cut)
+{
+	const mimg *m = c->m;
+	uint32_t ta = p->tri[i];
+	mimg_shade sh;
+	mimg_mat mt;
+	if (ta == PKT_NOHIT ||
+	    !lean_get(m, mimg_shade_addr(m, mimg_tri_index(m, ta)), MIMG_SHADE_BYTES, &sh))
+		return 0;
+	if (!lean_get(m, mimg_mat_addr(m, sh.mat), MIMG_MAT_BYTES, &mt) || mt.tex_bump >= 0)
+		return 0;
+	float kr = mt.reflect, kt = mt.transmit;
+	if ((kr > 0.0f || kt > 0.0f) && sp->can_recurse)
+		return 0;
+	cnt->hits++;
+	vec3 ka = arr3(mt.ka);
+	if (mt.tex_kd >= 0) {
+		float b1 = p->bu[i], b2 = p->bv[i], b0 = 1.0f - b1 - b2;
+		vec2 uv = {b0 * sh.uv[0][0] + b1 * sh.uv[1][0] + b2 * sh.uv[2][0],
+		           b0 * sh.uv[0][1] + b1 * sh.uv[1][1] + b2 * sh.uv[2][1]};
+		mimg_texhdr th;
+		vec3 tx = texel(rdr, m, mt.tex_kd, uv, 0, 0, cnt, &th);
+		if (shade_fault != SHADE_FAULT_LEAN_NO_TEXTURE)
+			ka = v3_mul(ka, tx);
+	} else
+		cnt->untextured_hits++;
+	int untextured = mt.tex_kd < 0;
+	float kl = 1.0f - kr - kt;
+	if (kl < 0.0f)
+		kl = 0.0f;
+	*klo = kl;
+	*kao = ka;
+	*cut = (kr > 0.0f) + (kt > 0.0f);
+	if (c->nlights == 0 && kl > 0.0f)
+		cnt->shadow_skip_nolight++;
+	cnt->depth_cut += (uint64_t)*cut;
+	return untextured ? 2 : 1;
+}
+
+/* fb_fixed in SIMD_W lanes: the same operations (a sum below 2^31
+ * converts to the same integer through int32 as through uint64). */
+static inline iv fixed_v(fv c)
+{
+	iv pos = c > fv_set1(0.0f);
+	fv x = shade_fault == SHADE_FAULT_LEAN_NO_CLAMP
+	           ? c
+	           : fv_sel(c > fv_set1(FB_MAX_CONTRIB), fv_set1(FB_MAX_CONTRIB), c);
+	x = x * fv_set1((float)(1u << FB_FRAC_BITS)) + fv_set1(0.5f);
+	return __builtin_convertvector(x, iv) & pos;
+}
+
+/* The frame-buffer adds of a lean packet's misses (shade_lane's
+ * background, w * background) and lean hits (shade_lane_lean's ambient
+ * term, ((w kl) ka) SHADE_AMBIENT), SIMD_W lanes at a time, then each
+ * lane's three fixed-point words added into its pixel. */
+static void lean_adds(const shade_ctx *c, const packet *p, uint64_t miss, uint64_t lit,
+                      const float *kl, const float (*ka)[PKT_RAYS])
+{
+	int32_t fx[3][PKT_RAYS];
+	const float *w[3] = {p->wr, p->wg, p->wb};
+	const float bg[3] = {c->background.x, c->background.y, c->background.z};
+	for (int g = 0; g < PKT_RAYS / SIMD_W; g++) {
+		if (!grp_bits(miss | lit, g))
+			continue;
+		int o = SIMD_W * g;
+		iv ish = iv_from_bits(grp_bits(lit, g));
+		fv l = fv_load(kl + o);
+		for (int k = 0; k < 3; k++) {
+			fv wk = fv_load(w[k] + o);
+			fv h = ((wk * l) * fv_load(ka[k] + o)) * fv_set1(SHADE_AMBIENT);
+			iv f = fixed_v(fv_sel(ish, h, wk * fv_set1(bg[k])));
+			memcpy(fx[k] + o, &f, sizeof f);
+		}
+	}
+	for (uint64_t b = miss | lit; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		uint64_t *a = c->fb->acc + 3 * (uint64_t)p->pixel[i];
+		a[0] += (uint64_t)fx[0][i];
+		a[1] += (uint64_t)fx[1][i];
+		a[2] += (uint64_t)fx[2][i];
+	}
+}
+
+/* shade_packet_rd; lean: the reader is kernel-ref's image without a log
+ * and the records are a single tree's (shade_packet_fp), so lanes that
+ * spawn nothing may take shade_lane_lean. */
+static int shade_packet_in(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr,
+                           const packet *p, packet *out, int max_out, shade_counts *cnt, int lean)
 {
 	if (c->defer)
 		c->defer->n = 0;
@@ -471,8 +585,50 @@ int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr
 		sp.refl->valid = sp.refr->valid = 0;
 	for (int l = 0; l < nl + 2; l++)
 		out[l].sample = p->sample; /* children keep the pixels' sample */
-	for (uint64_t b = p->valid; b; b &= b - 1)
-		shade_lane(c, fq, rdr, p, __builtin_ctzll(b), &sp, cnt);
+	if (lean && !fq && !c->defer && c->fb) {
+		/* misses and (no shadow packets) lean hits: adds in lean_adds */
+		float kl[PKT_RAYS] = {0}, ka[3][PKT_RAYS] = {{0}};
+		uint64_t miss = 0, lit = 0;
+		/* the last untextured lean hit: a lane on the same triangle has
+		 * the same kl, ka and counts (neighbouring rays mostly do) */
+		uint32_t last = PKT_NOHIT;
+		float lkl = 0.0f;
+		vec3 lka = v3(0, 0, 0);
+		int lcut = 0;
+		for (uint64_t b = p->valid; b; b &= b - 1) {
+			int i = __builtin_ctzll(b), cut, r;
+			vec3 a;
+			if (p->tri[i] == PKT_NOHIT) {
+				miss |= 1ull << i;
+				continue;
+			}
+			if (p->tri[i] == last) {
+				cnt->hits++;
+				cnt->untextured_hits++;
+				cnt->shadow_skip_nolight += c->nlights == 0 && lkl > 0.0f;
+				cnt->depth_cut += (uint64_t)lcut;
+				kl[i] = lkl;
+				a = lka;
+			} else if (sp.nl > 0 || !(r = shade_lane_lean(c, rdr, p, i, &sp, cnt,
+			                                              &kl[i], &a, &cut))) {
+				shade_lane(c, fq, rdr, p, i, &sp, cnt);
+				continue;
+			} else if (r == 2 || shade_fault == SHADE_FAULT_LEAN_MEMO_TEXTURED) {
+				last = p->tri[i];
+				lkl = kl[i];
+				lka = a;
+				lcut = cut;
+			}
+			lit |= 1ull << i;
+			ka[0][i] = a.x;
+			ka[1][i] = a.y;
+			ka[2][i] = a.z;
+		}
+		cnt->misses += (uint64_t)__builtin_popcountll(miss);
+		lean_adds(c, p, miss, lit, kl, ka);
+	} else
+		for (uint64_t b = p->valid; b; b &= b - 1)
+			shade_lane(c, fq, rdr, p, __builtin_ctzll(b), &sp, cnt);
 	if (!sp.refl->valid && !sp.refr->valid && p->type != PKT_SHADOW)
 		cnt->secondary_skip++;
 	/* compact: keep only packets that carry rays */
@@ -486,6 +642,12 @@ int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr
 		k++;
 	}
 	return k;
+}
+
+int shade_packet_rd(const shade_ctx *c, const fpfmt *fp, const shade_reader *rdr, const packet *p,
+                    packet *out, int max_out, shade_counts *cnt)
+{
+	return shade_packet_in(c, fp, rdr, p, out, max_out, cnt, 0);
 }
 
 void shade_shadow_done(const shade_ctx *c, const packet *p, shade_counts *cnt)

@@ -58,7 +58,13 @@ typedef struct shade_adds {
  * bytes; the chip's reader reads them from its memory. */
 #define SHADE_XF_BYTES 168u
 #define SHADE_XF_READS 4
-enum shade_fault { SHADE_FAULT_NONE, SHADE_FAULT_NO_NORMAL_XF };
+enum shade_fault {
+	SHADE_FAULT_NONE,
+	SHADE_FAULT_NO_NORMAL_XF,
+	SHADE_FAULT_LEAN_NO_TEXTURE,
+	SHADE_FAULT_LEAN_NO_CLAMP,
+	SHADE_FAULT_LEAN_MEMO_TEXTURED
+};
 extern int shade_fault; /* shade.c: planted mistakes, tests only */
 typedef struct shade_tl {
 	uint64_t base;   /* the first instance's shading transform */

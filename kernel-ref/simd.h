@@ -95,6 +95,31 @@ static inline fv fv_abs(fv a)
 	return (fv)((iv)a & iv_set1(0x7fffffff));
 }
 
+/* Square root, lane by lane (correctly rounded, as sqrtf). */
+static inline fv fv_sqrt(fv a)
+{
+#if defined(__AVX512F__)
+	__m512 x;
+	memcpy(&x, &a, sizeof x);
+	x = _mm512_sqrt_ps(x);
+	memcpy(&a, &x, sizeof a);
+#elif defined(__AVX__)
+	__m256 x;
+	memcpy(&x, &a, sizeof x);
+	x = _mm256_sqrt_ps(x);
+	memcpy(&a, &x, sizeof a);
+#elif defined(__SSE__)
+	__m128 x;
+	memcpy(&x, &a, sizeof x);
+	x = _mm_sqrt_ps(x);
+	memcpy(&a, &x, sizeof a);
+#else
+	for (int i = 0; i < SIMD_W; i++)
+		a[i] = __builtin_sqrtf(a[i]);
+#endif
+	return a;
+}
+
 /* Bits SIMD_W g .. SIMD_W g + SIMD_W - 1 of a packet mask: group g's lanes. */
 static inline unsigned grp_bits(uint64_t mask, int g)
 {

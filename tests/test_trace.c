@@ -332,3 +332,157 @@ Test(trace, textures_and_bump_maps_are_shaded)
 	fb_free(&plain);
 	fb_free(&bumped);
 }
+
+/* Five quads side by side, each with its own material: plain, a map_Kd
+ * checker, a bump map, a mirror (illum 3) and glass (d 0.5); the
+ * background shows around them. */
+static void lean_scene(const char *dir, world *w)
+{
+	uint8_t px[2 * 2 * 3] = {255, 0, 0, 0, 0, 255, 0, 0, 255, 255, 0, 0};
+	uint8_t bump[4 * 4 * 3];
+	for (int i = 0; i < 16; i++)
+		memset(bump + 3 * i, (i * 53) % 256, 3);
+	char path[512], obj[512], mtl[512], text[2048];
+	diag d;
+	snprintf(path, sizeof path, "%s/checker.png", dir);
+	cr_assert_eq(img_write(path, 2, 2, px, NULL, NULL, &d), 0, "%s", d.msg);
+	snprintf(path, sizeof path, "%s/bump.png", dir);
+	cr_assert_eq(img_write(path, 4, 4, bump, NULL, NULL, &d), 0, "%s", d.msg);
+	tu_write(mtl, sizeof mtl, dir, "five.mtl",
+	         "newmtl plain\nKd 0.8 0.6 0.4\nKa 0.7 0.5 0.3\nKs 0 0 0\n"
+	         "newmtl tex\nKd 1 1 1\nKa 0.9 0.8 0.7\nKs 0 0 0\nmap_Kd checker.png\n"
+	         "newmtl bumpy\nKd 1 1 1\nKa 1 1 1\nKs 0 0 0\nbump bump.png\n"
+	         "newmtl mirror\nKd 0.2 0.2 0.2\nKa 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum 3\n"
+	         "newmtl glass\nKd 0.1 0.2 0.3\nKa 0.4 0.4 0.4\nKs 0 0 0\nd 0.5\n");
+	int n = snprintf(text, sizeof text, "mtllib five.mtl\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
+	static const char *const mats[5] = {"plain", "tex", "bumpy", "mirror", "glass"};
+	for (int q = 0; q < 5; q++) {
+		float x0 = -5.0f + 2.0f * (float)q, x1 = x0 + 1.8f;
+		n += snprintf(text + n, sizeof text - (size_t)n,
+		              "v %g -1 0\nv %g -1 0\nv %g 1 0\nv %g 1 0\nusemtl %s\n"
+		              "f %d/1 %d/2 %d/3\nf %d/1 %d/3 %d/4\n",
+		              x0, x1, x1, x0, mats[q], 4 * q + 1, 4 * q + 2, 4 * q + 3, 4 * q + 1,
+		              4 * q + 3, 4 * q + 4);
+	}
+	tu_write(obj, sizeof obj, dir, "five.obj", text);
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = obj;
+	o.have_eye = o.have_lookat = o.have_up = o.have_fov = 1;
+	o.cam = (camera){v3(0.2f, 0.3f, 6), v3(0, 0, 0), v3(0, 1, 0), 90.0f};
+	o.nlights = 1;
+	o.lights[0] = (light){v3(0.3f, 0.2f, 2.0f), v3(1, 1, 1)};
+	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+}
+
+/* kernel-ref's shading without a read log (shade_packet_fp: lanes that
+ * spawn no ray take shade.c's lean lane) against the shader with one
+ * (shade_packet: every lane the general way): the same frame-buffer words,
+ * child packets and counts, with no lights and depth 0 (where lean lanes
+ * run: plain and textured hits, mirror and glass cut by the depth, misses,
+ * the bump map left to the general lane), depth 1 (mirror and glass spawn
+ * rays: general) and a light (shadow rays: general). Written to catch
+ * SHADE_FAULT_LEAN_NO_TEXTURE (the lean lane without the map_Kd texel)
+ * SHADE_FAULT_LEAN_NO_CLAMP (the packet's fixed-point conversion
+ * without fb_fixed's clamp) and SHADE_FAULT_LEAN_MEMO_TEXTURED (a textured
+ * hit's result reused for the next lane on the triangle), planted below. */
+static uint64_t lean_mismatches(const world *w, int depth, int nlights, vec3 background)
+{
+	static trav_entry stack[PKT_STACK_MAX];
+	static packet p, ka[8], kb[8];
+	framebuf fa, fb;
+	cr_assert_eq(fb_init(&fa, 64, 64), 0);
+	cr_assert_eq(fb_init(&fb, 64, 64), 0);
+	shade_ctx sa = {.m = &w->m,
+	                .lights = w->v.lights,
+	                .nlights = nlights,
+	                .max_depth = depth,
+	                .background = background,
+	                .fb = &fa};
+	shade_ctx sb = sa;
+	sb.fb = &fb;
+	cam_frame cf;
+	cam_setup(&cf, &w->v.cam, 64, 64);
+	shade_read log_e[SHADE_LOG_CAP];
+	shade_counts ca = {0}, cb = {0};
+	uint64_t bad = 0;
+	for (int t = 0; t < 64; t++) {
+		cam_primary_packet(&cf, t % 8, t / 8, &p);
+		pkt_trace(&p, &w->m, stack, PKT_STACK_MAX, NULL);
+		shade_log log = {log_e, 0, SHADE_LOG_CAP, 0};
+		int na = shade_packet(&sa, &p, ka, nlights + 2, &log, &ca);
+		int nb = shade_packet_fp(&sb, NULL, &p, kb, nlights + 2, NULL, &cb);
+		bad += na != nb;
+		for (int k = 0; k < na && k < nb; k++)
+			bad += memcmp(&ka[k], &kb[k], sizeof ka[k]) != 0;
+	}
+	bad += memcmp(&ca, &cb, sizeof ca) != 0;
+	bad += memcmp(fa.acc, fb.acc, 64 * 64 * 3 * sizeof *fa.acc) != 0;
+	fb_free(&fa);
+	fb_free(&fb);
+	return bad;
+}
+
+Test(trace, lean_shading_equals_the_general_shader)
+{
+	char dir[256];
+	tu_tmpdir(dir, sizeof dir);
+	world w;
+	lean_scene(dir, &w);
+	/* a background beyond the frame buffer's clamp on red and below zero
+	 * on green: the misses' adds clamp and drop as fb_fixed does */
+	const vec3 bgs[2] = {v3(0.1f, 0.2f, 0.3f), v3(5000.0f, -1.0f, 0.3f)};
+	for (int k = 0; k < 2; k++)
+		for (int depth = 0; depth < 2; depth++)
+			for (int nl = 0; nl < 2; nl++)
+				cr_assert_eq(lean_mismatches(&w, depth, nl, bgs[k]), 0,
+				             "background %d, depth %d, %d lights", k, depth, nl);
+	static const int faults[] = {SHADE_FAULT_LEAN_NO_TEXTURE, SHADE_FAULT_LEAN_NO_CLAMP,
+	                             SHADE_FAULT_LEAN_MEMO_TEXTURED};
+	for (int f = 0; f < 3; f++) {
+		shade_fault = faults[f];
+		uint64_t planted = lean_mismatches(&w, 0, 0, bgs[1]);
+		shade_fault = SHADE_FAULT_NONE;
+		cr_assert_gt(planted, 0, "planted mistake %d went unnoticed", faults[f]);
+	}
+	world_free(&w);
+}
+
+/* A full tile's pinhole rays (camera.c's pinhole_packet, SIMD_W lanes at
+ * a time) against the pixel-centre arithmetic written out per ray in one
+ * order: the same floats, bit for bit, for cameras looking along every
+ * axis sign. Written to catch the vector code summing or scaling in
+ * another order than the per-ray path (sample_ray) rounds, e.g.
+ * dx * dx + (dy * dy + dz * dz), or d / len for d * (1 / len). */
+Test(trace, pinhole_packet_is_the_per_ray_arithmetic)
+{
+	static packet p;
+	static const float eyes[4][3] = {{0, 0, 5}, {3, -2, 1}, {-1, 7, -4}, {0.1f, 0.2f, 0.3f}};
+	for (int e = 0; e < 4; e++) {
+		camera cam = {v3(eyes[e][0], eyes[e][1], eyes[e][2]), v3(0.3f, -0.1f, 0.2f),
+		              v3(0, 1, 0), 20.0f + 25.0f * (float)e};
+		cam_frame c;
+		cam_setup(&c, &cam, 24 + 8 * e, 16);
+		for (int t = 0; t < (c.width / 8) * 2; t++) {
+			int tx = t % (c.width / 8), ty = t / (c.width / 8);
+			cr_assert_eq(cam_primary_packet(&c, tx, ty, &p), PKT_RAYS);
+			for (int l = 0; l < PKT_RAYS; l++) {
+				float x = (float)(tx * 8 + l % 8), y = (float)(ty * 8 + l / 8);
+				float px = (2.0f * (x + 0.5f) / (float)c.width - 1.0f) * c.sx;
+				float py = (1.0f - 2.0f * (y + 0.5f) / (float)c.height) * c.sy;
+				float d[3] = {c.w.x + (c.u.x * px + c.v.x * py),
+				              c.w.y + (c.u.y * px + c.v.y * py),
+				              c.w.z + (c.u.z * px + c.v.z * py)};
+				float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+				float inv = 1.0f / len;
+				float got[3] = {p.dx[l], p.dy[l], p.dz[l]};
+				for (int k = 0; k < 3; k++) {
+					float want = len > 0.0f ? d[k] * inv : d[k];
+					cr_assert(memcmp(&want, &got[k], 4) == 0,
+					          "camera %d tile %d lane %d axis %d: %a, want %a",
+					          e, t, l, k, got[k], want);
+				}
+			}
+		}
+	}
+}
