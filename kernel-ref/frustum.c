@@ -30,7 +30,7 @@
 #include <math.h>
 
 #include "kernel-ref/cone.h"
-#include "kernel-ref/isect.h"
+#include "kernel-ref/isect_v.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/simd.h"
 
@@ -447,27 +447,9 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 			continue;
 		int o = SIMD_W * g;
 		fv sx = fv_load(rc->sx + o), sy = fv_load(rc->sy + o);
-		fv okx = fv_load(rc->okx + o), oky = fv_load(rc->oky + o);
-		fv okz = fv_load(rc->okz + o);
-		fv vx[3], vy[3], vkz[3];
-		for (int k = 0; k < 3; k++) {
-			vkz[k] = fv_set1(tr->v[k][rc->ukz]) - okz;
-			vx[k] = (fv_set1(tr->v[k][rc->ukx]) - okx) - sx * vkz[k];
-			vy[k] = (fv_set1(tr->v[k][rc->uky]) - oky) - sy * vkz[k];
-		}
-		fv u = vx[2] * vy[1] - vy[2] * vx[1];
-		fv v = vx[0] * vy[2] - vy[0] * vx[2];
-		fv w = vx[1] * vy[0] - vy[1] * vx[0];
-		unsigned dbl = iv_bits((u == zero) | (v == zero) | (w == zero)) & gb;
-		for (unsigned k = dbl; k; k &= k - 1) {
-			int l = __builtin_ctz(k);
-			float uu, vv, ww;
-			isect_uvw_double(vx[0][l], vy[0][l], vx[1][l], vy[1][l], vx[2][l], vy[2][l],
-			                 &uu, &vv, &ww);
-			u[l] = uu;
-			v[l] = vv;
-			w[l] = ww;
-		}
+		fv vx[3], vy[3], vkz[3], u, v, w;
+		isect_v_uniform(rc, o, tr, sx, sy, vx, vy, vkz);
+		isect_v_edges(vx, vy, gb, &u, &v, &w);
 		iv neg = (u < zero) | (v < zero) | (w < zero);
 		iv posv = (u > zero) | (v > zero) | (w > zero);
 		fv det = u + v + w;
@@ -478,17 +460,7 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 		fv az = sz * vkz[0], bz = sz * vkz[1], cz = sz * vkz[2];
 		fv t = (u * az + v * bz + w * cz) / det;
 		/* conservative t > 0, as in isect_tri (pbrt's deltaT) */
-		fv mzt = fv_max(fv_abs(az), fv_max(fv_abs(bz), fv_abs(cz)));
-		fv mxt = fv_max(fv_abs(vx[0]), fv_max(fv_abs(vx[1]), fv_abs(vx[2])));
-		fv myt = fv_max(fv_abs(vy[0]), fv_max(fv_abs(vy[1]), fv_abs(vy[2])));
-		fv dz = fv_set1(ISECT_GAMMA(3)) * mzt;
-		fv dx = fv_set1(ISECT_GAMMA(5)) * (mxt + mzt),
-		   dy = fv_set1(ISECT_GAMMA(5)) * (myt + mzt);
-		fv de = fv_set1(2.0f) * (fv_set1(ISECT_GAMMA(2)) * mxt * myt + dy * mxt + dx * myt);
-		fv me = fv_max(fv_abs(u), fv_max(fv_abs(v), fv_abs(w)));
-		fv dt = fv_set1(3.0f) * (fv_set1(ISECT_GAMMA(3)) * me * mzt + de * mzt + dz * me) /
-		        fv_abs(det);
-		okb &= iv_bits(t > dt);
+		okb &= iv_bits(t > isect_v_dt(u, v, w, det, az, bz, cz, vx, vy));
 		for (unsigned k = okb; k; k &= k - 1) {
 			int l = __builtin_ctz(k), i = o + l;
 			if (s->shadow) {
@@ -504,46 +476,6 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 				p->bv[i] = w[l] / det[l];
 			}
 		}
-	}
-}
-
-/* pkt_trace_leaf (the same counts, cone culling and shadow-ray drops),
- * its triangles fetched ahead and tested by fru_isect where the rays share
- * one permutation; skip as there. */
-static void fru_leaf(trav_state *s, packet *p, const mimg *m, kd_node n, uint64_t mask,
-                     const pkt_cone *cone, trav_counts *c, const pkt_skip *skip)
-{
-	const uint32_t *list = mimg_lists(m) + kd_first(n);
-	uint32_t count = kd_count(n);
-	if (!s->rc.uniform) {
-		pkt_trace_leaf(s, p, m, kd_first(n), count, mask, cone, c, skip);
-		return;
-	}
-	for (uint32_t k = 0; k < count; k++)
-		__builtin_prefetch(mimg_tri_at(m, list[k]));
-	if (c) {
-		c->leaf_visits++;
-		c->tri_tests += count;
-		c->ray_tri_tests += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
-	}
-	for (uint32_t k = 0; k < count && mask; k++) {
-		const mimg_tri *tr = mimg_tri_at(m, list[k]);
-		if (cone && cone_culls_tri(cone, tr)) {
-			if (c) {
-				c->cone_culled++;
-				c->cone_saved_ray_tests += (uint64_t)__builtin_popcountll(mask);
-			}
-			continue;
-		}
-		if (skip && skip->missed(skip->ctx, tr))
-			continue;
-		fru_isect(s, p, tr, mask, list[k]);
-		if (s->shadow)
-			for (uint64_t b = mask; b; b &= b - 1) {
-				int i = __builtin_ctzll(b);
-				if (p->tri[i] != PKT_NOHIT)
-					mask &= ~(1ull << i);
-			}
 	}
 }
 
@@ -572,10 +504,15 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	while (fru_pop(w)) {
 		kd_node n = nodes[w->node];
 		if (kd_is_leaf(n)) {
-			/* triangle culling pays when many rays would test */
+			/* triangle culling pays when many rays would test; rays of
+			 * one permutation take fru_isect, their triangles fetched
+			 * ahead */
 			int many = b->one && __builtin_popcountll(w->mask) >= 16;
-			pkt_skip sk = {fru_tri_missed, b};
-			fru_leaf(s, p, m, n, w->mask, cone, c, many ? &sk : NULL);
+			int uni = s->rc.uniform;
+			pkt_leaf_hooks hk = {many ? fru_tri_missed : NULL, b,
+			                     uni ? fru_isect : NULL, uni};
+			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, cone, c,
+			               many || uni ? &hk : NULL);
 			w->mask = 0; /* pop next */
 		} else {
 			__builtin_prefetch(&nodes[kd_left(n)]);

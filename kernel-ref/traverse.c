@@ -20,6 +20,7 @@
 
 #include "kernel-ref/cone.h"
 #include "kernel-ref/isect.h"
+#include "kernel-ref/isect_v.h"
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/packet.h"
 #include "kernel-ref/simd.h"
@@ -483,16 +484,9 @@ uint64_t pkt_isect_tri_v(trav_state *s, packet *p, const mimg_tri *tr, uint64_t 
 		iv ky0 = iv_load(rc->ky0 + o8), ky1 = iv_load(rc->ky1 + o8);
 		fv sx = fv_load(rc->sx + o8), sy = fv_load(rc->sy + o8), sz = fv_load(rc->sz + o8);
 		fv vx[3], vy[3], vkz[3];
-		if (rc->uniform) {
-			/* the same subtractions as below, without the selects */
-			fv okx = fv_load(rc->okx + o8), oky = fv_load(rc->oky + o8);
-			fv okz = fv_load(rc->okz + o8);
-			for (int k = 0; k < 3; k++) {
-				vkz[k] = fv_set1(tr->v[k][rc->ukz]) - okz;
-				vx[k] = (fv_set1(tr->v[k][rc->ukx]) - okx) - sx * vkz[k];
-				vy[k] = (fv_set1(tr->v[k][rc->uky]) - oky) - sy * vkz[k];
-			}
-		} else
+		if (rc->uniform) /* the same subtractions as below, without the selects */
+			isect_v_uniform(rc, o8, tr, sx, sy, vx, vy, vkz);
+		else
 			for (int k = 0; k < 3; k++) {
 				fv ax = fv_set1(tr->v[k][0]) - ox;
 				fv ay = fv_set1(tr->v[k][1]) - oy;
@@ -501,20 +495,8 @@ uint64_t pkt_isect_tri_v(trav_state *s, packet *p, const mimg_tri *tr, uint64_t 
 				vx[k] = sel3(kx0, kx1, ax, ay, az) - sx * vkz[k];
 				vy[k] = sel3(ky0, ky1, ax, ay, az) - sy * vkz[k];
 			}
-		fv u = vx[2] * vy[1] - vy[2] * vx[1];
-		fv v = vx[0] * vy[2] - vy[0] * vx[2];
-		fv w = vx[1] * vy[0] - vy[1] * vx[0];
-		fv zero = fv_set1(0.0f);
-		unsigned dbl = iv_bits((u == zero) | (v == zero) | (w == zero)) & gb;
-		for (unsigned k = dbl; k; k &= k - 1) {
-			int l = __builtin_ctz(k);
-			float uu, vv, ww;
-			isect_uvw_double(vx[0][l], vy[0][l], vx[1][l], vy[1][l], vx[2][l], vy[2][l],
-			                 &uu, &vv, &ww);
-			u[l] = uu;
-			v[l] = vv;
-			w[l] = ww;
-		}
+		fv u, v, w, zero = fv_set1(0.0f);
+		isect_v_edges(vx, vy, gb, &u, &v, &w);
 		iv neg = (u < zero) | (v < zero) | (w < zero);
 		iv posv = (u > zero) | (v > zero) | (w > zero);
 		fv det = u + v + w;
@@ -527,17 +509,7 @@ uint64_t pkt_isect_tri_v(trav_state *s, packet *p, const mimg_tri *tr, uint64_t 
 		fv t = tt / det;
 		fv bu = v / det, bv = w / det;
 		/* conservative t > 0, as in isect_tri (pbrt's deltaT) */
-		fv mzt = fv_max(fv_abs(az), fv_max(fv_abs(bz), fv_abs(cz)));
-		fv mxt = fv_max(fv_abs(vx[0]), fv_max(fv_abs(vx[1]), fv_abs(vx[2])));
-		fv myt = fv_max(fv_abs(vy[0]), fv_max(fv_abs(vy[1]), fv_abs(vy[2])));
-		fv dz = fv_set1(ISECT_GAMMA(3)) * mzt;
-		fv dx = fv_set1(ISECT_GAMMA(5)) * (mxt + mzt),
-		   dy = fv_set1(ISECT_GAMMA(5)) * (myt + mzt);
-		fv de = fv_set1(2.0f) * (fv_set1(ISECT_GAMMA(2)) * mxt * myt + dy * mxt + dx * myt);
-		fv me = fv_max(fv_abs(u), fv_max(fv_abs(v), fv_abs(w)));
-		fv dt = fv_set1(3.0f) * (fv_set1(ISECT_GAMMA(3)) * me * mzt + de * mzt + dz * me) /
-		        fv_abs(det);
-		okb &= iv_bits(t > dt);
+		okb &= iv_bits(t > isect_v_dt(u, v, w, det, az, bz, cz, vx, vy));
 		for (unsigned k = okb; k; k &= k - 1) {
 			int l = __builtin_ctz(k), i = o8 + l;
 			if (s->shadow) {
@@ -572,9 +544,12 @@ uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max
 }
 
 void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
-                    uint64_t mask, const pkt_cone *cone, trav_counts *c, const pkt_skip *skip)
+                    uint64_t mask, const pkt_cone *cone, trav_counts *c, const pkt_leaf_hooks *hk)
 {
 	const uint32_t *lists = mimg_lists(m);
+	if (hk && hk->prefetch)
+		for (uint32_t k = 0; k < count; k++)
+			__builtin_prefetch(mimg_tri_at(m, lists[first + k]));
 	if (c) {
 		c->leaf_visits++;
 		c->tri_tests += count;
@@ -582,16 +557,20 @@ void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uin
 	}
 	for (uint32_t k = 0; k < count && mask; k++) {
 		uint32_t ta = lists[first + k];
-		if (cone && cone_culls_tri(cone, mimg_tri_at(m, ta))) {
+		const mimg_tri *tr = mimg_tri_at(m, ta);
+		if (cone && cone_culls_tri(cone, tr)) {
 			if (c) {
 				c->cone_culled++;
 				c->cone_saved_ray_tests += (uint64_t)__builtin_popcountll(mask);
 			}
 			continue;
 		}
-		if (skip && skip->missed(skip->ctx, mimg_tri_at(m, ta)))
+		if (hk && hk->missed && hk->missed(hk->ctx, tr))
 			continue;
-		pkt_isect_tri(s, p, m, mask, ta);
+		if (hk && hk->isect)
+			hk->isect(s, p, tr, mask, ta);
+		else
+			pkt_isect_tri_v(s, p, tr, mask, ta);
 		if (s->shadow)
 			for (uint64_t b = mask; b; b &= b - 1) {
 				int i = __builtin_ctzll(b);
