@@ -60,7 +60,8 @@ cleanup() {
 	rm -f "$DOCTMP"
 }
 trap cleanup EXIT
-load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
+. "$(dirname "$0")/doc-section.sh"
+load0=$(doc_load)
 t0=$(date +%s)
 
 say "building saarsim and rtref with ARCH=-mavx2 into $B"
@@ -160,9 +161,8 @@ if [ -s "$REVROWS" ]; then
 fi
 
 elapsed=$(($(date +%s) - t0))
-load1=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
-GIT=$(git rev-parse --short HEAD)
-[ -z "$(git status --porcelain --untracked-files=no)" ] || GIT="$GIT (plus uncommitted changes)"
+load1=$(doc_load)
+GIT=$(doc_commit)
 SECTION=$TMP/section
 {
 	echo "<!-- BEGIN profile -->"
@@ -221,7 +221,6 @@ SECTION=$TMP/section
 	echo "<!-- END profile -->"
 } >"$SECTION"
 
-. "$(dirname "$0")/doc-section.sh"
 doc_section profile "$SECTION" "$DOC" # its temporary is $DOCTMP
 say "wrote $DOC (section profile)"
 cat "$SECTION"

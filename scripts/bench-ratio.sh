@@ -22,7 +22,8 @@ RUNS=${RUNS:-5}
 DOC=docs/PERFORMANCE.md
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-ratio.XXXXXX")
 trap 'rm -rf "$TMP"; rm -f "$DOC.tmp.$$"' EXIT
-load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
+. "$(dirname "$0")/doc-section.sh"
+load0=$(doc_load)
 t0=$(date +%s)
 VLIST=$(awk '/^views:/ { v = 1; next } v && /^[^[:space:]#]/ { v = 0 }
 	v && /^  [A-Za-z0-9_-]+:/ { sub(/^  /, ""); sub(/:.*/, ""); print }' "$VIEWS")
@@ -50,9 +51,8 @@ for v in $VLIST; do
 		"$(awk -v s="$bs" -v q="$br" 'BEGIN { printf "%.4f", (q > 0 ? s / q : 0) }')" >>"$ROWS"
 done
 elapsed=$(($(date +%s) - t0))
-load1=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
-GIT=$(git rev-parse --short HEAD)
-[ -z "$(git status --porcelain --untracked-files=no)" ] || GIT="$GIT (plus uncommitted changes)"
+load1=$(doc_load)
+GIT=$(doc_commit)
 SECTION=$TMP/section
 {
 	echo "<!-- BEGIN ratio -->"
@@ -72,7 +72,6 @@ SECTION=$TMP/section
 	END { printf "Target: at most 5 on every view: %s (%d of %d views; the highest %.1f, %s).\n", (ok == n ? "met" : "NOT met"), ok, n, hi, hv }' "$ROWS"
 	echo "<!-- END ratio -->"
 } >"$SECTION"
-. "$(dirname "$0")/doc-section.sh"
 doc_section ratio "$SECTION" "$DOC"
 say "wrote $DOC (section ratio)"
 cat "$SECTION"

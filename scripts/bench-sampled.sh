@@ -36,7 +36,8 @@ DOC=docs/PERFORMANCE.md
 DOCTMP=$DOC.tmp.$$
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-smp.XXXXXX")
 trap 'rm -rf "$TMP"; rm -f "$DOCTMP"' EXIT
-load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
+. "$(dirname "$0")/doc-section.sh"
+load0=$(doc_load)
 t0=$(date +%s)
 ROWS=$TMP/rows
 : >"$ROWS"
@@ -100,9 +101,8 @@ if [ "${ALL_VIEWS:-1}" != 0 ]; then
 	mv "$TMP/rows.main" "$ROWS"
 fi
 elapsed=$(($(date +%s) - t0))
-load1=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
-GIT=$(git rev-parse --short HEAD)
-[ -z "$(git status --porcelain --untracked-files=no)" ] || GIT="$GIT (plus uncommitted changes)"
+load1=$(doc_load)
+GIT=$(doc_commit)
 SECTION=$TMP/section
 {
 	echo "<!-- BEGIN sampled -->"
@@ -147,7 +147,6 @@ SECTION=$TMP/section
 	echo "<!-- END sampled -->"
 } >"$SECTION"
 
-. "$(dirname "$0")/doc-section.sh"
 doc_section sampled "$SECTION" "$DOC" # its temporary is $DOCTMP
 say "wrote $DOC (section sampled)"
 cat "$SECTION"

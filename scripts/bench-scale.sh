@@ -31,7 +31,8 @@ DOCTMP=$DOC.tmp.$$
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-scale.XXXXXX")
 trap 'rm -rf "$TMP"; rm -f "$DOCTMP"' EXIT
 tget() { sed -n "s/^[[:space:]]*$2:[[:space:]]*//p" "$1" | head -n 1; }
-load0=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
+. "$(dirname "$0")/doc-section.sh"
+load0=$(doc_load)
 t0=$(date +%s)
 
 # saarsim on scene $1 into $TMP/$2.{json,txt,time}; more arguments follow
@@ -68,9 +69,8 @@ ROWS=$TMP/rows
 	row large
 } >"$ROWS"
 elapsed=$(($(date +%s) - t0))
-load1=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?")
-GIT=$(git rev-parse --short HEAD)
-[ -z "$(git status --porcelain --untracked-files=no)" ] || GIT="$GIT (plus uncommitted changes)"
+load1=$(doc_load)
+GIT=$(doc_commit)
 rl=$(jget "$TMP/ref.json" load_ms)
 rb=$(jget "$TMP/ref.json" build_ms)
 ri=$(jget "$TMP/ref.json" image_ms)
@@ -110,7 +110,6 @@ SECTION=$TMP/section
 	echo "<!-- END scale -->"
 } >"$SECTION"
 
-. "$(dirname "$0")/doc-section.sh"
 doc_section scale "$SECTION" "$DOC" # its temporary is $DOCTMP
 say "wrote $DOC (section scale)"
 cat "$SECTION"

@@ -1,4 +1,5 @@
-# scripts/doc-section.sh: doc_section, for scripts that write one marked
+# scripts/doc-section.sh: doc_section (and doc_load, doc_commit for the
+# lines that say when and on what), for scripts that write one marked
 # part of a document (the bench-*.sh sections of docs/PERFORMANCE.md).
 # Sourced, not run: . "$(dirname "$0")/doc-section.sh"
 #
@@ -18,4 +19,17 @@ doc_section() {
 	else
 		cp "$2" "$3"
 	fi
+}
+
+# doc_load: the load average's three figures ("?" where it cannot be read).
+doc_load() {
+	cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?"
+}
+
+# doc_commit: HEAD's short hash, with " (plus uncommitted changes)" when a
+# tracked file differs from it (the figures may not be HEAD's).
+doc_commit() {
+	_dc=$(git rev-parse --short HEAD)
+	[ -z "$(git status --porcelain --untracked-files=no)" ] || _dc="$_dc (plus uncommitted changes)"
+	printf '%s\n' "$_dc"
 }
