@@ -265,6 +265,21 @@ Test(trace, skips_are_counted)
 	world_free(&w);
 }
 
+/* Loads the OBJ scene obj seen from cam, lit by one white light at
+ * (0.3, 0.2, 2) (the scenes of the texture and shading tests). */
+static void load_lit(world *w, const char *obj, camera cam)
+{
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = obj;
+	o.have_eye = o.have_lookat = o.have_up = o.have_fov = 1;
+	o.cam = cam;
+	o.nlights = 1;
+	o.lights[0] = (light){v3(0.3f, 0.2f, 2.0f), v3(1, 1, 1)};
+	diag d;
+	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+}
+
 /* A quad with a red/blue checker map_Kd and a bump map, seen head-on:
  * texels are read (and counted), the colours follow the texture, and the
  * bump map changes the shading. */
@@ -278,16 +293,9 @@ static void render_quad(const char *dir, const char *mtl_extra, framebuf *fb, re
 	tu_write(obj, sizeof obj, dir, "quad.obj",
 	         "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
 	         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl tex\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = obj;
-	o.have_eye = o.have_lookat = o.have_up = o.have_fov = 1;
-	o.cam = (camera){v3(0, 0, 3), v3(0, 0, 0), v3(0, 1, 0), 30.0f};
-	o.nlights = 1;
-	o.lights[0] = (light){v3(0.3f, 0.2f, 2.0f), v3(1, 1, 1)};
 	world w;
+	load_lit(&w, obj, (camera){v3(0, 0, 3), v3(0, 0, 0), v3(0, 1, 0), 30.0f});
 	diag d;
-	cr_assert_eq(world_load(&w, &o, &d), 0, "%s", d.msg);
 	render_opts ro;
 	render_opts_default(&ro);
 	ro.width = ro.height = 64;
@@ -365,14 +373,7 @@ static void lean_scene(const char *dir, world *w)
 		              4 * q + 3, 4 * q + 4);
 	}
 	tu_write(obj, sizeof obj, dir, "five.obj", text);
-	world_opts o;
-	world_opts_default(&o);
-	o.scene = obj;
-	o.have_eye = o.have_lookat = o.have_up = o.have_fov = 1;
-	o.cam = (camera){v3(0.2f, 0.3f, 6), v3(0, 0, 0), v3(0, 1, 0), 90.0f};
-	o.nlights = 1;
-	o.lights[0] = (light){v3(0.3f, 0.2f, 2.0f), v3(1, 1, 1)};
-	cr_assert_eq(world_load(w, &o, &d), 0, "%s", d.msg);
+	load_lit(w, obj, (camera){v3(0.2f, 0.3f, 6), v3(0, 0, 0), v3(0, 1, 0), 90.0f});
 }
 
 /* kernel-ref's shading without a read log (shade_packet_fp: lanes that
