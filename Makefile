@@ -88,7 +88,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-offsets stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -159,6 +159,11 @@ bench-sampled: all
 
 bench-ratio: all
 	B=$(B) sh scripts/bench-ratio.sh
+
+# issue 36 target 3: sampled mode's fps error by offset on every view
+# (BASE=DIR: a build of another commit for a "before" column).
+bench-offsets: all
+	B=$(B) sh scripts/bench-offsets.sh
 
 # Validation against the published SaarCOR results, like with like (seed 002
 # §4, Table 5; fit and held-out rows); writes docs/VALIDATION.md,
