@@ -12,7 +12,8 @@
 # 36): these runs measure builds, renders and warming as they are and
 # write nothing into the user's home; a run that wants a cache names its
 # own (--world-cache). jget FILE KEY: the first value of KEY in a JSON
-# report, quotes removed.
+# report, quotes removed. bench_views: the names of VIEWS' views (the
+# two-space-indented keys under `views:`), one a line.
 BENCH_NAME=bench
 say() { printf '%s: %s\n' "$BENCH_NAME" "$*" >&2; }
 die() {
@@ -37,4 +38,8 @@ jget() {
 	# shellcheck disable=SC2020
 	tr ',{}[]' '\n\n\n\n\n' <"$1" |
 		sed -n "s/^[[:space:]]*\"$2\"[[:space:]]*:[[:space:]]*//p" | head -n 1 | tr -d '"'
+}
+bench_views() {
+	awk '/^views:/ { v = 1; next } v && /^[^[:space:]#]/ { v = 0 }
+	v && /^  [A-Za-z0-9_-]+:/ { sub(/^  /, ""); sub(/:.*/, ""); print }' "$VIEWS"
 }

@@ -25,8 +25,7 @@ trap 'rm -rf "$TMP"; rm -f "$DOC.tmp.$$"' EXIT
 . "$(dirname "$0")/doc-section.sh"
 load0=$(doc_load)
 t0=$(date +%s)
-VLIST=$(awk '/^views:/ { v = 1; next } v && /^[^[:space:]#]/ { v = 0 }
-	v && /^  [A-Za-z0-9_-]+:/ { sub(/^  /, ""); sub(/:.*/, ""); print }' "$VIEWS")
+VLIST=$(bench_views)
 ROWS=$TMP/rows
 : >"$ROWS"
 for v in $VLIST; do
