@@ -245,6 +245,11 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	}
 	h->reads[type]++;
 	h->read_bytes[type] += r->bytes;
+	/* most reads miss the L1 on memory-bound views and then read the
+	 * image (sdram_read): its host cache miss now overlaps the tag
+	 * search's instead of following it */
+	if (h->ms)
+		ms_prefetch(h->ms, r->addr);
 	hreq *q = req_alloc(h);
 	if (!q)
 		return; /* out of memory: the unit never hears back (cannot happen in practice) */
