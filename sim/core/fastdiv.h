@@ -5,9 +5,10 @@
  * The simulator divides by the same few numbers at every event: a clock's
  * period (eng_next_edge), an L1's line size and set count when they are not
  * powers of two (36-byte triangle lines). A 64-bit division instruction
- * took about as long as the rest of an SDRAM access (docs/PERFORMANCE.md,
- * "Target 2"); a multiplication and one correction step give the same
- * quotient for every dividend.
+ * takes tens of cycles (the profile put a third of the SDRAM access's
+ * samples right after its divisions: docs/PERFORMANCE.md, "Target 2"); a
+ * multiplication and one correction step give the same quotient for every
+ * dividend.
  *
  * Why it is exact: inv = floor((2^64 - 1) / d) >= 2^64 / d - 1, so for
  * every t < 2^64, t / d - 1 < t * inv / 2^64 <= t / d; the high half of
