@@ -46,6 +46,8 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 	while (c->hash_bits < 63 && (1ull << c->hash_bits) < c->nsets)
 		c->hash_bits++;
 	c->set_mask = !(c->nsets & (c->nsets - 1)) ? c->nsets - 1 : 0;
+	c->set_div = fastdiv_of(c->nsets);
+	c->line_div = fastdiv_of(p->line_bytes);
 	c->line_shift = -1;
 	for (int b = 0; b < 32; b++)
 		if (p->line_bytes == 1u << b)
@@ -287,7 +289,7 @@ uint32_t cache_set_fold(const cache *c, uint64_t line)
 		for (uint64_t x = line >> c->hash_bits; x; x >>= c->hash_bits)
 			h ^= x;
 	}
-	return (uint32_t)(c->set_mask ? h & c->set_mask : h % c->nsets);
+	return (uint32_t)(c->set_mask ? h & c->set_mask : fastdiv_mod(c->set_div, h));
 }
 
 /* The way of set holding line, or -1. Four ways (every L1 of the

@@ -34,6 +34,7 @@
 #include "kernel-ref/bitset.h"
 #include "kernel-ref/diag.h"
 #include "mem/repl.h"
+#include "sim/core/fastdiv.h"
 
 enum cache_hash { CACHE_HASH_NONE, CACHE_HASH_XOR };
 
@@ -88,7 +89,9 @@ typedef struct cache {
 	uint32_t hash_bits; /* for xor-fold: bits of nsets rounded up */
 	uint64_t set_mask;  /* nsets - 1 when nsets is a power of two, else 0 */
 	int line_shift;     /* log2(line_bytes) when a power of two, else -1 */
-	cache_way *way;     /* nsets*ways, set by set, 64-byte aligned */
+	fastdiv line_div;   /* else line_bytes, and nsets, as divisors */
+	fastdiv set_div;
+	cache_way *way; /* nsets*ways, set by set, 64-byte aligned */
 	uint64_t stamp;
 	const repl_policy *rp;         /* p.repl, never NULL */
 	uint8_t stamp_hit, stamp_fill; /* rp's inline stamp rules */
@@ -202,7 +205,7 @@ int cache_ckpt_load(cache *c, uint32_t set0, uint32_t n, const void *buf);
 
 static inline uint64_t cache_line_of(const cache *c, uint64_t addr)
 {
-	return c->line_shift >= 0 ? addr >> c->line_shift : addr / c->p.line_bytes;
+	return c->line_shift >= 0 ? addr >> c->line_shift : fastdiv_div(c->line_div, addr);
 }
 uint32_t cache_set_fold(const cache *c, uint64_t line);
 /* The set a line maps to (inline: every lookup starts here). */

@@ -245,6 +245,11 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	}
 	h->reads[type]++;
 	h->read_bytes[type] += r->bytes;
+	/* most reads miss the L1 on memory-bound views and then read the
+	 * image (sdram_read): its host cache miss now overlaps the tag
+	 * search's instead of following it */
+	if (h->ms)
+		ms_prefetch(h->ms, r->addr);
 	hreq *q = req_alloc(h);
 	if (!q)
 		return; /* out of memory: the unit never hears back (cannot happen in practice) */
@@ -268,10 +273,10 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	}
 	hl1 *l = &h->l1[type];
 	/* the port: ports accesses per core cycle, in arrival order */
-	uint64_t start = tcache_port(&l->t, now, h->core.period);
+	uint64_t start = tcache_port(&l->t, now, h->core);
 	q->ready = start + (uint64_t)l->t.c.p.hit_latency * h->core.period;
-	q->next_line = r->addr / l->t.c.p.line_bytes;
-	q->last_line = (r->addr + bytes - 1) / l->t.c.p.line_bytes;
+	q->next_line = cache_line_of(&l->t.c, r->addr);
+	q->last_line = cache_line_of(&l->t.c, r->addr + bytes - 1);
 	/* reads refused earlier go first: a new read never overtakes them */
 	if (l->t.stall || walk(l, q, start)) {
 		tcache_stall(&l->t, q, start);

@@ -66,7 +66,6 @@ int memif_init(memif *m, eng *e, sdram *sd, int policy)
 		m->q[r] = (memif_queue){{MEMIF_NIL, MEMIF_NIL}, 0, 0, MEMIF_NIL};
 	for (int b = 0; b < SDRAM_MAX_BANKS; b++) {
 		m->bank[b] = (memif_list){MEMIF_NIL, MEMIF_NIL};
-		m->hrow[b] = SDRAM_NO_ROW; /* no item's row: hits[b] = 0 is right */
 	}
 	if (grow(m)) {
 		memif_free(m);
@@ -145,18 +144,6 @@ static void bank_start_at(const sdram *sd, uint32_t b, uint64_t now, bank_start 
 	}
 }
 
-/* Counts bank b's window items in `row`, the bank's open row (kept in
- * memif.hrow, .hits, and updated as items come and go, so that a pick
- * walks a bank's list for a row hit only when it holds one). */
-static void count_hits(memif *m, uint32_t b, uint64_t row)
-{
-	uint32_t n = 0;
-	for (uint32_t i = m->bank[b].head; i != MEMIF_NIL; i = m->pool[i].bnext)
-		n += m->pool[i].row == row;
-	m->hrow[b] = row;
-	m->hits[b] = n;
-}
-
 /* Bank b's best window item at `now` under FR-FCFS, or MEMIF_NIL if none
  * is ready (*start: when its data could start). Every item of the bank
  * starts at bs->hit (its row is open) or at bs->miss >= bs->hit, so the
@@ -167,9 +154,11 @@ static void count_hits(memif *m, uint32_t b, uint64_t row)
 static uint32_t bank_best(memif *m, uint32_t b, const bank_start *bs, uint64_t now, uint64_t *start,
                           uint64_t *next_ready)
 {
-	if (m->hrow[b] != bs->open_row)
-		count_hits(m, b, bs->open_row);
-	int hits_win = m->hits[b] && bs->hit < bs->miss; /* a hit beats an older miss */
+	/* a hit beats an older miss; with no item in the open row's slot of
+	 * rowcnt there is no hit (else perhaps one: the walk goes on past the
+	 * first ready miss and finds out, the same pick either way) */
+	int hits_win = bs->open_row != SDRAM_NO_ROW &&
+	               m->rowcnt[b][bs->open_row & (MEMIF_ROW_SLOTS - 1)] && bs->hit < bs->miss;
 	uint32_t cand = MEMIF_NIL;
 	for (uint32_t i = m->bank[b].head; i != MEMIF_NIL; i = m->pool[i].bnext) {
 		const memif_item *it = &m->pool[i];
@@ -194,6 +183,8 @@ static uint32_t bank_best(memif *m, uint32_t b, const bank_start *bs, uint64_t n
 	}
 	return cand;
 }
+
+_Static_assert(MEMIF_NREQ *MEMIF_FRFCFS_WINDOW <= UINT8_MAX, "memif.rowcnt counts in bytes");
 
 /* FR-FCFS: over the first MEMIF_FRFCFS_WINDOW requests of every queue,
  * the ready one whose data can start soonest (oldest on ties). Returns the
@@ -254,7 +245,7 @@ static void bank_insert(memif *m, uint32_t i)
 	memif_item *it = &m->pool[i];
 	memif_list *l = &m->bank[it->bank];
 	m->banks_used |= 1ull << it->bank;
-	m->hits[it->bank] += it->row == m->hrow[it->bank];
+	m->rowcnt[it->bank][it->row & (MEMIF_ROW_SLOTS - 1)]++;
 	uint32_t after = l->tail;
 	while (after != MEMIF_NIL && m->pool[after].seq > it->seq)
 		after = m->pool[after].bprev;
@@ -297,7 +288,7 @@ static void take(memif *m, uint32_t i)
 		m->pool[it->bnext].bprev = it->bprev;
 	if (bl->head == MEMIF_NIL)
 		m->banks_used &= ~(1ull << it->bank);
-	m->hits[it->bank] -= it->row == m->hrow[it->bank];
+	m->rowcnt[it->bank][it->row & (MEMIF_ROW_SLOTS - 1)]--;
 	q->n--;
 	q->nwin--;
 	if (q->wend != MEMIF_NIL) {

@@ -59,7 +59,8 @@ typedef struct memif_item {
 	uint64_t arg;
 } memif_item;
 
-#define MEMIF_NIL UINT32_MAX
+#define MEMIF_NIL       UINT32_MAX
+#define MEMIF_ROW_SLOTS 256 /* a power of two */
 
 typedef struct memif_list {
 	uint32_t head, tail;
@@ -88,9 +89,16 @@ typedef struct memif {
 	uint32_t cap, free_head;          /* pool size (doubles when full), its free list */
 	memif_list bank[SDRAM_MAX_BANKS]; /* window items by SDRAM bank */
 	uint64_t banks_used;              /* banks whose list is not empty */
-	uint64_t hrow[SDRAM_MAX_BANKS];   /* per bank: the row hits[] counts, */
-	uint32_t hits[SDRAM_MAX_BANKS];   /* its window items in that row */
-	uint64_t queued;                  /* requests in all queues */
+	/* per bank: its window items by row modulo MEMIF_ROW_SLOTS (at most
+	 * MEMIF_NREQ * MEMIF_FRFCFS_WINDOW each). 0 in the open row's slot
+	 * says no item is a row hit, so the pick stops at the first ready
+	 * request (mem/memif.c, bank_best); a slot that other rows share only
+	 * makes it look further, never changes the pick. Kept as items come
+	 * and go, whatever row is open: an exact count of the open row had to
+	 * be walked again after every row change, three picks in four on
+	 * dragon2 (docs/PERFORMANCE.md, "Target 2") */
+	uint8_t rowcnt[SDRAM_MAX_BANKS][MEMIF_ROW_SLOTS];
+	uint64_t queued; /* requests in all queues */
 	uint64_t seq;
 	int last;  /* requester served last (round robin) */
 	int armed; /* a dispatch event is queued */

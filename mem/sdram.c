@@ -35,6 +35,16 @@ const char *sdram_mapping_name(int m)
 	return m == SDRAM_MAP_BANK_ROW_COL ? "bank:row:col" : "row:bank:col";
 }
 
+/* Data beats of a request of `bytes`: whole bus widths (at least one),
+ * rounded up to whole bursts. */
+static uint64_t beats_of(uint32_t bus_bytes, uint32_t burst, uint32_t bytes)
+{
+	uint64_t beats = (bytes + bus_bytes - 1) / bus_bytes;
+	if (!beats)
+		beats = 1;
+	return (beats + burst - 1) / burst * burst;
+}
+
 int sdram_derive(const sdram_params *p, sdram_timing *t, diag *d)
 {
 	memset(t, 0, sizeof *t);
@@ -66,6 +76,8 @@ int sdram_derive(const sdram_params *p, sdram_timing *t, diag *d)
 	t->bus_bytes = p->bus_bits / 8;
 	t->col_bits = log2u(p->row_bytes);
 	t->bank_bits = log2u(p->banks);
+	for (uint32_t n = 0; n < SDRAM_BEATS_MEMO; n++)
+		t->beats_of[n] = (uint32_t)beats_of(t->bus_bytes, p->burst, n);
 	return 0;
 }
 
@@ -82,7 +94,8 @@ int sdram_init(sdram *s, const sdram_params *p, diag *d)
 
 void sdram_decode(const sdram *s, uint64_t addr, uint32_t *bank, uint64_t *row, uint32_t *col)
 {
-	addr %= s->p.bytes;
+	if (addr >= s->p.bytes) /* a division only where it changes addr */
+		addr %= s->p.bytes;
 	*col = (uint32_t)(addr & (s->p.row_bytes - 1));
 	uint64_t hi = addr >> s->t.col_bits;
 	if (s->p.mapping == SDRAM_MAP_BANK_ROW_COL) {
@@ -97,10 +110,9 @@ void sdram_decode(const sdram *s, uint64_t addr, uint32_t *bank, uint64_t *row, 
 
 uint64_t sdram_beats(const sdram *s, uint32_t bytes)
 {
-	uint64_t beats = (bytes + s->t.bus_bytes - 1) / s->t.bus_bytes;
-	if (!beats)
-		beats = 1;
-	return (beats + s->p.burst - 1) / s->p.burst * s->p.burst;
+	if (bytes < SDRAM_BEATS_MEMO)
+		return s->t.beats_of[bytes];
+	return beats_of(s->t.bus_bytes, s->p.burst, bytes);
 }
 
 double sdram_peak_bw(const sdram *s)
@@ -177,7 +189,8 @@ static uint64_t access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int 
 	uint32_t left = bytes ? bytes : 1;
 	while (left) {
 		/* split at row boundaries: each segment stays in one row */
-		uint32_t in_row = s->p.row_bytes - (uint32_t)(addr % s->p.row_bytes);
+		/* row_bytes is a power of two (sdram_derive) */
+		uint32_t in_row = s->p.row_bytes - (uint32_t)(addr & (s->p.row_bytes - 1));
 		uint32_t n = left < in_row ? left : in_row;
 		uint32_t b = b0, col;
 		uint64_t row = row0, f;

@@ -53,12 +53,19 @@ typedef struct sdram_params {
 	int mapping;                  /* enum sdram_map: address bits, MSB to LSB */
 } sdram_params;
 
+#define SDRAM_BEATS_MEMO 129
+
 /* Delays in ticks, computed once from the parameters. */
 typedef struct sdram_timing {
 	eng_clock clk;
 	uint64_t cl, trcd, trp, tras;
 	uint32_t bus_bytes;
 	uint32_t col_bits, bank_bits; /* address decoding */
+	/* sdram_beats of 0 .. SDRAM_BEATS_MEMO - 1 bytes, worked out once: the
+	 * memory system's requests are lines of a few bytes, and the two
+	 * divisions per request showed in the profile (docs/PERFORMANCE.md,
+	 * "Target 2") */
+	uint32_t beats_of[SDRAM_BEATS_MEMO];
 } sdram_timing;
 
 typedef struct sdram_bank {

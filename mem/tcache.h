@@ -32,6 +32,7 @@
 
 #include "kernel-ref/diag.h"
 #include "mem/cache.h"
+#include "sim/core/engine.h"
 
 typedef struct tc_wait tc_wait;
 struct tc_wait {
@@ -88,12 +89,13 @@ static inline void *tcache_pop(tcache *t, tc_wait **list)
 typedef int (*tc_retry)(void *ctx, void *who, uint64_t since, uint64_t now);
 void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx);
 
-/* The access port: p.ports accesses per cycle of `period` ticks, in
- * arrival order. Returns the tick at which an access arriving at `now`
- * starts (the start of the first cycle with a free port). */
-static inline uint64_t tcache_port(tcache *t, uint64_t now, uint64_t period)
+/* The access port: p.ports accesses per cycle of clock clk, in arrival
+ * order. Returns the tick at which an access arriving at `now` starts (the
+ * start of the first cycle with a free port). */
+static inline uint64_t tcache_port(tcache *t, uint64_t now, eng_clock clk)
 {
-	uint64_t cyc = (now + period - 1) / period;
+	uint64_t period = clk.period;
+	uint64_t cyc = eng_div_period(clk, now + period - 1);
 	if (cyc > t->port_cycle) {
 		t->port_cycle = cyc;
 		t->port_used = 0;

@@ -369,3 +369,52 @@ Test(engine, run_limit_and_stop)
 	cr_assert_eq(eng_run(e, ENG_FOREVER), ENG_EMPTY, "empty queue returns at once");
 	eng_destroy(e);
 }
+
+/* sim/core/fastdiv.h against the division instruction. The mistakes it
+ * catches: dropping the correction step (the estimate is one short for
+ * about half the dividends), an inverse rounded the other way (2^64 / d
+ * rounded up overshoots by one just below multiples of d), and the
+ * overflow at t near 2^64. Divisors: the clocks' periods, the L1 line and
+ * set counts, small numbers, powers of two and their neighbours, the
+ * largest; dividends: around multiples of d and the ends of the range. */
+Test(engine, fastdiv_matches_division)
+{
+	uint64_t ds[] = {1,
+	                 2,
+	                 3,
+	                 7,
+	                 36,
+	                 455,
+	                 1024,
+	                 1876,
+	                 7519,
+	                 1000000,
+	                 1u << 31,
+	                 (1ull << 32) + 1,
+	                 UINT64_MAX / 3,
+	                 UINT64_MAX};
+	uint64_t x = 88172645463325252ull; /* xorshift64 */
+	for (size_t i = 0; i < sizeof ds / sizeof ds[0]; i++) {
+		uint64_t d = ds[i];
+		fastdiv f = fastdiv_of(d);
+		for (int k = 0; k < 20000; k++) {
+			x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+			uint64_t ts[] = {x,
+			                 x >> (k % 64),
+			                 (x % 1000) * d,
+			                 (x % 1000) * d - 1,
+			                 UINT64_MAX - (uint64_t)k,
+			                 (uint64_t)k};
+			for (size_t j = 0; j < sizeof ts / sizeof ts[0]; j++) {
+				uint64_t t = ts[j];
+				cr_assert_eq(fastdiv_div(f, t), t / d, "%llu / %llu",
+				             (unsigned long long)t, (unsigned long long)d);
+				cr_assert_eq(fastdiv_mod(f, t), t % d);
+			}
+		}
+	}
+	/* a clock made without eng_clock_mhz (inv 0) still divides */
+	eng_clock c = {1876, 0};
+	cr_assert_eq(eng_next_edge(c, 1877), 2 * 1876);
+	cr_assert_eq(eng_ticks_to_cycles(eng_clock_mhz(533), UINT64_MAX), UINT64_MAX / 1876);
+}

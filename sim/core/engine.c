@@ -359,5 +359,6 @@ eng_clock eng_clock_mhz(double mhz)
 {
 	assert(mhz > 0);
 	long long p = llround(1e6 / mhz);
-	return (eng_clock){p < 1 ? 1 : (uint64_t)p};
+	uint64_t period = p < 1 ? 1 : (uint64_t)p;
+	return (eng_clock){period, fastdiv_of(period).inv};
 }

@@ -43,6 +43,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "sim/core/fastdiv.h"
+
 typedef struct eng eng;
 typedef void (*eng_handler)(eng *e, void *ctx, uint64_t arg);
 
@@ -97,11 +99,20 @@ size_t eng_pending(const eng *e);  /* live events queued */
 
 typedef struct eng_clock {
 	uint64_t period; /* ticks (ps) per cycle, >= 1 */
+	/* t / period by a multiplication (sim/core/fastdiv.h), worked out by
+	 * eng_clock_mhz; inv 0 (a clock made otherwise) divides */
+	uint64_t inv;
 } eng_clock;
 
 /* The domain of a clock of mhz MHz: period = round(1e6 / mhz) ps, at least 1.
  * mhz must be > 0. */
 eng_clock eng_clock_mhz(double mhz);
+
+/* t / c.period */
+static inline uint64_t eng_div_period(eng_clock c, uint64_t t)
+{
+	return fastdiv_div((fastdiv){c.period, c.inv}, t);
+}
 
 static inline uint64_t eng_cycles_to_ticks(eng_clock c, uint64_t cycles)
 {
@@ -110,12 +121,12 @@ static inline uint64_t eng_cycles_to_ticks(eng_clock c, uint64_t cycles)
 /* Whole cycles of c that have completed by tick t (rounds down). */
 static inline uint64_t eng_ticks_to_cycles(eng_clock c, uint64_t t)
 {
-	return t / c.period;
+	return eng_div_period(c, t);
 }
 /* The first tick >= t that is an edge of c (edges at multiples of period). */
 static inline uint64_t eng_next_edge(eng_clock c, uint64_t t)
 {
-	uint64_t r = t % c.period;
+	uint64_t r = t - eng_div_period(c, t) * c.period;
 	return r ? t + (c.period - r) : t;
 }
 /* The tick n cycles of c from now: the next edge of c at or after eng_now,
