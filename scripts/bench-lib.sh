@@ -13,7 +13,11 @@
 # write nothing into the user's home; a run that wants a cache names its
 # own (--world-cache). jget FILE KEY: the first value of KEY in a JSON
 # report, quotes removed. bench_views: the names of VIEWS' views (the
-# two-space-indented keys under `views:`), one a line.
+# two-space-indented keys under `views:`), one a line. bench_start TAG,
+# for a script that writes a section of docs/PERFORMANCE.md: DOC (that
+# file), TMP (a scratch folder saar-TAG.*), an exit trap that removes it
+# and doc_section's temporary ($DOC.tmp.$$), doc_section and its helpers
+# (doc-section.sh), load0 (the load average) and t0 (the start, seconds).
 BENCH_NAME=bench
 say() { printf '%s: %s\n' "$BENCH_NAME" "$*" >&2; }
 die() {
@@ -42,4 +46,12 @@ jget() {
 bench_views() {
 	awk '/^views:/ { v = 1; next } v && /^[^[:space:]#]/ { v = 0 }
 	v && /^  [A-Za-z0-9_-]+:/ { sub(/^  /, ""); sub(/:.*/, ""); print }' "$VIEWS"
+}
+bench_start() {
+	DOC=docs/PERFORMANCE.md
+	TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-$1.XXXXXX")
+	trap 'rm -rf "$TMP"; rm -f "$DOC.tmp.$$"' EXIT
+	. "$ROOT/scripts/doc-section.sh"
+	load0=$(doc_load)
+	t0=$(date +%s)
 }

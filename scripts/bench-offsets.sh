@@ -30,12 +30,7 @@ if [ -n "${BASE:-}" ]; then
 	BASE_SIM=$(cd "$BASE" && pwd)/saarsim
 	[ -x "$BASE_SIM" ] || die "$BASE_SIM not found"
 fi
-DOC=docs/PERFORMANCE.md
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-off.XXXXXX")
-trap 'rm -rf "$TMP"; rm -f "$DOC.tmp.$$"' EXIT
-. "$(dirname "$0")/doc-section.sh"
-load0=$(doc_load)
-t0=$(date +%s)
+bench_start off
 VLIST=$(bench_views)
 # fps of one run: BIN VIEW ARGS...
 fps_of() {

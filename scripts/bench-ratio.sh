@@ -19,12 +19,7 @@ set -eu
 bench_init bench-ratio
 SIZE=${SIZE:-1024x768}
 RUNS=${RUNS:-5}
-DOC=docs/PERFORMANCE.md
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-ratio.XXXXXX")
-trap 'rm -rf "$TMP"; rm -f "$DOC.tmp.$$"' EXIT
-. "$(dirname "$0")/doc-section.sh"
-load0=$(doc_load)
-t0=$(date +%s)
+bench_start ratio
 VLIST=$(bench_views)
 ROWS=$TMP/rows
 : >"$ROWS"

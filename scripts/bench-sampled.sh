@@ -32,13 +32,7 @@ SIZE=${SIZE:-1024x768}
 VIEW=${VIEW:-conference}
 RUNS=${RUNS:-1}
 case $RUNS in '' | *[!0-9]* | 0) die "RUNS must be a positive integer" ;; esac
-DOC=docs/PERFORMANCE.md
-DOCTMP=$DOC.tmp.$$
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-smp.XXXXXX")
-trap 'rm -rf "$TMP"; rm -f "$DOCTMP"' EXIT
-. "$(dirname "$0")/doc-section.sh"
-load0=$(doc_load)
-t0=$(date +%s)
+bench_start smp
 ROWS=$TMP/rows
 : >"$ROWS"
 # one row: label, the label of the row it is compared with, the cache
@@ -147,6 +141,6 @@ SECTION=$TMP/section
 	echo "<!-- END sampled -->"
 } >"$SECTION"
 
-doc_section sampled "$SECTION" "$DOC" # its temporary is $DOCTMP
+doc_section sampled "$SECTION" "$DOC" # its temporary is $DOC.tmp.$$ (bench_start)
 say "wrote $DOC (section sampled)"
 cat "$SECTION"

@@ -26,14 +26,8 @@ SMALL=${SMALL:-spd:balls:4:14}
 LARGE=${LARGE:-spd:balls:5:14}
 SIZE=${SIZE:-128x96}
 CFG=$ROOT/configs/saarcor-vma.yaml
-DOC=docs/PERFORMANCE.md
-DOCTMP=$DOC.tmp.$$
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-scale.XXXXXX")
-trap 'rm -rf "$TMP"; rm -f "$DOCTMP"' EXIT
+bench_start scale
 tget() { sed -n "s/^[[:space:]]*$2:[[:space:]]*//p" "$1" | head -n 1; }
-. "$(dirname "$0")/doc-section.sh"
-load0=$(doc_load)
-t0=$(date +%s)
 
 # saarsim on scene $1 into $TMP/$2.{json,txt,time}; more arguments follow
 sim() {
@@ -110,6 +104,6 @@ SECTION=$TMP/section
 	echo "<!-- END scale -->"
 } >"$SECTION"
 
-doc_section scale "$SECTION" "$DOC" # its temporary is $DOCTMP
+doc_section scale "$SECTION" "$DOC" # its temporary is $DOC.tmp.$$ (bench_start)
 say "wrote $DOC (section scale)"
 cat "$SECTION"
