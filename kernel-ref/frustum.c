@@ -440,7 +440,6 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
                       uint32_t tri_addr)
 {
 	const pkt_rayc *rc = &s->rc;
-	const fv zero = fv_set1(0.0f);
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
 		if (!gb)
@@ -450,17 +449,11 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 		fv vx[3], vy[3], vkz[3], u, v, w;
 		isect_v_uniform(rc, o, tr, sx, sy, vx, vy, vkz);
 		isect_v_edges(vx, vy, gb, &u, &v, &w);
-		iv neg = (u < zero) | (v < zero) | (w < zero);
-		iv posv = (u > zero) | (v > zero) | (w > zero);
-		fv det = u + v + w;
-		unsigned okb = iv_bits(~(neg & posv) & (det != zero)) & gb;
+		fv det, t;
+		unsigned okb = isect_v_inside(u, v, w, gb, &det);
 		if (!okb)
 			continue;
-		fv sz = fv_load(rc->sz + o);
-		fv az = sz * vkz[0], bz = sz * vkz[1], cz = sz * vkz[2];
-		fv t = (u * az + v * bz + w * cz) / det;
-		/* conservative t > 0, as in isect_tri (pbrt's deltaT) */
-		okb &= iv_bits(t > isect_v_dt(u, v, w, det, az, bz, cz, vx, vy));
+		okb = isect_v_front(u, v, w, det, fv_load(rc->sz + o), vx, vy, vkz, okb, &t);
 		for (unsigned k = okb; k; k &= k - 1) {
 			int l = __builtin_ctz(k), i = o + l;
 			if (s->shadow) {

@@ -1,6 +1,8 @@
 /*
- * isect_v.h: steps of the packet triangle test over SIMD_W lanes (the
- * watertight test of isect.h, Woop et al. 2013, lane by lane), shared by
+ * isect_v.h: the steps of the packet triangle test over SIMD_W lanes
+ * (the watertight test of isect.h, Woop et al. 2013, lane by lane): the
+ * sheared corners, the edge functions, the inside test and the hit
+ * distance in front of the origin, shared by
  * traverse.c's pkt_isect_tri_v, which the chip and the check use, and
  * frustum.c's fru_isect, rtref's own leaf test: both compute the same
  * operations in the same order, so the same floats, whichever runs them.
@@ -68,6 +70,29 @@ static inline fv isect_v_dt(fv u, fv v, fv w, fv det, fv az, fv bz, fv cz, const
 	fv me = fv_max(fv_abs(u), fv_max(fv_abs(v), fv_abs(w)));
 	return fv_set1(3.0f) * (fv_set1(ISECT_GAMMA(3)) * me * mzt + de * mzt + dz * me) /
 	       fv_abs(det);
+}
+
+/* The lanes of gb whose ray meets the triangle: edge functions u, v, w
+ * not of mixed sign and their sum, the determinant (*det), not zero. */
+static inline unsigned isect_v_inside(fv u, fv v, fv w, unsigned gb, fv *det)
+{
+	fv zero = fv_set1(0.0f);
+	iv neg = (u < zero) | (v < zero) | (w < zero);
+	iv posv = (u > zero) | (v > zero) | (w > zero);
+	*det = u + v + w;
+	return iv_bits(~(neg & posv) & (*det != zero)) & gb;
+}
+
+/* Of the lanes okb (isect_v_inside's), those whose hit distance
+ * *t = (u az + v bz + w cz) / det, the corners' z scaled by sz, lies in
+ * front of the origin by more than its rounding bound (isect_tri's
+ * conservative t > 0, pbrt's deltaT: isect_v_dt). */
+static inline unsigned isect_v_front(fv u, fv v, fv w, fv det, fv sz, const fv vx[3],
+                                     const fv vy[3], const fv vkz[3], unsigned okb, fv *t)
+{
+	fv az = sz * vkz[0], bz = sz * vkz[1], cz = sz * vkz[2];
+	*t = (u * az + v * bz + w * cz) / det;
+	return okb & iv_bits(*t > isect_v_dt(u, v, w, det, az, bz, cz, vx, vy));
 }
 
 #endif

@@ -495,21 +495,13 @@ uint64_t pkt_isect_tri_v(trav_state *s, packet *p, const mimg_tri *tr, uint64_t 
 				vx[k] = sel3(kx0, kx1, ax, ay, az) - sx * vkz[k];
 				vy[k] = sel3(ky0, ky1, ax, ay, az) - sy * vkz[k];
 			}
-		fv u, v, w, zero = fv_set1(0.0f);
+		fv u, v, w, det, t;
 		isect_v_edges(vx, vy, gb, &u, &v, &w);
-		iv neg = (u < zero) | (v < zero) | (w < zero);
-		iv posv = (u > zero) | (v > zero) | (w > zero);
-		fv det = u + v + w;
-		iv ok = ~(neg & posv) & (det != zero);
-		unsigned okb = iv_bits(ok) & gb;
+		unsigned okb = isect_v_inside(u, v, w, gb, &det);
 		if (!okb)
 			continue;
-		fv az = sz * vkz[0], bz = sz * vkz[1], cz = sz * vkz[2];
-		fv tt = u * az + v * bz + w * cz;
-		fv t = tt / det;
+		okb = isect_v_front(u, v, w, det, sz, vx, vy, vkz, okb, &t);
 		fv bu = v / det, bv = w / det;
-		/* conservative t > 0, as in isect_tri (pbrt's deltaT) */
-		okb &= iv_bits(t > isect_v_dt(u, v, w, det, az, bz, cz, vx, vy));
 		for (unsigned k = okb; k; k &= k - 1) {
 			int l = __builtin_ctz(k), i = o8 + l;
 			if (s->shadow) {
