@@ -436,8 +436,11 @@ int view_list(const char *file, char (*names)[VIEW_NAME_MAX], int max, diag *d)
 	if (views) {
 		n = 0;
 		for (yaml_node_pair_t *p = views->data.mapping.pairs.start;
-		     p < views->data.mapping.pairs.top && n < max; p++)
-			snprintf(names[n++], VIEW_NAME_MAX, "%s", scalar(node(&y, p->key)));
+		     p < views->data.mapping.pairs.top && n < max; p++) {
+			/* the file-level rules made every key a plain string */
+			const char *s = scalar(node(&y, p->key));
+			snprintf(names[n++], VIEW_NAME_MAX, "%s", s ? s : "");
+		}
 	}
 	yaml_document_delete(&y.doc);
 	return n;
