@@ -656,3 +656,24 @@ Test(oracles, srgb_table_equals_the_transfer_function_at_every_sum)
 	             fb_srgb8_formula(first));
 	cr_assert_eq(fb_srgb8(UINT64_MAX / 2), 255);
 }
+
+/* img_compare, which every run's check goes through: a frame differing
+ * from its reference only in the last byte is not identical (one pixel,
+ * a finite PSNR), and equal frames are (no pixel, PSNR infinite).
+ * Mistakes caught: the equal-bytes shortcut comparing fewer bytes than
+ * the frame holds (a pixel count for a byte count: the last two thirds
+ * unseen), or answering "identical" without comparing. */
+Test(oracles, img_compare_sees_a_difference_in_the_last_byte)
+{
+	enum { W = 7, H = 5, N = W * H * 3 };
+	uint8_t a[N], b[N];
+	for (int i = 0; i < N; i++)
+		a[i] = b[i] = (uint8_t)(i * 37);
+	img_cmp same = img_compare(a, b, W, H);
+	cr_assert(same.identical && same.differing_pixels == 0 && isinf(same.psnr));
+	b[N - 1] ^= 1;
+	img_cmp one = img_compare(a, b, W, H);
+	cr_assert(!one.identical, "a frame differing in its last byte called identical");
+	cr_assert_eq(one.differing_pixels, 1);
+	cr_assert(isfinite(one.psnr) && one.psnr > 40.0, "psnr %g", one.psnr);
+}
