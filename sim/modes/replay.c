@@ -29,7 +29,7 @@ static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 }
 
 static void run(thr_ctx *t);
-static void check_reads(thr_ctx *t);
+static inline void check_reads(thr_ctx *t);
 
 /* The reads so far are still on their way (timed): the stream goes on
  * from p when they are in, as thr_wait_mem's continuation does. */
@@ -89,13 +89,10 @@ static void found(thr_ctx *t, const mode_rcheck *k, uint32_t got)
 		bad->tiles[tile] = 2;
 }
 
-/* The reads so far are in (no read of the thread is outstanding): their
- * bytes' checksums against the record's. */
-static void check_reads(thr_ctx *t)
+/* check_reads' work, when there is a read to check: every read's bytes
+ * against the record's checksum, then the buffer emptied. */
+static __attribute__((noinline)) void check_now(thr_ctx *t, mode_slot_state *m)
 {
-	mode_slot_state *m = mode_slot(t);
-	if (t->pending)
-		return;
 	for (uint32_t i = 0; i < m->nchk; i++) {
 		const mode_rcheck *k = &m->chk[i];
 		uint32_t got = pr_sum(k->at, k->bytes);
@@ -112,6 +109,17 @@ static void check_reads(thr_ctx *t)
 		b->next = NULL;
 		b->used = 0;
 	}
+}
+
+/* The reads so far are in (no read of the thread is outstanding): their
+ * bytes' checksums against the record's. Most calls find none to check
+ * (at a stream's resumption, before a unit op): an unchecked read is
+ * what puts bytes in the buffer, so with none the buffer is empty too. */
+static inline void check_reads(thr_ctx *t)
+{
+	mode_slot_state *m = mode_slot(t);
+	if (!t->pending && m->nchk)
+		check_now(t, m);
 }
 
 /* A replayed read: its bytes into the slot's buffer, to be checked
