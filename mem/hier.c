@@ -297,8 +297,8 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 
 /* hier_access_func's lookup of one L1 line, `line`, holding bytes [a, b)
  * of read r (data: where they go; NULL: nowhere). */
-static inline void func_line(hier *h, hl1 *l, const mem_req *r, uint8_t *data, uint64_t line,
-                             uint64_t a, uint64_t b)
+static inline __attribute__((always_inline)) void
+func_line(hier *h, hl1 *l, const mem_req *r, uint8_t *data, uint64_t line, uint64_t a, uint64_t b)
 {
 	cache *c = &l->t.c;
 	uint32_t lb = c->p.line_bytes, slot;
