@@ -113,8 +113,17 @@ void thr_unit_free(thr_unit *u);
 /* Host bytes thr_unit_init allocates for count instances and max_waiters
  * requesters (the run's memory estimate, sim/hostmem.c). */
 uint64_t thr_unit_host_bytes(int count, int max_waiters);
-/* Issue cycles of an op with `rays` active rays. */
-uint64_t thr_unit_issue_div(const thr_unit *u, int rays);
+/* Issue cycles of an op with `rays` active rays. Inline, division and
+ * all: as a call, the rare division made every op's counting (thr_unit_count,
+ * the functional sink's use) save and restore registers. */
+static inline uint64_t thr_unit_issue_div(const thr_unit *u, int rays)
+{
+	if (rays == THR_SCALAR_OP)
+		return 1;
+	int r = u->masked ? PKT_RAYS : rays;
+	uint64_t c = ((uint64_t)r + (uint64_t)u->width - 1) / (uint64_t)u->width;
+	return c ? c : 1;
+}
 static inline uint64_t thr_unit_issue(const thr_unit *u, int rays)
 {
 	return rays >= 0 && rays <= THR_SCALAR_OP ? u->issue[rays] : thr_unit_issue_div(u, rays);
