@@ -249,27 +249,6 @@ void thr_pkt_free(thr_env *v, packet *p)
 
 /* ======================== threads ======================== */
 
-void thr_flush(thr_ctx *t)
-{
-	uint64_t now = eng_now(t->env->e);
-	*t->rtp->occ[t->state] += now - t->since;
-	t->since = now;
-}
-
-void thr_set(thr_ctx *t, int state)
-{
-	if (state == t->state)
-		return;
-	if (t->env->on_state)
-		t->env->on_state(t->env->state_ctx, t, state);
-	thr_flush(t);
-	if (t->state == THR_IDLE)
-		t->rtp->nidle--;
-	if (state == THR_IDLE)
-		t->rtp->nidle++;
-	t->state = state;
-}
-
 void thr_free_buffers(thr_ctx *t)
 {
 	free(t->list);

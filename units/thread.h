@@ -381,9 +381,28 @@ typedef struct thr_rtp {
 	uint64_t *occ[THR_NSTATES]; /* ticks spent in each state, summed over threads */
 } thr_rtp;
 
-void thr_set(thr_ctx *t, int state);
 /* Adds the time since the last change to the occupancy counters. */
-void thr_flush(thr_ctx *t);
+static inline void thr_flush(thr_ctx *t)
+{
+	uint64_t now = eng_now(t->env->e);
+	*t->rtp->occ[t->state] += now - t->since;
+	t->since = now;
+}
+/* The thread's state becomes `state` (the observer told first, the time
+ * in the old one counted). Inline: a timed op changes it three times. */
+static inline void thr_set(thr_ctx *t, int state)
+{
+	if (state == t->state)
+		return;
+	if (t->env->on_state)
+		t->env->on_state(t->env->state_ctx, t, state);
+	thr_flush(t);
+	if (t->state == THR_IDLE)
+		t->rtp->nidle--;
+	if (state == THR_IDLE)
+		t->rtp->nidle++;
+	t->state = state;
+}
 /* Frees the thread's data buffers (chip_destroy). */
 void thr_free_buffers(thr_ctx *t);
 /* The valid rays of a packet. */
