@@ -293,9 +293,10 @@ uint32_t cache_set_fold(const cache *c, uint64_t line)
 }
 
 /* The way of set holding line, or -1. Four ways (every L1 of the
- * standard configs) are tested without a loop: the search runs for every
- * lookup and fill. */
-static int find_way(const cache *c, uint32_t set, uint64_t line)
+ * standard configs) are tested without a loop, and it is always inlined
+ * (gcc had kept it a call): the search runs for every lookup and fill. */
+static inline __attribute__((always_inline)) int find_way(const cache *c, uint32_t set,
+                                                          uint64_t line)
 {
 	const cache_way *s = c->way + (size_t)set * c->p.ways;
 	if (c->p.ways == 4)

@@ -83,12 +83,12 @@ static void lower_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *ds
 
 /* The bytes of L1 way `slot` (given on its first fill); NULL without data
  * or out of memory. */
-static uint8_t *l1_data(hier *h, hl1 *l, uint32_t slot)
+static inline uint8_t *l1_data(hier *h, hl1 *l, uint32_t slot)
 {
 	if (!h->ms)
 		return NULL;
-	uint8_t *d = cache_data(&l->t.c, slot);
-	if (!d)
+	uint8_t *d = cache_data_at(&l->t.c, slot); /* most ways have theirs */
+	if (!d && !(d = cache_data(&l->t.c, slot)))
 		h->oom = 1;
 	return d;
 }
@@ -295,6 +295,35 @@ static void func_lower(hier *h, int type, uint64_t addr, uint32_t bytes, int wri
 	h->stack[0]->func(h, type, addr, bytes, write, data);
 }
 
+/* hier_access_func's lookup of one L1 line, `line`, holding bytes [a, b)
+ * of read r (data: where they go; NULL: nowhere). */
+static inline __attribute__((always_inline)) void
+func_line(hier *h, hl1 *l, const mem_req *r, uint8_t *data, uint64_t line, uint64_t a, uint64_t b)
+{
+	cache *c = &l->t.c;
+	uint32_t lb = c->p.line_bytes, slot;
+	uint64_t lo = line * lb, victim;
+	int hit = cache_lookup_func_at(c, line, (uint32_t)(b - a), &slot, &victim);
+	if (r->ray) /* a line in flight is a merged miss (cache_lookup_func) */
+		ray_count(h, r->ray, l->type, hit && slot != CACHE_NO_SLOT);
+	if (!h->ms) {
+		if (!hit)
+			func_lower(h, l->type, lo, lb, 0, NULL);
+		return;
+	}
+	if (slot == CACHE_NO_SLOT) {
+		/* a timed fill is on its way: the bytes it brings */
+		if (data)
+			lower_peek(h, a, (uint32_t)(b - a), data + (a - r->addr));
+		return;
+	}
+	uint8_t *d = l1_data(h, l, slot);
+	if (!hit) /* the line fills from below at once */
+		func_lower(h, l->type, lo, lb, 0, d);
+	if (d && data)
+		memcpy(data + (a - r->addr), d + (a - lo), (size_t)(b - a));
+}
+
 /* The functional twin of hier_access: the same L1 lookups, line by line,
  * with the fill applied at once. Timed misses may still be in flight (a
  * sampled region hands its packets to a functional stretch without
@@ -321,35 +350,19 @@ static void hier_access_func(void *impl, const mem_req *r)
 		return;
 	}
 	hl1 *l = &h->l1[type];
-	cache *c = &l->t.c;
+	const cache *c = &l->t.c;
 	uint32_t lb = c->p.line_bytes;
 	uint64_t first = cache_line_of(c, r->addr), end = r->addr + bytes;
-	/* most reads fit one line: no second division (36-byte lines) */
-	uint64_t last = end <= (first + 1) * lb ? first : cache_line_of(c, end - 1);
+	/* most reads fit one line: no second division (36-byte lines), and
+	 * the read's bytes are the line's part */
+	if (end <= (first + 1) * lb) {
+		func_line(h, l, r, data, first, r->addr, end);
+		return;
+	}
+	uint64_t last = cache_line_of(c, end - 1);
 	for (uint64_t line = first; line <= last; line++) {
 		uint64_t lo = line * lb, hi = lo + lb;
-		uint64_t a = r->addr > lo ? r->addr : lo, b = end < hi ? end : hi;
-		uint32_t slot;
-		uint64_t victim;
-		int hit = cache_lookup_func_at(c, line, (uint32_t)(b - a), &slot, &victim);
-		if (r->ray) /* a line in flight is a merged miss (cache_lookup_func) */
-			ray_count(h, r->ray, type, hit && slot != CACHE_NO_SLOT);
-		if (!h->ms) {
-			if (!hit)
-				func_lower(h, type, lo, lb, 0, NULL);
-			continue;
-		}
-		if (slot == CACHE_NO_SLOT) {
-			/* a timed fill is on its way: the bytes it brings */
-			if (data)
-				lower_peek(h, a, (uint32_t)(b - a), data + (a - r->addr));
-			continue;
-		}
-		uint8_t *d = l1_data(h, l, slot);
-		if (!hit) /* the line fills from below at once */
-			func_lower(h, type, lo, lb, 0, d);
-		if (d && data)
-			memcpy(data + (a - r->addr), d + (a - lo), (size_t)(b - a));
+		func_line(h, l, r, data, line, r->addr > lo ? r->addr : lo, end < hi ? end : hi);
 	}
 }
 

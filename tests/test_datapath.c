@@ -265,6 +265,44 @@ Test(datapath, wrong_replayed_address_is_caught, .timeout = 300)
 	replay_sees(next_tri, 0, "tri", 0);
 }
 
+/* Every replayed read is checked: at once in a functional run (sim/
+ * modes/replay.c read_checked), and in a sampled run's detailed regions
+ * (timed) once the thread's reads are in. With every triangle record read
+ * at the next one's address, all but a few of the run's triangle reads (a
+ * checksum passes a wrong read with odds 2^-16) are reported. Catches:
+ * the timed check dropped, which wrong_replayed_address_is_caught does
+ * not see (a sampled run's functional stretches still flag the frame),
+ * and the functional one. */
+Test(datapath, every_replayed_read_is_checked_timed_and_functional, .timeout = 300)
+{
+	static const char *const rec_modes[] = {"functional", "sampled"};
+	for (int m = 0; m < 2; m++) {
+		char dir[64];
+		tu_tmpdir(dir, sizeof dir);
+		world w;
+		tu_load_world_cached(&w, NULL, NULL, NULL, dir);
+		saar_config c;
+		cfg_for(&c, 128, rec_modes[m], NULL, 0);
+		chip *ch = make_chip(&w, &c);
+		cr_assert(frame_identical(ch, &w), "%s: the recording run", rec_modes[m]);
+		chip_destroy(ch);
+		ch = make_chip(&w, &c);
+		next_tri(ch, 0);
+		cr_assert_not(frame_identical(ch, &w), "%s", rec_modes[m]);
+		cr_assert_eq(ch->rec_state, REC_REPLAYED, "%s", rec_modes[m]);
+		hier_stats h;
+		cr_assert_eq(hier_get_stats(&ch->mem, &h), 0);
+		char msg[320];
+		uint64_t bad = chip_replay_bad(ch, msg, sizeof msg), tri = h.reads[MEM_TRI];
+		cr_assert_gt(tri, 0, "%s", rec_modes[m]);
+		cr_assert(bad <= tri && bad >= tri - tri / 100,
+		          "%s: %llu of %llu triangle reads reported", rec_modes[m],
+		          (unsigned long long)bad, (unsigned long long)tri);
+		chip_destroy(ch);
+		world_free(&w);
+	}
+}
+
 /* The shader's records travel too: the material of the visible triangle
  * made black in board memory changes the frame in every mode. */
 Test(datapath, damaged_material_changes_the_frame, .timeout = 300)

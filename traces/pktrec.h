@@ -133,8 +133,21 @@ static inline uint32_t pr_sum(const void *b, size_t n)
 		h ^= h >> 29;
 	}
 	if (n) {
-		w = 0;
-		memcpy(&w, p, n);
+		/* the last 1-7 bytes as memcpy(&w, p, n) would place them, in
+		 * fixed-size pieces (a call to memcpy cost more than the mix) */
+		uint8_t tail[8] = {0};
+		size_t o = 0;
+		if (n & 4) {
+			memcpy(tail, p, 4);
+			o = 4;
+		}
+		if (n & 2) {
+			memcpy(tail + o, p + o, 2);
+			o += 2;
+		}
+		if (n & 1)
+			tail[o] = p[o];
+		memcpy(&w, tail, 8);
 		h = (h ^ w) * k;
 		h ^= h >> 29;
 	}

@@ -53,15 +53,6 @@ void thr_unit_free(thr_unit *u)
 	memset(u, 0, sizeof *u);
 }
 
-uint64_t thr_unit_issue_div(const thr_unit *u, int rays)
-{
-	if (rays == THR_SCALAR_OP)
-		return 1;
-	int r = u->masked ? PKT_RAYS : rays;
-	uint64_t c = ((uint64_t)r + (uint64_t)u->width - 1) / (uint64_t)u->width;
-	return c ? c : 1;
-}
-
 static void start(thr_unit *u, int inst, const thr_op *op)
 {
 	uint64_t t0 = eng_next_edge(u->clk, eng_now(u->e));
@@ -257,27 +248,6 @@ void thr_pkt_free(thr_env *v, packet *p)
 }
 
 /* ======================== threads ======================== */
-
-void thr_flush(thr_ctx *t)
-{
-	uint64_t now = eng_now(t->env->e);
-	*t->rtp->occ[t->state] += now - t->since;
-	t->since = now;
-}
-
-void thr_set(thr_ctx *t, int state)
-{
-	if (state == t->state)
-		return;
-	if (t->env->on_state)
-		t->env->on_state(t->env->state_ctx, t, state);
-	thr_flush(t);
-	if (t->state == THR_IDLE)
-		t->rtp->nidle--;
-	if (state == THR_IDLE)
-		t->rtp->nidle++;
-	t->state = state;
-}
 
 void thr_free_buffers(thr_ctx *t)
 {

@@ -113,8 +113,17 @@ void thr_unit_free(thr_unit *u);
 /* Host bytes thr_unit_init allocates for count instances and max_waiters
  * requesters (the run's memory estimate, sim/hostmem.c). */
 uint64_t thr_unit_host_bytes(int count, int max_waiters);
-/* Issue cycles of an op with `rays` active rays. */
-uint64_t thr_unit_issue_div(const thr_unit *u, int rays);
+/* Issue cycles of an op with `rays` active rays. Inline, division and
+ * all: as a call, the rare division made every op's counting (thr_unit_count,
+ * the functional sink's use) save and restore registers. */
+static inline uint64_t thr_unit_issue_div(const thr_unit *u, int rays)
+{
+	if (rays == THR_SCALAR_OP)
+		return 1;
+	int r = u->masked ? PKT_RAYS : rays;
+	uint64_t c = ((uint64_t)r + (uint64_t)u->width - 1) / (uint64_t)u->width;
+	return c ? c : 1;
+}
 static inline uint64_t thr_unit_issue(const thr_unit *u, int rays)
 {
 	return rays >= 0 && rays <= THR_SCALAR_OP ? u->issue[rays] : thr_unit_issue_div(u, rays);
@@ -372,9 +381,28 @@ typedef struct thr_rtp {
 	uint64_t *occ[THR_NSTATES]; /* ticks spent in each state, summed over threads */
 } thr_rtp;
 
-void thr_set(thr_ctx *t, int state);
 /* Adds the time since the last change to the occupancy counters. */
-void thr_flush(thr_ctx *t);
+static inline void thr_flush(thr_ctx *t)
+{
+	uint64_t now = eng_now(t->env->e);
+	*t->rtp->occ[t->state] += now - t->since;
+	t->since = now;
+}
+/* The thread's state becomes `state` (the observer told first, the time
+ * in the old one counted). Inline: a timed op changes it three times. */
+static inline void thr_set(thr_ctx *t, int state)
+{
+	if (state == t->state)
+		return;
+	if (t->env->on_state)
+		t->env->on_state(t->env->state_ctx, t, state);
+	thr_flush(t);
+	if (t->state == THR_IDLE)
+		t->rtp->nidle--;
+	if (state == THR_IDLE)
+		t->rtp->nidle++;
+	t->state = state;
+}
 /* Frees the thread's data buffers (chip_destroy). */
 void thr_free_buffers(thr_ctx *t);
 /* The valid rays of a packet. */

@@ -10,40 +10,27 @@
 #include "units/rgs.h"
 
 /* The per-type counter (enum thr_type_counter) a thr_counter also
- * counts into, -1: none. */
-static int type_counter(int id)
-{
-	switch (id) {
-	case C_NODE_STEPS:
-		return TC_NODE_STEPS;
-	case C_LEAF_VISITS:
-		return TC_LEAF_VISITS;
-	case C_LIST_ENTRIES:
-		return TC_LIST_ENTRIES;
-	case C_TRI_TESTS:
-		return TC_TRI_TESTS;
-	case C_RAY_TRI_TESTS:
-		return TC_RAY_TRI_TESTS;
-	default:
-		return -1;
-	}
-}
+ * counts into, plus one; 0: none. A table, not a switch: every counter
+ * update asks (a replayed stream's ops are mostly counts). */
+static const uint8_t type_counter1[C_NCOUNTERS] = {
+    [C_NODE_STEPS] = TC_NODE_STEPS + 1,       [C_LEAF_VISITS] = TC_LEAF_VISITS + 1,
+    [C_LIST_ENTRIES] = TC_LIST_ENTRIES + 1,   [C_TRI_TESTS] = TC_TRI_TESTS + 1,
+    [C_RAY_TRI_TESTS] = TC_RAY_TRI_TESTS + 1,
+};
 
 void mode_base_count(thr_sink *s, thr_ctx *t, int id, uint64_t n)
 {
 	(void)s;
 	thr_env *v = t->env;
 	*v->c[id] += n;
-	int tc = type_counter(id);
-	if (tc >= 0)
-		*v->ct[t->ptype][tc] += n;
+	unsigned tc = type_counter1[id];
+	if (tc)
+		*v->ct[t->ptype][tc - 1] += n;
 }
 
 void mode_base_use(thr_ctx *t, int kind, int rays)
 {
-	thr_env *v = t->env;
-	*v->ct[t->ptype][TC_BUSY + kind] += thr_unit_issue(&t->rtp->u[kind], rays);
-	*v->ct[t->ptype][TC_RAYS + kind] += (uint64_t)thr_op_rays(rays);
+	mode_base_use_issue(t, kind, rays, thr_unit_issue(&t->rtp->u[kind], rays));
 }
 
 void mode_base_count_max(thr_sink *s, thr_ctx *t, int id, uint64_t v)

@@ -16,6 +16,13 @@ void mode_base_count(thr_sink *s, thr_ctx *t, int id, uint64_t n);
  * thread's unit of kind `kind` (the timed and functional sinks' use; the
  * totals are the unit's own, thr_unit_count). */
 void mode_base_use(thr_ctx *t, int kind, int rays);
+/* As mode_base_use, with the op's issue cycles (thr_unit_issue) known. */
+static inline void mode_base_use_issue(thr_ctx *t, int kind, int rays, uint64_t issue)
+{
+	uint64_t *const *ct = t->env->ct[t->ptype];
+	*ct[TC_BUSY + kind] += issue;
+	*ct[TC_RAYS + kind] += (uint64_t)thr_op_rays(rays);
+}
 void mode_base_count_max(thr_sink *s, thr_ctx *t, int id, uint64_t v);
 void mode_base_shade(thr_sink *s, thr_ctx *t, const shade_counts *add);
 void mode_base_enter(thr_sink *s, thr_ctx *t, int type, uint64_t rays);

@@ -26,8 +26,7 @@ static void func_use(thr_sink *s, thr_ctx *t, int kind, int rays, eng_handler do
 	(void)s;
 	/* the op's counts as its issue makes them (thread.c start), without
 	 * its time */
-	thr_unit_count(&t->rtp->u[kind], rays, 1);
-	mode_base_use(t, kind, rays);
+	mode_base_use_issue(t, kind, rays, thr_unit_count(&t->rtp->u[kind], rays, 1));
 	mode_slot_state *m = mode_slot(t);
 	m->fnext = done;
 	m->fkind = kind;

@@ -29,18 +29,27 @@ static void spawn(thr_ctx *t, uint64_t n, const uint8_t **p, const uint8_t *end)
 }
 
 static void run(thr_ctx *t);
-static inline void check_reads(thr_ctx *t);
+static inline void check_reads(thr_ctx *t, mode_slot_state *m);
+
+/* wait_reads' work when reads are outstanding: the sink's wait. */
+static __attribute__((noinline)) int park(thr_ctx *t, mode_slot_state *m, const uint8_t *p)
+{
+	if (!thr_park_mem(t, run))
+		return 0;
+	m->rp = p;
+	return 1;
+}
 
 /* The reads so far are still on their way (timed): the stream goes on
- * from p when they are in, as thr_wait_mem's continuation does. */
-static int wait_reads(thr_ctx *t, const uint8_t *p)
+ * from p when they are in, as thr_wait_mem's continuation does. With none
+ * outstanding (functional, always) the sink's wait would answer 0 (units/
+ * sink.h), so it is not asked. */
+static inline int wait_reads(thr_ctx *t, mode_slot_state *m, const uint8_t *p)
 {
-	if (!thr_park_mem(t, run)) {
-		check_reads(t);
-		return 0;
-	}
-	mode_slot(t)->rp = p;
-	return 1;
+	if (t->pending && park(t, m, p))
+		return 1;
+	check_reads(t, m);
+	return 0;
 }
 
 static void op_done(eng *e, void *ctx, uint64_t arg);
@@ -115,18 +124,20 @@ static __attribute__((noinline)) void check_now(thr_ctx *t, mode_slot_state *m)
  * bytes' checksums against the record's. Most calls find none to check
  * (at a stream's resumption, before a unit op): an unchecked read is
  * what puts bytes in the buffer, so with none the buffer is empty too. */
-static inline void check_reads(thr_ctx *t)
+static inline void check_reads(thr_ctx *t, mode_slot_state *m)
 {
-	mode_slot_state *m = mode_slot(t);
 	if (!t->pending && m->nchk)
 		check_now(t, m);
 }
 
-/* A replayed read: its bytes into the slot's buffer, to be checked
- * against the recorded checksum once they are in (at once, functional). */
-static void read_checked(thr_ctx *t, int type, uint64_t a, uint32_t bytes, uint32_t sum)
+/* A replayed read: its bytes into the slot's buffer, checked against the
+ * recorded checksum once they are in. A read in at once (functional:
+ * nothing outstanding after it) with no earlier one awaiting its check is
+ * checked here and its bytes given back, so a functional stream's reads
+ * never pile up in m->chk. */
+static void read_checked(thr_ctx *t, mode_slot_state *m, int type, uint64_t a, uint32_t bytes,
+                         uint32_t sum)
 {
-	mode_slot_state *m = mode_slot(t);
 	if (t->env->mutant == THR_MUT_REPLAY_NEXT_TRI && type == MEM_TRI)
 		a += MIMG_TRI_BYTES; /* test hook */
 	if (m->nchk == m->capchk) {
@@ -146,25 +157,32 @@ static void read_checked(thr_ctx *t, int type, uint64_t a, uint32_t bytes, uint3
 		thr_read(t, type, a, bytes, NULL);
 		return;
 	}
-	m->chk[m->nchk++] = (mode_rcheck){dst, a, bytes, sum, type};
 	thr_read(t, type, a, bytes, dst);
-	check_reads(t);
+	mode_rcheck k = {dst, a, bytes, sum, type};
+	if (!t->pending && !m->nchk) {
+		uint32_t got = pr_sum(dst, bytes);
+		m->rbuf->used -= bytes; /* room's, the block's last */
+		if (got != sum)
+			found(t, &k, got);
+		return;
+	}
+	m->chk[m->nchk++] = k;
+	check_reads(t, m);
 }
 
 /* A read or write op (below PR_USE). */
-static void access(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
+static void access(thr_ctx *t, mode_slot_state *m, int op, const uint8_t **p, const uint8_t *end)
 {
 	if (op >= PR_WRITE) {
 		uint64_t a = pr_get(p, end), b = pr_get(p, end);
 		thr_write(t, op & 3, a, (uint32_t)b, NULL);
 		return;
 	}
-	mode_slot_state *m = mode_slot(t);
 	int type = op & 3;
 	uint64_t a = m->raddr[type] += pr_unzigzag(pr_get(p, end));
 	if (op < PR_READ_SAME)
 		m->rbytes[type] = (uint32_t)pr_get(p, end);
-	read_checked(t, type, a, m->rbytes[type], pr_get_sum(p, end));
+	read_checked(t, m, type, a, m->rbytes[type], pr_get_sum(p, end));
 }
 
 /* A shading count or a packet entering: the ops between PR_SPILL_R and
@@ -208,21 +226,22 @@ static void other(thr_ctx *t, int op, const uint8_t **p, const uint8_t *end)
  * wait for reads in flight, or up to the end. */
 static void run(thr_ctx *t)
 {
-	const uint8_t *p = mode_slot(t)->rp, *end = mode_slot(t)->rpe;
+	mode_slot_state *m = mode_slot(t);
+	const uint8_t *p = m->rp, *end = m->rpe;
 	int spawned = 0;
-	check_reads(t); /* the reads waited for are in */
+	check_reads(t, m); /* the reads waited for are in */
 	while (p < end) {
 		const uint8_t *at = p;
 		int op = *p++;
 		if (op < PR_USE) {
-			access(t, op, &p, end);
+			access(t, m, op, &p, end);
 		} else if (op < PR_SPILL_R) {
 			/* the op starts once its reads are in (thr_wait_mem
 			 * before every thr_use) */
-			if (wait_reads(t, at))
+			if (wait_reads(t, m, at))
 				return;
 			thr_use(t, op - PR_USE, (int)pr_get(&p, end), op_done);
-			mode_slot(t)->rp = p;
+			m->rp = p;
 			return;
 		} else if (op >= PR_COUNT1 && op < PR_NOPS) {
 			int id = op & 31;
@@ -230,7 +249,7 @@ static void run(thr_ctx *t)
 			if (id < C_NCOUNTERS)
 				thr_count(t, id, a);
 		} else if (op == PR_WAIT) {
-			if (wait_reads(t, p))
+			if (wait_reads(t, m, p))
 				return;
 		} else if (op == PR_SPAWN) {
 			spawn(t, pr_get(&p, end), &p, end);
@@ -241,7 +260,7 @@ static void run(thr_ctx *t)
 			p = end;
 		}
 	}
-	check_reads(t);
+	check_reads(t, m);
 	/* as shade_done and shadow_done: the slot is free, and after a
 	 * shading op the RTP's idle slots get the children it queued */
 	if (spawned)

@@ -146,7 +146,7 @@ int mode_func_range(chip *c, int end, int mode)
 		for (int i = bits_next(c->live, n, 0); i < n && !stop;
 		     i = bits_next(c->live, n, i + 1)) {
 			thr_ctx *t = c->turn[i];
-			int r = (int)(t->rtp - c->rtp);
+			int r = t->rtp->id; /* its index in c->rtp */
 			if (!t->p && !mode_slot(t)->rp) {
 				if (chunked && given == F->unit_tiles) {
 					chip_demand(c, d1);
