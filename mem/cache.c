@@ -311,18 +311,9 @@ static inline __attribute__((always_inline)) int find_way(const cache *c, uint32
 	return -1;
 }
 
-/* The bucket of mshr_cnt a line counts in. */
 static inline uint32_t mshr_bucket(uint64_t line)
 {
-	return (uint32_t)((line ^ (line >> 6)) & (CACHE_MSHR_BUCKETS - 1));
-}
-
-int cache_mshr_find(const cache *c, uint64_t line)
-{
-	for (uint32_t i = c->mshr_head[mshr_bucket(line)]; i != CACHE_MSHR_NIL; i = c->mshr_next[i])
-		if (c->mshr_line[i] == line)
-			return (int)i;
-	return -1;
+	return cache_mshr_bucket(line);
 }
 
 /* Takes the lowest free MSHR for line (one is free). */

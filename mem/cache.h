@@ -231,8 +231,21 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim);
  * -1: none): what a timed fill that has just taken the MSHR's waiters
  * (tcache_take) calls, so the MSHRs are searched once per fill. */
 uint32_t cache_fill_mshr(cache *c, uint64_t line, int mshr, uint64_t *victim);
-/* The in-flight MSHR holding line, or -1. */
-int cache_mshr_find(const cache *c, uint64_t line);
+/* The chain of busy MSHRs (cache.mshr_head) a line's MSHR is in. */
+static inline uint32_t cache_mshr_bucket(uint64_t line)
+{
+	return (uint32_t)((line ^ (line >> 6)) & (CACHE_MSHR_BUCKETS - 1));
+}
+/* The in-flight MSHR holding line, or -1 (inline: every timed lookup that
+ * misses and every fill searches). */
+static inline int cache_mshr_find(const cache *c, uint64_t line)
+{
+	for (uint32_t i = c->mshr_head[cache_mshr_bucket(line)]; i != CACHE_MSHR_NIL;
+	     i = c->mshr_next[i])
+		if (c->mshr_line[i] == line)
+			return (int)i;
+	return -1;
+}
 static inline int cache_mshr_free(const cache *c)
 {
 	return c->mshr_used < c->p.mshrs;
