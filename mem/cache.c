@@ -393,7 +393,8 @@ cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, ui
 
 /* The way a fill of set (ways s) takes: an empty way first (the lowest),
  * else the policy's victim (stamp policies: the smallest stamp). */
-static uint32_t pick_victim(const cache *c, uint32_t set, const cache_way *s)
+static inline __attribute__((always_inline)) uint32_t pick_victim(const cache *c, uint32_t set,
+                                                                  const cache_way *s)
 {
 	uint32_t best = 0;
 	if (!c->rp->victim && c->p.ways == 4) {
@@ -422,8 +423,10 @@ static uint32_t pick_victim(const cache *c, uint32_t set, const cache_way *s)
 }
 
 /* Installs line (absent, in no MSHR) in set: an empty way (the lowest)
- * or the policy's victim; returns its slot. */
-static uint32_t fill_absent(cache *c, uint32_t set, uint64_t line, uint64_t *victim)
+ * or the policy's victim; returns its slot. Always inlined, with
+ * pick_victim: gcc had kept it a call from every fill. */
+static inline __attribute__((always_inline)) uint32_t fill_absent(cache *c, uint32_t set,
+                                                                  uint64_t line, uint64_t *victim)
 {
 	size_t base = (size_t)set * c->p.ways;
 	cache_way *s = c->way + base;
