@@ -62,16 +62,3 @@ tc_wait *tcache_wait_grow(tcache *t)
 	t->free_w = w->next;
 	return w;
 }
-
-void tcache_stall(tcache *t, void *who, uint64_t since)
-{
-	tc_wait *w = tcache_wait_alloc(t);
-	if (!w)
-		return;
-	*w = (tc_wait){who, since, NULL};
-	if (t->stall_tail)
-		t->stall_tail->next = w;
-	else
-		t->stall = w;
-	t->stall_tail = w;
-}

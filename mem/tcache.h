@@ -94,7 +94,18 @@ static inline cache_result tcache_lookup(tcache *t, uint64_t line, uint32_t byte
 	return r;
 }
 /* Parks who at the tail of the stall FIFO (since: when, for its wait). */
-void tcache_stall(tcache *t, void *who, uint64_t since);
+static inline void tcache_stall(tcache *t, void *who, uint64_t since)
+{
+	tc_wait *w = tcache_wait_alloc(t);
+	if (!w)
+		return;
+	*w = (tc_wait){who, since, NULL};
+	if (t->stall_tail)
+		t->stall_tail->next = w;
+	else
+		t->stall = w;
+	t->stall_tail = w;
+}
 /* Detaches the waiters of line (NULL if it has no MSHR); *mshr gets the
  * MSHR (-1: none) whose buffer holds the line. Call before the fill
  * (cache_fill_mshr with that MSHR: the MSHRs are searched once). */
