@@ -292,44 +292,14 @@ uint32_t cache_set_fold(const cache *c, uint64_t line)
 	return (uint32_t)(c->set_mask ? h & c->set_mask : fastdiv_mod(c->set_div, h));
 }
 
-/* The way of set holding line, or -1. Four ways (every L1 of the
- * standard configs) are tested without a loop, and it is always inlined
- * (gcc had kept it a call): the search runs for every lookup and fill. */
-static inline __attribute__((always_inline)) int find_way(const cache *c, uint32_t set,
-                                                          uint64_t line)
+static inline int find_way(const cache *c, uint32_t set, uint64_t line)
 {
-	const cache_way *s = c->way + (size_t)set * c->p.ways;
-	if (c->p.ways == 4)
-		return s[0].tag == line   ? 0
-		       : s[1].tag == line ? 1
-		       : s[2].tag == line ? 2
-		       : s[3].tag == line ? 3
-		                          : -1;
-	for (uint32_t w = 0; w < c->p.ways; w++)
-		if (s[w].tag == line)
-			return (int)w;
-	return -1;
+	return cache_find_way(c, set, line);
 }
 
 static inline uint32_t mshr_bucket(uint64_t line)
 {
 	return cache_mshr_bucket(line);
-}
-
-/* Takes the lowest free MSHR for line (one is free). */
-static uint32_t mshr_take(cache *c, uint64_t line)
-{
-	uint32_t w = 0;
-	while (!c->mshr_free[w])
-		w++;
-	uint32_t i = w * 64 + (uint32_t)__builtin_ctzll(c->mshr_free[w]);
-	c->mshr_free[w] &= c->mshr_free[w] - 1;
-	c->mshr_line[i] = line;
-	c->mshr_used++;
-	uint32_t b = mshr_bucket(line);
-	c->mshr_next[i] = c->mshr_head[b];
-	c->mshr_head[b] = i;
-	return i;
 }
 
 /* Frees MSHR m (busy, holding line). */
@@ -352,43 +322,6 @@ int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
 	if (w >= 0 && slot)
 		*slot = set * c->p.ways + (uint32_t)w;
 	return w >= 0;
-}
-
-cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, uint32_t *slot)
-{
-	uint32_t set = cache_set_of(c, line);
-	int w = find_way(c, set, line);
-	if (w >= 0) {
-		size_t i = (size_t)set * c->p.ways + (size_t)w;
-		cache_use(c, set, &c->way[i]);
-		c->s.accesses++;
-		c->s.hits++;
-		c->s.bytes += bytes;
-		if (slot)
-			*slot = (uint32_t)i;
-		return CACHE_HIT;
-	}
-	int m = cache_mshr_find(c, line);
-	if (m >= 0) {
-		c->s.accesses++;
-		c->s.misses++;
-		c->s.merges++;
-		c->s.bytes += bytes;
-		if (mshr)
-			*mshr = m;
-		return CACHE_MISS_MERGED;
-	}
-	if (c->mshr_used == c->p.mshrs) {
-		c->s.mshr_full++;
-		return CACHE_MSHR_FULL;
-	}
-	uint32_t i = mshr_take(c, line);
-	c->s.accesses++;
-	c->s.misses++;
-	c->s.bytes += bytes;
-	if (mshr)
-		*mshr = (int)i;
-	return CACHE_MISS_NEW;
 }
 
 /* The way a fill of set (ways s) takes: an empty way first (the lowest),
