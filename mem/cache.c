@@ -158,12 +158,9 @@ void cache_dirty_clear(cache *c)
 }
 
 /* The policy's view of set `set`. */
-static repl_set set_view(const cache *c, uint32_t set)
+static inline repl_set set_view(const cache *c, uint32_t set)
 {
-	uint32_t W = c->p.ways;
-	return (repl_set){c->way + (size_t)set * W,
-	                  c->rst ? c->rst + (size_t)set * c->rp->set_words : NULL, W,
-	                  (uint64_t *)&c->stamp};
+	return cache_set_view(c, set);
 }
 
 void cache_repl_hit(cache *c, uint32_t set, uint32_t w)
@@ -297,24 +294,6 @@ static inline int find_way(const cache *c, uint32_t set, uint64_t line)
 	return cache_find_way(c, set, line);
 }
 
-static inline uint32_t mshr_bucket(uint64_t line)
-{
-	return cache_mshr_bucket(line);
-}
-
-/* Frees MSHR m (busy, holding line). */
-static void mshr_release(cache *c, uint64_t line, uint32_t m)
-{
-	uint32_t *p = &c->mshr_head[mshr_bucket(line)];
-	while (*p != m && *p != CACHE_MSHR_NIL)
-		p = &c->mshr_next[*p];
-	if (*p == m)
-		*p = c->mshr_next[m];
-	c->mshr_line[m] = CACHE_INVALID;
-	c->mshr_used--;
-	c->mshr_free[m / 64] |= 1ull << (m % 64);
-}
-
 int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
 {
 	uint32_t set = cache_set_of(c, line);
@@ -322,80 +301,6 @@ int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
 	if (w >= 0 && slot)
 		*slot = set * c->p.ways + (uint32_t)w;
 	return w >= 0;
-}
-
-/* The way a fill of set (ways s) takes: an empty way first (the lowest),
- * else the policy's victim (stamp policies: the smallest stamp). */
-static inline __attribute__((always_inline)) uint32_t pick_victim(const cache *c, uint32_t set,
-                                                                  const cache_way *s)
-{
-	uint32_t best = 0;
-	if (!c->rp->victim && c->p.ways == 4) {
-		/* unrolled (see find_way): the first empty way, else the
-		 * smallest stamp, the lowest way on ties */
-		for (uint32_t i = 0; i < 4; i++)
-			if (s[i].tag == CACHE_INVALID)
-				return i;
-		uint32_t b01 = s[1].use < s[0].use, b23 = 2 + (s[3].use < s[2].use);
-		return s[b23].use < s[b01].use ? b23 : b01;
-	}
-	if (!c->rp->victim) {
-		for (uint32_t i = 0; i < c->p.ways; i++) {
-			if (s[i].tag == CACHE_INVALID)
-				return i;
-			if (s[i].use < s[best].use)
-				best = i;
-		}
-		return best;
-	}
-	for (uint32_t i = 0; i < c->p.ways; i++)
-		if (s[i].tag == CACHE_INVALID)
-			return i;
-	repl_set v = set_view(c, set);
-	return c->rp->victim(&v);
-}
-
-/* Installs line (absent, in no MSHR) in set: an empty way (the lowest)
- * or the policy's victim; returns its slot. Always inlined, with
- * pick_victim: gcc had kept it a call from every fill. */
-static inline __attribute__((always_inline)) uint32_t fill_absent(cache *c, uint32_t set,
-                                                                  uint64_t line, uint64_t *victim)
-{
-	size_t base = (size_t)set * c->p.ways;
-	cache_way *s = c->way + base;
-	uint32_t best = pick_victim(c, set, s);
-	if (s[best].tag != CACHE_INVALID) {
-		c->s.evictions++;
-		if (victim)
-			*victim = s[best].tag;
-	}
-	s[best].tag = line;
-	c->s.fills++;
-	c->s.fill_bytes += c->p.line_bytes;
-	if (c->stamp_fill)
-		s[best].use = ++c->stamp;
-	else if (c->rp->fill) {
-		repl_set v = set_view(c, set);
-		c->rp->fill(&v, best);
-	}
-	cache_touch(c, set);
-	return (uint32_t)(base + best);
-}
-
-uint32_t cache_fill_mshr(cache *c, uint64_t line, int m, uint64_t *victim)
-{
-	if (m >= 0)
-		mshr_release(c, line, (uint32_t)m);
-	if (victim)
-		*victim = CACHE_INVALID;
-	uint32_t set = cache_set_of(c, line);
-	int w = find_way(c, set, line);
-	if (w >= 0) { /* present: a hit for the policy */
-		size_t i = (size_t)set * c->p.ways + (size_t)w;
-		cache_use(c, set, &c->way[i]);
-		return (uint32_t)i;
-	}
-	return fill_absent(c, set, line, victim);
 }
 
 uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
@@ -427,7 +332,7 @@ int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot
 		return 1;
 	}
 	/* absent and in no MSHR: fill it here, without searching again */
-	*slot = fill_absent(c, set, line, victim);
+	*slot = cache_fill_absent(c, set, line, victim);
 	return 0;
 }
 
