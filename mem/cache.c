@@ -158,12 +158,9 @@ void cache_dirty_clear(cache *c)
 }
 
 /* The policy's view of set `set`. */
-static repl_set set_view(const cache *c, uint32_t set)
+static inline repl_set set_view(const cache *c, uint32_t set)
 {
-	uint32_t W = c->p.ways;
-	return (repl_set){c->way + (size_t)set * W,
-	                  c->rst ? c->rst + (size_t)set * c->rp->set_words : NULL, W,
-	                  (uint64_t *)&c->stamp};
+	return cache_set_view(c, set);
 }
 
 void cache_repl_hit(cache *c, uint32_t set, uint32_t w)
@@ -292,66 +289,9 @@ uint32_t cache_set_fold(const cache *c, uint64_t line)
 	return (uint32_t)(c->set_mask ? h & c->set_mask : fastdiv_mod(c->set_div, h));
 }
 
-/* The way of set holding line, or -1. Four ways (every L1 of the
- * standard configs) are tested without a loop, and it is always inlined
- * (gcc had kept it a call): the search runs for every lookup and fill. */
-static inline __attribute__((always_inline)) int find_way(const cache *c, uint32_t set,
-                                                          uint64_t line)
+static inline int find_way(const cache *c, uint32_t set, uint64_t line)
 {
-	const cache_way *s = c->way + (size_t)set * c->p.ways;
-	if (c->p.ways == 4)
-		return s[0].tag == line   ? 0
-		       : s[1].tag == line ? 1
-		       : s[2].tag == line ? 2
-		       : s[3].tag == line ? 3
-		                          : -1;
-	for (uint32_t w = 0; w < c->p.ways; w++)
-		if (s[w].tag == line)
-			return (int)w;
-	return -1;
-}
-
-/* The bucket of mshr_cnt a line counts in. */
-static inline uint32_t mshr_bucket(uint64_t line)
-{
-	return (uint32_t)((line ^ (line >> 6)) & (CACHE_MSHR_BUCKETS - 1));
-}
-
-int cache_mshr_find(const cache *c, uint64_t line)
-{
-	for (uint32_t i = c->mshr_head[mshr_bucket(line)]; i != CACHE_MSHR_NIL; i = c->mshr_next[i])
-		if (c->mshr_line[i] == line)
-			return (int)i;
-	return -1;
-}
-
-/* Takes the lowest free MSHR for line (one is free). */
-static uint32_t mshr_take(cache *c, uint64_t line)
-{
-	uint32_t w = 0;
-	while (!c->mshr_free[w])
-		w++;
-	uint32_t i = w * 64 + (uint32_t)__builtin_ctzll(c->mshr_free[w]);
-	c->mshr_free[w] &= c->mshr_free[w] - 1;
-	c->mshr_line[i] = line;
-	c->mshr_used++;
-	uint32_t b = mshr_bucket(line);
-	c->mshr_next[i] = c->mshr_head[b];
-	c->mshr_head[b] = i;
-	return i;
-}
-
-/* Frees MSHR m (busy, holding line). */
-static void mshr_release(cache *c, uint64_t line, uint32_t m)
-{
-	uint32_t *p = &c->mshr_head[mshr_bucket(line)];
-	while (*p != m && *p != CACHE_MSHR_NIL)
-		p = &c->mshr_next[*p];
-	if (*p == m)
-		*p = c->mshr_next[m];
-	c->mshr_line[m] = CACHE_INVALID;
-	c->mshr_used--;
-	c->mshr_free[m / 64] |= 1ull << (m % 64);
+	return cache_find_way(c, set, line);
 }
 
 int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
@@ -361,114 +301,6 @@ int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
 	if (w >= 0 && slot)
 		*slot = set * c->p.ways + (uint32_t)w;
 	return w >= 0;
-}
-
-cache_result cache_lookup(cache *c, uint64_t line, uint32_t bytes, int *mshr, uint32_t *slot)
-{
-	uint32_t set = cache_set_of(c, line);
-	int w = find_way(c, set, line);
-	if (w >= 0) {
-		size_t i = (size_t)set * c->p.ways + (size_t)w;
-		cache_use(c, set, &c->way[i]);
-		c->s.accesses++;
-		c->s.hits++;
-		c->s.bytes += bytes;
-		if (slot)
-			*slot = (uint32_t)i;
-		return CACHE_HIT;
-	}
-	int m = cache_mshr_find(c, line);
-	if (m >= 0) {
-		c->s.accesses++;
-		c->s.misses++;
-		c->s.merges++;
-		c->s.bytes += bytes;
-		if (mshr)
-			*mshr = m;
-		return CACHE_MISS_MERGED;
-	}
-	if (c->mshr_used == c->p.mshrs) {
-		c->s.mshr_full++;
-		return CACHE_MSHR_FULL;
-	}
-	uint32_t i = mshr_take(c, line);
-	c->s.accesses++;
-	c->s.misses++;
-	c->s.bytes += bytes;
-	if (mshr)
-		*mshr = (int)i;
-	return CACHE_MISS_NEW;
-}
-
-/* The way a fill of set (ways s) takes: an empty way first (the lowest),
- * else the policy's victim (stamp policies: the smallest stamp). */
-static uint32_t pick_victim(const cache *c, uint32_t set, const cache_way *s)
-{
-	uint32_t best = 0;
-	if (!c->rp->victim && c->p.ways == 4) {
-		/* unrolled (see find_way): the first empty way, else the
-		 * smallest stamp, the lowest way on ties */
-		for (uint32_t i = 0; i < 4; i++)
-			if (s[i].tag == CACHE_INVALID)
-				return i;
-		uint32_t b01 = s[1].use < s[0].use, b23 = 2 + (s[3].use < s[2].use);
-		return s[b23].use < s[b01].use ? b23 : b01;
-	}
-	if (!c->rp->victim) {
-		for (uint32_t i = 0; i < c->p.ways; i++) {
-			if (s[i].tag == CACHE_INVALID)
-				return i;
-			if (s[i].use < s[best].use)
-				best = i;
-		}
-		return best;
-	}
-	for (uint32_t i = 0; i < c->p.ways; i++)
-		if (s[i].tag == CACHE_INVALID)
-			return i;
-	repl_set v = set_view(c, set);
-	return c->rp->victim(&v);
-}
-
-/* Installs line (absent, in no MSHR) in set: an empty way (the lowest)
- * or the policy's victim; returns its slot. */
-static uint32_t fill_absent(cache *c, uint32_t set, uint64_t line, uint64_t *victim)
-{
-	size_t base = (size_t)set * c->p.ways;
-	cache_way *s = c->way + base;
-	uint32_t best = pick_victim(c, set, s);
-	if (s[best].tag != CACHE_INVALID) {
-		c->s.evictions++;
-		if (victim)
-			*victim = s[best].tag;
-	}
-	s[best].tag = line;
-	c->s.fills++;
-	c->s.fill_bytes += c->p.line_bytes;
-	if (c->stamp_fill)
-		s[best].use = ++c->stamp;
-	else if (c->rp->fill) {
-		repl_set v = set_view(c, set);
-		c->rp->fill(&v, best);
-	}
-	cache_touch(c, set);
-	return (uint32_t)(base + best);
-}
-
-uint32_t cache_fill_mshr(cache *c, uint64_t line, int m, uint64_t *victim)
-{
-	if (m >= 0)
-		mshr_release(c, line, (uint32_t)m);
-	if (victim)
-		*victim = CACHE_INVALID;
-	uint32_t set = cache_set_of(c, line);
-	int w = find_way(c, set, line);
-	if (w >= 0) { /* present: a hit for the policy */
-		size_t i = (size_t)set * c->p.ways + (size_t)w;
-		cache_use(c, set, &c->way[i]);
-		return (uint32_t)i;
-	}
-	return fill_absent(c, set, line, victim);
 }
 
 uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
@@ -500,7 +332,7 @@ int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot
 		return 1;
 	}
 	/* absent and in no MSHR: fill it here, without searching again */
-	*slot = fill_absent(c, set, line, victim);
+	*slot = cache_fill_absent(c, set, line, victim);
 	return 0;
 }
 

@@ -93,8 +93,11 @@ static inline uint8_t *l1_data(hier *h, hl1 *l, uint32_t slot)
 	return d;
 }
 
-/* Copies q's bytes inside L1 line `line` (in way slot) to q's buffer. */
-static void deliver(hier *h, hl1 *l, hreq *q, uint64_t line, uint32_t slot)
+/* Copies q's bytes inside L1 line `line` (in way slot) to q's buffer.
+ * Always inlined, like finish: gcc had kept both calls from each read's
+ * hit, fill and completion. */
+static inline __attribute__((always_inline)) void deliver(hier *h, hl1 *l, hreq *q, uint64_t line,
+                                                          uint32_t slot)
 {
 	const uint8_t *d = cache_data_at(&l->t.c, slot);
 	if (!d && !(d = l1_data(h, l, slot)))
@@ -107,7 +110,7 @@ static void deliver(hier *h, hl1 *l, hreq *q, uint64_t line, uint32_t slot)
 
 /* ---- reads ---- */
 
-static void finish(hier *h, hreq *q)
+static inline __attribute__((always_inline)) void finish(hier *h, hreq *q)
 {
 	uint64_t now = eng_now(h->e);
 	uint64_t when = eng_next_edge(h->core, now);

@@ -100,8 +100,24 @@ int sdram_init(sdram *s, const sdram_params *p, diag *d);
 int sdram_mapping_parse(const char *s);
 const char *sdram_mapping_name(int m);
 
-/* Decodes a byte address (taken modulo the capacity). */
-void sdram_decode(const sdram *s, uint64_t addr, uint32_t *bank, uint64_t *row, uint32_t *col);
+/* Decodes a byte address (taken modulo the capacity). Inline: the memory
+ * interface decodes every request it is given. */
+static inline void sdram_decode(const sdram *s, uint64_t addr, uint32_t *bank, uint64_t *row,
+                                uint32_t *col)
+{
+	if (addr >= s->p.bytes) /* a division only where it changes addr */
+		addr %= s->p.bytes;
+	*col = (uint32_t)(addr & (s->p.row_bytes - 1));
+	uint64_t hi = addr >> s->t.col_bits;
+	if (s->p.mapping == SDRAM_MAP_BANK_ROW_COL) {
+		uint64_t rows = s->p.bytes / s->p.banks / s->p.row_bytes;
+		*row = hi % rows;
+		*bank = (uint32_t)((hi / rows) & (s->p.banks - 1));
+	} else {
+		*bank = (uint32_t)(hi & (s->p.banks - 1));
+		*row = hi >> s->t.bank_bits;
+	}
+}
 
 /* One request issued at tick t: returns the tick its last beat ends.
  * *data_start (may be NULL) receives the tick its first beat starts. */

@@ -44,78 +44,21 @@ void tcache_free(tcache *t)
 	t->free_w = NULL;
 }
 
-static tc_wait *wait_alloc(tcache *t)
+/* tcache_wait_alloc's rare case, out of line: the free list is empty. */
+tc_wait *tcache_wait_grow(tcache *t)
 {
-	if (!t->free_w) {
-		tc_chunk *c = malloc(sizeof *c);
-		if (!c) {
-			t->oom = 1;
-			return NULL;
-		}
-		c->next = t->chunks;
-		t->chunks = c;
-		for (int i = 0; i < TC_CHUNK; i++) {
-			c->w[i].next = t->free_w;
-			t->free_w = &c->w[i];
-		}
+	tc_chunk *c = malloc(sizeof *c);
+	if (!c) {
+		t->oom = 1;
+		return NULL;
+	}
+	c->next = t->chunks;
+	t->chunks = c;
+	for (int i = 0; i < TC_CHUNK; i++) {
+		c->w[i].next = t->free_w;
+		t->free_w = &c->w[i];
 	}
 	tc_wait *w = t->free_w;
 	t->free_w = w->next;
 	return w;
-}
-
-cache_result tcache_lookup(tcache *t, uint64_t line, uint32_t bytes, void *who, int *mshr,
-                           uint32_t *slot)
-{
-	int m = -1;
-	cache_result r = cache_lookup(&t->c, line, bytes, &m, slot);
-	if (r == CACHE_MISS_NEW || r == CACHE_MISS_MERGED) {
-		tc_wait *w = wait_alloc(t);
-		if (w) {
-			*w = (tc_wait){who, 0, t->wait[m]};
-			t->wait[m] = w;
-		}
-		if (mshr)
-			*mshr = m;
-	}
-	return r;
-}
-
-void tcache_stall(tcache *t, void *who, uint64_t since)
-{
-	tc_wait *w = wait_alloc(t);
-	if (!w)
-		return;
-	*w = (tc_wait){who, since, NULL};
-	if (t->stall_tail)
-		t->stall_tail->next = w;
-	else
-		t->stall = w;
-	t->stall_tail = w;
-}
-
-tc_wait *tcache_take(tcache *t, uint64_t line, int *mshr)
-{
-	int m = cache_mshr_find(&t->c, line);
-	if (mshr)
-		*mshr = m;
-	if (m < 0)
-		return NULL;
-	tc_wait *w = t->wait[m];
-	t->wait[m] = NULL;
-	return w;
-}
-
-void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx)
-{
-	while (t->stall && cache_mshr_free(&t->c)) {
-		tc_wait *w = t->stall;
-		if (retry(ctx, w->who, w->since, now))
-			break; /* stays at the head */
-		t->stall = w->next;
-		if (!t->stall)
-			t->stall_tail = NULL;
-		w->next = t->free_w;
-		t->free_w = w;
-	}
 }

@@ -62,16 +62,64 @@ enum {
 int tcache_init(tcache *t, const cache_params *p, int flags, const char *what, diag *d);
 void tcache_free(tcache *t);
 
+/* A waiter record from the free list (tcache_wait_grow: the list is
+ * empty; NULL and oom set when out of memory). */
+tc_wait *tcache_wait_grow(tcache *t);
+static inline tc_wait *tcache_wait_alloc(tcache *t)
+{
+	tc_wait *w = t->free_w;
+	if (__builtin_expect(!w, 0))
+		return tcache_wait_grow(t);
+	t->free_w = w->next;
+	return w;
+}
+
 /* One access to one line: cache_lookup, and on a miss (new or merged) who
- * joins the line's MSHR (*mshr its index; *slot the way on a hit). */
-cache_result tcache_lookup(tcache *t, uint64_t line, uint32_t bytes, void *who, int *mshr,
-                           uint32_t *slot);
+ * joins the line's MSHR (*mshr its index; *slot the way on a hit). Inline,
+ * like tcache_take and tcache_resume: every L1 read and fill runs them. */
+static inline cache_result tcache_lookup(tcache *t, uint64_t line, uint32_t bytes, void *who,
+                                         int *mshr, uint32_t *slot)
+{
+	int m = -1;
+	cache_result r = cache_lookup(&t->c, line, bytes, &m, slot);
+	if (r == CACHE_MISS_NEW || r == CACHE_MISS_MERGED) {
+		tc_wait *w = tcache_wait_alloc(t);
+		if (w) {
+			*w = (tc_wait){who, 0, t->wait[m]};
+			t->wait[m] = w;
+		}
+		if (mshr)
+			*mshr = m;
+	}
+	return r;
+}
 /* Parks who at the tail of the stall FIFO (since: when, for its wait). */
-void tcache_stall(tcache *t, void *who, uint64_t since);
+static inline void tcache_stall(tcache *t, void *who, uint64_t since)
+{
+	tc_wait *w = tcache_wait_alloc(t);
+	if (!w)
+		return;
+	*w = (tc_wait){who, since, NULL};
+	if (t->stall_tail)
+		t->stall_tail->next = w;
+	else
+		t->stall = w;
+	t->stall_tail = w;
+}
 /* Detaches the waiters of line (NULL if it has no MSHR); *mshr gets the
  * MSHR (-1: none) whose buffer holds the line. Call before the fill
  * (cache_fill_mshr with that MSHR: the MSHRs are searched once). */
-tc_wait *tcache_take(tcache *t, uint64_t line, int *mshr);
+static inline tc_wait *tcache_take(tcache *t, uint64_t line, int *mshr)
+{
+	int m = cache_mshr_find(&t->c, line);
+	if (mshr)
+		*mshr = m;
+	if (m < 0)
+		return NULL;
+	tc_wait *w = t->wait[m];
+	t->wait[m] = NULL;
+	return w;
+}
 /* The next waiter of a taken list (NULL at its end); frees its record. */
 static inline void *tcache_pop(tcache *t, tc_wait **list)
 {
@@ -87,7 +135,19 @@ static inline void *tcache_pop(tcache *t, tc_wait **list)
  * since, now) returns 0 when who got through (it leaves the FIFO), 1 when
  * refused again (it stays at the head; resuming stops). */
 typedef int (*tc_retry)(void *ctx, void *who, uint64_t since, uint64_t now);
-void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx);
+static inline void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx)
+{
+	while (t->stall && cache_mshr_free(&t->c)) {
+		tc_wait *w = t->stall;
+		if (retry(ctx, w->who, w->since, now))
+			break; /* stays at the head */
+		t->stall = w->next;
+		if (!t->stall)
+			t->stall_tail = NULL;
+		w->next = t->free_w;
+		t->free_w = w;
+	}
+}
 
 /* The access port: p.ports accesses per cycle of clock clk, in arrival
  * order. Returns the tick at which an access arriving at `now` starts (the

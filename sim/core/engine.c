@@ -21,7 +21,10 @@
  * few events are that far ahead). The sequence number doubles as the
  * event's id: it is never reused, so an id is stale once its event ran or
  * was cancelled. Both queues keep a cancelled record (h == NULL) until it
- * comes first; `live` counts the records with a handler.
+ * comes first; `cancelled` counts those still queued, `dropped` those
+ * taken out. Live events and dispatched ones are worked out from these
+ * and the sequence number when asked (eng_pending, eng_events), so
+ * scheduling and dispatching keep no count of their own.
  *
  * Why a wheel (docs/PERFORMANCE.md, "Profile"): the heap alone spent about
  * a fifth of cycle mode's instructions sinking and refilling its root,
@@ -65,8 +68,9 @@ struct eng {
 	/* the overflow heap: heap[i] <= heap[2i+1], heap[2i+2] by (when, seq) */
 	hent *heap;
 	uint32_t cap, n;
-	size_t live;
-	uint64_t seq, dispatched;
+	uint64_t seq;       /* the next event's; seq - 1 events were queued */
+	uint64_t cancelled; /* cancelled records still queued */
+	uint64_t dropped;   /* cancelled records taken out */
 	int stop;
 };
 
@@ -257,7 +261,6 @@ static __attribute__((noinline)) eng_id schedule_slow(eng *e, const hent *x, int
 		wheel_link(e, i);
 	}
 	e->seq++;
-	e->live++;
 	return (eng_id)x->seq;
 }
 
@@ -280,7 +283,6 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	r->ev = (hent){when, seq, h, ctx, arg};
 	wheel_link(e, i);
 	e->seq = seq + 1;
-	e->live++;
 	return (eng_id)seq;
 }
 
@@ -297,7 +299,7 @@ int eng_cancel(eng *e, eng_id id)
 	if (!x || !x->h)
 		return -1;
 	x->h = NULL;
-	e->live--;
+	e->cancelled++;
 	return 0;
 }
 
@@ -326,11 +328,12 @@ eng_status eng_run(eng *e, uint64_t limit)
 			wheel_pop(e, s);
 		else
 			heap_pop(e);
-		if (!h)
-			continue; /* cancelled: not run, counted or timed */
+		if (!h) { /* cancelled: not run, counted or timed */
+			e->cancelled--;
+			e->dropped++;
+			continue;
+		}
 		e->hd.now = when;
-		e->live--;
-		e->dispatched++;
 		h(e, ctx, arg);
 		if (e->stop) {
 			e->stop = 0;
@@ -347,12 +350,13 @@ void eng_stop(eng *e)
 
 uint64_t eng_events(const eng *e)
 {
-	return e->dispatched;
+	/* every event queued is still queued, was dropped, or ran */
+	return e->seq - 1 - e->wn - e->n - e->dropped;
 }
 
 size_t eng_pending(const eng *e)
 {
-	return e->live;
+	return (size_t)(e->wn + e->n - e->cancelled);
 }
 
 eng_clock eng_clock_mhz(double mhz)
