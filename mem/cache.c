@@ -157,15 +157,9 @@ void cache_dirty_clear(cache *c)
 		memset(c->dirty, 0, (size_t)bits_words((int)c->nsets) * sizeof *c->dirty);
 }
 
-/* The policy's view of set `set`. */
-static inline repl_set set_view(const cache *c, uint32_t set)
-{
-	return cache_set_view(c, set);
-}
-
 void cache_repl_hit(cache *c, uint32_t set, uint32_t w)
 {
-	repl_set v = set_view(c, set);
+	repl_set v = cache_set_view(c, set);
 	c->rp->hit(&v, w);
 }
 
@@ -173,7 +167,7 @@ int cache_save(const cache *c, uint32_t set0, uint32_t n, uint32_t *line, uint8_
 {
 	uint32_t W = c->p.ways;
 	for (uint32_t s = 0; s < n; s++) {
-		repl_set v = set_view(c, set0 + s);
+		repl_set v = cache_set_view(c, set0 + s);
 		for (uint32_t i = 0; i < W; i++) {
 			size_t k = (size_t)s * W + i;
 			if (v.way[i].tag != CACHE_INVALID && v.way[i].tag >= UINT32_MAX)
@@ -190,7 +184,7 @@ void cache_load(cache *c, uint32_t set0, uint32_t n, const uint32_t *line, const
 {
 	uint32_t W = c->p.ways;
 	for (uint32_t s = 0; s < n; s++) {
-		repl_set v = set_view(c, set0 + s);
+		repl_set v = cache_set_view(c, set0 + s);
 		for (uint32_t i = 0; i < W; i++) {
 			size_t k = (size_t)s * W + i;
 			v.way[i].tag = line[k] == UINT32_MAX ? CACHE_INVALID : line[k];
@@ -289,15 +283,10 @@ uint32_t cache_set_fold(const cache *c, uint64_t line)
 	return (uint32_t)(c->set_mask ? h & c->set_mask : fastdiv_mod(c->set_div, h));
 }
 
-static inline int find_way(const cache *c, uint32_t set, uint64_t line)
-{
-	return cache_find_way(c, set, line);
-}
-
 int cache_probe(const cache *c, uint64_t line, uint32_t *slot)
 {
 	uint32_t set = cache_set_of(c, line);
-	int w = find_way(c, set, line);
+	int w = cache_find_way(c, set, line);
 	if (w >= 0 && slot)
 		*slot = set * c->p.ways + (uint32_t)w;
 	return w >= 0;
@@ -311,7 +300,7 @@ uint32_t cache_fill(cache *c, uint64_t line, uint64_t *victim)
 int cache_lookup_func_at(cache *c, uint64_t line, uint32_t bytes, uint32_t *slot, uint64_t *victim)
 {
 	uint32_t set = cache_set_of(c, line);
-	int w = find_way(c, set, line);
+	int w = cache_find_way(c, set, line);
 	c->s.accesses++;
 	c->s.func_accesses++;
 	c->s.bytes += bytes;

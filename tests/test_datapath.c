@@ -178,6 +178,22 @@ Test(datapath, damaged_triangle_changes_the_recording_run_and_its_record, .timeo
 	}
 }
 
+/* A 128x128 frame of the embedded room in mode `mode` (functional or
+ * sampled) recorded into a fresh world cache, so that the next chip of
+ * config *c on *w replays it; returns the recording run's record state. */
+static int record_frame(const char *mode, world *w, saar_config *c)
+{
+	char dir[64];
+	tu_tmpdir(dir, sizeof dir);
+	tu_load_world_cached(w, NULL, NULL, NULL, dir);
+	cfg_for(c, 128, mode, NULL, 0);
+	chip *ch = make_chip(w, c);
+	cr_assert(frame_identical(ch, w), "%s: the recording run", mode);
+	int rec = ch->rec_state;
+	chip_destroy(ch);
+	return rec;
+}
+
 /* A run replaying a packet record runs no math, but its reads carry
  * their bytes and the record holds each recorded read's checksum
  * (traces/pktrec.h pr_sum): a replayed read that returns other bytes is
@@ -192,18 +208,11 @@ static void replay_sees(void (*spoil_fn)(chip *ch, uint64_t arg), uint64_t arg, 
 	static const char *const rec_modes[] = {"functional", "sampled"};
 	char blind[64] = "";
 	for (int m = 0; m < 2; m++) {
-		char dir[64];
-		tu_tmpdir(dir, sizeof dir);
 		world w;
-		tu_load_world_cached(&w, NULL, NULL, NULL, dir);
 		saar_config c;
-		cfg_for(&c, 128, rec_modes[m], NULL, 0);
-		chip *ch = make_chip(&w, &c);
-		cr_assert(frame_identical(ch, &w), "%s: the recording run", rec_modes[m]);
-		cr_assert_eq(ch->rec_state, REC_STORED);
-		chip_destroy(ch);
+		cr_assert_eq(record_frame(rec_modes[m], &w, &c), REC_STORED);
 		char msg[320];
-		ch = make_chip(&w, &c);
+		chip *ch = make_chip(&w, &c);
 		cr_assert(frame_identical(ch, &w), "%s: an undamaged replay", rec_modes[m]);
 		cr_assert_eq(ch->rec_state, REC_REPLAYED);
 		cr_assert_eq(chip_replay_bad(ch, msg, sizeof msg), 0, "%s: %s", rec_modes[m], msg);
@@ -277,16 +286,10 @@ Test(datapath, every_replayed_read_is_checked_timed_and_functional, .timeout = 3
 {
 	static const char *const rec_modes[] = {"functional", "sampled"};
 	for (int m = 0; m < 2; m++) {
-		char dir[64];
-		tu_tmpdir(dir, sizeof dir);
 		world w;
-		tu_load_world_cached(&w, NULL, NULL, NULL, dir);
 		saar_config c;
-		cfg_for(&c, 128, rec_modes[m], NULL, 0);
+		record_frame(rec_modes[m], &w, &c);
 		chip *ch = make_chip(&w, &c);
-		cr_assert(frame_identical(ch, &w), "%s: the recording run", rec_modes[m]);
-		chip_destroy(ch);
-		ch = make_chip(&w, &c);
 		next_tri(ch, 0);
 		cr_assert_not(frame_identical(ch, &w), "%s", rec_modes[m]);
 		cr_assert_eq(ch->rec_state, REC_REPLAYED, "%s", rec_modes[m]);
