@@ -18,10 +18,11 @@
  * touched (ms_image_at) skips the buffer: the fill copies the image's
  * bytes into the way, the bytes the miss would have read (they cannot
  * change while it is in flight), in one copy instead of two and long
- * after the read's prefetch (hier_access) brought them into the host's
- * cache, where the copy at the miss waited for them (docs/PERFORMANCE.md,
- * "Target 2"). Bypass reads and writes move their bytes from and to the
- * level below directly.
+ * after the miss's prefetch (walk) brought them into the host's cache,
+ * where the copy at the miss waited for them (docs/PERFORMANCE.md,
+ * "Target 2"); hits and merged misses read no image bytes, so nothing
+ * else is prefetched. Bypass reads and writes move their bytes from and
+ * to the level below directly.
  */
 #include "mem/hier.h"
 #include "mem/hier_level.h"
@@ -170,6 +171,10 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 			const uint8_t *img = l->msrc ? ms_image_at(h->ms, lo, lb) : NULL;
 			if (l->msrc)
 				l->msrc[m] = img;
+			if (img) { /* in the host's cache by the time it fills */
+				__builtin_prefetch(img);
+				__builtin_prefetch(img + lb - 1);
+			}
 			uint8_t *buf = h->ms && !img ? l->t.mbuf + (size_t)m * lb : NULL;
 			lower_read(h, t, l->type, lo, lb, buf, l1_filled, l, line);
 		}
@@ -262,11 +267,6 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	}
 	h->reads[type]++;
 	h->read_bytes[type] += r->bytes;
-	/* most reads miss the L1 on memory-bound views and then read the
-	 * image (sdram_read): its host cache miss now overlaps the tag
-	 * search's instead of following it */
-	if (h->ms)
-		ms_prefetch(h->ms, r->addr);
 	hreq *q = req_alloc(h);
 	if (!q)
 		return; /* out of memory: the unit never hears back (cannot happen in practice) */

@@ -74,13 +74,6 @@ static inline const uint8_t *ms_image_at(const mem_store *s, uint64_t addr, uint
 		return s->image + addr;
 	return NULL;
 }
-/* A hint to the host: addr's image bytes will be read soon (no effect on
- * what any read returns). */
-static inline void ms_prefetch(const mem_store *s, uint64_t addr)
-{
-	if (addr < s->image_size)
-		__builtin_prefetch(s->image + addr);
-}
 /* Stores n bytes of src at addr (addresses past the store are dropped);
  * src NULL: a write without data (a replayed spill), which changes
  * nothing. -1 when out of memory (s->oom is set). */
