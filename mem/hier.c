@@ -224,6 +224,9 @@ static void l1_filled(eng *e, void *ctx, uint64_t line)
 	hl1 *l = ctx;
 	hier *h = l->h;
 	uint64_t now = eng_now(e);
+	/* the set was last looked at when the line missed, long ago: its
+	 * tags and data indices come in together, not one after the other */
+	cache_prefetch_set(&l->t.c, line);
 	int m;
 	tc_wait *w = tcache_take(&l->t, line, &m);
 	uint32_t slot = cache_fill_mshr(&l->t.c, line, m, NULL);
