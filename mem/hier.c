@@ -14,8 +14,15 @@
  * at its lookup on a hit, and when its line fills on a miss; a miss reads
  * the whole line from below into its MSHR's buffer (SDRAM: the store;
  * with the VMA, the on-board line or its DMA), and the fill copies it into
- * the way. Bypass reads and writes move their bytes from and to the level
- * below directly.
+ * the way. With SDRAM below, a line of the image that no write has
+ * touched (ms_image_at) skips the buffer: the fill copies the image's
+ * bytes into the way, the bytes the miss would have read (they cannot
+ * change while it is in flight), in one copy instead of two and long
+ * after the miss's prefetch (walk) brought them into the host's cache,
+ * where the copy at the miss waited for them (docs/PERFORMANCE.md,
+ * "Target 2"); hits and merged misses read no image bytes, so nothing
+ * else is prefetched. Bypass reads and writes move their bytes from and
+ * to the level below directly.
  */
 #include "mem/hier.h"
 #include "mem/hier_level.h"
@@ -157,11 +164,25 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 			if (q->dst)
 				deliver(h, l, q, line, slot);
 			break;
-		case CACHE_MISS_NEW:
+		case CACHE_MISS_NEW: {
 			if (h->obs)
 				h->miss_t0[l->type][m] = t;
-			lower_read(h, t, l->type, lo, lb, h->ms ? l->t.mbuf + (size_t)m * lb : NULL,
-			           l1_filled, l, line);
+			/* an image line fills from the image: nothing to read now */
+			const uint8_t *img = l->msrc ? ms_image_at(h->ms, lo, lb) : NULL;
+			if (l->msrc)
+				l->msrc[m] = img;
+			if (img) { /* in the host's cache by the time it fills */
+				__builtin_prefetch(img);
+				__builtin_prefetch(img + lb - 1);
+				/* SDRAM's read without bytes (hier_sdram.c, sdram_read) is
+				 * the memory interface's request alone: made here, not
+				 * through the level's hook (a call of nine arguments) */
+				memif_submit(&h->mi, t, l->type, lo, lb, 0, l1_filled, l, line);
+			} else {
+				uint8_t *buf = h->ms ? l->t.mbuf + (size_t)m * lb : NULL;
+				lower_read(h, t, l->type, lo, lb, buf, l1_filled, l, line);
+			}
+		}
 			/* fall through */
 		case CACHE_MISS_MERGED: /* q waits on the MSHR */
 			q->pending++;
@@ -203,12 +224,18 @@ static void l1_filled(eng *e, void *ctx, uint64_t line)
 	hl1 *l = ctx;
 	hier *h = l->h;
 	uint64_t now = eng_now(e);
+	/* the set was last looked at when the line missed, long ago: its
+	 * tags and data indices come in together, not one after the other */
+	cache_prefetch_set(&l->t.c, line);
 	int m;
 	tc_wait *w = tcache_take(&l->t, line, &m);
 	uint32_t slot = cache_fill_mshr(&l->t.c, line, m, NULL);
 	uint8_t *d = m >= 0 ? l1_data(h, l, slot) : NULL;
-	if (d) /* the line arrived in the MSHR's buffer */
-		memcpy(d, l->t.mbuf + (size_t)m * l->t.c.p.line_bytes, l->t.c.p.line_bytes);
+	if (d) { /* the line: the image's bytes, or those in the MSHR's buffer */
+		uint32_t lb = l->t.c.p.line_bytes;
+		const uint8_t *src = l->msrc ? l->msrc[m] : NULL;
+		memcpy(d, src ? src : l->t.mbuf + (size_t)m * lb, lb);
+	}
 	if (h->obs && m >= 0) {
 		uint32_t lb = l->t.c.p.line_bytes;
 		mem_obs_ev ev = {MEM_OBS_L1_MISS, l->type, m,   0, h->miss_t0[l->type][m], now,
@@ -248,11 +275,6 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 	}
 	h->reads[type]++;
 	h->read_bytes[type] += r->bytes;
-	/* most reads miss the L1 on memory-bound views and then read the
-	 * image (sdram_read): its host cache miss now overlaps the tag
-	 * search's instead of following it */
-	if (h->ms)
-		ms_prefetch(h->ms, r->addr);
 	hreq *q = req_alloc(h);
 	if (!q)
 		return; /* out of memory: the unit never hears back (cannot happen in practice) */
@@ -420,8 +442,10 @@ static void hier_destroy(void *impl)
 		n = c->next;
 		free(c);
 	}
-	for (int t = 0; t < MEM_NTYPES; t++)
+	for (int t = 0; t < MEM_NTYPES; t++) {
 		free(h->miss_t0[t]);
+		free(h->l1[t].msrc);
+	}
 	free(h);
 }
 
@@ -543,6 +567,15 @@ int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_
 	for (int i = h->nstack - 1; i >= 0; i--)
 		if (h->stack[i]->init && h->stack[i]->init(h, hp, d))
 			goto fail;
+	/* SDRAM right below the L1s reads the store when a miss is sent:
+	 * image lines may fill from the image instead (walk, l1_filled) */
+	for (int t = 0; store && h->stack[0] == &hier_sdram_level && t < MEM_NTYPES; t++) {
+		hl1 *l = &h->l1[t];
+		if (!(l->msrc = calloc(l->t.c.p.mshrs, sizeof *l->msrc))) {
+			diag_set(d, "config", 0, 0, "out of memory");
+			goto fail;
+		}
+	}
 	p->model = &hier_model;
 	p->impl = h;
 	return 0;

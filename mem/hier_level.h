@@ -47,6 +47,10 @@ typedef struct hl1 {
 	hier *h;
 	int type;
 	tcache t; /* the cache, its MSHRs' waiters, stall FIFO and port */
+	/* per MSHR, with a store and SDRAM below: the image bytes its line
+	 * fills from (ms_image_at at the miss; NULL: the line came into the
+	 * MSHR's buffer, t.mbuf) */
+	const uint8_t **msrc;
 } hl1;
 
 typedef struct hchunk {

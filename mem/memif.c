@@ -125,24 +125,11 @@ static int pick(const memif *m, uint64_t now, uint64_t *next_ready)
  * the bank's open row decides between CAS only (hit), ACTIVATE + CAS
  * (the bank is precharged) and PRECHARGE + ACTIVATE + CAS (the same rules
  * as sdram.c's segment(), bus aside). All but the row comparison depends on
- * the bank alone, so one pick works it out once per bank it meets. */
+ * the bank alone, so one pick works it out once per bank it meets; the
+ * miss only when a miss may be the bank's pick. */
 typedef struct bank_start {
 	uint64_t open_row, hit, miss;
 } bank_start;
-
-static void bank_start_at(const sdram *sd, uint32_t b, uint64_t now, bank_start *o)
-{
-	const sdram_bank *k = &sd->bank[b];
-	uint64_t c = now > k->col_ok ? now : k->col_ok;
-	o->open_row = k->open_row;
-	o->hit = c + sd->t.cl;
-	if (k->open_row == SDRAM_NO_ROW) {
-		o->miss = c + sd->t.trcd + sd->t.cl;
-	} else {
-		uint64_t pre = c > k->pre_ok ? c : k->pre_ok;
-		o->miss = pre + sd->t.trp + sd->t.trcd + sd->t.cl;
-	}
-}
 
 /* Bank b's best window item at `now` under FR-FCFS, or MEMIF_NIL if none
  * is ready (*start: when its data could start). Every item of the bank
@@ -150,15 +137,11 @@ static void bank_start_at(const sdram *sd, uint32_t b, uint64_t now, bank_start 
  * smallest (start, seq) is the oldest ready row hit when hit < miss and
  * one is queued, else the oldest ready item: the walk, in submit order,
  * stops at the first ready hit, or at the first ready item when no hit can
- * beat it. Items not ready lower *next_ready (complete when none is ready). */
-static uint32_t bank_best(memif *m, uint32_t b, const bank_start *bs, uint64_t now, uint64_t *start,
-                          uint64_t *next_ready)
+ * beat it. Items not ready lower *next_ready (complete when none is ready).
+ * hits_win: a hit beats an older miss and one may be queued (bank_pick). */
+static uint32_t bank_best(memif *m, uint32_t b, const bank_start *bs, int hits_win, uint64_t now,
+                          uint64_t *start, uint64_t *next_ready)
 {
-	/* a hit beats an older miss; with no item in the open row's slot of
-	 * rowcnt there is no hit (else perhaps one: the walk goes on past the
-	 * first ready miss and finds out, the same pick either way) */
-	int hits_win = bs->open_row != SDRAM_NO_ROW &&
-	               m->rowcnt[b][bs->open_row & (MEMIF_ROW_SLOTS - 1)] && bs->hit < bs->miss;
 	uint32_t cand = MEMIF_NIL;
 	for (uint32_t i = m->bank[b].head; i != MEMIF_NIL; i = m->pool[i].bnext) {
 		const memif_item *it = &m->pool[i];
@@ -186,26 +169,70 @@ static uint32_t bank_best(memif *m, uint32_t b, const bank_start *bs, uint64_t n
 
 _Static_assert(MEMIF_NREQ *MEMIF_FRFCFS_WINDOW <= UINT8_MAX, "memif.rowcnt counts in bytes");
 
+/* The constant parts of a pick's start times (SDRAM timing, in ticks). */
+typedef struct pick_lat {
+	uint64_t cl, rcd_cl, rp_rcd_cl;
+} pick_lat;
+
+/* Bank b's best item as bank_best picks it, or MEMIF_NIL (none ready, or
+ * its row hits could not start before best_start); *start as there.
+ * Before the walk, the two picks nearly every bank ends with, decided
+ * from its oldest item alone (the window's items are nearly always ready:
+ * they are submitted for eng_now): a ready row hit (nothing in the bank
+ * starts sooner, and it is the oldest), and a ready miss when no hit can
+ * beat it (the oldest ready item). Always inlined into the pick's loop. */
+static inline __attribute__((always_inline)) uint32_t
+bank_pick(memif *m, uint32_t b, const pick_lat *pl, uint64_t now, uint64_t best_start,
+          uint64_t *start, uint64_t *next_ready)
+{
+	const sdram_bank *k = &m->sd->bank[b];
+	uint64_t c = now > k->col_ok ? now : k->col_ok;
+	bank_start bs = {k->open_row, c + pl->cl, 0};
+	if (bs.hit > best_start) /* not even its row hits start soon enough */
+		return MEMIF_NIL;
+	uint32_t i = m->bank[b].head;
+	const memif_item *it = &m->pool[i];
+	int ready = it->ready <= now;
+	if (ready && it->row == bs.open_row) {
+		*start = bs.hit;
+		return i;
+	}
+	if (bs.open_row == SDRAM_NO_ROW) {
+		bs.miss = c + pl->rcd_cl;
+	} else {
+		uint64_t pre = c > k->pre_ok ? c : k->pre_ok;
+		bs.miss = pre + pl->rp_rcd_cl;
+	}
+	/* a hit beats an older miss; with no item in the open row's slot of
+	 * rowcnt there is no hit (else perhaps one: the walk goes on past the
+	 * first ready miss and finds out, the same pick either way) */
+	int hits_win = bs.open_row != SDRAM_NO_ROW &&
+	               m->rowcnt[b][bs.open_row & (MEMIF_ROW_SLOTS - 1)] && bs.hit < bs.miss;
+	if (ready && !hits_win) {
+		*start = bs.miss;
+		return i;
+	}
+	return bank_best(m, b, &bs, hits_win, now, start, next_ready);
+}
+
 /* FR-FCFS: over the first MEMIF_FRFCFS_WINDOW requests of every queue,
  * the ready one whose data can start soonest (oldest on ties). Returns the
  * item (MEMIF_NIL if none is ready). This pick is the simulator's hottest
  * loop on memory-bound views (docs/PERFORMANCE.md, "Profile"): the window
  * items are kept in one list per bank, in submit order, so each bank's
- * best comes from bank_best without looking at every request, and a bank
+ * best comes from bank_pick without looking at every request, and a bank
  * whose row hits cannot start as soon as the best so far is skipped. */
 static uint32_t pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready)
 {
 	uint32_t best = MEMIF_NIL;
 	uint64_t best_start = UINT64_MAX, best_seq = UINT64_MAX;
+	const sdram_timing *T = &m->sd->t;
+	pick_lat pl = {T->cl, T->trcd + T->cl, T->trp + T->trcd + T->cl};
 	*next_ready = UINT64_MAX;
 	for (uint64_t used = m->banks_used; used; used &= used - 1) {
 		uint32_t b = (uint32_t)__builtin_ctzll(used);
-		bank_start bs;
-		bank_start_at(m->sd, b, now, &bs);
-		if (bs.hit > best_start)
-			continue;
 		uint64_t st = 0;
-		uint32_t i = bank_best(m, b, &bs, now, &st, next_ready);
+		uint32_t i = bank_pick(m, b, &pl, now, best_start, &st, next_ready);
 		if (i == MEMIF_NIL)
 			continue;
 		uint64_t seq = m->pool[i].seq;

@@ -19,6 +19,7 @@
 #ifndef SAAR_MEM_STORE_H
 #define SAAR_MEM_STORE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #define MS_PAGE_BITS 12u /* 4 KB pages */
@@ -61,12 +62,17 @@ static inline void ms_read(const mem_store *s, uint64_t addr, uint32_t n, void *
 	}
 	ms_read_any(s, addr, n, dst);
 }
-/* A hint to the host: addr's image bytes will be read soon (no effect on
- * what any read returns). */
-static inline void ms_prefetch(const mem_store *s, uint64_t addr)
+/* The image's own bytes for [addr, addr + n) when the store reads them
+ * there (inside the image, no byte in a written page), else NULL. A
+ * write makes a private copy of its page and the host changes the image
+ * only between frames (sim/chip.c, chip_anim_update), when no read is in
+ * flight, so until the frame ends these bytes stay what ms_read returns
+ * now: a reader may take them later (mem/hier.c, an L1 fill). */
+static inline const uint8_t *ms_image_at(const mem_store *s, uint64_t addr, uint32_t n)
 {
-	if (addr < s->image_size)
-		__builtin_prefetch(s->image + addr);
+	if (addr < s->image_size && n <= s->image_size - addr && addr + n <= s->low)
+		return s->image + addr;
+	return NULL;
 }
 /* Stores n bytes of src at addr (addresses past the store are dropped);
  * src NULL: a write without data (a replayed spill), which changes
