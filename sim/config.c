@@ -197,8 +197,9 @@ static const cfg_key keys_src[] = {
              "adds only the work of the tiles after them, as the warming run split its "
              "counts by tile (faster; the warming run counts every step by tile, about "
              "three times its time; where the warming run had not finished those tiles by "
-             "the next region's checkpoint, a relax); mixed = drain, but a relax before a "
-             "region that starts after a memory-bound chunk"},
+             "the next region's checkpoint, a relax); mixed = drain, but a relax after a "
+             "region that ends in a memory-bound chunk or before one that starts after "
+             "one"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

@@ -308,17 +308,22 @@ static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
  * next one at full checkpoint rs drains (sampling.jump): drain, when the
  * warming run had finished every packet of the tiles before `at` by rs
  * (else the restored slots would hold packets the drain finished, counted
- * twice); mixed, as drain but not before a region that starts after a
- * memory-bound chunk (the warming run's U tiles before rs): the regions
- * the relax runs into there measured the frame better than restored ones
- * (docs/fidelity.md "Stored warming"). */
+ * twice); mixed, as drain but not next to memory-bound work: after a
+ * region whose last U tiles, or before one whose U tiles before rs, the
+ * warming run calls memory bound. There a relax usually runs into the
+ * next region, which then starts from a chip that ran the frame, and
+ * restored regions measured the frame worse (docs/fidelity.md "Stored
+ * warming"). */
 static int jump_drains(chip *c, int f, int at, int rs)
 {
 	int jump = c->cfg.sampling.jump, U = c->fid.unit_tiles;
 	if (jump == CFG_JUMP_RELAX || !wm_done_by(c->warm, f, at, rs))
 		return 0;
-	return jump != CFG_JUMP_MIXED || rs - U < at ||
-	       !warm_piece(c, f, rs - U, rs, hier_merge_share(&c->mem)).hard;
+	if (jump == CFG_JUMP_DRAIN)
+		return 1;
+	double m = hier_merge_share(&c->mem);
+	return !(at - U >= 0 && warm_piece(c, f, at - U, at, m).hard) &&
+	       !(rs - U >= at && warm_piece(c, f, rs - U, rs, m).hard);
 }
 
 /* After a drain that ended at tile `at`, before the next region at rs:
