@@ -305,6 +305,45 @@ Test(warming, drain_counts_every_l1_request_once)
 	world_free(&w);
 }
 
+/* sampling.jump mixed drains only away from memory-bound work: with
+ * every chunk memory bound (sampling.hard_share tiny) it relaxes at every
+ * jump, figure for figure as relax; with none (hard_share 0, off) it
+ * drains wherever drain does. Catches mixed draining next to memory-bound
+ * work, and mixed never draining. */
+Test(warming, mixed_relaxes_next_to_memory_bound_work)
+{
+	char dir[256];
+	world w;
+	cached(&w, "spd:balls:2", dir, sizeof dir);
+	saar_config c;
+	config(&c, 256, 1);
+	c.sampling.offset = 0.17;
+	const double share[2] = {1e-9, 0};
+	const cfg_jump as[2] = {CFG_JUMP_RELAX, CFG_JUMP_DRAIN};
+	for (int k = 0; k < 2; k++) {
+		c.sampling.hard_share = share[k];
+		c.sampling.jump = CFG_JUMP_MIXED;
+		chip *m = tu_run_chip(&w, &c);
+		c.sampling.jump = as[k];
+		chip *o = tu_run_chip(&w, &c);
+		same_figures(m, o,
+		             k ? "no chunk memory bound: mixed as drain"
+		               : "every chunk memory bound: mixed as relax");
+		chip_destroy(m);
+		chip_destroy(o);
+	}
+	/* and the two differ on this frame (else the test shows nothing) */
+	c.sampling.hard_share = 0;
+	c.sampling.jump = CFG_JUMP_RELAX;
+	chip *r = tu_run_chip(&w, &c);
+	c.sampling.jump = CFG_JUMP_DRAIN;
+	chip *d = tu_run_chip(&w, &c);
+	cr_assert(r->frame_cycles[0] != d->frame_cycles[0], "relax and drain alike");
+	chip_destroy(r);
+	chip_destroy(d);
+	world_free(&w);
+}
+
 /* The jittered full checkpoints: one in each g_full tiles, on the light
  * grid, at places that differ from one to the next; the checkpoints at or
  * before and at or after a tile bracket it. */
