@@ -89,6 +89,13 @@ typedef struct wm_writer {
 	int32_t *handout;
 	const int32_t *from; /* the packet record's parents (pktrec.from) */
 	uint32_t npk;
+	/* the counters as runs of adjacent ones (cnt[at..at+n) at src[0..n)):
+	 * wm_attr reads them as arrays, not pointer by pointer */
+	struct wm_run {
+		const uint64_t *src;
+		uint32_t at, n;
+	} * runs;
+	size_t nruns;
 	int failed;
 } wm_writer;
 
