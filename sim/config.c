@@ -36,7 +36,7 @@ static const char *const thread_sched_names[] = {"round_robin", "oldest_first", 
 static const char *const accel_names[] = {"kd", "grid", NULL};
 static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
 static const char *const warming_names[] = {"auto", "full", "stored", NULL};
-static const char *const jump_names[] = {"mixed", "relax", "drain", NULL};
+static const char *const jump_names[] = {"relax", "drain", "mixed", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
 /* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
 static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};

@@ -245,23 +245,21 @@ Test(warming, counts_and_covers_as_cycle)
 	world_free(&w);
 }
 
-/* against_cycle on a shared view through the VMA (shared_view), with
- * sampling.jump `jump`. */
+/* against_cycle on a shared view through the VMA (shared_view). */
 static void view_against_cycle(const char *name, int width, int height, int tpr, double rate, int n,
-                               double pci_tol, int jump, const char *what)
+                               double pci_tol, const char *what)
 {
 	char dir[256];
 	world w;
 	saar_config c;
 	shared_view(&w, &c, dir, sizeof dir, name, width, height, tpr, rate, 1);
-	c.sampling.jump = (cfg_jump)jump;
 	against_cycle(&w, c, n, pci_tol, what);
 	world_free(&w);
 }
 
 Test(warming, conference_counts_and_covers_as_cycle, .timeout = 300)
 {
-	view_against_cycle("conference", 1024, 768, 16, 0.02, 2, 0.03, CFG_JUMP_MIXED,
+	view_against_cycle("conference", 1024, 768, 16, 0.02, 2, 0.03,
 	                   "Conference through the VMA, 16 threads");
 }
 
@@ -374,11 +372,10 @@ Test(warming, full_checkpoints_jitter_on_the_light_grid)
 
 /* Sponza through the VMA at one thread per RTP: the frame's PCI bytes
  * are its scene's lines, each fetched once; stored warming counts them
- * within 0.5% (8% low while the relax stopped early; every jump relaxes
- * here, sampling.jump relax). */
+ * within 0.5% (8% low while the relax stopped early). */
 Test(warming, sponza_one_thread_pci_as_cycle, .timeout = 300)
 {
-	view_against_cycle("sponza", 256, 192, 1, 0.05, 3, 0.005, CFG_JUMP_RELAX,
+	view_against_cycle("sponza", 256, 192, 1, 0.05, 3, 0.005,
 	                   "Sponza through the VMA, 1 thread");
 }
 
