@@ -36,6 +36,7 @@ static const char *const thread_sched_names[] = {"round_robin", "oldest_first", 
 static const char *const accel_names[] = {"kd", "grid", NULL};
 static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
 static const char *const warming_names[] = {"auto", "full", "stored", NULL};
+static const char *const jump_names[] = {"relax", "drain", "mixed", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
 /* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
 static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};
@@ -187,6 +188,18 @@ static const cfg_key keys_src[] = {
                                           "whose config differs only in its name, "
                                           "timing (latencies, SDRAM timings, MSHRs, scheduling) "
                                           "and sampling keys"},
+    {ENUM("sampling.jump", sampling.jump, jump_names), .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled with stored warming: how a region's packets in flight end "
+             "before the jump to the next region's checkpoint: relax = they go on "
+             "functionally, with new tiles, until every thread slot took two and a slot "
+             "wants a tile on the light grid (the chip then holds what the warming run "
+             "held); drain = they finish functionally, no tile handed out, and the jump "
+             "adds only the work of the tiles after them, as the warming run split its "
+             "counts by tile (faster; the warming run counts every step by tile, about "
+             "three times its time; where the warming run had not finished those tiles by "
+             "the next region's checkpoint, a relax); mixed = drain, but a relax after a "
+             "region that ends in a memory-bound chunk or before one that starts after "
+             "one"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

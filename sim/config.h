@@ -38,6 +38,8 @@ typedef enum { CFG_DEMAND_AUTO, CFG_DEMAND_MAX, CFG_DEMAND_LINEAR } cfg_demand_m
 /* auto: stored when the run has a world cache (chip_create resolves it:
  * a chip's cfg holds FULL or STORED) */
 typedef enum { CFG_WARMING_AUTO, CFG_WARMING_FULL, CFG_WARMING_STORED } cfg_warming;
+/* sampling.jump (docs/fidelity.md "Stored warming") */
+typedef enum { CFG_JUMP_RELAX, CFG_JUMP_DRAIN, CFG_JUMP_MIXED } cfg_jump;
 typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
 typedef enum { CFG_MEM_FIXED, CFG_MEM_HIERARCHY } cfg_mem_model;
 typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN, CFG_MEMIF_FRFCFS } cfg_memif_policy;
@@ -153,6 +155,7 @@ typedef struct saar_config {
 		double sdram_factor; /* k on SDRAM time in the demand; 0 = fitted per frame */
 		cfg_demand_model demand_model; /* how a chunk's demand follows its resources */
 		cfg_warming warming; /* functional stretches run (full), restored (stored), auto */
+		cfg_jump jump;       /* stored: how a region's packets end before a jump */
 	} sampling;
 } saar_config;
 

@@ -8,6 +8,9 @@
  *   head       wm_head
  *   light      frames x nlight records: demand (WM_NDEM doubles), the
  *              on-board-cache hit ticks, the counters (ncnt uint64)
+ *   done       frames x nlight records as light's, of the work of the
+ *              tiles before each checkpoint's (wm_attr), the demand
+ *              computed from their counters
  *   offsets    frames x nfull uint64: each full checkpoint's offset
  *   full       per full checkpoint: wm_fhead, the slots (mode_replay_state, turn
  *              order), per RTP its queue length then the queued packet
@@ -28,14 +31,14 @@
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
 
-#define WM_MAGIC "saarwm03"
+#define WM_MAGIC "saarwm04"
 
 typedef struct wm_head {
 	char magic[8];
 	int32_t frames, ntiles, g_light, g_full, nlight, nfull, nslots, nrtp;
 	int32_t l2_sets, l2_ways;
 	uint64_t whole_bytes; /* hier_ckpt_bytes: the caches stored whole */
-	uint64_t ncnt, light_at, offs_at, full_at, full_bytes;
+	uint64_t ncnt, light_at, done_at, offs_at, full_at, full_bytes;
 } wm_head;
 
 typedef struct wm_fhead {
@@ -118,7 +121,31 @@ int wm_is_full(int g_light, int g_full, int tile)
 
 /* ---- writing ---- */
 
-int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full)
+/* Four counters at once (GCC's vector extension: AVX2 where the build
+ * targets it, else pairs of SSE2 operations); wraparound sums, as uint64_t. */
+typedef uint64_t u64x4 __attribute__((vector_size(32)));
+
+/* w->runs from w->cnt: the counters come in 17 runs of adjacent ones on
+ * the standard chip (376 counters), so wm_attr's pass over them at every
+ * functional step reads arrays instead of chasing a pointer each. */
+static int make_runs(wm_writer *w)
+{
+	size_t n = 0;
+	for (size_t i = 0; i < w->ncnt; i++)
+		n += i == 0 || w->cnt[i] != w->cnt[i - 1] + 1;
+	w->runs = malloc((n ? n : 1) * sizeof *w->runs);
+	if (!w->runs)
+		return -1;
+	w->nruns = 0;
+	for (size_t i = 0; i < w->ncnt; i++) {
+		if (i == 0 || w->cnt[i] != w->cnt[i - 1] + 1)
+			w->runs[w->nruns++] = (struct wm_run){w->cnt[i], (uint32_t)i, 0};
+		w->runs[w->nruns - 1].n++;
+	}
+	return 0;
+}
+
+int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full, int done)
 {
 	memset(w, 0, sizeof *w);
 	w->frames = c->cfg.frame.frames;
@@ -133,6 +160,14 @@ int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full)
 	w->foff = malloc((size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
 	if (w->foff) /* a checkpoint jittered past the frame's end is never written */
 		memset(w->foff, 0xff, (size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
+	if (done) {
+		size_t nd = (size_t)w->frames * (size_t)w->nlight * (1 + w->ncnt);
+		w->done = calloc(nd ? nd : 1, sizeof *w->done);
+		w->snap = calloc(1 + w->ncnt, sizeof *w->snap);
+		w->handout = malloc((size_t)w->ntiles * sizeof *w->handout);
+		if (!w->done || !w->snap || !w->handout || !w->cnt || make_runs(w))
+			w->failed = 1;
+	}
 	cache *l2 = onboard(c);
 	if (l2 && cache_track(l2))
 		w->failed = 1;
@@ -149,7 +184,74 @@ void wm_writer_free(wm_writer *w)
 	free(w->light);
 	free(w->foff);
 	free(w->full);
+	free(w->done);
+	free(w->snap);
+	free(w->handout);
+	free(w->runs);
 	memset(w, 0, sizeof *w);
+}
+
+/* The on-board-cache hit ticks and the counters now into v (1 + ncnt). */
+static void read_counts(wm_writer *w, chip *c, uint64_t *v)
+{
+	v[0] = hier_is(&c->mem) ? hier_l2hit_ticks(&c->mem) : 0;
+	for (size_t i = 0; i < w->ncnt; i++)
+		v[1 + i] = *w->cnt[i];
+}
+
+void wm_attr_take(wm_writer *w, chip *c, int32_t rec, int at)
+{
+	if (!w->from && c->md.in) { /* the record is opened as the run starts */
+		w->from = c->md.in->from;
+		w->npk = c->md.in->npk;
+	}
+	if (w->failed || !w->handout || rec < 0 || (uint32_t)rec >= w->npk || w->from[rec] >= 0)
+		return;
+	int tile = -1 - w->from[rec];
+	if (tile < w->ntiles)
+		w->handout[tile] = at;
+}
+
+void wm_attr(wm_writer *w, chip *c, int32_t rec)
+{
+	int frame = c->frames_done;
+	if (w->failed || !w->done || rec < 0 || (uint32_t)rec >= w->npk || frame >= w->frames)
+		return;
+	/* the primary packet the stream descends from (parents come first) */
+	int32_t p = rec;
+	for (int depth = 0; w->from[p] >= 0; depth++) {
+		if (depth > 4096 || (uint32_t)w->from[p] >= w->npk)
+			return;
+		p = w->from[p];
+	}
+	int tile = -1 - w->from[p];
+	if (tile >= w->ntiles)
+		return;
+	uint64_t *d = w->done + ((size_t)frame * (size_t)w->nlight +
+	                         (size_t)(w->handout[tile] / w->g_light)) *
+	                            (1 + w->ncnt);
+	uint64_t l2 = hier_is(&c->mem) ? hier_l2hit_ticks(&c->mem) : 0;
+	d[0] += l2 - w->snap[0];
+	w->snap[0] = l2;
+	uint64_t *dd = d + 1, *sn = w->snap + 1;
+	for (size_t r = 0; r < w->nruns; r++) {
+		const uint64_t *v = w->runs[r].src;
+		uint32_t at = w->runs[r].at, n = w->runs[r].n, j = 0;
+		for (; j + 4 <= n; j += 4) { /* four at a time (the same sums) */
+			u64x4 x, s0, a;
+			memcpy(&x, v + j, sizeof x);
+			memcpy(&s0, sn + at + j, sizeof s0);
+			memcpy(&a, dd + at + j, sizeof a);
+			a += x - s0;
+			memcpy(dd + at + j, &a, sizeof a);
+			memcpy(sn + at + j, &x, sizeof x);
+		}
+		for (; j < n; j++) {
+			uint64_t x = v[j];
+			dd[at + j] += x - sn[at + j];
+			sn[at + j] = x;
+		}
+	}
 }
 
 void wm_put_light(wm_writer *w, chip *c, int frame, int tile, const double *dem)
@@ -161,9 +263,58 @@ void wm_put_light(wm_writer *w, chip *c, int frame, int tile, const double *dem)
 	                            w->lsize;
 	memcpy(p, dem, sizeof(double) * WM_NDEM);
 	uint64_t *u = (uint64_t *)(void *)(p + sizeof(double) * WM_NDEM);
-	u[0] = hier_is(&c->mem) ? hier_l2hit_ticks(&c->mem) : 0;
+	read_counts(w, c, u);
+	/* the frame's first tile: what was counted before it stays out of
+	 * its tiles' work (the done records start from this one) */
+	if (tile == 0 && w->snap)
+		memcpy(w->snap, u, (1 + w->ncnt) * sizeof *u);
+}
+
+/* The done records of every frame (see the layout above) into out: the
+ * counts of the frame's first light checkpoint plus the work of the tiles
+ * before each, and the demand chip_demand makes of those counters (the
+ * chip's counters are set to them for it, then put back). Maxima keep
+ * the light record's value. */
+static void put_done(wm_writer *w, chip *c, uint8_t *out)
+{
+	size_t nv = 1 + w->ncnt;
+	uint64_t *keep = malloc(nv * sizeof *keep), *sum = malloc(nv * sizeof *sum);
+	if (!keep || !sum) {
+		w->failed = 1;
+		free(keep);
+		free(sum);
+		return;
+	}
+	read_counts(w, c, keep);
+	for (int f = 0; f < w->frames; f++) {
+		size_t base = (size_t)f * (size_t)w->nlight;
+		memcpy(sum, w->light + base * w->lsize + sizeof(double) * WM_NDEM,
+		       nv * sizeof *sum);
+		for (int k = 0; k < w->nlight; k++) {
+			const uint8_t *lp = w->light + (base + (size_t)k) * w->lsize;
+			uint8_t *p = out + (base + (size_t)k) * w->lsize;
+			uint64_t *u = (uint64_t *)(void *)(p + sizeof(double) * WM_NDEM);
+			const uint64_t *lu =
+			    (const uint64_t *)(const void *)(lp + sizeof(double) * WM_NDEM);
+			for (size_t i = 0; i < nv; i++)
+				u[i] = i > 0 && (w->cnt[i - 1] == c->env.c[C_MAX_SP] ||
+				                 w->cnt[i - 1] == c->env.c[C_MAX_QUEUE])
+				           ? lu[i]
+				           : sum[i];
+			for (size_t i = 0; i < w->ncnt; i++)
+				*w->cnt[i] = u[1 + i];
+			double dem[WM_NDEM];
+			chip_demand(c, dem);
+			memcpy(p, dem, sizeof dem);
+			const uint64_t *t = w->done + (base + (size_t)k) * nv;
+			for (size_t i = 0; i < nv; i++)
+				sum[i] += t[i];
+		}
+	}
 	for (size_t i = 0; i < w->ncnt; i++)
-		u[1 + i] = *w->cnt[i];
+		*w->cnt[i] = keep[1 + i];
+	free(keep);
+	free(sum);
 }
 
 /* Room for n more bytes of full checkpoints (8-byte aligned). */
@@ -262,7 +413,7 @@ static void geometry(chip *c, wm_head *h);
 
 int wm_writer_finish(wm_writer *w, chip *c, void **out, size_t *n)
 {
-	if (w->failed)
+	if (w->failed || (w->done && !w->from))
 		return -1;
 	wm_head h;
 	memset(&h, 0, sizeof h);
@@ -277,7 +428,8 @@ int wm_writer_finish(wm_writer *w, chip *c, void **out, size_t *n)
 	size_t nl = (size_t)w->frames * (size_t)w->nlight * w->lsize,
 	       no = (size_t)w->frames * (size_t)w->nfull * sizeof(uint64_t);
 	h.light_at = pad8(sizeof h);
-	h.offs_at = h.light_at + nl;
+	h.done_at = h.light_at + nl;
+	h.offs_at = h.done_at + (w->done ? nl : 0);
 	h.full_at = h.offs_at + no;
 	h.full_bytes = w->nfullb;
 	geometry(c, &h); /* wm_open checks it against the reader's */
@@ -287,6 +439,12 @@ int wm_writer_finish(wm_writer *w, chip *c, void **out, size_t *n)
 		return -1;
 	memcpy(b, &h, sizeof h);
 	memcpy(b + h.light_at, w->light, nl);
+	if (w->done)
+		put_done(w, c, b + h.done_at);
+	if (w->failed) {
+		free(b);
+		return -1;
+	}
 	memcpy(b + h.offs_at, w->foff, no);
 	memcpy(b + h.full_at, w->full, w->nfullb);
 	*out = b;
@@ -344,7 +502,9 @@ int wm_open(wm *r, const void *b, size_t n, chip *c)
 	r->lsize = sizeof(double) * WM_NDEM + sizeof(uint64_t) * (1 + ncnt);
 	size_t nl = (size_t)h.frames * (size_t)h.nlight * r->lsize,
 	       no = (size_t)h.frames * (size_t)h.nfull * sizeof(uint64_t);
-	if (h.light_at != pad8(sizeof h) || h.offs_at != h.light_at + nl ||
+	r->has_done = h.offs_at != h.done_at;
+	if (h.light_at != pad8(sizeof h) || h.done_at != h.light_at + nl ||
+	    (h.offs_at != h.done_at && h.offs_at != h.done_at + nl) ||
 	    h.full_at != h.offs_at + no || h.full_at + h.full_bytes != n)
 		return -1;
 	r->cnt = counters_of(c, &ncnt);
@@ -371,10 +531,11 @@ fail:
 	return -1;
 }
 
-static const uint8_t *light_at(const wm *r, int frame, int tile)
+/* The light (done 0) or done (1) record at tile of frame. */
+static const uint8_t *light_at(const wm *r, int frame, int tile, int done)
 {
 	const wm_head *h = (const wm_head *)(const void *)r->b;
-	return r->b + h->light_at +
+	return r->b + (done ? h->done_at : h->light_at) +
 	       ((size_t)frame * (size_t)r->nlight +
 	        (size_t)light_index(r->ntiles, r->g_light, tile)) *
 	           r->lsize;
@@ -382,7 +543,14 @@ static const uint8_t *light_at(const wm *r, int frame, int tile)
 
 const double *wm_demand(const wm *r, int frame, int tile, uint64_t *l2hit)
 {
-	const uint8_t *p = light_at(r, frame, tile);
+	const uint8_t *p = light_at(r, frame, tile, 0);
+	memcpy(l2hit, p + sizeof(double) * WM_NDEM, sizeof *l2hit);
+	return (const double *)(const void *)p;
+}
+
+const double *wm_demand_done(const wm *r, int frame, int tile, uint64_t *l2hit)
+{
+	const uint8_t *p = light_at(r, frame, tile, 1);
 	memcpy(l2hit, p + sizeof(double) * WM_NDEM, sizeof *l2hit);
 	return (const double *)(const void *)p;
 }
@@ -401,9 +569,25 @@ int wm_full_above(const wm *r, int tile)
 	return t < r->ntiles ? t : r->ntiles;
 }
 
-void wm_region_end(wm *r, int frame, int tile)
+int wm_done_by(const wm *r, int frame, int at, int x)
 {
-	const uint8_t *p = light_at(r, frame, tile) + sizeof(double) * WM_NDEM;
+	if (!r->has_done)
+		return 0;
+	const uint8_t *a = light_at(r, frame, at, 1) + sizeof(double) * WM_NDEM,
+	              *b = light_at(r, frame, x, 0) + sizeof(double) * WM_NDEM;
+	for (size_t i = 0; i <= r->ncnt; i++) {
+		uint64_t u, v;
+		memcpy(&u, a + 8 * i, 8);
+		memcpy(&v, b + 8 * i, 8);
+		if (u > v && (i == 0 || !r->is_max[i - 1]))
+			return 0;
+	}
+	return 1;
+}
+
+void wm_region_end(wm *r, int frame, int tile, int done)
+{
+	const uint8_t *p = light_at(r, frame, tile, done) + sizeof(double) * WM_NDEM;
 	memcpy(&r->prev_l2hit, p, 8);
 	memcpy(r->prev, p + 8, r->ncnt * sizeof *r->prev);
 }
@@ -552,7 +736,7 @@ int wm_restore(wm *r, chip *c, int frame, int tile, double merge_share)
 	chip_resume_at(c, tile, fh.next_age);
 	/* the counters: what the warming run counted since the last region's
 	 * end; maxima take the larger */
-	const uint8_t *lp = light_at(r, frame, tile) + sizeof(double) * WM_NDEM;
+	const uint8_t *lp = light_at(r, frame, tile, 0) + sizeof(double) * WM_NDEM;
 	uint64_t l2hit;
 	memcpy(&l2hit, lp, 8);
 	for (size_t i = 0; i < r->ncnt; i++) {

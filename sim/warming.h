@@ -31,6 +31,15 @@
  * forward through the diffs into a warm image kept by the reader, and
  * only the sets a diff or the region changed are copied into the chip.
  *
+ * With done records (sampling.jump drain or mixed; their own file) the
+ * warming run also splits its counts by tile: every step's counts go to
+ * the tile its packet descends from (wm_attr), and the done record at a
+ * light checkpoint holds the work of the tiles before it, whenever the
+ * warming run did it. A sampled run that drained a region's packets (every
+ * tile before the checkpoint finished) adds from there only the work of
+ * the tiles after them; from the plain light record it would count again
+ * what the warming run's packets in flight there still had to do.
+ *
  * The file format is this build's own (its key names the program, the
  * frame and every config key functional processing reads); a file that
  * does not match the chip is rebuilt.
@@ -72,20 +81,44 @@ typedef struct wm_writer {
 	uint64_t *foff; /* frames x nfull offsets into full */
 	uint8_t *full;  /* full checkpoints, appended */
 	size_t nfullb, capfull;
+	/* the work of each tile's packets (wm_attr): per frame and light
+	 * bucket (tiles [b g_light, (b + 1) g_light) in hand-out order), the
+	 * on-board-cache hit ticks and every counter they moved; the values
+	 * at the last attribution; per tile (row-major), its hand-out index */
+	uint64_t *done, *snap;
+	int32_t *handout;
+	const int32_t *from; /* the packet record's parents (pktrec.from) */
+	uint32_t npk;
+	/* the counters as runs of adjacent ones (cnt[at..at+n) at src[0..n)):
+	 * wm_attr reads them as arrays, not pointer by pointer */
+	struct wm_run {
+		const uint64_t *src;
+		uint32_t at, n;
+	} * runs;
+	size_t nruns;
 	int failed;
 } wm_writer;
 
 /* For chip c (functional, replaying a packet record; every slot's
  * packet must be a replayed one): checkpoints every g_light tiles and
- * every g_full (a multiple of g_light) in full. -1 when out of memory or
- * the chip's caches cannot be stored. */
-int wm_writer_init(wm_writer *w, struct chip *c, int g_light, int g_full);
+ * every g_full (a multiple of g_light) in full; done: also the done
+ * records (wm_attr, wm_demand_done). -1 when out of memory or the chip's
+ * caches cannot be stored. */
+int wm_writer_init(wm_writer *w, struct chip *c, int g_light, int g_full, int done);
 /* A light checkpoint at hand-out index tile of frame (tile: a multiple
  * of g_light, or the frame's tile count), dem: chip_demand now. */
 void wm_put_light(wm_writer *w, struct chip *c, int frame, int tile, const double *dem);
 /* A full checkpoint at tile (wm_is_full, below the tile count); the
  * chip's slots must be stopped between steps. */
 void wm_put_full(wm_writer *w, struct chip *c, int frame, int tile);
+/* Packet stream rec, a tile's primary packet, was handed out as index
+ * `at` of the frame. */
+void wm_attr_take(wm_writer *w, struct chip *c, int32_t rec, int at);
+/* What the chip counted since the last attribution goes to the tile of
+ * packet stream rec (its primary's, through the record's parents; rec < 0:
+ * nobody's, it stays with the next). The warming run's functional
+ * driver (mode_func_range) calls it after every hand-out and step. */
+void wm_attr(wm_writer *w, struct chip *c, int32_t rec);
 /* The stored form, one malloc'd block. -1 when out of memory. */
 int wm_writer_finish(wm_writer *w, struct chip *c, void **out, size_t *n);
 void wm_writer_free(wm_writer *w);
@@ -99,6 +132,7 @@ typedef struct wm {
 	size_t ncnt, lsize;
 	uint64_t **cnt;  /* the chip's counters */
 	uint8_t *is_max; /* per counter: a maximum, not a sum */
+	int has_done;    /* the done records are stored (wm_demand_done) */
 	uint64_t *prev;  /* the counters at the last region's end */
 	uint64_t prev_l2hit;
 	/* the on-board cache at the last full checkpoint applied (each set
@@ -119,9 +153,19 @@ void wm_close(wm *r);
  * count): the demand so far (WM_NDEM) and *l2hit, the on-board-cache hit
  * ticks so far. */
 const double *wm_demand(const wm *r, int frame, int tile, uint64_t *l2hit);
+/* As wm_demand, but of the work of the tiles before tile, whenever the
+ * warming run did it (their packets in flight at the checkpoint
+ * finished): the warming run's counts split by tile (wm_attr). */
+const double *wm_demand_done(const wm *r, int frame, int tile, uint64_t *l2hit);
+/* Whether the warming run had finished every packet of the tiles before
+ * tile `at` by the light checkpoint at tile x: its counts at x hold all
+ * of their work (wm_demand_done's counts at `at`), counter by counter. */
+int wm_done_by(const wm *r, int frame, int at, int x);
 /* A region ended at tile (on the light grid): the next restore adds what
- * the warming run counted from there. */
-void wm_region_end(wm *r, int frame, int tile);
+ * the warming run counted from there; done: the chip finished every
+ * packet of the tiles before it (a drain), and the next restore adds only
+ * the work of the tiles from there on (wm_demand_done's counts). */
+void wm_region_end(wm *r, int frame, int tile, int done);
 /* The tile of the last full checkpoint at or before tile (0 for tiles
  * before the first jittered one), and of the first at or after it (the
  * tile count when there is none). */

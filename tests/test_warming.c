@@ -18,6 +18,9 @@
  * started on a grid of plain multiples of 1/64 of the frame, so units
  * sampled the same places of the tile order's blocks (Conference: +1.3%
  * at every offset). Full checkpoints are jittered against the second.
+ * With sampling.jump drain a region's packets finish before the jump and
+ * the gap adds the work of the tiles after them, split by tile in the
+ * warming run: every L1 request is then counted once, as cycle does.
  */
 #include <math.h>
 #include <stdio.h>
@@ -258,6 +261,85 @@ Test(warming, conference_counts_and_covers_as_cycle, .timeout = 300)
 {
 	view_against_cycle("conference", 1024, 768, 16, 0.02, 2, 0.03,
 	                   "Conference through the VMA, 16 threads");
+}
+
+/* Every L1 request of a frame counted once: the L1 requests are the
+ * packets' recorded reads, the same whatever the timing, and stored
+ * warming's jump counts each tile's once. The region's packets in flight
+ * drain before the jump, and the gap adds the work of the tiles after
+ * it, as the warming run split its counts by tile (wm_demand_done), not
+ * what it counted after its checkpoint there, which holds the rest of
+ * the packets it had in flight (the drain did those already: the
+ * mistake this catches, as well as a tile's work put in the wrong light
+ * bucket). The cycle run's requests, exactly, at three offsets. */
+Test(warming, drain_counts_every_l1_request_once)
+{
+	char dir[256];
+	world w;
+	cached(&w, "spd:balls:2", dir, sizeof dir);
+	saar_config c;
+	config(&c, 256, 1);
+	c.sampling.jump = CFG_JUMP_DRAIN;
+	saar_config k = c;
+	k.fidelity = CFG_FIDELITY_CYCLE;
+	chip *t = tu_run_chip(&w, &k);
+	hier_stats ht, hs;
+	cr_assert_eq(hier_get_stats(&t->mem, &ht), 0);
+	for (int o = 0; o < 3; o++) {
+		c.sampling.offset = (o + 0.5) / 3;
+		chip *s = tu_run_chip(&w, &c);
+		cr_assert(s->warm_state == WARM_BUILT || s->warm_state == WARM_LOADED, "%s",
+		          chip_warm_name(s->warm_state));
+		cr_assert_gt(s->fid.functional_tiles, 0);
+		cr_assert_eq(hier_get_stats(&s->mem, &hs), 0);
+		for (int ty = 0; ty < MEM_NTYPES; ty++)
+			cr_assert_eq(hs.reads[ty], ht.reads[ty],
+			             "offset %.2f, type %d: %llu L1 requests, cycle %llu",
+			             c.sampling.offset, ty, (unsigned long long)hs.reads[ty],
+			             (unsigned long long)ht.reads[ty]);
+		chip_destroy(s);
+	}
+	chip_destroy(t);
+	world_free(&w);
+}
+
+/* sampling.jump mixed drains only away from memory-bound work: with
+ * every chunk memory bound (sampling.hard_share tiny) it relaxes at every
+ * jump, figure for figure as relax; with none (hard_share 0, off) it
+ * drains wherever drain does. Catches mixed draining next to memory-bound
+ * work, and mixed never draining. */
+Test(warming, mixed_relaxes_next_to_memory_bound_work)
+{
+	char dir[256];
+	world w;
+	cached(&w, "spd:balls:2", dir, sizeof dir);
+	saar_config c;
+	config(&c, 256, 1);
+	c.sampling.offset = 0.17;
+	const double share[2] = {1e-9, 0};
+	const cfg_jump as[2] = {CFG_JUMP_RELAX, CFG_JUMP_DRAIN};
+	for (int k = 0; k < 2; k++) {
+		c.sampling.hard_share = share[k];
+		c.sampling.jump = CFG_JUMP_MIXED;
+		chip *m = tu_run_chip(&w, &c);
+		c.sampling.jump = as[k];
+		chip *o = tu_run_chip(&w, &c);
+		same_figures(m, o,
+		             k ? "no chunk memory bound: mixed as drain"
+		               : "every chunk memory bound: mixed as relax");
+		chip_destroy(m);
+		chip_destroy(o);
+	}
+	/* and the two differ on this frame (else the test shows nothing) */
+	c.sampling.hard_share = 0;
+	c.sampling.jump = CFG_JUMP_RELAX;
+	chip *r = tu_run_chip(&w, &c);
+	c.sampling.jump = CFG_JUMP_DRAIN;
+	chip *d = tu_run_chip(&w, &c);
+	cr_assert(r->frame_cycles[0] != d->frame_cycles[0], "relax and drain alike");
+	chip_destroy(r);
+	chip_destroy(d);
+	world_free(&w);
 }
 
 /* The jittered full checkpoints: one in each g_full tiles, on the light

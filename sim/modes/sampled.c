@@ -134,6 +134,9 @@ int mode_func_range(chip *c, int end, int mode)
 		c->live[n / 64] = (1ull << (n % 64)) - 1;
 	memset(c->park_n, 0, (size_t)c->nrtp * sizeof *c->park_n);
 	int relaxed = 0, stop = 0;
+	/* a warming run with done records: every count goes to its packet's
+	 * tile (wm_attr) */
+	wm_writer *wa = c->wcap && c->wcap->done ? c->wcap : NULL;
 	if (mode == FR_RELAX)
 		memset(c->relax_n, 0, (size_t)n * sizeof *c->relax_n);
 	mode_set_func(&c->md, 1);
@@ -166,7 +169,14 @@ int mode_func_range(chip *c, int end, int mode)
 					break;
 				}
 				int had = given;
-				if (!func_give(c, t, end, &given)) {
+				int ok = func_give(c, t, end, &given);
+				if (wa && ok) {
+					if (given != had)
+						wm_attr_take(wa, c, mode_slot(t)->rec,
+						             c->tiles_given - 1);
+					wm_attr(wa, c, mode_slot(t)->rec);
+				}
+				if (!ok) {
 					/* no tile is left (`end` only comes closer) and
 					 * its RTP's queue is empty: until the RTP queues
 					 * a packet, every visit would do nothing, so the
@@ -194,7 +204,10 @@ int mode_func_range(chip *c, int end, int mode)
 					__builtin_prefetch(rp + 32);
 				}
 			}
+			int32_t rec = mode_slot(t)->rec;
 			busy |= mode_func_step(t);
+			if (wa)
+				wm_attr(wa, c, rec);
 			/* packets it queued (functional: only a step of its
 			 * RTP's slots queues) bring that RTP's parked slots
 			 * back: those ahead of i in this pass, the others in
@@ -270,17 +283,98 @@ static void sampled_region(chip *c, int j, int tail)
 	account(F, chip_piece(c, de, r1), !tail);
 }
 
+/* The warming run's demand at the light checkpoint at tile (done: of the
+ * tiles before it, wm_demand_done), its SDRAM demand less the share m of
+ * on-board-cache hits a timed chip merges. */
+static void warm_dem(chip *c, int f, int tile, double m, int done, double *d)
+{
+	uint64_t h;
+	memcpy(d, done ? wm_demand_done(c->warm, f, tile, &h) : wm_demand(c->warm, f, tile, &h),
+	       RES_N * sizeof *d);
+	d[RES_SDRAM] -= m * (double)h / (double)c->clk.period;
+}
+
 /* A piece of the warming run between two light checkpoints, its SDRAM
  * demand less the share m of on-board-cache hits a timed chip merges. */
 static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
 {
-	double d0[RES_N], d1[RES_N], per = (double)c->clk.period;
-	uint64_t h0, h1;
-	memcpy(d0, wm_demand(c->warm, f, a, &h0), sizeof d0);
-	memcpy(d1, wm_demand(c->warm, f, b, &h1), sizeof d1);
-	d0[RES_SDRAM] -= m * (double)h0 / per;
-	d1[RES_SDRAM] -= m * (double)h1 / per;
+	double d0[RES_N], d1[RES_N];
+	warm_dem(c, f, a, m, 0, d0);
+	warm_dem(c, f, b, m, 0, d1);
 	return chip_piece(c, d0, d1);
+}
+
+/* Whether the stretch between a region that ended at tile `at` and the
+ * next one at full checkpoint rs drains (sampling.jump): drain, when the
+ * warming run had finished every packet of the tiles before `at` by rs
+ * (else the restored slots would hold packets the drain finished, counted
+ * twice); mixed, as drain but not next to memory-bound work: after a
+ * region whose last U tiles, or before one whose U tiles before rs, the
+ * warming run calls memory bound. There a relax usually runs into the
+ * next region, which then starts from a chip that ran the frame, and
+ * restored regions measured the frame worse (docs/fidelity.md "Stored
+ * warming"). */
+static int jump_drains(chip *c, int f, int at, int rs)
+{
+	int jump = c->cfg.sampling.jump, U = c->fid.unit_tiles;
+	if (jump == CFG_JUMP_RELAX || !wm_done_by(c->warm, f, at, rs))
+		return 0;
+	if (jump == CFG_JUMP_DRAIN)
+		return 1;
+	double m = hier_merge_share(&c->mem);
+	return !(at - U >= 0 && warm_piece(c, f, at - U, at, m).hard) &&
+	       !(rs - U >= at && warm_piece(c, f, rs - U, rs, m).hard);
+}
+
+/* After a drain that ended at tile `at`, before the next region at rs:
+ * an extra region at the first full checkpoint x that ends a memory-bound
+ * chunk of U tiles (the warming run's) where extra_due lets one start and
+ * the warming run had finished the tiles before `at` (jump_drains): where
+ * the relax would have met it. Returns the next region's start, *extra
+ * set when it is an extra one. */
+static int drained_extra(chip *c, int f, int at, int rs, double m, int *extra)
+{
+	int U = c->fid.unit_tiles;
+	for (int x = wm_full_above(c->warm, at + 1); x < rs; x = wm_full_above(c->warm, x + 1))
+		if (x - U >= at && wm_done_by(c->warm, f, at, x) &&
+		    extra_due(&c->fid, warm_piece(c, f, x - U, x, m).hard, x, x, rs)) {
+			*extra = 1;
+			return x;
+		}
+	return rs;
+}
+
+/* The gap [at, *rs): the warming run's chunks of U tiles into the
+ * estimate. After a relax (dd NULL) a memory-bound one brings an extra
+ * region at the next full checkpoint after it, as mode_func_range does
+ * (*rs moves there, *extra set). After a drain (dd: its demand) the
+ * first chunk starts from the work of the tiles before `at`, less what
+ * the drain did (the timed chip's packets in flight at its end). */
+static void gap_chunks(chip *c, int f, int at, int *rs, double m, const double *dd, int *extra)
+{
+	chip_fidelity *F = &c->fid;
+	int U = F->unit_tiles;
+	for (int a = at; a < *rs;) {
+		int e = a + U < *rs ? a + U : *rs;
+		smp_piece p = warm_piece(c, f, a, e, m);
+		if (a == at && dd) {
+			double d0[RES_N], d1[RES_N];
+			warm_dem(c, f, at, m, 1, d0);
+			warm_dem(c, f, e, m, 0, d1);
+			for (int k = 0; k < RES_N; k++)
+				d0[k] -= dd[k];
+			p = chip_piece(c, d0, d1);
+		}
+		int hard = account(F, p, 1), xs = wm_full_above(c->warm, e);
+		if (!dd && e - a == U && extra_due(F, hard, e, xs, *rs)) {
+			if (xs > e)
+				account(F, warm_piece(c, f, e, xs, m), 1);
+			*rs = xs;
+			*extra = 1;
+			return;
+		}
+		a = e;
+	}
 }
 
 /* A sampled frame with stored warming (docs/fidelity.md "Stored
@@ -305,45 +399,54 @@ void mode_sampled_frame_stored(chip *c, int f)
 			j--;
 			continue;
 		}
+		int drained = 0;
+		double dd[RES_N];
 		if (rs > at && j > 0) {
-			/* the last region's packets in flight go on functionally
-			 * until none is left in a slot and those in flight are as
-			 * far along as the warming run's when it takes a
-			 * checkpoint (FR_RELAX): the work the chip leaves undone
-			 * at the jump is then what the gap's counts hold. A
-			 * timed chip holds more work in flight when a tile is
-			 * wanted than the warming run does (slow packets stay
-			 * longer), and jumping at once lost that work (the
-			 * frame's PCI bytes came out low; docs/fidelity.md). A
-			 * memory-bound chunk on the way brings an extra region
-			 * there and then, as in full warming: a relax takes
-			 * RELAX_TILES tiles per slot, and with many threads the
-			 * gaps after it were too short for the extra regions,
-			 * and the estimate lost its memory-bound units. */
-			extra = mode_func_range(c, rs, FR_RELAX);
 			at = c->g.next;
+			if (jump_drains(c, f, at, rs)) {
+				/* the region's packets in flight finish functionally,
+				 * no tile handed out: the chip has then done every
+				 * tile before `at`, and the jump adds the work of the
+				 * tiles from there on, as the warming run split its
+				 * counts by tile (wm_region_end, wm_demand_done). The
+				 * drain's demand joins the gap's first chunk (below) */
+				double d0[RES_N];
+				int npc = F->npc;
+				chip_demand(c, d0);
+				mode_func_range(c, at, FR_DRAIN);
+				chip_demand(c, dd);
+				for (int k = 0; k < RES_N; k++)
+					dd[k] -= d0[k];
+				F->npc = npc;
+				drained = 1;
+			} else {
+				/* the last region's packets in flight go on
+				 * functionally until none is left in a slot and those
+				 * in flight are as far along as the warming run's when
+				 * it takes a checkpoint (FR_RELAX): the work the chip
+				 * leaves undone at the jump is then what the gap's
+				 * counts hold. A timed chip holds more work in flight
+				 * when a tile is wanted than the warming run does
+				 * (slow packets stay longer), and jumping at once lost
+				 * that work (the frame's PCI bytes came out low;
+				 * docs/fidelity.md). A memory-bound chunk on the way
+				 * brings an extra region there and then, as in full
+				 * warming: a relax takes RELAX_TILES tiles per slot,
+				 * and with many threads the gaps after it were too
+				 * short for the extra regions, and the estimate lost
+				 * its memory-bound units. */
+				extra = mode_func_range(c, rs, FR_RELAX);
+				at = c->g.next;
+			}
 		}
 		if (extra) /* it stopped at a memory-bound chunk: a region follows */
 			rs = at;
 		else if (rs > at) {
-			/* the gap [at, rs): the warming run's chunks of U tiles; a
-			 * memory-bound one brings an extra region at the next full
-			 * checkpoint after it, as mode_func_range does */
 			double m = hier_merge_share(&c->mem);
-			wm_region_end(r, f, at);
-			for (int a = at; a < rs;) {
-				int e = a + U < rs ? a + U : rs;
-				int hard = account(F, warm_piece(c, f, a, e, m), 1);
-				int xs = wm_full_above(r, e);
-				if (e - a == U && extra_due(F, hard, e, xs, rs)) {
-					if (xs > e)
-						account(F, warm_piece(c, f, e, xs, m), 1);
-					rs = xs;
-					extra = 1;
-					break;
-				}
-				a = e;
-			}
+			wm_region_end(r, f, at, drained);
+			if (drained)
+				rs = drained_extra(c, f, at, rs, m, &extra);
+			gap_chunks(c, f, at, &rs, m, drained ? dd : NULL, &extra);
 			F->functional_tiles += (uint64_t)(rs - at);
 			F->replayed_tiles += (uint64_t)(rs - at);
 			if (wm_restore(r, c, f, rs, m))

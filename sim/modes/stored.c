@@ -124,6 +124,13 @@ void mode_rec_pixels(chip *c)
 		}
 }
 
+/* Whether the warming run keeps done records (sim/warming.h): only for a
+ * sampling.jump that drains. */
+static int warm_done(const chip *c)
+{
+	return c->cfg.sampling.jump != CFG_JUMP_RELAX;
+}
+
 /* The warming run's key: the packet record's (the frame) and every config
  * key functional processing reads. Left out (at their defaults): the name
  * (a label; a config file without one is named after the file), fidelity,
@@ -150,8 +157,10 @@ static char *warm_key(const chip *c, int gl, int gf)
 	jsonw w;
 	jsonw_init_file(&w, f);
 	cfg_write_json(&k, &w);
-	if (fclose(f) || asprintf(&key, "saarsim warming 1\n%sgrid %d %d\nconfig %s\n", c->rec_key,
-	                          gl, gf, js) < 0)
+	/* the done records (sampling.jump drain or mixed) make a file of
+	 * their own: a relax needs none, and counting them costs */
+	if (fclose(f) || asprintf(&key, "saarsim warming 1\n%sgrid %d %d\ndone %d\nconfig %s\n",
+	                          c->rec_key, gl, gf, warm_done(c), js) < 0)
 		key = NULL;
 	free(js);
 	return key;
@@ -188,7 +197,7 @@ static void warm_close(chip *c)
 static int warm_build(chip *h, int gl, int gf, void **out, size_t *n)
 {
 	wm_writer w;
-	if (wm_writer_init(&w, h, gl, gf))
+	if (wm_writer_init(&w, h, gl, gf, warm_done(h)))
 		return -1;
 	h->wcap = &w;
 	h->on_tile = warm_mark;
