@@ -196,7 +196,7 @@ static const cfg_key keys_src[] = {
              "held); drain = they finish functionally, no tile handed out, and the jump "
              "adds only the work of the tiles after them, as the warming run split its "
              "counts by tile (faster; the warming run counts every step by tile, about "
-             "three times its time; where the warming run had not finished those tiles by "
+             "2.4 times its time; where the warming run had not finished those tiles by "
              "the next region's checkpoint, a relax); mixed = drain, but a relax after a "
              "region that ends in a memory-bound chunk or before one that starts after "
              "one"},
