@@ -307,7 +307,11 @@ Test(warming, drain_counts_every_l1_request_once)
  * every chunk memory bound (sampling.hard_share tiny) it relaxes at every
  * jump, figure for figure as relax; with none (hard_share 0, off) it
  * drains wherever drain does. Catches mixed draining next to memory-bound
- * work, and mixed never draining. */
+ * work, and mixed never draining. Not caught: dropping one of the rule's
+ * two halves (relax after a region that ends in memory-bound work, or
+ * before one that starts after it), since with every chunk memory bound
+ * either half alone relaxes at every jump (a planted drop of the first
+ * half passed). */
 Test(warming, mixed_relaxes_next_to_memory_bound_work)
 {
 	char dir[256];
