@@ -52,16 +52,6 @@ uint64_t ms_host_bytes(uint64_t space, uint64_t pages);
 /* Copies bytes [addr, addr + n) into dst; addresses past the store read as
  * zero. */
 void ms_read_any(const mem_store *s, uint64_t addr, uint32_t n, void *dst);
-static inline void ms_read(const mem_store *s, uint64_t addr, uint32_t n, void *dst)
-{
-	/* the usual case: image bytes, no page written, within one page */
-	if (addr < s->image_size && n <= s->image_size - addr && addr + n <= s->low &&
-	    (addr & (MS_PAGE - 1)) + n <= MS_PAGE) {
-		__builtin_memcpy(dst, s->image + addr, n);
-		return;
-	}
-	ms_read_any(s, addr, n, dst);
-}
 /* The image's own bytes for [addr, addr + n) when the store reads them
  * there (inside the image, no byte in a written page), else NULL. A
  * write makes a private copy of its page and the host changes the image
@@ -73,6 +63,16 @@ static inline const uint8_t *ms_image_at(const mem_store *s, uint64_t addr, uint
 	if (addr < s->image_size && n <= s->image_size - addr && addr + n <= s->low)
 		return s->image + addr;
 	return NULL;
+}
+static inline void ms_read(const mem_store *s, uint64_t addr, uint32_t n, void *dst)
+{
+	/* the usual case: image bytes, no page written, within one page */
+	const uint8_t *p = ms_image_at(s, addr, n);
+	if (p && (addr & (MS_PAGE - 1)) + n <= MS_PAGE) {
+		__builtin_memcpy(dst, p, n);
+		return;
+	}
+	ms_read_any(s, addr, n, dst);
 }
 /* Stores n bytes of src at addr (addresses past the store are dropped);
  * src NULL: a write without data (a replayed spill), which changes
