@@ -174,14 +174,12 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 			if (img) { /* in the host's cache by the time it fills */
 				__builtin_prefetch(img);
 				__builtin_prefetch(img + lb - 1);
-				/* SDRAM's read without bytes (hier_sdram.c, sdram_read) is
-				 * the memory interface's request alone: made here, not
-				 * through the level's hook (a call of nine arguments) */
-				memif_submit(&h->mi, t, l->type, lo, lb, 0, l1_filled, l, line);
-			} else {
-				uint8_t *buf = h->ms ? l->t.mbuf + (size_t)m * lb : NULL;
-				lower_read(h, t, l->type, lo, lb, buf, l1_filled, l, line);
 			}
+			/* the level below reads the bytes into the MSHR's buffer,
+			 * or (an image line) only makes the request */
+			lower_read(h, t, l->type, lo, lb,
+			           h->ms && !img ? l->t.mbuf + (size_t)m * lb : NULL, l1_filled, l,
+			           line);
 		}
 			/* fall through */
 		case CACHE_MISS_MERGED: /* q waits on the MSHR */

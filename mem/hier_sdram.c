@@ -25,8 +25,8 @@ static void sdram_level_free(hier *h)
 /* A read's bytes are the store's, taken when the read is issued: only the
  * reading thread writes what it reads (its spill area) and its writes go
  * in when issued, so they are the bytes SDRAM returns. An L1 miss that
- * fills from the image (mem/hier.c, walk) makes the read without bytes
- * itself: the request to the memory interface below. */
+ * fills from the image (mem/hier.c, walk) reads without bytes (dst NULL):
+ * the request to the memory interface alone. */
 static void sdram_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
                        eng_handler cb, void *ctx, uint64_t arg)
 {
