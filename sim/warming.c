@@ -86,6 +86,19 @@ static uint64_t **counters_of(chip *c, size_t *n)
 	return p;
 }
 
+/* Whether counter p is a maximum, not a sum (a gap's count is then the
+ * later value, not a sum of deltas). */
+static int is_max_counter(const chip *c, const uint64_t *p)
+{
+	return p == c->env.c[C_MAX_SP] || p == c->env.c[C_MAX_QUEUE];
+}
+
+/* The on-board cache's hit ticks so far (0 without one). */
+static uint64_t l2hit_now(chip *c)
+{
+	return hier_is(&c->mem) ? hier_l2hit_ticks(&c->mem) : 0;
+}
+
 /* The on-board cache (NULL: none), stored by set. */
 static cache *onboard(chip *c)
 {
@@ -188,15 +201,29 @@ void wm_writer_free(wm_writer *w)
 	free(w->snap);
 	free(w->handout);
 	free(w->runs);
+	free(w->tile_of);
 	memset(w, 0, sizeof *w);
 }
 
 /* The on-board-cache hit ticks and the counters now into v (1 + ncnt). */
 static void read_counts(wm_writer *w, chip *c, uint64_t *v)
 {
-	v[0] = hier_is(&c->mem) ? hier_l2hit_ticks(&c->mem) : 0;
+	v[0] = l2hit_now(c);
 	for (size_t i = 0; i < w->ncnt; i++)
 		v[1 + i] = *w->cnt[i];
+}
+
+/* The tile of the primary packet stream rec descends from (parents come
+ * first), through the record's parents; -1 when the chain is damaged. */
+static int32_t primary_tile(const int32_t *from, uint32_t npk, int32_t rec)
+{
+	int32_t p = rec;
+	for (int depth = 0; from[p] >= 0; depth++) {
+		if (depth > 4096 || (uint32_t)from[p] >= npk)
+			return -1;
+		p = from[p];
+	}
+	return -1 - from[p];
 }
 
 void wm_attr_take(wm_writer *w, chip *c, int32_t rec, int at)
@@ -204,6 +231,13 @@ void wm_attr_take(wm_writer *w, chip *c, int32_t rec, int at)
 	if (!w->from && c->md.in) { /* the record is opened as the run starts */
 		w->from = c->md.in->from;
 		w->npk = c->md.in->npk;
+		/* each stream's tile once, not a walk up its parents at every
+		 * step (wm_attr) */
+		w->tile_of = malloc((w->npk ? w->npk : 1) * sizeof *w->tile_of);
+		if (!w->tile_of)
+			w->failed = 1;
+		for (uint32_t i = 0; w->tile_of && i < w->npk; i++)
+			w->tile_of[i] = primary_tile(w->from, w->npk, (int32_t)i);
 	}
 	if (w->failed || !w->handout || rec < 0 || (uint32_t)rec >= w->npk || w->from[rec] >= 0)
 		return;
@@ -217,20 +251,13 @@ void wm_attr(wm_writer *w, chip *c, int32_t rec)
 	int frame = c->frames_done;
 	if (w->failed || !w->done || rec < 0 || (uint32_t)rec >= w->npk || frame >= w->frames)
 		return;
-	/* the primary packet the stream descends from (parents come first) */
-	int32_t p = rec;
-	for (int depth = 0; w->from[p] >= 0; depth++) {
-		if (depth > 4096 || (uint32_t)w->from[p] >= w->npk)
-			return;
-		p = w->from[p];
-	}
-	int tile = -1 - w->from[p];
-	if (tile >= w->ntiles)
+	int32_t tile = w->tile_of[rec];
+	if (tile < 0 || tile >= w->ntiles)
 		return;
 	uint64_t *d = w->done + ((size_t)frame * (size_t)w->nlight +
 	                         (size_t)(w->handout[tile] / w->g_light)) *
 	                            (1 + w->ncnt);
-	uint64_t l2 = hier_is(&c->mem) ? hier_l2hit_ticks(&c->mem) : 0;
+	uint64_t l2 = l2hit_now(c);
 	d[0] += l2 - w->snap[0];
 	w->snap[0] = l2;
 	uint64_t *dd = d + 1, *sn = w->snap + 1;
@@ -297,10 +324,7 @@ static void put_done(wm_writer *w, chip *c, uint8_t *out)
 			const uint64_t *lu =
 			    (const uint64_t *)(const void *)(lp + sizeof(double) * WM_NDEM);
 			for (size_t i = 0; i < nv; i++)
-				u[i] = i > 0 && (w->cnt[i - 1] == c->env.c[C_MAX_SP] ||
-				                 w->cnt[i - 1] == c->env.c[C_MAX_QUEUE])
-				           ? lu[i]
-				           : sum[i];
+				u[i] = i > 0 && is_max_counter(c, w->cnt[i - 1]) ? lu[i] : sum[i];
 			for (size_t i = 0; i < w->ncnt; i++)
 				*w->cnt[i] = u[1 + i];
 			double dem[WM_NDEM];
@@ -513,8 +537,7 @@ int wm_open(wm *r, const void *b, size_t n, chip *c)
 	if (!r->cnt || !r->is_max || !r->prev)
 		goto fail;
 	for (size_t i = 0; i < ncnt; i++)
-		r->is_max[i] =
-		    r->cnt[i] == c->env.c[C_MAX_SP] || r->cnt[i] == c->env.c[C_MAX_QUEUE];
+		r->is_max[i] = (uint8_t)is_max_counter(c, r->cnt[i]);
 	cache *l2 = onboard(c);
 	if (l2) {
 		r->l2set = cache_ckpt_bytes(l2, 1);

@@ -89,6 +89,7 @@ typedef struct wm_writer {
 	int32_t *handout;
 	const int32_t *from; /* the packet record's parents (pktrec.from) */
 	uint32_t npk;
+	int32_t *tile_of; /* per stream: its primary's tile (-1: damaged chain) */
 	/* the counters as runs of adjacent ones (cnt[at..at+n) at src[0..n)):
 	 * wm_attr reads them as arrays, not pointer by pointer */
 	struct wm_run {
