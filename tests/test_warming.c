@@ -54,6 +54,15 @@ static void cached(world *w, const char *path, char *dir, size_t n)
 	tu_load_world_cached(w, path, NULL, NULL, dir);
 }
 
+/* The procedural balls scene through a world cache in a fresh folder dir
+ * (the world keeps it), and its sampled config: 256x256 through a 1 MB
+ * VMA (config). */
+static void balls(world *w, saar_config *c, char *dir, size_t n)
+{
+	cached(w, "spd:balls:2", dir, n);
+	config(c, 256, 1);
+}
+
 /* A shared view (skipped when the scenes are absent) at width x height
  * through a world cache in a fresh folder dir (the world keeps it), and
  * its sampled config: tpr threads per RTP, rate, through the VMA (64 MB
@@ -238,9 +247,8 @@ Test(warming, counts_and_covers_as_cycle)
 {
 	char dir[256];
 	world w;
-	cached(&w, "spd:balls:2", dir, sizeof dir);
 	saar_config c;
-	config(&c, 256, 1);
+	balls(&w, &c, dir, sizeof dir);
 	against_cycle(&w, c, 3, 0.03, "balls through a 1 MB VMA");
 	world_free(&w);
 }
@@ -276,9 +284,8 @@ Test(warming, drain_counts_every_l1_request_once)
 {
 	char dir[256];
 	world w;
-	cached(&w, "spd:balls:2", dir, sizeof dir);
 	saar_config c;
-	config(&c, 256, 1);
+	balls(&w, &c, dir, sizeof dir);
 	c.sampling.jump = CFG_JUMP_DRAIN;
 	saar_config k = c;
 	k.fidelity = CFG_FIDELITY_CYCLE;
@@ -316,9 +323,8 @@ Test(warming, mixed_relaxes_next_to_memory_bound_work)
 {
 	char dir[256];
 	world w;
-	cached(&w, "spd:balls:2", dir, sizeof dir);
 	saar_config c;
-	config(&c, 256, 1);
+	balls(&w, &c, dir, sizeof dir);
 	c.sampling.offset = 0.17;
 	const double share[2] = {1e-9, 0};
 	const cfg_jump as[2] = {CFG_JUMP_RELAX, CFG_JUMP_DRAIN};
