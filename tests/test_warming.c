@@ -27,6 +27,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "sim/modes/sampled.h"
 #include "sim/warming.h"
 #include "tests/chiptest.h"
 
@@ -314,11 +315,11 @@ Test(warming, drain_counts_every_l1_request_once)
  * every chunk memory bound (sampling.hard_share tiny) it relaxes at every
  * jump, figure for figure as relax; with none (hard_share 0, off) it
  * drains wherever drain does. Catches mixed draining next to memory-bound
- * work, and mixed never draining. Not caught: dropping one of the rule's
- * two halves (relax after a region that ends in memory-bound work, or
- * before one that starts after it), since with every chunk memory bound
- * either half alone relaxes at every jump (a planted drop of the first
- * half passed). */
+ * work, and mixed never draining. Dropping one of the rule's two halves
+ * (relax after a region that ends in memory-bound work, or before one that
+ * starts after it) passes here, since with every chunk memory bound either
+ * half alone relaxes at every jump: mixed_rule_jump_by_jump (below)
+ * catches that. */
 Test(warming, mixed_relaxes_next_to_memory_bound_work)
 {
 	char dir[256];
@@ -450,5 +451,54 @@ Test(warming, auto_picks_stored_when_cached)
 	cr_assert_eq(f->cfg.sampling.warming, CFG_WARMING_FULL);
 	cr_assert_eq(f->warm_state, WARM_OFF, "%s", chip_warm_name(f->warm_state));
 	chip_destroy(f);
+	world_free(&w);
+}
+
+/* The mixed rule jump by jump (sampling.jump mixed; docs/fidelity.md,
+ * "Draining instead of the relax"): for every region end `at` on the
+ * light grid and every later full checkpoint rs, mode_jump_drains answers
+ * "drain" exactly when the warming run had finished the tiles before `at`
+ * by rs (wm_done_by) and calls neither the U tiles before `at` nor the U
+ * tiles before rs memory bound. With a sampling.hard_share that makes some
+ * chunks of the frame memory bound and others not, there are jumps where
+ * only one of the two is, and the test demands some of each: it catches
+ * mixed relaxing only after memory-bound work or only before it (either
+ * half of the rule dropped), which mixed_relaxes_next_to_memory_bound_work
+ * does not, as well as mixed draining next to memory-bound work. */
+Test(warming, mixed_rule_jump_by_jump)
+{
+	char dir[256];
+	world w;
+	saar_config c;
+	balls(&w, &c, dir, sizeof dir);
+	c.sampling.jump = CFG_JUMP_MIXED;
+	/* the default: 54 of the frame's 64 chunks memory bound, the rest not
+	 * (0.2 and below: every chunk) */
+	c.sampling.hard_share = 0.6;
+	chip *m = tu_run_chip(&w, &c);
+	cr_assert_not_null(m->warm, "no warming run open");
+	int N = m->g.ntiles, U = m->fid.unit_tiles, g = m->warm->g_light;
+	int after = 0, before = 0, drains = 0;
+	for (int at = U; at < N; at += g)
+		for (int rs = wm_full_above(m->warm, at + 1); rs < N;
+		     rs = wm_full_above(m->warm, rs + 1)) {
+			int ha = mode_warm_hard(m, 0, at - U, at);
+			int hb = rs - U >= at && mode_warm_hard(m, 0, rs - U, rs);
+			int done = wm_done_by(m->warm, 0, at, rs), want = done && !ha && !hb;
+			cr_assert_eq(
+			    mode_jump_drains(m, 0, at, rs), want,
+			    "region end %d, next region %d: memory bound before the end %d, "
+			    "before the next %d, done %d",
+			    at, rs, ha, hb, done);
+			drains += want;
+			after += done && ha && !hb;
+			before += done && !ha && hb;
+		}
+	/* else the frame cannot tell the rule's halves apart */
+	cr_assert(drains > 0 && after > 0 && before > 0,
+	          "%d drains, %d jumps with only the end memory bound, %d with only the next "
+	          "start",
+	          drains, after, before);
+	chip_destroy(m);
 	world_free(&w);
 }

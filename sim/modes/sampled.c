@@ -326,6 +326,16 @@ static int jump_drains(chip *c, int f, int at, int rs)
 	       !(rs - U >= at && warm_piece(c, f, rs - U, rs, m).hard);
 }
 
+int mode_warm_hard(chip *c, int f, int a, int b)
+{
+	return warm_piece(c, f, a, b, hier_merge_share(&c->mem)).hard;
+}
+
+int mode_jump_drains(chip *c, int f, int at, int rs)
+{
+	return jump_drains(c, f, at, rs);
+}
+
 /* After a drain that ended at tile `at`, before the next region at rs:
  * an extra region at the first full checkpoint x that ends a memory-bound
  * chunk of U tiles (the warming run's) where extra_due lets one start and

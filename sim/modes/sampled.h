@@ -24,5 +24,11 @@ int mode_func_range(chip *c, int end, int mode);
 /* Sampled frame f with full warming, and with stored warming. */
 void mode_sampled_frame(chip *c, int f);
 void mode_sampled_frame_stored(chip *c, int f);
+/* Stored warming, frame f (the warming run open): whether the warming run
+ * calls tiles [a, b) memory bound, and whether the jump from a region that
+ * ended at tile `at` to the full checkpoint rs drains under the chip's
+ * sampling.jump (docs/fidelity.md, "Draining instead of the relax"). */
+int mode_warm_hard(chip *c, int f, int a, int b);
+int mode_jump_drains(chip *c, int f, int at, int rs);
 
 #endif
