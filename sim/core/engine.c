@@ -51,7 +51,8 @@ typedef struct hent {
 	uint64_t arg;
 } hent;
 
-/* A wheel record: an event and the next of its slot (seq 0: free). */
+/* A wheel record: an event and the next of its slot (or of the free
+ * list). */
 typedef struct wrec {
 	hent ev;
 	uint32_t next;
@@ -90,7 +91,7 @@ static int grow_heap(eng *e, uint32_t want)
 	return 0;
 }
 
-/* Pool records [pcap, want) join the free list (seq 0: not queued). */
+/* Pool records [pcap, want) join the free list. */
 static int grow_pool(eng *e, uint32_t want)
 {
 	if (want <= e->pcap)
@@ -102,7 +103,6 @@ static int grow_pool(eng *e, uint32_t want)
 		return -1;
 	e->pool = p;
 	for (uint32_t i = want; i-- > e->pcap;) {
-		p[i].ev.seq = 0;
 		p[i].next = e->pfree;
 		e->pfree = i;
 	}
@@ -227,41 +227,28 @@ static inline void wheel_link(eng *e, uint32_t i)
 	e->wn++;
 }
 
-/* Takes out the first record of slot s. */
-static void wheel_pop(eng *e, uint32_t s)
-{
-	wrec *p = e->pool;
-	uint32_t i = e->head[s];
-	e->head[s] = p[i].next;
-	if (e->head[s] == ENG_NIL) {
-		e->tail[s] = ENG_NIL;
-		e->used[s / 64] &= ~((uint64_t)1 << (s % 64));
-	}
-	p[i].ev.seq = 0;
-	p[i].next = e->pfree;
-	e->pfree = i;
-	e->wn--;
-}
-
 /* eng_schedule's rare cases, out of line: an event past the wheel's
- * window (into the heap), or a full pool. */
-static __attribute__((noinline)) eng_id schedule_slow(eng *e, const hent *x, int far)
+ * window (into the heap), or a full pool. It takes the event's parts, not
+ * a record: a record built by eng_schedule cost every call a stack frame. */
+static __attribute__((noinline)) eng_id schedule_slow(eng *e, uint64_t when, eng_handler h,
+                                                      void *ctx, uint64_t arg, int far)
 {
+	hent x = {when, e->seq, h, ctx, arg};
 	if (far) {
 		if (e->n == e->cap && grow_heap(e, e->cap * 2))
 			return ENG_NONE;
-		e->heap[e->n] = *x;
+		e->heap[e->n] = x;
 		sift_up(e->heap, e->n++);
 	} else {
 		if (grow_pool(e, e->pcap * 2))
 			return ENG_NONE;
 		uint32_t i = e->pfree;
 		e->pfree = e->pool[i].next;
-		e->pool[i].ev = *x;
+		e->pool[i].ev = x;
 		wheel_link(e, i);
 	}
 	e->seq++;
-	return (eng_id)x->seq;
+	return (eng_id)x.seq;
 }
 
 eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
@@ -273,10 +260,8 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	/* the window: the ENG_SLOTS slots from the start of eng_now's */
 	uint64_t base = e->hd.now & ~(ENG_SLOT_TICKS - 1);
 	int far = when - base >= ENG_SLOTS * ENG_SLOT_TICKS;
-	if (__builtin_expect(far || e->pfree == ENG_NIL, 0)) {
-		hent x = {when, seq, h, ctx, arg};
-		return schedule_slow(e, &x, far);
-	}
+	if (__builtin_expect(far || e->pfree == ENG_NIL, 0))
+		return schedule_slow(e, when, h, ctx, arg, far);
 	uint32_t i = e->pfree;
 	wrec *r = &e->pool[i];
 	e->pfree = r->next;
@@ -286,16 +271,22 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	return (eng_id)seq;
 }
 
-/* O(n) in the queued events: the simulator never cancels (the tests do). */
+/* O(n) in the queued events: the simulator never cancels (the tests do).
+ * The wheel's queued records are those of its used slots' lists (a free
+ * record keeps the sequence number of the event it held). */
 int eng_cancel(eng *e, eng_id id)
 {
 	hent *x = NULL;
 	for (uint32_t i = 0; i < e->n && !x; i++)
 		if (e->heap[i].seq == id)
 			x = &e->heap[i];
-	for (uint32_t i = 0; i < e->pcap && !x && id; i++)
-		if (e->pool[i].ev.seq == id)
-			x = &e->pool[i].ev;
+	for (uint32_t s = 0; s < ENG_SLOTS && !x && id; s++) {
+		if (!(e->used[s / 64] >> (s % 64) & 1))
+			continue;
+		for (uint32_t i = e->head[s]; i != ENG_NIL && !x; i = e->pool[i].next)
+			if (e->pool[i].ev.seq == id)
+				x = &e->pool[i].ev;
+	}
 	if (!x || !x->h)
 		return -1;
 	x->h = NULL;
@@ -306,28 +297,47 @@ int eng_cancel(eng *e, eng_id id)
 eng_status eng_run(eng *e, uint64_t limit)
 {
 	e->stop = 0;
-	while (e->wn || e->n) {
-		/* the first event: the wheel's or the overflow's, by (when, seq) */
-		uint32_t s = 0;
-		const hent *top = NULL;
+	for (;;) {
+		/* the first event: the wheel's or the overflow's, by (when, seq);
+		 * a wheel record (nearly every event) stays in hand, with its
+		 * index, for its removal below (a separate pop read the slot's
+		 * head again) */
+		eng_handler h;
+		void *ctx;
+		uint64_t arg, when;
+		uint32_t s = 0, i = 0;
+		wrec *r = NULL;
 		if (e->wn) {
 			s = first_used(e, slot_of(e->hd.now));
-			top = &e->pool[e->head[s]].ev;
+			i = e->head[s];
+			r = &e->pool[i];
+			if (e->n && before(&e->heap[0], &r->ev))
+				r = NULL;
+		} else if (!e->n) {
+			return ENG_EMPTY;
 		}
-		int wheel = top && !(e->n && before(&e->heap[0], top));
-		if (!wheel)
-			top = &e->heap[0];
-		if (top->h && top->when > limit)
+		const hent *top = r ? &r->ev : &e->heap[0];
+		h = top->h;
+		when = top->when;
+		if (h && when > limit)
 			return ENG_LIMIT;
 		/* copy out, then take it out: the handler may schedule (and so
 		 * move the heap or the pool) or cancel */
-		eng_handler h = top->h;
-		void *ctx = top->ctx;
-		uint64_t arg = top->arg, when = top->when;
-		if (wheel)
-			wheel_pop(e, s);
-		else
+		ctx = top->ctx;
+		arg = top->arg;
+		if (r) { /* out of its slot, into the free list */
+			uint32_t next = r->next;
+			e->head[s] = next;
+			if (next == ENG_NIL) {
+				e->tail[s] = ENG_NIL;
+				e->used[s / 64] &= ~((uint64_t)1 << (s % 64));
+			}
+			r->next = e->pfree;
+			e->pfree = i;
+			e->wn--;
+		} else {
 			heap_pop(e);
+		}
 		if (!h) { /* cancelled: not run, counted or timed */
 			e->cancelled--;
 			e->dropped++;
@@ -340,7 +350,6 @@ eng_status eng_run(eng *e, uint64_t limit)
 			return ENG_STOPPED;
 		}
 	}
-	return ENG_EMPTY;
 }
 
 void eng_stop(eng *e)
