@@ -225,7 +225,7 @@ bank_pick(memif *m, uint32_t b, const pick_lat *pl, uint64_t now, uint64_t best_
 static uint32_t pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready)
 {
 	uint32_t best = MEMIF_NIL;
-	uint64_t best_start = UINT64_MAX, best_seq = UINT64_MAX;
+	uint64_t best_start = UINT64_MAX;
 	const sdram_timing *T = &m->sd->t;
 	pick_lat pl = {T->cl, T->trcd + T->cl, T->trp + T->trcd + T->cl};
 	*next_ready = UINT64_MAX;
@@ -235,11 +235,11 @@ static uint32_t pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready)
 		uint32_t i = bank_pick(m, b, &pl, now, best_start, &st, next_ready);
 		if (i == MEMIF_NIL)
 			continue;
-		uint64_t seq = m->pool[i].seq;
-		if (st < best_start || (st == best_start && seq < best_seq)) {
+		/* the sequence numbers only on a tie of start times */
+		if (st < best_start || (st == best_start && (best == MEMIF_NIL ||
+		                                             m->pool[i].seq < m->pool[best].seq))) {
 			best = i;
 			best_start = st;
-			best_seq = seq;
 		}
 	}
 	return best;
