@@ -204,14 +204,21 @@ static inline void wheel_link(eng *e, uint32_t i)
 {
 	wrec *p = e->pool;
 	uint64_t when = p[i].ev.when;
-	uint32_t s = slot_of(when), t = e->tail[s];
-	p[i].next = ENG_NIL;
-	if (t == ENG_NIL) {
-		e->head[s] = e->tail[s] = i;
-		e->used[s / 64] |= (uint64_t)1 << (s % 64);
-	} else if (p[t].ev.when <= when) {
-		p[t].next = i;
+	uint32_t s = slot_of(when);
+	uint64_t *u = &e->used[s / 64], bit = (uint64_t)1 << (s % 64);
+	/* An empty slot (its bit clear; its tail is stale then) and an
+	 * append to a used one take the same path, without a branch on which
+	 * it is: whether a slot holds events is as good as random to the
+	 * host's branch predictor. Empty, the record compares with itself and
+	 * links from the slot's head; used, from the slot's tail. */
+	uint32_t em = (uint32_t)(*u >> (s % 64) & 1) - 1; /* all ones: empty */
+	uint32_t t = (i & em) | (e->tail[s] & ~em);
+	if (p[t].ev.when <= when) {
+		e->head[s] = (i & em) | (e->head[s] & ~em);
+		p[t].next = i; /* empty: p[i].next, set just below */
+		p[i].next = ENG_NIL;
 		e->tail[s] = i;
+		*u |= bit;
 	} else { /* an earlier tick than the slot's last: walk (the tail stops it) */
 		uint32_t prev = ENG_NIL, c = e->head[s];
 		while (p[c].ev.when <= when) {
@@ -326,12 +333,11 @@ eng_status eng_run(eng *e, uint64_t limit)
 		ctx = top->ctx;
 		arg = top->arg;
 		if (r) { /* out of its slot, into the free list */
+			/* the slot's bit cleared when it empties, without a branch
+			 * (see wheel_link: its tail is not reset) */
 			uint32_t next = r->next;
 			e->head[s] = next;
-			if (next == ENG_NIL) {
-				e->tail[s] = ENG_NIL;
-				e->used[s / 64] &= ~((uint64_t)1 << (s % 64));
-			}
+			e->used[s / 64] &= ~((uint64_t)(next == ENG_NIL) << (s % 64));
 			r->next = e->pfree;
 			e->pfree = i;
 			e->wn--;
