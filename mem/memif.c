@@ -94,7 +94,13 @@ static void arm(memif *m, uint64_t when)
 	 * later one finds nothing or re-arms (harmless, deterministic). */
 	m->armed = 1;
 	m->armed_at = when;
-	eng_schedule(m->e, when, dispatch, m, 0);
+	/* Right behind another dispatch of its tick, with no event between
+	 * (the one armed before, left queued when an earlier need armed
+	 * another), a dispatch does nothing: it would find the state the first
+	 * left, in which the first already issued all it could and armed what
+	 * follows. It is counted, not queued (a tenth of dragon2's events:
+	 * docs/PERFORMANCE.md, "Target 2"). */
+	eng_schedule_or_idle(m->e, when, dispatch, m, 0);
 }
 
 /* fifo and round_robin: the requester to serve now (its queue head), or

@@ -258,7 +258,13 @@ static __attribute__((noinline)) eng_id schedule_slow(eng *e, uint64_t when, eng
 	return (eng_id)x.seq;
 }
 
-eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
+/* eng_schedule, and with idle_behind set eng_schedule_or_idle: the new
+ * event is counted, not queued, when the last event queued for its tick
+ * is h(ctx) (the slot's last record is its last event by (when, seq): one
+ * for another tick says no; the overflow heap's events for a tick run
+ * before the wheel's, which were queued after them). */
+static inline __attribute__((always_inline)) eng_id
+schedule_in(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg, int idle_behind)
 {
 	assert(when >= e->hd.now && "event scheduled into the past");
 	if (when < e->hd.now)
@@ -269,6 +275,16 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	int far = when - base >= ENG_SLOTS * ENG_SLOT_TICKS;
 	if (__builtin_expect(far || e->pfree == ENG_NIL, 0))
 		return schedule_slow(e, when, h, ctx, arg, far);
+	if (idle_behind) {
+		uint32_t s = slot_of(when);
+		if (e->used[s / 64] >> (s % 64) & 1) { /* else its tail is stale */
+			const hent *t = &e->pool[e->tail[s]].ev;
+			if (t->when == when && t->h == h && t->ctx == ctx) {
+				e->seq = seq + 1; /* counted as dispatched: seq - 1 - queued */
+				return (eng_id)seq;
+			}
+		}
+	}
 	uint32_t i = e->pfree;
 	wrec *r = &e->pool[i];
 	e->pfree = r->next;
@@ -276,6 +292,16 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	wheel_link(e, i);
 	e->seq = seq + 1;
 	return (eng_id)seq;
+}
+
+eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
+{
+	return schedule_in(e, when, h, ctx, arg, 0);
+}
+
+eng_id eng_schedule_or_idle(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
+{
+	return schedule_in(e, when, h, ctx, arg, 1);
 }
 
 /* O(n) in the queued events: the simulator never cancels (the tests do).
