@@ -362,7 +362,10 @@ cache_pick_victim(const cache *c, uint32_t set, const cache_way *s)
 			if (s[i].tag == CACHE_INVALID)
 				return i;
 		uint32_t b01 = s[1].use < s[0].use, b23 = 2 + (s[3].use < s[2].use);
-		return s[b23].use < s[b01].use ? b23 : b01;
+		/* the last choice by a mask, not a branch: which pair holds
+		 * the least recent way is as good as random to the host */
+		uint32_t lo23 = (uint32_t)0 - (uint32_t)(s[b23].use < s[b01].use);
+		return (b23 & lo23) | (b01 & ~lo23);
 	}
 	if (!c->rp->victim) {
 		for (uint32_t i = 0; i < c->p.ways; i++) {

@@ -278,17 +278,20 @@ static void hier_access(void *impl, const mem_req *r, eng_handler done, void *ct
 		return; /* out of memory: the unit never hears back (cannot happen in practice) */
 	uint32_t bytes = r->bytes ? r->bytes : 1;
 	uint8_t *dst = h->ms && r->bytes ? r->data : NULL;
-	*q = (hreq){.done = done,
-	            .ctx = ctx,
-	            .arg = arg,
-	            .issue = now,
-	            .ready = now,
-	            .addr = r->addr,
-	            .dst = dst,
-	            .bytes = bytes,
-	            .pending = 1,
-	            .type = (uint8_t)type,
-	            .ray = r->ray};
+	/* field by field: every one is set below or here, so no zeroing of
+	 * the whole record first (next_line, last_line and the free list's
+	 * next are set before they are read) */
+	q->done = done;
+	q->ctx = ctx;
+	q->arg = arg;
+	q->issue = now;
+	q->ready = now;
+	q->addr = r->addr;
+	q->dst = dst;
+	q->bytes = bytes;
+	q->pending = 1;
+	q->type = (uint8_t)type;
+	q->ray = r->ray;
 	if (r->addr >= h->image_bytes) {
 		h->bypass[type]++;
 		lower_read(h, now, type, r->addr, bytes, dst, l1_bypass_done, h, (uintptr_t)q);

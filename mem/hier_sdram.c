@@ -27,11 +27,24 @@ static void sdram_level_free(hier *h)
  * in when issued, so they are the bytes SDRAM returns. An L1 miss that
  * fills from the image (mem/hier.c, walk) reads without bytes (dst NULL):
  * the request to the memory interface alone. */
+static __attribute__((noinline)) void sdram_read_bytes(hier *h, uint64_t t, int type, uint64_t addr,
+                                                       uint32_t bytes, uint8_t *dst, eng_handler cb,
+                                                       void *ctx, uint64_t arg)
+{
+	ms_read(h->ms, addr, bytes, dst);
+	memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
+}
+
+/* The read with bytes is out of line: most reads are L1 misses to image
+ * lines (no bytes), and this way they go on to memif_submit by a plain
+ * jump, without saving registers around a copy they never make. */
 static void sdram_read(hier *h, uint64_t t, int type, uint64_t addr, uint32_t bytes, uint8_t *dst,
                        eng_handler cb, void *ctx, uint64_t arg)
 {
-	if (dst)
-		ms_read(h->ms, addr, bytes, dst);
+	if (dst) {
+		sdram_read_bytes(h, t, type, addr, bytes, dst, cb, ctx, arg);
+		return;
+	}
 	memif_submit(&h->mi, t, type, addr, bytes, 0, cb, ctx, arg);
 }
 

@@ -7,6 +7,7 @@
  */
 #include "mem/memif.h"
 
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -93,7 +94,13 @@ static void arm(memif *m, uint64_t when)
 	 * later one finds nothing or re-arms (harmless, deterministic). */
 	m->armed = 1;
 	m->armed_at = when;
-	eng_schedule(m->e, when, dispatch, m, 0);
+	/* Right behind another dispatch of its tick, with no event between
+	 * (the one armed before, left queued when an earlier need armed
+	 * another), a dispatch does nothing: it would find the state the first
+	 * left, in which the first already issued all it could and armed what
+	 * follows. It is counted, not queued (a tenth of dragon2's events:
+	 * docs/PERFORMANCE.md, "Target 2"). */
+	eng_schedule_or_idle(m->e, when, dispatch, m, 0);
 }
 
 /* fifo and round_robin: the requester to serve now (its queue head), or
@@ -235,12 +242,16 @@ static uint32_t pick_frfcfs(memif *m, uint64_t now, uint64_t *next_ready)
 		uint32_t i = bank_pick(m, b, &pl, now, best_start, &st, next_ready);
 		if (i == MEMIF_NIL)
 			continue;
+		/* the better of the two by (start, seq) without a branch: which
+		 * bank's request wins is as good as random to the host's branch
+		 * predictor (two mispredictions a pick) */
 		uint64_t seq = m->pool[i].seq;
-		if (st < best_start || (st == best_start && seq < best_seq)) {
-			best = i;
-			best_start = st;
-			best_seq = seq;
-		}
+		uint64_t take =
+		    (uint64_t)((st < best_start) | ((st == best_start) & (seq < best_seq)));
+		uint64_t keep = take - 1; /* all ones: keep the best so far */
+		best = (uint32_t)((i & ~keep) | (best & keep));
+		best_start = (st & ~keep) | (best_start & keep);
+		best_seq = (seq & ~keep) | (best_seq & keep);
 	}
 	return best;
 }
@@ -290,6 +301,16 @@ static inline __attribute__((always_inline)) void bank_insert(memif *m, uint32_t
 		m->pool[after].bnext = i;
 }
 
+/* The link field at byte offset off of pool item i, or end when i is
+ * MEMIF_NIL, picked by a mask instead of a branch (the address of the
+ * item is worked out as a number, never used when i is MEMIF_NIL). */
+static inline uint32_t *link_at(uint32_t *end, memif_item *pool, uint32_t i, size_t off)
+{
+	uintptr_t a = (uintptr_t)end, b = (uintptr_t)pool + (uintptr_t)i * sizeof *pool + off;
+	uintptr_t nil = (uintptr_t)0 - (uintptr_t)(i == MEMIF_NIL); /* all ones: no item */
+	return (uint32_t *)((a & nil) | (b & ~nil));
+}
+
 /* Takes item i (inside its queue's window) out of its queue and its bank's
  * list; the first item after the window, if any, moves into it. */
 static void take(memif *m, uint32_t i)
@@ -297,22 +318,13 @@ static void take(memif *m, uint32_t i)
 	memif_item *it = &m->pool[i];
 	memif_queue *q = &m->q[it->req];
 	memif_list *bl = &m->bank[it->bank];
-	if (it->qprev == MEMIF_NIL)
-		q->l.head = it->qnext;
-	else
-		m->pool[it->qprev].qnext = it->qnext;
-	if (it->qnext == MEMIF_NIL)
-		q->l.tail = it->qprev;
-	else
-		m->pool[it->qnext].qprev = it->qprev;
-	if (it->bprev == MEMIF_NIL)
-		bl->head = it->bnext;
-	else
-		m->pool[it->bprev].bnext = it->bnext;
-	if (it->bnext == MEMIF_NIL)
-		bl->tail = it->bprev;
-	else
-		m->pool[it->bnext].bprev = it->bprev;
+	/* each neighbour's link, or the list's end when there is none, chosen
+	 * without a branch (link_at: whether the item is first or last in its
+	 * lists is as good as random to the host's branch predictor) */
+	*link_at(&q->l.head, m->pool, it->qprev, offsetof(memif_item, qnext)) = it->qnext;
+	*link_at(&q->l.tail, m->pool, it->qnext, offsetof(memif_item, qprev)) = it->qprev;
+	*link_at(&bl->head, m->pool, it->bprev, offsetof(memif_item, bnext)) = it->bnext;
+	*link_at(&bl->tail, m->pool, it->bnext, offsetof(memif_item, bprev)) = it->bprev;
 	if (bl->head == MEMIF_NIL)
 		m->banks_used &= ~(1ull << it->bank);
 	m->rowcnt[it->bank][it->row & (MEMIF_ROW_SLOTS - 1)]--;
@@ -381,8 +393,7 @@ static void dispatch(eng *e, void *ctx, uint64_t arg)
 	(void)arg;
 	memif *m = ctx;
 	uint64_t now = eng_now(e);
-	if (m->armed && m->armed_at == now)
-		m->armed = 0;
+	m->armed &= m->armed_at != now; /* this was the armed one (no branch) */
 	if (m->sd->bus_free > now + m->lead)
 		wait_bus(m);
 	else

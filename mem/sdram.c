@@ -109,9 +109,13 @@ static uint64_t max64(uint64_t a, uint64_t b)
 	return a > b ? a : b;
 }
 
-/* One row's worth of a request, to bank b's row `row` (addr's). */
-static uint64_t segment(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
-                        uint64_t *first, uint32_t b, uint64_t row)
+/* One row's worth of a request, to bank b's row `row` (addr's). Always
+ * inlined: sdram_access_in's one-row path runs it for nearly every
+ * request. */
+static inline __attribute__((always_inline)) uint64_t segment(sdram *s, uint64_t t, uint64_t addr,
+                                                              uint32_t bytes, int write,
+                                                              uint64_t *first, uint32_t b,
+                                                              uint64_t row)
 {
 	const sdram_timing *T = &s->t;
 	sdram_bank *k = &s->bank[b];
@@ -201,5 +205,17 @@ uint64_t sdram_access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int w
 uint64_t sdram_access_in(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
                          uint64_t *data_start, uint32_t bank, uint64_t row)
 {
-	return access(s, t, addr, bytes, write, data_start, 1, bank, row);
+	/* a request inside one row (every L1 line that does not cross a row
+	 * boundary): access's one segment, without its loop */
+	uint32_t in_row = s->p.row_bytes - (uint32_t)(addr & (s->p.row_bytes - 1));
+	if (bytes == 0 || bytes > in_row)
+		return access(s, t, addr, bytes, write, data_start, 1, bank, row);
+	if (write) {
+		s->s.writes++;
+		s->s.write_bytes += bytes;
+	} else {
+		s->s.reads++;
+		s->s.read_bytes += bytes;
+	}
+	return segment(s, t, addr, bytes, write, data_start, bank, row);
 }

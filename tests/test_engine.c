@@ -418,3 +418,43 @@ Test(engine, fastdiv_matches_division)
 	cr_assert_eq(eng_next_edge(c, 1877), 2 * 1876);
 	cr_assert_eq(eng_ticks_to_cycles(eng_clock_mhz(533), UINT64_MAX), UINT64_MAX / 1876);
 }
+
+/* A second handler, to tell handlers apart. */
+static void log_ev2(eng *e, void *ctx, uint64_t arg)
+{
+	log_ev(e, ctx, arg + 1000);
+}
+
+/* eng_schedule_or_idle counts the new event instead of queueing it only
+ * when the last event queued for its tick is the same handler on the same
+ * context. Mistakes caught: the slot's last record taken for the tick's
+ * without comparing its tick (a wheel slot spans 1024 ticks: an event at
+ * tick 100 would swallow one for tick 200), or without comparing the
+ * handler or the context; and an idle event not counted (eng_events) or
+ * shifting the order of later same-tick events. */
+Test(engine, schedule_or_idle_counts_only_behind_the_same_event)
+{
+	eng *e = mk(0);
+	rec r = {0}, r2 = {0};
+	eng_schedule(e, 100, log_ev, &r, 1);
+	eng_schedule(e, 300, log_ev, &r, 2);
+	eng_schedule(e, 300, log_ev, &r, 3);
+	eng_schedule_or_idle(e, 200, log_ev, &r, 4);  /* slot's last is tick 100: queued */
+	eng_schedule_or_idle(e, 300, log_ev, &r, 5);  /* behind (log_ev, r) at 300: idle */
+	eng_schedule_or_idle(e, 300, log_ev, &r, 6);  /* still behind it: idle */
+	eng_schedule_or_idle(e, 300, log_ev, &r2, 7); /* another context: queued */
+	eng_schedule_or_idle(e, 300, log_ev, &r, 8);  /* behind r2's: queued */
+	eng_schedule_or_idle(e, 300, log_ev2, &r, 9); /* another handler: queued */
+	eng_schedule_or_idle(e, 400, log_ev, &r, 10); /* nothing at 400: queued */
+	eng_schedule(e, 300, log_ev, &r, 11);         /* after the idle ones, in order */
+	cr_assert_eq(eng_pending(e), 9);
+	cr_assert_eq(eng_run(e, ENG_FOREVER), ENG_EMPTY);
+	uint64_t want[] = {1, 4, 2, 3, 8, 1009, 11, 10};
+	cr_assert_eq(r.n, 8);
+	for (int i = 0; i < 8; i++)
+		cr_assert_eq(r.arg[i], want[i], "event %d: %llu", i, (unsigned long long)r.arg[i]);
+	cr_assert_eq(r2.n, 1);
+	cr_assert_eq(r2.arg[0], 7);
+	cr_assert_eq(eng_events(e), 11, "the two idle events count as dispatched");
+	eng_destroy(e);
+}

@@ -51,7 +51,8 @@ typedef struct hent {
 	uint64_t arg;
 } hent;
 
-/* A wheel record: an event and the next of its slot (seq 0: free). */
+/* A wheel record: an event and the next of its slot (or of the free
+ * list). */
 typedef struct wrec {
 	hent ev;
 	uint32_t next;
@@ -90,7 +91,7 @@ static int grow_heap(eng *e, uint32_t want)
 	return 0;
 }
 
-/* Pool records [pcap, want) join the free list (seq 0: not queued). */
+/* Pool records [pcap, want) join the free list. */
 static int grow_pool(eng *e, uint32_t want)
 {
 	if (want <= e->pcap)
@@ -102,7 +103,6 @@ static int grow_pool(eng *e, uint32_t want)
 		return -1;
 	e->pool = p;
 	for (uint32_t i = want; i-- > e->pcap;) {
-		p[i].ev.seq = 0;
 		p[i].next = e->pfree;
 		e->pfree = i;
 	}
@@ -204,14 +204,21 @@ static inline void wheel_link(eng *e, uint32_t i)
 {
 	wrec *p = e->pool;
 	uint64_t when = p[i].ev.when;
-	uint32_t s = slot_of(when), t = e->tail[s];
-	p[i].next = ENG_NIL;
-	if (t == ENG_NIL) {
-		e->head[s] = e->tail[s] = i;
-		e->used[s / 64] |= (uint64_t)1 << (s % 64);
-	} else if (p[t].ev.when <= when) {
-		p[t].next = i;
+	uint32_t s = slot_of(when);
+	uint64_t *u = &e->used[s / 64], bit = (uint64_t)1 << (s % 64);
+	/* An empty slot (its bit clear; its tail is stale then) and an
+	 * append to a used one take the same path, without a branch on which
+	 * it is: whether a slot holds events is as good as random to the
+	 * host's branch predictor. Empty, the record compares with itself and
+	 * links from the slot's head; used, from the slot's tail. */
+	uint32_t em = (uint32_t)(*u >> (s % 64) & 1) - 1; /* all ones: empty */
+	uint32_t t = (i & em) | (e->tail[s] & ~em);
+	if (p[t].ev.when <= when) {
+		e->head[s] = (i & em) | (e->head[s] & ~em);
+		p[t].next = i; /* empty: p[i].next, set just below */
+		p[i].next = ENG_NIL;
 		e->tail[s] = i;
+		*u |= bit;
 	} else { /* an earlier tick than the slot's last: walk (the tail stops it) */
 		uint32_t prev = ENG_NIL, c = e->head[s];
 		while (p[c].ev.when <= when) {
@@ -227,44 +234,37 @@ static inline void wheel_link(eng *e, uint32_t i)
 	e->wn++;
 }
 
-/* Takes out the first record of slot s. */
-static void wheel_pop(eng *e, uint32_t s)
-{
-	wrec *p = e->pool;
-	uint32_t i = e->head[s];
-	e->head[s] = p[i].next;
-	if (e->head[s] == ENG_NIL) {
-		e->tail[s] = ENG_NIL;
-		e->used[s / 64] &= ~((uint64_t)1 << (s % 64));
-	}
-	p[i].ev.seq = 0;
-	p[i].next = e->pfree;
-	e->pfree = i;
-	e->wn--;
-}
-
 /* eng_schedule's rare cases, out of line: an event past the wheel's
- * window (into the heap), or a full pool. */
-static __attribute__((noinline)) eng_id schedule_slow(eng *e, const hent *x, int far)
+ * window (into the heap), or a full pool. It takes the event's parts, not
+ * a record: a record built by eng_schedule cost every call a stack frame. */
+static __attribute__((noinline)) eng_id schedule_slow(eng *e, uint64_t when, eng_handler h,
+                                                      void *ctx, uint64_t arg, int far)
 {
+	hent x = {when, e->seq, h, ctx, arg};
 	if (far) {
 		if (e->n == e->cap && grow_heap(e, e->cap * 2))
 			return ENG_NONE;
-		e->heap[e->n] = *x;
+		e->heap[e->n] = x;
 		sift_up(e->heap, e->n++);
 	} else {
 		if (grow_pool(e, e->pcap * 2))
 			return ENG_NONE;
 		uint32_t i = e->pfree;
 		e->pfree = e->pool[i].next;
-		e->pool[i].ev = *x;
+		e->pool[i].ev = x;
 		wheel_link(e, i);
 	}
 	e->seq++;
-	return (eng_id)x->seq;
+	return (eng_id)x.seq;
 }
 
-eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
+/* eng_schedule, and with idle_behind set eng_schedule_or_idle: the new
+ * event is counted, not queued, when the last event queued for its tick
+ * is h(ctx) (the slot's last record is its last event by (when, seq): one
+ * for another tick says no; the overflow heap's events for a tick run
+ * before the wheel's, which were queued after them). */
+static inline __attribute__((always_inline)) eng_id
+schedule_in(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg, int idle_behind)
 {
 	assert(when >= e->hd.now && "event scheduled into the past");
 	if (when < e->hd.now)
@@ -273,9 +273,17 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	/* the window: the ENG_SLOTS slots from the start of eng_now's */
 	uint64_t base = e->hd.now & ~(ENG_SLOT_TICKS - 1);
 	int far = when - base >= ENG_SLOTS * ENG_SLOT_TICKS;
-	if (__builtin_expect(far || e->pfree == ENG_NIL, 0)) {
-		hent x = {when, seq, h, ctx, arg};
-		return schedule_slow(e, &x, far);
+	if (__builtin_expect(far || e->pfree == ENG_NIL, 0))
+		return schedule_slow(e, when, h, ctx, arg, far);
+	if (idle_behind) {
+		uint32_t s = slot_of(when);
+		if (e->used[s / 64] >> (s % 64) & 1) { /* else its tail is stale */
+			const hent *t = &e->pool[e->tail[s]].ev;
+			if (t->when == when && t->h == h && t->ctx == ctx) {
+				e->seq = seq + 1; /* counted as dispatched: seq - 1 - queued */
+				return (eng_id)seq;
+			}
+		}
 	}
 	uint32_t i = e->pfree;
 	wrec *r = &e->pool[i];
@@ -286,16 +294,32 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
 	return (eng_id)seq;
 }
 
-/* O(n) in the queued events: the simulator never cancels (the tests do). */
+eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
+{
+	return schedule_in(e, when, h, ctx, arg, 0);
+}
+
+eng_id eng_schedule_or_idle(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg)
+{
+	return schedule_in(e, when, h, ctx, arg, 1);
+}
+
+/* O(n) in the queued events: the simulator never cancels (the tests do).
+ * The wheel's queued records are those of its used slots' lists (a free
+ * record keeps the sequence number of the event it held). */
 int eng_cancel(eng *e, eng_id id)
 {
 	hent *x = NULL;
 	for (uint32_t i = 0; i < e->n && !x; i++)
 		if (e->heap[i].seq == id)
 			x = &e->heap[i];
-	for (uint32_t i = 0; i < e->pcap && !x && id; i++)
-		if (e->pool[i].ev.seq == id)
-			x = &e->pool[i].ev;
+	for (uint32_t s = 0; s < ENG_SLOTS && !x && id; s++) {
+		if (!(e->used[s / 64] >> (s % 64) & 1))
+			continue;
+		for (uint32_t i = e->head[s]; i != ENG_NIL && !x; i = e->pool[i].next)
+			if (e->pool[i].ev.seq == id)
+				x = &e->pool[i].ev;
+	}
 	if (!x || !x->h)
 		return -1;
 	x->h = NULL;
@@ -306,28 +330,46 @@ int eng_cancel(eng *e, eng_id id)
 eng_status eng_run(eng *e, uint64_t limit)
 {
 	e->stop = 0;
-	while (e->wn || e->n) {
-		/* the first event: the wheel's or the overflow's, by (when, seq) */
-		uint32_t s = 0;
-		const hent *top = NULL;
+	for (;;) {
+		/* the first event: the wheel's or the overflow's, by (when, seq);
+		 * a wheel record (nearly every event) stays in hand, with its
+		 * index, for its removal below (a separate pop read the slot's
+		 * head again) */
+		eng_handler h;
+		void *ctx;
+		uint64_t arg, when;
+		uint32_t s = 0, i = 0;
+		wrec *r = NULL;
 		if (e->wn) {
 			s = first_used(e, slot_of(e->hd.now));
-			top = &e->pool[e->head[s]].ev;
+			i = e->head[s];
+			r = &e->pool[i];
+			if (e->n && before(&e->heap[0], &r->ev))
+				r = NULL;
+		} else if (!e->n) {
+			return ENG_EMPTY;
 		}
-		int wheel = top && !(e->n && before(&e->heap[0], top));
-		if (!wheel)
-			top = &e->heap[0];
-		if (top->h && top->when > limit)
+		const hent *top = r ? &r->ev : &e->heap[0];
+		h = top->h;
+		when = top->when;
+		if (h && when > limit)
 			return ENG_LIMIT;
 		/* copy out, then take it out: the handler may schedule (and so
 		 * move the heap or the pool) or cancel */
-		eng_handler h = top->h;
-		void *ctx = top->ctx;
-		uint64_t arg = top->arg, when = top->when;
-		if (wheel)
-			wheel_pop(e, s);
-		else
+		ctx = top->ctx;
+		arg = top->arg;
+		if (r) { /* out of its slot, into the free list */
+			/* the slot's bit cleared when it empties, without a branch
+			 * (see wheel_link: its tail is not reset) */
+			uint32_t next = r->next;
+			e->head[s] = next;
+			e->used[s / 64] &= ~((uint64_t)(next == ENG_NIL) << (s % 64));
+			r->next = e->pfree;
+			e->pfree = i;
+			e->wn--;
+		} else {
 			heap_pop(e);
+		}
 		if (!h) { /* cancelled: not run, counted or timed */
 			e->cancelled--;
 			e->dropped++;
@@ -340,7 +382,6 @@ eng_status eng_run(eng *e, uint64_t limit)
 			return ENG_STOPPED;
 		}
 	}
-	return ENG_EMPTY;
 }
 
 void eng_stop(eng *e)

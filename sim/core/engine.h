@@ -72,6 +72,16 @@ eng_id eng_schedule(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t ar
  * stale (already ran, already cancelled) or was never issued. */
 int eng_cancel(eng *e, eng_id id);
 
+/* eng_schedule for a caller that knows the event would do nothing if it
+ * ran right after another h(ctx) of the same tick (mem/memif.c: a dispatch
+ * right behind another): when the last event queued for `when` is h(ctx),
+ * the new one is counted, not queued. It takes its sequence number, as
+ * eng_schedule would, and counts as dispatched at once, so the events
+ * after it keep their order and eng_events, once eng_run has run to the
+ * end, is what it would have been. Otherwise (or when `when` is past the
+ * wheel's near future) it is eng_schedule. */
+eng_id eng_schedule_or_idle(eng *e, uint64_t when, eng_handler h, void *ctx, uint64_t arg);
+
 /* Dispatches events in (when, sequence) order while when <= limit. Returns
  * when the queue holds no live event, the next one is after limit, or a
  * handler called eng_stop (the current handler finishes first; the rest stay
