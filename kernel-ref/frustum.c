@@ -50,10 +50,6 @@ typedef struct fru_box {
 	float olo[3], ohi[3];
 	float idlo[3], idhi[3];
 	int pos[3], ok[3];
-	/* one origin (olo = ohi): the rays' directions lie in [dlo, dhi],
-	 * each component at most dmax in size (fru_tri_missed) */
-	int one;
-	float dlo[3], dhi[3], dmax;
 } fru_box;
 
 /* min and max of two floats that are not NaN (no libm call) */
@@ -95,7 +91,7 @@ static inline float fv_hmax(fv v)
 #endif
 }
 
-#define FRU_RANGES 9 /* at most, in one pass (fru_setup) */
+#define FRU_RANGES 6 /* at most, in one pass (fru_setup) */
 
 /* Smallest and largest x[j][i] over the lanes i of mask, for j < n, in one
  * pass over the lane groups; returns nonzero when one is NaN (the bounds
@@ -139,20 +135,15 @@ static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *
 static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t entered)
 {
 	const float *id[3] = {s->rc.idx, s->rc.idy, s->rc.idz};
-	const float *x[FRU_RANGES] = {s->rc.idx, s->rc.idy, s->rc.idz, p->ox, p->oy,
-	                              p->oz,     p->dx,     p->dy,     p->dz};
+	const float *x[FRU_RANGES] = {s->rc.idx, s->rc.idy, s->rc.idz, p->ox, p->oy, p->oz};
 	float lo[FRU_RANGES], hi[FRU_RANGES];
 	unsigned nan = lane_ranges(x, FRU_RANGES, entered, lo, hi);
 	int any = 0;
-	b->one = 1;
-	b->dmax = 0.0f;
 	for (int a = 0; a < 3; a++) {
 		b->idlo[a] = lo[a];
 		b->idhi[a] = hi[a];
 		b->olo[a] = lo[3 + a];
 		b->ohi[a] = hi[3 + a];
-		b->dlo[a] = lo[6 + a];
-		b->dhi[a] = hi[6 + a];
 		b->pos[a] = b->idlo[a] > 0.0f;
 		b->ok[a] =
 		    b->pos[a] ? b->idhi[a] < INFINITY : b->idhi[a] < 0.0f && b->idlo[a] > -INFINITY;
@@ -161,8 +152,6 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 			int first = __builtin_ctzll(entered);
 			b->idlo[a] = b->idhi[a] = id[a][first];
 		}
-		b->one &= b->olo[a] == b->ohi[a];
-		b->dmax = mx2(b->dmax, mx2(fabsf(b->dlo[a]), fabsf(b->dhi[a])));
 	}
 	return nan == 0 && any;
 }
@@ -196,47 +185,6 @@ static void fru_plane(const fru_box *b, int axis, float split, float *lo, float 
 	}
 	*lo = tl - fabsf(tl) * FRU_MARGIN;
 	*hi = th + fabsf(th) * FRU_MARGIN;
-}
-
-/* Triangle culling for a packet from one origin (Reshetov et al. 2005 §3
- * cull a leaf's triangles by the packet's frustum): 1 when no ray of the
- * packet can hit t. With the corners relative to the origin, ray d passes
- * inside the triangle only if the three triple products d . (a_k x
- * a_k+1) do not have both signs; over the box of the rays' directions each
- * product's range is an interval sum. If one edge's products are above
- * +margin for every ray and another's below -margin, every ray's Woop
- * test (isect.h) sees two edge functions of opposite sign and rejects:
- * they are these products over d[kz] (one factor for all three), computed
- * with an error within a few float roundings of |a_k|_1 |a_k+1|_1, far
- * inside margin = 1e-4 |a_k|_1 |a_k+1|_1 dmax (also above the rounding of
- * this test itself). So skipping t changes no hit. */
-static int fru_tri_missed(const void *ctx, const mimg_tri *t)
-{
-	const fru_box *b = ctx;
-	float a[3][3], l1[3];
-	for (int k = 0; k < 3; k++) {
-		for (int j = 0; j < 3; j++)
-			a[k][j] = t->v[k][j] - b->olo[j];
-		l1[k] = fabsf(a[k][0]) + fabsf(a[k][1]) + fabsf(a[k][2]);
-	}
-	int pos = 0, neg = 0;
-	for (int e = 0; e < 3; e++) {
-		const float *u = a[e], *v = a[(e + 1) % 3];
-		float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-		              u[0] * v[1] - u[1] * v[0]};
-		float lo = 0.0f, hi = 0.0f;
-		for (int j = 0; j < 3; j++) {
-			float x = n[j] * b->dlo[j], y = n[j] * b->dhi[j];
-			lo += mn2(x, y);
-			hi += mx2(x, y);
-		}
-		float margin = 1e-4f * l1[e] * l1[(e + 1) % 3] * b->dmax;
-		pos |= lo > margin;
-		neg |= hi < -margin;
-	}
-	if (fru_fault == FRU_FAULT_CULL_ONE_SIGN)
-		return neg;
-	return pos && neg;
 }
 
 /* traverse.c's gamma(3): the per-ray widening of a split distance */
@@ -497,15 +445,11 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	while (fru_pop(w)) {
 		kd_node n = nodes[w->node];
 		if (kd_is_leaf(n)) {
-			/* triangle culling pays when many rays would test; rays of
-			 * one permutation take fru_isect, their triangles fetched
-			 * ahead */
-			int many = b->one && __builtin_popcountll(w->mask) >= 16;
-			int uni = s->rc.uniform;
-			pkt_leaf_hooks hk = {many ? fru_tri_missed : NULL, b,
-			                     uni ? fru_isect : NULL, uni};
+			/* rays of one permutation take fru_isect, their triangles
+			 * fetched ahead */
+			pkt_leaf_hooks hk = {fru_isect, 1};
 			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, cone, c,
-			               many || uni ? &hk : NULL);
+			               s->rc.uniform ? &hk : NULL);
 			w->mask = 0; /* pop next */
 		} else {
 			__builtin_prefetch(&nodes[kd_left(n)]);

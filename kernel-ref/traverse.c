@@ -557,8 +557,6 @@ void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uin
 			}
 			continue;
 		}
-		if (hk && hk->missed && hk->missed(hk->ctx, tr))
-			continue;
 		if (hk && hk->isect)
 			hk->isect(s, p, tr, mask, ta);
 		else
