@@ -207,9 +207,13 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		kz0 &= valid;
 		kz1 &= valid;
 		fv dkx = sel3(kx0, kx1, dx, dy, dz), dky = sel3(ky0, ky1, dx, dy, dz);
+		fv id[3] = {fv_sel(valid, one / dx, zero), fv_sel(valid, one / dy, zero),
+		            fv_sel(valid, one / dz, zero)};
 		fv_store(rc->sx + o, fv_sel(valid, dkx / dkz, zero));
 		fv_store(rc->sy + o, fv_sel(valid, dky / dkz, zero));
-		fv_store(rc->sz + o, fv_sel(valid, one / dkz, zero));
+		/* 1 / d[kz] is one of the three (an invalid lane's kz masks are
+		 * zero and its 1/dz is zero) */
+		fv_store(rc->sz + o, sel3(kz0, kz1, id[0], id[1], id[2]));
 		memcpy(rc->kz0 + o, &kz0, sizeof kz0);
 		memcpy(rc->kz1 + o, &kz1, sizeof kz1);
 		memcpy(rc->kx0 + o, &kx0, sizeof kx0);
@@ -219,8 +223,6 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		iv ks[6] = {kz0, kz1, kx0, kx1, ky0, ky1};
 		for (int k = 0; k < 6; k++)
 			mk[k] |= (uint64_t)iv_bits(ks[k]) << o;
-		fv id[3] = {fv_sel(valid, one / dx, zero), fv_sel(valid, one / dy, zero),
-		            fv_sel(valid, one / dz, zero)};
 		fv_store(rc->idx + o, id[0]);
 		fv_store(rc->idy + o, id[1]);
 		fv_store(rc->idz + o, id[2]);
