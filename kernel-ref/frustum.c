@@ -210,6 +210,7 @@ typedef struct fru_walker {
 	packet *p;
 	fru_entry stk[PKT_STACK_MAX];
 	int sp;
+	int nseg; /* stk[0 .. nseg-1] have their buffers (fru_step gives them) */
 	uint32_t node;
 	uint64_t mask;
 	trav_entry *cur, *spare; /* the current node's segments; the scratch */
@@ -352,6 +353,8 @@ static uint32_t fru_step(fru_walker *w, kd_node n)
 	int near_below = b->ok[axis] ? b->pos[axis] : !signbit(idv[__builtin_ctzll(w->mask)]);
 	uint32_t nnode = near_below ? left : left + 1, fnode = near_below ? left + 1 : left;
 	int room = w->sp < w->s->stack_max;
+	if (room && w->sp == w->nseg) /* the stack's first use of this slot */
+		w->stk[w->nseg++].seg = &w->s->stack[w->sp];
 	trav_entry *fseg = room ? w->stk[w->sp].seg : w->spare;
 	uint64_t fmask, nmask = fru_lanes(w, n, near_below, b->ok[axis], fseg, &fmask);
 	float ftn = mx2(w->tn, lo), ntf = mn2(w->tf, hi), otf = w->tf;
@@ -430,9 +433,12 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
                      const pkt_cone *cone, trav_counts *c)
 {
 	const kd_node *nodes = mimg_nodes(m);
-	fru_walker *w = &(fru_walker){.b = b, .s = s, .p = p};
-	for (int k = 0; k < s->stack_max; k++)
-		w->stk[k].seg = &s->stack[k];
+	fru_walker wk; /* stk's entries are set as the stack grows (fru_step) */
+	fru_walker *w = &wk;
+	w->b = b;
+	w->s = s;
+	w->p = p;
+	w->sp = w->nseg = 0;
 	w->cur = &s->cur;
 	w->spare = &s->spare;
 	w->node = s->cur.node;
@@ -442,6 +448,10 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	lane_ranges(seg, 2, w->mask, lo, hi);
 	w->tn = lo[0];
 	w->tf = hi[1];
+	/* the counts kept here during the walk (a counter in memory, read
+	 * and written at every step, held it up) */
+	uint64_t steps = 0;
+	int max_sp = 0;
 	while (fru_pop(w)) {
 		kd_node n = nodes[w->node];
 		if (kd_is_leaf(n)) {
@@ -457,10 +467,12 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 			if (pushed != UINT32_MAX)
 				__builtin_prefetch(&nodes[pushed]);
 		}
-		if (c) { /* as pkt_trace_run: the depth after the step */
-			c->node_steps++;
-			c->max_sp = (uint64_t)w->sp > c->max_sp ? (uint64_t)w->sp : c->max_sp;
-		}
+		steps++; /* as pkt_trace_run: the depth after the step */
+		max_sp = w->sp > max_sp ? w->sp : max_sp;
+	}
+	if (c) {
+		c->node_steps += steps;
+		c->max_sp = (uint64_t)max_sp > c->max_sp ? (uint64_t)max_sp : c->max_sp;
 	}
 }
 
