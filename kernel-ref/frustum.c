@@ -423,6 +423,34 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 	}
 }
 
+/* The leaf counts of a walk (trav_counts' fields), kept in locals. */
+typedef struct fru_counts {
+	uint64_t leaves, tris, ray_tris;
+} fru_counts;
+
+/* pkt_trace_leaf for rays of one permutation without cone culling: the
+ * same tests in the same order, so the same hits and counts (into k),
+ * with fru_isect called directly; the leaf's triangles fetched ahead. */
+static void fru_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
+                     uint64_t mask, fru_counts *k)
+{
+	const uint32_t *lists = mimg_lists(m) + first;
+	for (uint32_t j = 0; j < count; j++)
+		__builtin_prefetch(mimg_tri_at(m, lists[j]));
+	k->leaves++;
+	k->tris += count;
+	k->ray_tris += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
+	for (uint32_t j = 0; j < count && mask; j++) {
+		fru_isect(s, p, mimg_tri_at(m, lists[j]), mask, lists[j]);
+		if (s->shadow) /* an occluded shadow ray stops */
+			for (uint64_t b = mask; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				if (p->tri[i] != PKT_NOHIT)
+					mask &= ~(1ull << i);
+			}
+	}
+}
+
 /* pkt_trace_run with the packet shortcut (fru_step), the same pops
  * (fru_pop) and leaves, so the same counts; the segments change hands
  * instead of being copied (fru_walker). The next node's data is fetched
@@ -452,14 +480,18 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	 * and written at every step, held it up) */
 	uint64_t steps = 0;
 	int max_sp = 0;
+	fru_counts leaf = {0, 0, 0};
 	while (fru_pop(w)) {
 		kd_node n = nodes[w->node];
 		if (kd_is_leaf(n)) {
-			/* rays of one permutation take fru_isect, their triangles
-			 * fetched ahead */
+			/* rays of one permutation take fru_isect (fru_leaf where
+			 * no cone culls), their triangles fetched ahead */
 			pkt_leaf_hooks hk = {fru_isect, 1};
-			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, cone, c,
-			               s->rc.uniform ? &hk : NULL);
+			if (!cone && s->rc.uniform)
+				fru_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, &leaf);
+			else
+				pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, cone, c,
+				               s->rc.uniform ? &hk : NULL);
 			w->mask = 0; /* pop next */
 		} else {
 			__builtin_prefetch(&nodes[kd_left(n)]);
@@ -472,6 +504,9 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	}
 	if (c) {
 		c->node_steps += steps;
+		c->leaf_visits += leaf.leaves;
+		c->tri_tests += leaf.tris;
+		c->ray_tri_tests += leaf.ray_tris;
 		c->max_sp = (uint64_t)max_sp > c->max_sp ? (uint64_t)max_sp : c->max_sp;
 	}
 }
