@@ -661,26 +661,36 @@ static uint64_t miss_lanes(const packet *p)
 	return miss;
 }
 
-/* shade_packet_in's lean packet: the hits of p each
- * by shade_lane_lean into a slot of t, or by shade_lane where it does not
- * cover them or the packet spawns shadow packets; returns the lean lanes. The last untextured lean
- * hit's slot serves the next lanes on its triangle, which have the same kl, ka and counts
- * (neighbouring rays mostly do); their counts are summed here. */
+/* shade_packet_in's lean packet: the hits of p each by shade_lane_lean
+ * into a slot of t, or by shade_lane where it does not cover them or the
+ * packet spawns shadow packets; returns the lean lanes. The slot of an
+ * untextured lean hit serves the later lanes on its triangle, which have
+ * the same kl, ka and counts (neighbouring rays mostly do): the last
+ * one's and up to LEAN_MEMO others' are looked up; their lanes' counts are
+ * summed here. */
+#define LEAN_MEMO 8
 static uint64_t lean_hits(const shade_ctx *c, const shade_reader *rdr, const packet *p,
                           const spawn *sp, shade_counts *cnt, uint64_t hits, lean_tab *t)
 {
 	uint64_t lit = 0, memo = 0, nolight = 0, cuts = 0;
-	uint32_t last = PKT_NOHIT;
-	int ls = 0, lcut = 0, lnolight = 0;
+	uint32_t last = PKT_NOHIT, mtri[LEAN_MEMO];
+	uint8_t mslot[LEAN_MEMO], scut[PKT_RAYS], snolight[PKT_RAYS];
+	int ls = 0, nm = 0;
 	t->n = 0;
 	for (uint64_t b = hits; b; b &= b - 1) {
 		int i = __builtin_ctzll(b), cut;
-		if (p->tri[i] == last) {
-			t->slot[i] = (uint8_t)ls;
+		uint32_t tri = p->tri[i];
+		int s = tri == last ? ls : -1;
+		for (int q = 0; s < 0 && q < nm; q++)
+			s = mtri[q] == tri ? mslot[q] : -1;
+		if (s >= 0) {
+			t->slot[i] = (uint8_t)s;
 			memo++;
-			nolight += (uint64_t)lnolight;
-			cuts += (uint64_t)lcut;
+			nolight += snolight[s];
+			cuts += scut[s];
 			lit |= 1ull << i;
+			last = tri;
+			ls = s;
 			continue;
 		}
 		float kl;
@@ -690,17 +700,21 @@ static uint64_t lean_hits(const shade_ctx *c, const shade_reader *rdr, const pac
 			shade_lane(c, NULL, rdr, p, i, sp, cnt);
 			continue;
 		}
-		int s = t->n++;
+		s = t->n++;
 		t->kl[s] = kl;
 		t->ka[0][s] = a.x;
 		t->ka[1][s] = a.y;
 		t->ka[2][s] = a.z;
 		t->slot[i] = (uint8_t)s;
 		if (r == 2 || shade_fault == SHADE_FAULT_LEAN_MEMO_TEXTURED) {
-			last = p->tri[i];
+			scut[s] = (uint8_t)cut;
+			snolight[s] = c->nlights == 0 && kl > 0.0f;
+			last = tri;
 			ls = s;
-			lcut = cut;
-			lnolight = c->nlights == 0 && kl > 0.0f;
+			if (nm < LEAN_MEMO) {
+				mtri[nm] = tri;
+				mslot[nm++] = (uint8_t)s;
+			}
 		}
 		lit |= 1ull << i;
 	}
