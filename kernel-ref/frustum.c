@@ -387,9 +387,10 @@ static uint32_t fru_step(fru_walker *w, kd_node n)
  * order: the barycentrics' divisions are left to the lanes whose hit is
  * taken (a division is correctly rounded, in a lane or alone), which the
  * packet test spends on every lane of a group with a candidate. */
-static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
-                      uint32_t tri_addr)
+static inline void fru_isect_in(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
+                                uint32_t tri_addr, const mimg *m)
 {
+	int took = 0;
 	const pkt_rayc *rc = &s->rc;
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
@@ -413,6 +414,7 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 					p->tri[i] = tri_addr;
 				}
 			} else if (isect_better(t[l], tri_addr, p->t[i], p->tri[i])) {
+				took = 1;
 				p->t[i] = t[l];
 				p->tri[i] = tri_addr;
 				p->bu[i] = fru_fault == FRU_FAULT_BARY_SWAP ? w[l] / det[l]
@@ -421,6 +423,18 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 			}
 		}
 	}
+	/* the shader reads the hit triangle's shading record: fetched ahead */
+	if (m && took) {
+		uint64_t a = mimg_shade_addr(m, mimg_tri_index(m, tri_addr));
+		if (a < m->size)
+			__builtin_prefetch(m->bytes + a);
+	}
+}
+
+static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
+                      uint32_t tri_addr)
+{
+	fru_isect_in(s, p, tr, mask, tri_addr, NULL);
 }
 
 /* The leaf counts of a walk (trav_counts' fields), kept in locals. */
@@ -441,7 +455,7 @@ static void fru_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, ui
 	k->tris += count;
 	k->ray_tris += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
 	for (uint32_t j = 0; j < count && mask; j++) {
-		fru_isect(s, p, mimg_tri_at(m, lists[j]), mask, lists[j]);
+		fru_isect_in(s, p, mimg_tri_at(m, lists[j]), mask, lists[j], m);
 		if (s->shadow) /* an occluded shadow ray stops */
 			for (uint64_t b = mask; b; b &= b - 1) {
 				int i = __builtin_ctzll(b);
