@@ -50,6 +50,7 @@ typedef struct fru_box {
 	float olo[3], ohi[3];
 	float idlo[3], idhi[3];
 	int pos[3], ok[3];
+	int one; /* one origin (olo = ohi on every axis): fru_plane's short way */
 } fru_box;
 
 /* min and max of two floats that are not NaN (no libm call) */
@@ -130,6 +131,29 @@ static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *
 	return nan;
 }
 
+/* The smallest entry and the largest exit distance of e's rays in mask
+ * (lane_ranges' two of the four that are used). */
+static void seg_bounds(const trav_entry *e, uint64_t mask, float *tn, float *tf)
+{
+	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
+	fv mn = pinf, mx = ninf;
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(mask, g);
+		if (!gb)
+			continue;
+		fv n = fv_load(e->tn + SIMD_W * g), f = fv_load(e->tf + SIMD_W * g);
+		if (gb != SIMD_MASK) {
+			iv on = iv_from_bits(gb);
+			n = fv_sel(on, n, pinf);
+			f = fv_sel(on, f, ninf);
+		}
+		mn = fv_min(mn, n);
+		mx = fv_max(mx, f);
+	}
+	*tn = fv_hmin(mn);
+	*tf = fv_hmax(mx);
+}
+
 /* Fills b from the state pkt_trav_begin_fp left; 0 when no axis can take
  * the packet step (or a ray has a NaN origin or direction). */
 static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t entered)
@@ -139,6 +163,7 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 	float lo[FRU_RANGES], hi[FRU_RANGES];
 	unsigned nan = lane_ranges(x, FRU_RANGES, entered, lo, hi);
 	int any = 0;
+	b->one = 1;
 	for (int a = 0; a < 3; a++) {
 		b->idlo[a] = lo[a];
 		b->idhi[a] = hi[a];
@@ -148,6 +173,7 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 		b->ok[a] =
 		    b->pos[a] ? b->idhi[a] < INFINITY : b->idhi[a] < 0.0f && b->idlo[a] > -INFINITY;
 		any |= b->ok[a];
+		b->one &= b->olo[a] == b->ohi[a];
 		if (fru_fault == FRU_FAULT_ONE_DIRECTION) {
 			int first = __builtin_ctzll(entered);
 			b->idlo[a] = b->idhi[a] = id[a][first];
@@ -174,10 +200,19 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered)
  * axis (the whole line if a bound overflows). */
 static void fru_plane(const fru_box *b, int axis, float split, float *lo, float *hi)
 {
-	float clo = split - b->ohi[axis], chi = split - b->olo[axis];
-	float p0 = clo * b->idlo[axis], p1 = clo * b->idhi[axis];
-	float p2 = chi * b->idlo[axis], p3 = chi * b->idhi[axis];
-	float tl = mn2(mn2(p0, p1), mn2(p2, p3)), th = mx2(mx2(p0, p1), mx2(p2, p3));
+	float tl, th;
+	if (b->one) { /* clo = chi: the four products are two */
+		float c = split - b->olo[axis];
+		float p0 = c * b->idlo[axis], p1 = c * b->idhi[axis];
+		tl = mn2(p0, p1);
+		th = mx2(p0, p1);
+	} else {
+		float clo = split - b->ohi[axis], chi = split - b->olo[axis];
+		float p0 = clo * b->idlo[axis], p1 = clo * b->idhi[axis];
+		float p2 = chi * b->idlo[axis], p3 = chi * b->idhi[axis];
+		tl = mn2(mn2(p0, p1), mn2(p2, p3));
+		th = mx2(mx2(p0, p1), mx2(p2, p3));
+	}
 	if (!(fabsf(tl) < INFINITY && fabsf(th) < INFINITY)) {
 		*lo = -INFINITY;
 		*hi = INFINITY;
@@ -485,11 +520,7 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 	w->spare = &s->spare;
 	w->node = s->cur.node;
 	w->mask = s->cur.mask;
-	const float *seg[2] = {s->cur.tn, s->cur.tf};
-	float lo[2], hi[2];
-	lane_ranges(seg, 2, w->mask, lo, hi);
-	w->tn = lo[0];
-	w->tf = hi[1];
+	seg_bounds(&s->cur, w->mask, &w->tn, &w->tf);
 	/* the counts kept here during the walk (a counter in memory, read
 	 * and written at every step, held it up) */
 	uint64_t steps = 0;
