@@ -204,16 +204,21 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		iv kx1 = (iv)fv_sel(neg, (fv)kz2, (fv)kz0) & valid;
 		iv ky0 = (iv)fv_sel(neg, (fv)kz2, (fv)kz1) & valid;
 		iv ky1 = (iv)fv_sel(neg, (fv)kz0, (fv)kz2) & valid;
-		kz0 &= valid;
-		kz1 &= valid;
 		fv dkx = sel3(kx0, kx1, dx, dy, dz), dky = sel3(ky0, ky1, dx, dy, dz);
 		fv id[3] = {fv_sel(valid, one / dx, zero), fv_sel(valid, one / dy, zero),
 		            fv_sel(valid, one / dz, zero)};
+#if defined(__x86_64__) && defined(__GNUC__)
+		/* an empty asm hides how id was made: gcc 12 otherwise redid two
+		 * of its divisions unmasked for sz (seven divisions in all) */
+		__asm__("" : "+v"(id[0]), "+v"(id[1]), "+v"(id[2]));
+#endif
 		fv_store(rc->sx + o, fv_sel(valid, dkx / dkz, zero));
 		fv_store(rc->sy + o, fv_sel(valid, dky / dkz, zero));
-		/* 1 / d[kz] is one of the three (an invalid lane's kz masks are
-		 * zero and its 1/dz is zero) */
+		/* 1 / d[kz] is the one of the three that dkz picks (an invalid
+		 * lane's are all zero): five divisions, not six */
 		fv_store(rc->sz + o, sel3(kz0, kz1, id[0], id[1], id[2]));
+		kz0 &= valid;
+		kz1 &= valid;
 		memcpy(rc->kz0 + o, &kz0, sizeof kz0);
 		memcpy(rc->kz1 + o, &kz1, sizeof kz1);
 		memcpy(rc->kx0 + o, &kx0, sizeof kx0);
