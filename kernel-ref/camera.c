@@ -6,6 +6,7 @@
 
 #include "kernel-ref/sudoku.h"
 
+#include <stddef.h>
 #include <string.h>
 
 void cam_setup(cam_frame *c, const camera *cam, int width, int height)
@@ -119,15 +120,24 @@ static void pinhole_packet(const cam_frame *c, int tx, int ty, packet *p)
 
 int cam_sample_packet(const cam_frame *c, int tx, int ty, int s, packet *p)
 {
-	pkt_clear(p, PKT_PRIMARY, 0);
-	p->sample = (uint16_t)s;
-	p->n = PKT_RAYS;
 	if (c->spp == 1 && c->lens_r == 0.0f && c->motion.x == 0.0f && c->motion.y == 0.0f &&
 	    c->motion.z == 0.0f && (tx + 1) * TILE_W <= c->width &&
 	    (ty + 1) * TILE_H <= c->height) {
+		/* pkt_clear's bytes, but the arrays before t, which
+		 * pinhole_packet writes in every lane, are not zeroed first */
+		_Static_assert(offsetof(packet, t) == 11 * PKT_RAYS * sizeof(float),
+		               "cam_sample_packet: pinhole_packet writes ox .. wb, nothing else");
+		memset(&p->t, 0, sizeof *p - offsetof(packet, t));
+		p->type = PKT_PRIMARY;
+		p->depth = 0;
+		p->sample = (uint16_t)s;
+		p->n = PKT_RAYS;
 		pinhole_packet(c, tx, ty, p);
 		return PKT_RAYS;
 	}
+	pkt_clear(p, PKT_PRIMARY, 0);
+	p->sample = (uint16_t)s;
+	p->n = PKT_RAYS;
 	int nvalid = 0;
 	for (int j = 0; j < TILE_H; j++)
 		for (int i = 0; i < TILE_W; i++) {
