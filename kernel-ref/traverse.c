@@ -111,6 +111,15 @@ static inline void trav_cut(int pos, float tn, float tf, float lo, float hi, flo
 
 /* ---- setup ------------------------------------------------------------ */
 
+/* A short loop over vectors unrolled by gcc (its rolled loop kept them in
+ * memory); other compilers decide themselves. */
+#if defined(__GNUC__) && !defined(__clang__)
+#define TRAV_PRAGMA(x) _Pragma(#x)
+#define TRAV_UNROLL(n) TRAV_PRAGMA(GCC unroll n)
+#else
+#define TRAV_UNROLL(n)
+#endif
+
 /* fminf/fmaxf semantics lane by lane (a NaN operand yields the other), so
  * the vector clip rounds exactly like ray_trace's scalar one. */
 static inline fv fv_fmin(fv a, fv b)
@@ -226,6 +235,9 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		memcpy(rc->ky0 + o, &ky0, sizeof ky0);
 		memcpy(rc->ky1 + o, &ky1, sizeof ky1);
 		iv ks[6] = {kz0, kz1, kx0, kx1, ky0, ky1};
+		/* this loop and the clip's unrolled: gcc's loops kept their
+		 * vectors and mk in memory */
+		TRAV_UNROLL(6)
 		for (int k = 0; k < 6; k++)
 			mk[k] |= (uint64_t)iv_bits(ks[k]) << o;
 		fv_store(rc->idx + o, id[0]);
@@ -240,6 +252,7 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		 * segment open on that axis. */
 		fv org[3] = {fv_load(p->ox + o), fv_load(p->oy + o), fv_load(p->oz + o)};
 		fv tn = zero, tf = tmax;
+		TRAV_UNROLL(3)
 		for (int a = 0; a < 3; a++) {
 			fv t0 = (lo[a] - org[a]) * id[a], t1 = (hi[a] - org[a]) * id[a];
 			fv n = fv_fmin(t0, t1), f = fv_fmax(t0, t1);
