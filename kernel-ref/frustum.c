@@ -92,18 +92,28 @@ static inline float fv_hmax(fv v)
 #endif
 }
 
-#define FRU_RANGES 6 /* at most, in one pass (fru_setup) */
+#define FRU_RANGES 6 /* in one pass (fru_setup) */
 
-/* Smallest and largest x[j][i] over the lanes i of mask, for j < n, in one
- * pass over the lane groups; returns nonzero when one is NaN (the bounds
- * are then meaningless). A group with all lanes in mask needs no
+/* A short loop over vectors unrolled by gcc (its rolled loop kept them in
+ * memory); other compilers decide themselves. */
+#if defined(__GNUC__) && !defined(__clang__)
+#define FRU_PRAGMA(x) _Pragma(#x)
+#define FRU_UNROLL(n) FRU_PRAGMA(GCC unroll n)
+#else
+#define FRU_UNROLL(n)
+#endif
+
+/* Smallest and largest x[j][i] over the lanes i of mask, for j <
+ * FRU_RANGES, in one pass over the lane groups; returns nonzero when one
+ * is NaN (the bounds are then meaningless). A group with all lanes in mask needs no
  * selects. Which zero a range of +0 and -0 ends on does not matter: the
  * bounds only decide shortcuts (file comment), by value. */
-static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *lo, float *hi)
+static unsigned lane_ranges(const float *const *x, uint64_t mask, float *lo, float *hi)
 {
 	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
 	fv mn[FRU_RANGES], mx[FRU_RANGES];
-	for (int j = 0; j < n; j++) {
+	FRU_UNROLL(6)
+	for (int j = 0; j < FRU_RANGES; j++) {
 		mn[j] = pinf;
 		mx[j] = ninf;
 	}
@@ -113,7 +123,8 @@ static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *
 		if (!gb)
 			continue;
 		iv on = iv_from_bits(gb);
-		for (int j = 0; j < n; j++) {
+		FRU_UNROLL(6)
+		for (int j = 0; j < FRU_RANGES; j++) {
 			fv v = fv_load(x[j] + SIMD_W * g), vl = v, vh = v;
 			if (gb != SIMD_MASK) {
 				vl = fv_sel(on, v, pinf);
@@ -124,7 +135,8 @@ static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *
 			mx[j] = fv_max(mx[j], vh);
 		}
 	}
-	for (int j = 0; j < n; j++) {
+	FRU_UNROLL(6)
+	for (int j = 0; j < FRU_RANGES; j++) {
 		lo[j] = fv_hmin(mn[j]);
 		hi[j] = fv_hmax(mx[j]);
 	}
@@ -161,7 +173,7 @@ static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t 
 	const float *id[3] = {s->rc.idx, s->rc.idy, s->rc.idz};
 	const float *x[FRU_RANGES] = {s->rc.idx, s->rc.idy, s->rc.idz, p->ox, p->oy, p->oz};
 	float lo[FRU_RANGES], hi[FRU_RANGES];
-	unsigned nan = lane_ranges(x, FRU_RANGES, entered, lo, hi);
+	unsigned nan = lane_ranges(x, entered, lo, hi);
 	int any = 0;
 	b->one = 1;
 	for (int a = 0; a < 3; a++) {
