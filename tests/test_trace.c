@@ -471,7 +471,10 @@ Test(trace, lean_shading_equals_the_general_shader)
  * order: the same floats, bit for bit, for cameras looking along every
  * axis sign. Written to catch the vector code summing or scaling in
  * another order than the per-ray path (sample_ray) rounds, e.g.
- * dx * dx + (dy * dy + dz * dz), or d / len for d * (1 / len). */
+ * dx * dx + (dy * dy + dz * dz), or d / len for d * (1 / len), and (with
+ * 16 lanes, where a lane group's y comes from two of the tile's eight
+ * rows) a group given the wrong rows (seen to fail with the first two
+ * swapped). */
 Test(trace, pinhole_packet_is_the_per_ray_arithmetic)
 {
 	static packet p;
