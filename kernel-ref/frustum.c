@@ -105,9 +105,9 @@ static inline float fv_hmax(fv v)
 
 /* Smallest and largest x[j][i] over the lanes i of mask, for j <
  * FRU_RANGES, in one pass over the lane groups; returns nonzero when one
- * is NaN (the bounds are then meaningless). A group with all lanes in mask needs no
- * selects. Which zero a range of +0 and -0 ends on does not matter: the
- * bounds only decide shortcuts (file comment), by value. */
+ * is NaN (the bounds are then meaningless). A group with all lanes in
+ * mask needs no selects. Which zero a range of +0 and -0 ends on does not
+ * matter: the bounds only decide shortcuts (file comment), by value. */
 static unsigned lane_ranges(const float *const *x, uint64_t mask, float *lo, float *hi)
 {
 	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
@@ -433,7 +433,9 @@ static uint32_t fru_step(fru_walker *w, kd_node n)
  * (pkt_rayc.uniform, full precision), the same operations in the same
  * order: the barycentrics' divisions are left to the lanes whose hit is
  * taken (a division is correctly rounded, in a lane or alone), which the
- * packet test spends on every lane of a group with a candidate. */
+ * packet test spends on every lane of a group with a candidate. With the
+ * image m (non-NULL), a triangle whose hit is taken has its shading
+ * record fetched ahead for the shader. */
 static inline void fru_isect_in(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
                                 uint32_t tri_addr, const mimg *m)
 {
@@ -478,6 +480,8 @@ static inline void fru_isect_in(trav_state *s, packet *p, const mimg_tri *tr, ui
 	}
 }
 
+/* fru_isect_in as pkt_trace_leaf's hook (with cone culling), which has
+ * no image at hand for the shading record's fetch. */
 static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
                       uint32_t tri_addr)
 {
