@@ -6,6 +6,7 @@
 
 #include "kernel-ref/sudoku.h"
 
+#include <stddef.h>
 #include <string.h>
 
 void cam_setup(cam_frame *c, const camera *cam, int width, int height)
@@ -86,16 +87,40 @@ int cam_primary_packet(const cam_frame *c, int tx, int ty, packet *p)
  * frame. */
 static void pinhole_packet(const cam_frame *c, int tx, int ty, packet *p)
 {
+#if SIMD_W == 16 && TILE_W == 8 && TILE_H == 8 && defined(__GNUC__) && __GNUC__ >= 12
+	/* A lane group is two tile rows: a pixel's x depends on its column,
+	 * its y on its row, so the tile's eight of each, in one 8-lane vector
+	 * each, are all there is to compute (the scalar loop's 128 divisions
+	 * and its stores read back as vectors, which the store buffer cannot
+	 * forward, cost more than the directions) */
+	typedef float f8 __attribute__((vector_size(32)));
+	const f8 i8 = {0, 1, 2, 3, 4, 5, 6, 7};
+	f8 x8 = (float)(tx * TILE_W) + i8, y8 = (float)(ty * TILE_H) + i8;
+	f8 cx = (2.0f * (x8 + 0.5f) / (float)c->width - 1.0f) * c->sx;
+	f8 ry = (1.0f - 2.0f * (y8 + 0.5f) / (float)c->height) * c->sy;
+	const fv xs =
+	    __builtin_shufflevector(cx, cx, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
+	const fv ys[4] = {
+	    __builtin_shufflevector(ry, ry, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1),
+	    __builtin_shufflevector(ry, ry, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3, 3, 3, 3, 3, 3, 3),
+	    __builtin_shufflevector(ry, ry, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 5, 5, 5, 5, 5),
+	    __builtin_shufflevector(ry, ry, 6, 6, 6, 6, 6, 6, 6, 6, 7, 7, 7, 7, 7, 7, 7, 7)};
+#else
 	float px[PKT_RAYS], py[PKT_RAYS];
 	for (int l = 0; l < PKT_RAYS; l++) {
 		float x = (float)(tx * TILE_W + l % TILE_W), y = (float)(ty * TILE_H + l / TILE_W);
 		px[l] = (2.0f * (x + 0.5f) / (float)c->width - 1.0f) * c->sx;
 		py[l] = (1.0f - 2.0f * (y + 0.5f) / (float)c->height) * c->sy;
 	}
+#endif
 	/* the directions SIMD_W lanes at a time: the same operations, each
 	 * correctly rounded in a lane as alone */
 	for (int o = 0; o < PKT_RAYS; o += SIMD_W) {
+#if SIMD_W == 16 && TILE_W == 8 && TILE_H == 8 && defined(__GNUC__) && __GNUC__ >= 12
+		fv x = xs, y = ys[o / SIMD_W];
+#else
 		fv x = fv_load(px + o), y = fv_load(py + o);
+#endif
 		fv dx = fv_set1(c->w.x) + (fv_set1(c->u.x) * x + fv_set1(c->v.x) * y);
 		fv dy = fv_set1(c->w.y) + (fv_set1(c->u.y) * x + fv_set1(c->v.y) * y);
 		fv dz = fv_set1(c->w.z) + (fv_set1(c->u.z) * x + fv_set1(c->v.z) * y);
@@ -119,15 +144,24 @@ static void pinhole_packet(const cam_frame *c, int tx, int ty, packet *p)
 
 int cam_sample_packet(const cam_frame *c, int tx, int ty, int s, packet *p)
 {
-	pkt_clear(p, PKT_PRIMARY, 0);
-	p->sample = (uint16_t)s;
-	p->n = PKT_RAYS;
 	if (c->spp == 1 && c->lens_r == 0.0f && c->motion.x == 0.0f && c->motion.y == 0.0f &&
 	    c->motion.z == 0.0f && (tx + 1) * TILE_W <= c->width &&
 	    (ty + 1) * TILE_H <= c->height) {
+		/* pkt_clear's bytes, but the arrays before t, which
+		 * pinhole_packet writes in every lane, are not zeroed first */
+		_Static_assert(offsetof(packet, t) == 11 * PKT_RAYS * sizeof(float),
+		               "cam_sample_packet: pinhole_packet writes ox .. wb, nothing else");
+		memset(&p->t, 0, sizeof *p - offsetof(packet, t));
+		p->type = PKT_PRIMARY;
+		p->depth = 0;
+		p->sample = (uint16_t)s;
+		p->n = PKT_RAYS;
 		pinhole_packet(c, tx, ty, p);
 		return PKT_RAYS;
 	}
+	pkt_clear(p, PKT_PRIMARY, 0);
+	p->sample = (uint16_t)s;
+	p->n = PKT_RAYS;
 	int nvalid = 0;
 	for (int j = 0; j < TILE_H; j++)
 		for (int i = 0; i < TILE_W; i++) {

@@ -50,10 +50,7 @@ typedef struct fru_box {
 	float olo[3], ohi[3];
 	float idlo[3], idhi[3];
 	int pos[3], ok[3];
-	/* one origin (olo = ohi): the rays' directions lie in [dlo, dhi],
-	 * each component at most dmax in size (fru_tri_missed) */
-	int one;
-	float dlo[3], dhi[3], dmax;
+	int one; /* one origin (olo = ohi on every axis): fru_plane's short way */
 } fru_box;
 
 /* min and max of two floats that are not NaN (no libm call) */
@@ -95,18 +92,28 @@ static inline float fv_hmax(fv v)
 #endif
 }
 
-#define FRU_RANGES 9 /* at most, in one pass (fru_setup) */
+#define FRU_RANGES 6 /* in one pass (fru_setup) */
 
-/* Smallest and largest x[j][i] over the lanes i of mask, for j < n, in one
- * pass over the lane groups; returns nonzero when one is NaN (the bounds
- * are then meaningless). A group with all lanes in mask needs no
- * selects. Which zero a range of +0 and -0 ends on does not matter: the
- * bounds only decide shortcuts (file comment), by value. */
-static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *lo, float *hi)
+/* A short loop over vectors unrolled by gcc (its rolled loop kept them in
+ * memory); other compilers decide themselves. */
+#if defined(__GNUC__) && !defined(__clang__)
+#define FRU_PRAGMA(x) _Pragma(#x)
+#define FRU_UNROLL(n) FRU_PRAGMA(GCC unroll n)
+#else
+#define FRU_UNROLL(n)
+#endif
+
+/* Smallest and largest x[j][i] over the lanes i of mask, for j <
+ * FRU_RANGES, in one pass over the lane groups; returns nonzero when one
+ * is NaN (the bounds are then meaningless). A group with all lanes in
+ * mask needs no selects. Which zero a range of +0 and -0 ends on does not
+ * matter: the bounds only decide shortcuts (file comment), by value. */
+static unsigned lane_ranges(const float *const *x, uint64_t mask, float *lo, float *hi)
 {
 	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
 	fv mn[FRU_RANGES], mx[FRU_RANGES];
-	for (int j = 0; j < n; j++) {
+	FRU_UNROLL(6)
+	for (int j = 0; j < FRU_RANGES; j++) {
 		mn[j] = pinf;
 		mx[j] = ninf;
 	}
@@ -116,7 +123,8 @@ static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *
 		if (!gb)
 			continue;
 		iv on = iv_from_bits(gb);
-		for (int j = 0; j < n; j++) {
+		FRU_UNROLL(6)
+		for (int j = 0; j < FRU_RANGES; j++) {
 			fv v = fv_load(x[j] + SIMD_W * g), vl = v, vh = v;
 			if (gb != SIMD_MASK) {
 				vl = fv_sel(on, v, pinf);
@@ -127,11 +135,35 @@ static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *
 			mx[j] = fv_max(mx[j], vh);
 		}
 	}
-	for (int j = 0; j < n; j++) {
+	FRU_UNROLL(6)
+	for (int j = 0; j < FRU_RANGES; j++) {
 		lo[j] = fv_hmin(mn[j]);
 		hi[j] = fv_hmax(mx[j]);
 	}
 	return nan;
+}
+
+/* The smallest entry and the largest exit distance of e's rays in mask
+ * (lane_ranges' two of the four that are used). */
+static void seg_bounds(const trav_entry *e, uint64_t mask, float *tn, float *tf)
+{
+	const fv pinf = fv_set1(INFINITY), ninf = fv_set1(-INFINITY);
+	fv mn = pinf, mx = ninf;
+	for (int g = 0; g < NGROUPS; g++) {
+		unsigned gb = grp_bits(mask, g);
+		if (!gb)
+			continue;
+		fv n = fv_load(e->tn + SIMD_W * g), f = fv_load(e->tf + SIMD_W * g);
+		if (gb != SIMD_MASK) {
+			iv on = iv_from_bits(gb);
+			n = fv_sel(on, n, pinf);
+			f = fv_sel(on, f, ninf);
+		}
+		mn = fv_min(mn, n);
+		mx = fv_max(mx, f);
+	}
+	*tn = fv_hmin(mn);
+	*tf = fv_hmax(mx);
 }
 
 /* Fills b from the state pkt_trav_begin_fp left; 0 when no axis can take
@@ -139,30 +171,25 @@ static unsigned lane_ranges(const float *const *x, int n, uint64_t mask, float *
 static int fru_setup(fru_box *b, const trav_state *s, const packet *p, uint64_t entered)
 {
 	const float *id[3] = {s->rc.idx, s->rc.idy, s->rc.idz};
-	const float *x[FRU_RANGES] = {s->rc.idx, s->rc.idy, s->rc.idz, p->ox, p->oy,
-	                              p->oz,     p->dx,     p->dy,     p->dz};
+	const float *x[FRU_RANGES] = {s->rc.idx, s->rc.idy, s->rc.idz, p->ox, p->oy, p->oz};
 	float lo[FRU_RANGES], hi[FRU_RANGES];
-	unsigned nan = lane_ranges(x, FRU_RANGES, entered, lo, hi);
+	unsigned nan = lane_ranges(x, entered, lo, hi);
 	int any = 0;
 	b->one = 1;
-	b->dmax = 0.0f;
 	for (int a = 0; a < 3; a++) {
 		b->idlo[a] = lo[a];
 		b->idhi[a] = hi[a];
 		b->olo[a] = lo[3 + a];
 		b->ohi[a] = hi[3 + a];
-		b->dlo[a] = lo[6 + a];
-		b->dhi[a] = hi[6 + a];
 		b->pos[a] = b->idlo[a] > 0.0f;
 		b->ok[a] =
 		    b->pos[a] ? b->idhi[a] < INFINITY : b->idhi[a] < 0.0f && b->idlo[a] > -INFINITY;
 		any |= b->ok[a];
+		b->one &= b->olo[a] == b->ohi[a];
 		if (fru_fault == FRU_FAULT_ONE_DIRECTION) {
 			int first = __builtin_ctzll(entered);
 			b->idlo[a] = b->idhi[a] = id[a][first];
 		}
-		b->one &= b->olo[a] == b->ohi[a];
-		b->dmax = mx2(b->dmax, mx2(fabsf(b->dlo[a]), fabsf(b->dhi[a])));
 	}
 	return nan == 0 && any;
 }
@@ -185,10 +212,19 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered)
  * axis (the whole line if a bound overflows). */
 static void fru_plane(const fru_box *b, int axis, float split, float *lo, float *hi)
 {
-	float clo = split - b->ohi[axis], chi = split - b->olo[axis];
-	float p0 = clo * b->idlo[axis], p1 = clo * b->idhi[axis];
-	float p2 = chi * b->idlo[axis], p3 = chi * b->idhi[axis];
-	float tl = mn2(mn2(p0, p1), mn2(p2, p3)), th = mx2(mx2(p0, p1), mx2(p2, p3));
+	float tl, th;
+	if (b->one) { /* clo = chi: the four products are two */
+		float c = split - b->olo[axis];
+		float p0 = c * b->idlo[axis], p1 = c * b->idhi[axis];
+		tl = mn2(p0, p1);
+		th = mx2(p0, p1);
+	} else {
+		float clo = split - b->ohi[axis], chi = split - b->olo[axis];
+		float p0 = clo * b->idlo[axis], p1 = clo * b->idhi[axis];
+		float p2 = chi * b->idlo[axis], p3 = chi * b->idhi[axis];
+		tl = mn2(mn2(p0, p1), mn2(p2, p3));
+		th = mx2(mx2(p0, p1), mx2(p2, p3));
+	}
 	if (!(fabsf(tl) < INFINITY && fabsf(th) < INFINITY)) {
 		*lo = -INFINITY;
 		*hi = INFINITY;
@@ -196,47 +232,6 @@ static void fru_plane(const fru_box *b, int axis, float split, float *lo, float 
 	}
 	*lo = tl - fabsf(tl) * FRU_MARGIN;
 	*hi = th + fabsf(th) * FRU_MARGIN;
-}
-
-/* Triangle culling for a packet from one origin (Reshetov et al. 2005 §3
- * cull a leaf's triangles by the packet's frustum): 1 when no ray of the
- * packet can hit t. With the corners relative to the origin, ray d passes
- * inside the triangle only if the three triple products d . (a_k x
- * a_k+1) do not have both signs; over the box of the rays' directions each
- * product's range is an interval sum. If one edge's products are above
- * +margin for every ray and another's below -margin, every ray's Woop
- * test (isect.h) sees two edge functions of opposite sign and rejects:
- * they are these products over d[kz] (one factor for all three), computed
- * with an error within a few float roundings of |a_k|_1 |a_k+1|_1, far
- * inside margin = 1e-4 |a_k|_1 |a_k+1|_1 dmax (also above the rounding of
- * this test itself). So skipping t changes no hit. */
-static int fru_tri_missed(const void *ctx, const mimg_tri *t)
-{
-	const fru_box *b = ctx;
-	float a[3][3], l1[3];
-	for (int k = 0; k < 3; k++) {
-		for (int j = 0; j < 3; j++)
-			a[k][j] = t->v[k][j] - b->olo[j];
-		l1[k] = fabsf(a[k][0]) + fabsf(a[k][1]) + fabsf(a[k][2]);
-	}
-	int pos = 0, neg = 0;
-	for (int e = 0; e < 3; e++) {
-		const float *u = a[e], *v = a[(e + 1) % 3];
-		float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-		              u[0] * v[1] - u[1] * v[0]};
-		float lo = 0.0f, hi = 0.0f;
-		for (int j = 0; j < 3; j++) {
-			float x = n[j] * b->dlo[j], y = n[j] * b->dhi[j];
-			lo += mn2(x, y);
-			hi += mx2(x, y);
-		}
-		float margin = 1e-4f * l1[e] * l1[(e + 1) % 3] * b->dmax;
-		pos |= lo > margin;
-		neg |= hi < -margin;
-	}
-	if (fru_fault == FRU_FAULT_CULL_ONE_SIGN)
-		return neg;
-	return pos && neg;
 }
 
 /* traverse.c's gamma(3): the per-ray widening of a split distance */
@@ -262,6 +257,7 @@ typedef struct fru_walker {
 	packet *p;
 	fru_entry stk[PKT_STACK_MAX];
 	int sp;
+	int nseg; /* stk[0 .. nseg-1] have their buffers (fru_step gives them) */
 	uint32_t node;
 	uint64_t mask;
 	trav_entry *cur, *spare; /* the current node's segments; the scratch */
@@ -404,6 +400,8 @@ static uint32_t fru_step(fru_walker *w, kd_node n)
 	int near_below = b->ok[axis] ? b->pos[axis] : !signbit(idv[__builtin_ctzll(w->mask)]);
 	uint32_t nnode = near_below ? left : left + 1, fnode = near_below ? left + 1 : left;
 	int room = w->sp < w->s->stack_max;
+	if (room && w->sp == w->nseg) /* the stack's first use of this slot */
+		w->stk[w->nseg++].seg = &w->s->stack[w->sp];
 	trav_entry *fseg = room ? w->stk[w->sp].seg : w->spare;
 	uint64_t fmask, nmask = fru_lanes(w, n, near_below, b->ok[axis], fseg, &fmask);
 	float ftn = mx2(w->tn, lo), ntf = mn2(w->tf, hi), otf = w->tf;
@@ -435,10 +433,13 @@ static uint32_t fru_step(fru_walker *w, kd_node n)
  * (pkt_rayc.uniform, full precision), the same operations in the same
  * order: the barycentrics' divisions are left to the lanes whose hit is
  * taken (a division is correctly rounded, in a lane or alone), which the
- * packet test spends on every lane of a group with a candidate. */
-static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
-                      uint32_t tri_addr)
+ * packet test spends on every lane of a group with a candidate. With the
+ * image m (non-NULL), a triangle whose hit is taken has its shading
+ * record fetched ahead for the shader. */
+static inline void fru_isect_in(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
+                                uint32_t tri_addr, const mimg *m)
 {
+	int took = 0;
 	const pkt_rayc *rc = &s->rc;
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(mask, g);
@@ -462,6 +463,7 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 					p->tri[i] = tri_addr;
 				}
 			} else if (isect_better(t[l], tri_addr, p->t[i], p->tri[i])) {
+				took = 1;
 				p->t[i] = t[l];
 				p->tri[i] = tri_addr;
 				p->bu[i] = fru_fault == FRU_FAULT_BARY_SWAP ? w[l] / det[l]
@@ -469,6 +471,48 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 				p->bv[i] = w[l] / det[l];
 			}
 		}
+	}
+	/* the shader reads the hit triangle's shading record: fetched ahead */
+	if (m && took) {
+		uint64_t a = mimg_shade_addr(m, mimg_tri_index(m, tri_addr));
+		if (a < m->size)
+			__builtin_prefetch(m->bytes + a);
+	}
+}
+
+/* fru_isect_in as pkt_trace_leaf's hook (with cone culling), which has
+ * no image at hand for the shading record's fetch. */
+static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mask,
+                      uint32_t tri_addr)
+{
+	fru_isect_in(s, p, tr, mask, tri_addr, NULL);
+}
+
+/* The leaf counts of a walk (trav_counts' fields), kept in locals. */
+typedef struct fru_counts {
+	uint64_t leaves, tris, ray_tris;
+} fru_counts;
+
+/* pkt_trace_leaf for rays of one permutation without cone culling: the
+ * same tests in the same order, so the same hits and counts (into k),
+ * with fru_isect called directly; the leaf's triangles fetched ahead. */
+static void fru_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
+                     uint64_t mask, fru_counts *k)
+{
+	const uint32_t *lists = mimg_lists(m) + first;
+	for (uint32_t j = 0; j < count; j++)
+		__builtin_prefetch(mimg_tri_at(m, lists[j]));
+	k->leaves++;
+	k->tris += count;
+	k->ray_tris += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
+	for (uint32_t j = 0; j < count && mask; j++) {
+		fru_isect_in(s, p, mimg_tri_at(m, lists[j]), mask, lists[j], m);
+		if (s->shadow) /* an occluded shadow ray stops */
+			for (uint64_t b = mask; b; b &= b - 1) {
+				int i = __builtin_ctzll(b);
+				if (p->tri[i] != PKT_NOHIT)
+					mask &= ~(1ull << i);
+			}
 	}
 }
 
@@ -482,30 +526,33 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
                      const pkt_cone *cone, trav_counts *c)
 {
 	const kd_node *nodes = mimg_nodes(m);
-	fru_walker *w = &(fru_walker){.b = b, .s = s, .p = p};
-	for (int k = 0; k < s->stack_max; k++)
-		w->stk[k].seg = &s->stack[k];
+	fru_walker wk; /* stk's entries are set as the stack grows (fru_step) */
+	fru_walker *w = &wk;
+	w->b = b;
+	w->s = s;
+	w->p = p;
+	w->sp = w->nseg = 0;
 	w->cur = &s->cur;
 	w->spare = &s->spare;
 	w->node = s->cur.node;
 	w->mask = s->cur.mask;
-	const float *seg[2] = {s->cur.tn, s->cur.tf};
-	float lo[2], hi[2];
-	lane_ranges(seg, 2, w->mask, lo, hi);
-	w->tn = lo[0];
-	w->tf = hi[1];
+	seg_bounds(&s->cur, w->mask, &w->tn, &w->tf);
+	/* the counts kept here during the walk (a counter in memory, read
+	 * and written at every step, held it up) */
+	uint64_t steps = 0;
+	int max_sp = 0;
+	fru_counts leaf = {0, 0, 0};
 	while (fru_pop(w)) {
 		kd_node n = nodes[w->node];
 		if (kd_is_leaf(n)) {
-			/* triangle culling pays when many rays would test; rays of
-			 * one permutation take fru_isect, their triangles fetched
-			 * ahead */
-			int many = b->one && __builtin_popcountll(w->mask) >= 16;
-			int uni = s->rc.uniform;
-			pkt_leaf_hooks hk = {many ? fru_tri_missed : NULL, b,
-			                     uni ? fru_isect : NULL, uni};
-			pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, cone, c,
-			               many || uni ? &hk : NULL);
+			/* rays of one permutation take fru_isect (fru_leaf where
+			 * no cone culls), their triangles fetched ahead */
+			pkt_leaf_hooks hk = {fru_isect, 1};
+			if (!cone && s->rc.uniform)
+				fru_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, &leaf);
+			else
+				pkt_trace_leaf(s, p, m, kd_first(n), kd_count(n), w->mask, cone, c,
+				               s->rc.uniform ? &hk : NULL);
 			w->mask = 0; /* pop next */
 		} else {
 			__builtin_prefetch(&nodes[kd_left(n)]);
@@ -513,10 +560,15 @@ static void fru_walk(const fru_box *b, trav_state *s, packet *p, const mimg *m,
 			if (pushed != UINT32_MAX)
 				__builtin_prefetch(&nodes[pushed]);
 		}
-		if (c) { /* as pkt_trace_run: the depth after the step */
-			c->node_steps++;
-			c->max_sp = (uint64_t)w->sp > c->max_sp ? (uint64_t)w->sp : c->max_sp;
-		}
+		steps++; /* as pkt_trace_run: the depth after the step */
+		max_sp = w->sp > max_sp ? w->sp : max_sp;
+	}
+	if (c) {
+		c->node_steps += steps;
+		c->leaf_visits += leaf.leaves;
+		c->tri_tests += leaf.tris;
+		c->ray_tri_tests += leaf.ray_tris;
+		c->max_sp = (uint64_t)max_sp > c->max_sp ? (uint64_t)max_sp : c->max_sp;
 	}
 }
 

@@ -56,9 +56,6 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered);
  *   FRU_FAULT_ONE_DIRECTION: the plane-distance interval uses the first
  *     ray's 1/d for all (the packet segment then misses the other rays'
  *     crossings: rays lose hits in children it wrongly skips);
- *   FRU_FAULT_CULL_ONE_SIGN: triangle culling skips a triangle when one
- *     edge has every ray on its negative side (a triangle facing the other
- *     way has all three there for the rays that hit it);
  *   FRU_FAULT_POP_ALL: a pop keeps every ray of the entry, also those
  *     whose best hit lies before its segment (more work counted);
  *   FRU_FAULT_STALE_SEGMENTS: a pop takes the entry's node and rays but
@@ -71,7 +68,6 @@ enum fru_fault {
 	FRU_FAULT_NONE,
 	FRU_FAULT_ALWAYS_NEAR,
 	FRU_FAULT_ONE_DIRECTION,
-	FRU_FAULT_CULL_ONE_SIGN,
 	FRU_FAULT_POP_ALL,
 	FRU_FAULT_STALE_SEGMENTS,
 	FRU_FAULT_BARY_SWAP

@@ -24,6 +24,10 @@ static inline void isect_v_uniform(const pkt_rayc *rc, int o, const mimg_tri *tr
 {
 	fv okx = fv_load(rc->okx + o), oky = fv_load(rc->oky + o);
 	fv okz = fv_load(rc->okz + o);
+	/* unrolled: gcc's loop kept the nine vectors in memory */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC unroll 3
+#endif
 	for (int k = 0; k < 3; k++) {
 		vkz[k] = fv_set1(tr->v[k][rc->ukz]) - okz;
 		vx[k] = (fv_set1(tr->v[k][rc->ukx]) - okx) - sx * vkz[k];

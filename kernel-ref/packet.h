@@ -210,15 +210,11 @@ uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max
  * the rays of mask tested against the leaf's list entries first..
  * first+count-1 (a shadow ray stops at its first occluder), counted into c
  * (optional). frustum.c's loop shares the leaf step through hooks (NULL:
- * none): missed (NULL: none) names triangles no ray of the packet can
- * hit, which are then not tested (the same hits; counted as tested, as the
- * per-lane loop tests them); isect (NULL: pkt_isect_tri) tests one
- * triangle, finding the same hits; prefetch fetches the leaf's triangles
- * ahead before the first is tested. */
+ * none): isect (NULL: pkt_isect_tri) tests one triangle, finding the same
+ * hits; prefetch fetches the leaf's triangles ahead before the first is
+ * tested. */
 struct pkt_cone;
 typedef struct pkt_leaf_hooks {
-	int (*missed)(const void *ctx, const mimg_tri *t);
-	const void *ctx;
 	void (*isect)(trav_state *s, packet *p, const mimg_tri *t, uint64_t mask,
 	              uint32_t tri_addr);
 	int prefetch;

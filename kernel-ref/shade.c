@@ -197,7 +197,9 @@ typedef struct spawn {
  * map_Kd texel; SHADE_FAULT_LEAN_NO_CLAMP: the lean adds convert to
  * fixed point without fb_fixed's clamp; SHADE_FAULT_LEAN_MEMO_TEXTURED:
  * a textured hit's result is reused for the next lane on its triangle
- * (whose texel differs). */
+ * (whose texel differs); SHADE_FAULT_LEAN_ONE_WEIGHT: the lean adds take
+ * the first lane's weight for every lane (lean_adds' per-slot sums where
+ * the lanes' weights differ). */
 int shade_fault;
 
 /* A two-level hit (shade_ctx.tl): instance k's shading transform (read in
@@ -533,14 +535,39 @@ static inline iv fixed_v(fv c)
 	return __builtin_convertvector(x, iv) & pos;
 }
 
+/* fb_fixed for one value, as fixed_v's lanes (the planted clamp-less
+ * conversion too, here without the int32 overflow). */
+static inline uint64_t fixed_s(float c)
+{
+	if (shade_fault != SHADE_FAULT_LEAN_NO_CLAMP)
+		return fb_fixed(c);
+	return c > 0.0f && c < 0x1p43f ? (uint64_t)(c * (float)(1u << FB_FRAC_BITS) + 0.5f) : 0;
+}
+
+/* A lean packet's lit lanes: each lane's slot, and per slot the kl and ka
+ * shade_lane_lean gave (lanes on one untextured triangle share a slot). */
+typedef struct lean_tab {
+	uint8_t slot[PKT_RAYS];
+	int n;
+	float kl[PKT_RAYS], ka[3][PKT_RAYS];
+} lean_tab;
+
 /* The frame-buffer adds of a lean packet's misses (shade_lane's
  * background, w * background) and lean hits (shade_lane_lean's ambient
  * term, ((w kl) ka) SHADE_AMBIENT), SIMD_W lanes at a time, then each
- * lane's three fixed-point words added into its pixel. */
-static void lean_adds(const shade_ctx *c, const packet *p, uint64_t miss, uint64_t lit,
-                      const float *kl, const float (*ka)[PKT_RAYS])
+ * lane's three fixed-point words added into its pixel: for packets whose
+ * lanes carry different weights (lean_adds takes the others). */
+static void lean_adds_lanes(const shade_ctx *c, const packet *p, uint64_t miss, uint64_t lit,
+                            const lean_tab *t)
 {
 	int32_t fx[3][PKT_RAYS];
+	float kl[PKT_RAYS] = {0}, ka[3][PKT_RAYS] = {{0}};
+	for (uint64_t b = lit; b; b &= b - 1) {
+		int i = __builtin_ctzll(b), s = t->slot[i];
+		kl[i] = t->kl[s];
+		for (int k = 0; k < 3; k++)
+			ka[k][i] = t->ka[k][s];
+	}
 	const float *w[3] = {p->wr, p->wg, p->wb};
 	const float bg[3] = {c->background.x, c->background.y, c->background.z};
 	for (int g = 0; g < PKT_RAYS / SIMD_W; g++) {
@@ -565,6 +592,139 @@ static void lean_adds(const shade_ctx *c, const packet *p, uint64_t miss, uint64
 	}
 }
 
+/* The lanes of mask whose weight is not lane f's (compared as floats: a
+ * zero of either sign adds nothing either way, a NaN weight differs). */
+static uint64_t other_weights(const packet *p, uint64_t mask, int f)
+{
+	const float *w[3] = {p->wr, p->wg, p->wb};
+	uint64_t other = 0;
+	for (int g = 0; g < PKT_RAYS / SIMD_W; g++) {
+		int o = SIMD_W * g;
+		iv same = iv_set1(-1);
+		for (int k = 0; k < 3; k++)
+			same &= fv_load(w[k] + o) == fv_set1(w[k][f]);
+		other |= (uint64_t)(~iv_bits(same) & grp_bits(mask, g)) << o;
+	}
+	return shade_fault == SHADE_FAULT_LEAN_ONE_WEIGHT ? 0 : other;
+}
+
+/* lean_adds_lanes when every lane of miss | lit has one weight (a
+ * primary packet's): the same sums, worked out once per slot and once for
+ * the misses, then added lane by lane. */
+static void lean_adds(const shade_ctx *c, const packet *p, uint64_t miss, uint64_t lit,
+                      const lean_tab *t)
+{
+	uint64_t all = miss | lit;
+	if (!all)
+		return;
+	int f = __builtin_ctzll(all);
+	if (other_weights(p, all, f)) {
+		lean_adds_lanes(c, p, miss, lit, t);
+		return;
+	}
+	const float w[3] = {p->wr[f], p->wg[f], p->wb[f]};
+	const float bg[3] = {c->background.x, c->background.y, c->background.z};
+	uint64_t fx[PKT_RAYS][3], fm[3];
+	for (int k = 0; k < 3; k++)
+		fm[k] = fixed_s(w[k] * bg[k]);
+	for (int s = 0; s < t->n; s++)
+		for (int k = 0; k < 3; k++)
+			fx[s][k] = fixed_s(((w[k] * t->kl[s]) * t->ka[k][s]) * SHADE_AMBIENT);
+	for (uint64_t b = miss; b; b &= b - 1) {
+		uint64_t *a = c->fb->acc + 3 * (uint64_t)p->pixel[__builtin_ctzll(b)];
+		a[0] += fm[0];
+		a[1] += fm[1];
+		a[2] += fm[2];
+	}
+	for (uint64_t b = lit; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		const uint64_t *x = fx[t->slot[i]];
+		uint64_t *a = c->fb->acc + 3 * (uint64_t)p->pixel[i];
+		a[0] += x[0];
+		a[1] += x[1];
+		a[2] += x[2];
+	}
+}
+
+/* The valid lanes of p without a hit. */
+static uint64_t miss_lanes(const packet *p)
+{
+	uint64_t miss = 0;
+	for (int g = 0; g < PKT_RAYS / SIMD_W; g++) {
+		int o = SIMD_W * g;
+		iv tri;
+		memcpy(&tri, p->tri + o, sizeof tri);
+		miss |=
+		    (uint64_t)(iv_bits(tri == iv_set1((int32_t)PKT_NOHIT)) & grp_bits(p->valid, g))
+		    << o;
+	}
+	return miss;
+}
+
+/* shade_packet_in's lean packet: the hits of p each by shade_lane_lean
+ * into a slot of t, or by shade_lane where it does not cover them or the
+ * packet spawns shadow packets; returns the lean lanes. The slot of an
+ * untextured lean hit serves the later lanes on its triangle, which have
+ * the same kl, ka and counts (neighbouring rays mostly do): the last
+ * one's and up to LEAN_MEMO others' are looked up; their lanes' counts are
+ * summed here. */
+#define LEAN_MEMO 8
+static uint64_t lean_hits(const shade_ctx *c, const shade_reader *rdr, const packet *p,
+                          const spawn *sp, shade_counts *cnt, uint64_t hits, lean_tab *t)
+{
+	uint64_t lit = 0, memo = 0, nolight = 0, cuts = 0;
+	uint32_t last = PKT_NOHIT, mtri[LEAN_MEMO];
+	uint8_t mslot[LEAN_MEMO], scut[PKT_RAYS], snolight[PKT_RAYS];
+	int ls = 0, nm = 0;
+	t->n = 0;
+	for (uint64_t b = hits; b; b &= b - 1) {
+		int i = __builtin_ctzll(b), cut;
+		uint32_t tri = p->tri[i];
+		int s = tri == last ? ls : -1;
+		for (int q = 0; s < 0 && q < nm; q++)
+			s = mtri[q] == tri ? mslot[q] : -1;
+		if (s >= 0) {
+			t->slot[i] = (uint8_t)s;
+			memo++;
+			nolight += snolight[s];
+			cuts += scut[s];
+			lit |= 1ull << i;
+			last = tri;
+			ls = s;
+			continue;
+		}
+		float kl;
+		vec3 a;
+		int r = sp->nl == 0 ? shade_lane_lean(c, rdr, p, i, sp, cnt, &kl, &a, &cut) : 0;
+		if (!r) {
+			shade_lane(c, NULL, rdr, p, i, sp, cnt);
+			continue;
+		}
+		s = t->n++;
+		t->kl[s] = kl;
+		t->ka[0][s] = a.x;
+		t->ka[1][s] = a.y;
+		t->ka[2][s] = a.z;
+		t->slot[i] = (uint8_t)s;
+		if (r == 2 || shade_fault == SHADE_FAULT_LEAN_MEMO_TEXTURED) {
+			scut[s] = (uint8_t)cut;
+			snolight[s] = c->nlights == 0 && kl > 0.0f;
+			last = tri;
+			ls = s;
+			if (nm < LEAN_MEMO) {
+				mtri[nm] = tri;
+				mslot[nm++] = (uint8_t)s;
+			}
+		}
+		lit |= 1ull << i;
+	}
+	cnt->hits += memo;
+	cnt->untextured_hits += memo;
+	cnt->shadow_skip_nolight += nolight;
+	cnt->depth_cut += cuts;
+	return lit;
+}
+
 /* shade_packet_rd; lean: the reader is kernel-ref's image without a log
  * and the records are a single tree's (shade_packet_fp), so lanes that
  * spawn nothing may take shade_lane_lean. */
@@ -586,46 +746,12 @@ static int shade_packet_in(const shade_ctx *c, const fpfmt *fp, const shade_read
 	for (int l = 0; l < nl + 2; l++)
 		out[l].sample = p->sample; /* children keep the pixels' sample */
 	if (lean && !fq && !c->defer && c->fb) {
-		/* misses and (no shadow packets) lean hits: adds in lean_adds */
-		float kl[PKT_RAYS] = {0}, ka[3][PKT_RAYS] = {{0}};
-		uint64_t miss = 0, lit = 0;
-		/* the last untextured lean hit: a lane on the same triangle has
-		 * the same kl, ka and counts (neighbouring rays mostly do) */
-		uint32_t last = PKT_NOHIT;
-		float lkl = 0.0f;
-		vec3 lka = v3(0, 0, 0);
-		int lcut = 0;
-		for (uint64_t b = p->valid; b; b &= b - 1) {
-			int i = __builtin_ctzll(b), cut, r;
-			vec3 a;
-			if (p->tri[i] == PKT_NOHIT) {
-				miss |= 1ull << i;
-				continue;
-			}
-			if (p->tri[i] == last) {
-				cnt->hits++;
-				cnt->untextured_hits++;
-				cnt->shadow_skip_nolight += c->nlights == 0 && lkl > 0.0f;
-				cnt->depth_cut += (uint64_t)lcut;
-				kl[i] = lkl;
-				a = lka;
-			} else if (sp.nl > 0 || !(r = shade_lane_lean(c, rdr, p, i, &sp, cnt,
-			                                              &kl[i], &a, &cut))) {
-				shade_lane(c, fq, rdr, p, i, &sp, cnt);
-				continue;
-			} else if (r == 2 || shade_fault == SHADE_FAULT_LEAN_MEMO_TEXTURED) {
-				last = p->tri[i];
-				lkl = kl[i];
-				lka = a;
-				lcut = cut;
-			}
-			lit |= 1ull << i;
-			ka[0][i] = a.x;
-			ka[1][i] = a.y;
-			ka[2][i] = a.z;
-		}
+		/* misses and lean hits: adds in lean_adds */
+		lean_tab t;
+		uint64_t miss = miss_lanes(p);
+		uint64_t lit = lean_hits(c, rdr, p, &sp, cnt, p->valid & ~miss, &t);
 		cnt->misses += (uint64_t)__builtin_popcountll(miss);
-		lean_adds(c, p, miss, lit, kl, ka);
+		lean_adds(c, p, miss, lit, &t);
 	} else
 		for (uint64_t b = p->valid; b; b &= b - 1)
 			shade_lane(c, fq, rdr, p, __builtin_ctzll(b), &sp, cnt);

@@ -63,7 +63,8 @@ enum shade_fault {
 	SHADE_FAULT_NO_NORMAL_XF,
 	SHADE_FAULT_LEAN_NO_TEXTURE,
 	SHADE_FAULT_LEAN_NO_CLAMP,
-	SHADE_FAULT_LEAN_MEMO_TEXTURED
+	SHADE_FAULT_LEAN_MEMO_TEXTURED,
+	SHADE_FAULT_LEAN_ONE_WEIGHT
 };
 extern int shade_fault; /* shade.c: planted mistakes, tests only */
 typedef struct shade_tl {

@@ -57,8 +57,15 @@ static inline fv fv_set1(float x)
 static inline iv iv_set1(int32_t x)
 {
 	iv v = {0};
+#if defined(__AVX512F__)
+	/* (the lane loop became two 8-lane stores and a 16-lane load, which
+	 * the store buffer cannot forward) */
+	__m512i b = _mm512_set1_epi32(x);
+	memcpy(&v, &b, sizeof v);
+#else
 	for (int i = 0; i < SIMD_W; i++)
 		v[i] = x;
+#endif
 	return v;
 }
 static inline fv fv_load(const float *p)
@@ -130,6 +137,12 @@ static inline unsigned grp_bits(uint64_t mask, int g)
  * against each lane's own bit. */
 static inline iv iv_from_bits(unsigned b)
 {
+#if SIMD_W == 16 && defined(__AVX512F__)
+	iv v;
+	__m512i x = _mm512_maskz_set1_epi32((__mmask16)b, -1);
+	memcpy(&v, &x, sizeof v);
+	return v;
+#else
 #if SIMD_W == 16
 	const iv bit = {1,   2,   4,    8,    16,   32,   64,    128,
 	                256, 512, 1024, 2048, 4096, 8192, 16384, 32768};
@@ -139,6 +152,7 @@ static inline iv iv_from_bits(unsigned b)
 	const iv bit = {1, 2, 4, 8};
 #endif
 	return (iv_set1((int32_t)b) & bit) != 0;
+#endif
 }
 
 /* Lane i of m (all-ones or zero) becomes bit i. */

@@ -111,6 +111,15 @@ static inline void trav_cut(int pos, float tn, float tf, float lo, float hi, flo
 
 /* ---- setup ------------------------------------------------------------ */
 
+/* A short loop over vectors unrolled by gcc (its rolled loop kept them in
+ * memory); other compilers decide themselves. */
+#if defined(__GNUC__) && !defined(__clang__)
+#define TRAV_PRAGMA(x) _Pragma(#x)
+#define TRAV_UNROLL(n) TRAV_PRAGMA(GCC unroll n)
+#else
+#define TRAV_UNROLL(n)
+#endif
+
 /* fminf/fmaxf semantics lane by lane (a NaN operand yields the other), so
  * the vector clip rounds exactly like ray_trace's scalar one. */
 static inline fv fv_fmin(fv a, fv b)
@@ -204,12 +213,21 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		iv kx1 = (iv)fv_sel(neg, (fv)kz2, (fv)kz0) & valid;
 		iv ky0 = (iv)fv_sel(neg, (fv)kz2, (fv)kz1) & valid;
 		iv ky1 = (iv)fv_sel(neg, (fv)kz0, (fv)kz2) & valid;
-		kz0 &= valid;
-		kz1 &= valid;
 		fv dkx = sel3(kx0, kx1, dx, dy, dz), dky = sel3(ky0, ky1, dx, dy, dz);
+		fv id[3] = {fv_sel(valid, one / dx, zero), fv_sel(valid, one / dy, zero),
+		            fv_sel(valid, one / dz, zero)};
+#if defined(__x86_64__) && defined(__GNUC__)
+		/* an empty asm hides how id was made: gcc 12 otherwise redid two
+		 * of its divisions unmasked for sz (seven divisions in all) */
+		__asm__("" : "+v"(id[0]), "+v"(id[1]), "+v"(id[2]));
+#endif
 		fv_store(rc->sx + o, fv_sel(valid, dkx / dkz, zero));
 		fv_store(rc->sy + o, fv_sel(valid, dky / dkz, zero));
-		fv_store(rc->sz + o, fv_sel(valid, one / dkz, zero));
+		/* 1 / d[kz] is the one of the three that dkz picks (an invalid
+		 * lane's are all zero): five divisions, not six */
+		fv_store(rc->sz + o, sel3(kz0, kz1, id[0], id[1], id[2]));
+		kz0 &= valid;
+		kz1 &= valid;
 		memcpy(rc->kz0 + o, &kz0, sizeof kz0);
 		memcpy(rc->kz1 + o, &kz1, sizeof kz1);
 		memcpy(rc->kx0 + o, &kx0, sizeof kx0);
@@ -217,10 +235,11 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		memcpy(rc->ky0 + o, &ky0, sizeof ky0);
 		memcpy(rc->ky1 + o, &ky1, sizeof ky1);
 		iv ks[6] = {kz0, kz1, kx0, kx1, ky0, ky1};
+		/* this loop and the clip's unrolled: gcc's loops kept their
+		 * vectors and mk in memory */
+		TRAV_UNROLL(6)
 		for (int k = 0; k < 6; k++)
 			mk[k] |= (uint64_t)iv_bits(ks[k]) << o;
-		fv id[3] = {fv_sel(valid, one / dx, zero), fv_sel(valid, one / dy, zero),
-		            fv_sel(valid, one / dz, zero)};
 		fv_store(rc->idx + o, id[0]);
 		fv_store(rc->idy + o, id[1]);
 		fv_store(rc->idz + o, id[2]);
@@ -233,6 +252,7 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		 * segment open on that axis. */
 		fv org[3] = {fv_load(p->ox + o), fv_load(p->oy + o), fv_load(p->oz + o)};
 		fv tn = zero, tf = tmax;
+		TRAV_UNROLL(3)
 		for (int a = 0; a < 3; a++) {
 			fv t0 = (lo[a] - org[a]) * id[a], t1 = (hi[a] - org[a]) * id[a];
 			fv n = fv_fmin(t0, t1), f = fv_fmax(t0, t1);
@@ -557,8 +577,6 @@ void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uin
 			}
 			continue;
 		}
-		if (hk && hk->missed && hk->missed(hk->ctx, tr))
-			continue;
 		if (hk && hk->isect)
 			hk->isect(s, p, tr, mask, ta);
 		else

@@ -9,8 +9,7 @@
  * to fail): FRU_FAULT_ALWAYS_NEAR (the shortcut enters the near child
  * where every ray needs only the far one) and FRU_FAULT_ONE_DIRECTION
  * (the plane-distance interval from one ray's direction: the shortcut
- * skips children other rays need), FRU_FAULT_CULL_ONE_SIGN (triangle
- * culling on one edge's sign alone), and in the walk's own pops and
+ * skips children other rays need), and in the walk's own pops and
  * steps: FRU_FAULT_POP_ALL (a pop keeps rays whose best hit lies before
  * the entry: counted work differs) and FRU_FAULT_STALE_SEGMENTS (a pop
  * leaves the segment buffers unswapped: rays step with another node's
@@ -169,9 +168,9 @@ Test(frustum, same_hits_and_counts_as_per_lane, .init = setup_soup, .fini = tear
 /* Each planted mistake must show up as mismatches (the check can fail). */
 Test(frustum, planted_mistakes_are_caught, .init = setup_soup, .fini = teardown_soup)
 {
-	static const int faults[] = {FRU_FAULT_ALWAYS_NEAR,    FRU_FAULT_ONE_DIRECTION,
-	                             FRU_FAULT_CULL_ONE_SIGN,  FRU_FAULT_POP_ALL,
-	                             FRU_FAULT_STALE_SEGMENTS, FRU_FAULT_BARY_SWAP};
+	static const int faults[] = {FRU_FAULT_ALWAYS_NEAR, FRU_FAULT_ONE_DIRECTION,
+	                             FRU_FAULT_POP_ALL, FRU_FAULT_STALE_SEGMENTS,
+	                             FRU_FAULT_BARY_SWAP};
 	for (int f = 0; f < (int)(sizeof faults / sizeof faults[0]); f++) {
 		fru_fault = faults[f];
 		uint64_t coh = 0, bad = 0;

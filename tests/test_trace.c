@@ -385,9 +385,14 @@ static void lean_scene(const char *dir, world *w)
  * rays: general) and a light (shadow rays: general). Written to catch
  * SHADE_FAULT_LEAN_NO_TEXTURE (the lean lane without the map_Kd texel)
  * SHADE_FAULT_LEAN_NO_CLAMP (the packet's fixed-point conversion
- * without fb_fixed's clamp) and SHADE_FAULT_LEAN_MEMO_TEXTURED (a textured
- * hit's result reused for the next lane on the triangle), planted below. */
-static uint64_t lean_mismatches(const world *w, int depth, int nlights, vec3 background)
+ * without fb_fixed's clamp), SHADE_FAULT_LEAN_MEMO_TEXTURED (a textured
+ * hit's result reused for the next lane on the triangle) and
+ * SHADE_FAULT_LEAN_ONE_WEIGHT (the per-slot sums of one weight taken for
+ * lanes whose weights differ: vary gives the packet's lanes different
+ * weights, as a secondary packet's), planted below, each with one weight
+ * for all lanes (a primary packet's: shade.c's per-slot sums) and varied
+ * (its per-lane sums). */
+static uint64_t lean_mismatches(const world *w, int depth, int nlights, vec3 background, int vary)
 {
 	static trav_entry stack[PKT_STACK_MAX];
 	static packet p, ka[8], kb[8];
@@ -410,6 +415,10 @@ static uint64_t lean_mismatches(const world *w, int depth, int nlights, vec3 bac
 	for (int t = 0; t < 64; t++) {
 		cam_primary_packet(&cf, t % 8, t / 8, &p);
 		pkt_trace(&p, &w->m, stack, PKT_STACK_MAX, NULL);
+		for (int l = 0; vary && l < PKT_RAYS; l++) { /* as a secondary packet's */
+			p.wr[l] *= 1.0f + 0.25f * (float)(l % 5);
+			p.wb[l] *= 1.0f - 0.125f * (float)(l % 3);
+		}
 		shade_log log = {log_e, 0, SHADE_LOG_CAP, 0};
 		int na = shade_packet(&sa, &p, ka, nlights + 2, &log, &ca);
 		int nb = shade_packet_fp(&sb, NULL, &p, kb, nlights + 2, NULL, &cb);
@@ -433,19 +442,27 @@ Test(trace, lean_shading_equals_the_general_shader)
 	/* a background beyond the frame buffer's clamp on red and below zero
 	 * on green: the misses' adds clamp and drop as fb_fixed does */
 	const vec3 bgs[2] = {v3(0.1f, 0.2f, 0.3f), v3(5000.0f, -1.0f, 0.3f)};
-	for (int k = 0; k < 2; k++)
-		for (int depth = 0; depth < 2; depth++)
-			for (int nl = 0; nl < 2; nl++)
-				cr_assert_eq(lean_mismatches(&w, depth, nl, bgs[k]), 0,
-				             "background %d, depth %d, %d lights", k, depth, nl);
+	for (int vary = 0; vary < 2; vary++)
+		for (int k = 0; k < 2; k++)
+			for (int depth = 0; depth < 2; depth++)
+				for (int nl = 0; nl < 2; nl++)
+					cr_assert_eq(
+					    lean_mismatches(&w, depth, nl, bgs[k], vary), 0,
+					    "background %d, depth %d, %d lights, weights %s", k,
+					    depth, nl, vary ? "varied" : "one");
 	static const int faults[] = {SHADE_FAULT_LEAN_NO_TEXTURE, SHADE_FAULT_LEAN_NO_CLAMP,
-	                             SHADE_FAULT_LEAN_MEMO_TEXTURED};
-	for (int f = 0; f < 3; f++) {
-		shade_fault = faults[f];
-		uint64_t planted = lean_mismatches(&w, 0, 0, bgs[1]);
-		shade_fault = SHADE_FAULT_NONE;
-		cr_assert_gt(planted, 0, "planted mistake %d went unnoticed", faults[f]);
-	}
+	                             SHADE_FAULT_LEAN_MEMO_TEXTURED, SHADE_FAULT_LEAN_ONE_WEIGHT};
+	for (int f = 0; f < 4; f++)
+		for (int vary = 0; vary < 2; vary++) {
+			shade_fault = faults[f];
+			uint64_t planted = lean_mismatches(&w, 0, 0, bgs[1], vary);
+			shade_fault = SHADE_FAULT_NONE;
+			/* one weight for every lane leaves nothing to mistake */
+			if (faults[f] != SHADE_FAULT_LEAN_ONE_WEIGHT || vary)
+				cr_assert_gt(planted, 0,
+				             "planted mistake %d went unnoticed (weights %s)",
+				             faults[f], vary ? "varied" : "one");
+		}
 	world_free(&w);
 }
 
@@ -454,7 +471,10 @@ Test(trace, lean_shading_equals_the_general_shader)
  * order: the same floats, bit for bit, for cameras looking along every
  * axis sign. Written to catch the vector code summing or scaling in
  * another order than the per-ray path (sample_ray) rounds, e.g.
- * dx * dx + (dy * dy + dz * dz), or d / len for d * (1 / len). */
+ * dx * dx + (dy * dy + dz * dz), or d / len for d * (1 / len), and (with
+ * 16 lanes, where a lane group's y comes from two of the tile's eight
+ * rows) a group given the wrong rows (seen to fail with the first two
+ * swapped). */
 Test(trace, pinhole_packet_is_the_per_ray_arithmetic)
 {
 	static packet p;
