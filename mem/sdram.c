@@ -161,10 +161,8 @@ static inline __attribute__((always_inline)) uint64_t segment(sdram *s, uint64_t
 	return end;
 }
 
-/* sdram_access and sdram_access_in: b0 and row0 are addr's bank and row
- * when known (known = 1); later segments start a row of their own. */
-static uint64_t access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
-                       uint64_t *data_start, int known, uint32_t b0, uint64_t row0)
+/* A request's read or write and its bytes in the stats. */
+static inline void count_request(sdram *s, uint32_t bytes, int write)
 {
 	if (write) {
 		s->s.writes++;
@@ -173,6 +171,14 @@ static uint64_t access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int 
 		s->s.reads++;
 		s->s.read_bytes += bytes;
 	}
+}
+
+/* sdram_access and sdram_access_in: b0 and row0 are addr's bank and row
+ * when known (known = 1); later segments start a row of their own. */
+static uint64_t access(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, int write,
+                       uint64_t *data_start, int known, uint32_t b0, uint64_t row0)
+{
+	count_request(s, bytes, write);
 	uint64_t end = t, first = UINT64_MAX;
 	uint32_t left = bytes ? bytes : 1;
 	while (left) {
@@ -210,12 +216,6 @@ uint64_t sdram_access_in(sdram *s, uint64_t t, uint64_t addr, uint32_t bytes, in
 	uint32_t in_row = s->p.row_bytes - (uint32_t)(addr & (s->p.row_bytes - 1));
 	if (bytes == 0 || bytes > in_row)
 		return access(s, t, addr, bytes, write, data_start, 1, bank, row);
-	if (write) {
-		s->s.writes++;
-		s->s.write_bytes += bytes;
-	} else {
-		s->s.reads++;
-		s->s.read_bytes += bytes;
-	}
+	count_request(s, bytes, write);
 	return segment(s, t, addr, bytes, write, data_start, bank, row);
 }
