@@ -508,11 +508,7 @@ static void fru_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, ui
 	for (uint32_t j = 0; j < count && mask; j++) {
 		fru_isect_in(s, p, mimg_tri_at(m, lists[j]), mask, lists[j], m);
 		if (s->shadow) /* an occluded shadow ray stops */
-			for (uint64_t b = mask; b; b &= b - 1) {
-				int i = __builtin_ctzll(b);
-				if (p->tri[i] != PKT_NOHIT)
-					mask &= ~(1ull << i);
-			}
+			mask = pkt_shadow_open(p, mask);
 	}
 }
 

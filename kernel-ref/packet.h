@@ -212,7 +212,9 @@ uint64_t pkt_trace_fp(packet *p, const mimg *m, trav_entry *stack, int stack_max
  * (optional). frustum.c's loop shares the leaf step through hooks (NULL:
  * none): isect (NULL: pkt_isect_tri) tests one triangle, finding the same
  * hits; prefetch fetches the leaf's triangles ahead before the first is
- * tested. */
+ * tested. Where no cone culls and the packet's rays share one axis
+ * permutation (pkt_rayc.uniform), frustum.c's fru_leaf tests a leaf
+ * itself, with the same counts. */
 struct pkt_cone;
 typedef struct pkt_leaf_hooks {
 	void (*isect)(trav_state *s, packet *p, const mimg_tri *t, uint64_t mask,
@@ -222,6 +224,19 @@ typedef struct pkt_leaf_hooks {
 void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
                     uint64_t mask, const struct pkt_cone *cone, trav_counts *c,
                     const pkt_leaf_hooks *hk);
+/* The lanes of mask still open after a leaf's triangle was tested for a
+ * shadow packet: an occluded shadow ray (one with a hit) stops there.
+ * pkt_trace_leaf's step, and fru_leaf's (frustum.c) where it tests a
+ * leaf itself. */
+static inline uint64_t pkt_shadow_open(const packet *p, uint64_t mask)
+{
+	for (uint64_t b = mask; b; b &= b - 1) {
+		int i = __builtin_ctzll(b);
+		if (p->tri[i] != PKT_NOHIT)
+			mask &= ~(1ull << i);
+	}
+	return mask;
+}
 void pkt_trace_run(trav_state *s, packet *p, const mimg *m, const struct pkt_cone *cone,
                    trav_counts *c);
 /* pkt_trace_cone with another loop: the packet enters the scene's box

@@ -582,11 +582,7 @@ void pkt_trace_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uin
 		else
 			pkt_isect_tri_v(s, p, tr, mask, ta);
 		if (s->shadow)
-			for (uint64_t b = mask; b; b &= b - 1) {
-				int i = __builtin_ctzll(b);
-				if (p->tri[i] != PKT_NOHIT)
-					mask &= ~(1ull << i);
-			}
+			mask = pkt_shadow_open(p, mask);
 	}
 }
 
