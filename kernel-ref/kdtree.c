@@ -31,6 +31,20 @@
  * list a triangle that only comes within a float ulp of it). Nodes whose
  * box has zero surface area (a line or a point) become leaves.
  *
+ * Packet footprint (params->footprint = f, 0 by default): the SAH above
+ * prices a split by the chance that a ray hitting the node hits each
+ * child, the ratio of their surface areas. A packet of rays is not a line:
+ * with a cross-section about w wide, it meets a box whenever the box grown
+ * by w/2 on every side meets the packet's middle ray, so the chance is the
+ * ratio of the grown boxes' areas. Far above w that is the plain ratio;
+ * near w it tends to 1 for both children, and splitting a node much
+ * smaller than a packet stops paying (the packet visits both halves).
+ * Scanned meshes of tiny triangles, which the plain SAH cuts into cells
+ * far smaller than a primary packet, get shallower trees with fuller
+ * leaves. w/2 is f times the scene box's diagonal: a property of the
+ * scene, not of a view, so the tree stays view-independent; rtref takes
+ * KD_RTREF_FOOTPRINT, the chip's tree 0 (the model's figures).
+ *
  * Memory: events live in one growable arena used as a stack (a node's
  * children overwrite its own events, right child below left child, and the
  * left subtree is built first), plus one growable scratch buffer, so there
@@ -81,6 +95,7 @@ typedef struct builder {
 	uint32_t *list;
 	size_t nlist, list_cap;
 	double inv_root_area;
+	double grow2; /* twice the footprint's growth per side, scene units */
 	kdtree *t;
 } builder;
 
@@ -94,6 +109,7 @@ void kd_params_default(kd_params *p)
 	p->leaf_size = 2;
 	/* Wald-Havran's lambda = 0.8 for cutting off empty space. */
 	p->empty_bonus = 0.2f;
+	p->footprint = 0; /* the plain SAH: rtref sets KD_RTREF_FOOTPRINT */
 }
 
 static int grow(void **ptr, size_t *cap, size_t need, size_t elem)
@@ -311,13 +327,18 @@ static double find_split(const builder *b, const work *w, const event *ev, int *
 	uint32_t best_cl = 0, best_cr = 0;
 	if (!(area > 0))
 		return best;
-	double kt = b->p.cost_trav, ki = b->p.cost_isect / area, keep = 1.0 - b->p.empty_bonus;
+	/* every extent grown by the footprint (2 * w/2); g = 0: plain SAH */
+	double g = b->grow2;
+	double ex = w->box.hi.x - w->box.lo.x + g, ey = w->box.hi.y - w->box.lo.y + g,
+	       ez = w->box.hi.z - w->box.lo.z + g;
+	double area_g = ex * ey + ey * ez + ez * ex;
+	double kt = b->p.cost_trav, ki = b->p.cost_isect / area_g, keep = 1.0 - b->p.empty_bonus;
 	for (int k = 0; k < 3; ev += w->n[k], k++) {
 		double lo = lo_of(&w->box, k), hi = hi_of(&w->box, k);
 		if (!(hi > lo))
 			continue;
-		double u = hi_of(&w->box, (k + 1) % 3) - lo_of(&w->box, (k + 1) % 3);
-		double v = hi_of(&w->box, (k + 2) % 3) - lo_of(&w->box, (k + 2) % 3);
+		double u = hi_of(&w->box, (k + 1) % 3) - lo_of(&w->box, (k + 1) % 3) + g;
+		double v = hi_of(&w->box, (k + 2) % 3) - lo_of(&w->box, (k + 2) % 3) + g;
 		double uv = u * v, us = u + v;
 		uint32_t nl = 0, nr = w->ntris, n = w->n[k];
 		for (uint32_t i = 0; i < n;) {
@@ -332,8 +353,8 @@ static double find_split(const builder *b, const work *w, const event *ev, int *
 			nr -= ne + np;
 			if (p > lo && p < hi) {
 				uint32_t cl = nl + np, cr = nr + np;
-				double c = kt + ki * ((uv + (p - lo) * us) * cl +
-				                      (uv + (hi - p) * us) * cr);
+				double c = kt + ki * ((uv + (p - lo + g) * us) * cl +
+				                      (uv + (hi - p + g) * us) * cr);
 				if (cl == 0 || cr == 0)
 					c *= keep;
 				if (c < best) {
@@ -553,6 +574,10 @@ static int build(builder *b, const scene *s)
 	b->nnodes = 1;
 	double ra = half_area(&s->bounds);
 	b->inv_root_area = ra > 0 ? 1.0 / ra : 0.0;
+	double dx = (double)s->bounds.hi.x - s->bounds.lo.x,
+	       dy = (double)s->bounds.hi.y - s->bounds.lo.y,
+	       dz = (double)s->bounds.hi.z - s->bounds.lo.z;
+	b->grow2 = 2.0 * b->p.footprint * sqrt(dx * dx + dy * dy + dz * dz);
 
 	work stack[KD_DEPTH_MAX + 4];
 	int sp = 0;
@@ -598,11 +623,13 @@ int kd_build(kdtree *t, const scene *s, const kd_params *params, diag *d)
 	if (!(p.cost_trav >= 0 && isfinite(p.cost_trav)) ||
 	    !(p.cost_isect > 0 && isfinite(p.cost_isect)) || p.max_depth < 0 ||
 	    p.max_depth > KD_DEPTH_MAX || p.leaf_size < 0 ||
-	    !(p.empty_bonus >= 0 && p.empty_bonus < 1))
+	    !(p.empty_bonus >= 0 && p.empty_bonus < 1) ||
+	    !(p.footprint >= 0 && p.footprint <= (float)KD_FOOTPRINT_MAX))
 		return diag_set(d, "kd_build", 0, 0,
 		                "bad parameters (need cost_trav >= 0, cost_isect > 0, 0 <= "
-		                "max_depth <= %d, leaf_size >= 0, 0 <= empty_bonus < 1)",
-		                KD_DEPTH_MAX);
+		                "max_depth <= %d, leaf_size >= 0, 0 <= empty_bonus < 1, 0 <= "
+		                "footprint <= %g)",
+		                KD_DEPTH_MAX, KD_FOOTPRINT_MAX);
 	if (s->ntris == 0 || s->ntris > MAX_TRIS)
 		return diag_set(d, s->name, 0, 0, "kd-tree needs 1 to %u triangles, scene has %u",
 		                MAX_TRIS, s->ntris);

@@ -33,6 +33,9 @@ typedef struct kd_params {
 	int max_depth;     /* hard depth limit; 0 = 8 + 1.3 log2(n) */
 	int leaf_size;     /* stop splitting at or below this many triangles */
 	float empty_bonus; /* in [0,1): SAH discount for cutting off empty space */
+	float footprint;   /* packet footprint, a fraction of the scene box's
+	                    * diagonal: the SAH grows every box by it on each side
+	                    * (kdtree.c, "Packet footprint"); 0 = the plain SAH */
 } kd_params;
 
 typedef struct kd_node {
@@ -77,12 +80,19 @@ typedef struct kdtree {
 
 /* The ranges the kd parameters take from the command line (--kd-*) and
  * from configs (kdtree.*): one definition for both. */
-#define KD_COST_MIN  0.001
-#define KD_COST_MAX  1000.0
-#define KD_DEPTH_MAX 64 /* the traversal stack's PKT_STACK_MAX */
-#define KD_LEAF_MIN  1
-#define KD_LEAF_MAX  1024
-#define KD_BONUS_MAX 0.99
+#define KD_COST_MIN      0.001
+#define KD_COST_MAX      1000.0
+#define KD_DEPTH_MAX     64 /* the traversal stack's PKT_STACK_MAX */
+#define KD_LEAF_MIN      1
+#define KD_LEAF_MAX      1024
+#define KD_BONUS_MAX     0.99
+#define KD_FOOTPRINT_MAX 0.1
+
+/* rtref's own footprint (the chip's tree, kdtree.footprint, keeps 0):
+ * measured against 0, 0.0005, 0.0015 and 0.002 on the shared views in
+ * docs/PERFORMANCE.md ("Target 1: session 46"); the one that makes no
+ * view slower. */
+#define KD_RTREF_FOOTPRINT 0.001f
 
 void kd_params_default(kd_params *p);
 

@@ -233,6 +233,7 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 	memset(a, 0, sizeof *a);
 	a->frames = 1;
 	world_opts_default(&a->wo);
+	a->wo.kd.footprint = KD_RTREF_FOOTPRINT; /* rtref's own tree (kdtree.h) */
 	render_opts_default(&a->ro);
 	a->ro.frustum = 1;
 	a->fp_mode = FPR_NEAREST;

@@ -42,6 +42,8 @@ const char world_usage[] =
     "  --spp N (1|4|16|64) --aperture F --focus F --light-size F --gloss F --motion X,Y,Z\n"
     "                        distribution ray tracing (override the view's drt; docs/views.md)\n"
     "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n"
+    "  --kd-footprint F      kd-tree SAH for packets this fraction of the scene's\n"
+    "                        diagonal wide (kernel-ref.md); 0: the plain SAH\n"
     "  --world-cache DIR|off keep built worlds (scene, kd-tree, memory image), reference\n"
     "                        frames, packet records and warming runs in DIR and reuse them\n"
     "                        while the program and scene files are unchanged; default:\n"
@@ -192,6 +194,7 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	                                         "--kd-max-depth",
 	                                         "--kd-leaf-size",
 	                                         "--kd-empty-bonus",
+	                                         "--kd-footprint",
 	                                         "--world-cache",
 	                                         "--world-cache-max",
 	                                         "--spp",
@@ -285,6 +288,10 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		if (parse_num(a, v, 0, KD_BONUS_MAX, &x, d))
 			return -1;
 		o->kd.empty_bonus = (float)x;
+	} else if (!strcmp(a, "--kd-footprint")) {
+		if (parse_num(a, v, 0, KD_FOOTPRINT_MAX, &x, d))
+			return -1;
+		o->kd.footprint = (float)x;
 	}
 	return 1;
 }

@@ -103,7 +103,7 @@ void world_opts_default(world_opts *o);
  * --lookat x,y,z, --up x,y,z, --fov deg, --light x,y,z (repeatable),
  * --no-lights, --spp n, --aperture f, --focus f, --light-size f, --gloss f,
  * --motion x,y,z (override the view's drt), --kd-cost-trav f, --kd-cost-isect f, --kd-max-depth n,
- * --kd-leaf-size n, --kd-empty-bonus f, --world-cache DIR|off,
+ * --kd-leaf-size n, --kd-empty-bonus f, --kd-footprint f, --world-cache DIR|off,
  * --world-cache-max MB. */
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
 

@@ -235,6 +235,7 @@ int main(int argc, char **argv)
 {
 	world_opts wo;
 	world_opts_default(&wo);
+	wo.kd.footprint = KD_RTREF_FOOTPRINT; /* the tree rtref traces */
 	diag d = {{0}};
 	int width = 1024, height = 1024, runs = 3, robust = 0, list_diffs = 0;
 	enum RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;

@@ -286,6 +286,9 @@ static const cfg_key keys_src[] = {
      .desc = "stop splitting at or below this many triangles"},
     {FLT("kdtree.empty_bonus", kdtree.empty_bonus, 0.2, 0, KD_BONUS_MAX, ""),
      .source = "kernel-ref kd_params_default", .desc = "SAH discount for cutting off empty space"},
+    {FLT("kdtree.footprint", kdtree.footprint, 0, 0, KD_FOOTPRINT_MAX, ""),
+     .source = "kernel-ref kd_params_default (rtref alone takes 0.001)",
+     .desc = "SAH for packets this fraction of the scene's diagonal wide; 0 = the plain SAH"},
     {KEY("memory.model", CFG_ENUM, memory.model, CFG_MEM_HIERARCHY, 0, 0, ""),
      .names = mem_model_names,
      .source = "hierarchy models the published memory system; fixed isolates the units",
@@ -1063,10 +1066,10 @@ void cfg_write_markdown(FILE *f)
 	      "`saarsim --set key=value` (repeatable) overrides one key after the file is\n"
 	      "read, e.g. `--set chip.trav.width=8`. The shorthand flags `--fidelity`,\n"
 	      "`--sample-rate`, `--unit-tiles`, `--warmup-tiles` and `--kd-cost-trav`,\n"
-	      "`--kd-cost-isect`, `--kd-max-depth`, `--kd-leaf-size`, `--kd-empty-bonus`\n"
-	      "are `--set` of their keys, with the same checks; among them and `--set`\n"
-	      "the last given wins. Checks that involve several keys run\n"
-	      "after all overrides. Every report embeds the resolved config under\n"
+	      "`--kd-cost-isect`, `--kd-max-depth`, `--kd-leaf-size`, `--kd-empty-bonus`,\n"
+	      "`--kd-footprint` are `--set` of their keys, with the same checks; among\n"
+	      "them and `--set` the last given wins. Checks that involve several keys\n"
+	      "run after all overrides. Every report embeds the resolved config under\n"
 	      "`\"config\"`, nested along the dotted paths, so a report says exactly what\n"
 	      "was simulated.\n\n"
 	      "*Provenance*: **published** values come from the SaarCOR description in the\n"

@@ -107,7 +107,7 @@ typedef struct saar_config {
 		char spp[16], aperture[32], focus[32], light_size[32], gloss[32], motion[96];
 	} drt;
 	struct {
-		double cost_trav, cost_isect, empty_bonus;
+		double cost_trav, cost_isect, empty_bonus, footprint;
 		int max_depth, leaf_size;
 	} kdtree;
 	struct {

@@ -137,7 +137,8 @@ static const char *key_flag(const char *a)
 	                                   {"--kd-cost-isect", "kdtree.cost_isect"},
 	                                   {"--kd-max-depth", "kdtree.max_depth"},
 	                                   {"--kd-leaf-size", "kdtree.leaf_size"},
-	                                   {"--kd-empty-bonus", "kdtree.empty_bonus"}};
+	                                   {"--kd-empty-bonus", "kdtree.empty_bonus"},
+	                                   {"--kd-footprint", "kdtree.footprint"}};
 	for (size_t i = 0; i < sizeof f / sizeof *f; i++)
 		if (!strcmp(a, f[i][0]))
 			return f[i][1];
@@ -407,6 +408,7 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 	a->wo.kd.max_depth = cfg->kdtree.max_depth;
 	a->wo.kd.leaf_size = cfg->kdtree.leaf_size;
 	a->wo.kd.empty_bonus = (float)cfg->kdtree.empty_bonus;
+	a->wo.kd.footprint = (float)cfg->kdtree.footprint;
 	return -1;
 }
 

@@ -328,15 +328,18 @@ Test(kdtree, bad_params_fail_with_diag)
 {
 	scene s;
 	random_soup(&s, 10, 1);
-	kd_params bad[5];
-	for (int i = 0; i < 5; i++)
+	kd_params bad[8];
+	for (int i = 0; i < 8; i++)
 		kd_params_default(&bad[i]);
 	bad[0].cost_isect = 0;
 	bad[1].cost_trav = -1;
 	bad[2].max_depth = 65;
 	bad[3].leaf_size = -1;
 	bad[4].empty_bonus = 1;
-	for (int i = 0; i < 5; i++) {
+	bad[5].footprint = -0.001f;
+	bad[6].footprint = (float)KD_FOOTPRINT_MAX * 1.5f;
+	bad[7].footprint = NAN;
+	for (int i = 0; i < 8; i++) {
 		kdtree t;
 		diag d = {{0}};
 		cr_assert_eq(kd_build(&t, &s, &bad[i], &d), -1, "case %d", i);
@@ -378,7 +381,153 @@ Test(kdtree, random_soup)
 	build_check(&s, &p, 1);
 	p.max_depth = 5;
 	build_check(&s, &p, 1);
+	kd_params_default(&p);
+	p.footprint = 0.01f; /* shallower tree, same coverage */
+	build_check(&s, &p, 1);
 	scene_free(&s);
+}
+
+/* Packet footprint (kdtree.c): n tiny triangles in a cube of side `side`
+ * around c, added to s. */
+static void cluster(scene *s, vec3 c, float side, int n, uint64_t seed)
+{
+	for (int i = 0; i < n; i++) {
+		vec3 q = v3_add(c, v3((rnd(&seed) - 0.5f) * side, (rnd(&seed) - 0.5f) * side,
+		                      (rnd(&seed) - 0.5f) * side));
+		float e = 0.1f * side;
+		add_tri(s, q, v3_add(q, v3(e, 0, 0)), v3_add(q, v3(0, e, 0.5f * e)));
+	}
+}
+
+/* Over the leaves: how many list a triangle with id in [lo, hi) (return
+ * value), and whether one lists ids of both [lo, hi) and [hi, hi2). */
+static uint32_t leaves_listing(const kdtree *t, uint32_t lo, uint32_t hi, uint32_t hi2, int *mixed)
+{
+	uint32_t n = 0;
+	*mixed = 0;
+	for (uint32_t i = 0; i < t->nnodes; i++) {
+		if (!kd_is_leaf(t->nodes[i]))
+			continue;
+		const uint32_t *l = t->list + kd_first(t->nodes[i]);
+		uint32_t in = 0, other = 0;
+		for (uint32_t k = 0; k < kd_count(t->nodes[i]); k++) {
+			in += l[k] >= lo && l[k] < hi;
+			other += l[k] >= hi && l[k] < hi2;
+		}
+		n += in > 0;
+		*mixed |= in && other;
+	}
+	return n;
+}
+
+/* Two tiny marker triangles at opposite corners of the unit cube: the
+ * scene's diagonal is about sqrt(3) whatever lies between. */
+static void corners(scene *s)
+{
+	add_tri(s, v3(0, 0, 0), v3(0.001f, 0, 0), v3(0, 0.001f, 0));
+	add_tri(s, v3(1, 1, 1), v3(0.999f, 1, 1), v3(1, 0.999f, 1));
+}
+
+/* Mistake caught: the footprint not reaching the SAH. The plain SAH cuts
+ * a cluster far smaller than a packet into leaves of two or three
+ * triangles (44 leaves here); under the footprint it stays in at most two
+ * (the root's cut may pass through it: at that size, through or beside
+ * it costs the same). */
+Test(kdtree, footprint_keeps_a_cluster_smaller_than_a_packet_whole)
+{
+	scene s;
+	scene_init(&s, "cluster");
+	corners(&s);
+	cluster(&s, v3(0.5f, 0.5f, 0.5f), 0.001f, 64, 5);
+	finish(&s);
+	kd_params p;
+	kd_params_default(&p);
+	kdtree t;
+	diag d;
+	int mixed;
+	cr_assert_eq(kd_build(&t, &s, &p, &d), 0, "%s", d.msg);
+	uint32_t plain = leaves_listing(&t, 2, 66, 66, &mixed);
+	cr_assert_geq(plain, 16, "the plain SAH splits the cluster (%u leaves)", plain);
+	kd_free(&t);
+	/* grown by 0.05 * sqrt(3) per side: 170 times the cluster's side */
+	p.footprint = 0.05f;
+	cr_assert_eq(kd_build(&t, &s, &p, &d), 0, "%s", d.msg);
+	uint32_t fp = leaves_listing(&t, 2, 66, 66, &mixed);
+	cr_assert_leq(fp, 2,
+	              "a packet 170 times wider than the cluster gains nothing by splitting it "
+	              "(%u leaves)",
+	              fp);
+	kd_free(&t);
+	scene_free(&s);
+}
+
+/* Mistake caught: the footprint growing the children but not the node
+ * they split (the chance of a child would exceed 1, and no split of a
+ * node smaller than the footprint would ever pay): two clusters half the
+ * scene apart must still go to different leaves under a footprint a
+ * third of their distance. */
+Test(kdtree, footprint_still_parts_clusters_farther_apart_than_a_packet)
+{
+	scene s;
+	scene_init(&s, "two clusters");
+	corners(&s);
+	cluster(&s, v3(0.25f, 0.5f, 0.5f), 0.001f, 32, 6);
+	cluster(&s, v3(0.75f, 0.5f, 0.5f), 0.001f, 32, 7);
+	finish(&s);
+	kd_params p;
+	kd_params_default(&p);
+	p.footprint = 0.05f;
+	kdtree t;
+	diag d;
+	int mixed;
+	cr_assert_eq(kd_build(&t, &s, &p, &d), 0, "%s", d.msg);
+	leaves_listing(&t, 2, 34, 66, &mixed);
+	cr_assert_not(mixed, "one leaf lists triangles of both clusters");
+	kd_free(&t);
+	scene_free(&s);
+}
+
+/* Mistake caught: the footprint taken in scene units instead of as a
+ * fraction of the scene's diagonal. Scaling by 1024 is exact in floats,
+ * so the same fraction must give the same tree node for node. */
+Test(kdtree, footprint_is_a_fraction_of_the_scene)
+{
+	scene a, b;
+	random_soup(&a, 2000, 11);
+	scene_init(&b, "random x1024");
+	for (uint32_t i = 0; i < a.ntris; i++) {
+		vec3 p[3];
+		for (int k = 0; k < 3; k++)
+			p[k] = v3_scale(a.v[3 * (size_t)i + k], 1024.0f);
+		add_tri(&b, p[0], p[1], p[2]);
+	}
+	finish(&b);
+	kd_params p;
+	kd_params_default(&p);
+	p.footprint = 0.004f;
+	kdtree ta, tb, plain;
+	diag d;
+	cr_assert_eq(kd_build(&ta, &a, &p, &d), 0, "%s", d.msg);
+	cr_assert_eq(kd_build(&tb, &b, &p, &d), 0, "%s", d.msg);
+	kd_params_default(&p);
+	cr_assert_eq(kd_build(&plain, &a, &p, &d), 0, "%s", d.msg);
+	cr_assert(ta.nnodes != plain.nnodes ||
+	              memcmp(ta.nodes, plain.nodes, ta.nnodes * sizeof *ta.nodes),
+	          "the footprint changed nothing here");
+	cr_assert_eq(ta.nnodes, tb.nnodes);
+	cr_assert_eq(ta.nlist, tb.nlist);
+	cr_assert_eq(memcmp(ta.list, tb.list, ta.nlist * sizeof *ta.list), 0);
+	for (uint32_t i = 0; i < ta.nnodes; i++) {
+		cr_assert_eq(kd_is_leaf(ta.nodes[i]), kd_is_leaf(tb.nodes[i]), "node %u", i);
+		if (!kd_is_leaf(ta.nodes[i]))
+			cr_assert_eq(kd_split(ta.nodes[i]) * 1024.0f, kd_split(tb.nodes[i]),
+			             "node %u", i);
+	}
+	kd_free(&ta);
+	kd_free(&tb);
+	kd_free(&plain);
+	scene_free(&a);
+	scene_free(&b);
 }
 
 Test(kdtree, flat_cells)

@@ -54,7 +54,7 @@ static void fresh_scene(char *dir, size_t ndir, char *cache, size_t ncache, char
 	write_scene(dir, "1 1 1", obj, nobj);
 }
 
-static int load(world *w, const char *obj, const char *cache, float empty_bonus)
+static int load_fp(world *w, const char *obj, const char *cache, float empty_bonus, float footprint)
 {
 	world_opts o;
 	world_opts_default(&o);
@@ -62,10 +62,16 @@ static int load(world *w, const char *obj, const char *cache, float empty_bonus)
 	o.cache_dir = cache;
 	if (empty_bonus >= 0)
 		o.kd.empty_bonus = empty_bonus;
+	o.kd.footprint = footprint;
 	diag d;
 	int rc = world_load(w, &o, &d);
 	cr_assert_eq(rc, 0, "%s", d.msg);
 	return w->cache;
+}
+
+static int load(world *w, const char *obj, const char *cache, float empty_bonus)
+{
+	return load_fp(w, obj, cache, empty_bonus, 0);
 }
 
 /* The cached world w equals the built world b in everything used after
@@ -173,6 +179,12 @@ Test(worldcache, kd_parameters_have_their_own_entry)
 	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
 	world_free(&w);
 	cr_assert_eq(load(&w, obj, cache, 0.5f), WORLD_CACHE_HIT);
+	world_free(&w);
+	/* the packet footprint (rtref's tree against the chip's) too */
+	cr_assert_eq(load_fp(&w, obj, cache, -1, KD_RTREF_FOOTPRINT), WORLD_CACHE_STORED);
+	world_free(&w);
+	cr_assert_eq(world_files(cache, f, sizeof f), 3);
+	cr_assert_eq(load_fp(&w, obj, cache, -1, KD_RTREF_FOOTPRINT), WORLD_CACHE_HIT);
 	world_free(&w);
 }
 
