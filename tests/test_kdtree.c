@@ -464,8 +464,9 @@ Test(kdtree, footprint_keeps_a_cluster_smaller_than_a_packet_whole)
 /* Mistake caught: the footprint growing the children but not the node
  * they split (the chance of a child would exceed 1, and no split of a
  * node smaller than the footprint would ever pay): two clusters half the
- * scene apart must still go to different leaves under a footprint a
- * third of their distance. */
+ * scene apart must still go to different leaves under the largest
+ * footprint, which grows a box by a third of their distance on each side
+ * (the mistake keeps them in one leaf there). */
 Test(kdtree, footprint_still_parts_clusters_farther_apart_than_a_packet)
 {
 	scene s;
@@ -476,7 +477,7 @@ Test(kdtree, footprint_still_parts_clusters_farther_apart_than_a_packet)
 	finish(&s);
 	kd_params p;
 	kd_params_default(&p);
-	p.footprint = 0.05f;
+	p.footprint = (float)KD_FOOTPRINT_MAX; /* grown 0.17 per side */
 	kdtree t;
 	diag d;
 	int mixed;
