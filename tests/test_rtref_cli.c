@@ -146,7 +146,9 @@ Test(rtref_cli, absurd_sizes_and_threads)
 	                     "--kd-max-depth 65",
 	                     "--kd-max-depth 3.7",
 	                     "--kd-leaf-size 100000",
-	                     "--kd-cost-trav 0"};
+	                     "--kd-cost-trav 0",
+	                     "--kd-footprint 0.2",
+	                     "--kd-footprint nan"};
 	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
 		snprintf(args, sizeof args, "%s --out %s/f.png", bad[k], dir);
 		cr_assert_eq(rtref(args), 2, "'%s' should exit 2", bad[k]);

@@ -579,9 +579,10 @@ Test(saarsim_cli, kd_flags_go_through_the_config)
 {
 	const char *bad[][2] = {{"--kd-leaf-size 100000", "--kd-leaf-size: kdtree.leaf_size"},
 	                        {"--kd-max-depth 3.7", "--kd-max-depth: kdtree.max_depth"},
-	                        {"--kd-empty-bonus 1", "--kd-empty-bonus: kdtree.empty_bonus"}};
+	                        {"--kd-empty-bonus 1", "--kd-empty-bonus: kdtree.empty_bonus"},
+	                        {"--kd-footprint 0.2", "--kd-footprint: kdtree.footprint"}};
 	char args[2048];
-	for (int i = 0; i < 3; i++) {
+	for (int i = 0; i < 4; i++) {
 		snprintf(args, sizeof args, "--size 16x16 %s", bad[i][0]);
 		cr_assert_eq(saarsim(args), 2, "%s", bad[i][0]);
 		one_line_naming(bad[i][1]);
@@ -614,6 +615,37 @@ Test(saarsim_cli, kd_flags_go_through_the_config)
 	snprintf(args, sizeof args, "--size 16x16 --sample-rate %s", rate);
 	cr_assert_eq(saarsim(args), 2);
 	one_line_naming("--sample-rate");
+}
+
+/* The report's kd-tree node count (its "kdtree" object), or 0. */
+static unsigned long kd_nodes(const char *report)
+{
+	const char *k = strstr(report, "\"kdtree\": {");
+	const char *n = k ? strstr(k, "\"nodes\": ") : NULL;
+	return n ? strtoul(n + 9, NULL, 10) : 0;
+}
+
+/* Mistake caught: kdtree.footprint checked and reported but never handed
+ * to the chip's tree build (sim/main.c sets the world's kd parameters key
+ * by key). The embedded room's tree under a footprint is another tree,
+ * and the chip's frame still passes its check on it. */
+Test(saarsim_cli, kd_footprint_reaches_the_chips_tree)
+{
+	char args[1024];
+	unsigned long n[2];
+	const char *fp[2] = {"0", "0.05"};
+	for (int i = 0; i < 2; i++) {
+		snprintf(args, sizeof args,
+		         "--size 32x32 --set chip.rtps=1 --kd-footprint %s --report %s/r.json",
+		         fp[i], dir);
+		cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+		const char *r = slurp("r.json");
+		cr_assert(strstr(r, "\"footprint\": "),
+		          "no kdtree.footprint in the report's config");
+		n[i] = kd_nodes(r);
+		cr_assert_gt(n[i], 1, "no kd-tree node count in the report");
+	}
+	cr_assert_neq(n[0], n[1], "the same tree (%lu nodes) with and without the footprint", n[0]);
 }
 
 Test(saarsim_cli, bad_config_key_names_file_line_col)
