@@ -488,6 +488,198 @@ static void fru_isect(trav_state *s, packet *p, const mimg_tri *tr, uint64_t mas
 	fru_isect_in(s, p, tr, mask, tri_addr, NULL);
 }
 
+int fru_tri_path = FRU_TRI_AUTO;
+
+/* Up to SIMD_W of a leaf's triangles, one per lane: each corner's
+ * coordinates in the packet's axis permutation (pkt_rayc's ukx, uky,
+ * ukz); the lanes past the chunk's last triangle are off (on). */
+typedef struct fru_tris {
+	fv x[3], y[3], z[3];
+	uint32_t addr[SIMD_W];
+	unsigned on; /* the lanes holding a triangle of the chunk */
+} fru_tris;
+
+/* fru_gather lane by lane, the lanes that are off holding list[0]. */
+static void fru_gather_lanes(fru_tris *g, const pkt_rayc *rc, const mimg *m, const uint32_t *list,
+                             int n)
+{
+	float b[9][SIMD_W];
+	for (int l = 0; l < SIMD_W; l++) {
+		uint32_t a = list[l < n ? l : 0];
+		const mimg_tri *tr = mimg_tri_at(m, a);
+		g->addr[l] = a;
+		for (int k = 0; k < 3; k++) {
+			b[k][l] = tr->v[k][rc->ukx];
+			b[3 + k][l] = tr->v[k][rc->uky];
+			b[6 + k][l] = tr->v[k][rc->ukz];
+		}
+	}
+	for (int k = 0; k < 3; k++) {
+		g->x[k] = fv_load(b[k]);
+		g->y[k] = fv_load(b[3 + k]);
+		g->z[k] = fv_load(b[6 + k]);
+	}
+}
+
+/* The triangles list[0 .. n-1] (0 < n <= SIMD_W) into g's lanes: with
+ * AVX-512 or AVX2 nine gathers from the image, the addresses being the
+ * gathers' byte offsets (an image of up to 2 GB: the offsets are signed),
+ * the lanes that are off zero; else lane by lane (dragon2's primary frame
+ * took 52 ms with the lanes filled one by one, 49 with the gathers:
+ * docs/PERFORMANCE.md, session 46). */
+static void fru_gather(fru_tris *g, const pkt_rayc *rc, const mimg *m, const uint32_t *list, int n)
+{
+	g->on = n == SIMD_W ? SIMD_MASK : (1u << n) - 1u;
+	const int ax[3] = {rc->ukx, rc->uky, rc->ukz};
+	fv *dst[3] = {g->x, g->y, g->z};
+	if (m->size > (uint64_t)INT32_MAX) {
+		fru_gather_lanes(g, rc, m, list, n);
+		return;
+	}
+#if SIMD_W == 16 && defined(__AVX512F__)
+	__mmask16 on = (__mmask16)g->on;
+	__m512i idx = _mm512_maskz_loadu_epi32(on, list);
+	_mm512_storeu_si512(g->addr, idx);
+	FRU_UNROLL(9)
+	for (int c = 0; c < 9; c++) { /* corner c % 3, axis ax[c / 3] */
+		__m512 v = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), on, idx,
+		                                    m->bytes + 4 * (3 * (c % 3) + ax[c / 3]), 1);
+		memcpy(&dst[c / 3][c % 3], &v, sizeof v);
+	}
+#elif SIMD_W == 8 && defined(__AVX2__)
+	iv onv = iv_from_bits(g->on);
+	__m256i idx, msk;
+	for (int l = 0; l < SIMD_W; l++)
+		g->addr[l] = l < n ? list[l] : 0;
+	memcpy(&idx, g->addr, sizeof idx);
+	memcpy(&msk, &onv, sizeof msk);
+	FRU_UNROLL(9)
+	for (int c = 0; c < 9; c++) {
+		const float *base = (const float *)(m->bytes + 4 * (3 * (c % 3) + ax[c / 3]));
+		__m256 v = _mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, idx,
+		                                    _mm256_castsi256_ps(msk), 1);
+		memcpy(&dst[c / 3][c % 3], &v, sizeof v);
+	}
+#else
+	(void)ax;
+	(void)dst;
+	fru_gather_lanes(g, rc, m, list, n);
+#endif
+}
+
+/* Ray i against g's triangles, lane by lane: for each (ray, triangle)
+ * pair the operations of isect_v_uniform, isect_v_edges, isect_v_inside
+ * and isect_v_front in fru_isect_in, with the ray's constants broadcast
+ * and the triangles' corners in the lanes, so the same floats. Returns
+ * the lanes hit in front of the origin, with their t, edge functions v,
+ * w and determinant. */
+static inline unsigned fru_ray_tris(const pkt_rayc *rc, int i, const fru_tris *g, fv *t, fv *v,
+                                    fv *w, fv *det)
+{
+	fv okx = fv_set1(rc->okx[i]), oky = fv_set1(rc->oky[i]), okz = fv_set1(rc->okz[i]);
+	fv sx = fv_set1(rc->sx[i]), sy = fv_set1(rc->sy[i]);
+	fv vx[3], vy[3], vkz[3], u;
+	FRU_UNROLL(3)
+	for (int k = 0; k < 3; k++) {
+		vkz[k] = g->z[k] - okz;
+		vx[k] = (g->x[k] - okx) - sx * vkz[k];
+		vy[k] = (g->y[k] - oky) - sy * vkz[k];
+	}
+	isect_v_edges(vx, vy, g->on, &u, v, w);
+	unsigned okb = isect_v_inside(u, *v, *w, g->on, det);
+	if (!okb)
+		return 0;
+	return isect_v_front(u, *v, *w, *det, fv_set1(rc->sz[i]), vx, vy, vkz, okb, t);
+}
+
+/* Ray i's hits okb on g's triangles taken as fru_isect_in takes them:
+ * a shadow ray records its first occluder in the leaf's order (the
+ * lowest lane: the per-triangle loop stops a ray at its first); any other
+ * ray the best hit by isect_better, a total order, so whichever order the
+ * lanes are taken in, with its barycentrics divided once. Returns the
+ * lane bit of the taken hit of a non-shadow ray, else 0. */
+static inline unsigned fru_take_tris(const trav_state *s, packet *p, int i, const fru_tris *g,
+                                     unsigned okb, fv t, fv v, fv w, fv det)
+{
+	if (s->shadow) {
+		okb &= iv_bits(t < fv_set1(p->tmax[i]));
+		if (okb && p->tri[i] == PKT_NOHIT) {
+			int l = fru_fault == FRU_FAULT_TRI_SHADOW_LAST ? 31 - __builtin_clz(okb)
+			                                               : __builtin_ctz(okb);
+			p->t[i] = -INFINITY; /* occluded: every filter drops it */
+			p->tri[i] = g->addr[l];
+		}
+		return 0;
+	}
+	int b = -1;
+	for (unsigned k = okb; k; k &= k - 1) {
+		int l = __builtin_ctz(k);
+		if (isect_better(t[l], g->addr[l], p->t[i], p->tri[i])) {
+			p->t[i] = t[l];
+			p->tri[i] = g->addr[l];
+			b = l;
+		}
+	}
+	if (b < 0)
+		return 0;
+	p->bu[i] = fru_fault == FRU_FAULT_BARY_SWAP ? w[b] / det[b] : v[b] / det[b];
+	p->bv[i] = w[b] / det[b];
+	return 1u << b;
+}
+
+/* fru_leaf's test of the leaf's triangles list[0 .. count-1] for the few
+ * rays of mask: triangle-parallel, each ray against SIMD_W triangles at
+ * once (fru_ray_tris), where the per-triangle loop spends a lane group
+ * on each triangle for each group with an active ray, most of its lanes
+ * idle. The same hits (fru_take_tris); a shadow ray occluded in one
+ * chunk of triangles is not tested against the next. */
+static void fru_leaf_tris(trav_state *s, packet *p, const mimg *m, const uint32_t *list,
+                          uint32_t count, uint64_t mask)
+{
+	uint32_t step = fru_fault == FRU_FAULT_TRI_ONE_CHUNK ? count : SIMD_W;
+	for (uint32_t j0 = 0; j0 < count && mask; j0 += step) {
+		fru_tris g;
+		fru_gather(&g, &s->rc, m, list + j0,
+		           count - j0 < SIMD_W ? (int)(count - j0) : SIMD_W);
+		unsigned took = 0;
+		for (uint64_t r = mask; r; r &= r - 1) {
+			int i = __builtin_ctzll(r);
+			fv t, v, w, det;
+			unsigned okb = fru_ray_tris(&s->rc, i, &g, &t, &v, &w, &det);
+			if (okb)
+				took |= fru_take_tris(s, p, i, &g, okb, t, v, w, det);
+		}
+		if (s->shadow) /* an occluded shadow ray stops */
+			mask = pkt_shadow_open(p, mask);
+		/* the shader reads the hit triangles' shading records: fetched ahead */
+		for (; took; took &= took - 1) {
+			uint64_t a =
+			    mimg_shade_addr(m, mimg_tri_index(m, g.addr[__builtin_ctz(took)]));
+			if (a < m->size)
+				__builtin_prefetch(m->bytes + a);
+		}
+	}
+}
+
+/* Whether fru_leaf tests a leaf of count triangles for the rays of mask
+ * (rays of them) triangle-parallel: where that takes fewer SIMD_W-lane
+ * tests, counting a chunk's gathers as one more test (one per ray and
+ * one for the gathers for each chunk of SIMD_W triangles), than the
+ * per-triangle loop (one per triangle for each lane group with an
+ * active ray); fru_tri_path as tests set it. A leaf of one triangle
+ * never gains. */
+static inline int fru_tri_parallel(uint32_t count, uint64_t mask, int rays)
+{
+	if (fru_tri_path != FRU_TRI_AUTO)
+		return fru_tri_path == FRU_TRI_ALWAYS;
+	if (count < 2)
+		return 0;
+	uint32_t groups = 0;
+	for (int g = 0; g < NGROUPS; g++)
+		groups += grp_bits(mask, g) != 0;
+	return ((uint32_t)rays + 1) * ((count + SIMD_W - 1) / SIMD_W) < count * groups;
+}
+
 /* The leaf counts of a walk (trav_counts' fields), kept in locals. */
 typedef struct fru_counts {
 	uint64_t leaves, tris, ray_tris;
@@ -495,7 +687,9 @@ typedef struct fru_counts {
 
 /* pkt_trace_leaf for rays of one permutation without cone culling: the
  * same tests in the same order, so the same hits and counts (into k),
- * with fru_isect called directly; the leaf's triangles fetched ahead. */
+ * with fru_isect called directly, or for a sparse packet the same tests
+ * triangle-parallel (fru_tri_parallel, fru_leaf_tris); the leaf's
+ * triangles fetched ahead. */
 static void fru_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, uint32_t count,
                      uint64_t mask, fru_counts *k)
 {
@@ -504,7 +698,12 @@ static void fru_leaf(trav_state *s, packet *p, const mimg *m, uint32_t first, ui
 		__builtin_prefetch(mimg_tri_at(m, lists[j]));
 	k->leaves++;
 	k->tris += count;
-	k->ray_tris += (uint64_t)count * (uint64_t)__builtin_popcountll(mask);
+	int rays = __builtin_popcountll(mask);
+	k->ray_tris += (uint64_t)count * (uint64_t)rays;
+	if (fru_tri_parallel(count, mask, rays)) {
+		fru_leaf_tris(s, p, m, lists, count, mask);
+		return;
+	}
 	for (uint32_t j = 0; j < count && mask; j++) {
 		fru_isect_in(s, p, mimg_tri_at(m, lists[j]), mask, lists[j], m);
 		if (s->shadow) /* an occluded shadow ray stops */

@@ -63,15 +63,33 @@ int fru_coherent(const trav_state *s, const packet *p, uint64_t entered);
  *     buffers change hands instead of being copied: rays step with
  *     another node's segments);
  *   FRU_FAULT_BARY_SWAP: the leaf test's late barycentric division
- *     divides the wrong edge function for bu (w in place of v). */
+ *     divides the wrong edge function for bu (w in place of v);
+ *   FRU_FAULT_TRI_SHADOW_LAST: the triangle-parallel leaf test
+ *     (fru_tri_path) records a shadow ray's last occluder among a chunk
+ *     of triangles instead of its first;
+ *   FRU_FAULT_TRI_ONE_CHUNK: the triangle-parallel leaf test tests only
+ *     the first SIMD_W triangles of a leaf. */
 enum fru_fault {
 	FRU_FAULT_NONE,
 	FRU_FAULT_ALWAYS_NEAR,
 	FRU_FAULT_ONE_DIRECTION,
 	FRU_FAULT_POP_ALL,
 	FRU_FAULT_STALE_SEGMENTS,
-	FRU_FAULT_BARY_SWAP
+	FRU_FAULT_BARY_SWAP,
+	FRU_FAULT_TRI_SHADOW_LAST,
+	FRU_FAULT_TRI_ONE_CHUNK
 };
 extern int fru_fault;
+
+/* How fru_trace's leaf test (rays of one axis permutation, no cone
+ * culling) takes a leaf: FRU_TRI_AUTO, triangle-parallel (each ray
+ * against SIMD_W of the leaf's triangles at once) where that takes fewer
+ * vector tests than triangle by triangle over the rays' lane groups, the
+ * sparse packets that reach small cells; FRU_TRI_NEVER and FRU_TRI_ALWAYS
+ * one way for every leaf. The same hits and counts whichever way (the
+ * same floats for each ray and triangle, the first occluder of a shadow
+ * ray in the leaf's order). Tests set fru_tri_path; rtref keeps AUTO. */
+enum fru_tri { FRU_TRI_AUTO, FRU_TRI_NEVER, FRU_TRI_ALWAYS };
+extern int fru_tri_path;
 
 #endif

@@ -15,6 +15,17 @@
  * leaves the segment buffers unswapped: rays step with another node's
  * segments), and in its own leaf test: FRU_FAULT_BARY_SWAP (the late
  * barycentric division takes the wrong edge function).
+ *
+ * The leaf test's triangle-parallel way (fru_tri_path: each ray against
+ * SIMD_W of a leaf's triangles at once) is checked the same way on a pile
+ * of triangles that every split plane cuts (leaves of more than SIMD_W
+ * triangles, shadow rays with many occluders), forced for every leaf and
+ * left to the automatic choice; the mistakes it is written to catch:
+ * FRU_FAULT_TRI_SHADOW_LAST (a shadow ray records its last occluder of a
+ * chunk, not its first), FRU_FAULT_TRI_ONE_CHUNK (triangles past the
+ * first SIMD_W of a leaf skipped), and, by a crafted ray whose float edge
+ * function rounds to zero, the double-precision redo skipped
+ * (tests/mutants/50-fru-tri-no-double-redo.patch).
  */
 #include <math.h>
 #include <string.h>
@@ -22,6 +33,7 @@
 #include "kernel-ref/camera.h"
 #include "kernel-ref/cone.h"
 #include "kernel-ref/frustum.h"
+#include "kernel-ref/simd.h"
 #include "kernel-ref/world.h"
 #include "tests/testutil.h"
 
@@ -99,6 +111,44 @@ static void make_packet(packet *p, int kind, int n, uint32_t *seed)
 	p->n = PKT_RAYS;
 	/* every third packet partly valid */
 	p->valid = n % 3 ? ~0ull : ((uint64_t)rng_next(seed) << 32 | rng_next(seed));
+}
+
+/* Triangles each spanning the box [-1, 1]^3 corner region to corner
+ * region: every split plane cuts every one, so the tree's leaves hold
+ * most of them (more than SIMD_W) and a ray meets many. */
+static void make_pile(world *w)
+{
+	scene s;
+	scene_init(&s, "test:pile");
+	material mt = material_default("m");
+	scene_add_material(&s, &mt);
+	uint32_t seed = 4242;
+	for (int k = 0; k < 3 * SIMD_W + 5; k++) {
+		vec3 t[3];
+		for (int j = 0; j < 3; j++) {
+			float x = 0.8f + 0.2f * rng_unit(&seed), y = 0.8f + 0.2f * rng_unit(&seed),
+			      z = 0.8f + 0.2f * rng_unit(&seed);
+			/* corners in opposite octants, so each triangle crosses the
+			 * middle of every axis */
+			int o = (k + j) % 3;
+			t[j] = v3(o == 0 ? -x : x, o == 1 ? -y : y, j == 2 ? -z : z);
+		}
+		scene_add_triangle(&s, t, NULL, NULL, 0);
+	}
+	diag d;
+	cr_assert_eq(scene_finish(&s, "pile", &d), 0);
+	tu_build_world(w, &s);
+}
+
+/* The most triangles of one leaf of w's tree. */
+static uint32_t largest_leaf(const world *w)
+{
+	const kd_node *nodes = mimg_nodes(&w->m);
+	uint32_t most = 0;
+	for (uint32_t i = 0; i < w->m.nnodes; i++)
+		if (kd_is_leaf(nodes[i]) && kd_count(nodes[i]) > most)
+			most = kd_count(nodes[i]);
+	return most;
 }
 
 /* Rays whose results differ between the two paths, plus 1 per packet
@@ -179,4 +229,105 @@ Test(frustum, planted_mistakes_are_caught, .init = setup_soup, .fini = teardown_
 		fru_fault = FRU_FAULT_NONE;
 		cr_assert_gt(bad, 0, "fault %d went unnoticed", faults[f]);
 	}
+}
+
+static world pile;
+
+static void setup_pile(void)
+{
+	make_pile(&pile);
+}
+
+static void teardown_pile(void)
+{
+	world_free(&pile);
+	fru_tri_path = FRU_TRI_AUTO;
+	fru_fault = FRU_FAULT_NONE;
+}
+
+/* The triangle-parallel leaf test against the per-lane reference, forced
+ * for every leaf, never taken and chosen automatically: the same hits
+ * (t, triangle, barycentrics bit for bit; a shadow ray's first occluder
+ * in the leaf's order) and the same counts. Mistakes it catches: a
+ * shadow ray taking another occluder than its first, triangles of a long
+ * leaf skipped, any operation of the test done differently (the planted
+ * faults below). */
+Test(frustum, triangle_parallel_leaves_equal_per_triangle, .init = setup_pile,
+     .fini = teardown_pile)
+{
+	cr_assert_gt(largest_leaf(&pile), 2 * SIMD_W, "largest leaf %u",
+	             (unsigned)largest_leaf(&pile));
+	static const int paths[] = {FRU_TRI_ALWAYS, FRU_TRI_NEVER, FRU_TRI_AUTO};
+	for (int q = 0; q < 3; q++)
+		for (int k = 0; k < NKINDS; k++) {
+			fru_tri_path = paths[q];
+			uint64_t coh = 0, bad = mismatches(&pile, k, 128, 0, &coh);
+			fru_tri_path = FRU_TRI_AUTO;
+			cr_assert_eq(bad, 0, "path %d, kind %d: %llu mismatches", paths[q], k,
+			             (unsigned long long)bad);
+		}
+}
+
+/* Each planted mistake of the triangle-parallel test shows up. */
+Test(frustum, triangle_parallel_planted_mistakes_are_caught, .init = setup_pile,
+     .fini = teardown_pile)
+{
+	static const int faults[] = {FRU_FAULT_TRI_SHADOW_LAST, FRU_FAULT_TRI_ONE_CHUNK,
+	                             FRU_FAULT_BARY_SWAP};
+	for (int f = 0; f < (int)(sizeof faults / sizeof faults[0]); f++) {
+		fru_fault = faults[f];
+		fru_tri_path = FRU_TRI_ALWAYS;
+		uint64_t coh = 0, bad = 0;
+		for (int k = 0; k < NKINDS; k++)
+			bad += mismatches(&pile, k, 128, 0, &coh);
+		fru_fault = FRU_FAULT_NONE;
+		fru_tri_path = FRU_TRI_AUTO;
+		cr_assert_gt(bad, 0, "fault %d went unnoticed", faults[f]);
+	}
+}
+
+/* A ray down the z axis from (0, 0, 1) past a triangle at z = 0 whose
+ * edge from c1 = (-1, -1 - e) to c2 = (1 + e, 1 + 2e), e = 2^-12, passes
+ * 2^-24 / |c2 - c1| beside the axis: its edge function (1 + e)(-1 - e)
+ * + (1 + 2e) is -2^-24, which float rounds to 0 (the product's 2^-24 is
+ * a tie, to even), so only the double-precision redo (isect_uvw_double)
+ * sees the ray miss it; it goes on to the floor at z = -1. Mistake
+ * caught: the triangle-parallel test skipping the redo (the ray then
+ * stops at t = 1). Either axis permutation (kx, ky) gives the same: a
+ * swap negates every edge function exactly. */
+Test(frustum, triangle_parallel_redoes_zero_edges_in_double)
+{
+	const float e = 0x1p-12f;
+	scene s;
+	scene_init(&s, "test:edge");
+	material mt = material_default("m");
+	scene_add_material(&s, &mt);
+	vec3 tri[3] = {v3(1, -1, 0), v3(-1, -1 - e, 0), v3(1 + e, 1 + 2 * e, 0)};
+	vec3 floor[3] = {v3(-8, -8, -1), v3(8, -8, -1), v3(0, 8, -1)};
+	scene_add_triangle(&s, tri, NULL, NULL, 0);
+	scene_add_triangle(&s, floor, NULL, NULL, 0);
+	diag d;
+	cr_assert_eq(scene_finish(&s, "edge", &d), 0);
+	world w;
+	tu_build_world(&w, &s);
+	static trav_entry stack[PKT_STACK_MAX];
+	static const int paths[] = {FRU_TRI_NEVER, FRU_TRI_ALWAYS, FRU_TRI_AUTO};
+	for (int q = 0; q < 3; q++) {
+		static packet p;
+		pkt_clear(&p, PKT_PRIMARY, 0);
+		for (int i = 0; i < PKT_RAYS; i++) {
+			p.ox[i] = p.oy[i] = 0.0f, p.oz[i] = 1.0f;
+			p.dx[i] = p.dy[i] = 0.0f, p.dz[i] = -1.0f;
+			p.tmax[i] = INFINITY;
+		}
+		p.n = PKT_RAYS;
+		p.valid = 1; /* one ray: a sparse packet, triangle-parallel when AUTO */
+		fru_tri_path = paths[q];
+		fru_trace(&p, &w.m, stack, PKT_STACK_MAX, NULL, NULL, 0);
+		fru_tri_path = FRU_TRI_AUTO;
+		cr_assert(p.tri[0] != PKT_NOHIT && p.t[0] == 2.0f,
+		          "path %d: t %a (the edge's triangle at t 1 taken?)", paths[q],
+		          (double)p.t[0]);
+	}
+	world_free(&w);
 }
