@@ -672,12 +672,13 @@ static inline int fru_tri_parallel(uint32_t count, uint64_t mask, int rays)
 {
 	if (fru_tri_path != FRU_TRI_AUTO)
 		return fru_tri_path == FRU_TRI_ALWAYS;
-	if (count < 2)
+	uint32_t chunks = (count + SIMD_W - 1) / SIMD_W, cost = ((uint32_t)rays + 1) * chunks;
+	if (count < 2 || cost >= count * NGROUPS) /* dense: no need to count groups */
 		return 0;
 	uint32_t groups = 0;
 	for (int g = 0; g < NGROUPS; g++)
 		groups += grp_bits(mask, g) != 0;
-	return ((uint32_t)rays + 1) * ((count + SIMD_W - 1) / SIMD_W) < count * groups;
+	return cost < count * groups;
 }
 
 /* The leaf counts of a walk (trav_counts' fields), kept in locals. */
