@@ -25,7 +25,7 @@
  * chunk, not its first), FRU_FAULT_TRI_ONE_CHUNK (triangles past the
  * first SIMD_W of a leaf skipped), and, by a crafted ray whose float edge
  * function rounds to zero, the double-precision redo skipped
- * (tests/mutants/50-fru-tri-no-double-redo.patch).
+ * (tests/mutants/51-fru-tri-no-double-redo.patch).
  */
 #include <math.h>
 #include <string.h>
