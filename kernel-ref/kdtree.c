@@ -42,8 +42,11 @@
  * Scanned meshes of tiny triangles, which the plain SAH cuts into cells
  * far smaller than a primary packet, get shallower trees with fuller
  * leaves. w/2 is f times the scene box's diagonal: a property of the
- * scene, not of a view, so the tree stays view-independent; rtref takes
- * KD_RTREF_FOOTPRINT, the chip's tree 0 (the model's figures).
+ * scene, not of a view, so the tree stays view-independent (the chip's
+ * tree takes 0, the model's figures). Or w is the width a primary packet
+ * of a view has at the scene box's centre (params->fp_angle, the packet's
+ * angle, and fp_eye): what rtref takes when it knows its view before the
+ * scene loads (world.c, view_kd), KD_RTREF_FOOTPRINT otherwise.
  *
  * Memory: events live in one growable arena used as a stack (a node's
  * children overwrite its own events, right child below left child, and the
@@ -109,7 +112,9 @@ void kd_params_default(kd_params *p)
 	p->leaf_size = 2;
 	/* Wald-Havran's lambda = 0.8 for cutting off empty space. */
 	p->empty_bonus = 0.2f;
-	p->footprint = 0; /* the plain SAH: rtref sets KD_RTREF_FOOTPRINT */
+	p->footprint = 0; /* the plain SAH: rtref sets its own (world.c, view_kd) */
+	p->fp_angle = 0;
+	p->fp_eye[0] = p->fp_eye[1] = p->fp_eye[2] = 0;
 }
 
 static int grow(void **ptr, size_t *cap, size_t need, size_t elem)
@@ -375,6 +380,21 @@ static double find_split(const builder *b, const work *w, const event *ev, int *
 	return best;
 }
 
+/* Twice the footprint's growth per side (scene units): a packet's width
+ * at the box's centre seen from the view's eye, or the fraction of the
+ * box's diagonal (kdtree.c's top comment, "Packet footprint"). */
+static double fp_grow2(const kd_params *p, const aabb *bx)
+{
+	double dx = (double)bx->hi.x - bx->lo.x, dy = (double)bx->hi.y - bx->lo.y,
+	       dz = (double)bx->hi.z - bx->lo.z;
+	if (!(p->fp_angle > 0))
+		return 2.0 * p->footprint * sqrt(dx * dx + dy * dy + dz * dz);
+	double ex = p->fp_eye[0] - 0.5 * ((double)bx->lo.x + bx->hi.x),
+	       ey = p->fp_eye[1] - 0.5 * ((double)bx->lo.y + bx->hi.y),
+	       ez = p->fp_eye[2] - 0.5 * ((double)bx->lo.z + bx->hi.z);
+	return p->fp_angle * sqrt(ex * ex + ey * ey + ez * ez);
+}
+
 static int make_leaf(builder *b, const work *w, const event *ev)
 {
 	if (grow((void **)&b->list, &b->list_cap, b->nlist + w->ntris, sizeof *b->list))
@@ -574,10 +594,9 @@ static int build(builder *b, const scene *s)
 	b->nnodes = 1;
 	double ra = half_area(&s->bounds);
 	b->inv_root_area = ra > 0 ? 1.0 / ra : 0.0;
-	double dx = (double)s->bounds.hi.x - s->bounds.lo.x,
-	       dy = (double)s->bounds.hi.y - s->bounds.lo.y,
-	       dz = (double)s->bounds.hi.z - s->bounds.lo.z;
-	b->grow2 = 2.0 * b->p.footprint * sqrt(dx * dx + dy * dy + dz * dz);
+	b->grow2 = fp_grow2(&b->p, &s->bounds);
+	b->t->fp_grow = 0.5 * b->grow2;
+	b->t->fp_angle = b->p.fp_angle;
 
 	work stack[KD_DEPTH_MAX + 4];
 	int sp = 0;
@@ -624,12 +643,15 @@ int kd_build(kdtree *t, const scene *s, const kd_params *params, diag *d)
 	    !(p.cost_isect > 0 && isfinite(p.cost_isect)) || p.max_depth < 0 ||
 	    p.max_depth > KD_DEPTH_MAX || p.leaf_size < 0 ||
 	    !(p.empty_bonus >= 0 && p.empty_bonus < 1) ||
-	    !(p.footprint >= 0 && p.footprint <= (float)KD_FOOTPRINT_MAX))
+	    !(p.footprint >= 0 && p.footprint <= (float)KD_FOOTPRINT_MAX) ||
+	    !(p.fp_angle >= 0 && p.fp_angle <= (float)KD_FP_ANGLE_MAX) ||
+	    (p.fp_angle > 0 &&
+	     !(isfinite(p.fp_eye[0]) && isfinite(p.fp_eye[1]) && isfinite(p.fp_eye[2]))))
 		return diag_set(d, "kd_build", 0, 0,
 		                "bad parameters (need cost_trav >= 0, cost_isect > 0, 0 <= "
 		                "max_depth <= %d, leaf_size >= 0, 0 <= empty_bonus < 1, 0 <= "
-		                "footprint <= %g)",
-		                KD_DEPTH_MAX, KD_FOOTPRINT_MAX);
+		                "footprint <= %g, 0 <= fp_angle <= %g, a finite fp_eye)",
+		                KD_DEPTH_MAX, KD_FOOTPRINT_MAX, KD_FP_ANGLE_MAX);
 	if (s->ntris == 0 || s->ntris > MAX_TRIS)
 		return diag_set(d, s->name, 0, 0, "kd-tree needs 1 to %u triangles, scene has %u",
 		                MAX_TRIS, s->ntris);

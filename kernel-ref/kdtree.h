@@ -36,6 +36,12 @@ typedef struct kd_params {
 	float footprint;   /* packet footprint, a fraction of the scene box's
 	                    * diagonal: the SAH grows every box by it on each side
 	                    * (kdtree.c, "Packet footprint"); 0 = the plain SAH */
+	/* a view's packet instead (fp_angle > 0): the growth per side is
+	 * fp_angle / 2 times the distance from fp_eye to the scene box's
+	 * centre, half the width there of a packet fp_angle wide (radians)
+	 * seen from fp_eye; footprint is not used then */
+	float fp_angle;
+	float fp_eye[3];
 } kd_params;
 
 typedef struct kd_node {
@@ -56,6 +62,8 @@ typedef struct kdtree {
 	uint64_t work;   /* triangle references the splits spent (KD_WORK_BUDGET) */
 	int depth;       /* deepest leaf */
 	double sah_cost; /* expected cost of the whole tree */
+	double fp_grow;  /* the packet footprint's growth per side, scene units */
+	float fp_angle;  /* kd_params.fp_angle it was built with (0: none) */
 	double build_ms; /* host wall time of kd_build */
 } kdtree;
 
@@ -88,11 +96,14 @@ typedef struct kdtree {
 #define KD_BONUS_MAX     0.99
 #define KD_FOOTPRINT_MAX 0.1
 
-/* rtref's own footprint (the chip's tree, kdtree.footprint, keeps 0):
- * measured against 0, 0.0005, 0.0015 and 0.002 on the shared views in
- * docs/PERFORMANCE.md ("Target 1: session 46"); the one that makes no
- * view slower. */
+/* rtref's own footprint where it has no view to take it from (the chip's
+ * tree, kdtree.footprint, keeps 0): measured against 0, 0.0005, 0.0015
+ * and 0.002 on the shared views in docs/PERFORMANCE.md ("Target 1:
+ * session 46"); the one that makes no view slower. With a view known
+ * before the scene loads rtref takes its packet's footprint instead
+ * (world_opts.fp_packet, kernel-ref.md). */
 #define KD_RTREF_FOOTPRINT 0.001f
+#define KD_FP_ANGLE_MAX    1.0 /* radians: a packet of a 180-degree view */
 
 void kd_params_default(kd_params *p);
 

@@ -149,6 +149,13 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	jsonw_kint(j, "depth", w->kd.depth);
 	jsonw_kuint(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_knum(j, "sah_cost", w->kd.sah_cost);
+	/* the SAH's packet footprint (kdtree.c): growth per side in scene
+	 * units, from the view's packet or a fraction of the scene */
+	jsonw_knum(j, "footprint_grow", w->kd.fp_grow);
+	jsonw_kstr(j, "footprint_from",
+	           w->kd.fp_angle > 0  ? "view"
+	           : w->kd.fp_grow > 0 ? "scene"
+	                               : "none");
 	jsonw_obj_end(j);
 	if (w->tl)
 		two_level_stats(j, w->tl);
@@ -278,6 +285,12 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 		a->ro.prec = &a->prec;
 	if (a->frames > 1 && !a->wo.have_anim_fps)
 		return cli_bad("rtref", "--frames: needs --anim-fps F (frame i is at T + i/F)");
+	/* rtref's own tree: its primary packet's footprint (world.h) unless
+	 * --kd-footprint names one */
+	if (!a->wo.kd_footprint_given) {
+		a->wo.fp_packet = TILE_W;
+		a->wo.fp_height = a->ro.height;
+	}
 	return -1;
 }
 

@@ -11,6 +11,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -292,6 +293,7 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		if (parse_num(a, v, 0, KD_FOOTPRINT_MAX, &x, d))
 			return -1;
 		o->kd.footprint = (float)x;
+		o->kd_footprint_given = 1;
 	}
 	return 1;
 }
@@ -507,14 +509,14 @@ int world_cache_put(const world *w, const char *file, const char *key, const wc_
 /* The world cache's file (cfile) and key (*ckey, malloc'd) for the scene
  * at path; the stored world into parts and w->m.bytes when there is one
  * (w->cache = WORLD_CACHE_HIT). Nothing without a folder. */
-static int cache_lookup(world *w, const world_opts *o, const char *path, wc_part *parts,
-                        char *cfile, size_t ncfile, char **ckey, diag *d)
+static int cache_lookup(world *w, const world_opts *o, const kd_params *kp, const char *path,
+                        wc_part *parts, char *cfile, size_t ncfile, char **ckey, diag *d)
 {
 	if (cache_open(w, o, d))
 		return -1;
 	if (!w->cache_dir)
 		return 0;
-	if (!(*ckey = wc_world_key(w->cache_prog, path, &o->kd)))
+	if (!(*ckey = wc_world_key(w->cache_prog, path, kp)))
 		return diag_set(d, w->cache_dir, 0, 0, "--world-cache: out of memory");
 	if (wc_file(cfile, ncfile, w->cache_dir, "world", *ckey))
 		return diag_set(d, w->cache_dir, 0, 0, "--world-cache: folder name too long");
@@ -535,16 +537,22 @@ static int cache_lookup(world *w, const world_opts *o, const char *path, wc_part
 }
 
 /* The camera and light flags override the view. */
-static int apply_view_flags(world *w, const world_opts *o, diag *d)
+/* The camera flags (--eye, --lookat, --up, --fov) over camera c. */
+static void cam_flags(const world_opts *o, camera *c)
 {
 	if (o->have_eye)
-		w->v.cam.eye = o->cam.eye;
+		c->eye = o->cam.eye;
 	if (o->have_lookat)
-		w->v.cam.lookat = o->cam.lookat;
+		c->lookat = o->cam.lookat;
 	if (o->have_up)
-		w->v.cam.up = o->cam.up;
+		c->up = o->cam.up;
 	if (o->have_fov)
-		w->v.cam.fov_deg = o->cam.fov_deg;
+		c->fov_deg = o->cam.fov_deg;
+}
+
+static int apply_view_flags(world *w, const world_opts *o, diag *d)
+{
+	cam_flags(o, &w->v.cam);
 	if (o->have_eye || o->have_lookat || o->have_up || o->have_fov) {
 		if (camera_validate(&w->v.cam, "--eye/--lookat/--up/--fov", d))
 			return -1;
@@ -619,6 +627,32 @@ static void cache_store(world *w, view *sv, const char *cfile, const char *ckey,
 	}
 }
 
+/* rtref's own tree (world_opts.fp_packet): the kd parameters with the
+ * footprint of a primary packet of the final view, when that view is
+ * known before the scene loads (from a views file, or the embedded
+ * scene's default), camera flags applied, so that the world cache keys
+ * the tree by it (kdtree.c, "Packet footprint"; docs/kernel-ref.md). A
+ * packet fp_packet pixels wide on an image fp_height high spans
+ * fp_packet * 2 tan(fov/2) / fp_height radians (the camera's vertical
+ * field of view, square pixels). Else (a view framed by the scene's box
+ * or brought by the scene, an AFF scene) the parameters as given. */
+static kd_params view_kd(const world *w, const world_opts *o, const char *path)
+{
+	kd_params k = o->kd;
+	if (o->fp_packet <= 0 || o->fp_height <= 0 || (path && !o->views))
+		return k;
+	camera c = w->v.cam;
+	cam_flags(o, &c);
+	double a = o->fp_packet * 2.0 * tan(c.fov_deg * (M_PI / 360.0)) / o->fp_height;
+	if (!(a > 0 && a <= KD_FP_ANGLE_MAX))
+		return k;
+	k.fp_angle = (float)a;
+	k.fp_eye[0] = c.eye.x;
+	k.fp_eye[1] = c.eye.y;
+	k.fp_eye[2] = c.eye.z;
+	return k;
+}
+
 int world_load(world *w, const world_opts *o, diag *d)
 {
 	memset(w, 0, sizeof *w);
@@ -640,7 +674,8 @@ int world_load(world *w, const world_opts *o, diag *d)
 	wc_part parts[WORLD_PARTS];
 	world_parts(parts, &w->s, &w->kd, &w->m, &sv, &w->image_crc);
 	/* an AFF world is not cached: it is rebuilt per animation time */
-	if (!aff && cache_lookup(w, o, path, parts, cfile, sizeof cfile, &ckey, d)) {
+	kd_params kp = view_kd(w, o, path);
+	if (!aff && cache_lookup(w, o, &kp, path, parts, cfile, sizeof cfile, &ckey, d)) {
 		free(ckey);
 		return -1;
 	}
@@ -665,7 +700,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 		goto fail;
 	if (w->cache != WORLD_CACHE_HIT) {
 		t0 = now_ms();
-		if (kd_build(&w->kd, &w->s, world_kd(o), d))
+		if (kd_build(&w->kd, &w->s, aff ? world_kd(o) : &kp, d))
 			goto fail;
 		w->kd_ms = now_ms() - t0;
 		t0 = now_ms();

@@ -34,6 +34,13 @@ typedef struct world_opts {
 	 * problem is then named by the key, drt.<name>, not the flag) */
 	unsigned drt_from_config;
 	kd_params kd;
+	/* rtref's own tree (view_kd in world.c): with fp_packet > 0 the
+	 * footprint of kd is a packet fp_packet pixels wide on an image
+	 * fp_height pixels high, seen from the view's eye at the scene's
+	 * centre, when the view is known before the scene loads (a views
+	 * file, or the embedded scene's default view); kd.footprint else.
+	 * kd_footprint_given: --kd-footprint was given (rtref then takes it) */
+	int fp_packet, fp_height, kd_footprint_given;
 	/* --world-cache DIR (or "off"), or NULL: the default folder, from the
 	 * environment (wc_choose in worldcache.h) */
 	const char *cache_dir;

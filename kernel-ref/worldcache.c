@@ -354,14 +354,17 @@ char *wc_world_key(const char *prog, const char *source, const kd_params *kd)
 	char *rp = source && !spd_is(source) ? realpath(source, NULL) : NULL;
 	char *key;
 	int n = asprintf(
-	    &key, "saarsim world 1\n%s\nsource %s\nkd %a %a %d %d %a %a\nstructs %zu %zu %zu %zu\n",
+	    &key,
+	    "saarsim world 1\n%s\nsource %s\nkd %a %a %d %d %a %a %a %a %a %a\nstructs %zu %zu %zu "
+	    "%zu\n",
 	    prog,
 	    rp       ? rp
 	    : source ? source
 	             : "(embedded)",
 	    (double)kd->cost_trav, (double)kd->cost_isect, kd->max_depth, kd->leaf_size,
-	    (double)kd->empty_bonus, (double)kd->footprint, sizeof(scene), sizeof(kdtree),
-	    sizeof(mimg), sizeof(view));
+	    (double)kd->empty_bonus, (double)kd->footprint, (double)kd->fp_angle,
+	    (double)kd->fp_eye[0], (double)kd->fp_eye[1], (double)kd->fp_eye[2], sizeof(scene),
+	    sizeof(kdtree), sizeof(mimg), sizeof(view));
 	free(rp);
 	return n < 0 ? NULL : key;
 }

@@ -316,6 +316,10 @@ int main(int argc, char **argv)
 	 * does not hold (world.h): no default world-cache folder (issue 36) */
 	if (!wo.cache_dir)
 		wo.cache_dir = "off";
+	if (!wo.kd_footprint_given) { /* the tree rtref traces (rtref.c) */
+		wo.fp_packet = TILE_W;
+		wo.fp_height = height;
+	}
 	if (world_load(&w, &wo, &d)) {
 		fprintf(stderr, "embree_bench: %s\n", d.msg);
 		return DIAG_EXIT;

@@ -328,8 +328,8 @@ Test(kdtree, bad_params_fail_with_diag)
 {
 	scene s;
 	random_soup(&s, 10, 1);
-	kd_params bad[8];
-	for (int i = 0; i < 8; i++)
+	kd_params bad[10];
+	for (int i = 0; i < 10; i++)
 		kd_params_default(&bad[i]);
 	bad[0].cost_isect = 0;
 	bad[1].cost_trav = -1;
@@ -339,7 +339,10 @@ Test(kdtree, bad_params_fail_with_diag)
 	bad[5].footprint = -0.001f;
 	bad[6].footprint = (float)KD_FOOTPRINT_MAX * 1.5f;
 	bad[7].footprint = NAN;
-	for (int i = 0; i < 8; i++) {
+	bad[8].fp_angle = 2; /* wider than a half turn */
+	bad[9].fp_angle = 0.01f;
+	bad[9].fp_eye[1] = INFINITY;
+	for (int i = 0; i < 10; i++) {
 		kdtree t;
 		diag d = {{0}};
 		cr_assert_eq(kd_build(&t, &s, &bad[i], &d), -1, "case %d", i);
@@ -724,4 +727,62 @@ Test(kdtree, cornell_box)
 Test(kdtree, dragon_res4, .timeout = 120)
 {
 	shared_scene("stanford_dragon/dragon_vrip_res4.obj", 0);
+}
+
+/* Whether trees a and b are the same node for node, list for list. */
+static int same_tree(const kdtree *a, const kdtree *b)
+{
+	return a->nnodes == b->nnodes && a->nlist == b->nlist &&
+	       !memcmp(a->nodes, b->nodes, a->nnodes * sizeof *a->nodes) &&
+	       !memcmp(a->list, b->list, a->nlist * sizeof *a->list);
+}
+
+/* Mistakes caught: a view's footprint (fp_angle, fp_eye) measured to
+ * another point than the scene box's centre (a corner, the origin), or
+ * not halved into a growth per side. The scene's box is [0,1]x[0,2]x[0,2]
+ * (diagonal 3, centre (0.5,1,1)), so a packet 2^-5 wide seen from 3 away,
+ * or 2^-6 wide from 6 away in any direction, grows a box by exactly what
+ * the fraction 2^-6 of the diagonal does: the same tree, bit for bit. */
+Test(kdtree, footprint_from_a_view_is_a_packet_at_the_scene_centre)
+{
+	scene s;
+	uint64_t seed = 3;
+	scene_init(&s, "box 1x2x2");
+	add_tri(&s, v3(0, 0, 0), v3(0.01f, 0, 0), v3(0, 0.01f, 0));
+	add_tri(&s, v3(1, 2, 2), v3(0.99f, 2, 2), v3(1, 1.99f, 2));
+	for (int i = 0; i < 1500; i++) {
+		vec3 c = v3(0.05f + 0.9f * rnd(&seed), 0.05f + 1.9f * rnd(&seed),
+		            0.05f + 1.9f * rnd(&seed));
+		add_tri(&s, c, v3_add(c, v3(0.01f * rnd(&seed), 0.02f, 0)),
+		        v3_add(c, v3(0.02f, 0, 0.01f * rnd(&seed))));
+	}
+	finish(&s);
+	diag d;
+	kd_params p;
+	kdtree plain, frac, t;
+	kd_params_default(&p);
+	cr_assert_eq(kd_build(&plain, &s, &p, &d), 0, "%s", d.msg);
+	p.footprint = 0.015625f; /* 2^-6 of the diagonal, 0.046875 a side */
+	cr_assert_eq(kd_build(&frac, &s, &p, &d), 0, "%s", d.msg);
+	cr_assert_not(same_tree(&plain, &frac), "the footprint changed nothing here");
+	cr_assert_float_eq(frac.fp_grow, 0.046875, 0);
+	const float eyes[4][4] = {/* angle, eye */
+	                          {0.03125f, 0.5f, 1, 4},
+	                          {0.015625f, 6.5f, 1, 1},
+	                          {0.015625f, 0.5f, -5, 1},
+	                          {0.03125f, 0.5f, 1, -2}};
+	for (int i = 0; i < 4; i++) {
+		kd_params_default(&p);
+		p.footprint = 0.1f; /* not used beside a view's */
+		p.fp_angle = eyes[i][0];
+		for (int k = 0; k < 3; k++)
+			p.fp_eye[k] = eyes[i][1 + k];
+		cr_assert_eq(kd_build(&t, &s, &p, &d), 0, "%s", d.msg);
+		cr_assert_float_eq(t.fp_grow, 0.046875, 0, "eye %d: growth %g", i, t.fp_grow);
+		cr_assert(same_tree(&t, &frac), "eye %d: another tree", i);
+		kd_free(&t);
+	}
+	kd_free(&plain);
+	kd_free(&frac);
+	scene_free(&s);
 }

@@ -164,6 +164,48 @@ Test(rtref_cli, absurd_sizes_and_threads)
 	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
 }
 
+/* The kdtree object of rtref's stats in dir/s.json: the node count and
+ * the footprint's growth; the footprint's source in from (64 bytes). */
+static void kd_stats(unsigned long *nodes, double *grow, char *from)
+{
+	const char *s = slurp("s.json");
+	const char *k = strstr(s, "\"kdtree\": {");
+	cr_assert(k, "no kdtree object in the stats");
+	const char *n = strstr(k, "\"nodes\": "), *g = strstr(k, "\"footprint_grow\": "),
+	           *f = strstr(k, "\"footprint_from\": \"");
+	cr_assert(n && g && f, "no nodes, footprint_grow or footprint_from in the kdtree object");
+	*nodes = strtoul(n + 9, NULL, 10);
+	*grow = strtod(g + 18, NULL);
+	f += 19;
+	size_t len = strcspn(f, "\"");
+	snprintf(from, 64, "%.*s", (int)(len < 63 ? len : 63), f);
+}
+
+/* rtref's own tree takes its primary packet's footprint (world.c,
+ * view_kd). Mistakes caught: the view's footprint worked out but not
+ * built with (the same tree as the plain SAH's), or taken for one image
+ * height whatever --size says (a packet of a frame 8 times higher is 8
+ * times narrower); --kd-footprint not winning over it. */
+Test(rtref_cli, own_tree_takes_the_views_packet_footprint)
+{
+	char args[1024], from[64];
+	unsigned long n[4];
+	double g[4];
+	const char *run[4] = {"--size 64x64", "--size 64x512", "--size 64x64 --kd-footprint 0",
+	                      "--size 64x64 --kd-footprint 0.002"};
+	const char *want[4] = {"view", "view", "none", "scene"};
+	for (int i = 0; i < 4; i++) {
+		snprintf(args, sizeof args, "%s --world-cache off --stats %s/s.json", run[i], dir);
+		cr_assert_eq(rtref(args), 0, "%s: %s", run[i], slurp("err"));
+		kd_stats(&n[i], &g[i], from);
+		cr_assert_str_eq(from, want[i], "%s", run[i]);
+	}
+	cr_assert_neq(n[0], n[2], "the view's footprint built the plain SAH's tree (%lu nodes)",
+	              n[0]);
+	cr_assert_float_eq(g[0] / g[1], 8.0, 1e-5, "growth %g at 64 rows, %g at 512", g[0], g[1]);
+	cr_assert_eq(g[2], 0);
+}
+
 Test(rtref_cli, unwritable_output_leaves_nothing)
 {
 	char args[1024];

@@ -54,6 +54,25 @@ static void fresh_scene(char *dir, size_t ndir, char *cache, size_t ncache, char
 	write_scene(dir, "1 1 1", obj, nobj);
 }
 
+/* With eye_x > 0: a view's footprint (a packet 0.01 wide seen from
+ * (eye_x, 0, 0)) instead of the fraction. */
+static int load_view_fp(world *w, const char *obj, const char *cache, float footprint, float eye_x)
+{
+	world_opts o;
+	world_opts_default(&o);
+	o.scene = obj;
+	o.cache_dir = cache;
+	o.kd.footprint = footprint;
+	if (eye_x > 0) {
+		o.kd.fp_angle = 0.01f;
+		o.kd.fp_eye[0] = eye_x;
+	}
+	diag d;
+	int rc = world_load(w, &o, &d);
+	cr_assert_eq(rc, 0, "%s", d.msg);
+	return w->cache;
+}
+
 static int load_fp(world *w, const char *obj, const char *cache, float empty_bonus, float footprint)
 {
 	world_opts o;
@@ -185,6 +204,14 @@ Test(worldcache, kd_parameters_have_their_own_entry)
 	world_free(&w);
 	cr_assert_eq(world_files(cache, f, sizeof f), 3);
 	cr_assert_eq(load_fp(&w, obj, cache, -1, KD_RTREF_FOOTPRINT), WORLD_CACHE_HIT);
+	world_free(&w);
+	/* and a view's footprint by its eye (rtref's tree for another view) */
+	cr_assert_eq(load_view_fp(&w, obj, cache, 0, 5), WORLD_CACHE_STORED);
+	world_free(&w);
+	cr_assert_eq(load_view_fp(&w, obj, cache, 0, 7), WORLD_CACHE_STORED);
+	world_free(&w);
+	cr_assert_eq(world_files(cache, f, sizeof f), 5);
+	cr_assert_eq(load_view_fp(&w, obj, cache, 0, 5), WORLD_CACHE_HIT);
 	world_free(&w);
 }
 
