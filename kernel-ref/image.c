@@ -186,7 +186,9 @@ int img_can_write(const char *path, diag *d)
 	return rc ? -1 : 0;
 }
 
-int img_reserve(const char *path, diag *d)
+/* A path naming a folder ("out/", or an existing folder) is refused as
+ * such, before any other check. */
+static int not_a_folder(const char *path, diag *d)
 {
 	size_t n = strlen(path);
 	struct stat st;
@@ -195,11 +197,26 @@ int img_reserve(const char *path, diag *d)
 		                "cannot write image: it names a folder, not a file (give a name "
 		                "such as %s%sframe.png)",
 		                path, n && path[n - 1] == '/' ? "" : "/");
-	if (img_can_write(path, d))
-		return -1;
+	return 0;
+}
+
+static int reserve_temp(const char *path, diag *d)
+{
 	char ext[32], sfx[34];
 	snprintf(sfx, sizeof sfx, ".%s", ext_of(path, ext, sizeof ext));
 	return af_reserve(path, sfx, d);
+}
+
+int img_reserve(const char *path, diag *d)
+{
+	if (not_a_folder(path, d) || img_can_write(path, d))
+		return -1;
+	return reserve_temp(path, d);
+}
+
+int img_reserve_file(const char *path, diag *d)
+{
+	return not_a_folder(path, d) ? -1 : reserve_temp(path, d);
 }
 
 int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d)

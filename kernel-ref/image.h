@@ -39,6 +39,14 @@ int img_can_write(const char *path, diag *d);
  * as such. */
 int img_reserve(const char *path, diag *d);
 
+/* img_reserve without img_can_write: the plugin is not loaded. A program
+ * that imports a scene file calls this before the import and
+ * img_can_write after it: the plugin's libraries start threads when they
+ * load (log4cplus, through OpenVDB), and the importer forks
+ * (importproc.c); a child forked beside other threads can hang on a lock
+ * one of them held (seen under AddressSanitizer: its allocator's). */
+int img_reserve_file(const char *path, diag *d);
+
 /* The image plugin file that reads and writes images (out, n bytes); -1
  * with d set when there is none. A world cache keys texture-decoding
  * results on it, since rebuilding the plugin does not rebuild the program. */

@@ -378,14 +378,20 @@ int main(int argc, char **argv)
 	int rc = parse_args(argc, argv, &a, &d);
 	if (rc >= 0)
 		return rc;
-	/* an unwritable --out format fails now, not after the run */
-	if (a.out && img_reserve(a.out, &d))
+	/* an unwritable --out folder fails now, its format once the scene is
+	 * imported (img_reserve_file in image.h: not beside the importer's
+	 * fork), both before the run */
+	if (a.out && img_reserve_file(a.out, &d))
 		return cli_bad("rtref", d.msg);
 	if (a.stats && strcmp(a.stats, "-") && af_reserve(a.stats, "", &d))
 		return cli_bad("rtref", d.msg);
 	world w;
 	if (world_load(&w, &a.wo, &d))
 		return cli_bad("rtref", d.msg);
+	if (a.out && img_can_write(a.out, &d)) {
+		world_free(&w);
+		return cli_bad("rtref", d.msg);
+	}
 	if (w.tl)
 		a.ro.tracer = &w.tl->tracer;
 	if (w.grid)

@@ -439,7 +439,23 @@ static int reserve_heatmap(const char *dir, diag *d)
 	for (int i = 0; obs_heat_files[i]; i++) {
 		snprintf(path, sizeof path, "%s/%s", dir, obs_heat_files[i]);
 		const char *ext = strrchr(obs_heat_files[i], '.');
-		if (strcmp(ext, ".json") ? img_reserve(path, d) : af_reserve(path, "", d))
+		if (strcmp(ext, ".json") ? img_reserve_file(path, d) : af_reserve(path, "", d))
+			return flag_first("--heatmap", d);
+	}
+	return 0;
+}
+
+/* The image formats of --out and --heatmap's pictures: checked once the
+ * scene is imported, still before the run (img_reserve_file in image.h:
+ * the plugin's libraries start threads, and the importer forks). */
+static int check_image_formats(const cli *a, diag *d)
+{
+	if (a->out && img_can_write(a->out, d))
+		return -1;
+	char path[4200];
+	for (int i = 0; a->heatmap && obs_heat_files[i]; i++) {
+		snprintf(path, sizeof path, "%s/%s", a->heatmap, obs_heat_files[i]);
+		if (strcmp(strrchr(obs_heat_files[i], '.'), ".json") && img_can_write(path, d))
 			return flag_first("--heatmap", d);
 	}
 	return 0;
@@ -451,7 +467,7 @@ static int reserve_heatmap(const char *dir, diag *d)
  * before the world loads. */
 static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 {
-	if (a->out && img_reserve(a->out, d))
+	if (a->out && img_reserve_file(a->out, d))
 		return -1;
 	if (a->csv && (report_csv_check(a->csv, d) || af_reserve(a->csv, "", d)))
 		return -1;
@@ -635,7 +651,7 @@ static int run_frame(const cli *a, const saar_config *cfg, world *w, int i, uint
                      double t_start, diag *d)
 {
 	double t0 = now_ms();
-	if (i == 0 ? world_load(w, &a->wo, d)
+	if (i == 0 ? world_load(w, &a->wo, d) || check_image_formats(a, d)
 	           : world_set_time(w, &a->wo, world_frame_time(&a->wo, i), d))
 		return cli_bad("saarsim", d->msg);
 	double load_ms = now_ms() - t0;
@@ -733,8 +749,8 @@ int main(int argc, char **argv)
 	fa.report = cli_frame_path(a.report, nanim, 0, rb, sizeof rb);
 	if (reserve_outputs(&fa, &cfg, &d))
 		return cli_bad("saarsim", d.msg);
-	if (a.dry)
-		return 0;
+	if (a.dry) /* no scene import: the formats now */
+		return check_image_formats(&fa, &d) ? cli_bad("saarsim", d.msg) : 0;
 	world w;
 	memset(&w, 0, sizeof w);
 	rc = 0;

@@ -1426,3 +1426,35 @@ Test(saarsim_cli, drt_keys_are_their_flags)
 	cr_assert_eq(saarsim(args), 2);
 	one_line_naming("c.yaml:3:10: drt.gloss: gloss must be 0");
 }
+
+/* Mistake caught: the image plugin loaded before the scene's import (the
+ * --out and --heatmap format checks first, as before session 46). The
+ * plugin's libraries start threads as they load, and the importer forks:
+ * under AddressSanitizer the child hung on a lock one of them held (the
+ * ASan suite's observe/conference_timeline_and_heatmap timed out).
+ * SAAR_IMPORT_ONE_THREAD makes the importer refuse to fork beside other
+ * threads; a bad format is still refused before the run. rtref alike. */
+Test(saarsim_cli, scene_import_forks_before_the_image_plugin_loads)
+{
+	char p[512], args[2048];
+	tiny_scene(p, sizeof p);
+	snprintf(args, sizeof args,
+	         "--scene %s --size 16x16 --out %s/f.png --heatmap %s/hm --report %s/r.json", p,
+	         dir, dir, dir);
+	cr_assert_eq(tu_run_env("SAAR_IMPORT_ONE_THREAD=1", dir, "saarsim", args), 0, "%s",
+	             slurp("err"));
+	cr_assert(tu_exists(dir, "f.png"));
+	snprintf(args, sizeof args, "--scene %s --size 16x16 --out %s/f2.png", p, dir);
+	cr_assert_eq(tu_run_env("SAAR_IMPORT_ONE_THREAD=1", dir, "rtref", args), 0, "%s",
+	             slurp("err"));
+	cr_assert(tu_exists(dir, "f2.png"));
+	/* still refused before the run, with nothing left behind */
+	snprintf(args, sizeof args, "--scene %s --size 16x16 --out %s/f3.nosuchformat", p, dir);
+	cr_assert_eq(tu_run_env("SAAR_IMPORT_ONE_THREAD=1", dir, "saarsim", args), 2);
+	one_line_naming("f3.nosuchformat");
+	cr_assert_not(tu_exists(dir, "f3.nosuchformat"));
+	cr_assert_eq(tu_run_env("SAAR_IMPORT_ONE_THREAD=1", dir, "rtref", args), 2);
+	const char *e = slurp("err");
+	cr_assert(!strncmp(e, "rtref: ", 7) && strstr(e, "f3.nosuchformat") && !strchr(e, '\n')[1],
+	          "not one line naming the file: %s", e);
+}
