@@ -142,9 +142,11 @@ static const img_plugin plugin = {IMG_PLUGIN_ABI, write_rgb, can_write, read_rgb
 /* No worker pools: OpenImageIO's own and OpenEXR's (which an EXR read or
  * write, or an EXR writer's creation, starts) would be threads the scene
  * importer's child process does not have, and an EXR texture read there
- * waited on them for good (importproc.c forks after rtref and saarsim
- * open this plugin for --out). Images are read and written on the
- * calling thread instead; saarsim's frames and textures are small. */
+ * waited on them for good (importproc.c forked after rtref and saarsim
+ * opened this plugin for --out; they open it after the import now, since
+ * the libraries behind OIIO start threads of their own as they load:
+ * image.h, img_reserve_file). Images are read and written on the calling
+ * thread instead; saarsim's frames and textures are small. */
 extern "C" const img_plugin *saar_image_plugin(void)
 {
 	static const bool serial = [] {
