@@ -185,7 +185,8 @@ static void kd_stats(unsigned long *nodes, double *grow, char *from)
  * view_kd). Mistakes caught: the view's footprint worked out but not
  * built with (the same tree as the plain SAH's), or taken for one image
  * height whatever --size says (a packet of a frame 8 times higher is 8
- * times narrower); --kd-footprint not winning over it. */
+ * times narrower), or from the views file's eye when --eye moves it;
+ * --kd-footprint not winning over it. */
 Test(rtref_cli, own_tree_takes_the_views_packet_footprint)
 {
 	char args[1024], from[64];
@@ -204,6 +205,19 @@ Test(rtref_cli, own_tree_takes_the_views_packet_footprint)
 	              n[0]);
 	cr_assert_float_eq(g[0] / g[1], 8.0, 1e-5, "growth %g at 64 rows, %g at 512", g[0], g[1]);
 	cr_assert_eq(g[2], 0);
+	/* the camera flags apply: an eye twice as far, a wider footprint */
+	double ge[2];
+	const char *eyes[2] = {"--eye 0,0,3000", "--eye 0,0,6000"};
+	for (int i = 0; i < 2; i++) {
+		snprintf(args, sizeof args,
+		         "--size 64x64 %s --lookat 0,0,0 --world-cache off --stats %s/s.json",
+		         eyes[i], dir);
+		cr_assert_eq(rtref(args), 0, "%s: %s", eyes[i], slurp("err"));
+		unsigned long nn;
+		kd_stats(&nn, &ge[i], from);
+	}
+	cr_assert_gt(ge[1], 1.5 * ge[0], "--eye not applied to the footprint (%g, %g)", ge[0],
+	             ge[1]);
 }
 
 Test(rtref_cli, unwritable_output_leaves_nothing)
