@@ -240,7 +240,6 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 	memset(a, 0, sizeof *a);
 	a->frames = 1;
 	world_opts_default(&a->wo);
-	a->wo.kd.footprint = KD_RTREF_FOOTPRINT; /* rtref's own tree (kdtree.h) */
 	render_opts_default(&a->ro);
 	a->ro.frustum = 1;
 	a->fp_mode = FPR_NEAREST;
@@ -285,12 +284,7 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 		a->ro.prec = &a->prec;
 	if (a->frames > 1 && !a->wo.have_anim_fps)
 		return cli_bad("rtref", "--frames: needs --anim-fps F (frame i is at T + i/F)");
-	/* rtref's own tree: its primary packet's footprint (world.h) unless
-	 * --kd-footprint names one */
-	if (!a->wo.kd_footprint_given) {
-		a->wo.fp_packet = TILE_W;
-		a->wo.fp_height = a->ro.height;
-	}
+	world_opts_packet_tree(&a->wo, a->ro.height); /* rtref's own tree */
 	return -1;
 }
 

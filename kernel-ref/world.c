@@ -628,6 +628,15 @@ static void cache_store(world *w, view *sv, const char *cfile, const char *ckey,
 	}
 }
 
+void world_opts_packet_tree(world_opts *o, int height)
+{
+	if (o->kd_footprint_given)
+		return;
+	o->kd.footprint = KD_RTREF_FOOTPRINT;
+	o->fp_packet = TILE_W;
+	o->fp_height = height;
+}
+
 /* rtref's own tree (world_opts.fp_packet): the kd parameters with the
  * footprint of a primary packet of the final view, when that view is
  * known before the scene loads (from a views file, or the embedded

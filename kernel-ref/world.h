@@ -114,6 +114,14 @@ void world_opts_default(world_opts *o);
  * --world-cache-max MB. */
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
 
+/* rtref's own tree (kernel-ref.md, "rtref's own tree"), after the flags
+ * are parsed: unless --kd-footprint named a footprint, the footprint of
+ * rtref's primary packet (TILE_W pixels on an image height pixels high)
+ * where the view is known before the scene loads, KD_RTREF_FOOTPRINT
+ * where it is not. rtref and the Embree harness (scripts/embree_bench.c)
+ * call it, so that both trace the same tree. */
+void world_opts_packet_tree(world_opts *o, int height);
+
 /* Usage lines for those flags. */
 extern const char world_usage[];
 

@@ -235,7 +235,6 @@ int main(int argc, char **argv)
 {
 	world_opts wo;
 	world_opts_default(&wo);
-	wo.kd.footprint = KD_RTREF_FOOTPRINT; /* the tree rtref traces */
 	diag d = {{0}};
 	int width = 1024, height = 1024, runs = 3, robust = 0, list_diffs = 0;
 	enum RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;
@@ -316,10 +315,7 @@ int main(int argc, char **argv)
 	 * does not hold (world.h): no default world-cache folder (issue 36) */
 	if (!wo.cache_dir)
 		wo.cache_dir = "off";
-	if (!wo.kd_footprint_given) { /* the tree rtref traces (rtref.c) */
-		wo.fp_packet = TILE_W;
-		wo.fp_height = height;
-	}
+	world_opts_packet_tree(&wo, height); /* the tree rtref traces */
 	if (world_load(&w, &wo, &d)) {
 		fprintf(stderr, "embree_bench: %s\n", d.msg);
 		return DIAG_EXIT;
