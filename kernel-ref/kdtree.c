@@ -147,13 +147,21 @@ static void v3_set(vec3 *v, int a, float x)
 	*(a == 0 ? &v->x : a == 1 ? &v->y : &v->z) = x;
 }
 
-/* Surface area without the factor 2 (only ratios are used). */
-static double half_area(const aabb *b)
+/* Surface area without the factor 2 (only ratios are used) of box b with
+ * every extent grown by g (the packet footprint's 2 * w/2: "Packet
+ * footprint" above; 0: the box itself). */
+static double half_area_grown(const aabb *b, double g)
 {
-	double dx = b->hi.x - b->lo.x, dy = b->hi.y - b->lo.y, dz = b->hi.z - b->lo.z;
+	double dx = (b->hi.x - b->lo.x) + g, dy = (b->hi.y - b->lo.y) + g,
+	       dz = (b->hi.z - b->lo.z) + g;
 	if (dx < 0 || dy < 0 || dz < 0)
 		return 0;
 	return dx * dy + dy * dz + dz * dx;
+}
+
+static double half_area(const aabb *b)
+{
+	return half_area_grown(b, 0);
 }
 
 /* Sort key: float order as unsigned order (no NaN; -0 is normalised away). */
@@ -334,9 +342,7 @@ static double find_split(const builder *b, const work *w, const event *ev, int *
 		return best;
 	/* every extent grown by the footprint (2 * w/2); g = 0: plain SAH */
 	double g = b->grow2;
-	double ex = w->box.hi.x - w->box.lo.x + g, ey = w->box.hi.y - w->box.lo.y + g,
-	       ez = w->box.hi.z - w->box.lo.z + g;
-	double area_g = ex * ey + ey * ez + ez * ex;
+	double area_g = half_area_grown(&w->box, g);
 	double kt = b->p.cost_trav, ki = b->p.cost_isect / area_g, keep = 1.0 - b->p.empty_bonus;
 	for (int k = 0; k < 3; ev += w->n[k], k++) {
 		double lo = lo_of(&w->box, k), hi = hi_of(&w->box, k);
