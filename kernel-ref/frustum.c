@@ -568,9 +568,10 @@ static void fru_gather(fru_tris *g, const pkt_rayc *rc, const mimg *m, const uin
 }
 
 /* Ray i against g's triangles, lane by lane: for each (ray, triangle)
- * pair the operations of isect_v_uniform, isect_v_edges, isect_v_inside
- * and isect_v_front in fru_isect_in, with the ray's constants broadcast
- * and the triangles' corners in the lanes, so the same floats. Returns
+ * pair the functions fru_isect_in runs (isect_v_shear, as
+ * isect_v_uniform calls it, isect_v_edges, isect_v_inside and
+ * isect_v_front), with the ray's constants broadcast and the triangles'
+ * corners in the lanes, so the same floats. Returns
  * the lanes hit in front of the origin, with their t, edge functions v,
  * w and determinant. */
 static inline unsigned fru_ray_tris(const pkt_rayc *rc, int i, const fru_tris *g, fv *t, fv *v,
@@ -580,11 +581,9 @@ static inline unsigned fru_ray_tris(const pkt_rayc *rc, int i, const fru_tris *g
 	fv sx = fv_set1(rc->sx[i]), sy = fv_set1(rc->sy[i]);
 	fv vx[3], vy[3], vkz[3], u;
 	FRU_UNROLL(3)
-	for (int k = 0; k < 3; k++) {
-		vkz[k] = g->z[k] - okz;
-		vx[k] = (g->x[k] - okx) - sx * vkz[k];
-		vy[k] = (g->y[k] - oky) - sy * vkz[k];
-	}
+	for (int k = 0; k < 3; k++)
+		isect_v_shear(g->x[k], g->y[k], g->z[k], okx, oky, okz, sx, sy, &vx[k], &vy[k],
+		              &vkz[k]);
 	isect_v_edges(vx, vy, g->on, &u, v, w);
 	unsigned okb = isect_v_inside(u, *v, *w, g->on, det);
 	if (!okb)

@@ -15,6 +15,19 @@
 #include "kernel-ref/packet.h"
 #include "kernel-ref/simd.h"
 
+/* One corner (cx, cy, cz, in the rays' axis permutation) relative to the
+ * origin (okx, oky, okz), sheared by sx, sy: *vx, *vy the sheared x and y,
+ * *vkz the unsheared z. The lanes hold rays (isect_v_uniform: the corner
+ * broadcast) or triangles (frustum.c's fru_ray_tris: the ray broadcast);
+ * one function, so the same floats for each ray and corner either way. */
+static inline void isect_v_shear(fv cx, fv cy, fv cz, fv okx, fv oky, fv okz, fv sx, fv sy, fv *vx,
+                                 fv *vy, fv *vkz)
+{
+	*vkz = cz - okz;
+	*vx = (cx - okx) - sx * *vkz;
+	*vy = (cy - oky) - sy * *vkz;
+}
+
 /* The corners of tr relative to the rays' origins in the axis
  * permutation every ray of the packet shares (pkt_rayc.uniform), lanes
  * o..o+SIMD_W-1, sheared by sx, sy (isect_prepare): vx, vy the sheared
@@ -28,11 +41,10 @@ static inline void isect_v_uniform(const pkt_rayc *rc, int o, const mimg_tri *tr
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC unroll 3
 #endif
-	for (int k = 0; k < 3; k++) {
-		vkz[k] = fv_set1(tr->v[k][rc->ukz]) - okz;
-		vx[k] = (fv_set1(tr->v[k][rc->ukx]) - okx) - sx * vkz[k];
-		vy[k] = (fv_set1(tr->v[k][rc->uky]) - oky) - sy * vkz[k];
-	}
+	for (int k = 0; k < 3; k++)
+		isect_v_shear(fv_set1(tr->v[k][rc->ukx]), fv_set1(tr->v[k][rc->uky]),
+		              fv_set1(tr->v[k][rc->ukz]), okx, oky, okz, sx, sy, &vx[k], &vy[k],
+		              &vkz[k]);
 }
 
 /* The edge functions u, v, w of the sheared corners; a lane of gb where
