@@ -420,6 +420,14 @@ static int flag_first(const char *flag, diag *d)
 	return diag_set(d, flag, 0, 0, "%s", m);
 }
 
+/* --heatmap's file i (obs_heat_files) in folder dir, into path; 1 when it
+ * is a picture (written through the image plugin), 0 for its JSON. */
+static int heat_file(char *path, size_t n, const char *dir, int i)
+{
+	snprintf(path, n, "%s/%s", dir, obs_heat_files[i]);
+	return strcmp(strrchr(obs_heat_files[i], '.'), ".json") != 0;
+}
+
 /* --heatmap's folder, made here if missing and removed, if still empty,
  * at exit or on SIGINT/SIGTERM/SIGHUP after its files' temporaries
  * (af_made_dir): a failed or interrupted run leaves no folder. */
@@ -436,12 +444,10 @@ static int reserve_heatmap(const char *dir, diag *d)
 	} else if (!S_ISDIR(st.st_mode))
 		return diag_set(d, "--heatmap", 0, 0, "%s: not a folder", dir);
 	char path[4200];
-	for (int i = 0; obs_heat_files[i]; i++) {
-		snprintf(path, sizeof path, "%s/%s", dir, obs_heat_files[i]);
-		const char *ext = strrchr(obs_heat_files[i], '.');
-		if (strcmp(ext, ".json") ? img_reserve_file(path, d) : af_reserve(path, "", d))
+	for (int i = 0; obs_heat_files[i]; i++)
+		if (heat_file(path, sizeof path, dir, i) ? img_reserve_file(path, d)
+		                                         : af_reserve(path, "", d))
 			return flag_first("--heatmap", d);
-	}
 	return 0;
 }
 
@@ -453,18 +459,17 @@ static int check_image_formats(const cli *a, diag *d)
 	if (a->out && img_can_write(a->out, d))
 		return -1;
 	char path[4200];
-	for (int i = 0; a->heatmap && obs_heat_files[i]; i++) {
-		snprintf(path, sizeof path, "%s/%s", a->heatmap, obs_heat_files[i]);
-		if (strcmp(strrchr(obs_heat_files[i], '.'), ".json") && img_can_write(path, d))
+	for (int i = 0; a->heatmap && obs_heat_files[i]; i++)
+		if (heat_file(path, sizeof path, a->heatmap, i) && img_can_write(path, d))
 			return flag_first("--heatmap", d);
-	}
 	return 0;
 }
 
-/* Every output's temporary is made now, so an unwritable --out format, a
- * missing or read-only folder or a CSV of other columns fails before the
- * run, not after it (af_reserve); so does a census the run cannot keep,
- * before the world loads. */
+/* Every output's temporary is made now, so a missing or read-only folder
+ * or a CSV of other columns fails before the run, not after it
+ * (af_reserve); so does a census the run cannot keep, before the world
+ * loads. An image format the plugin cannot write fails once the scene is
+ * imported, still before the run (check_image_formats). */
 static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 {
 	if (a->out && img_reserve_file(a->out, d))
