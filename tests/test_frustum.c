@@ -50,14 +50,28 @@ static float rng_unit(uint32_t *s)
 	return (float)(rng_next(s) >> 8) * 0x1p-24f;
 }
 
+/* A test scene begun with one default material (scene_open), and
+ * finished into world w (scene_close). */
+static void scene_open(scene *s, const char *name)
+{
+	scene_init(s, name);
+	material mt = material_default("m");
+	scene_add_material(s, &mt);
+}
+
+static void scene_close(world *w, scene *s, const char *name)
+{
+	diag d;
+	cr_assert_eq(scene_finish(s, name, &d), 0);
+	tu_build_world(w, s);
+}
+
 /* Random small triangles in [-1, 1]^3 and axis-aligned quads on planes a
  * kd-tree splits at (faces in split planes, rays grazing them). */
 static void make_soup(world *w)
 {
 	scene s;
-	scene_init(&s, "test:soup");
-	material mt = material_default("m");
-	scene_add_material(&s, &mt);
+	scene_open(&s, "test:soup");
 	uint32_t seed = 12345;
 	for (int k = 0; k < 3000; k++) {
 		vec3 c =
@@ -75,9 +89,7 @@ static void make_soup(world *w)
 		scene_add_triangle(&s, a, NULL, NULL, 0);
 		scene_add_triangle(&s, b, NULL, NULL, 0);
 	}
-	diag d;
-	cr_assert_eq(scene_finish(&s, "soup", &d), 0);
-	tu_build_world(w, &s);
+	scene_close(w, &s, "soup");
 }
 
 enum { KIND_CAMERA, KIND_POINT, KIND_MIXED, KIND_LIGHT, KIND_SURFACE, NKINDS };
@@ -119,9 +131,7 @@ static void make_packet(packet *p, int kind, int n, uint32_t *seed)
 static void make_pile(world *w)
 {
 	scene s;
-	scene_init(&s, "test:pile");
-	material mt = material_default("m");
-	scene_add_material(&s, &mt);
+	scene_open(&s, "test:pile");
 	uint32_t seed = 4242;
 	for (int k = 0; k < 3 * SIMD_W + 5; k++) {
 		vec3 t[3];
@@ -135,9 +145,7 @@ static void make_pile(world *w)
 		}
 		scene_add_triangle(&s, t, NULL, NULL, 0);
 	}
-	diag d;
-	cr_assert_eq(scene_finish(&s, "pile", &d), 0);
-	tu_build_world(w, &s);
+	scene_close(w, &s, "pile");
 }
 
 /* The most triangles of one leaf of w's tree. */
@@ -299,17 +307,13 @@ Test(frustum, triangle_parallel_redoes_zero_edges_in_double)
 {
 	const float e = 0x1p-12f;
 	scene s;
-	scene_init(&s, "test:edge");
-	material mt = material_default("m");
-	scene_add_material(&s, &mt);
+	scene_open(&s, "test:edge");
 	vec3 tri[3] = {v3(1, -1, 0), v3(-1, -1 - e, 0), v3(1 + e, 1 + 2 * e, 0)};
 	vec3 floor[3] = {v3(-8, -8, -1), v3(8, -8, -1), v3(0, 8, -1)};
 	scene_add_triangle(&s, tri, NULL, NULL, 0);
 	scene_add_triangle(&s, floor, NULL, NULL, 0);
-	diag d;
-	cr_assert_eq(scene_finish(&s, "edge", &d), 0);
 	world w;
-	tu_build_world(&w, &s);
+	scene_close(&w, &s, "edge");
 	static trav_entry stack[PKT_STACK_MAX];
 	static const int paths[] = {FRU_TRI_NEVER, FRU_TRI_ALWAYS, FRU_TRI_AUTO};
 	for (int q = 0; q < 3; q++) {
