@@ -527,6 +527,10 @@ static void fru_gather_lanes(fru_tris *g, const pkt_rayc *rc, const mimg *m, con
  * the lanes that are off zero; else lane by lane (dragon2's primary frame
  * took 52 ms with the lanes filled one by one, 49 with the gathers:
  * docs/PERFORMANCE.md, session 46). */
+_Static_assert(offsetof(mimg_tri, v) == 0 && sizeof(mimg_tri) == 9 * sizeof(float),
+               "fru_gather reads corner k's axis a at byte 4 * (3k + a) of a triangle's "
+               "record, which starts at its address (mimg_tri_at)");
+
 static void fru_gather(fru_tris *g, const pkt_rayc *rc, const mimg *m, const uint32_t *list, int n)
 {
 	g->on = n == SIMD_W ? SIMD_MASK : (1u << n) - 1u;
