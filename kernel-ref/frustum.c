@@ -28,6 +28,7 @@
 #include "kernel-ref/frustum.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "kernel-ref/cone.h"
 #include "kernel-ref/isect_v.h"
