@@ -8,6 +8,7 @@
 #   make bench-scale    the largest scene: memory and build time (PERFORMANCE.md)
 #   make bench-sampled  a sampled run's time with its defaults (PERFORMANCE.md)
 #   make bench-ratio    cycle mode against kernel-ref on every view at 1024x768 (PERFORMANCE.md)
+#   make bench-footprint the chip on a packet-footprint kd-tree against its default (PERFORMANCE.md)
 #   make calibrate  fit the assumed parameters to published figures; writes
 #                   docs/CALIBRATION.md (docs/calibration.md)
 #   make accel      kd-tree, uniform grid and two-level trees compared;
@@ -88,7 +89,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-offsets stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -159,6 +160,9 @@ bench-sampled: all
 
 bench-ratio: all
 	B=$(B) sh scripts/bench-ratio.sh
+
+bench-footprint: all
+	B=$(B) sh scripts/bench-footprint.sh
 
 # issue 36 target 3: sampled mode's fps error by offset on every view
 # (BASE=DIR: a build of another commit for a "before" column).
