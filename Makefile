@@ -9,6 +9,7 @@
 #   make bench-sampled  a sampled run's time with its defaults (PERFORMANCE.md)
 #   make bench-ratio    cycle mode against kernel-ref on every view at 1024x768 (PERFORMANCE.md)
 #   make bench-footprint the chip on a packet-footprint kd-tree against its default (PERFORMANCE.md)
+#   make bench-frontier sampled mode's speed against its fps error, setting by setting (PERFORMANCE.md)
 #   make calibrate  fit the assumed parameters to published figures; writes
 #                   docs/CALIBRATION.md (docs/calibration.md)
 #   make accel      kd-tree, uniform grid and two-level trees compared;
@@ -89,7 +90,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets bench-frontier stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -168,6 +169,8 @@ bench-footprint: all
 # (BASE=DIR: a build of another commit for a "before" column).
 bench-offsets: all
 	B=$(B) sh scripts/bench-offsets.sh
+bench-frontier: all
+	B=$(B) sh scripts/bench-frontier.sh
 
 # Validation against the published SaarCOR results, like with like (seed 002
 # §4, Table 5; fit and held-out rows); writes docs/VALIDATION.md,
