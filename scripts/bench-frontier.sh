@@ -66,7 +66,7 @@ for v in $VLIST; do
 		say "$v: $label"
 		line=
 		for o in $OFFSETS; do
-			# shellcheck disable=SC2046
+			# shellcheck disable=SC2046,SC2086
 			run "$v" --no-check --fidelity sampled --set sampling.offset="$o" $(sets $kvs)
 			f=$(jget "$TMP/r.json" fps)
 			line="$line,$(awk -v f="$f" -v t="$truth" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }')"
@@ -85,7 +85,7 @@ while [ "$i" -lt "$RUNS" ]; do
 	run "$VIEW"
 	echo "cycle $(jget "$TMP/r.json" wall_s)" >>"$TIMES"
 	while read -r label kvs; do
-		# shellcheck disable=SC2046
+		# shellcheck disable=SC2046,SC2086
 		run "$VIEW" --fidelity sampled $(sets $kvs)
 		echo "$label $(jget "$TMP/r.json" wall_s)" >>"$TIMES"
 	done <"$SETTINGS"
