@@ -419,6 +419,28 @@ Test(engine, fastdiv_matches_division)
 	cr_assert_eq(eng_ticks_to_cycles(eng_clock_mhz(533), UINT64_MAX), UINT64_MAX / 1876);
 }
 
+/* A slot that emptied keeps its last record's index as a stale tail, and
+ * the freed record keeps its event: eng_schedule_or_idle must take the
+ * slot's bit, not that record, for whether an event of the tick is still
+ * queued. Mistake caught: the stale record compared without the bit (or
+ * the bit tested after it), so an event scheduled for the tick of the one
+ * that just ran, the same handler on the same context, is counted idle
+ * and never runs. */
+Test(engine, schedule_or_idle_after_the_slot_emptied_queues)
+{
+	eng *e = mk(0);
+	rec r = {0};
+	eng_schedule(e, 300, log_ev, &r, 1);
+	cr_assert_eq(eng_run(e, ENG_FOREVER), ENG_EMPTY);
+	eng_schedule_or_idle(e, 300, log_ev, &r, 2); /* the slot is empty now: queued */
+	cr_assert_eq(eng_pending(e), 1);
+	cr_assert_eq(eng_run(e, ENG_FOREVER), ENG_EMPTY);
+	cr_assert_eq(r.n, 2);
+	cr_assert_eq(r.arg[1], 2);
+	cr_assert_eq(eng_events(e), 2);
+	eng_destroy(e);
+}
+
 /* A second handler, to tell handlers apart. */
 static void log_ev2(eng *e, void *ctx, uint64_t arg)
 {
