@@ -312,9 +312,15 @@ int main(int argc, char **argv)
 
 	world w;
 	/* Embree needs the scene's triangles, which a world from the cache
-	 * does not hold (world.h): no default world-cache folder (issue 36) */
-	if (!wo.cache_dir)
-		wo.cache_dir = "off";
+	 * does not hold (world.h): no default world-cache folder (issue 36),
+	 * and a named one refused (a hit left the harness without triangles
+	 * and it crashed) */
+	if (wo.cache_dir && strcmp(wo.cache_dir, "off") != 0) {
+		fprintf(stderr, "embree_bench: --world-cache: Embree needs the scene's triangles, "
+		                "which a cached world does not hold; use --world-cache off\n");
+		return DIAG_EXIT;
+	}
+	wo.cache_dir = "off";
 	world_opts_packet_tree(&wo, height); /* the tree rtref traces */
 	if (world_load(&w, &wo, &d)) {
 		fprintf(stderr, "embree_bench: %s\n", d.msg);
@@ -330,6 +336,12 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	rtcSetDeviceErrorFunction(dev, on_embree_error, NULL);
+	if (!w.s.v && w.s.ntris) { /* cannot happen with the cache off */
+		fprintf(stderr, "embree_bench: the world holds no triangles for Embree\n");
+		rtcReleaseDevice(dev);
+		world_free(&w);
+		return 1;
+	}
 	double t0 = now_ms();
 	RTCScene sc = embree_scene(dev, &w.s, quality, robust);
 	double embree_build_ms = now_ms() - t0;
