@@ -5,15 +5,17 @@
 #
 #   sh scripts/bench-frontier.sh
 #
-# For each view of views.yaml at SIZE (default 1024x768), the default
-# config (16 threads per RTP): one cycle run (the truth), then for each
-# setting of the list below sampled runs at every offset of OFFSETS
-# (default 0.1 0.2 ... 0.9; `--set sampling.offset=X`), `--no-check`. The
-# fps errors are deterministic (no host time enters them). Then the speed
-# on VIEW (default conference): warm whole runs (`host.wall_s`, the
-# world, packet record and warming run already in the cache; the default
-# check on), cycle and each setting in turn, best of RUNS (default 5).
-# A world cache in a temporary folder keeps the runs short.
+# For each thread count of THREADS (threads per RTP, default 8 16 32; the
+# default config has 16) and each view of views.yaml at SIZE (default
+# 1024x768): one cycle run (the truth), then for each setting of the list
+# below sampled runs at every offset of OFFSETS (default 0.1 0.2 ... 0.9;
+# `--set sampling.offset=X`), `--no-check`. The fps errors are
+# deterministic (no host time enters them). Then the speed on VIEW
+# (default conference) at each thread count: warm whole runs
+# (`host.wall_s`, the world, packet record and warming run already in the
+# cache; the default check on), cycle and each setting in turn, best of
+# RUNS (default 5). A world cache in a temporary folder keeps the runs
+# short.
 #
 # Writes the section between <!-- BEGIN frontier --> and
 # <!-- END frontier --> of docs/PERFORMANCE.md and prints it. Needs POSIX
@@ -25,7 +27,11 @@ SIZE=${SIZE:-1024x768}
 OFFSETS=${OFFSETS:-0.1 0.2 0.3 0.4 0.5 0.6 0.7 0.8 0.9}
 VIEW=${VIEW:-conference}
 RUNS=${RUNS:-5}
+THREADS=${THREADS:-8 16 32}
 case $RUNS in '' | *[!0-9]* | 0) die "RUNS must be a positive integer" ;; esac
+for T in $THREADS; do
+	case $T in '' | *[!0-9]* | 0) die "THREADS must be positive integers" ;; esac
+done
 bench_start frontier
 VLIST=$(bench_views)
 echo "$VLIST" | grep -qx "$VIEW" || die "no view $VIEW in $VIEWS"
@@ -56,48 +62,56 @@ run() {
 sets() {
 	for kv in "$@"; do printf -- '--set %s ' "$kv"; done
 }
-ERRS=$TMP/errs # label view e1,e2,...
+ERRS=$TMP/errs   # threads label view e1,e2,...
+TIMES=$TMP/times # threads label wall_s
 : >"$ERRS"
-for v in $VLIST; do
-	say "$v: cycle"
-	run "$v" --no-check
-	truth=$(jget "$TMP/r.json" fps)
-	while read -r label kvs; do
-		say "$v: $label"
-		line=
-		for o in $OFFSETS; do
+: >"$TIMES"
+for T in $THREADS; do
+	for v in $VLIST; do
+		say "$T threads, $v: cycle"
+		run "$v" --no-check --set chip.threads_per_rtp="$T"
+		truth=$(jget "$TMP/r.json" fps)
+		while read -r label kvs; do
+			say "$T threads, $v: $label"
+			line=
+			for o in $OFFSETS; do
+				# shellcheck disable=SC2046,SC2086
+				run "$v" --no-check --set chip.threads_per_rtp="$T" --fidelity sampled \
+					--set sampling.offset="$o" $(sets $kvs)
+				f=$(jget "$TMP/r.json" fps)
+				line="$line,$(awk -v f="$f" -v t="$truth" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }')"
+			done
+			printf '%s %s %s %s\n' "$T" "$label" "$v" "${line#,}" >>"$ERRS"
+		done <"$SETTINGS"
+	done
+	# Speed on VIEW: every setting's warming run is in the cache by now;
+	# the check's reference frames join it at the first checked run
+	# (discarded).
+	say "$T threads, $VIEW: timing (best of $RUNS)"
+	run "$VIEW" --set chip.threads_per_rtp="$T"
+	i=0
+	while [ "$i" -lt "$RUNS" ]; do
+		i=$((i + 1))
+		run "$VIEW" --set chip.threads_per_rtp="$T"
+		echo "$T cycle $(jget "$TMP/r.json" wall_s)" >>"$TIMES"
+		while read -r label kvs; do
 			# shellcheck disable=SC2046,SC2086
-			run "$v" --no-check --fidelity sampled --set sampling.offset="$o" $(sets $kvs)
-			f=$(jget "$TMP/r.json" fps)
-			line="$line,$(awk -v f="$f" -v t="$truth" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }')"
-		done
-		printf '%s %s %s\n' "$label" "$v" "${line#,}" >>"$ERRS"
-	done <"$SETTINGS"
-done
-# Speed on VIEW: every setting's warming run is in the cache by now; the
-# check's reference frames join it at the first checked run (discarded).
-TIMES=$TMP/times # label best_wall_s
-say "$VIEW: timing (best of $RUNS)"
-run "$VIEW"
-i=0
-while [ "$i" -lt "$RUNS" ]; do
-	i=$((i + 1))
-	run "$VIEW"
-	echo "cycle $(jget "$TMP/r.json" wall_s)" >>"$TIMES"
-	while read -r label kvs; do
-		# shellcheck disable=SC2046,SC2086
-		run "$VIEW" --fidelity sampled $(sets $kvs)
-		echo "$label $(jget "$TMP/r.json" wall_s)" >>"$TIMES"
-	done <"$SETTINGS"
+			run "$VIEW" --set chip.threads_per_rtp="$T" --fidelity sampled $(sets $kvs)
+			echo "$T $label $(jget "$TMP/r.json" wall_s)" >>"$TIMES"
+		done <"$SETTINGS"
+	done
 done
 elapsed=$(($(date +%s) - t0))
 load1=$(doc_load)
 GIT=$(doc_commit)
 SECTION=$TMP/section
-best() { awk -v l="$1" '$1 == l && (b == "" || $2 < b) { b = $2 } END { print b }' "$TIMES"; }
-cyc=$(best cycle)
+best() { awk -v t="$1" -v l="$2" '$1 == t && $2 == l && (b == "" || $3 < b) { b = $3 } END { print b }' "$TIMES"; }
 nv=$(echo "$VLIST" | wc -l)
 no=$(echo "$OFFSETS" | wc -w)
+# the fields 2.. of a settings line as the table names them
+name_of() {
+	if [ -z "$1" ]; then echo "(defaults)"; else echo "$1" | sed 's/sampling\.//g; s/ /, /g'; fi
+}
 {
 	echo "<!-- BEGIN frontier -->"
 	echo "### Sampled mode: speed against fps error by setting (issue 36, target 3)"
@@ -106,35 +120,40 @@ no=$(echo "$OFFSETS" | wc -w)
 	echo
 	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (took $elapsed s); commit $GIT"
 	echo "- Machine: $(nproc) CPUs; load average $load0 at start, $load1 at the end (the errors do not depend on it; the times do)"
-	echo "- Run: every view of views.yaml at $SIZE, the default config (16 threads per RTP); each view's cycle run the truth; each setting's sampled runs (\`--fidelity sampled\` and the setting's \`--set\` keys) at \`sampling.offset\` $OFFSETS, \`--no-check\`. Speed: whole runs on $VIEW with the default check, the world, packet record and warming runs already in the cache, best of $RUNS; cycle $(printf '%.3f' "$cyc") s. Settings name keys under \`sampling.\`."
-	echo "- *within 2%*: of the $((nv - 1)) views other than robots x $no offsets (robots: docs/fidelity.md, \"Frames that alternate between bottlenecks\"); *mean |error|* over the same points."
+	echo "- Run: the default config with \`chip.threads_per_rtp\` $THREADS (the default 16); every view of views.yaml at $SIZE; each view's cycle run the truth; each setting's sampled runs (\`--fidelity sampled\` and the setting's \`--set\` keys) at \`sampling.offset\` $OFFSETS, \`--no-check\`. Speed: whole runs on $VIEW with the default check, the world, packet record and warming runs already in the cache, best of $RUNS, against the cycle run's best at the same thread count. Settings name keys under \`sampling.\`; a unit or warm-up length is in tiles whatever the thread count (the defaults: units of one tile per thread slot, warm-ups of one per slot up to 16 per RTP)."
+	echo "- *within 2%*: of the $((nv - 1)) views other than robots x $no offsets (robots: docs/fidelity.md, \"Frames that alternate between bottlenecks\"); *mean |error|* over the same points. Offsets whose regions snap to the same stored-warming checkpoints give the same plan, so the offsets are fewer independent replicas than there are offsets."
 	echo
-	echo "| setting | $VIEW whole s | speed-up | $VIEW fps errors, lowest to highest | within 2% | mean abs. error | worst view (mean error) | robots mean error |"
-	echo "|---|---:|---:|---|---:|---:|---|---:|"
-	while read -r label kvs; do
-		b=$(best "$label")
-		awk -v l="$label" -v V="$VIEW" -v b="$b" -v c="$cyc" -v kv="$kvs" '
-		$1 == l { n = split($3, e, ",")
-			s = 0; for (i = 1; i <= n; i++) s += e[i]
-			if ($2 == "robots") { rob = s / n; next }
-			if ($2 == V) { lo = e[1]; hi = e[1]
-				for (i = 2; i <= n; i++) { if (e[i] < lo) lo = e[i]; if (e[i] > hi) hi = e[i] } }
-			m = s / n; am = m < 0 ? -m : m
-			if (wv == "" || am > wam) { wv = $2; wam = am; wm = m }
-			for (i = 1; i <= n; i++) { x = e[i] < 0 ? -e[i] : e[i]; pts++; sa += x; if (x <= 2) ok++ } }
-		END { name = kv == "" ? "(defaults)" : kv; gsub(/sampling\./, "", name); gsub(/ /, ", ", name)
-			printf "| %s | %.3f | %.2fx | %+.2f%% to %+.2f%% | %d of %d | %.2f%% | %s (%+.2f%%) | %+.2f%% |\n",
-				name, b, c / b, lo, hi, ok, pts, sa / pts, wv, wm, rob }' "$ERRS"
-	done <"$SETTINGS"
+	echo "| threads per RTP | setting | $VIEW whole s | speed-up | $VIEW fps errors, lowest to highest | within 2% | mean abs. error | worst view (mean error) | robots mean error |"
+	echo "|---:|---|---:|---:|---|---:|---:|---|---:|"
+	for T in $THREADS; do
+		cyc=$(best "$T" cycle)
+		while read -r label kvs; do
+			b=$(best "$T" "$label")
+			awk -v T="$T" -v l="$label" -v V="$VIEW" -v b="$b" -v c="$cyc" -v name="$(name_of "$kvs")" '
+			$1 == T && $2 == l { n = split($4, e, ",")
+				s = 0; for (i = 1; i <= n; i++) s += e[i]
+				if ($3 == "robots") { rob = s / n; next }
+				if ($3 == V) { lo = e[1]; hi = e[1]
+					for (i = 2; i <= n; i++) { if (e[i] < lo) lo = e[i]; if (e[i] > hi) hi = e[i] } }
+				m = s / n; am = m < 0 ? -m : m
+				if (wv == "" || am > wam) { wv = $3; wam = am; wm = m }
+				for (i = 1; i <= n; i++) { x = e[i] < 0 ? -e[i] : e[i]; pts++; sa += x; if (x <= 2) ok++ } }
+			END { printf "| %s | %s | %.3f | %.2fx | %+.2f%% to %+.2f%% | %d of %d | %.2f%% | %s (%+.2f%%) | %+.2f%% |\n",
+					T, name, b, c / b, lo, hi, ok, pts, sa / pts, wv, wm, rob }' "$ERRS"
+		done <"$SETTINGS"
+	done
+	echo
+	echo "Cycle runs' whole s on $VIEW: $(for T in $THREADS; do printf '%s threads %.3f; ' "$T" "$(best "$T" cycle)"; done | sed 's/; $//')."
 	echo
 	echo "Every view's errors, offsets in the order above:"
 	echo
-	echo "| setting | view | fps errors (%) |"
-	echo "|---|---|---|"
-	while read -r label kvs; do
-		name=${kvs:-(defaults)}
-		awk -v l="$label" -v name="$(echo "$name" | sed 's/sampling\.//g; s/ /, /g')" '$1 == l { e = $3; gsub(/,/, " ", e); printf "| %s | %s | %s |\n", name, $2, e }' "$ERRS"
-	done <"$SETTINGS"
+	echo "| threads per RTP | setting | view | fps errors (%) |"
+	echo "|---:|---|---|---|"
+	for T in $THREADS; do
+		while read -r label kvs; do
+			awk -v T="$T" -v l="$label" -v name="$(name_of "$kvs")" '$1 == T && $2 == l { e = $4; gsub(/,/, " ", e); printf "| %s | %s | %s | %s |\n", T, name, $3, e }' "$ERRS"
+		done <"$SETTINGS"
+	done
 	echo "<!-- END frontier -->"
 } >"$SECTION"
 doc_section frontier "$SECTION" "$DOC"
