@@ -33,10 +33,7 @@ for v in $VLIST; do
 	done
 	echo "$row" >>"$ROWS"
 done
-elapsed=$(($(date +%s) - t0))
-load1=$(doc_load)
-GIT=$(doc_commit)
-SECTION=$TMP/section
+bench_end
 {
 	echo "<!-- BEGIN footprint -->"
 	echo "## The chip on a packet-footprint tree"

@@ -79,7 +79,7 @@ for T in $THREADS; do
 				run "$v" --no-check --set chip.threads_per_rtp="$T" --fidelity sampled \
 					--set sampling.offset="$o" $(sets $kvs)
 				f=$(jget "$TMP/r.json" fps)
-				line="$line,$(awk -v f="$f" -v t="$truth" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }')"
+				line="$line,$(pct_err "$f" "$truth")"
 			done
 			printf '%s %s %s %s\n' "$T" "$label" "$v" "${line#,}" >>"$ERRS"
 		done <"$SETTINGS"
@@ -101,10 +101,7 @@ for T in $THREADS; do
 		done <"$SETTINGS"
 	done
 done
-elapsed=$(($(date +%s) - t0))
-load1=$(doc_load)
-GIT=$(doc_commit)
-SECTION=$TMP/section
+bench_end
 best() { awk -v t="$1" -v l="$2" '$1 == t && $2 == l && (b == "" || $3 < b) { b = $3 } END { print b }' "$TIMES"; }
 nv=$(echo "$VLIST" | wc -l)
 no=$(echo "$OFFSETS" | wc -w)

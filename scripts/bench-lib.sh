@@ -18,6 +18,10 @@
 # file), TMP (a scratch folder saar-TAG.*), an exit trap that removes it
 # and doc_section's temporary ($DOC.tmp.$$), doc_section and its helpers
 # (doc-section.sh), load0 (the load average) and t0 (the start, seconds).
+# bench_end, once the measurements are done: elapsed (seconds since
+# bench_start), load1 (the load average then), GIT (doc_commit) and
+# SECTION (the file the section is written into before doc_section).
+# pct_err F T: F's difference from T in percent of T, signed, two decimals.
 BENCH_NAME=bench
 say() { printf '%s: %s\n' "$BENCH_NAME" "$*" >&2; }
 die() {
@@ -54,4 +58,13 @@ bench_start() {
 	. "$ROOT/scripts/doc-section.sh"
 	load0=$(doc_load)
 	t0=$(date +%s)
+}
+bench_end() {
+	elapsed=$(($(date +%s) - t0))
+	load1=$(doc_load)
+	GIT=$(doc_commit)
+	SECTION=$TMP/section
+}
+pct_err() {
+	awk -v f="$1" -v t="$2" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }'
 }

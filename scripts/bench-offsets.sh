@@ -48,7 +48,7 @@ errs() {
 	line=
 	for o in $OFFSETS; do
 		f=$(fps_of "$bin" "$v" --fidelity sampled --set sampling.offset="$o" "$@")
-		line="$line $(awk -v f="$f" -v t="$truth" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }')"
+		line="$line $(pct_err "$f" "$truth")"
 	done
 	echo "$line"
 }
@@ -68,10 +68,7 @@ for v in $VLIST; do
 	big=$(errs "$SIM" "$v" "$truth" --set sampling.unit_tiles="$UNIT" | sed 's/^ //; s/ /,/g')
 	printf '%s %s %s %s\n' "$v" "$before" "$def" "$big" >>"$ROWS"
 done
-elapsed=$(($(date +%s) - t0))
-load1=$(doc_load)
-GIT=$(doc_commit)
-SECTION=$TMP/section
+bench_end
 # one column's summary: within 2% and mean |error| over its points,
 # robots left out (a few units among tiles that differ widely: FIDELITY.md
 # "Few units") and with it

@@ -160,10 +160,7 @@ if [ -s "$REVROWS" ]; then
 	echo "$line" >>"$REVROWS"
 fi
 
-elapsed=$(($(date +%s) - t0))
-load1=$(doc_load)
-GIT=$(doc_commit)
-SECTION=$TMP/section
+bench_end
 {
 	echo "<!-- BEGIN profile -->"
 	echo "## Profile of cycle mode (issue 36)"

@@ -44,10 +44,7 @@ for v in $VLIST; do
 	printf '%s %s %s %s %s\n' "$v" "$cyc" "$bs" "$br" \
 		"$(awk -v s="$bs" -v q="$br" 'BEGIN { printf "%.4f", (q > 0 ? s / q : 0) }')" >>"$ROWS"
 done
-elapsed=$(($(date +%s) - t0))
-load1=$(doc_load)
-GIT=$(doc_commit)
-SECTION=$TMP/section
+bench_end
 {
 	echo "<!-- BEGIN ratio -->"
 	echo "## Cycle mode against kernel-ref on every view (issue 36, target 2)"

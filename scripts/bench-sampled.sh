@@ -100,10 +100,7 @@ if [ "${ALL_VIEWS:-1}" != 0 ]; then
 	mv "$ROWS" "$VROWS"
 	mv "$TMP/rows.main" "$ROWS"
 fi
-elapsed=$(($(date +%s) - t0))
-load1=$(doc_load)
-GIT=$(doc_commit)
-SECTION=$TMP/section
+bench_end
 {
 	echo "<!-- BEGIN sampled -->"
 	echo "## Sampled mode with its defaults (issue 36, target 3)"

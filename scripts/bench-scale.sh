@@ -62,15 +62,12 @@ ROWS=$TMP/rows
 	row small
 	row large
 } >"$ROWS"
-elapsed=$(($(date +%s) - t0))
-load1=$(doc_load)
-GIT=$(doc_commit)
+bench_end
 rl=$(jget "$TMP/ref.json" load_ms)
 rb=$(jget "$TMP/ref.json" build_ms)
 ri=$(jget "$TMP/ref.json" image_ms)
 rt=$(jget "$TMP/ref.json" triangles)
 rrss=$(tget "$TMP/ref.time" 'Maximum resident set size (kbytes)')
-SECTION=$TMP/section
 {
 	echo "<!-- BEGIN scale -->"
 	echo "## Scale: the largest scene (issue 36, target 4)"
