@@ -537,7 +537,6 @@ static int cache_lookup(world *w, const world_opts *o, const kd_params *kp, cons
 	return 0;
 }
 
-/* The camera and light flags override the view. */
 /* The camera flags (--eye, --lookat, --up, --fov) over camera c. */
 static void cam_flags(const world_opts *o, camera *c)
 {
@@ -551,6 +550,7 @@ static void cam_flags(const world_opts *o, camera *c)
 		c->fov_deg = o->cam.fov_deg;
 }
 
+/* The camera and light flags override the view. */
 static int apply_view_flags(world *w, const world_opts *o, diag *d)
 {
 	cam_flags(o, &w->v.cam);
