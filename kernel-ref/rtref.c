@@ -23,6 +23,7 @@
 #include "kernel-ref/image.h"
 #include "kernel-ref/jsonw.h"
 #include "kernel-ref/render.h"
+#include "kernel-ref/simd.h"
 #include "kernel-ref/twolevel.h"
 #include "kernel-ref/world.h"
 
@@ -98,6 +99,7 @@ static void write_stats(jsonw *j, const world *w, const render_opts *o, const re
 	           o->single_ray ? "single-ray"
 	           : o->frustum  ? "packet-frustum"
 	                         : "packet");
+	jsonw_kint(j, "simd_lanes", SIMD_W); /* the packet groups' width, set by ARCH */
 	if (o->prec) {
 		char buf[64];
 		jsonw_key(j, "precision");

@@ -3,8 +3,10 @@
  * by scripts/bench.sh only when libembree-dev is installed).
  *
  * Owns one measurement: the primary rays of one frame, traced single
- * threaded (a) by Embree 3 with 16-wide packets (rtcIntersect16), each 8x8
- * tile as four 4x4 packets, and (b) by our packet tracer's traversal alone
+ * threaded (a) by Embree 3 with packets of 4, 8 and 16 rays (rtcIntersect4,
+ * 8, 16: each 8x8 tile as sixteen 2x2, eight 4x2 or four 4x4 packets; the
+ * fastest width is Embree's figure, since which is fastest depends on the
+ * host's SIMD width: 16 on AVX-512, 8 on AVX2), and (b) by our packet tracer's traversal alone
  * (fru_trace, rtref's packet traversal, on the 64-ray tile packet, no
  * shading), both on exactly the
  * same rays: the scene, view and camera come from world_load() and the rays
@@ -17,10 +19,10 @@
  * whether the distances differ too, and if so which tracer is closer).
  *
  *   embree_bench --views F --view N [--size WxH] [--runs N] [--quality low|medium|high]
- *                [--robust] [other scene/view flags of rtref]
+ *                [--robust] [--packet 4|8|16|all] [other scene/view flags of rtref]
  *
  * Prints key=value lines (parsed by scripts/bench.sh). Written from the
- * Embree 3 API documentation (man pages rtcIntersect16, RTCRayHit16,
+ * Embree 3 API documentation (man pages rtcIntersect4/8/16, RTCRayHit4/8/16,
  * rtcNewGeometry, rtcSetNewGeometryBuffer).
  */
 #include <embree3/rtcore.h>
@@ -36,8 +38,6 @@
 #include "kernel-ref/frustum.h"
 #include "kernel-ref/packet.h"
 #include "kernel-ref/world.h"
-
-#define QUAD 4 /* Embree packet: QUAD x QUAD = 16 rays */
 
 static double now_ms(void)
 {
@@ -59,6 +59,8 @@ static int usage(FILE *f, int rc)
 	           "  --runs N              passes per tracer, best is reported (default 3)\n"
 	           "  --quality Q           Embree build quality: low, medium (default), high\n"
 	           "  --robust              Embree robust (watertight) mode\n"
+	           "  --packet W            Embree's packet width: 4, 8, 16 or all (default all:\n"
+	           "                        each timed, the fastest reported as Embree's)\n"
 	           "  --list-diffs N        print up to N pixels where the hits differ (stderr)\n");
 	fputs(world_usage, f);
 	return rc;
@@ -117,61 +119,75 @@ static RTCScene embree_scene(RTCDevice dev, const scene *s, enum RTCBuildQuality
 	return sc;
 }
 
-/* One tile's packet p with Embree, as four 16-ray packets; hits into h. */
-static uint64_t embree_tile(RTCScene sc, const packet *p, hits *h)
-{
-	struct RTCIntersectContext ctx;
-	rtcInitIntersectContext(&ctx);
-	ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-	struct RTCRayHit16 rh;
-	int valid[16] __attribute__((aligned(64)));
-	uint64_t rays = 0;
-	for (int q = 0; q < 4; q++) {
-		int qx = (q & 1) * QUAD, qy = (q >> 1) * QUAD, any = 0;
-		for (int k = 0; k < 16; k++) {
-			int lane = (qy + k / QUAD) * TILE_W + qx + k % QUAD;
-			int on = (int)((p->valid >> lane) & 1);
-			valid[k] = on ? -1 : 0;
-			any |= on;
-			rh.ray.org_x[k] = p->ox[lane];
-			rh.ray.org_y[k] = p->oy[lane];
-			rh.ray.org_z[k] = p->oz[lane];
-			rh.ray.dir_x[k] = p->dx[lane];
-			rh.ray.dir_y[k] = p->dy[lane];
-			rh.ray.dir_z[k] = p->dz[lane];
-			rh.ray.tnear[k] = 0.0f;
-			rh.ray.tfar[k] = p->tmax[lane];
-			rh.ray.time[k] = 0.0f;
-			rh.ray.mask[k] = UINT32_MAX;
-			rh.ray.id[k] = (unsigned)k;
-			rh.ray.flags[k] = 0;
-			rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-		}
-		if (!any)
-			continue;
-		rtcIntersect16(valid, sc, &ctx, &rh);
-		for (int k = 0; k < 16; k++) {
-			if (!valid[k])
-				continue;
-			rays++;
-			int lane = (qy + k / QUAD) * TILE_W + qx + k % QUAD;
-			uint32_t px = p->pixel[lane];
-			if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
-				h->tri[px] = rh.hit.primID[k];
-				h->t[px] = rh.ray.tfar[k];
-			} else {
-				h->tri[px] = UINT32_MAX;
-				h->t[px] = INFINITY;
-			}
-		}
+/* One tile's packet p with Embree, as packets of W rays (an 8x8 tile as
+ * 64 / W packets of PW x PH pixels); hits into h. One function per width:
+ * Embree's RTCRayHit4/8/16 differ only in the length of their arrays. */
+#define EMBREE_TILE(W, PW, PH)                                                         \
+	static uint64_t embree_tile##W(RTCScene sc, const packet *p, hits *h)          \
+	{                                                                              \
+		struct RTCIntersectContext ctx;                                        \
+		rtcInitIntersectContext(&ctx);                                         \
+		ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;                       \
+		struct RTCRayHit##W rh;                                                \
+		int valid[W] __attribute__((aligned(64)));                             \
+		uint64_t rays = 0;                                                     \
+		for (int q = 0; q < (TILE_W / PW) * (TILE_H / PH); q++) {              \
+			int qx = (q % (TILE_W / PW)) * PW, qy = (q / (TILE_W / PW)) * PH; \
+			int any = 0;                                                   \
+			for (int k = 0; k < W; k++) {                                  \
+				int lane = (qy + k / PW) * TILE_W + qx + k % PW;       \
+				int on = (int)((p->valid >> lane) & 1);                \
+				valid[k] = on ? -1 : 0;                                \
+				any |= on;                                             \
+				rh.ray.org_x[k] = p->ox[lane];                         \
+				rh.ray.org_y[k] = p->oy[lane];                         \
+				rh.ray.org_z[k] = p->oz[lane];                         \
+				rh.ray.dir_x[k] = p->dx[lane];                         \
+				rh.ray.dir_y[k] = p->dy[lane];                         \
+				rh.ray.dir_z[k] = p->dz[lane];                         \
+				rh.ray.tnear[k] = 0.0f;                                \
+				rh.ray.tfar[k] = p->tmax[lane];                        \
+				rh.ray.time[k] = 0.0f;                                 \
+				rh.ray.mask[k] = UINT32_MAX;                           \
+				rh.ray.id[k] = (unsigned)k;                            \
+				rh.ray.flags[k] = 0;                                   \
+				rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;            \
+			}                                                              \
+			if (!any)                                                      \
+				continue;                                              \
+			rtcIntersect##W(valid, sc, &ctx, &rh);                         \
+			for (int k = 0; k < W; k++) {                                  \
+				if (!valid[k])                                         \
+					continue;                                      \
+				rays++;                                                \
+				int lane = (qy + k / PW) * TILE_W + qx + k % PW;       \
+				uint32_t px = p->pixel[lane];                          \
+				if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {     \
+					h->tri[px] = rh.hit.primID[k];                 \
+					h->t[px] = rh.ray.tfar[k];                     \
+				} else {                                               \
+					h->tri[px] = UINT32_MAX;                       \
+					h->t[px] = INFINITY;                           \
+				}                                                      \
+			}                                                              \
+		}                                                                      \
+		return rays;                                                           \
 	}
-	return rays;
-}
+EMBREE_TILE(4, 2, 2)
+EMBREE_TILE(8, 4, 2)
+EMBREE_TILE(16, 4, 4)
+
+typedef uint64_t (*embree_tile_fn)(RTCScene sc, const packet *p, hits *h);
+
+/* The packet widths timed, narrowest first, and their tile functions. */
+static const int embree_widths[3] = {4, 8, 16};
+static const embree_tile_fn embree_tiles[3] = {embree_tile4, embree_tile8, embree_tile16};
 
 /* One frame with Embree, the rays made tile by tile as rtref makes them;
  * gen_only: the rays made and nothing traced (the time both sides spend
  * on ray generation). */
-static uint64_t embree_frame(RTCScene sc, const cam_frame *cf, packet *p, int gen_only, hits *h)
+static uint64_t embree_frame(RTCScene sc, embree_tile_fn tile, const cam_frame *cf, packet *p,
+                             int gen_only, hits *h)
 {
 	int tw = (cf->width + TILE_W - 1) / TILE_W, th = (cf->height + TILE_H - 1) / TILE_H;
 	uint64_t rays = 0;
@@ -182,7 +198,7 @@ static uint64_t embree_frame(RTCScene sc, const cam_frame *cf, packet *p, int ge
 			if (gen_only) /* keep the packet's rays live for the compiler */
 				rays += (uint64_t)(p->valid & 1) + (p->dx[0] != p->dx[0]);
 			else
-				rays += embree_tile(sc, p, h);
+				rays += tile(sc, p, h);
 		}
 	return rays;
 }
@@ -237,6 +253,7 @@ int main(int argc, char **argv)
 	world_opts_default(&wo);
 	diag d = {{0}};
 	int width = 1024, height = 1024, runs = 3, robust = 0, list_diffs = 0;
+	int wsel = 0; /* Embree packet widths timed: 0 all, else one of embree_widths */
 	enum RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;
 	const char *qname = "medium";
 	for (int i = 1; i < argc;) {
@@ -287,6 +304,17 @@ int main(int argc, char **argv)
 				return DIAG_EXIT;
 			}
 			list_diffs = (int)n;
+		} else if (!strcmp(a, "--packet")) {
+			if (!strcmp(v, "all"))
+				wsel = 0;
+			else if (!strcmp(v, "4") || !strcmp(v, "8") || !strcmp(v, "16"))
+				wsel = atoi(v);
+			else {
+				fprintf(stderr,
+				        "embree_bench: --packet: expected 4, 8, 16 or all, got '%s'\n",
+				        v);
+				return DIAG_EXIT;
+			}
 		} else if (!strcmp(a, "--quality")) {
 			if (!strcmp(v, "low"))
 				quality = RTC_BUILD_QUALITY_LOW;
@@ -340,10 +368,17 @@ int main(int argc, char **argv)
 	RTCScene sc = embree_scene(dev, &w.s, quality, robust);
 	double embree_build_ms = now_ms() - t0;
 	size_t npix = (size_t)width * (size_t)height;
-	hits he, ho;
+	hits hw[3], ho;
 	packet *p = aligned_alloc(64, (sizeof(packet) + 63) / 64 * 64);
 	trav_entry *stack = aligned_alloc(64, (sizeof(trav_entry) * PKT_STACK_MAX + 63) / 64 * 64);
-	if (!sc || rtcGetDeviceError(dev) != RTC_ERROR_NONE || hits_alloc(&he, npix) ||
+	int nw = 0, wi[3]; /* the widths timed: indices into embree_widths */
+	for (int k = 0; k < 3; k++)
+		if (!wsel || wsel == embree_widths[k])
+			wi[nw++] = k;
+	int alloc_failed = 0;
+	for (int k = 0; k < nw; k++)
+		alloc_failed |= hits_alloc(&hw[k], npix);
+	if (!sc || rtcGetDeviceError(dev) != RTC_ERROR_NONE || alloc_failed ||
 	    hits_alloc(&ho, npix) || !p || !stack) {
 		fprintf(stderr, "embree_bench: setup failed (Embree scene or out of memory)\n");
 		return 1;
@@ -351,27 +386,43 @@ int main(int argc, char **argv)
 
 	cam_frame cf;
 	cam_setup(&cf, &w.v.cam, width, height);
-	double best_e = INFINITY, best_o = INFINITY;
-	uint64_t rays_e = 0, rays_o = 0;
+	double best_w[3] = {INFINITY, INFINITY, INFINITY}, best_o = INFINITY;
+	uint64_t rays_w[3] = {0, 0, 0}, rays_o = 0;
 	/* the ray generation alone (the same cam_primary_packet calls), to
 	 * take out of both sides' times for traversal alone */
 	double best_g = INFINITY;
 	for (int r = 0; r < runs; r++) {
 		t0 = now_ms();
-		embree_frame(sc, &cf, p, 1, &he);
+		embree_frame(sc, embree_tiles[wi[0]], &cf, p, 1, &hw[0]);
 		double tg = now_ms() - t0;
 		best_g = tg < best_g ? tg : best_g;
 	}
 	for (int r = 0; r < runs; r++) {
-		t0 = now_ms();
-		rays_e = embree_frame(sc, &cf, p, 0, &he);
-		double te = now_ms() - t0;
+		for (int k = 0; k < nw; k++) {
+			t0 = now_ms();
+			rays_w[k] = embree_frame(sc, embree_tiles[wi[k]], &cf, p, 0, &hw[k]);
+			double te = now_ms() - t0;
+			best_w[k] = te < best_w[k] ? te : best_w[k];
+		}
 		t0 = now_ms();
 		rays_o = ours_frame(&w.m, &cf, p, stack, &ho);
 		double to = now_ms() - t0;
-		best_e = te < best_e ? te : best_e;
 		best_o = to < best_o ? to : best_o;
 	}
+
+	/* Embree's figure: its fastest width; every width must find the same
+	 * triangles (the widths share one BVH and one triangle test) */
+	int fk = 0;
+	for (int k = 1; k < nw; k++)
+		if (best_w[k] < best_w[fk])
+			fk = k;
+	double best_e = best_w[fk];
+	uint64_t rays_e = rays_w[fk];
+	hits he = hw[fk];
+	uint64_t width_diffs = 0;
+	for (int k = 0; k < nw; k++)
+		for (size_t i = 0; i < npix; i++)
+			width_diffs += (uint64_t)(hw[k].tri[i] != he.tri[i]);
 
 	/* Compare per pixel. A different triangle at the same distance (within
 	 * a relative 1e-4) is a tie on a shared edge or coplanar faces; a
@@ -413,6 +464,14 @@ int main(int argc, char **argv)
 	printf("runs=%d\n", runs);
 	printf("rays=%llu\n", (unsigned long long)rays_e);
 	printf("embree_build_ms=%.1f\n", embree_build_ms);
+	printf("embree_packet=%d\n", embree_widths[wi[fk]]);
+	for (int k = 0; k < nw; k++) {
+		printf("embree%d_mrays=%.3f\n", embree_widths[wi[k]],
+		       (double)rays_w[k] / (best_w[k] * 1e3));
+		printf("embree%d_trav_only_mrays=%.3f\n", embree_widths[wi[k]],
+		       (double)rays_w[k] / ((best_w[k] - best_g) * 1e3));
+	}
+	printf("embree_width_diffs=%llu\n", (unsigned long long)width_diffs);
 	printf("embree_ms=%.2f\n", best_e);
 	printf("embree_mrays=%.3f\n", (double)rays_e / (best_e * 1e3));
 	printf("embree_hits=%llu\n", (unsigned long long)hits_e);
@@ -429,8 +488,10 @@ int main(int argc, char **argv)
 	printf("diff_triangle_and_t=%llu\n", (unsigned long long)diff_t);
 	printf("diff_t_ours_closer=%llu\n", (unsigned long long)diff_t_ours);
 
-	free(he.tri);
-	free(he.t);
+	for (int k = 0; k < nw; k++) {
+		free(hw[k].tri);
+		free(hw[k].t);
+	}
 	free(ho.tri);
 	free(ho.t);
 	free(p);

@@ -38,7 +38,7 @@ Test(rtref_cli, good_run_writes_image_and_stats)
 	fclose(f);
 	const char *keys[] = {"\"rays\"",           "\"kd_node_visits\"", "\"leaf_visits\"",
 	                      "\"triangle_tests\"", "\"build_ms\"",       "\"render_ms\"",
-	                      "\"mrays_per_s\"",    "\"shadow\""};
+	                      "\"mrays_per_s\"",    "\"shadow\"",           "\"simd_lanes\""};
 	for (size_t k = 0; k < sizeof keys / sizeof *keys; k++)
 		cr_assert(strstr(buf, keys[k]), "stats lack %s", keys[k]);
 }
