@@ -1,4 +1,4 @@
-# scripts/doc-section.sh: doc_section (and doc_load, doc_commit for the
+# scripts/doc-section.sh: doc_section (and doc_load, doc_commit, doc_cpu for the
 # lines that say when and on what), for scripts that write one marked
 # part of a document (the bench-*.sh sections of docs/PERFORMANCE.md).
 # Sourced, not run: . "$(dirname "$0")/doc-section.sh"
@@ -19,6 +19,21 @@ doc_section() {
 	else
 		cp "$2" "$3"
 	fi
+}
+
+# doc_cpu: the host's processor model and widest vector extension ("AMD
+# EPYC, AVX2"): host times and the ratios between two programs' times
+# depend on both (docs/PERFORMANCE.md, "Target 1: session 48").
+doc_cpu() {
+	_m=$(sed -n 's/^model name[[:space:]]*:[[:space:]]*//p' /proc/cpuinfo 2>/dev/null | head -n 1)
+	_f=$(grep -m 1 '^flags' /proc/cpuinfo 2>/dev/null)
+	case " $_f " in
+	*" avx512f "*) _v=AVX-512 ;;
+	*" avx2 "*) _v=AVX2 ;;
+	*" avx "*) _v=AVX ;;
+	*) _v=$(uname -m) ;;
+	esac
+	printf '%s, %s\n' "${_m:-unknown processor}" "$_v"
 }
 
 # doc_load: the load average's three figures ("?" where it cannot be read).
