@@ -299,7 +299,7 @@ for view in $ALL_VIEWS; do
 		if [ "$e_ok" = 1 ]; then
 			em=$(kget "$TMP/e.txt" embree_mrays)
 			say "[$i/$nviews] $view: Embree $(kget "$TMP/e.txt" embree_packet)-wide, 1 thread: $em Mrays/s" \
-			    "(our traversal alone: $(kget "$TMP/e.txt" ours_trace_mrays) Mrays/s)"
+			    "(our traversal: $(kget "$TMP/e.txt" ours_trace_mrays) Mrays/s; both with ray generation)"
 			printf '%s %s %s %s %s %s %s %s %s %s %s %s %s %s %s %s\n' "$view" "$(kget "$TMP/e.txt" rays)" \
 			    "$em" "$(kget "$TMP/e.txt" ours_trace_mrays)" \
 			    "$(kget "$TMP/e.txt" embree_hits)" "$(kget "$TMP/e.txt" ours_hits)" \
