@@ -473,7 +473,7 @@ void view_frame_bbox(view *v, aabb b)
 	r[2] /= rl;
 	double u[3] = {r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
 	               r[0] * f[1] - r[1] * f[0]};
-	const double fov = 45.0, t = 0.95 * tan(fov * M_PI / 360.0);
+	const double fov = VIEW_FRAME_FOV, t = 0.95 * tan(fov * M_PI / 360.0);
 	/* eye = c - D f: a corner p (from c) sits at depth D + p.f and must
 	 * have |p.r| and |p.u| within t times that depth */
 	double dist = 0;

@@ -89,5 +89,8 @@ void view_place_default_light(view *v, const scene *s);
  * views file's "bbox framed from +z" views. Lights are left to
  * view_place_default_light. */
 void view_frame_bbox(view *v, aabb b);
+/* view_frame_bbox's field of view, degrees (world.c takes a framed
+ * view's packet footprint from it before the scene's box is known). */
+#define VIEW_FRAME_FOV 45.0
 
 #endif

@@ -638,20 +638,32 @@ void world_opts_packet_tree(world_opts *o, int height)
 }
 
 /* rtref's own tree (world_opts.fp_packet): the kd parameters with the
- * footprint of a primary packet of the final view, when that view is
- * known before the scene loads (from a views file, or the embedded
- * scene's default), camera flags applied, so that the world cache keys
- * the tree by it (kdtree.c, "Packet footprint"; docs/kernel-ref.md). A
- * packet fp_packet pixels wide on an image fp_height high spans
- * fp_packet * 2 tan(fov/2) / fp_height radians (the camera's vertical
- * field of view, square pixels). Else (a view framed by the scene's box
- * or brought by the scene, an AFF scene) the parameters as given. */
+ * footprint of a primary packet of the final view, camera flags applied,
+ * so that the world cache keys the tree by it (kdtree.c, "Packet
+ * footprint"; docs/kernel-ref.md). A packet fp_packet pixels wide on an
+ * image fp_height high spans fp_packet * 2 tan(fov/2) / fp_height
+ * radians (the camera's vertical field of view, square pixels). The view
+ * is known before the scene loads when it comes from a views file or is
+ * the embedded scene's default. A scene file without a views file is
+ * framed by its box (view_frame_bbox): its field of view is known
+ * (VIEW_FRAME_FOV or --fov), its eye only after the import unless --eye
+ * gives it, so the eye is left NaN here, which keys the cache by the rule
+ * (the file's box decides the eye), and set by fp_framed_eye once the
+ * view is framed. Else (a view brought by a procedural or AFF scene) the
+ * parameters as given. */
 static kd_params view_kd(const world *w, const world_opts *o, const char *path)
 {
 	kd_params k = o->kd;
-	if (o->fp_packet <= 0 || o->fp_height <= 0 || (path && !o->views))
+	if (o->fp_packet <= 0 || o->fp_height <= 0)
 		return k;
 	camera c = w->v.cam;
+	int framed = path && !o->views;
+	if (framed && (spd_is(path) || aff_is(path)))
+		return k;
+	if (framed) {
+		c.fov_deg = (float)VIEW_FRAME_FOV;
+		c.eye = v3(NAN, NAN, NAN);
+	}
 	cam_flags(o, &c);
 	double a = o->fp_packet * 2.0 * tan(c.fov_deg * (M_PI / 360.0)) / o->fp_height;
 	if (!(a > 0 && a <= KD_FP_ANGLE_MAX))
@@ -661,6 +673,17 @@ static kd_params view_kd(const world *w, const world_opts *o, const char *path)
 	k.fp_eye[1] = c.eye.y;
 	k.fp_eye[2] = c.eye.z;
 	return k;
+}
+
+/* view_kd's footprint for a framed scene file: the eye of the view as
+ * framed (w->v, flags applied) where view_kd left it NaN. */
+static void fp_framed_eye(kd_params *k, const world *w)
+{
+	if (k->fp_angle > 0 && isnan(k->fp_eye[0])) {
+		k->fp_eye[0] = w->v.cam.eye.x;
+		k->fp_eye[1] = w->v.cam.eye.y;
+		k->fp_eye[2] = w->v.cam.eye.z;
+	}
 }
 
 int world_load(world *w, const world_opts *o, diag *d)
@@ -709,6 +732,7 @@ int world_load(world *w, const world_opts *o, diag *d)
 	if (apply_view_flags(w, o, d))
 		goto fail;
 	if (w->cache != WORLD_CACHE_HIT) {
+		fp_framed_eye(&kp, w);
 		t0 = now_ms();
 		if (kd_build(&w->kd, &w->s, aff ? world_kd(o) : &kp, d))
 			goto fail;

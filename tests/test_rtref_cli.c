@@ -3,6 +3,8 @@
  * JSON stats file; every kind of bad input gives one line on stderr, exit
  * status 2 and no output file.
  */
+#include <math.h>
+
 #include "tests/testutil.h"
 
 static char dir[256];
@@ -38,7 +40,7 @@ Test(rtref_cli, good_run_writes_image_and_stats)
 	fclose(f);
 	const char *keys[] = {"\"rays\"",           "\"kd_node_visits\"", "\"leaf_visits\"",
 	                      "\"triangle_tests\"", "\"build_ms\"",       "\"render_ms\"",
-	                      "\"mrays_per_s\"",    "\"shadow\"",           "\"simd_lanes\""};
+	                      "\"mrays_per_s\"",    "\"shadow\"",         "\"simd_lanes\""};
 	for (size_t k = 0; k < sizeof keys / sizeof *keys; k++)
 		cr_assert(strstr(buf, keys[k]), "stats lack %s", keys[k]);
 }
@@ -215,6 +217,68 @@ Test(rtref_cli, own_tree_takes_the_views_packet_footprint)
 		cr_assert_eq(rtref(args), 0, "%s: %s", eyes[i], slurp("err"));
 		unsigned long nn;
 		kd_stats(&nn, &ge[i], from);
+	}
+	cr_assert_gt(ge[1], 1.5 * ge[0], "--eye not applied to the footprint (%g, %g)", ge[0],
+	             ge[1]);
+}
+
+/* A scene file without a views file is framed by its box, and rtref's
+ * tree takes that view's packet footprint too (world.c, view_kd and
+ * fp_framed_eye). Mistakes caught: the scene's fraction taken instead
+ * (the footprint's source "scene"), the framed view's field of view or
+ * eye not the one rendered (the growth not the packet's width at the
+ * box's centre: 8 pixels of a 64-row frame of 45 degrees, at the framed
+ * eye's distance), the image height left out of the world cache's key (a
+ * hit from a 64-row run serving a 512-row one), --eye not applied. */
+Test(rtref_cli, framed_scene_file_takes_its_views_packet_footprint)
+{
+	char file[512], args[1600], from[64];
+	SCENE_OR_SKIP(file, "utah_teapot/teapot.obj");
+	const char *run[4] = {"--size 64x64", "--size 64x512", "--size 64x64",
+	                      "--size 64x64 --kd-footprint 0"};
+	const char *want[4] = {"view", "view", "view", "none"};
+	const char *cachestate[3] = {"stored", "stored", "hit"};
+	unsigned long n[4];
+	double g[4];
+	for (int i = 0; i < 4; i++) {
+		snprintf(args, sizeof args, "--scene %s %s --world-cache %s/wc --stats %s/s.json",
+		         file, run[i], dir, dir);
+		cr_assert_eq(rtref(args), 0, "%s: %s", run[i], slurp("err"));
+		kd_stats(&n[i], &g[i], from);
+		cr_assert_str_eq(from, want[i], "%s", run[i]);
+		if (i < 3)
+			cr_assert(strstr(slurp("s.json"), cachestate[i]),
+			          "run %d: world cache not %s", i, cachestate[i]);
+		if (i == 0) { /* half a packet's width at the framed eye's distance */
+			double e[3], l[3];
+			const char *st = slurp("s.json"), *ce = strstr(st, "\"eye\": ["),
+			           *cl = strstr(st, "\"lookat\": [");
+			cr_assert(ce && cl && strstr(st, "\"view\": \"bbox\""), "no framed camera");
+			cr_assert_eq(sscanf(ce + 8, " %lf , %lf , %lf", &e[0], &e[1], &e[2]), 3);
+			cr_assert_eq(sscanf(cl + 11, " %lf , %lf , %lf", &l[0], &l[1], &l[2]), 3);
+			double dist =
+			    sqrt((e[0] - l[0]) * (e[0] - l[0]) + (e[1] - l[1]) * (e[1] - l[1]) +
+			         (e[2] - l[2]) * (e[2] - l[2]));
+			double want_g = 0.5 * (8.0 * 2.0 * tan(45.0 * M_PI / 360.0) / 64.0) * dist;
+			cr_assert_float_eq(g[0], want_g, 1e-4 * want_g, "growth %g, a packet's %g",
+			                   g[0], want_g);
+		}
+	}
+	cr_assert_float_eq(g[0] / g[1], 8.0, 1e-5, "growth %g at 64 rows, %g at 512", g[0], g[1]);
+	cr_assert_eq(g[2], g[0], "the cache hit's growth %g, the stored one's %g", g[2], g[0]);
+	cr_assert_neq(n[0], n[3], "the framed view's footprint built the plain SAH's tree");
+	/* --eye applies: an eye twice as far, a wider footprint */
+	double ge[2];
+	const char *eyes[2] = {"--eye 0,30,300", "--eye 0,30,600"};
+	for (int i = 0; i < 2; i++) {
+		snprintf(args, sizeof args,
+		         "--scene %s --size 64x64 %s --lookat 0,30,0 --world-cache off --stats "
+		         "%s/s.json",
+		         file, eyes[i], dir);
+		cr_assert_eq(rtref(args), 0, "%s: %s", eyes[i], slurp("err"));
+		unsigned long nn;
+		kd_stats(&nn, &ge[i], from);
+		cr_assert_str_eq(from, "view", "%s", eyes[i]);
 	}
 	cr_assert_gt(ge[1], 1.5 * ge[0], "--eye not applied to the footprint (%g, %g)", ge[0],
 	             ge[1]);
