@@ -53,7 +53,7 @@ bench_end
 	echo
 	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (took $elapsed s); commit $GIT"
 	echo "- Machine: $(nproc) CPUs, $(doc_cpu); load average $load0 at start, $load1 at the end (other jobs may share the machine: both times in a row come from the same process, so the ratio is less noisy than either)"
-	echo "- Run: \`saarsim --views views.yaml --view V --size $SIZE\` (default config, cycle mode, the check on, no world cache), $RUNS runs; *sim s*: the best \`host.sim_s\` (chip_run); *kernel-ref s*: the best time of its packet render of the same frame, one host thread, in the same process (\`host.sim_s\` / \`host.sim_to_ref_ratio\`); *ratio*: the two bests' quotient."
+	echo "- Run: \`saarsim --views views.yaml --view V --size $SIZE\` (default config, cycle mode, the check on, no world cache), $RUNS runs; *sim s*: the best \`host.sim_s\` (chip_run); *kernel-ref s*: the best time of its packet render of the same frame, one host thread, in the same process (\`host.sim_s\` / \`host.sim_to_ref_ratio\`: the check's render, which steps the per-lane packet traversal the chip models on the chip's tree; rtref's default, the frustum walk on its own tree, renders faster, so against it the ratios would be higher); *ratio*: the two bests' quotient."
 	echo
 	echo "| view | cycles/frame | sim s | kernel-ref s | ratio |"
 	echo "|---|---:|---:|---:|---:|"
