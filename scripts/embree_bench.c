@@ -122,56 +122,56 @@ static RTCScene embree_scene(RTCDevice dev, const scene *s, enum RTCBuildQuality
 /* One tile's packet p with Embree, as packets of W rays (an 8x8 tile as
  * 64 / W packets of PW x PH pixels); hits into h. One function per width:
  * Embree's RTCRayHit4/8/16 differ only in the length of their arrays. */
-#define EMBREE_TILE(W, PW, PH)                                                         \
-	static uint64_t embree_tile##W(RTCScene sc, const packet *p, hits *h)          \
-	{                                                                              \
-		struct RTCIntersectContext ctx;                                        \
-		rtcInitIntersectContext(&ctx);                                         \
-		ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;                       \
-		struct RTCRayHit##W rh;                                                \
-		int valid[W] __attribute__((aligned(64)));                             \
-		uint64_t rays = 0;                                                     \
-		for (int q = 0; q < (TILE_W / PW) * (TILE_H / PH); q++) {              \
-			int qx = (q % (TILE_W / PW)) * PW, qy = (q / (TILE_W / PW)) * PH; \
-			int any = 0;                                                   \
-			for (int k = 0; k < W; k++) {                                  \
-				int lane = (qy + k / PW) * TILE_W + qx + k % PW;       \
-				int on = (int)((p->valid >> lane) & 1);                \
-				valid[k] = on ? -1 : 0;                                \
-				any |= on;                                             \
-				rh.ray.org_x[k] = p->ox[lane];                         \
-				rh.ray.org_y[k] = p->oy[lane];                         \
-				rh.ray.org_z[k] = p->oz[lane];                         \
-				rh.ray.dir_x[k] = p->dx[lane];                         \
-				rh.ray.dir_y[k] = p->dy[lane];                         \
-				rh.ray.dir_z[k] = p->dz[lane];                         \
-				rh.ray.tnear[k] = 0.0f;                                \
-				rh.ray.tfar[k] = p->tmax[lane];                        \
-				rh.ray.time[k] = 0.0f;                                 \
-				rh.ray.mask[k] = UINT32_MAX;                           \
-				rh.ray.id[k] = (unsigned)k;                            \
-				rh.ray.flags[k] = 0;                                   \
-				rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;            \
-			}                                                              \
-			if (!any)                                                      \
-				continue;                                              \
-			rtcIntersect##W(valid, sc, &ctx, &rh);                         \
-			for (int k = 0; k < W; k++) {                                  \
-				if (!valid[k])                                         \
-					continue;                                      \
-				rays++;                                                \
-				int lane = (qy + k / PW) * TILE_W + qx + k % PW;       \
-				uint32_t px = p->pixel[lane];                          \
-				if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {     \
-					h->tri[px] = rh.hit.primID[k];                 \
-					h->t[px] = rh.ray.tfar[k];                     \
-				} else {                                               \
-					h->tri[px] = UINT32_MAX;                       \
-					h->t[px] = INFINITY;                           \
-				}                                                      \
-			}                                                              \
-		}                                                                      \
-		return rays;                                                           \
+#define EMBREE_TILE(W, PW, PH)                                                                     \
+	static uint64_t embree_tile##W(RTCScene sc, const packet *p, hits *h)                      \
+	{                                                                                          \
+		struct RTCIntersectContext ctx;                                                    \
+		rtcInitIntersectContext(&ctx);                                                     \
+		ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;                                   \
+		struct RTCRayHit##W rh;                                                            \
+		int valid[W] __attribute__((aligned(64)));                                         \
+		uint64_t rays = 0;                                                                 \
+		for (int q = 0; q < (TILE_W / PW) * (TILE_H / PH); q++) {                          \
+			int qx = (q % (TILE_W / PW)) * PW, qy = (q / (TILE_W / PW)) * PH;          \
+			int any = 0;                                                               \
+			for (int k = 0; k < W; k++) {                                              \
+				int lane = (qy + k / PW) * TILE_W + qx + k % PW;                   \
+				int on = (int)((p->valid >> lane) & 1);                            \
+				valid[k] = on ? -1 : 0;                                            \
+				any |= on;                                                         \
+				rh.ray.org_x[k] = p->ox[lane];                                     \
+				rh.ray.org_y[k] = p->oy[lane];                                     \
+				rh.ray.org_z[k] = p->oz[lane];                                     \
+				rh.ray.dir_x[k] = p->dx[lane];                                     \
+				rh.ray.dir_y[k] = p->dy[lane];                                     \
+				rh.ray.dir_z[k] = p->dz[lane];                                     \
+				rh.ray.tnear[k] = 0.0f;                                            \
+				rh.ray.tfar[k] = p->tmax[lane];                                    \
+				rh.ray.time[k] = 0.0f;                                             \
+				rh.ray.mask[k] = UINT32_MAX;                                       \
+				rh.ray.id[k] = (unsigned)k;                                        \
+				rh.ray.flags[k] = 0;                                               \
+				rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;                        \
+			}                                                                          \
+			if (!any)                                                                  \
+				continue;                                                          \
+			rtcIntersect##W(valid, sc, &ctx, &rh);                                     \
+			for (int k = 0; k < W; k++) {                                              \
+				if (!valid[k])                                                     \
+					continue;                                                  \
+				rays++;                                                            \
+				int lane = (qy + k / PW) * TILE_W + qx + k % PW;                   \
+				uint32_t px = p->pixel[lane];                                      \
+				if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {                 \
+					h->tri[px] = rh.hit.primID[k];                             \
+					h->t[px] = rh.ray.tfar[k];                                 \
+				} else {                                                           \
+					h->tri[px] = UINT32_MAX;                                   \
+					h->t[px] = INFINITY;                                       \
+				}                                                                  \
+			}                                                                          \
+		}                                                                                  \
+		return rays;                                                                       \
 	}
 EMBREE_TILE(4, 2, 2)
 EMBREE_TILE(8, 4, 2)
@@ -310,9 +310,10 @@ int main(int argc, char **argv)
 			else if (!strcmp(v, "4") || !strcmp(v, "8") || !strcmp(v, "16"))
 				wsel = atoi(v);
 			else {
-				fprintf(stderr,
-				        "embree_bench: --packet: expected 4, 8, 16 or all, got '%s'\n",
-				        v);
+				fprintf(
+				    stderr,
+				    "embree_bench: --packet: expected 4, 8, 16 or all, got '%s'\n",
+				    v);
 				return DIAG_EXIT;
 			}
 		} else if (!strcmp(a, "--quality")) {
