@@ -23,7 +23,7 @@ doc_section() {
 
 # doc_cpu: the host's processor model and widest vector extension ("AMD
 # EPYC, AVX2"): host times and the ratios between two programs' times
-# depend on both (docs/PERFORMANCE.md, "Target 1: session 48").
+# depend on both (docs/PERFORMANCE.md, "Targets 1 and 2: session 48").
 doc_cpu() {
 	_m=$(sed -n 's/^model name[[:space:]]*:[[:space:]]*//p' /proc/cpuinfo 2>/dev/null | head -n 1)
 	_f=$(grep -m 1 '^flags' /proc/cpuinfo 2>/dev/null)
