@@ -5,6 +5,7 @@
  */
 #include <math.h>
 
+#include "kernel-ref/simd.h"
 #include "tests/testutil.h"
 
 static char dir[256];
@@ -43,6 +44,10 @@ Test(rtref_cli, good_run_writes_image_and_stats)
 	                      "\"mrays_per_s\"",    "\"shadow\"",         "\"simd_lanes\""};
 	for (size_t k = 0; k < sizeof keys / sizeof *keys; k++)
 		cr_assert(strstr(buf, keys[k]), "stats lack %s", keys[k]);
+	/* the packet groups' width of this build (make bench prints it) */
+	int lanes = 0;
+	cr_assert_eq(sscanf(strstr(buf, "\"simd_lanes\"") + 12, ": %d", &lanes), 1);
+	cr_assert_eq(lanes, SIMD_W, "simd_lanes %d, the build's groups are %d wide", lanes, SIMD_W);
 }
 
 /* Mistake: --cone-cull ignored (render_opts.cone_cull not set: nothing
@@ -237,7 +242,8 @@ Test(rtref_cli, framed_scene_file_takes_its_views_packet_footprint)
 	const char *run[4] = {"--size 64x64", "--size 64x512", "--size 64x64",
 	                      "--size 64x64 --kd-footprint 0"};
 	const char *want[4] = {"view", "view", "view", "none"};
-	const char *cachestate[3] = {"stored", "stored", "hit"};
+	const char *cachestate[3] = {"\"world_cache\": \"stored\"", "\"world_cache\": \"stored\"",
+	                             "\"world_cache\": \"hit\""};
 	unsigned long n[4];
 	double g[4];
 	for (int i = 0; i < 4; i++) {
