@@ -90,7 +90,8 @@ for name in rtref saarsim; do
 done
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/saar-bench.XXXXXX")
-DOCTMP=$DOC.tmp.$$
+. "$ROOT/scripts/doc-section.sh"
+DOCTMP=$DOC.tmp.$$ # doc_section's temporary
 trap 'rm -rf "$TMP"; rm -f "$DOCTMP"' EXIT
 trap 'exit 130' INT TERM
 
@@ -144,12 +145,7 @@ fi
 write_section() {
 	mkdir -p docs
 	if [ -f "$DOC" ]; then
-		awk -v sec="$2" -v b="<!-- BEGIN $1 -->" -v e="<!-- END $1 -->" '
-		BEGIN { while ((getline l < sec) > 0) s = s l "\n" }
-		index($0, b) { printf "%s", s; skip = 1; done = 1; next }
-		index($0, e) { skip = 0; next }
-		!skip { print }
-		END { if (!done) printf "\n%s", s }' "$DOC" >"$DOCTMP"
+		doc_section "$1" "$2" "$DOC"
 	else
 		{
 			echo "# saarsim performance"
@@ -160,8 +156,8 @@ write_section() {
 			echo
 			cat "$2"
 		} >"$DOCTMP"
+		mv -f "$DOCTMP" "$DOC"
 	fi
-	mv -f "$DOCTMP" "$DOC"
 	say "wrote $DOC (section $1)"
 	cat "$2"
 }
@@ -171,8 +167,7 @@ GIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 if [ "$GIT" != unknown ] && [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ]; then
 	GIT="$GIT (plus uncommitted changes)"
 fi
-CPU=$(sed -n 's/^model name[[:space:]]*:[[:space:]]*//p' /proc/cpuinfo 2>/dev/null | head -n 1)
-[ -n "$CPU" ] || CPU=$(uname -m)
+CPU=$(doc_cpu)
 NPROC=$(nproc 2>/dev/null || getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?')
 # the Makefile passes its CC; run by hand, the script uses cc like make
 CC=${CC:-cc}
