@@ -19,9 +19,6 @@ bench_init bench-footprint
 SIZE=${SIZE:-1024x768}
 F=${F:-0.001}
 bench_start footprint
-VLIST=$(bench_views)
-ROWS=$TMP/rows
-: >"$ROWS"
 for v in $VLIST; do
 	row=$v
 	for fp in 0 "$F"; do

@@ -33,7 +33,6 @@ for T in $THREADS; do
 	case $T in '' | *[!0-9]* | 0) die "THREADS must be positive integers" ;; esac
 done
 bench_start frontier
-VLIST=$(bench_views)
 echo "$VLIST" | grep -qx "$VIEW" || die "no view $VIEW in $VIEWS"
 WC=$TMP/wc
 # The settings: label, then the --set arguments (none: the defaults).

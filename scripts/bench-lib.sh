@@ -17,11 +17,14 @@
 # for a script that writes a section of docs/PERFORMANCE.md: DOC (that
 # file), TMP (a scratch folder saar-TAG.*), an exit trap that removes it
 # and doc_section's temporary ($DOC.tmp.$$), doc_section and its helpers
-# (doc-section.sh), load0 (the load average) and t0 (the start, seconds).
+# (doc-section.sh), load0 (the load average), t0 (the start, seconds),
+# VLIST (bench_views) and ROWS (an empty file $TMP/rows for the rows).
 # bench_end, once the measurements are done: elapsed (seconds since
 # bench_start), load1 (the load average then), GIT (doc_commit) and
 # SECTION (the file the section is written into before doc_section).
 # pct_err F T: F's difference from T in percent of T, signed, two decimals.
+# lt A B: true when number A < number B. bench_min CUR NEW: the smaller
+# of the two numbers (NEW when CUR is empty: the best of runs so far).
 BENCH_NAME=bench
 say() { printf '%s: %s\n' "$BENCH_NAME" "$*" >&2; }
 die() {
@@ -58,12 +61,19 @@ bench_start() {
 	. "$ROOT/scripts/doc-section.sh"
 	load0=$(doc_load)
 	t0=$(date +%s)
+	VLIST=$(bench_views)
+	ROWS=$TMP/rows
+	: >"$ROWS"
 }
 bench_end() {
 	elapsed=$(($(date +%s) - t0))
 	load1=$(doc_load)
 	GIT=$(doc_commit)
 	SECTION=$TMP/section
+}
+lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
+bench_min() {
+	if [ -z "$1" ] || lt "$2" "$1"; then echo "$2"; else echo "$1"; fi
 }
 pct_err() {
 	awk -v f="$1" -v t="$2" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }'

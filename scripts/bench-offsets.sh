@@ -31,7 +31,6 @@ if [ -n "${BASE:-}" ]; then
 	[ -x "$BASE_SIM" ] || die "$BASE_SIM not found"
 fi
 bench_start off
-VLIST=$(bench_views)
 # fps of one run: BIN VIEW ARGS...
 fps_of() {
 	bin=$1 v=$2
@@ -52,8 +51,6 @@ errs() {
 	done
 	echo "$line"
 }
-ROWS=$TMP/rows
-: >"$ROWS"
 for v in $VLIST; do
 	say "$v: cycle"
 	truth=$(fps_of "$SIM" "$v")

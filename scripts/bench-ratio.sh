@@ -25,9 +25,6 @@ RTREF=$ROOT/$B/rtref
 SIZE=${SIZE:-1024x768}
 RUNS=${RUNS:-5}
 bench_start ratio
-VLIST=$(bench_views)
-ROWS=$TMP/rows
-: >"$ROWS"
 for v in $VLIST; do
 	bs= br=
 	r=1
@@ -41,8 +38,8 @@ for v in $VLIST; do
 		ref=$(awk -v s="$s" -v q="$q" 'BEGIN { printf "%.6f", (q > 0 ? s / q : 0) }')
 		# each side's best over the runs: a minimum of the ratio itself
 		# would pick the run whose kernel-ref time was slowed the most
-		if [ -z "$bs" ] || awk -v a="$s" -v b="$bs" 'BEGIN { exit !(a + 0 < b + 0) }'; then bs=$s; fi
-		if [ -z "$br" ] || awk -v a="$ref" -v b="$br" 'BEGIN { exit !(a + 0 < b + 0) }'; then br=$ref; fi
+		bs=$(bench_min "$bs" "$s")
+		br=$(bench_min "$br" "$ref")
 		cyc=$(jget "$TMP/r.json" cycles)
 		r=$((r + 1))
 	done
@@ -54,7 +51,7 @@ for v in $VLIST; do
 		"$RTREF" --views "$VIEWS" --view "$v" --size "$SIZE" --threads 1 \
 			--stats "$TMP/s.json" >"$TMP/s.txt" 2>&1 || { cat "$TMP/s.txt" >&2; die "rtref failed on $v"; }
 		d=$(awk -v m="$(jget "$TMP/s.json" render_ms)" 'BEGIN { printf "%.6f", m / 1000 }')
-		if [ -z "$bd" ] || awk -v a="$d" -v b="$bd" 'BEGIN { exit !(a + 0 < b + 0) }'; then bd=$d; fi
+		bd=$(bench_min "$bd" "$d")
 		r=$((r + 1))
 	done
 	printf '%s %s %s %s %s %s %s\n' "$v" "$cyc" "$bs" "$br" \

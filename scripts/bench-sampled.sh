@@ -34,8 +34,6 @@ VIEW=${VIEW:-conference}
 RUNS=${RUNS:-3}
 case $RUNS in '' | *[!0-9]* | 0) die "RUNS must be a positive integer" ;; esac
 bench_start smp
-ROWS=$TMP/rows
-: >"$ROWS"
 # one row: label, the label of the row it is compared with, the cache
 # folder (a path, "fresh:PATH" for an empty one at every run, or "-" for
 # the flag's own), the view, then saarsim arguments; the run with the
@@ -60,7 +58,7 @@ point() {
 			--report "$TMP/r.json" "$@" >"$TMP/r.txt" 2>&1 ||
 			{ cat "$TMP/r.txt" >&2; die "saarsim failed: $label"; }
 		w=$(jget "$TMP/r.json" wall_s)
-		if [ -z "$best" ] || awk -v a="$w" -v b="$best" 'BEGIN { exit !(a < b) }'; then
+		if [ -z "$best" ] || lt "$w" "$best"; then
 			best=$w
 			cp "$TMP/r.json" "$TMP/best.json"
 		fi

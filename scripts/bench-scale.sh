@@ -57,7 +57,6 @@ row() {
 		"$(tget "$TMP/$n.time" 'User time (seconds)')" \
 		"$(tget "$TMP/$n.time" 'Elapsed (wall clock) time (h:mm:ss or m:ss)')"
 }
-ROWS=$TMP/rows
 {
 	row small
 	row large
