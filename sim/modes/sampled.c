@@ -354,12 +354,35 @@ static int drained_extra(chip *c, int f, int at, int rs, double m, int *extra)
 	return rs;
 }
 
+/* The demand a drain at tile `at` stands for (into dd): the warming run's
+ * work of the tiles before `at` since the chip last took its state, at
+ * tile rs_last with demand dem_rs (wm_demand_done at `at` less the light
+ * checkpoint at rs_last), less what the chip did of it before the drain
+ * (its demand d0 then, less dem_rs). Not the drain's own demand: a drain
+ * runs a region's last packets with no new tile handed out, so they share
+ * the L1s with fewer packets than in a chip that runs on, and read less
+ * SDRAM for the same work (Conference 1024x768 at 32 threads per RTP:
+ * 12% less than the warming run in the memory-bound regions; the estimates
+ * ran fast, docs/fidelity.md "Draining instead of the relax"). So each
+ * stretch from a restore to the next counts the warming run's demand for
+ * its work in all, the timed regions in it their own. */
+static void drain_demand(chip *c, int f, int rs_last, const double *dem_rs, int at,
+                         const double *d0, double *dd)
+{
+	double m = hier_merge_share(&c->mem), w0[RES_N], w1[RES_N];
+	warm_dem(c, f, rs_last, m, 0, w0);
+	warm_dem(c, f, at, m, 1, w1);
+	for (int k = 0; k < RES_N; k++)
+		dd[k] = (w1[k] - w0[k]) - (d0[k] - dem_rs[k]);
+}
+
 /* The gap [at, *rs): the warming run's chunks of U tiles into the
  * estimate. After a relax (dd NULL) a memory-bound one brings an extra
  * region at the next full checkpoint after it, as mode_func_range does
- * (*rs moves there, *extra set). After a drain (dd: its demand) the
- * first chunk starts from the work of the tiles before `at`, less what
- * the drain did (the timed chip's packets in flight at its end). */
+ * (*rs moves there, *extra set). After a drain (dd: its demand,
+ * drain_demand) the first chunk starts from the work of the tiles before
+ * `at`, less what the drain stands for (the timed chip's packets in flight
+ * at its end). */
 static void gap_chunks(chip *c, int f, int at, int *rs, double m, const double *dd, int *extra)
 {
 	chip_fidelity *F = &c->fid;
@@ -402,6 +425,12 @@ void mode_sampled_frame_stored(chip *c, int f)
 	uint64_t t0 = eng_now(c->e);
 	sampled_begin(F);
 	int j = 0, at = 0, room = W + U;
+	/* where the chip last took the warming run's state (the frame's start
+	 * before the first restore): the tile and the chip's demand then, from
+	 * which a drain's demand is worked out (drain_demand) */
+	int rs_last = 0;
+	double dem_rs[RES_N];
+	chip_demand(c, dem_rs);
 	for (int b = 0; b < n; j++) {
 		int tail = b == n - 1, rs = wm_full_below(r, F->base_s[b] - W), extra = 0;
 		if (!tail && (rs > at ? rs : at) + room > wm_full_below(r, F->base_s[n - 1] - W)) {
@@ -419,14 +448,13 @@ void mode_sampled_frame_stored(chip *c, int f)
 				 * tile before `at`, and the jump adds the work of the
 				 * tiles from there on, as the warming run split its
 				 * counts by tile (wm_region_end, wm_demand_done). The
-				 * drain's demand joins the gap's first chunk (below) */
+				 * drain's demand (drain_demand) joins the gap's first
+				 * chunk (below) */
 				double d0[RES_N];
 				int npc = F->npc;
 				chip_demand(c, d0);
 				mode_func_range(c, at, FR_DRAIN);
-				chip_demand(c, dd);
-				for (int k = 0; k < RES_N; k++)
-					dd[k] -= d0[k];
+				drain_demand(c, f, rs_last, dem_rs, at, d0, dd);
 				F->npc = npc;
 				drained = 1;
 			} else {
@@ -461,6 +489,8 @@ void mode_sampled_frame_stored(chip *c, int f)
 			F->replayed_tiles += (uint64_t)(rs - at);
 			if (wm_restore(r, c, f, rs, m))
 				c->warm_err = 1;
+			rs_last = rs;
+			chip_demand(c, dem_rs);
 		} else
 			rs = at;
 		if (extra) {
