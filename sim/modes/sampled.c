@@ -354,52 +354,50 @@ static int drained_extra(chip *c, int f, int at, int rs, double m, int *extra)
 	return rs;
 }
 
-/* The demand a drain at tile `at` stands for (into dd): the warming run's
- * work of the tiles before `at` since the chip last took its state, at
- * tile rs_last with demand dem_rs (wm_demand_done at `at` less the light
- * checkpoint at rs_last), less what the chip did of it before the drain
- * (its demand d0 then, less dem_rs). Not the drain's own demand: a drain
- * runs a region's last packets with no new tile handed out, so they share
- * the L1s with fewer packets than in a chip that runs on, and read less
- * SDRAM for the same work (Conference 1024x768 at 32 threads per RTP:
- * 12% less than the warming run in the memory-bound regions; the estimates
- * ran fast, docs/fidelity.md "Draining instead of the relax"). So each
- * stretch from a restore to the next counts the warming run's demand for
- * its work in all, the timed regions in it their own. */
-static void drain_demand(chip *c, int f, int rs_last, const double *dem_rs, int at,
-                         const double *d0, double *dd)
+/* Where, in the warming run's demand, the gap after a drain starts (into
+ * from): its demand at the light checkpoint rs_last where the chip last
+ * took its state (the chip's demand then dem_rs), plus what the chip did
+ * since, up to the drain (its demand d0 then, less dem_rs). From one
+ * restore to the next the estimate so counts the warming run's demand of
+ * the work in all, the timed regions in it their own, and the drain none
+ * of its own: a drain runs a region's last packets with no new tile handed
+ * out, in L1s they share with fewer packets than in a chip that runs on,
+ * and reads less SDRAM for the same work (Conference 1024x768 at 32
+ * threads per RTP: 12% less than the warming run in the memory-bound
+ * regions; counted, it made the estimates fast: docs/fidelity.md "A
+ * drain's demand"). The estimate then needs no done record (the warming
+ * run's work of the tiles before the drain's end, which the drained
+ * work's share would be taken from); the counters still do (wm_restore
+ * after wm_region_end). */
+static void drain_from(chip *c, int f, int rs_last, const double *dem_rs, const double *d0,
+                       double *from)
 {
-	double m = hier_merge_share(&c->mem), w0[RES_N], w1[RES_N];
-	warm_dem(c, f, rs_last, m, 0, w0);
-	warm_dem(c, f, at, m, 1, w1);
+	warm_dem(c, f, rs_last, hier_merge_share(&c->mem), 0, from);
 	for (int k = 0; k < RES_N; k++)
-		dd[k] = (w1[k] - w0[k]) - (d0[k] - dem_rs[k]);
+		from[k] += d0[k] - dem_rs[k];
 }
 
 /* The gap [at, *rs): the warming run's chunks of U tiles into the
- * estimate. After a relax (dd NULL) a memory-bound one brings an extra
+ * estimate. After a relax (from NULL) a memory-bound one brings an extra
  * region at the next full checkpoint after it, as mode_func_range does
- * (*rs moves there, *extra set). After a drain (dd: its demand,
- * drain_demand) the first chunk starts from the work of the tiles before
- * `at`, less what the drain stands for (the timed chip's packets in flight
- * at its end). */
-static void gap_chunks(chip *c, int f, int at, int *rs, double m, const double *dd, int *extra)
+ * (*rs moves there, *extra set). After a drain the first chunk starts from
+ * `from` (drain_from), not from the light checkpoint at `at`: it holds
+ * the rest of the work of the timed chip's packets in flight at the
+ * region's end. */
+static void gap_chunks(chip *c, int f, int at, int *rs, double m, const double *from, int *extra)
 {
 	chip_fidelity *F = &c->fid;
 	int U = F->unit_tiles;
 	for (int a = at; a < *rs;) {
 		int e = a + U < *rs ? a + U : *rs;
 		smp_piece p = warm_piece(c, f, a, e, m);
-		if (a == at && dd) {
-			double d0[RES_N], d1[RES_N];
-			warm_dem(c, f, at, m, 1, d0);
+		if (a == at && from) {
+			double d1[RES_N];
 			warm_dem(c, f, e, m, 0, d1);
-			for (int k = 0; k < RES_N; k++)
-				d0[k] -= dd[k];
-			p = chip_piece(c, d0, d1);
+			p = chip_piece(c, from, d1);
 		}
 		int hard = account(F, p, 1), xs = wm_full_above(c->warm, e);
-		if (!dd && e - a == U && extra_due(F, hard, e, xs, *rs)) {
+		if (!from && e - a == U && extra_due(F, hard, e, xs, *rs)) {
 			if (xs > e)
 				account(F, warm_piece(c, f, e, xs, m), 1);
 			*rs = xs;
@@ -427,7 +425,7 @@ void mode_sampled_frame_stored(chip *c, int f)
 	int j = 0, at = 0, room = W + U;
 	/* where the chip last took the warming run's state (the frame's start
 	 * before the first restore): the tile and the chip's demand then, from
-	 * which a drain's demand is worked out (drain_demand) */
+	 * which the gap after a drain starts (drain_from) */
 	int rs_last = 0;
 	double dem_rs[RES_N];
 	chip_demand(c, dem_rs);
@@ -439,7 +437,7 @@ void mode_sampled_frame_stored(chip *c, int f)
 			continue;
 		}
 		int drained = 0;
-		double dd[RES_N];
+		double from[RES_N];
 		if (rs > at && j > 0) {
 			at = c->g.next;
 			if (jump_drains(c, f, at, rs)) {
@@ -448,13 +446,13 @@ void mode_sampled_frame_stored(chip *c, int f)
 				 * tile before `at`, and the jump adds the work of the
 				 * tiles from there on, as the warming run split its
 				 * counts by tile (wm_region_end, wm_demand_done). The
-				 * drain's demand (drain_demand) joins the gap's first
-				 * chunk (below) */
+				 * gap's first chunk holds the drained work (drain_from,
+				 * below) */
 				double d0[RES_N];
 				int npc = F->npc;
 				chip_demand(c, d0);
 				mode_func_range(c, at, FR_DRAIN);
-				drain_demand(c, f, rs_last, dem_rs, at, d0, dd);
+				drain_from(c, f, rs_last, dem_rs, d0, from);
 				F->npc = npc;
 				drained = 1;
 			} else {
@@ -484,7 +482,7 @@ void mode_sampled_frame_stored(chip *c, int f)
 			wm_region_end(r, f, at, drained);
 			if (drained)
 				rs = drained_extra(c, f, at, rs, m, &extra);
-			gap_chunks(c, f, at, &rs, m, drained ? dd : NULL, &extra);
+			gap_chunks(c, f, at, &rs, m, drained ? from : NULL, &extra);
 			F->functional_tiles += (uint64_t)(rs - at);
 			F->replayed_tiles += (uint64_t)(rs - at);
 			if (wm_restore(r, c, f, rs, m))
