@@ -312,7 +312,7 @@ Test(warming, drain_counts_every_l1_request_once)
 }
 
 /* A drain stands for the warming run's demand of its work, not its own
- * (sampled.c drain_demand): a drain runs a region's last packets with no
+ * (sampled.c drain_from): a drain runs a region's last packets with no
  * new tile handed out, in L1s they share with fewer packets than in a chip
  * that runs on, and reads less SDRAM for the same work. Counting the
  * drain's own reads made every drained estimate fast on the memory-bound
