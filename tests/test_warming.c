@@ -317,7 +317,7 @@ Test(warming, drain_counts_every_l1_request_once)
  * that runs on, and reads less SDRAM for the same work. Counting the
  * drain's own reads made every drained estimate fast on the memory-bound
  * views: the Stanford bunny at 1024x768 with 32 threads per RTP, offsets
- * 0.3, 0.5 and 0.7, +1.82% on average (-0.30% with the warming run's). The
+ * 0.3, 0.5 and 0.7, +1.81% on average (-0.30% with the warming run's). The
  * mistake this catches: the gap's first chunk after a drain taking the
  * drain's own demand. */
 Test(warming, drain_counts_the_warming_runs_demand_of_its_work, .timeout = 300)
