@@ -254,6 +254,28 @@ Test(warming, counts_and_covers_as_cycle)
 	world_free(&w);
 }
 
+/* The mean fps error against a cycle run of sampled config c (stored
+ * warming built or loaded) over the n sampling offsets, each logged. */
+static double mean_fps_error(const world *w, saar_config c, const double *offsets, int n)
+{
+	saar_config k = c;
+	k.fidelity = CFG_FIDELITY_CYCLE;
+	chip *t = tu_run_chip(w, &k);
+	double sum = 0;
+	for (int o = 0; o < n; o++) {
+		c.sampling.offset = offsets[o];
+		chip *s = tu_run_chip(w, &c);
+		cr_assert(s->warm_state == WARM_BUILT || s->warm_state == WARM_LOADED, "%s",
+		          chip_warm_name(s->warm_state));
+		double e = (double)t->frame_cycles[0] / s->fid.est[0] - 1;
+		cr_log_info("offset %.2f: fps %+.2f%%", c.sampling.offset, 100 * e);
+		sum += e;
+		chip_destroy(s);
+	}
+	chip_destroy(t);
+	return sum / n;
+}
+
 /* against_cycle on a shared view through the VMA (shared_view). */
 static void view_against_cycle(const char *name, int width, int height, int tpr, double rate, int n,
                                double pci_tol, const char *what)
@@ -327,22 +349,9 @@ Test(warming, drain_counts_the_warming_runs_demand_of_its_work, .timeout = 300)
 	saar_config c;
 	shared_view(&w, &c, dir, sizeof dir, "bunny", 1024, 768, 32, 0.1, 0);
 	c.sampling.jump = CFG_JUMP_DRAIN;
-	saar_config k = c;
-	k.fidelity = CFG_FIDELITY_CYCLE;
-	chip *t = tu_run_chip(&w, &k);
-	double sum = 0;
-	for (int o = 0; o < 3; o++) {
-		c.sampling.offset = 0.3 + 0.2 * o;
-		chip *s = tu_run_chip(&w, &c);
-		cr_assert(s->warm_state == WARM_BUILT || s->warm_state == WARM_LOADED, "%s",
-		          chip_warm_name(s->warm_state));
-		double e = (double)t->frame_cycles[0] / s->fid.est[0] - 1;
-		cr_log_info("offset %.2f: fps %+.2f%%", c.sampling.offset, 100 * e);
-		sum += e;
-		chip_destroy(s);
-	}
-	cr_assert_lt(fabs(sum / 3), 0.01, "mean fps error %+.2f%%", 100 * sum / 3);
-	chip_destroy(t);
+	const double offsets[] = {0.3, 0.5, 0.7};
+	double mean = mean_fps_error(&w, c, offsets, 3);
+	cr_assert_lt(fabs(mean), 0.01, "mean fps error %+.2f%%", 100 * mean);
 	world_free(&w);
 }
 
@@ -433,22 +442,11 @@ Test(warming, conference_one_thread_unbiased, .timeout = 300)
 	world w;
 	saar_config c;
 	shared_view(&w, &c, dir, sizeof dir, "conference", 1024, 768, 1, 0.05, 0);
-	saar_config k = c;
-	k.fidelity = CFG_FIDELITY_CYCLE;
-	chip *t = tu_run_chip(&w, &k);
-	double sum = 0;
-	for (int o = 0; o < 6; o++) {
-		c.sampling.offset = (o + 0.5) / 6;
-		chip *s = tu_run_chip(&w, &c);
-		cr_assert(s->warm_state == WARM_BUILT || s->warm_state == WARM_LOADED, "%s",
-		          chip_warm_name(s->warm_state));
-		double e = (double)t->frame_cycles[0] / s->fid.est[0] - 1;
-		cr_log_info("offset %.2f: fps %+.2f%%", c.sampling.offset, 100 * e);
-		sum += e;
-		chip_destroy(s);
-	}
-	cr_assert_lt(fabs(sum / 6), 0.007, "mean fps error %+.2f%%", 100 * sum / 6);
-	chip_destroy(t);
+	double offsets[6];
+	for (int o = 0; o < 6; o++)
+		offsets[o] = (o + 0.5) / 6;
+	double mean = mean_fps_error(&w, c, offsets, 6);
+	cr_assert_lt(fabs(mean), 0.007, "mean fps error %+.2f%%", 100 * mean);
 	world_free(&w);
 }
 
