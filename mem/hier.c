@@ -758,6 +758,28 @@ size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap)
 	return n;
 }
 
+size_t hier_traffic_ptrs(memport *p, uint64_t **out, size_t cap)
+{
+	hier *h = p->impl;
+	size_t n = 0;
+	n = hier_add_ptrs(out, n, cap, h->mi.s.reads, MEMIF_NREQ);
+	n = hier_add_ptrs(out, n, cap, h->mi.s.writes, MEMIF_NREQ);
+	n = hier_add_ptrs(out, n, cap, h->mi.s.bytes, MEMIF_NREQ);
+	uint64_t *sd[] = {&h->sd.s.reads,       &h->sd.s.writes, &h->sd.s.read_bytes,
+	                  &h->sd.s.write_bytes, &h->sd.s.beats,  &h->sd.s.busy_ticks,
+	                  &h->hb.s.transfers,   &h->hb.s.bytes,  &h->hb.s.busy_ticks};
+	for (size_t i = 0; i < sizeof sd / sizeof *sd; i++)
+		n = hier_add_ptrs(out, n, cap, sd[i], 1);
+	return n;
+}
+
+size_t hier_wait_ptrs(memport *p, uint64_t **out, size_t cap)
+{
+	hier *h = p->impl;
+	size_t n = hier_add_ptrs(out, 0, cap, h->wait_ticks, MEM_NTYPES);
+	return hier_add_ptrs(out, n, cap, h->stall_ticks, MEM_NTYPES);
+}
+
 uint64_t hier_l2hit_ticks(const memport *p)
 {
 	return ((const hier *)p->impl)->fl2hit_ticks;
@@ -766,6 +788,23 @@ uint64_t hier_l2hit_ticks(const memport *p)
 void hier_add_merge_ticks(memport *p, double ticks)
 {
 	((hier *)p->impl)->fmerge_ticks += ticks;
+}
+
+void hier_mark_shares(memport *p)
+{
+	hier *h = p->impl;
+	if (h->use_vma)
+		h->l2_mark = h->v.l2.c.s;
+}
+
+void hier_keep_shares(memport *p)
+{
+	hier *h = p->impl;
+	if (!h->use_vma)
+		return;
+	const cache_stats *a = &h->l2_mark, *b = &h->v.l2.c.s;
+	h->kept_th += (double)((b->hits - b->func_hits) - (a->hits - a->func_hits));
+	h->kept_tm += (double)((b->merges - b->func_merges) - (a->merges - a->func_merges));
 }
 
 double hier_merge_share(const memport *p)

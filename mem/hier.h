@@ -75,11 +75,31 @@ void hier_caches(memport *p, cache *l1[MEM_NTYPES], cache **tag, cache **l2);
  * bitset; NULL: none) from host memory, clean, then every L1 line. */
 void hier_reload(memport *p, const uint64_t *l2sets);
 size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap);
+/* The timed models' traffic counts that the functional counters of
+ * hier_counter_ptrs stand for in functional processing: the memory
+ * interface's and SDRAM's requests, bytes, beats and data-bus busy time,
+ * the host bus's transfers, bytes and busy time (the resource demand
+ * counts both kinds; not the timing's own: row hits, queueing, waits).
+ * A sampled jump that skips (sampling.jump skip, sim/warming.h wm_skip)
+ * takes them back with the counters it hands to the warming run. out
+ * NULL: counts only. */
+size_t hier_traffic_ptrs(memport *p, uint64_t **out, size_t cap);
+/* Of hier_counter_ptrs, those only timed reads move: the reads' waits and
+ * MSHR stalls (a skip keeps them: a sampled run scales its regions'
+ * waits to the estimated cycles). */
+size_t hier_wait_ptrs(memport *p, uint64_t **out, size_t cap);
 uint64_t hier_l2hit_ticks(const memport *p);
 void hier_add_merge_ticks(memport *p, double ticks);
 /* The share of on-board-cache hits a timed chip merges into fetches on
  * their way, from the on-board cache's counts so far (the factor on
  * func_sdram_merge_ticks); 0 without the VMA or without a hierarchy. */
 double hier_merge_share(const memport *p);
+/* A skip (sim/warming.h wm_skip) hands the on-board cache's counts since
+ * the chip's last restore to the warming run: its timed hits and merges
+ * since hier_mark_shares (called at the restore) stay in
+ * hier_merge_share all the same (hier_keep_shares, before the counts go
+ * back). */
+void hier_mark_shares(memport *p);
+void hier_keep_shares(memport *p);
 
 #endif

@@ -102,6 +102,11 @@ struct hier {
 	 * fmerge_ticks takes its share of; stored warming applies the share
 	 * to the checkpoints' traffic after the fact, sim/warming.h) */
 	uint64_t fl2hit_ticks;
+	/* the on-board cache's timed hits and merges that skips handed over
+	 * (hier_keep_shares): counted into hier_vma_merge_share still, and
+	 * the counts at the last mark */
+	double kept_th, kept_tm;
+	cache_stats l2_mark;
 };
 
 /* One level below the L1s. Every hook but the four accesses may be NULL

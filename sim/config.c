@@ -36,7 +36,7 @@ static const char *const thread_sched_names[] = {"round_robin", "oldest_first", 
 static const char *const accel_names[] = {"kd", "grid", NULL};
 static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
 static const char *const warming_names[] = {"auto", "full", "stored", NULL};
-static const char *const jump_names[] = {"relax", "drain", "mixed", NULL};
+static const char *const jump_names[] = {"relax", "drain", "mixed", "skip", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
 /* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
 static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};
@@ -200,7 +200,10 @@ static const cfg_key keys_src[] = {
              "2.4 times its time; where the warming run had not finished those tiles by "
              "the next region's checkpoint, a relax); mixed = drain, but a relax after a "
              "region that ends in a memory-bound chunk or before one that starts after "
-             "one"},
+             "one; skip = no functional step: the chip's counts since its last restore "
+             "give way to the warming run's and the estimate is drain's, without done "
+             "records (where the warming run had not finished the region's tiles by "
+             "the next checkpoint, a relax)"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "

@@ -39,7 +39,7 @@ typedef enum { CFG_DEMAND_AUTO, CFG_DEMAND_MAX, CFG_DEMAND_LINEAR } cfg_demand_m
  * a chip's cfg holds FULL or STORED) */
 typedef enum { CFG_WARMING_AUTO, CFG_WARMING_FULL, CFG_WARMING_STORED } cfg_warming;
 /* sampling.jump (docs/fidelity.md "Stored warming") */
-typedef enum { CFG_JUMP_RELAX, CFG_JUMP_DRAIN, CFG_JUMP_MIXED } cfg_jump;
+typedef enum { CFG_JUMP_RELAX, CFG_JUMP_DRAIN, CFG_JUMP_MIXED, CFG_JUMP_SKIP } cfg_jump;
 typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
 typedef enum { CFG_MEM_FIXED, CFG_MEM_HIERARCHY } cfg_mem_model;
 typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN, CFG_MEMIF_FRFCFS } cfg_memif_policy;

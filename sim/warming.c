@@ -12,6 +12,9 @@
  *              tiles before each checkpoint's (wm_attr), the demand
  *              computed from their counters
  *   offsets    frames x nfull uint64: each full checkpoint's offset
+ *   oldest     frames x nlight int32 (padded to 8 bytes): at each light
+ *              checkpoint, the hand-out index of the oldest tile with a
+ *              packet in flight (the checkpoint's own when none is)
  *   full       per full checkpoint: wm_fhead, the slots (mode_replay_state, turn
  *              order), per RTP its queue length then the queued packet
  *              ids, the L1s and tag cache whole (hier_ckpt_save: each
@@ -31,14 +34,14 @@
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
 
-#define WM_MAGIC "saarwm04"
+#define WM_MAGIC "saarwm05"
 
 typedef struct wm_head {
 	char magic[8];
 	int32_t frames, ntiles, g_light, g_full, nlight, nfull, nslots, nrtp;
 	int32_t l2_sets, l2_ways;
 	uint64_t whole_bytes; /* hier_ckpt_bytes: the caches stored whole */
-	uint64_t ncnt, light_at, done_at, offs_at, full_at, full_bytes;
+	uint64_t ncnt, light_at, done_at, offs_at, oldest_at, full_at, full_bytes;
 } wm_head;
 
 typedef struct wm_fhead {
@@ -171,6 +174,10 @@ int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full, int done)
 	w->lsize = sizeof(double) * WM_NDEM + sizeof(uint64_t) * (1 + w->ncnt);
 	w->light = calloc((size_t)w->frames * (size_t)w->nlight, w->lsize);
 	w->foff = malloc((size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
+	w->oldest = calloc((size_t)w->frames * (size_t)w->nlight, sizeof *w->oldest);
+	w->pos = malloc((size_t)(w->ntiles ? w->ntiles : 1) * sizeof *w->pos);
+	for (int k = 0; w->pos && k < w->ntiles; k++)
+		w->pos[c->g.order[k]] = k;
 	if (w->foff) /* a checkpoint jittered past the frame's end is never written */
 		memset(w->foff, 0xff, (size_t)w->frames * (size_t)w->nfull * sizeof *w->foff);
 	if (done) {
@@ -184,7 +191,7 @@ int wm_writer_init(wm_writer *w, chip *c, int g_light, int g_full, int done)
 	cache *l2 = onboard(c);
 	if (l2 && cache_track(l2))
 		w->failed = 1;
-	if (!w->cnt || !w->light || !w->foff || w->failed) {
+	if (!w->cnt || !w->light || !w->foff || !w->oldest || !w->pos || w->failed) {
 		wm_writer_free(w);
 		return -1;
 	}
@@ -202,6 +209,8 @@ void wm_writer_free(wm_writer *w)
 	free(w->handout);
 	free(w->runs);
 	free(w->tile_of);
+	free(w->oldest);
+	free(w->pos);
 	memset(w, 0, sizeof *w);
 }
 
@@ -226,19 +235,25 @@ static int32_t primary_tile(const int32_t *from, uint32_t npk, int32_t rec)
 	return -1 - from[p];
 }
 
+/* Each packet stream's primary tile, once the packet record is open (it
+ * is as the run starts): worked out once, not by a walk up the stream's
+ * parents at every step (wm_attr) or checkpoint (oldest_in_flight). */
+static void know_tiles(wm_writer *w, chip *c)
+{
+	if (w->from || !c->md.in)
+		return;
+	w->from = c->md.in->from;
+	w->npk = c->md.in->npk;
+	w->tile_of = malloc((w->npk ? w->npk : 1) * sizeof *w->tile_of);
+	if (!w->tile_of)
+		w->failed = 1;
+	for (uint32_t i = 0; w->tile_of && i < w->npk; i++)
+		w->tile_of[i] = primary_tile(w->from, w->npk, (int32_t)i);
+}
+
 void wm_attr_take(wm_writer *w, chip *c, int32_t rec, int at)
 {
-	if (!w->from && c->md.in) { /* the record is opened as the run starts */
-		w->from = c->md.in->from;
-		w->npk = c->md.in->npk;
-		/* each stream's tile once, not a walk up its parents at every
-		 * step (wm_attr) */
-		w->tile_of = malloc((w->npk ? w->npk : 1) * sizeof *w->tile_of);
-		if (!w->tile_of)
-			w->failed = 1;
-		for (uint32_t i = 0; w->tile_of && i < w->npk; i++)
-			w->tile_of[i] = primary_tile(w->from, w->npk, (int32_t)i);
-	}
+	know_tiles(w, c);
 	if (w->failed || !w->handout || rec < 0 || (uint32_t)rec >= w->npk || w->from[rec] >= 0)
 		return;
 	int tile = -1 - w->from[rec];
@@ -281,10 +296,44 @@ void wm_attr(wm_writer *w, chip *c, int32_t rec)
 	}
 }
 
+/* The hand-out index of packet stream rec's tile; 0 (the frame's first,
+ * so nothing counts as done) when the record cannot tell. */
+static int handout_of(const wm_writer *w, int32_t rec)
+{
+	if (rec < 0 || (uint32_t)rec >= w->npk || !w->tile_of || w->tile_of[rec] < 0 ||
+	    w->tile_of[rec] >= w->ntiles)
+		return 0;
+	return w->pos[w->tile_of[rec]];
+}
+
+/* The hand-out index of the oldest tile with a packet in flight at the
+ * light checkpoint at tile (in a slot or an RTP's queue); tile when none
+ * is: every tile before it is done. */
+static int oldest_in_flight(wm_writer *w, chip *c, int tile)
+{
+	know_tiles(w, c);
+	int o = tile, ns = c->nrtp * c->tpr;
+	for (int i = 0; i < ns; i++) {
+		thr_ctx *t = c->turn[i];
+		if (t->p || mode_slot(t)->rp) {
+			int h = handout_of(w, mode_slot(t)->rec);
+			o = h < o ? h : o;
+		}
+	}
+	for (int r = 0; r < c->nrtp; r++)
+		for (int i = 0, n = rgs_queue_len(&c->rtp[r]); i < n; i++) {
+			int h = handout_of(w, rgs_queue_at(&c->rtp[r], i).rec);
+			o = h < o ? h : o;
+		}
+	return o;
+}
+
 void wm_put_light(wm_writer *w, chip *c, int frame, int tile, const double *dem)
 {
 	if (w->failed || frame >= w->frames)
 		return;
+	w->oldest[(size_t)frame * (size_t)w->nlight +
+	          (size_t)light_index(w->ntiles, w->g_light, tile)] = oldest_in_flight(w, c, tile);
 	uint8_t *p = w->light + ((size_t)frame * (size_t)w->nlight +
 	                         (size_t)light_index(w->ntiles, w->g_light, tile)) *
 	                            w->lsize;
@@ -450,11 +499,13 @@ int wm_writer_finish(wm_writer *w, chip *c, void **out, size_t *n)
 	h.nfull = w->nfull;
 	h.ncnt = w->ncnt;
 	size_t nl = (size_t)w->frames * (size_t)w->nlight * w->lsize,
-	       no = (size_t)w->frames * (size_t)w->nfull * sizeof(uint64_t);
+	       no = (size_t)w->frames * (size_t)w->nfull * sizeof(uint64_t),
+	       nold = pad8((size_t)w->frames * (size_t)w->nlight * sizeof(int32_t));
 	h.light_at = pad8(sizeof h);
 	h.done_at = h.light_at + nl;
 	h.offs_at = h.done_at + (w->done ? nl : 0);
-	h.full_at = h.offs_at + no;
+	h.oldest_at = h.offs_at + no;
+	h.full_at = h.oldest_at + nold;
 	h.full_bytes = w->nfullb;
 	geometry(c, &h); /* wm_open checks it against the reader's */
 	*n = (size_t)h.full_at + w->nfullb;
@@ -470,6 +521,8 @@ int wm_writer_finish(wm_writer *w, chip *c, void **out, size_t *n)
 		return -1;
 	}
 	memcpy(b + h.offs_at, w->foff, no);
+	memset(b + h.oldest_at, 0, nold);
+	memcpy(b + h.oldest_at, w->oldest, (size_t)w->frames * (size_t)w->nlight * sizeof(int32_t));
 	memcpy(b + h.full_at, w->full, w->nfullb);
 	*out = b;
 	return 0;
@@ -493,9 +546,48 @@ void wm_close(wm *r)
 	free(r->cnt);
 	free(r->is_max);
 	free(r->prev);
+	free(r->sk);
+	free(r->mark);
 	free(r->l2img);
 	free(r->l2pend);
 	memset(r, 0, sizeof *r);
+}
+
+/* The counters a skip (wm_skip) takes back: every one of
+ * chip_counter_ptrs but the maxima and the reads' waits and MSHR stalls
+ * (hier_wait_ptrs: timing's own, which functional processing never
+ * moves), and the timed models' traffic (hier_traffic_ptrs), whose
+ * functional counters are among the first. A cache's counts go back
+ * together (its merges and refusals with its misses and fills), or its
+ * relations would break: its timed shares (hits against merges, which
+ * the estimated hit rates take) then come from the regions after the
+ * last restore only. */
+static int skip_counters(wm *r, chip *c)
+{
+	int hi = hier_is(&c->mem);
+	size_t nt = hi ? hier_traffic_ptrs(&c->mem, NULL, 0) : 0,
+	       nw = hi ? hier_wait_ptrs(&c->mem, NULL, 0) : 0;
+	uint64_t **wp = malloc((nw + 1) * sizeof *wp);
+	r->sk = malloc((r->ncnt + nt + 1) * sizeof *r->sk);
+	r->mark = calloc(r->ncnt + nt + 1, sizeof *r->mark);
+	if (!wp || !r->sk || !r->mark) {
+		free(wp);
+		return -1;
+	}
+	if (nw)
+		hier_wait_ptrs(&c->mem, wp, nw);
+	r->nsk = 0;
+	for (size_t i = 0; i < r->ncnt; i++) {
+		int keep = r->is_max[i];
+		for (size_t k = 0; k < nw && !keep; k++)
+			keep = wp[k] == r->cnt[i];
+		if (!keep)
+			r->sk[r->nsk++] = r->cnt[i];
+	}
+	free(wp);
+	if (nt)
+		r->nsk += hier_traffic_ptrs(&c->mem, r->sk + r->nsk, nt);
+	return 0;
 }
 
 int wm_open(wm *r, const void *b, size_t n, chip *c)
@@ -525,12 +617,15 @@ int wm_open(wm *r, const void *b, size_t n, chip *c)
 	r->ncnt = ncnt;
 	r->lsize = sizeof(double) * WM_NDEM + sizeof(uint64_t) * (1 + ncnt);
 	size_t nl = (size_t)h.frames * (size_t)h.nlight * r->lsize,
-	       no = (size_t)h.frames * (size_t)h.nfull * sizeof(uint64_t);
+	       no = (size_t)h.frames * (size_t)h.nfull * sizeof(uint64_t),
+	       nold = pad8((size_t)h.frames * (size_t)h.nlight * sizeof(int32_t));
 	r->has_done = h.offs_at != h.done_at;
 	if (h.light_at != pad8(sizeof h) || h.done_at != h.light_at + nl ||
 	    (h.offs_at != h.done_at && h.offs_at != h.done_at + nl) ||
-	    h.full_at != h.offs_at + no || h.full_at + h.full_bytes != n)
+	    h.oldest_at != h.offs_at + no || h.full_at != h.oldest_at + nold ||
+	    h.full_at + h.full_bytes != n)
 		return -1;
+	r->oldest_at = h.oldest_at;
 	r->cnt = counters_of(c, &ncnt);
 	r->is_max = calloc(ncnt ? ncnt : 1, 1);
 	r->prev = calloc(ncnt ? ncnt : 1, sizeof *r->prev);
@@ -538,6 +633,8 @@ int wm_open(wm *r, const void *b, size_t n, chip *c)
 		goto fail;
 	for (size_t i = 0; i < ncnt; i++)
 		r->is_max[i] = (uint8_t)is_max_counter(c, r->cnt[i]);
+	if (skip_counters(r, c))
+		goto fail;
 	cache *l2 = onboard(c);
 	if (l2) {
 		r->l2set = cache_ckpt_bytes(l2, 1);
@@ -606,6 +703,41 @@ int wm_done_by(const wm *r, int frame, int at, int x)
 			return 0;
 	}
 	return 1;
+}
+
+int wm_oldest(const wm *r, int frame, int tile)
+{
+	int32_t o;
+	memcpy(&o,
+	       r->b + r->oldest_at +
+	           ((size_t)frame * (size_t)r->nlight +
+	            (size_t)light_index(r->ntiles, r->g_light, tile)) *
+	               sizeof o,
+	       sizeof o);
+	return o;
+}
+
+void wm_mark(wm *r, struct chip *c)
+{
+	for (size_t i = 0; i < r->nsk; i++)
+		r->mark[i] = *r->sk[i];
+	hier_stats s;
+	r->mark_merge = hier_get_stats(&c->mem, &s) ? 0 : s.func_sdram_merge_ticks;
+	if (hier_is(&c->mem))
+		hier_mark_shares(&c->mem);
+}
+
+void wm_skip(wm *r, struct chip *c, int frame, int tile)
+{
+	/* the on-board cache's timed shares first: the counts go back next */
+	hier_stats s;
+	if (hier_is(&c->mem))
+		hier_keep_shares(&c->mem);
+	for (size_t i = 0; i < r->nsk; i++)
+		*r->sk[i] = r->mark[i];
+	if (!hier_get_stats(&c->mem, &s))
+		hier_add_merge_ticks(&c->mem, r->mark_merge - s.func_sdram_merge_ticks);
+	wm_region_end(r, frame, tile, 0);
 }
 
 void wm_region_end(wm *r, int frame, int tile, int done)

@@ -90,6 +90,10 @@ typedef struct wm_writer {
 	const int32_t *from; /* the packet record's parents (pktrec.from) */
 	uint32_t npk;
 	int32_t *tile_of; /* per stream: its primary's tile (-1: damaged chain) */
+	/* per frame and light checkpoint, the hand-out index of the oldest
+	 * tile in flight (wm_oldest); per tile (row-major), its hand-out
+	 * index in the RGC's order */
+	int32_t *oldest, *pos;
 	/* the counters as runs of adjacent ones (cnt[at..at+n) at src[0..n)):
 	 * wm_attr reads them as arrays, not pointer by pointer */
 	struct wm_run {
@@ -136,6 +140,12 @@ typedef struct wm {
 	int has_done;    /* the done records are stored (wm_demand_done) */
 	uint64_t *prev;  /* the counters at the last region's end */
 	uint64_t prev_l2hit;
+	uint64_t oldest_at; /* the oldest-tile section (wm_oldest) */
+	/* the counters a skip takes back (wm_skip), and their values at the
+	 * chip's last restore (wm_mark), with the merge ticks then */
+	uint64_t **sk, *mark;
+	size_t nsk;
+	double mark_merge;
 	/* the on-board cache at the last full checkpoint applied (each set
 	 * in its own checkpoint form, l2set bytes), sets to copy into the
 	 * chip at the next restore, and that checkpoint */
@@ -162,6 +172,22 @@ const double *wm_demand_done(const wm *r, int frame, int tile, uint64_t *l2hit);
  * tile `at` by the light checkpoint at tile x: its counts at x hold all
  * of their work (wm_demand_done's counts at `at`), counter by counter. */
 int wm_done_by(const wm *r, int frame, int at, int x);
+/* The hand-out index of the oldest tile whose packets the warming run
+ * still had in flight at the light checkpoint at tile of frame (tile when
+ * it had none): it had finished every packet of the tiles before `at` by
+ * then when this is at least `at`. */
+int wm_oldest(const wm *r, int frame, int tile);
+/* Chip c took the warming run's state (a restore, or the frame's start):
+ * the values of the counters a skip takes back, kept. */
+void wm_mark(wm *r, struct chip *c);
+/* A skip (sampling.jump skip): the chip's work since its last wm_mark,
+ * which the light checkpoint at tile of frame followed, is handed to the
+ * warming run. The counters functional processing moves, and the timed
+ * models' traffic (hier_traffic_ptrs), go back to their marked values, and
+ * the next restore adds what the warming run counted from the checkpoint
+ * at tile on: from one restore to the next the counts are the warming
+ * run's. The timing's own counts (waits, stalls, row hits) stay. */
+void wm_skip(wm *r, struct chip *c, int frame, int tile);
 /* A region ended at tile (on the light grid): the next restore adds what
  * the warming run counted from there; done: the chip finished every
  * packet of the tiles before it (a drain), and the next restore adds only

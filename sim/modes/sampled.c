@@ -314,16 +314,28 @@ static smp_piece warm_piece(chip *c, int f, int a, int b, double m)
  * next region, which then starts from a chip that ran the frame, and
  * restored regions measured the frame worse (docs/fidelity.md "Stored
  * warming"). */
+static int warm_done_by(chip *c, int f, int at, int x);
+
 static int jump_drains(chip *c, int f, int at, int rs)
 {
 	int jump = c->cfg.sampling.jump, U = c->fid.unit_tiles;
-	if (jump == CFG_JUMP_RELAX || !wm_done_by(c->warm, f, at, rs))
+	if (jump == CFG_JUMP_RELAX || !warm_done_by(c, f, at, rs))
 		return 0;
-	if (jump == CFG_JUMP_DRAIN)
+	if (jump == CFG_JUMP_DRAIN || jump == CFG_JUMP_SKIP)
 		return 1;
 	double m = hier_merge_share(&c->mem);
 	return !(at - U >= 0 && warm_piece(c, f, at - U, at, m).hard) &&
 	       !(rs - U >= at && warm_piece(c, f, rs - U, rs, m).hard);
+}
+
+/* Whether the warming run had finished every packet of the tiles before
+ * `at` by the light checkpoint at x: a skip asks the oldest tile in flight
+ * there (it keeps no done records), a drain its done records. */
+static int warm_done_by(chip *c, int f, int at, int x)
+{
+	if (c->cfg.sampling.jump == CFG_JUMP_SKIP)
+		return wm_oldest(c->warm, f, x) >= at;
+	return wm_done_by(c->warm, f, at, x);
 }
 
 int mode_warm_hard(chip *c, int f, int a, int b)
@@ -346,7 +358,7 @@ static int drained_extra(chip *c, int f, int at, int rs, double m, int *extra)
 {
 	int U = c->fid.unit_tiles;
 	for (int x = wm_full_above(c->warm, at + 1); x < rs; x = wm_full_above(c->warm, x + 1))
-		if (x - U >= at && wm_done_by(c->warm, f, at, x) &&
+		if (x - U >= at && warm_done_by(c, f, at, x) &&
 		    extra_due(&c->fid, warm_piece(c, f, x - U, x, m).hard, x, x, rs)) {
 			*extra = 1;
 			return x;
@@ -429,6 +441,7 @@ void mode_sampled_frame_stored(chip *c, int f)
 	int rs_last = 0;
 	double dem_rs[RES_N];
 	chip_demand(c, dem_rs);
+	wm_mark(r, c);
 	for (int b = 0; b < n; j++) {
 		int tail = b == n - 1, rs = wm_full_below(r, F->base_s[b] - W), extra = 0;
 		if (!tail && (rs > at ? rs : at) + room > wm_full_below(r, F->base_s[n - 1] - W)) {
@@ -436,11 +449,22 @@ void mode_sampled_frame_stored(chip *c, int f)
 			j--;
 			continue;
 		}
-		int drained = 0;
+		int drained = 0, skipped = 0;
 		double from[RES_N];
 		if (rs > at && j > 0) {
 			at = c->g.next;
-			if (jump_drains(c, f, at, rs)) {
+			int drains = jump_drains(c, f, at, rs);
+			if (drains && c->cfg.sampling.jump == CFG_JUMP_SKIP) {
+				/* no functional step: the chip's work since its last
+				 * restore, the region's packets in flight half done
+				 * among it, gives way to the warming run's counts
+				 * (wm_skip, below) and the estimate is the drain's,
+				 * whose own steps it never counted (drain_from) */
+				double d0[RES_N];
+				chip_demand(c, d0);
+				drain_from(c, f, rs_last, dem_rs, d0, from);
+				drained = skipped = 1;
+			} else if (drains) {
 				/* the region's packets in flight finish functionally,
 				 * no tile handed out: the chip has then done every
 				 * tile before `at`, and the jump adds the work of the
@@ -479,7 +503,10 @@ void mode_sampled_frame_stored(chip *c, int f)
 			rs = at;
 		else if (rs > at) {
 			double m = hier_merge_share(&c->mem);
-			wm_region_end(r, f, at, drained);
+			if (skipped)
+				wm_skip(r, c, f, rs_last);
+			else
+				wm_region_end(r, f, at, drained);
 			if (drained)
 				rs = drained_extra(c, f, at, rs, m, &extra);
 			gap_chunks(c, f, at, &rs, m, drained ? from : NULL, &extra);
@@ -489,6 +516,7 @@ void mode_sampled_frame_stored(chip *c, int f)
 				c->warm_err = 1;
 			rs_last = rs;
 			chip_demand(c, dem_rs);
+			wm_mark(r, c);
 		} else
 			rs = at;
 		if (extra) {

@@ -125,10 +125,10 @@ void mode_rec_pixels(chip *c)
 }
 
 /* Whether the warming run keeps done records (sim/warming.h): only for a
- * sampling.jump that drains. */
+ * sampling.jump that drains (a skip hands the counts over whole). */
 static int warm_done(const chip *c)
 {
-	return c->cfg.sampling.jump != CFG_JUMP_RELAX;
+	return c->cfg.sampling.jump == CFG_JUMP_DRAIN || c->cfg.sampling.jump == CFG_JUMP_MIXED;
 }
 
 /* The warming run's key: the packet record's (the frame) and every config
@@ -159,7 +159,7 @@ static char *warm_key(const chip *c, int gl, int gf)
 	cfg_write_json(&k, &w);
 	/* the done records (sampling.jump drain or mixed) make a file of
 	 * their own: a relax needs none, and counting them costs */
-	if (fclose(f) || asprintf(&key, "saarsim warming 1\n%sgrid %d %d\ndone %d\nconfig %s\n",
+	if (fclose(f) || asprintf(&key, "saarsim warming 2\n%sgrid %d %d\ndone %d\nconfig %s\n",
 	                          c->rec_key, gl, gf, warm_done(c), js) < 0)
 		key = NULL;
 	free(js);
