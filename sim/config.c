@@ -200,10 +200,13 @@ static const cfg_key keys_src[] = {
              "2.4 times its time; where the warming run had not finished those tiles by "
              "the next region's checkpoint, a relax); mixed = drain, but a relax after a "
              "region that ends in a memory-bound chunk or before one that starts after "
-             "one; skip = no functional step: the chip's counts since its last restore "
-             "give way to the warming run's and the estimate is drain's, without done "
-             "records (where the warming run had not finished the region's tiles by "
-             "the next checkpoint, a relax)"},
+             "one; skip = no functional step at all: the chip's counts since its last "
+             "restore give way to the warming run's, the timed SDRAM and host-bus traffic "
+             "and busy time with them (the timing's own counts, waits, stalls, row hits, "
+             "stay the regions') and the estimate is drain's, from the relax's warming run (no "
+             "done records; where "
+             "that run had not finished the region's tiles by the next checkpoint, a "
+             "relax)"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "
