@@ -615,6 +615,8 @@ int hier_get_stats(const memport *p, hier_stats *s)
 	s->func_requests = h->freqs;
 	s->func_sdram_merge_ticks = h->fmerge_ticks;
 	s->func_hostbus_busy_ticks = h->fhb.busy_ticks;
+	s->skipped_sdram_busy_ticks = h->kept_sd_busy;
+	s->skipped_hostbus_busy_ticks = h->kept_hb_busy;
 	for (int i = 0; i < h->nstack; i++)
 		if (h->stack[i]->stats)
 			h->stack[i]->stats(h, s);
@@ -793,6 +795,8 @@ void hier_add_merge_ticks(memport *p, double ticks)
 void hier_mark_shares(memport *p)
 {
 	hier *h = p->impl;
+	h->mark_sd_busy = h->sd.s.busy_ticks;
+	h->mark_hb_busy = h->hb.s.busy_ticks;
 	if (h->use_vma)
 		h->l2_mark = h->v.l2.c.s;
 }
@@ -800,6 +804,8 @@ void hier_mark_shares(memport *p)
 void hier_keep_shares(memport *p)
 {
 	hier *h = p->impl;
+	h->kept_sd_busy += h->sd.s.busy_ticks - h->mark_sd_busy;
+	h->kept_hb_busy += h->hb.s.busy_ticks - h->mark_hb_busy;
 	if (!h->use_vma)
 		return;
 	const cache_stats *a = &h->l2_mark, *b = &h->v.l2.c.s;

@@ -94,11 +94,11 @@ void hier_add_merge_ticks(memport *p, double ticks);
  * their way, from the on-board cache's counts so far (the factor on
  * func_sdram_merge_ticks); 0 without the VMA or without a hierarchy. */
 double hier_merge_share(const memport *p);
-/* A skip (sim/warming.h wm_skip) hands the on-board cache's counts since
- * the chip's last restore to the warming run: its timed hits and merges
+/* A skip (sim/warming.h wm_skip) hands the counts since the chip's last
+ * restore to the warming run: the on-board cache's timed hits and merges
  * since hier_mark_shares (called at the restore) stay in
- * hier_merge_share all the same (hier_keep_shares, before the counts go
- * back). */
+ * hier_merge_share all the same, and the buses' timed busy time in
+ * hier_stats.skipped_* (hier_keep_shares, before the counts go back). */
 void hier_mark_shares(memport *p);
 void hier_keep_shares(memport *p);
 

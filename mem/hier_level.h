@@ -107,6 +107,8 @@ struct hier {
 	 * the counts at the last mark */
 	double kept_th, kept_tm;
 	cache_stats l2_mark;
+	/* the same for the timed data-bus busy time (hier_stats.skipped_*) */
+	uint64_t kept_sd_busy, kept_hb_busy, mark_sd_busy, mark_hb_busy;
 };
 
 /* One level below the L1s. Every hook but the four accesses may be NULL

@@ -56,6 +56,11 @@ typedef struct hier_stats {
 	/* of func_sdram_busy_ticks, the expected part a timed chip would not
 	 * spend: on-board-cache hits it would merge into PCI fetches in flight */
 	double func_sdram_merge_ticks;
+	/* the timed data-bus busy time of regions whose counts a skip handed
+	 * to the warming run (sampling.jump skip, hier_keep_shares): out of
+	 * the counts above and the resource demand, but the regions' time on
+	 * the buses all the same (the report's busy time and utilization) */
+	uint64_t skipped_sdram_busy_ticks, skipped_hostbus_busy_ticks;
 } hier_stats;
 
 /* Everything the hierarchy is built from (sim/memconfig.h derives it from

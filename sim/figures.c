@@ -144,8 +144,13 @@ void fig_span(const chip *c, int f0, int f1, memfig *m)
 	                a->sdram.row_conflicts;
 	m->row_hit_rate = rows ? (double)rh / (double)rows : -1;
 	double ticks = (double)(b->now_ticks - a->now_ticks);
-	m->sdram_util = ratio((double)(b->sdram.busy_ticks - a->sdram.busy_ticks), ticks);
-	m->pci_util = ratio((double)(b->hostbus.busy_ticks - a->hostbus.busy_ticks), ticks);
+	/* with the busy time of regions a skip handed over (hier_params.h) */
+	m->sdram_util = ratio((double)(b->sdram.busy_ticks + b->skipped_sdram_busy_ticks -
+	                               a->sdram.busy_ticks - a->skipped_sdram_busy_ticks),
+	                      ticks);
+	m->pci_util = ratio((double)(b->hostbus.busy_ticks + b->skipped_hostbus_busy_ticks -
+	                             a->hostbus.busy_ticks - a->skipped_hostbus_busy_ticks),
+	                    ticks);
 }
 
 /* frames 2..N, or frame 1 alone (report.h) */
