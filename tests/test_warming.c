@@ -416,8 +416,9 @@ Test(warming, skip_counts_as_cycle_and_estimates_as_drain)
  * before `at` by checkpoint x, one from the slots and queues, the other
  * from its counts split by tile. They agree at every pair of the frame's
  * light checkpoints where the oldest tile says done, both answers occur,
- * and they differ at few pairs (the done records miss a packet's last
- * steps where those count nothing). Tiles go out in Morton order. Catches
+ * and they differ at few pairs (the done records compare counts, so work
+ * of later tiles done by x can make up for an unfinished packet's rest;
+ * the oldest tile is exact). Tiles go out in Morton order. Catches
  * an oldest tile taken in raster order instead of the hand-out order, the
  * queued packets left out, and a record written at the wrong checkpoint. */
 Test(warming, oldest_in_flight_agrees_with_the_done_records)
@@ -446,8 +447,8 @@ Test(warming, oldest_in_flight_agrees_with_the_done_records)
 	cr_log_info("%d pairs done by the oldest tile, %d not; the done records differ at %d", yes,
 	            no, differ);
 	cr_assert(yes > 0 && no > 0, "%d pairs done, %d not", yes, no);
-	/* the two mostly agree: the done records miss a packet's last steps
-	 * only where those count nothing */
+	/* the two mostly agree: the done records' counts say done early only
+	 * where later tiles' work made up for an unfinished packet's rest */
 	cr_assert_lt(differ, (yes + no) / 10, "%d of %d pairs differ", differ, yes + no);
 	chip_destroy(m);
 	world_free(&w);
