@@ -349,7 +349,8 @@ uint32_t cache_access(cache *c, uint64_t addr, uint32_t bytes)
 }
 
 /* Timed hits and merges between the snapshots, as doubles; returns the
- * merges' share of them, and the functional hits in *fh. */
+ * merges' share of them (with the skips' timed hits and merges, which
+ * the counts no longer hold), and the functional hits in *fh. */
 static double timed_counts(const cache_stats *from, const cache_stats *to, double *th, double *fh)
 {
 	static const cache_stats zero;
@@ -358,8 +359,10 @@ static double timed_counts(const cache_stats *from, const cache_stats *to, doubl
 	double h = (double)(to->hits - from->hits), m = (double)(to->merges - from->merges);
 	*fh = (double)(to->func_hits - from->func_hits);
 	*th = h - *fh;
-	double tm = m - (double)(to->func_merges - from->func_merges);
-	return *th + tm > 0 ? tm / (*th + tm) : 0.0;
+	double tm = m - (double)(to->func_merges - from->func_merges),
+	       sm = (double)(to->skip_merges - from->skip_merges),
+	       all = *th + tm + (double)(to->skip_hits - from->skip_hits) + sm;
+	return all > 0 ? (tm + sm) / all : 0.0;
 }
 
 double cache_timed_merge_share(const cache_stats *from, const cache_stats *to)

@@ -69,6 +69,11 @@ typedef struct cache_stats {
 	 * timed cache would merge into a fill in flight is a hit here
 	 * (cache_timed_hits separates the two) */
 	uint64_t func_accesses, func_hits, func_merges;
+	/* timed hits and merges of regions whose counts a skip handed to the
+	 * warming run (sampling.jump skip, sim/warming.h wm_skip): out of the
+	 * counts above, but samples of the merge share all the same
+	 * (cache_timed_hits) */
+	uint64_t skip_hits, skip_merges;
 } cache_stats;
 
 /* cache_way (mem/repl.h): one way, its line and its replacement word side

@@ -775,13 +775,6 @@ size_t hier_traffic_ptrs(memport *p, uint64_t **out, size_t cap)
 	return n;
 }
 
-size_t hier_wait_ptrs(memport *p, uint64_t **out, size_t cap)
-{
-	hier *h = p->impl;
-	size_t n = hier_add_ptrs(out, 0, cap, h->wait_ticks, MEM_NTYPES);
-	return hier_add_ptrs(out, n, cap, h->stall_ticks, MEM_NTYPES);
-}
-
 uint64_t hier_l2hit_ticks(const memport *p)
 {
 	return ((const hier *)p->impl)->fl2hit_ticks;
@@ -792,25 +785,56 @@ void hier_add_merge_ticks(memport *p, double ticks)
 	((hier *)p->impl)->fmerge_ticks += ticks;
 }
 
+/* The caches whose timed hits and merges a skip keeps (hier_keep_shares),
+ * into k; returns how many (at most MEM_NTYPES + 2). */
+static int skip_caches(hier *h, cache **k)
+{
+	int n = 0;
+	for (int t = 0; t < MEM_NTYPES; t++)
+		k[n++] = &h->l1[t].t.c;
+	if (h->use_vma) {
+		if (h->v.p.tag_cache_enabled)
+			k[n++] = &h->v.tag.c;
+		k[n++] = &h->v.l2.c;
+	}
+	return n;
+}
+
 void hier_mark_shares(memport *p)
 {
 	hier *h = p->impl;
+	cache *k[MEM_NTYPES + 2];
+	for (int i = 0, n = skip_caches(h, k); i < n; i++)
+		h->skip_mark[i] = k[i]->s;
 	h->mark_sd_busy = h->sd.s.busy_ticks;
 	h->mark_hb_busy = h->hb.s.busy_ticks;
-	if (h->use_vma)
-		h->l2_mark = h->v.l2.c.s;
 }
 
 void hier_keep_shares(memport *p)
 {
 	hier *h = p->impl;
+	cache *k[MEM_NTYPES + 2];
+	for (int i = 0, n = skip_caches(h, k); i < n; i++) {
+		cache_stats *b = &k[i]->s;
+		const cache_stats *a = &h->skip_mark[i];
+		b->skip_hits += (b->hits - b->func_hits) - (a->hits - a->func_hits);
+		b->skip_merges += (b->merges - b->func_merges) - (a->merges - a->func_merges);
+	}
 	h->kept_sd_busy += h->sd.s.busy_ticks - h->mark_sd_busy;
 	h->kept_hb_busy += h->hb.s.busy_ticks - h->mark_hb_busy;
-	if (!h->use_vma)
-		return;
-	const cache_stats *a = &h->l2_mark, *b = &h->v.l2.c.s;
-	h->kept_th += (double)((b->hits - b->func_hits) - (a->hits - a->func_hits));
-	h->kept_tm += (double)((b->merges - b->func_merges) - (a->merges - a->func_merges));
+}
+
+size_t hier_kept_ptrs(memport *p, uint64_t **out, size_t cap)
+{
+	hier *h = p->impl;
+	size_t n = hier_add_ptrs(out, 0, cap, h->wait_ticks, MEM_NTYPES);
+	n = hier_add_ptrs(out, n, cap, h->stall_ticks, MEM_NTYPES);
+	cache *k[MEM_NTYPES + 2];
+	for (int i = 0, m = skip_caches(h, k); i < m; i++) {
+		n = hier_add_ptrs(out, n, cap, &k[i]->s.skip_hits, 1);
+		n = hier_add_ptrs(out, n, cap, &k[i]->s.skip_merges, 1);
+	}
+	return n;
 }
 
 double hier_merge_share(const memport *p)

@@ -84,10 +84,11 @@ size_t hier_counter_ptrs(memport *p, uint64_t **out, size_t cap);
  * takes them back with the counters it hands to the warming run. out
  * NULL: counts only. */
 size_t hier_traffic_ptrs(memport *p, uint64_t **out, size_t cap);
-/* Of hier_counter_ptrs, those only timed reads move: the reads' waits and
- * MSHR stalls (a skip keeps them: a sampled run scales its regions'
- * waits to the estimated cycles). */
-size_t hier_wait_ptrs(memport *p, uint64_t **out, size_t cap);
+/* Of hier_counter_ptrs, those a skip keeps: the reads' waits and MSHR
+ * stalls (only timed reads move them; a sampled run scales its regions'
+ * waits to the estimated cycles) and the caches' skip_hits and
+ * skip_merges (hier_keep_shares). */
+size_t hier_kept_ptrs(memport *p, uint64_t **out, size_t cap);
 uint64_t hier_l2hit_ticks(const memport *p);
 void hier_add_merge_ticks(memport *p, double ticks);
 /* The share of on-board-cache hits a timed chip merges into fetches on
@@ -95,10 +96,12 @@ void hier_add_merge_ticks(memport *p, double ticks);
  * func_sdram_merge_ticks); 0 without the VMA or without a hierarchy. */
 double hier_merge_share(const memport *p);
 /* A skip (sim/warming.h wm_skip) hands the counts since the chip's last
- * restore to the warming run: the on-board cache's timed hits and merges
- * since hier_mark_shares (called at the restore) stay in
- * hier_merge_share all the same, and the buses' timed busy time in
- * hier_stats.skipped_* (hier_keep_shares, before the counts go back). */
+ * restore to the warming run. hier_mark_shares (called at the restore)
+ * notes the caches' counts and the buses' timed busy time;
+ * hier_keep_shares, before the counts go back, adds every cache's timed
+ * hits and merges since then to its skip_hits and skip_merges (so the
+ * merge shares, hier_merge_share and the estimated hit rates, still count
+ * every region's) and the busy time to hier_stats.skipped_*. */
 void hier_mark_shares(memport *p);
 void hier_keep_shares(memport *p);
 

@@ -102,12 +102,10 @@ struct hier {
 	 * fmerge_ticks takes its share of; stored warming applies the share
 	 * to the checkpoints' traffic after the fact, sim/warming.h) */
 	uint64_t fl2hit_ticks;
-	/* the on-board cache's timed hits and merges that skips handed over
-	 * (hier_keep_shares): counted into hier_vma_merge_share still, and
-	 * the counts at the last mark */
-	double kept_th, kept_tm;
-	cache_stats l2_mark;
-	/* the same for the timed data-bus busy time (hier_stats.skipped_*) */
+	/* a skip (hier_keep_shares): the caches' counts (by
+	 * hier_skip_caches) and the buses' timed busy time at the last mark,
+	 * and the busy time the skips handed over (hier_stats.skipped_*) */
+	cache_stats skip_mark[MEM_NTYPES + 2];
 	uint64_t kept_sd_busy, kept_hb_busy, mark_sd_busy, mark_hb_busy;
 };
 

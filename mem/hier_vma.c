@@ -41,14 +41,7 @@ static void vmal_peek(const hier *h, uint64_t addr, uint32_t bytes, uint8_t *dst
 
 double hier_vma_merge_share(const hier *h)
 {
-	if (!h->use_vma)
-		return 0;
-	/* the timed hits and merges (cache_timed_merge_share's), with those
-	 * skips handed over (hier_keep_shares) */
-	const cache_stats *s = &h->v.l2.c.s;
-	double m = (double)(s->merges - s->func_merges) + h->kept_tm,
-	       t = (double)(s->hits - s->func_hits) + m + h->kept_th;
-	return t > 0 ? m / t : 0.0;
+	return h->use_vma ? cache_timed_merge_share(NULL, &h->v.l2.c.s) : 0;
 }
 
 /* The host-bus transfer of n bytes as functional traffic. */

@@ -554,19 +554,20 @@ void wm_close(wm *r)
 }
 
 /* The counters a skip (wm_skip) takes back: every one of
- * chip_counter_ptrs but the maxima and the reads' waits and MSHR stalls
- * (hier_wait_ptrs: timing's own, which functional processing never
- * moves), and the timed models' traffic (hier_traffic_ptrs), whose
- * functional counters are among the first. A cache's counts go back
- * together (its merges and refusals with its misses and fills), or its
- * relations would break: its timed shares (hits against merges, which
- * the estimated hit rates take) then come from the regions after the
- * last restore only. */
+ * chip_counter_ptrs but the maxima, the reads' waits and MSHR stalls
+ * (timing's own, which functional processing never moves) and the
+ * caches' skip_hits and skip_merges (hier_kept_ptrs), and the timed
+ * models' traffic (hier_traffic_ptrs), whose functional counters are
+ * among the first. A cache's counts go back together (its merges and
+ * refusals with its misses and fills), or its relations would break; its
+ * timed hits and merges, whose shares the estimated hit rates and the
+ * gaps' SDRAM demand take, stay in skip_hits and skip_merges
+ * (hier_keep_shares). */
 static int skip_counters(wm *r, chip *c)
 {
 	int hi = hier_is(&c->mem);
 	size_t nt = hi ? hier_traffic_ptrs(&c->mem, NULL, 0) : 0,
-	       nw = hi ? hier_wait_ptrs(&c->mem, NULL, 0) : 0;
+	       nw = hi ? hier_kept_ptrs(&c->mem, NULL, 0) : 0;
 	uint64_t **wp = malloc((nw + 1) * sizeof *wp);
 	r->sk = malloc((r->ncnt + nt + 1) * sizeof *r->sk);
 	r->mark = calloc(r->ncnt + nt + 1, sizeof *r->mark);
@@ -575,7 +576,7 @@ static int skip_counters(wm *r, chip *c)
 		return -1;
 	}
 	if (nw)
-		hier_wait_ptrs(&c->mem, wp, nw);
+		hier_kept_ptrs(&c->mem, wp, nw);
 	r->nsk = 0;
 	for (size_t i = 0; i < r->ncnt; i++) {
 		int keep = r->is_max[i];

@@ -27,6 +27,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "sim/figures.h"
 #include "sim/modes/sampled.h"
 #include "sim/warming.h"
 #include "tests/chiptest.h"
@@ -393,6 +394,16 @@ Test(warming, skip_counts_as_cycle_and_estimates_as_drain)
 		            c.sampling.offset, us, ur);
 		cr_assert_lt(fabs(bu), 0.03, "offset %.2f: SDRAM utilization %.4f, drain's %.4f",
 		             c.sampling.offset, us, ur);
+		memfig ms, mr;
+		fig_span(s, 0, 1, &ms);
+		fig_span(r, 0, 1, &mr);
+		for (int q = 0; q < HR_N; q++) {
+			cr_log_info("skip offset %.2f: %s hit rate %.4f, drain's %.4f", c.sampling.offset,
+			            fig_hit_name(q), ms.hit[q], mr.hit[q]);
+			cr_assert_lt(fabs(ms.hit[q] - mr.hit[q]), 0.005,
+			             "offset %.2f: %s hit rate %.4f, drain's %.4f", c.sampling.offset,
+			             fig_hit_name(q), ms.hit[q], mr.hit[q]);
+		}
 		cr_log_info("skip offset %.2f against functional: SDRAM bytes %+.2f%%, PCI bytes "
 		            "%+.2f%%; fps against drain %+.3f%%",
 		            c.sampling.offset, 100 * sd, 100 * pci, 100 * fe);
