@@ -48,6 +48,9 @@ drain,_units_128 sampling.jump=drain sampling.unit_tiles=128
 drain,_units_224,_warm-up_32 sampling.jump=drain sampling.unit_tiles=224 sampling.warmup_tiles=32
 drain,_units_256 sampling.jump=drain sampling.unit_tiles=256
 drain,_units_320 sampling.jump=drain sampling.unit_tiles=320
+skip sampling.jump=skip
+skip,_units_128 sampling.jump=skip sampling.unit_tiles=128
+skip,_units_256 sampling.jump=skip sampling.unit_tiles=256
 EOF
 # one run's report into $TMP/r.json: VIEW ARGS...
 run() {
