@@ -166,6 +166,13 @@ static const cfg_key keys_src[] = {
              "max(compute, k x SDRAM, host bus), for the SDRAM's row misses and turnarounds; "
              "0 = fitted to the frame's units (the k in [1, 4] under which one ratio fits them "
              "best), > 0 = this k"},
+    {FLT("sampling.overlap", sampling.overlap, -1, -1, 4, ""),
+     .source = "a run setting (docs/fidelity.md)",
+     .desc = "fidelity sampled: the share g of the smaller of compute and k x SDRAM time "
+             "added to each chunk's demand, max(compute, k x SDRAM, host bus) + g x "
+             "min(compute, k x SDRAM), for the memory latency that compute and memory "
+             "time alike leave unhidden; -1 = fitted with k to the frame's units (the g in "
+             "[0, 1] under which one ratio fits them best), 0 = none, > 0 = this g"},
     {ENUM("sampling.demand_model", sampling.demand_model, demand_model_names),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: how a chunk's cycles follow its resource demands: max = its "
@@ -907,6 +914,11 @@ int cfg_validate(const saar_config *c, diag *d)
 		    "memory.levels '%s' disagrees with memory.model or memory.vma.enabled "
 		    "set after it; set one or the other",
 		    l);
+	/* sampling.overlap: fitted (negative) is -1, a given share 0 or more */
+	if (c->sampling.overlap < 0 && c->sampling.overlap != -1)
+		return diag_set(d, "config", 0, 0,
+		                "sampling.overlap %g: -1 (fitted) or a share from 0 to 4",
+		                c->sampling.overlap);
 	/* No other key constrains another today. (A packet is an 8 x 8 tile: both
 	 * packet keys' ranges are [8, 8].) chip.stack_depth may be below the
 	 * tree depth: the traversal unit spills the entries beyond it to

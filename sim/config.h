@@ -153,6 +153,7 @@ typedef struct saar_config {
 		double hard_share; /* memory share above which a chunk is memory bound; 0 = off */
 		double bias_bound; /* share of the estimate added to the interval for window bias */
 		double sdram_factor; /* k on SDRAM time in the demand; 0 = fitted per frame */
+		double overlap;      /* g on min(compute, k x SDRAM) in the demand; < 0 = fitted */
 		cfg_demand_model demand_model; /* how a chunk's demand follows its resources */
 		cfg_warming warming; /* functional stretches run (full), restored (stored), auto */
 		cfg_jump jump;       /* stored: how a region's packets end before a jump */

@@ -83,13 +83,14 @@ static const char *model_name(const chip_fidelity *F)
 	return F->exact ? "none" : F->model.linear ? "linear" : "max";
 }
 
-/* "max, SDRAM factor 1.52" or "linear", for the text line. */
+/* "max, SDRAM factor 1.52, overlap 0.30" or "linear", for the text line. */
 static const char *model_str(const chip_fidelity *F, char *buf, size_t n)
 {
 	if (F->model.linear)
 		snprintf(buf, n, "%s", model_name(F));
 	else
-		snprintf(buf, n, "%s, SDRAM factor %.2f", model_name(F), F->model.k);
+		snprintf(buf, n, "%s, SDRAM factor %.2f, overlap %.2f", model_name(F), F->model.k,
+		         F->model.g);
 	return buf;
 }
 
@@ -163,6 +164,11 @@ static void fidelity_json(jsonw *j, const chip *c)
 			jsonw_null(j);
 		else
 			jsonw_num(j, F->model.k);
+		jsonw_key(j, "overlap");
+		if (F->exact || F->model.linear)
+			jsonw_null(j);
+		else
+			jsonw_num(j, F->model.g);
 		jsonw_key(j, "demand_coefficients");
 		if (F->exact || !F->model.linear) {
 			jsonw_null(j);

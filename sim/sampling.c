@@ -18,10 +18,21 @@ static double demand_k(const smp_piece *p, double k)
 	return k * p->sdram > x ? k * p->sdram : x;
 }
 
+/* demand_k plus the overlap term: g times the smaller of the compute and
+ * the scaled SDRAM time. Where the two are alike, neither hides the
+ * other: a chunk whose packets wait for memory as long as they compute
+ * runs well above its busiest resource, one that is all memory or all
+ * compute near it (docs/fidelity.md "The estimator"). */
+static double demand_kg(const smp_piece *p, double k, double g)
+{
+	double s = k * p->sdram, lo = s < p->comp ? s : p->comp;
+	return demand_k(p, k) + g * lo;
+}
+
 double smp_demand(const smp_piece *p, const smp_model *m)
 {
 	if (!m->linear)
-		return demand_k(p, m->k);
+		return demand_kg(p, m->k, m->g);
 	double x = 0;
 	for (int i = 0; i < SMP_LIN; i++)
 		x += m->beta[i] * p->lin[i];
@@ -113,7 +124,7 @@ double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n)
 {
 	double kbest = 1, sbest = INFINITY;
 	for (int step = 0; step <= 150; step++) {
-		smp_model m = {0, 1.0 + 0.02 * step, {0}};
+		smp_model m = {0, 1.0 + 0.02 * step, {0}, 0};
 		double ss = ratio_ss(u, cyc, n, &m);
 		if (step == 0 || ss < sbest * (1 - 1e-6)) {
 			sbest = ss;
@@ -121,6 +132,30 @@ double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n)
 		}
 	}
 	return kbest;
+}
+
+void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, double gfix, double *k,
+                 double *g)
+{
+	/* k in [1, 4] and g in [0, 1], steps of 0.02, the smallest g and
+	 * then k under which one ratio fits best (as smp_fit_sdram_factor) */
+	int nk = kfix > 0 ? 0 : 150, ng = gfix >= 0 ? 0 : 50;
+	double sbest = INFINITY;
+	*k = kfix > 0 ? kfix : 1;
+	*g = gfix >= 0 ? gfix : 0;
+	for (int gs = 0; gs <= ng; gs++)
+		for (int ks = 0; ks <= nk; ks++) {
+			smp_model m = {0,
+			               kfix > 0 ? kfix : 1.0 + 0.02 * ks,
+			               {0},
+			               gfix >= 0 ? gfix : 0.02 * gs};
+			double ss = ratio_ss(u, cyc, n, &m);
+			if (ss < sbest * (1 - 1e-6)) {
+				sbest = ss;
+				*k = m.k;
+				*g = m.g;
+			}
+		}
 }
 
 /* Solves the m x m system A z = y in place (Gaussian elimination with
@@ -299,9 +334,10 @@ static double lin_param_var(const smp_piece *u, int n, const smp_piece *pc, int 
 }
 
 void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
-                  double sdram_factor, int demand_model, smp_est *r)
+                  double sdram_factor, double overlap, int demand_model, smp_est *r)
 {
-	/* the demand model: max, with the SDRAM factor fitted or given, or
+	/* the demand model: max, with the SDRAM factor and the overlap share
+	 * fitted or given, or
 	 * linear, fitted when there are 30 units or more; auto takes the one
 	 * whose units' error is smaller: the max model's residual variance
 	 * per degree of freedom against the linear model's leave-one-out error
@@ -309,14 +345,14 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 	 * degree of freedom; infl: how much larger the linear model's
 	 * leave-one-out error is than its residuals say, by which its variance
 	 * is widened */
-	smp_model mm = {0, sdram_factor, {0}}, ml = {1, 1, {0}};
-	int fitk = mm.k <= 0, extra = 0;
-	if (fitk)
-		mm.k = smp_fit_sdram_factor(u, cyc, n);
+	smp_model mm = {0, sdram_factor, {0}, overlap}, ml = {1, 1, {0}, 0};
+	int fitk = mm.k <= 0, fitg = mm.g < 0, extra = 0;
+	if (fitk || fitg)
+		smp_fit_max(u, cyc, n, sdram_factor, overlap, &mm.k, &mm.g);
 	int plin =
 	    demand_model != CFG_DEMAND_MAX && n >= 30 ? smp_fit_linear(u, cyc, n, ml.beta) : 0;
 	const smp_model *use = &mm;
-	extra = fitk && mm.k > 1;
+	extra = (fitk && mm.k > 1) + (fitg && mm.g > 0);
 	double infl = 1, lss = 0;
 	if (plin) {
 		double ss, press = lin_press(u, cyc, n, &ml, &ss);

@@ -26,11 +26,12 @@ typedef struct smp_piece {
 } smp_piece;
 
 /* How a piece's demand follows from its resources: max(comp, k x sdram,
- * hbus), or sum(beta x lin). */
+ * hbus) + g x min(comp, k x sdram), or sum(beta x lin). */
 typedef struct smp_model {
 	int linear;
 	double k;
 	double beta[SMP_LIN];
+	double g; /* the overlap term's share (max model) */
 } smp_model;
 
 /* The estimate of a frame's middle: cycles, their variance and degrees of
@@ -43,8 +44,13 @@ typedef struct smp_est {
 /* A piece's demand under model m; its plain busiest resource (k = 1). */
 double smp_demand(const smp_piece *p, const smp_model *m);
 double smp_busiest(const smp_piece *p);
-/* The SDRAM factor fitted to n units' demands and cycles. */
+/* The SDRAM factor fitted to n units' demands and cycles (no overlap
+ * term). */
 double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n);
+/* The max model's k and g fitted to n units' demands and cycles: kfix > 0
+ * fixes k, gfix >= 0 fixes g, the others are fitted (sampling.c). */
+void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, double gfix, double *k,
+                 double *g);
 /* The linear model's non-negative least-squares fit (beta); returns the
  * number of regressors kept, 0 when none fits. */
 int smp_fit_linear(const smp_piece *u, const double *cyc, int n, double beta[SMP_LIN]);
@@ -53,9 +59,9 @@ double smp_t975(int df);
 /* The stratified ratio estimate of the middle's cycles from n measured
  * units u (cycles cyc, strata u[j].hard) and the middle's npc pieces pc
  * (the units' own among them), with the demand model picked by
- * sampling.demand_model (enum cfg_demand_model) and sampling.sdram_factor
- * (0 = fitted). */
+ * sampling.demand_model (enum cfg_demand_model), sampling.sdram_factor
+ * (0 = fitted) and sampling.overlap (negative = fitted). */
 void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
-                  double sdram_factor, int demand_model, smp_est *r);
+                  double sdram_factor, double overlap, int demand_model, smp_est *r);
 
 #endif

@@ -378,9 +378,10 @@ Test(fidelity, tail_unit_is_not_a_sample_of_the_middle)
 	cr_assert_gt(F->est[0], F->floor[0], "premise: the estimate is not the bound");
 	smp_est mid, with_tail;
 	smp_estimate(F->unit_pc + 1, F->unit_cyc + 1, nr - 2, F->pc, F->npc,
-	             c.sampling.sdram_factor, c.sampling.demand_model, &mid);
+	             c.sampling.sdram_factor, c.sampling.overlap, c.sampling.demand_model, &mid);
 	smp_estimate(F->unit_pc + 1, F->unit_cyc + 1, nr - 1, F->pc, F->npc,
-	             c.sampling.sdram_factor, c.sampling.demand_model, &with_tail);
+	             c.sampling.sdram_factor, c.sampling.overlap, c.sampling.demand_model,
+	             &with_tail);
 	double want = F->head_cyc + mid.est + F->tail_cyc;
 	cr_log_info("%d regions: estimate %.1f, middle's units %.1f, with the tail's %.1f", nr,
 	            F->est[0], want, F->head_cyc + with_tail.est + F->tail_cyc);
@@ -517,6 +518,42 @@ Test(fidelity, sdram_factor_fits_the_units_law)
 	cr_assert(fabs(mixed - 1.5) <= 0.04, "PCI- and SDRAM-bound units: fitted %.2f", mixed);
 }
 
+/* The max model's overlap share g (smp_fit_max): units whose cycles are
+ * max(compute, k x SDRAM) + g x min(compute, k x SDRAM) give back k and
+ * g; units on the busiest resource alone give back g = 0 (the smallest
+ * that fits); a given k or g stays as given. Catches the overlap term
+ * left out of the demand, taken on the larger time instead of the
+ * smaller, or fitted to the first g instead of the best. */
+Test(fidelity, overlap_fits_the_units_law)
+{
+	enum { N = 24 };
+	smp_piece u[N];
+	double cyc[N];
+	const double laws[][2] = {{1.3, 0.3}, {1.0, 0.5}, {1.5, 0.0}};
+	for (int l = 0; l < 3; l++) {
+		double k = laws[l][0], g = laws[l][1];
+		for (int j = 0; j < N; j++) {
+			double noise = 1.0 + 0.01 * ((j * 7) % 5 - 2) / 2.0;
+			/* SDRAM time from a fifth of compute to twice it */
+			u[j] = (smp_piece){.comp = 1000.0, .sdram = 200.0 + 80.0 * j};
+			double s = k * u[j].sdram, hi = s > u[j].comp ? s : u[j].comp,
+			       lo = s < u[j].comp ? s : u[j].comp;
+			cyc[j] = (hi + g * lo) * noise;
+		}
+		double fk, fg;
+		smp_fit_max(u, cyc, N, 0, -1, &fk, &fg);
+		cr_assert(fabs(fk - k) <= 0.04 && fabs(fg - g) <= 0.04,
+		          "law k = %.2f, g = %.2f: fitted k = %.2f, g = %.2f", k, g, fk, fg);
+		smp_fit_max(u, cyc, N, 2.0, -1, &fk, &fg);
+		cr_assert_float_eq(fk, 2.0, 1e-12, "a given k is kept");
+		smp_fit_max(u, cyc, N, 0, 0.25, &fk, &fg);
+		cr_assert_float_eq(fg, 0.25, 1e-12, "a given g is kept");
+		smp_model m = {0, k, {0}, g};
+		cr_assert(fabs(smp_demand(&u[N - 1], &m) - cyc[N - 1]) < 0.02 * cyc[N - 1],
+		          "the demand under the law is the law's cycles");
+	}
+}
+
 /* Loads a shared view (the test skips when the shared scenes are absent)
  * and sets c to the defaults at width x height in cycle mode. */
 static void shared_view(world *w, saar_config *c, const char *vname, int width, int height)
@@ -584,7 +621,7 @@ Test(fidelity, linear_demand_fits_the_units_law)
 	for (int i = 0; i < SMP_LIN; i++)
 		cr_assert(fabs(beta[i] - law[i]) <= 0.05 * law[3], "beta[%d] %.3f, law %.3f", i,
 		          beta[i], law[i]);
-	smp_model m = {1, 1, {0}};
+	smp_model m = {1, 1, {0}, 0};
 	memcpy(m.beta, beta, sizeof beta);
 	cr_assert(fabs(smp_demand(&u[0], &m) - cyc[0]) < 0.02 * cyc[0]);
 	/* cycles that fall as SDRAM time grows: its coefficient is dropped */

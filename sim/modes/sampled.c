@@ -565,7 +565,7 @@ static void sampled_estimate(chip *c, int f, int nr, uint64_t t0)
 	int nm = nr - 2 >= 2 ? nr - 2 : nr - 1;
 	smp_est r;
 	smp_estimate(F->unit_pc + 1, cyc + 1, nm, F->pc, F->npc, c->cfg.sampling.sdram_factor,
-	             c->cfg.sampling.demand_model, &r);
+	             c->cfg.sampling.overlap, c->cfg.sampling.demand_model, &r);
 	F->model = r.model;
 	for (int u = 0; u < nr; u++) {
 		double x = smp_demand(&F->unit_pc[u], &r.model);
