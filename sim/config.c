@@ -163,7 +163,8 @@ static const cfg_key keys_src[] = {
     {FLT("sampling.sdram_factor", sampling.sdram_factor, 0, 0, 10, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: the factor k on SDRAM data-bus time in each chunk's demand, "
-             "max(compute, k x SDRAM, host bus), for the SDRAM's row misses and turnarounds; "
+             "max(compute, k x SDRAM, host bus) (plus sampling.overlap's term), for the SDRAM's "
+             "row misses and turnarounds; "
              "0 = fitted to the frame's units (the k in [1, 4] under which one ratio fits them "
              "best), > 0 = this k"},
     {FLT("sampling.overlap", sampling.overlap, -1, -1, 4, ""),
