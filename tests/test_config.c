@@ -406,6 +406,22 @@ Test(config, validate_cross_keys)
 	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
 }
 
+/* sampling.overlap: -1 (fitted) or a share from 0 on; a value between
+ * is bad input, not a silent fit. Catches the check left out. */
+Test(config, overlap_between_fitted_and_none_is_refused)
+{
+	saar_config c;
+	diag d = {{0}};
+	cfg_defaults(&c);
+	cr_assert_eq(c.sampling.overlap, -1.0, "the default: fitted");
+	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "sampling.overlap=0", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "sampling.overlap=-0.5", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_validate(&c, &d), -1);
+	cr_assert_str_eq(d.msg, "sampling.overlap -0.5: -1 (fitted) or a share from 0 to 4");
+}
+
 /* Runs a writer into a temporary file and returns its text (malloc'd). */
 static char *capture(void (*fn)(FILE *, const saar_config *), const saar_config *c)
 {
