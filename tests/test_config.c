@@ -419,7 +419,7 @@ Test(config, overlap_between_fitted_and_none_is_refused)
 	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
 	cr_assert_eq(cfg_set(&c, "sampling.overlap=-0.5", &d), 0, "%s", d.msg);
 	cr_assert_eq(cfg_validate(&c, &d), -1);
-	cr_assert_str_eq(d.msg, "sampling.overlap -0.5: -1 (fitted) or a share from 0 to 4");
+	cr_assert_str_eq(d.msg, "config: sampling.overlap -0.5: -1 (fitted) or a share from 0 to 4");
 }
 
 /* Runs a writer into a temporary file and returns its text (malloc'd). */
