@@ -177,7 +177,8 @@ static const cfg_key keys_src[] = {
     {ENUM("sampling.demand_model", sampling.demand_model, demand_model_names),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: how a chunk's cycles follow its resource demands: max = its "
-             "busiest resource with SDRAM time x sdram_factor (many threads: throughput bound), "
+             "busiest resource with SDRAM time x sdram_factor, plus the overlap term "
+             "(sampling.overlap; many threads: throughput bound), "
              "linear = a non-negative sum of unit issue cycles, SDRAM and host-bus time fitted "
              "to the units (few threads: latency bound; needs 30 units), auto = linear when its "
              "leave-one-out error over the units is below the max model's residual variance"},
