@@ -277,6 +277,22 @@ static double mean_fps_error(const world *w, saar_config c, const double *offset
 	return sum / n;
 }
 
+/* mean_fps_error on a shared view at 1024x768 (shared_view, not through
+ * the VMA) with tpr threads per RTP, sample rate `rate` and
+ * sampling.jump `jump`. */
+static double view_mean_fps_error(const char *name, int tpr, double rate, int jump,
+                                  const double *offsets, int n)
+{
+	char dir[256];
+	world w;
+	saar_config c;
+	shared_view(&w, &c, dir, sizeof dir, name, 1024, 768, tpr, rate, 0);
+	c.sampling.jump = jump;
+	double mean = mean_fps_error(&w, c, offsets, n);
+	world_free(&w);
+	return mean;
+}
+
 /* against_cycle on a shared view through the VMA (shared_view). */
 static void view_against_cycle(const char *name, int width, int height, int tpr, double rate, int n,
                                double pci_tol, const char *what)
@@ -476,15 +492,9 @@ Test(warming, oldest_in_flight_agrees_with_the_done_records)
  * drain's own demand. */
 Test(warming, drain_counts_the_warming_runs_demand_of_its_work, .timeout = 300)
 {
-	char dir[256];
-	world w;
-	saar_config c;
-	shared_view(&w, &c, dir, sizeof dir, "bunny", 1024, 768, 32, 0.1, 0);
-	c.sampling.jump = CFG_JUMP_DRAIN;
 	const double offsets[] = {0.3, 0.5, 0.7};
-	double mean = mean_fps_error(&w, c, offsets, 3);
+	double mean = view_mean_fps_error("bunny", 32, 0.1, CFG_JUMP_DRAIN, offsets, 3);
 	cr_assert_lt(fabs(mean), 0.01, "mean fps error %+.2f%%", 100 * mean);
-	world_free(&w);
 }
 
 /* The max demand model's overlap term (sampling.overlap, fitted): the
@@ -499,14 +509,9 @@ Test(warming, drain_counts_the_warming_runs_demand_of_its_work, .timeout = 300)
  * never fitted. */
 Test(warming, teapot_sixteen_threads_takes_the_overlap_term, .timeout = 300)
 {
-	char dir[256];
-	world w;
-	saar_config c;
-	shared_view(&w, &c, dir, sizeof dir, "teapot", 1024, 768, 16, 0.1, 0);
 	const double offsets[] = {0.4, 0.7, 0.8};
-	double mean = mean_fps_error(&w, c, offsets, 3);
+	double mean = view_mean_fps_error("teapot", 16, 0.1, CFG_JUMP_RELAX, offsets, 3);
 	cr_assert_lt(fabs(mean), 0.02, "mean fps error %+.2f%%", 100 * mean);
-	world_free(&w);
 }
 
 /* sampling.jump mixed drains only away from memory-bound work: with
@@ -592,16 +597,11 @@ Test(warming, sponza_one_thread_pci_as_cycle, .timeout = 300)
  * error within 0.7% of cycle (+1.3% at every offset on the plain grid). */
 Test(warming, conference_one_thread_unbiased, .timeout = 300)
 {
-	char dir[256];
-	world w;
-	saar_config c;
-	shared_view(&w, &c, dir, sizeof dir, "conference", 1024, 768, 1, 0.05, 0);
 	double offsets[6];
 	for (int o = 0; o < 6; o++)
 		offsets[o] = (o + 0.5) / 6;
-	double mean = mean_fps_error(&w, c, offsets, 6);
+	double mean = view_mean_fps_error("conference", 1, 0.05, CFG_JUMP_RELAX, offsets, 6);
 	cr_assert_lt(fabs(mean), 0.007, "mean fps error %+.2f%%", 100 * mean);
-	world_free(&w);
 }
 
 /* sampling.warming auto (the default) picks stored warming when the run
