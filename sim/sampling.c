@@ -111,34 +111,20 @@ static double ratio_ss(const smp_piece *u, const double *cyc, int n, const smp_m
 	return ss;
 }
 
-/* The SDRAM factor k of demand_k for n units (demand, cycles). Where a
- * unit's SDRAM time nears its compute time, its cycles follow k x SDRAM
- * time, k about 1.5 for the standard SDRAM's row misses; with k = 1 those
- * units sat 1.4-1.6x above the rest and dominated the spread. k is the
- * value in [1, 4] (steps of 0.02) under which one ratio fits all units
- * best (least squares of cycles - R x demand, R their ratio); the smallest
- * such k, so 1 when no unit tells them apart. Fitting k to the strata's
- * own ratios instead would favour a k that shrinks the memory-bound
- * stratum's estimate (and so its variance). docs/fidelity.md. */
-double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n)
-{
-	double kbest = 1, sbest = INFINITY;
-	for (int step = 0; step <= 150; step++) {
-		smp_model m = {0, 1.0 + 0.02 * step, {0}, 0};
-		double ss = ratio_ss(u, cyc, n, &m);
-		if (step == 0 || ss < sbest * (1 - 1e-6)) {
-			sbest = ss;
-			kbest = m.k;
-		}
-	}
-	return kbest;
-}
-
+/* The max model's k and g for n units (demand, cycles). Where a unit's
+ * SDRAM time nears its compute time, its cycles follow k x SDRAM time, k
+ * about 1.5 for the standard SDRAM's row misses; with k = 1 those units
+ * sat 1.4-1.6x above the rest and dominated the spread. Where its compute
+ * and SDRAM times are alike, neither hides the other (demand_kg's g).
+ * k in [1, 4] and g in [0, 1] (steps of 0.02) are the values under which
+ * one ratio fits all units best (least squares of cycles - R x demand, R
+ * their ratio); the smallest such g, then k, so 1 and 0 when no unit tells
+ * them apart. Fitting to the strata's own ratios instead would favour a k
+ * that shrinks the memory-bound stratum's estimate (and so its variance).
+ * docs/fidelity.md. */
 void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, double gfix, double *k,
                  double *g)
 {
-	/* k in [1, 4] and g in [0, 1], steps of 0.02, the smallest g and
-	 * then k under which one ratio fits best (as smp_fit_sdram_factor) */
 	int nk = kfix > 0 ? 0 : 150, ng = gfix >= 0 ? 0 : 50;
 	double sbest = INFINITY;
 	*k = kfix > 0 ? kfix : 1;
@@ -150,12 +136,19 @@ void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, doub
 			               {0},
 			               gfix >= 0 ? gfix : 0.02 * gs};
 			double ss = ratio_ss(u, cyc, n, &m);
-			if (ss < sbest * (1 - 1e-6)) {
+			if ((gs == 0 && ks == 0) || ss < sbest * (1 - 1e-6)) {
 				sbest = ss;
 				*k = m.k;
 				*g = m.g;
 			}
 		}
+}
+
+double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n)
+{
+	double k, g;
+	smp_fit_max(u, cyc, n, 0, 0, &k, &g);
+	return k;
 }
 
 /* Solves the m x m system A z = y in place (Gaussian elimination with

@@ -44,8 +44,8 @@ typedef struct smp_est {
 /* A piece's demand under model m; its plain busiest resource (k = 1). */
 double smp_demand(const smp_piece *p, const smp_model *m);
 double smp_busiest(const smp_piece *p);
-/* The SDRAM factor fitted to n units' demands and cycles (no overlap
- * term). */
+/* The SDRAM factor fitted to n units' demands and cycles with no overlap
+ * term (smp_fit_max with g = 0). */
 double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n);
 /* The max model's k and g fitted to n units' demands and cycles: kfix > 0
  * fixes k, gfix >= 0 fixes g, the others are fitted (sampling.c). */
