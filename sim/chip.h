@@ -89,6 +89,12 @@ typedef struct chip_fidelity {
 	int *unit_s;         /* first tile (hand-out index) of each unit run */
 	int gap, extra_left; /* extra regions: tiles at least between, how many more */
 	int last_end;        /* the last region's end tile */
+	/* stored warming: the jump each frame took (sampling.jump, auto
+	 * resolved: mode_sampled_frame_stored), the last frame's and the
+	 * count of frames per jump, and the last frame's memory-to-compute
+	 * demand ratio in the warming run */
+	int jump, jump_frames[CFG_JUMP_AUTO + 1];
+	double mem_ratio;
 	/* this frame: the middle's pieces (chunks and region pieces) and the
 	 * units' own (sampling.h; a unit's stratum is its piece's .hard) */
 	smp_piece *pc, *unit_pc;

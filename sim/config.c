@@ -36,7 +36,7 @@ static const char *const thread_sched_names[] = {"round_robin", "oldest_first", 
 static const char *const accel_names[] = {"kd", "grid", NULL};
 static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
 static const char *const warming_names[] = {"auto", "full", "stored", NULL};
-static const char *const jump_names[] = {"relax", "drain", "mixed", "skip", NULL};
+static const char *const jump_names[] = {"relax", "drain", "mixed", "skip", "auto", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
 /* the order of enum fp_rmode (kernel-ref/fpfmt.h) */
 static const char *const fp_round_names[] = {"nearest", "zero", "up", "down", NULL};
@@ -197,7 +197,8 @@ static const cfg_key keys_src[] = {
                                           "whose config differs only in its name, "
                                           "timing (latencies, SDRAM timings, MSHRs, scheduling) "
                                           "and sampling keys"},
-    {ENUM("sampling.jump", sampling.jump, jump_names), .source = "a run setting (docs/fidelity.md)",
+    {KEY("sampling.jump", CFG_ENUM, sampling.jump, CFG_JUMP_AUTO, 0, 0, ""), .names = jump_names,
+     .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled with stored warming: how a region's packets in flight end "
              "before the jump to the next region's checkpoint: relax = they go on "
              "functionally, with new tiles, until every thread slot took two and a slot "
@@ -215,7 +216,15 @@ static const cfg_key keys_src[] = {
              "stay the regions') and the estimate is drain's, from the relax's warming run (no "
              "done records; where "
              "that run had not finished the region's tiles by the next checkpoint, a "
-             "relax)"},
+             "relax); auto = per frame, relax where the warming run's memory demand is at "
+             "least sampling.auto_ratio times its compute demand (a frame nearly all "
+             "memory bound, whose relaxes run into the next regions), skip elsewhere"},
+    {FLT("sampling.auto_ratio", sampling.auto_ratio, 2, 0, 1000, ""),
+     .source = "a run setting, chosen from measured fps errors (docs/fidelity.md)",
+     .desc = "sampling.jump auto: a frame relaxes when its warming run's memory demand "
+             "(SDRAM or host-bus time, the larger, summed over chunks of unit_tiles) is at "
+             "least this many times its compute demand (the busiest unit or L1 port per "
+             "chunk, summed), and skips otherwise; 0 = always relax"},
     {FLT("sampling.bias_bound", sampling.bias_bound, 0.02, 0, 1, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: share of the estimated cycles added to the 95% interval's "
@@ -937,6 +946,11 @@ const char *cfg_enum_name(const saar_config *c, const char *path)
 	if (!k || k->type != CFG_ENUM)
 		return NULL;
 	return k->names[*(const int *)cfield(c, k)];
+}
+
+const char *cfg_jump_name(cfg_jump j)
+{
+	return j >= CFG_JUMP_RELAX && j <= CFG_JUMP_AUTO ? jump_names[j] : "?";
 }
 
 /* ======================== output ======================== */

@@ -39,7 +39,13 @@ typedef enum { CFG_DEMAND_AUTO, CFG_DEMAND_MAX, CFG_DEMAND_LINEAR } cfg_demand_m
  * a chip's cfg holds FULL or STORED) */
 typedef enum { CFG_WARMING_AUTO, CFG_WARMING_FULL, CFG_WARMING_STORED } cfg_warming;
 /* sampling.jump (docs/fidelity.md "Stored warming") */
-typedef enum { CFG_JUMP_RELAX, CFG_JUMP_DRAIN, CFG_JUMP_MIXED, CFG_JUMP_SKIP } cfg_jump;
+typedef enum {
+	CFG_JUMP_RELAX,
+	CFG_JUMP_DRAIN,
+	CFG_JUMP_MIXED,
+	CFG_JUMP_SKIP,
+	CFG_JUMP_AUTO /* per frame: relax or skip by the warming run's memory/compute ratio */
+} cfg_jump;
 typedef enum { CFG_TILES_SCANLINE, CFG_TILES_MORTON } cfg_tile_order;
 typedef enum { CFG_MEM_FIXED, CFG_MEM_HIERARCHY } cfg_mem_model;
 typedef enum { CFG_MEMIF_FIFO, CFG_MEMIF_ROUND_ROBIN, CFG_MEMIF_FRFCFS } cfg_memif_policy;
@@ -157,6 +163,7 @@ typedef struct saar_config {
 		cfg_demand_model demand_model; /* how a chunk's demand follows its resources */
 		cfg_warming warming; /* functional stretches run (full), restored (stored), auto */
 		cfg_jump jump;       /* stored: how a region's packets end before a jump */
+		double auto_ratio;   /* jump auto: relax at a frame memory/compute ratio >= this */
 	} sampling;
 } saar_config;
 
@@ -211,6 +218,8 @@ int cfg_validate(const saar_config *c, diag *d);
 
 /* Name of an enum key's current value (for reports), NULL if not an enum. */
 const char *cfg_enum_name(const saar_config *c, const char *path);
+/* Name of a sampling.jump value ("relax", ..., "auto"). */
+const char *cfg_jump_name(cfg_jump j);
 
 /* ---- output ---- */
 

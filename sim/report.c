@@ -94,6 +94,19 @@ static const char *model_str(const chip_fidelity *F, char *buf, size_t n)
 	return buf;
 }
 
+/* " (stored warming, auto; skip, memory/compute 0.69)" or "", for the
+ * text line: the warming, and the jump the last frame took. */
+static const char *warm_str(const chip *c, char *buf, size_t n)
+{
+	const chip_fidelity *F = &c->fid;
+	if (!chip_warm_stored(c))
+		snprintf(buf, n, "%s", "");
+	else
+		snprintf(buf, n, " (stored warming%s; %s, memory/compute %.2f)",
+		         c->warm_auto ? ", auto" : "", cfg_jump_name(F->jump), F->mem_ratio);
+	return buf;
+}
+
 static void fidelity_text(FILE *f, const chip *c)
 {
 	const chip_fidelity *F = &c->fid;
@@ -105,7 +118,7 @@ static void fidelity_text(FILE *f, const chip *c)
 		        "resource is %s, %.0f cycles/frame)\n",
 		        x.fps_bound, x.bound_by, F->res_cycles[F->bound_by]);
 	else if (chip_estimates(&c->cfg)) {
-		char ms[64];
+		char ms[64], ws[96];
 		fprintf(f,
 		        "  fidelity sampled: %d units (%d memory bound) x %d tiles (+%d warm-up), "
 		        "demand %s in the last frame; cycles "
@@ -114,10 +127,7 @@ static void fidelity_text(FILE *f, const chip *c)
 		        F->nreg, hard_units(F), F->unit_tiles, F->warmup_tiles,
 		        model_str(F, ms, sizeof ms), x.cycles, x.half, x.fps, x.fps_lo, x.fps_hi,
 		        (unsigned long long)F->detailed_tiles,
-		        (unsigned long long)F->functional_tiles,
-		        chip_warm_stored(c)
-		            ? c->warm_auto ? " (stored warming, auto)" : " (stored warming)"
-		            : "",
+		        (unsigned long long)F->functional_tiles, warm_str(c, ws, sizeof ws),
 		        (unsigned long long)F->replayed_tiles);
 	} else if (F->mode == CFG_FIDELITY_SAMPLED)
 		fputs("  fidelity sampled: every tile detailed (identical to cycle)\n", f);
@@ -159,6 +169,19 @@ static void fidelity_json(jsonw *j, const chip *c)
 		/* the warming that ran, and whether sampling.warming auto chose it */
 		jsonw_kstr(j, "warming", chip_warm_stored(c) ? "stored" : "full");
 		jsonw_kbool(j, "warming_auto", c->warm_auto);
+		/* stored warming: how regions end before a jump (sampling.jump,
+		 * auto resolved per frame by the last frame's ratio) */
+		jsonw_key(j, "jump_frames");
+		jsonw_obj_begin(j);
+		for (int q = CFG_JUMP_RELAX; q < CFG_JUMP_AUTO; q++)
+			if (F->jump_frames[q])
+				jsonw_kint(j, cfg_jump_name(q), F->jump_frames[q]);
+		jsonw_obj_end(j);
+		jsonw_key(j, "memory_to_compute");
+		if (chip_warm_stored(c))
+			jsonw_num(j, F->mem_ratio);
+		else
+			jsonw_null(j);
 		jsonw_key(j, "sdram_factor");
 		if (F->exact || F->model.linear)
 			jsonw_null(j);

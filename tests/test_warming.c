@@ -514,6 +514,74 @@ Test(warming, teapot_sixteen_threads_takes_the_overlap_term, .timeout = 300)
 	cr_assert_lt(fabs(mean), 0.02, "mean fps error %+.2f%%", 100 * mean);
 }
 
+/* The jump a frame takes (sampling.jump auto, the default; sampled.c
+ * frame_jump) and the frame's figures under it: `jump` frames for jump,
+ * whose estimate must be the one that jump gives when asked for by name. */
+static void takes_jump(world *w, saar_config c, cfg_jump jump, const char *what)
+{
+	chip *a = tu_run_chip(w, &c);
+	c.sampling.jump = jump;
+	chip *b = tu_run_chip(w, &c);
+	cr_assert_eq(a->fid.jump_frames[jump], 1, "%s: ratio %.3f, not a %s", what,
+	             a->fid.mem_ratio, cfg_jump_name(jump));
+	cr_assert(a->fid.est[0] == b->fid.est[0], "%s: %.1f cycles, %s's %.1f", what, a->fid.est[0],
+	          cfg_jump_name(jump), b->fid.est[0]);
+	chip_destroy(a);
+	chip_destroy(b);
+}
+
+/* sampling.jump auto relaxes a frame whose memory demand in the warming
+ * run is at least sampling.auto_ratio (2) times its compute demand and
+ * skips any other: with 4 threads per RTP the Stanford bunny at 256x192
+ * reads 7.3 (relax), the embedded room at 256x256 1.06 (skip), and the
+ * room relaxes with auto_ratio 0.5. The ratio lies where a functional
+ * run's frame totals put it: the SDRAM time over the sum of the compute
+ * resources' times at least, over the busiest one's at most (a sum of
+ * per-chunk maxima lies between). The mistakes this catches: the rule
+ * turned round, auto_ratio ignored, and a ratio that is not the memory's
+ * over the compute's. */
+Test(warming, auto_jump_relaxes_memory_bound_frames_and_skips_others, .timeout = 300)
+{
+	char dir[256], dir2[256];
+	world w, wb;
+	saar_config c, b;
+	cached(&w, NULL, dir, sizeof dir);
+	config(&c, 256, 0);
+	cr_assert_eq(c.sampling.jump, CFG_JUMP_AUTO, "auto is the default");
+	shared_view(&wb, &b, dir2, sizeof dir2, "bunny", 256, 192, 4, 0.1, 0);
+	takes_jump(&wb, b, CFG_JUMP_RELAX, "bunny");
+	takes_jump(&w, c, CFG_JUMP_SKIP, "room");
+	saar_config lo = c;
+	lo.sampling.auto_ratio = 0.5;
+	takes_jump(&w, lo, CFG_JUMP_RELAX, "room, auto_ratio 0.5");
+	const struct {
+		world *w;
+		saar_config *c;
+		const char *name;
+	} v[2] = {{&w, &c, "room"}, {&wb, &b, "bunny"}};
+	for (int i = 0; i < 2; i++) {
+		saar_config fu = *v[i].c;
+		fu.fidelity = CFG_FIDELITY_FUNCTIONAL;
+		chip *a = tu_run_chip(v[i].w, v[i].c), *f = tu_run_chip(v[i].w, &fu);
+		double d[RES_N], all = 0, top = 0;
+		chip_demand(f, d);
+		for (int r = 0; r < RES_SDRAM; r++) {
+			all += d[r];
+			top = d[r] > top ? d[r] : top;
+		}
+		double r = a->fid.mem_ratio;
+		cr_log_info("%s: memory/compute %.3f, functional totals %.3f to %.3f", v[i].name, r,
+		            d[RES_SDRAM] / all, d[RES_SDRAM] / top);
+		cr_assert(r >= 0.99 * d[RES_SDRAM] / all && r <= 1.01 * d[RES_SDRAM] / top,
+		          "%s: memory/compute %.3f outside %.3f to %.3f", v[i].name, r,
+		          d[RES_SDRAM] / all, d[RES_SDRAM] / top);
+		chip_destroy(a);
+		chip_destroy(f);
+	}
+	world_free(&w);
+	world_free(&wb);
+}
+
 /* sampling.jump mixed drains only away from memory-bound work: with
  * every chunk memory bound (sampling.hard_share tiny) it relaxes at every
  * jump, figure for figure as relax; with none (hard_share 0, off) it
