@@ -40,6 +40,7 @@ SETTINGS=$TMP/settings
 cat >"$SETTINGS" <<'EOF'
 defaults
 units_128 sampling.unit_tiles=128
+relax sampling.jump=relax
 mixed sampling.jump=mixed
 mixed,_units_128 sampling.jump=mixed sampling.unit_tiles=128
 mixed,_units_256 sampling.jump=mixed sampling.unit_tiles=256
