@@ -94,7 +94,7 @@ static const char *model_str(const chip_fidelity *F, char *buf, size_t n)
 	return buf;
 }
 
-/* " (stored warming, auto; skip, memory/compute 0.69)" or "", for the
+/* " (stored warming, auto; jump skip, memory/compute 0.69)" or "", for the
  * text line: the warming, and the jump the last frame took. */
 static const char *warm_str(const chip *c, char *buf, size_t n)
 {
@@ -102,7 +102,7 @@ static const char *warm_str(const chip *c, char *buf, size_t n)
 	if (!chip_warm_stored(c))
 		snprintf(buf, n, "%s", "");
 	else
-		snprintf(buf, n, " (stored warming%s; %s, memory/compute %.2f)",
+		snprintf(buf, n, " (stored warming%s; jump %s, memory/compute %.2f)",
 		         c->warm_auto ? ", auto" : "", cfg_jump_name(F->jump), F->mem_ratio);
 	return buf;
 }
@@ -170,7 +170,7 @@ static void fidelity_json(jsonw *j, const chip *c)
 		jsonw_kstr(j, "warming", chip_warm_stored(c) ? "stored" : "full");
 		jsonw_kbool(j, "warming_auto", c->warm_auto);
 		/* stored warming: how regions end before a jump (sampling.jump,
-		 * auto resolved per frame by the last frame's ratio) */
+		 * auto resolved per frame by its own ratio) */
 		jsonw_key(j, "jump_frames");
 		jsonw_obj_begin(j);
 		for (int q = CFG_JUMP_RELAX; q < CFG_JUMP_AUTO; q++)
