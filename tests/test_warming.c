@@ -580,7 +580,7 @@ Test(warming, auto_jump_relaxes_memory_bound_frames_and_skips_others, .timeout =
 		            "host bus %.0f)",
 		            v[i].name, r, lw, hi, S, H);
 		cr_assert(r >= 0.99 * lw && r <= 1.01 * hi,
-		          "%s: memory/compute %.3f outside %.3f to %.3f", v[i].name, r, lo, hi);
+		          "%s: memory/compute %.3f outside %.3f to %.3f", v[i].name, r, lw, hi);
 		chip_destroy(a);
 		chip_destroy(f);
 	}
