@@ -499,7 +499,7 @@ void mode_sampled_frame_stored(chip *c, int f)
 		if (rs > at && j > 0) {
 			at = c->g.next;
 			int drains = jump_drains(c, f, at, rs);
-			if (drains && F->jump == CFG_JUMP_SKIP) {
+			if (drains && jump_of(c) == CFG_JUMP_SKIP) {
 				/* no functional step: the chip's work since its last
 				 * restore, the region's packets in flight half done
 				 * among it, gives way to the warming run's counts
