@@ -67,8 +67,10 @@ sets() {
 }
 ERRS=$TMP/errs   # threads label view e1,e2,...
 TIMES=$TMP/times # threads label wall_s
+RATIOS=$TMP/ratios # threads view memory_to_compute jump (the defaults' run)
 : >"$ERRS"
 : >"$TIMES"
+: >"$RATIOS"
 for T in $THREADS; do
 	for v in $VLIST; do
 		say "$T threads, $v: cycle"
@@ -84,6 +86,14 @@ for T in $THREADS; do
 				f=$(jget "$TMP/r.json" fps)
 				line="$line,$(pct_err "$f" "$truth")"
 			done
+			# the jump the defaults took (sampling.jump auto decides per
+			# frame, the same at every offset): from the last run's report
+			if [ "$label" = defaults ]; then
+				j="?"
+				[ -n "$(jget "$TMP/r.json" relax)" ] && j=relax
+				[ -n "$(jget "$TMP/r.json" skip)" ] && j=skip
+				echo "$T $v $(jget "$TMP/r.json" memory_to_compute) $j" >>"$RATIOS"
+			fi
 			printf '%s %s %s %s\n' "$T" "$label" "$v" "${line#,}" >>"$ERRS"
 		done <"$SETTINGS"
 	done
@@ -144,6 +154,22 @@ name_of() {
 	done
 	echo
 	echo "Cycle runs' whole s on $VIEW: $(for T in $THREADS; do printf '%s threads %.3f; ' "$T" "$(best "$T" cycle)"; done | sed 's/; $//')."
+	echo
+	echo "The defaults' jump by view: the warming run's memory time over its compute time (the report's \`fidelity.memory_to_compute\`) and the jump \`sampling.jump: auto\` took (relax at \`sampling.auto_ratio\`, 2, or more; docs/fidelity.md):"
+	echo
+	printf '| view |'
+	for T in $THREADS; do printf ' %s threads per RTP |' "$T"; done
+	echo
+	printf '|---|'
+	for T in $THREADS; do printf -- '---:|'; done
+	echo
+	for v in $VLIST; do
+		printf '| %s |' "$v"
+		for T in $THREADS; do
+			awk -v T="$T" -v v="$v" '$1 == T && $2 == v { printf " %.2f %s |", $3, $4 }' "$RATIOS"
+		done
+		echo
+	done
 	echo
 	echo "Every view's errors, offsets in the order above:"
 	echo
