@@ -77,6 +77,36 @@ Test(saarsim_cli, good_run_writes_frame_and_identical_reports)
 	          "%s", a);
 }
 
+/* The report names the jump sampling.jump auto took and the ratio it took
+ * it by, alike in the JSON and the text line: the embedded room at
+ * 256x256 with 4 threads per RTP (memory/compute about 1.06) skips, and
+ * relaxes with sampling.auto_ratio 0.5. Catches the configured jump
+ * (auto) written where the resolved one belongs, a frame counted under
+ * the wrong jump in jump_frames, and a text line whose ratio is not the
+ * JSON's. */
+Test(saarsim_cli, report_names_the_jump_auto_took)
+{
+	const char *want[2] = {"skip", "relax"};
+	for (int i = 0; i < 2; i++) {
+		char args[1024], jf[64], line[96];
+		snprintf(
+		    args, sizeof args,
+		    "--size 256x256 --no-check --fidelity sampled --set chip.threads_per_rtp=4 "
+		    "--world-cache %s/wc --report %s/j.json%s",
+		    dir, dir, i ? " --set sampling.auto_ratio=0.5" : "");
+		cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+		char *a = tu_squeeze_json(slurp("j.json")), *out = slurp("out");
+		snprintf(jf, sizeof jf, "\"jump_frames\":{\"%s\":1}", want[i]);
+		cr_assert(strstr(a, jf), "no %s in %s", jf, a);
+		const char *r = strstr(a, "\"memory_to_compute\":");
+		cr_assert(r, "%s", a);
+		double ratio = strtod(r + strlen("\"memory_to_compute\":"), NULL);
+		cr_assert(ratio > 0.5 && ratio < 2, "memory/compute %g", ratio);
+		snprintf(line, sizeof line, "; jump %s, memory/compute %.2f)", want[i], ratio);
+		cr_assert(strstr(out, line), "no \"%s\" in %s", line, out);
+	}
+}
+
 /* The report says what was rendered: the camera and lights are in the
  * JSON always, and in the text when flags changed the view (the name
  * "custom", or the view's name with other lights, says too little). */
