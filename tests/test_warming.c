@@ -588,6 +588,38 @@ Test(warming, auto_jump_relaxes_memory_bound_frames_and_skips_others, .timeout =
 	world_free(&wb);
 }
 
+/* sampling.jump auto decides frame by frame, each from its own frame's
+ * warming run: through a 1 MB VMA the room's first frame brings the scene
+ * over the host bus (memory bound: a relax, figure for figure as
+ * sampling.jump relax's first frame) and its second finds it on board (a
+ * skip); the report's ratio is the last frame's. Catches the jump, or the
+ * ratio it is decided by, worked out once for the run (from its first
+ * frame) or left over from the frame before. */
+Test(warming, auto_jump_decides_each_frame_of_a_run, .timeout = 300)
+{
+	char dir[256];
+	world w;
+	saar_config c;
+	cached(&w, NULL, dir, sizeof dir);
+	config(&c, 256, 1);
+	c.frame.frames = 2;
+	chip *a = tu_run_chip(&w, &c);
+	cr_assert_eq(a->frames_done, 2);
+	cr_assert_eq(a->fid.jump_frames[CFG_JUMP_RELAX], 1, "frames relaxed: %d",
+	             a->fid.jump_frames[CFG_JUMP_RELAX]);
+	cr_assert_eq(a->fid.jump_frames[CFG_JUMP_SKIP], 1, "frames skipped: %d",
+	             a->fid.jump_frames[CFG_JUMP_SKIP]);
+	cr_assert(a->fid.mem_ratio < c.sampling.auto_ratio,
+	          "the last frame's memory/compute %.3f, not the warm frame's", a->fid.mem_ratio);
+	c.sampling.jump = CFG_JUMP_RELAX;
+	chip *r = tu_run_chip(&w, &c);
+	cr_assert(a->fid.est[0] == r->fid.est[0], "first frame %.1f cycles, relax's %.1f",
+	          a->fid.est[0], r->fid.est[0]);
+	chip_destroy(a);
+	chip_destroy(r);
+	world_free(&w);
+}
+
 /* sampling.jump mixed drains only away from memory-bound work: with
  * every chunk memory bound (sampling.hard_share tiny) it relaxes at every
  * jump, figure for figure as relax; with none (hard_share 0, off) it
