@@ -27,16 +27,15 @@
 # of docs/PERFORMANCE.md (other sections are kept; the file is replaced
 # atomically) and prints it. Needs POSIX sh, awk, sed, valgrind, git.
 set -eu
+# say, die and bench_end (not bench_init: this script builds its own
+# binaries into B, below)
+. "$(dirname "$0")/bench-lib.sh"
+BENCH_NAME=bench-profile
 # No default world-cache folder (issue 36): these runs measure or compare
 # builds, renders and sampled warming as they were, and write nothing into
 # the user's home; a run that wants a cache names its own (--world-cache).
 SAARSIM_CACHE_DIR=off
 export SAARSIM_CACHE_DIR
-say() { printf 'bench-profile: %s\n' "$*" >&2; }
-die() {
-	say "error: $*"
-	exit 1
-}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 cd "$ROOT"
 SCENES=${SAAR_SCENES:-$ROOT/../shared/scenes}

@@ -1,0 +1,44 @@
+/*
+ * test_scripts.c: checks of the repository's shell scripts that their
+ * own runs would find only at the end. The bench scripts share
+ * scripts/bench-lib.sh (say, die, jget, bench_start, bench_end, ...); a
+ * script that calls one of its functions without sourcing it runs its
+ * measurements and then dies where it writes its section (bench-profile.sh
+ * did after the library took over its last lines: 19 minutes of callgrind,
+ * then "bench_end: not found"). The scripts are found beside the tests
+ * (SAAR_ROOT, else the current folder: `make test` runs from the repo).
+ */
+#include "tests/testutil.h"
+
+static const char *root(void)
+{
+	const char *r = getenv("SAAR_ROOT");
+	return r && *r ? r : ".";
+}
+
+/* Every script under scripts/ that calls a function of bench-lib.sh
+ * sources it (or is it). Catches a script left calling bench_end,
+ * bench_start, bench_init, bench_min, bench_views or pct_err after the
+ * lines it replaced were taken out, without the library that defines
+ * them. */
+Test(scripts, bench_library_functions_come_with_the_library)
+{
+	char dir[256], cmd[2048];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(
+	    cmd, sizeof cmd,
+	    "cd '%s' && n=0 && for f in scripts/*.sh; do "
+	    "[ \"$f\" = scripts/bench-lib.sh ] && continue; "
+	    "grep -qE '(^|[^_[:alnum:]])(bench_init|bench_start|bench_end|bench_min|"
+	    "bench_views|pct_err)([^_[:alnum:]]|$)' \"$f\" || continue; n=$((n + 1)); "
+	    "grep -qE '^[[:space:]]*\\. .*bench-lib\\.sh\"?[[:space:]]*$' \"$f\" || echo \"$f\"; "
+	    "done >'%s/out' && echo \"$n\" >'%s/n'",
+	    root(), dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "the scan failed");
+	cr_assert_str_empty(tu_slurp(dir, "out"),
+	                    "scripts calling bench-lib.sh's functions without sourcing it:\n%s",
+	                    tu_slurp(dir, "out"));
+	/* the scan found the scripts that use the library (else it shows nothing) */
+	cr_assert_geq(atoi(tu_slurp(dir, "n")), 7, "only %s scripts use bench-lib.sh",
+	              tu_slurp(dir, "n"));
+}
