@@ -280,6 +280,7 @@ for view in $ALL_VIEWS; do
 		FNR == 1 { f++ }
 		$1 ~ /_mrays$/ { if (!($1 in best) || $2 + 0 > best[$1] + 0) best[$1] = $2 }
 		$1 == "embree_trav_only_mrays" { et[f] = $2 + 0 }
+		$1 == "ours_trav_only_mrays" { ot[f] = $2 + 0 }
 		$1 == "embree_packet" { w[f] = $2 }
 		f == 1 { order[++n] = $1; first[$1] = $2 }
 		END {
@@ -290,12 +291,21 @@ for view in $ALL_VIEWS; do
 				v = key in best ? best[key] : (key == "embree_packet" ? w[bf] : first[key])
 				print key "=" v
 			}
+			# each process'"'"'s own ratio, traversal alone (both sides
+			# timed in it: its speed cancels), sorted; their median
+			m = 0
+			for (k = 1; k <= f; k++)
+				if (et[k] > 0) { q = ot[k] / et[k]; j = ++m; while (j > 1 && r[j - 1] > q) { r[j] = r[j - 1]; j-- } r[j] = q }
+			if (m) {
+				med = m % 2 ? r[(m + 1) / 2] : (r[m / 2] + r[m / 2 + 1]) / 2
+				printf "alone_ratio_median=%.4f\nalone_ratio_lo=%.4f\nalone_ratio_hi=%.4f\n", med, r[1], r[m]
+			}
 		}' "$TMP"/e[0-9]*.txt >"$TMP/e.txt"
 		if [ "$e_ok" = 1 ]; then
 			em=$(kget "$TMP/e.txt" embree_mrays)
 			say "[$i/$nviews] $view: Embree $(kget "$TMP/e.txt" embree_packet)-wide, 1 thread: $em Mrays/s" \
 			    "(our traversal: $(kget "$TMP/e.txt" ours_trace_mrays) Mrays/s; both with ray generation)"
-			printf '%s %s %s %s %s %s %s %s %s %s %s %s %s %s %s %s\n' "$view" "$(kget "$TMP/e.txt" rays)" \
+			printf '%s %s %s %s %s %s %s %s %s %s %s %s %s %s %s %s %s %s %s\n' "$view" "$(kget "$TMP/e.txt" rays)" \
 			    "$em" "$(kget "$TMP/e.txt" ours_trace_mrays)" \
 			    "$(kget "$TMP/e.txt" embree_hits)" "$(kget "$TMP/e.txt" ours_hits)" \
 			    "$(kget "$TMP/e.txt" hit_only_embree)" "$(kget "$TMP/e.txt" hit_only_ours)" \
@@ -306,7 +316,9 @@ for view in $ALL_VIEWS; do
 			    "$(kget "$TMP/e.txt" ours_trav_only_mrays)" \
 			    "$(kget "$TMP/e.txt" embree_packet)" \
 			    "$(kget "$TMP/e.txt" embree16_trav_only_mrays)" \
-			    "$(kget "$TMP/e.txt" embree_width_diffs)" >>"$ECHK"
+			    "$(kget "$TMP/e.txt" embree_width_diffs)" \
+			    "$(kget "$TMP/e.txt" alone_ratio_median)" "$(kget "$TMP/e.txt" alone_ratio_lo)" \
+			    "$(kget "$TMP/e.txt" alone_ratio_hi)" >>"$ECHK"
 			EMBREE_VERSION=$(kget "$TMP/e.txt" embree_version)
 		else
 			cat "$TMP/e.err" >&2
@@ -396,6 +408,14 @@ SECTION=$TMP/section
 			printf "%s (%d of %d views).\n", (ok == n ? "met" : "NOT met"), ok, n
 		}' "$ECHK"
 		echo
+		awk -v procs="$EPROCS" '
+		$17 > 0 { n++; if ($17 >= 1) ok++; if (n == 1 || $17 < lo) lo = $17; if (n == 1 || $17 > hi) hi = $17 }
+		END {
+			if (!n) exit
+			printf "The same, each of the %d processes'"'"' own ratio (both sides timed in it, so a process'"'"'s speed cancels; the median of them, *same process* below, %.2f to %.2f):", procs, lo, hi
+			printf " at least 1.0 on %d of %d views. Not the verdict above, which takes each side'"'"'s best; shown for the noise between processes.\n", ok, n
+		}' "$ECHK"
+		echo
 		awk '
 		$12 ~ /^[0-9.]+$/ && $12 + 0 > 0 { n++; r = $4 / $12; if (r >= 0.6) ok++; if (n == 1 || r < lo) lo = r; if (n == 1 || r > hi) hi = r }
 		END {
@@ -424,13 +444,16 @@ SECTION=$TMP/section
 		    "of those ours is the closer hit. *width*: Embree's fastest packet width on the view, whose" \
 		    "figures these are; *16-wide alone*: Embree's 16-wide packets (the issue's yardstick) by" \
 		    "themselves; *widths differ*: pixels where another width's Embree picked another triangle" \
-		    "(ties: Embree's kernels for each width order their tests differently)."
+		    "(ties: Embree's kernels for each width order their tests differently);" \
+		    "*same process*: ours alone over Embree alone within each of the $EPROCS processes, both timed" \
+		    "in it, the median and the range over them (*alone: ours/Embree* divides each side's best" \
+		    "over the processes, which may come from different ones)."
 		echo
-		echo "| view | rays | width | Embree Mrays/s | ours, traversal only | traversal/Embree | Embree alone | ours alone | alone: ours/Embree | 16-wide alone | ours/16-wide | hits Embree | hits ours | hit only by Embree | hit only by ours | other triangle, same t | other triangle, other t (ours closer) | widths differ |"
-		echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-		awk '{ printf "| %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %s | %s | %s | %s | %d | %s (%s) | %s |\n",
+		echo "| view | rays | width | Embree Mrays/s | ours, traversal only | traversal/Embree | Embree alone | ours alone | alone: ours/Embree | same process: median (range) | 16-wide alone | ours/16-wide | hits Embree | hits ours | hit only by Embree | hit only by ours | other triangle, same t | other triangle, other t (ours closer) | widths differ |"
+		echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+		awk '{ printf "| %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f (%.2f-%.2f) | %.2f | %.2f | %s | %s | %s | %s | %d | %s (%s) | %s |\n",
 			$1, $2, $14, $3, $4, ($3 > 0 ? $4 / $3 : 0), $12, $13, ($12 > 0 ? $13 / $12 : 0),
-			$15, ($15 > 0 ? $13 / $15 : 0),
+			$17, $18, $19, $15, ($15 > 0 ? $13 / $15 : 0),
 			$5, $6, $7, $8, $9 - $10, $10, $11, $16 }' "$ECHK"
 	else
 		echo "$EMBREE_NOTE"
