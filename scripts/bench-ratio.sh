@@ -31,6 +31,33 @@ RTREF=$ROOT/$B/rtref
 [ -x "$RTREF" ] || die "$RTREF not found; run 'make' first"
 SIZE=${SIZE:-1024x768}
 RUNS=${RUNS:-5}
+# One functional run of view $1 without the check, further arguments to
+# saarsim; its report in $TMP/f.json.
+functional() {
+	fv=$1
+	shift
+	"$SIM" --views "$VIEWS" --view "$fv" --size "$SIZE" --quiet --fidelity functional \
+		--no-check "$@" --report "$TMP/f.json" >"$TMP/f.txt" 2>&1 ||
+		{ cat "$TMP/f.txt" >&2; die "saarsim --fidelity functional $* failed on $fv"; }
+}
+# The best host.sim_s of RUNS functional runs of view $1; with $2 = 1
+# each must have replayed the packet record (every tile); further
+# arguments to saarsim.
+functional_best() {
+	fv=$1 freplay=$2
+	shift 2
+	fb=
+	fr=1
+	while [ "$fr" -le "$RUNS" ]; do
+		functional "$fv" "$@"
+		[ "$freplay" = 0 ] ||
+			[ "$(jget "$TMP/f.json" replayed_tiles)" = "$(jget "$TMP/f.json" functional_tiles)" ] ||
+			die "$fv: the functional run did not replay the packet record"
+		fb=$(bench_min "$fb" "$(jget "$TMP/f.json" sim_s)")
+		fr=$((fr + 1))
+	done
+	echo "$fb"
+}
 bench_start ratio
 for v in $VLIST; do
 	bs= br=
@@ -62,27 +89,10 @@ for v in $VLIST; do
 		r=$((r + 1))
 	done
 	# functional fidelity: with the math (no world cache), then replaying
-	# the packet record a first run put in a scratch world cache
-	bf=
-	r=1
-	while [ "$r" -le "$RUNS" ]; do
-		"$SIM" --views "$VIEWS" --view "$v" --size "$SIZE" --quiet --fidelity functional \
-			--no-check --report "$TMP/f.json" >"$TMP/f.txt" 2>&1 || { cat "$TMP/f.txt" >&2; die "saarsim --fidelity functional failed on $v"; }
-		bf=$(bench_min "$bf" "$(jget "$TMP/f.json" sim_s)")
-		r=$((r + 1))
-	done
-	bp=
-	r=0
-	while [ "$r" -le "$RUNS" ]; do
-		"$SIM" --views "$VIEWS" --view "$v" --size "$SIZE" --quiet --fidelity functional \
-			--no-check --world-cache "$TMP/wc" --report "$TMP/p.json" >"$TMP/p.txt" 2>&1 || { cat "$TMP/p.txt" >&2; die "saarsim --fidelity functional --world-cache failed on $v"; }
-		if [ "$r" -gt 0 ]; then # run 0 records the packet record
-			[ "$(jget "$TMP/p.json" replayed_tiles)" = "$(jget "$TMP/p.json" functional_tiles)" ] ||
-				die "$v: the functional run did not replay the packet record"
-			bp=$(bench_min "$bp" "$(jget "$TMP/p.json" sim_s)")
-		fi
-		r=$((r + 1))
-	done
+	# the packet record a first, uncounted run put in a scratch world cache
+	bf=$(functional_best "$v" 0)
+	functional "$v" --world-cache "$TMP/wc"
+	bp=$(functional_best "$v" 1 --world-cache "$TMP/wc")
 	rm -rf "$TMP/wc"
 	printf '%s %s %s %s %s %s %s %s %s\n' "$v" "$cyc" "$bs" "$br" \
 		"$(awk -v s="$bs" -v q="$br" 'BEGIN { printf "%.4f", (q > 0 ? s / q : 0) }')" "$bd" \
