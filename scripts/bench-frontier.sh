@@ -157,12 +157,8 @@ name_of() {
 	echo
 	echo "The defaults' jump by view: the warming run's memory time over its compute time (the report's \`fidelity.memory_to_compute\`) and the jump \`sampling.jump: auto\` took (relax at \`sampling.auto_ratio\`, 2, or more; docs/fidelity.md):"
 	echo
-	printf '| view |'
-	for T in $THREADS; do printf ' %s threads per RTP |' "$T"; done
-	echo
-	printf '|---|'
-	for T in $THREADS; do printf -- '---:|'; done
-	echo
+	# shellcheck disable=SC2086
+	md_head '| view |' ' %s threads per RTP |' '|---|' $THREADS
 	for v in $VLIST; do
 		printf '| %s |' "$v"
 		for T in $THREADS; do

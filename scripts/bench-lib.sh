@@ -23,6 +23,9 @@
 # bench_start), load1 (the load average then), GIT (doc_commit) and
 # SECTION (the file the section is written into before doc_section).
 # pct_err F T: F's difference from T in percent of T, signed, two decimals.
+# md_head LEAD FMT RULE ITEMS...: a markdown table's header row (LEAD,
+# then printf FMT of each item) and its rule (RULE, then a right-aligned
+# column for each item).
 # lt A B: true when number A < number B. bench_min CUR NEW: the smaller
 # of the two numbers (NEW when CUR is empty: the best of runs so far).
 BENCH_NAME=bench
@@ -74,6 +77,16 @@ bench_end() {
 lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
 bench_min() {
 	if [ -z "$1" ] || lt "$2" "$1"; then echo "$2"; else echo "$1"; fi
+}
+md_head() {
+	mh_lead=$1 mh_fmt=$2 mh_rule=$3
+	shift 3
+	printf '%s' "$mh_lead"
+	for mh_x in "$@"; do printf "$mh_fmt" "$mh_x"; done
+	echo
+	printf '%s' "$mh_rule"
+	for mh_x in "$@"; do printf -- '---:|'; done
+	echo
 }
 pct_err() {
 	awk -v f="$1" -v t="$2" 'BEGIN { printf "%+.2f", (f / t - 1) * 100 }'

@@ -202,12 +202,8 @@ bench_end
 		echo
 		echo "### chip_run instructions by commit ($SIZE)"
 		echo
-		printf '| commit | change |'
-		for v in $REV_VIEWS; do printf ' %s |' "$v"; done
-		echo
-		printf '|---|---|'
-		for v in $REV_VIEWS; do printf -- '---:|'; done
-		echo
+		# shellcheck disable=SC2086
+		md_head '| commit | change |' ' %s |' '|---|---|' $REV_VIEWS
 		awk -F'|' '{
 			printf "| %s | %s |", $1, $2
 			for (i = 3; i <= NF; i++) {
