@@ -90,7 +90,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets bench-frontier stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test readme-check bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets bench-frontier stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -148,6 +148,11 @@ bench: all
 # Run time against error of the fidelity modes; writes docs/FIDELITY.md.
 bench-fidelity: all
 	sh scripts/bench-fidelity.sh $(B)
+
+# README.md's examples run in a scratch folder, their output compared with
+# the page's (scripts/readme-check.py; `make test` runs it too).
+readme-check: all
+	SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) python3 scripts/readme-check.py --bin $(B)
 
 # issue 36: the profile builds its own valgrind-runnable copy (ARCH=-mavx2)
 bench-profile:

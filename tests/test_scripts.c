@@ -42,3 +42,30 @@ Test(scripts, bench_library_functions_come_with_the_library)
 	cr_assert_geq(atoi(tu_slurp(dir, "n")), 7, "only %s scripts use bench-lib.sh",
 	              tu_slurp(dir, "n"));
 }
+
+/* Every example of README.md prints what the page shows
+ * (scripts/readme-check.py: the commands run in the page's order in a
+ * scratch folder; cycles, fps, counts and checks compared exactly, the
+ * host's times masked). Catches an example left showing figures the
+ * model no longer gives (the Robots' flat chip frames showed 387573 and
+ * 292769 cycles for a day after the model gave 357572 and 271486), a
+ * changed output line, and a command that no longer runs. */
+Test(scripts, readme_examples_print_what_the_readme_shows, .timeout = 900)
+{
+	char views[512], dir[256], cmd[2048];
+	SCENE_OR_SKIP(views, "views.yaml");
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cmd, sizeof cmd,
+	         "python3 '%s/scripts/readme-check.py' --bin '%s' --scenes '%s' '%s/README.md' "
+	         ">'%s/out' 2>&1",
+	         root(), tu_bin_dir(), tu_scenes_dir(), root(), dir);
+	int rc = tu_run(cmd);
+	const char *out = tu_slurp(dir, "out");
+	cr_assert_eq(rc, 0, "README.md's examples differ from what they print:\n%s", out);
+	/* it ran the page's examples (25 when written; a run that found
+	 * none would pass saying nothing) */
+	const char *n = strstr(out, "README.md: ");
+	int ok = 0, all = 0;
+	cr_assert(n && sscanf(n + 11, "%d of %d", &ok, &all) == 2, "%s", out);
+	cr_assert(ok == all && all >= 20, "%d of %d examples:\n%s", ok, all, out);
+}
