@@ -78,6 +78,11 @@ lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
 bench_min() {
 	if [ -z "$1" ] || lt "$2" "$1"; then echo "$2"; else echo "$1"; fi
 }
+# The median, the least and the greatest of the numbers given: "med lo hi".
+med_range() {
+	printf '%s\n' "$@" | sort -g | awk '{ v[++n] = $1 }
+	END { if (!n) exit 1; printf "%.4f %.4f %.4f\n", (n % 2 ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2), v[1], v[n] }'
+}
 md_head() {
 	mh_lead=$1 mh_fmt=$2 mh_rule=$3
 	shift 3

@@ -60,7 +60,7 @@ functional_best() {
 }
 bench_start ratio
 for v in $VLIST; do
-	bs= br=
+	bs= br= qs=
 	r=1
 	while [ "$r" -le "$RUNS" ]; do
 		say "$v $SIZE, run $r of $RUNS"
@@ -72,6 +72,7 @@ for v in $VLIST; do
 		ref=$(awk -v s="$s" -v q="$q" 'BEGIN { printf "%.6f", (q > 0 ? s / q : 0) }')
 		# each side's best over the runs: a minimum of the ratio itself
 		# would pick the run whose kernel-ref time was slowed the most
+		qs="$qs $q"
 		bs=$(bench_min "$bs" "$s")
 		br=$(bench_min "$br" "$ref")
 		cyc=$(jget "$TMP/r.json" cycles)
@@ -94,9 +95,13 @@ for v in $VLIST; do
 	functional "$v" --world-cache "$TMP/wc"
 	bp=$(functional_best "$v" 1 --world-cache "$TMP/wc")
 	rm -rf "$TMP/wc"
-	printf '%s %s %s %s %s %s %s %s %s\n' "$v" "$cyc" "$bs" "$br" \
+	# each run's own ratio (both sides timed in its process: a slow
+	# spell of the host slows both), their median and range
+	# shellcheck disable=SC2086
+	qmr=$(med_range $qs)
+	printf '%s %s %s %s %s %s %s %s %s %s\n' "$v" "$cyc" "$bs" "$br" \
 		"$(awk -v s="$bs" -v q="$br" 'BEGIN { printf "%.4f", (q > 0 ? s / q : 0) }')" "$bd" \
-		"$(awk -v s="$bs" -v q="$bd" 'BEGIN { printf "%.4f", (q > 0 ? s / q : 0) }')" "$bf" "$bp" >>"$ROWS"
+		"$(awk -v s="$bs" -v q="$bd" 'BEGIN { printf "%.4f", (q > 0 ? s / q : 0) }')" "$bf" "$bp" "$qmr" >>"$ROWS"
 done
 bench_end
 {
@@ -107,14 +112,17 @@ bench_end
 	echo
 	echo "- Date: $(date -u '+%Y-%m-%d %H:%M UTC') (took $elapsed s); commit $GIT"
 	echo "- Machine: $(nproc) CPUs, $(doc_cpu); load average $load0 at start, $load1 at the end (other jobs may share the machine: both times in a row come from the same process, so the ratio is less noisy than either)"
-	echo "- Run: \`saarsim --views views.yaml --view V --size $SIZE\` (default config, cycle mode, the check on, no world cache), $RUNS runs; *sim s*: the best \`host.sim_s\` (chip_run); *kernel-ref s*: the best time of its packet render of the same frame, one host thread, in the same process (\`host.sim_s\` / \`host.sim_to_ref_ratio\`: the check's render, which steps the per-lane packet traversal the chip models on the chip's tree); *ratio*: the two bests' quotient. *rtref s*: rtref's default render of the same frame (the frustum walk on its own tree, which renders faster; \`rtref --threads 1\`, no world cache, best of $RUNS runs, its \`render_ms\`), and the simulation's best over it."
+	echo "- Run: \`saarsim --views views.yaml --view V --size $SIZE\` (default config, cycle mode, the check on, no world cache), $RUNS runs; *sim s*: the best \`host.sim_s\` (chip_run); *kernel-ref s*: the best time of its packet render of the same frame, one host thread, in the same process (\`host.sim_s\` / \`host.sim_to_ref_ratio\`: the check's render, which steps the per-lane packet traversal the chip models on the chip's tree); *ratio*: the two bests' quotient (the verdict below); *same run*: each run's own ratio (\`host.sim_to_ref_ratio\`, both times from one process, so a slow spell of the host slows both), the median and the range over the $RUNS runs. *rtref s*: rtref's default render of the same frame (the frustum walk on its own tree, which renders faster; \`rtref --threads 1\`, no world cache, best of $RUNS runs, its \`render_ms\`), and the simulation's best over it."
 	echo
-	echo "| view | cycles/frame | sim s | kernel-ref s | ratio | rtref s | ratio to rtref |"
-	echo "|---|---:|---:|---:|---:|---:|---:|"
-	awk '{ printf "| %s | %d | %.3f | %.3f | %.1f | %.3f | %.1f |\n", $1, $2, $3, $4, $5, $6, $7 }' "$ROWS"
+	echo "| view | cycles/frame | sim s | kernel-ref s | ratio | same run: median (range) | rtref s | ratio to rtref |"
+	echo "|---|---:|---:|---:|---:|---:|---:|---:|"
+	awk '{ printf "| %s | %d | %.3f | %.3f | %.1f | %.1f (%.1f-%.1f) | %.3f | %.1f |\n", $1, $2, $3, $4, $5, $10, $11, $12, $6, $7 }' "$ROWS"
 	echo
 	awk '{ n++; if ($5 <= 5) ok++; if (n == 1 || $5 > hi) { hi = $5; hv = $1 } }
 	END { printf "Target: at most 5 on every view: %s (%d of %d views; the highest %.1f, %s).\n", (ok == n ? "met" : "NOT met"), ok, n, hi, hv }' "$ROWS"
+	echo
+	awk '{ n++; if ($10 <= 5) ok++; if ($12 <= 5) all++; if (n == 1 || $10 > hi) { hi = $10; hv = $1 } }
+	END { printf "By each run'"'"'s own ratio instead (not the verdict; for the noise between runs): the median at most 5 on %d of %d views (the highest %.1f, %s), every run at most 5 on %d.\n", ok, n, hi, hv, all }' "$ROWS"
 	echo
 	awk '{ n++; if ($7 <= 5) ok++; if (n == 1 || $7 > hi) { hi = $7; hv = $1 } }
 	END { printf "Against rtref'"'"'s default render instead: at most 5 on %d of %d views (the highest %.1f, %s).\n", ok, n, hi, hv }' "$ROWS"

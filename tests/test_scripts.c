@@ -18,9 +18,9 @@ static const char *root(void)
 
 /* Every script under scripts/ that calls a function of bench-lib.sh
  * sources it (or is it). Catches a script left calling bench_end,
- * bench_start, bench_init, bench_min, bench_views or pct_err after the
- * lines it replaced were taken out, without the library that defines
- * them. */
+ * bench_start, bench_init, bench_min, bench_views, pct_err, md_head or
+ * med_range after the lines it replaced were taken out, without the
+ * library that defines them. */
 Test(scripts, bench_library_functions_come_with_the_library)
 {
 	char dir[256], cmd[2048];
@@ -30,7 +30,8 @@ Test(scripts, bench_library_functions_come_with_the_library)
 	    "cd '%s' && n=0 && for f in scripts/*.sh; do "
 	    "[ \"$f\" = scripts/bench-lib.sh ] && continue; "
 	    "grep -qE '(^|[^_[:alnum:]])(bench_init|bench_start|bench_end|bench_min|"
-	    "bench_views|pct_err)([^_[:alnum:]]|$)' \"$f\" || continue; n=$((n + 1)); "
+	    "bench_views|pct_err|md_head|med_range)([^_[:alnum:]]|$)' \"$f\" || continue; "
+	    "n=$((n + 1)); "
 	    "grep -qE '^[[:space:]]*\\. .*bench-lib\\.sh\"?[[:space:]]*$' \"$f\" || echo \"$f\"; "
 	    "done >'%s/out' && echo \"$n\" >'%s/n'",
 	    root(), dir, dir);
