@@ -25,7 +25,11 @@ not) stands for any number of lines. Cycles, fps, counts, hit rates and
 check results must match exactly: they depend on no host time.
 
 A block right after the line `<!-- readme-check: skip -->` is not run
-(its commands need files a reader does not have).
+(its commands need files a reader does not have). A picture right after
+the line `<!-- readme-check: picture FILE -->` (`![...](PATH)`) is what
+the examples wrote to FILE: once every block has run, PATH (beside the
+page) and FILE (in the scratch folder) are compared pixel by pixel with
+OpenImageIO's idiff, and must be the same.
 
 Exit status: 0 every example printed what the page shows, 1 some did not
 (each difference is printed: the command, the line shown and the line
@@ -55,6 +59,23 @@ def closed(cmd):
         return True
     except ValueError:
         return False
+
+
+def pictures(path):
+    """The page's checked pictures: (line number, FILE the examples
+    write, PATH the page shows)."""
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().split("\n")
+    out = []
+    for i, t in enumerate(lines):
+        m = re.match(r"\s*<!-- readme-check: picture (\S+) -->\s*$", t)
+        if not m:
+            continue
+        img = re.match(r"\s*!\[[^\]]*\]\(([^)\s]+)\)", lines[i + 1] if i + 1 < len(lines) else "")
+        if not img:
+            die("%s:%d: a picture marker not followed by a picture ![...](PATH)" % (path, i + 1))
+        out.append((i + 2, m.group(1), img.group(1)))
+    return out
 
 
 def examples(path):
@@ -202,7 +223,32 @@ def main(argv):
                     print("  printed: %s" % (got if got is not None else "(nothing more)"))
         print("readme-check: %s: %d of %d example commands printed what the page shows" %
               (os.path.relpath(page), ncmd - bad, ncmd))
-        return 1 if bad else 0
+        pics = pictures(page)
+        badpic = 0
+        for n, made, shown in pics:
+            a = os.path.join(work, made)
+            b = os.path.join(os.path.dirname(os.path.abspath(page)), shown)
+            why = None
+            if not os.path.exists(a):
+                why = "the examples wrote no %s" % made
+            elif not os.path.exists(b):
+                why = "%s does not exist" % shown
+            else:
+                try:
+                    d = subprocess.run(["idiff", a, b], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+                except OSError:
+                    die("idiff (OpenImageIO's tools, openimageio-tools) not found")
+                if d.returncode != 0:
+                    why = "differs from the %s the examples wrote: %s" % (made, " ".join(
+                        t.strip() for t in d.stdout.decode("utf-8", "replace").split("\n")
+                        if "pixels" in t or "RMS" in t))
+            if why:
+                badpic += 1
+                print("%s:%d: picture %s: %s" % (page, n, shown, why))
+        if pics:
+            print("readme-check: %s: %d of %d pictures are what the examples draw" %
+                  (os.path.relpath(page), len(pics) - badpic, len(pics)))
+        return 1 if bad or badpic else 0
     finally:
         if keep:
             print("readme-check: kept %s" % work)

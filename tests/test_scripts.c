@@ -44,13 +44,16 @@ Test(scripts, bench_library_functions_come_with_the_library)
 	              tu_slurp(dir, "n"));
 }
 
-/* Every example of README.md prints what the page shows
- * (scripts/readme-check.py: the commands run in the page's order in a
- * scratch folder; cycles, fps, counts and checks compared exactly, the
- * host's times masked). Catches an example left showing figures the
- * model no longer gives (the Robots' flat chip frames showed 387573 and
- * 292769 cycles for a day after the model gave 357572 and 271486), a
- * changed output line, and a command that no longer runs. */
+/* Every example of README.md prints what the page shows, and its
+ * pictures are what the examples draw (scripts/readme-check.py: the
+ * commands run in the page's order in a scratch folder; cycles, fps,
+ * counts and checks compared exactly, the host's times masked; the marked
+ * pictures compared pixel by pixel with what the examples wrote). Catches
+ * an example left showing figures the model no longer gives (the Robots'
+ * flat chip frames showed 387573 and 292769 cycles for a day after the
+ * model gave 357572 and 271486), a changed output line, a command that no
+ * longer runs, and a picture the tools no longer draw (the timeline
+ * picture lacked the transformation unit's row). */
 Test(scripts, readme_examples_print_what_the_readme_shows, .timeout = 900)
 {
 	char views[512], dir[256], cmd[2048];
@@ -69,4 +72,8 @@ Test(scripts, readme_examples_print_what_the_readme_shows, .timeout = 900)
 	int ok = 0, all = 0;
 	cr_assert(n && sscanf(n + 11, "%d of %d", &ok, &all) == 2, "%s", out);
 	cr_assert(ok == all && all >= 20, "%d of %d examples:\n%s", ok, all, out);
+	/* and compared its pictures (3 when written) */
+	n = strstr(n + 11, "README.md: ");
+	cr_assert(n && sscanf(n + 11, "%d of %d pictures", &ok, &all) == 2, "%s", out);
+	cr_assert(ok == all && all >= 3, "%d of %d pictures:\n%s", ok, all, out);
 }
