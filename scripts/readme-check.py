@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """readme-check.py: run the examples of a markdown file and compare their
-output with what the file shows (docs/TESTING.md, "README examples").
+output with what the file shows (docs/TESTING.md, "Scripts").
 
     python3 scripts/readme-check.py [--bin DIR] [--scenes DIR] [--keep] [FILE.md]
 
@@ -20,9 +20,10 @@ output (stdout and stderr together), after both sides are normalised:
 the scenes folder reads ../shared/scenes, an absolute path ending in
 out/... reads out/..., and what the host decides is masked: the numbers
 of a `  host:` line (its times) and the default cache folder's path
-there, and rtref's "in N ms = N Mrays/s" and "built in N ms". A shown line "..." (alone, indented or
-not) stands for any number of lines. Cycles, fps, counts, hit rates and
-check results must match exactly: they depend on no host time.
+there, and rtref's "in N ms = N Mrays/s" and "built in N ms". A shown
+line "..." (alone, indented or not) stands for any number of lines.
+Cycles, fps, counts, hit rates and check results must match exactly:
+they depend on no host time. A command gets TIMEOUT seconds (600).
 
 A block right after the line `<!-- readme-check: skip -->` is not run
 (its commands need files a reader does not have). A picture right after
@@ -31,20 +32,23 @@ the examples wrote to FILE: once every block has run, PATH (beside the
 page) and FILE (in the scratch folder) are compared pixel by pixel with
 OpenImageIO's idiff, and must be the same.
 
-Exit status: 0 every example printed what the page shows, 1 some did not
-(each difference is printed: the command, the line shown and the line
-printed), 2 bad use (a file or folder missing).
+Exit status: 0 every example printed what the page shows and every
+marked picture is what they drew, 1 some did not (each difference is
+printed: the command, the line shown and the line printed; the picture
+and how it differs), 2 bad use (a file or folder missing, no idiff).
 """
 import os
 import re
 import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SKIP = "<!-- readme-check: skip -->"
+TIMEOUT = 600
 
 
 def die(msg):
@@ -204,9 +208,17 @@ def main(argv):
             for n, cmd, shown in block:
                 ncmd += 1
                 run = cmd.replace("../shared/scenes", scenes)
-                p = subprocess.run(["bash", "-c", run], cwd=work, env=env, stdout=subprocess.PIPE,
-                                   stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
-                text = p.stdout.decode("utf-8", "replace")
+                # its own process group, so a command that never ends
+                # goes with everything it started
+                p = subprocess.Popen(["bash", "-c", run], cwd=work, env=env, stdout=subprocess.PIPE,
+                                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                     start_new_session=True)
+                try:
+                    text = p.communicate(timeout=TIMEOUT)[0].decode("utf-8", "replace")
+                except subprocess.TimeoutExpired:
+                    os.killpg(p.pid, signal.SIGKILL)
+                    p.communicate()
+                    text = "(readme-check: no end after %d s)" % TIMEOUT
                 printed = [normalise(t, scenes, work) for t in text.split("\n")]
                 while printed and printed[-1] == "":
                     printed.pop()
