@@ -41,11 +41,9 @@ set -eu
 SAARSIM_CACHE_DIR=off
 export SAARSIM_CACHE_DIR
 
-say() { printf 'bench: %s\n' "$*" >&2; }
-die() {
-	say "error: $*"
-	exit 1
-}
+# say, die, jget, lt and med_range (BENCH_NAME bench; not bench_init:
+# the build folder is this script's first argument)
+. "$(dirname "$0")/bench-lib.sh"
 
 B=${1:-build}
 case $B in /*) ;; *) B=$PWD/$B ;; esac
@@ -106,16 +104,8 @@ if part saarsim; then
 	cp "$B/saarsim-replay" "$TMP/saarsim-replay"
 fi
 
-# Value of a scalar key in a JSON file (first occurrence): tiny and
-# layout-independent enough for our own jsonw output.
-jget() {
-	tr ',{}[]' '\n\n\n\n\n' <"$1" |
-		sed -n "s/^[[:space:]]*\"$2\"[[:space:]]*:[[:space:]]*//p" | head -n 1
-}
 # Value of KEY in a key=value file.
 kget() { sed -n "s/^$2=//p" "$1" | head -n 1; }
-# True if number $1 < number $2.
-lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
 
 # View names: the keys one level below `views:` (block style, as in
 # views.yaml and docs/views.md).
@@ -292,16 +282,19 @@ for view in $ALL_VIEWS; do
 				print key "=" v
 			}
 			# each process'"'"'s own ratio, traversal alone (both sides
-			# timed in it: its speed cancels), sorted; their median
-			m = 0
+			# timed in it: its speed cancels)
+			printf "alone_ratios="
 			for (k = 1; k <= f; k++)
-				if (et[k] > 0) { q = ot[k] / et[k]; j = ++m; while (j > 1 && r[j - 1] > q) { r[j] = r[j - 1]; j-- } r[j] = q }
-			if (m) {
-				med = m % 2 ? r[(m + 1) / 2] : (r[m / 2] + r[m / 2 + 1]) / 2
-				printf "alone_ratio_median=%.4f\nalone_ratio_lo=%.4f\nalone_ratio_hi=%.4f\n", med, r[1], r[m]
-			}
+				if (et[k] > 0) printf " %.9g", ot[k] / et[k]
+			print ""
 		}' "$TMP"/e[0-9]*.txt >"$TMP/e.txt"
 		if [ "$e_ok" = 1 ]; then
+			# their median and range (med_range, bench-lib.sh)
+			ar=$(kget "$TMP/e.txt" alone_ratios)
+			if [ -n "$ar" ]; then
+				# shellcheck disable=SC2086
+				med_range $ar | awk '{ printf "alone_ratio_median=%s\nalone_ratio_lo=%s\nalone_ratio_hi=%s\n", $1, $2, $3 }' >>"$TMP/e.txt"
+			fi
 			em=$(kget "$TMP/e.txt" embree_mrays)
 			say "[$i/$nviews] $view: Embree $(kget "$TMP/e.txt" embree_packet)-wide, 1 thread: $em Mrays/s" \
 			    "(our traversal: $(kget "$TMP/e.txt" ours_trace_mrays) Mrays/s; both with ray generation)"
