@@ -26,6 +26,18 @@ def load(out, name):
         bad(f"{path}: {e}")
 
 
+def load_kd(out, name):
+    """An rtref kd-tree run: the plain SAH tree the chip walks, not rtref's
+    own tree for the view's packets (accel.sh passes --kd-footprint 0)."""
+    r = load(out, name)
+    fp = r.get("kdtree", {}).get("footprint_from")
+    if fp != "none":
+        bad(f"{os.path.join(out, name)}: rtref built its kd-tree for a packet footprint "
+            f"(footprint_from {fp!r}); the tables compare the plain SAH tree: rerun with "
+            "--kd-footprint 0 (delete the run to redo it)")
+    return r
+
+
 def same_image(out, a, b):
     try:
         with open(os.path.join(out, a), "rb") as f, open(os.path.join(out, b), "rb") as g:
@@ -67,8 +79,8 @@ def static_section(out, views):
              "*build*: the host build of the structure (kd-tree: SAH build; grid: "
              "`grid_build`, lambda 5, macrocells 6; frusta of primary rays, secondary rays by the "
              "DDA); *trace*: kernel-ref's traversal and "
-             "intersection time; *steps/ray*: kd-node steps (kd) or slice steps (grid) "
-             "per ray; *tests/ray*: ray-triangle tests per ray; *same image*: the grid's "
+             "intersection time; *steps/ray*: kd-node steps (kd: a packet's step counts "
+             "once) or slice steps (grid: a frustum's once, the DDA's per ray) over the rays; *tests/ray*: ray-triangle tests per ray; *same image*: the grid's "
              "frame equals the kd-tree's byte for byte. Two-level trees need a scene "
              "of rigid objects placed by transforms (an AFF scene): a static OBJ is one "
              "object, whose two-level tree would be its kd-tree under one instance, so "
@@ -80,7 +92,7 @@ def static_section(out, views):
              "| same image |")
     L.append("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---|")
     for v in views:
-        k, g = load(out, f"{v}-kd.json"), load(out, f"{v}-grid.json")
+        k, g = load_kd(out, f"{v}-kd.json"), load(out, f"{v}-grid.json")
         res = "x".join(str(n) for n in g["grid"]["resolution"])
         L.append(f"| {v} | {k['triangles']:,} | {fmt(k['build_ms'], 1)} | "
                  f"{fmt(g['grid']['build_ms'], 1)} | {res} | {fmt(k['trace_ms'], 1)} | "
@@ -136,7 +148,8 @@ def table4_section(out, views):
     L.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     trend = {"r4": [], "r8": [], "t4": [], "t8": []}
     for v in views:
-        r = {k: load(out, f"{v}-t4-{k}.json") for k in ("1", "4", "8", "kd")}
+        r = {k: load(out, f"{v}-t4-{k}.json") for k in ("1", "4", "8")}
+        r["kd"] = load_kd(out, f"{v}-t4-kd.json")
         c1, c4, c8 = (r[k]["leaf_visits"] for k in ("1", "4", "8"))
         t1, t4, t8 = (r[k]["ray_triangle_tests"] for k in ("1", "4", "8"))
         r4, r8 = c1 / c4 if c4 else 0, c1 / c8 if c8 else 0
@@ -207,7 +220,7 @@ def robots_section(out, times):
     L.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|"
              "---:|---:|---|---|")
     for t in times:
-        k = load(out, f"robots-{t}-kd.json")
+        k = load_kd(out, f"robots-{t}-kd.json")
         g = load(out, f"robots-{t}-grid.json")
         tl = load(out, f"robots-{t}-two-level.json")
         c = load(out, f"robots-{t}-chip.json")
@@ -270,11 +283,19 @@ def main():
              "not edit by hand -->")
     L.append("")
     L.append(f"Frames of {size} pixels. The kd-tree is kernel-ref's SAH tree "
-             "(kernel-ref/kdtree.c), the grid seed 003's uniform grid with coherent grid "
+             "(kernel-ref/kdtree.c), the plain one the chip walks (rtref `--kd-footprint 0`: "
+             "rtref's default tree is built for the view's packets, docs/kernel-ref.md "
+             "\"rtref's own tree\", and cuts the less the fewer pixels a frame has), the grid seed 003's uniform grid with coherent grid "
              "traversal (kernel-ref/grid.c, gridtrav.c; docs/design.md \"Uniform grid\"), "
              "the two-level trees seed 002 §6's (kernel-ref/twolevel.c). Host times are "
              "from one run each on a shared machine: compare them within a table, not "
              "across runs. Regenerate with `make accel`.")
+    L.append("")
+    env = os.environ.get
+    L.append(f"Generated {env('ACCEL_DATE', 'at an unknown date')} on "
+             f"{env('ACCEL_HOST', 'an unknown host')}; commit "
+             f"{env('ACCEL_COMMIT', 'unknown')} (runs already in the run folder are "
+             "reused, with their own host times).")
     L.append("")
     L += static_section(out, views)
     L += table4_section(out, views)

@@ -78,15 +78,21 @@ run() {
 	mv "$OUT/$f.tmp" "$OUT/$f"
 }
 
+# rtref's kd runs take the plain SAH tree, the one the chip walks
+# (kernel-ref/kdtree.c): by default rtref builds its own for the view's
+# packet footprint (docs/kernel-ref.md, "rtref's own tree"), which at this
+# size cuts so little that its counts would say more about the frame size
+# than about the structure.
+KD="--kd-footprint 0"
 for v in $VIEWS; do
 	W="--views $VF --view $v --size $SIZE"
-	run "$v-kd.json" rtref $W --out "$OUT/$v-kd.ppm"
+	run "$v-kd.json" rtref $W $KD --out "$OUT/$v-kd.ppm"
 	run "$v-grid.json" rtref $W --accel grid --out "$OUT/$v-grid.ppm"
 	run "$v-chip.json" saarsim $W
 	run "$v-chip-grid.json" saarsim $W --accel grid
 	# seed 003 Table 4: primary rays, no macrocells
 	P="$W --no-shadows --depth 0"
-	run "$v-t4-kd.json" rtref $P
+	run "$v-t4-kd.json" rtref $P $KD
 	for k in 1 4 8; do
 		run "$v-t4-$k.json" rtref $P --accel grid --grid-macro 0 --grid-packet "$k"
 	done
@@ -102,7 +108,7 @@ done
 
 for t in $TIMES; do
 	R="--scene $AFF --anim-time $t --size $SIZE"
-	run "robots-$t-kd.json" rtref $R --out "$OUT/robots-$t-kd.ppm"
+	run "robots-$t-kd.json" rtref $R $KD --out "$OUT/robots-$t-kd.ppm"
 	run "robots-$t-grid.json" rtref $R --accel grid --out "$OUT/robots-$t-grid.ppm"
 	run "robots-$t-two-level.json" rtref $R --two-level --out "$OUT/robots-$t-two-level.ppm"
 	run "robots-$t-chip.json" saarsim $R
@@ -110,5 +116,13 @@ for t in $TIMES; do
 	run "robots-$t-chip-two-level.json" saarsim $R --two-level
 done
 
+# what the document names as its origin: the commit, the date, the host
+ACCEL_COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+if [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ]; then
+	ACCEL_COMMIT="$ACCEL_COMMIT (with uncommitted changes)"
+fi
+ACCEL_DATE=$(date -u '+%Y-%m-%d %H:%M UTC')
+ACCEL_HOST="$(nproc 2>/dev/null || echo '?') CPUs, $(awk -F': ' '/^model name/ { print $2; exit }' /proc/cpuinfo 2>/dev/null || :)"
+export ACCEL_COMMIT ACCEL_DATE ACCEL_HOST
 python3 "$ROOT/scripts/accel-doc.py" "$OUT" "$DOC" "$SIZE" "$VIEWS" "$TIMES" "$BIG" "$BS"
 say "wrote $DOC"

@@ -77,3 +77,45 @@ Test(scripts, readme_examples_print_what_the_readme_shows, .timeout = 900)
 	cr_assert(n && sscanf(n + 11, "%d of %d pictures", &ok, &all) == 2, "%s", out);
 	cr_assert(ok == all && all >= 3, "%d of %d pictures:\n%s", ok, all, out);
 }
+
+/* `make accel` (scripts/accel.sh, accel-doc.py) at a tiny size on one
+ * view: it writes its document, whose kd-tree columns come from the plain
+ * SAH tree the chip walks. Catches rtref's kd runs left on rtref's own
+ * tree for the view's packets (docs/ACCEL.md's kd steps and tests per ray
+ * came from it for a day after that tree became rtref's default: dragon2
+ * at 128x96 1.83 steps and 46.9 tests per ray instead of the plain tree's
+ * 9.1 and 1.73, set beside the grid's as if they were the same kd-tree),
+ * and a document written from such a run. */
+Test(scripts, accel_compares_the_plain_kd_tree, .timeout = 300)
+{
+	char views[512], dir[256], runs[300], cmd[4096];
+	SCENE_OR_SKIP(views, "views.yaml");
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(runs, sizeof runs, "%s/runs", dir);
+	snprintf(cmd, sizeof cmd,
+	         "ACCEL_SIZE=16x16 ACCEL_VIEWS=cornell ACCEL_TIMES=0 ACCEL_T4_VIEW=cornell "
+	         "ACCEL_OUT='%s/runs' ACCEL_DOC='%s/ACCEL.md' SAAR_SCENES='%s' "
+	         "sh '%s/scripts/accel.sh' '%s' >'%s/log' 2>&1",
+	         dir, dir, tu_scenes_dir(), root(), tu_bin_dir(), dir);
+	cr_assert_eq(tu_run(cmd), 0, "accel.sh failed:\n%s", tu_slurp(dir, "log"));
+	const char *doc = tu_slurp(dir, "ACCEL.md");
+	cr_assert(strstr(doc, "| cornell | 32 |"), "no cornell row in:\n%s", doc);
+	cr_assert(strstr(doc, "Generated ") && strstr(doc, "; commit "),
+	          "the document names no date, host or commit:\n%s", doc);
+	/* each kd run's tree is the plain one */
+	const char *kd[] = {"cornell-kd.json", "cornell-t4-kd.json", "robots-0-kd.json"};
+	for (size_t i = 0; i < sizeof kd / sizeof *kd; i++) {
+		const char *js = tu_slurp(runs, kd[i]);
+		cr_assert(strstr(js, "\"footprint_from\": \"none\""), "%s: %s", kd[i], js);
+	}
+	/* and the document is not written from a run on rtref's own tree */
+	snprintf(cmd, sizeof cmd,
+	         "sed -i 's/\"footprint_from\": \"none\"/\"footprint_from\": \"view\"/' "
+	         "'%s/cornell-kd.json' && "
+	         "python3 '%s/scripts/accel-doc.py' '%s' '%s/A2.md' 16x16 cornell 0 cornell "
+	         "64x64 >'%s/log2' 2>&1",
+	         runs, root(), runs, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "accel-doc.py took a footprint tree's run:\n%s",
+	             tu_slurp(dir, "log2"));
+	cr_assert(strstr(tu_slurp(dir, "log2"), "plain SAH tree"), "%s", tu_slurp(dir, "log2"));
+}
