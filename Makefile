@@ -50,11 +50,18 @@ endif
 # x86-64. Images are bit-identical either way (exact selects, no FMA contraction).
 ARCH     ?= $(shell $(CC) -march=native -E -x c /dev/null >/dev/null 2>&1 && echo -march=native)
 WARN     := -Wall -Wextra -Werror -Wshadow -Wno-unused-parameter -Wno-psabi
+# No superword (SLP) vectorizing: Debian 12's GCC 12.2 vectorizes two floats
+# narrowed from doubles and widened back into the original doubles, their
+# rounding dropped (tests/test_compiler.c; the stress suite's double
+# reference took an unrounded ray origin). It costs nothing measured
+# (docs/NUMERICS.md, "The compiler"). Wherever the compiler knows the flag.
+NOSLP    := $(shell $(CC) -fno-tree-slp-vectorize -E -x c /dev/null >/dev/null 2>&1 && echo -fno-tree-slp-vectorize)
+NOSLPXX  := $(shell $(CXX) -fno-tree-slp-vectorize -E -x c++ /dev/null >/dev/null 2>&1 && echo -fno-tree-slp-vectorize)
 # Our flags first; the user's CFLAGS/CXXFLAGS (make CFLAGS=...) add to them.
 XCFLAGS  := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE $(OPT) $(ARCH) -ffp-contract=off \
-            $(WARN) $(SANFLAGS) -MMD -MP -I. $(CFLAGS)
-XCXXFLAGS := -std=c++17 $(OPT) $(ARCH) -ffp-contract=off -Wall -Wextra -Werror $(SANFLAGS) -MMD -MP \
-            -I. $(CXXFLAGS)
+            $(NOSLP) $(WARN) $(SANFLAGS) -MMD -MP -I. $(CFLAGS)
+XCXXFLAGS := -std=c++17 $(OPT) $(ARCH) -ffp-contract=off $(NOSLPXX) -Wall -Wextra -Werror $(SANFLAGS) \
+            -MMD -MP -I. $(CXXFLAGS)
 LDLIBS   := -pthread -lm -ldl
 
 # Dependency check runs once per build dir; pkg-config must exist to ask.
