@@ -425,8 +425,8 @@ Test(saarsim_cli, host_memory_estimate_bounds_the_peak, .timeout = 120)
 	const char *cases[] = {"--size 16x16 --set chip.rtps=16 --set chip.threads_per_rtp=512",
 	                       "--size 128x128 --set chip.rtps=16 --set chip.threads_per_rtp=64",
 	                       "--size 16x16 --set memory.l1.kd.size_kb=131072",
-	                       "--size 16x16 --set memory.vma.enabled=true --set "
-	                       "memory.sdram.mb=1024"};
+	                       ("--size 16x16 --set memory.vma.enabled=true --set "
+	                        "memory.sdram.mb=1024")};
 	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
 		char args[1024];
 		snprintf(args, sizeof args, "%s --no-check --report %s/r.json", cases[i], dir);
