@@ -97,7 +97,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test readme-check bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets bench-frontier stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test readme-check figures-check bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets bench-frontier stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -160,6 +160,11 @@ bench-fidelity: all
 # the page's (scripts/readme-check.py; `make test` runs it too).
 readme-check: all
 	SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) python3 scripts/readme-check.py --bin $(B)
+
+# The generated documents' figures rerun: the runs their generators name in
+# figures-check lines (scripts/figures-check.py; `make test` runs it too).
+figures-check: all
+	SAAR_SCENES=$(or $(SAAR_SCENES),$(CURDIR)/../shared/scenes) python3 scripts/figures-check.py --bin $(B)
 
 # issue 36: the profile builds its own valgrind-runnable copy (ARCH=-mavx2)
 bench-profile:

@@ -116,6 +116,16 @@ for t in $TIMES; do
 	run "robots-$t-chip-two-level.json" saarsim $R --two-level
 done
 
+# two runs of the first view for `make test` to rerun (scripts/figures-check.py):
+# the chip on the kd-tree, and rtref's Table 4 run on the plain tree
+set -- $VIEWS
+V1=$1
+python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$OUT/$V1-chip.json" fps cycles \
+	traversal.kd_node_steps -- --views "$VF" --view "$V1" --size "$SIZE" --quiet >"$OUT/checks" &&
+	python3 "$ROOT/scripts/figures-check.py" --emit rtref "$OUT/$V1-t4-kd.json" kd_node_visits \
+		ray_triangle_tests leaf_visits -- --views "$VF" --view "$V1" --size "$SIZE" \
+		--no-shadows --depth 0 --threads 1 $KD >>"$OUT/checks" || bad "figures-check.py --emit failed"
+
 # what the document names as its origin: the commit, the date, the host
 ACCEL_COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 if [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ]; then

@@ -23,8 +23,11 @@ def fail(msg):
     sys.exit(1)
 
 
+PATHS = {}
+
+
 def load():
-    """{(view, cone): report} of the finished points."""
+    """{(view, cone): report} of the finished points (their files in PATHS)."""
     pts = {}
     with open(os.path.join(OUT, "points.tsv")) as f:
         hdr = f.readline().rstrip("\n").split("\t")
@@ -32,8 +35,10 @@ def load():
             c = dict(zip(hdr, line.rstrip("\n").split("\t")))
             js = os.path.join(OUT, "points", c["id"] + ".json")
             if os.path.isfile(js):
+                key = (c["view"], c.get("chip.cone_cull", "false"))
                 with open(js) as g:
-                    pts[(c["view"], c.get("chip.cone_cull", "false"))] = json.load(g)
+                    pts[key] = json.load(g)
+                PATHS[key] = js
     return pts
 
 
@@ -147,6 +152,24 @@ def slope_fit(xs, ys):
     return b, r2
 
 
+def check_line():
+    """The video's settings (the ls-0.5 point) as configs/drt-views.yaml's
+    billiard-drt view holds them, for `make test` to rerun
+    (scripts/figures-check.py)."""
+    rep("ls-0.5")
+    args = ["--views", "configs/drt-views.yaml", "--view", "billiard-drt", "--size", SIZE]
+    if len(CONES) > 1:
+        args += ["--set", "chip.cone_cull=false"]
+    fc = os.path.join(os.path.dirname(os.path.realpath(__file__)), "figures-check.py")
+    r = subprocess.run([sys.executable, fc, "--emit", "saarsim", PATHS[("ls-0.5", "false")],
+                        "fps", "cycles", "ray_types.primary.kd_node_steps",
+                        "ray_types.shadow.kd_node_steps", "--"] + args,
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        fail("figures-check.py --emit: " + r.stderr.strip())
+    return r.stdout.strip() + "\n"
+
+
 def main():
     base = rep("pinhole")
     out = []
@@ -180,6 +203,7 @@ def main():
         for x, v in pts:
             w(row(v, rep(v), base))
     w("")
+    w(check_line())
     for key, title, xl, pts, logx in SWEEPS:
         png = plot(key, title, xl, pts, logx)
         w("### %s\n\n![%s](%s)\n" % (title, title, png))

@@ -231,6 +231,14 @@ def main():
     L += frame_rows("std")
     L += ["", "## Scene in host memory, over PCI (configs/saarcor-vma.yaml)", "", hdr % "PCI", sep]
     L += frame_rows("vma")
+    checks = []
+    for run in ("flat-std", "warm-std"):
+        p = os.path.join(OUT, run + ".check")
+        if not os.path.isfile(p):
+            fail("no %s (scripts/dynamic.sh writes it with the run)" % p)
+        with open(p) as f:
+            checks.append(f.read().strip())
+    L += [""] + checks
     L += [
         "",
         "## What this shows and what it does not",

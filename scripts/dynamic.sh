@@ -49,6 +49,23 @@ run() {
 	if grep -q "packets DIFFERENT\|single rays DIFFERENT" "$OUT/$name.txt"; then
 		bad "$name: a frame differs from kernel-ref's (see $OUT/$name.txt)"
 	fi
+	# two runs for `make test` to rerun (scripts/figures-check.py): the warm
+	# animation as it ran, and the flat one's first frame alone (each flat
+	# frame is a fresh world and chip)
+	case $name in
+	warm-std) python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$OUT/$name.json" \
+		per_frame.0.fps steady_state.fps -- --scene "$AFF" --config "$ROOT/configs/$cfg.yaml" \
+		--size "$SIZE" --anim-time "$T0" --anim-fps "$FPS" --frames "$FRAMES" --quiet "$@" \
+		>"$OUT/$name.check" || bad "$name: figures-check.py --emit failed" ;;
+	flat-std)
+		f0=$OUT/$name.json
+		[ "$FRAMES" -gt 1 ] && f0=$OUT/$name-0000.json
+		python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$f0" fps cycles \
+			traversal.kd_node_steps -- --scene "$AFF" --config "$ROOT/configs/$cfg.yaml" \
+			--size "$SIZE" --anim-time "$T0" --quiet "$@" >"$OUT/$name.check" ||
+			bad "$name: figures-check.py --emit failed" ;;
+	*) rm -f "$OUT/$name.check" ;;
+	esac
 }
 
 say "Robots, $FRAMES frames at $FPS fps from t = $T0, $SIZE: flat and two-level, std and VMA"

@@ -1127,6 +1127,10 @@ p("saarsim is a model of the published SaarCOR description, not of its RTL. Unit
   "a procedural scene.")
 p()
 
+if E.get("VD_CHECKS"):  # runs for `make test` to rerun (scripts/figures-check.py)
+    p(E["VD_CHECKS"])
+    p()
+
 tmp = DOC + ".tmp.%d" % os.getpid()
 with open(tmp, "w") as f:
     f.write("\n".join(L))

@@ -259,6 +259,19 @@ PNG=$DOCDIR/validation-threads.png
 cp "$SRC" "$PNG.tmp.$$"
 mv -f "$PNG.tmp.$$" "$PNG"
 
+# one run for `make test` to rerun (scripts/figures-check.py): Conference,
+# the standard config, 16 threads per RTP (F1's and F3's run), as the
+# sweep ran it
+CHECKS=
+if has conference; then
+	id=$(awk -F'\t' 'NR > 1 && $3 == "conference" && $4 == "16" { print $1; exit }' \
+		"$OUT/std/points.tsv")
+	[ -n "$id" ] && [ -f "$OUT/std/points/$id.json" ] || die "no Conference 16-thread run in $OUT/std"
+	CHECKS=$(python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$OUT/std/points/$id.json" \
+		fps cycles units.isect.utilisation -- --views "$VIEWS" --view conference --config "$STD" \
+		--size "$SIZE" --frames 2 --set chip.threads_per_rtp=16) ||
+		die "figures-check.py --emit failed"
+fi
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 if [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ]; then
 	COMMIT="$COMMIT (with uncommitted changes)"
@@ -266,7 +279,7 @@ fi
 VD_DATE=$(date -u '+%Y-%m-%d %H:%M UTC')
 VD_HOST="$(uname -n), $(uname -m), $(awk -F': ' '/^model name/ { print $2; exit }' /proc/cpuinfo 2>/dev/null || :)"
 export VD_OUT="$OUT" VD_DOC="$DOC" VD_SIZE="$SIZE" VD_LARGE="$LARGE" VD_SMALL="$SMALL" VD_LIST="$LIST" VD_TV="$TV" \
-	VD_ASSUMED="$ASSUMED" VD_BALLS="$BALLS" VD_COMMIT="$COMMIT" VD_DATE VD_HOST \
+	VD_ASSUMED="$ASSUMED" VD_BALLS="$BALLS" VD_COMMIT="$COMMIT" VD_DATE VD_HOST VD_CHECKS="$CHECKS" \
 	VD_LIGHTS="conference: ($CONF_L1), ($CONF_L2), ($CONF_L3); $BALLS: ($BALLS_L1), ($BALLS_L2), ($BALLS_L3)"
 python3 "$ROOT/scripts/validate-doc.py" || die "scripts/validate-doc.py failed"
 say "wrote $DOC, $PNG and $DOCDIR/validation-published.png"

@@ -26,6 +26,18 @@ __attribute__((noinline)) static void narrow_widen(const double in[3], tc_vec3 *
 	out[0] = o->x, out[1] = o->y, out[2] = o->z;
 }
 
+/* The same through memory: two doubles narrowed into a float array, read
+ * back into doubles (GCC 12.2 with SLP stores the original doubles here
+ * too). */
+__attribute__((noinline)) static void narrow_widen_mem(const double in[2], float f[2],
+                                                       double out[2])
+{
+	f[0] = (float)in[0];
+	f[1] = (float)in[1];
+	out[0] = f[0];
+	out[1] = f[1];
+}
+
 /* A double narrowed to float and widened back is the float's value, not
  * the double's (C11 6.3.1.5). Catches the SLP vectorizer of GCC 12.2 at
  * -O2 left on (the Makefile's NOSLP taken out: mutant 85), under which
@@ -43,4 +55,10 @@ Test(compiler, a_float_keeps_its_rounding_when_widened)
 		cr_assert_neq(out[k], in[k], "field %d kept the double %a", k, in[k]);
 	}
 	cr_assert_eq((double)o.x, (double)want[0]);
+	float f[2];
+	double out2[2];
+	narrow_widen_mem(in, f, out2);
+	for (int k = 0; k < 2; k++)
+		cr_assert_eq(out2[k], (double)f[k], "element %d read back as %a, not the float %a",
+		             k, out2[k], (double)f[k]);
 }
