@@ -116,7 +116,10 @@ def check(argv):
                              os.path.join(root, "..", "shared", "scenes"))
     if not docs:
         d = os.path.join(root, "docs")
-        docs = sorted(os.path.join(d, f) for f in os.listdir(d) if f.endswith(".md"))
+        try:
+            docs = sorted(os.path.join(d, f) for f in os.listdir(d) if f.endswith(".md"))
+        except OSError as e:
+            bad(f"{d}: {e}")
     runs = ok = 0
     env = dict(os.environ, SAARSIM_CACHE_DIR="off")
     with tempfile.TemporaryDirectory() as tmp:
@@ -158,8 +161,11 @@ def check(argv):
                 if r.returncode != 0:
                     last = (r.stderr.strip().splitlines() or [""])[-1]
                     bad(f"{where}: {parts[0]}: exit {r.returncode}: {last}")
-                with open(report) as f:
-                    got = json.load(f)
+                try:
+                    with open(report) as f:
+                        got = json.load(f)
+                except (OSError, ValueError) as e:
+                    bad(f"{where}: {parts[0]}: its report: {e}")
                 diffs = []
                 for k, v in want:
                     try:
