@@ -55,6 +55,15 @@ def value_at(doc, path):
     return x
 
 
+def load_report(path, where):
+    """A run's JSON report, or one line naming it and exit 2."""
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as e:
+        bad(f"{where}: {e}")
+
+
 def as_text(v):
     """A JSON scalar as the check line writes it (json.dumps: 2058.47935,
     258929, null, true)."""
@@ -69,11 +78,7 @@ def emit(argv):
     prog, report, keys = head[0], head[1], head[2:]
     if prog not in PROGS or not keys:
         bad(f"--emit: PROG must be saarsim or rtref with at least one KEY, got {head}")
-    try:
-        with open(report) as f:
-            doc = json.load(f)
-    except (OSError, ValueError) as e:
-        bad(f"{report}: {e}")
+    doc = load_report(report, report)
     root = os.path.dirname(os.path.dirname(os.path.realpath(__file__))) + "/"
     scenes = os.environ.get("SAAR_SCENES") or os.path.join(root, "..", "shared", "scenes")
     scenes = os.path.normpath(os.path.abspath(scenes)) + "/"
@@ -161,11 +166,7 @@ def check(argv):
                 if r.returncode != 0:
                     last = (r.stderr.strip().splitlines() or [""])[-1]
                     bad(f"{where}: {parts[0]}: exit {r.returncode}: {last}")
-                try:
-                    with open(report) as f:
-                        got = json.load(f)
-                except (OSError, ValueError) as e:
-                    bad(f"{where}: {parts[0]}: its report: {e}")
+                got = load_report(report, f"{where}: {parts[0]}: its report")
                 diffs = []
                 for k, v in want:
                     try:
