@@ -44,6 +44,21 @@ Test(scripts, bench_library_functions_come_with_the_library)
 	              tu_slurp(dir, "n"));
 }
 
+/* A checker's summary "PREFIX N of M ...", the first from *at on: all
+ * N of at least min things passed (a checker that found nothing to check
+ * would pass saying nothing). *at moves past it, to a second summary of
+ * the same output. */
+static void all_of_at_least(const char **at, const char *prefix, int min, const char *what,
+                            const char *out)
+{
+	size_t k = strlen(prefix);
+	const char *n = strstr(*at, prefix);
+	int ok = 0, all = 0;
+	cr_assert(n && sscanf(n + k, "%d of %d", &ok, &all) == 2, "%s", out);
+	cr_assert(ok == all && all >= min, "%d of %d %s:\n%s", ok, all, what, out);
+	*at = n + k;
+}
+
 /* Every example of README.md prints what the page shows, and its
  * pictures are what the examples draw (scripts/readme-check.py: the
  * commands run in the page's order in a scratch folder; cycles, fps,
@@ -66,16 +81,11 @@ Test(scripts, readme_examples_print_what_the_readme_shows, .timeout = 900)
 	int rc = tu_run(cmd);
 	const char *out = tu_slurp(dir, "out");
 	cr_assert_eq(rc, 0, "README.md's examples differ from what they print:\n%s", out);
-	/* it ran the page's examples (25 when written; a run that found
-	 * none would pass saying nothing) */
-	const char *n = strstr(out, "README.md: ");
-	int ok = 0, all = 0;
-	cr_assert(n && sscanf(n + 11, "%d of %d", &ok, &all) == 2, "%s", out);
-	cr_assert(ok == all && all >= 20, "%d of %d examples:\n%s", ok, all, out);
-	/* and compared its pictures (3 when written) */
-	n = strstr(n + 11, "README.md: ");
-	cr_assert(n && sscanf(n + 11, "%d of %d pictures", &ok, &all) == 2, "%s", out);
-	cr_assert(ok == all && all >= 3, "%d of %d pictures:\n%s", ok, all, out);
+	/* it ran the page's examples (25 when written) and compared its
+	 * pictures (3 when written) */
+	const char *at = out;
+	all_of_at_least(&at, "README.md: ", 20, "examples", out);
+	all_of_at_least(&at, "README.md: ", 3, "pictures", out);
 }
 
 /* `make accel` (scripts/accel.sh, accel-doc.py) at a tiny size on one
@@ -140,11 +150,9 @@ Test(scripts, documents_show_the_programs_figures, .timeout = 900)
 	const char *out = tu_slurp(dir, "out");
 	cr_assert_eq(rc, 0, "documents whose figures the program no longer gives:\n%s", out);
 	/* it reran the generators' runs (8 when written: NUMERICS 2, DYNAMIC 2,
-	 * ACCEL 2, DRT 1, VALIDATION 1; none found would pass saying nothing) */
-	int ok = 0, all = 0;
-	const char *n = strstr(out, "figures-check: ");
-	cr_assert(n && sscanf(n + 15, "%d of %d", &ok, &all) == 2, "%s", out);
-	cr_assert(ok == all && all >= 8, "%d of %d runs:\n%s", ok, all, out);
+	 * ACCEL 2, DRT 1, VALIDATION 1) */
+	const char *at = out;
+	all_of_at_least(&at, "figures-check: ", 8, "runs", out);
 	/* a figure changed (a digit put in front of DRT.md's fps) is found
 	 * and named */
 	snprintf(cmd, sizeof cmd,
