@@ -99,6 +99,19 @@ print("region_tiles", f.get("unit_tiles", 0) + f.get("warmup_tiles", 0))
 EOF
 }
 
+# figures-check lines (scripts/figures-check.py): `make test` reruns a few
+# of the runs this file shows, without a world cache, and compares their
+# figures with the ones here. check_line FILE REPORT KEY... -- ARGS...
+# appends the line for a run made with ARGS to FILE.
+check_line() {
+	cf_file=$1
+	shift
+	SAAR_SCENES="$SC" python3 scripts/figures-check.py --emit saarsim "$@" >>"$cf_file" || {
+		echo "bench-fidelity: figures-check.py --emit failed" >&2
+		return 1
+	}
+}
+
 # ---- distribution ray tracing (issue 32 item 5) ----
 # The DRT views of configs/drt-views.yaml (16 samples per pixel, every
 # effect on; billiard also at 64) at BENCH_DRT_SIZE (default 512x384: at
@@ -129,6 +142,12 @@ drt_rows() { # appends rows to $1
 				# full warming, as before auto chose stored with a cache
 				run pt "$@" --fidelity sampled --sample-rate "$mode" --set sampling.warming=full \
 					>"$TMP/dpt.kv" || continue
+				# the first rate's sampled run on cornell-drt, for make test
+				if [ "$vs" = cornell-drt@16 ] && [ "$mode" = "${DRT_RATES%% *}" ]; then
+					check_line "$DRT_CHECKS" "$TMP/pt.0.json" steady_state.fps fidelity.fps_ci95.0 \
+						fidelity.fps_ci95.1 -- "$@" --fidelity sampled --sample-rate "$mode" \
+						--set sampling.warming=full --no-check
+				fi
 			fi
 			python3 - "$TMP/dtruth.kv" "$TMP/dpt.kv" "$view" "$spp" "$mode" "$DRT_SIZE" >>"$drows" <<'EOF'
 import sys
@@ -160,6 +179,8 @@ EOF
 drt_section() {
 	rows="$TMP/drt_rows.md"
 	: >"$rows"
+	DRT_CHECKS="$TMP/drt_checks.md"
+	: >"$DRT_CHECKS"
 	drt_rows "$rows"
 	sec="$TMP/drt_sec.md"
 	{
@@ -171,6 +192,7 @@ drt_section() {
 		echo "| view | spp | mode | size | cycle sim s | mode sim s | speed-up | cycle fps | mode fps | fps err % | CI lo | CI hi | inside | shade hit err | kd | list | tri | SDRAM MB err % |"
 		echo "|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"
 		cat "$rows"
+		cat "$DRT_CHECKS"
 		echo "<!-- END fidelity-drt -->"
 	} >"$sec"
 	if [ -f "$OUT" ] && grep -q '<!-- BEGIN fidelity-drt -->' "$OUT"; then
@@ -194,6 +216,8 @@ fi
 
 ROWS="$TMP/rows.tsv"
 : >"$ROWS"
+CHECKS="$TMP/checks.md" # figures-check lines: Conference, std, 16 threads
+: >"$CHECKS"
 CENSUS="$TMP/census.txt" # per Conference config and thread count: its census (the sample table)
 : >"$CENSUS"
 for view in $VIEWS; do
@@ -227,6 +251,12 @@ for view in $VIEWS; do
 			[ "$view" = conference ] && cen="--census $TMP/census_${cfg}_$tpr.csv"
 			# shellcheck disable=SC2086 # cen is two words or none
 			run truth "$@" $cen >"$TMP/truth.kv" || continue
+			# Conference, standard config, 16 threads: its truth and
+			# its first rate's sampled point, for make test
+			chk=
+			if [ "$view" = conference ] && [ "$cfg" = std ] && [ "$tpr" = 16 ]; then chk=1; fi
+			[ -z "$chk" ] || check_line "$CHECKS" "$TMP/truth.0.json" steady_state.fps cycles \
+				-- "$@" --no-check
 			censused=
 			# Conference: replicas at other sampling offsets too; every
 			# rate and offset also with stored warming (rate@offset@stored),
@@ -250,6 +280,12 @@ for view in $VIEWS; do
 						--set sampling.offset="$(echo "$mode" | cut -d@ -f2)" \
 						--set sampling.warming="$(echo "$mode" | cut -d@ -f3)" \
 						>"$TMP/pt.kv" || continue
+					if [ -n "$chk" ] && [ "$mode" = "${RATES%% *}@0.5@full" ]; then
+						check_line "$CHECKS" "$TMP/pt.0.json" steady_state.fps \
+							fidelity.fps_ci95.0 fidelity.fps_ci95.1 -- "$@" --fidelity sampled \
+							--sample-rate "${mode%%@*}" --set sampling.offset=0.5 \
+							--set sampling.warming=full --no-check
+					fi
 				fi
 				# the census's regions: a sampled point's unit and warm-up
 				if [ -n "$cen" ] && [ -z "$censused" ] && [ "$mode" != functional ] && [ "$tpr" -gt 1 ]; then
@@ -530,6 +566,7 @@ EOF
 	echo "| view | config | threads | mode / rate | size | cycle s | mode s | speed-up | cycle fps | mode fps | fps err % | CI low | CI high | true in CI | shade pp | kd pp | list pp | tri pp | tag pp | l2 pp | SDRAM MB err % | PCI MB err % | whole-run speed-up | record |"
 	echo "|---|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
 	awk -F'\t' 'BEGIN {OFS=" | "} {if ($14 == 1) $14 = "yes"; else if ($14 == 0) $14 = "NO"; else if ($14 == -2) $14 = "(exact)"; else $14 = "(bound)"; $24 = $24 == 1 ? "replayed" : "-"; $1 = $1; print "| " $0 " |"}' "$ROWS"
+	cat "$CHECKS"
 	echo
 	if [ -s "$REP" ]; then
 		echo "### Replicas on a small, sparse frame"
