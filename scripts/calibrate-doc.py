@@ -203,6 +203,10 @@ P("| F2 gain 16 -> 32 threads | +10 points (7-13) | %+.1f | %+.1f | %+.1f | %+.1
   (A["gain"], C["gain"], CC["gain"], C["gain"] - 10, verdict(C["gain"], 7, 13)))
 P("| F3 VMA fps loss | 11.7%% (10.46-12.90) | %.1f%% | %.1f%% | %.1f%% | %+.1f points | %s |" %
   (A["loss"], C["loss"], CC["loss"], C["loss"] - 11.7, verdict(C["loss"], F3LO, F3HI)))
+# the assumed and the chosen point's standard 16-thread runs, for `make
+# test` to rerun (scripts/figures-check.py; calibrate.sh writes the lines)
+for line in open(need(os.path.join(OUT, "final", "checks.md"))):
+    P(line.rstrip("\n"))
 P()
 same = all(band(X[k], lo, hi) == band(C[k], lo, hi)
            for X in (CC,) for k, lo, hi in (("u16", 60, 80), ("gain", 7, 13), ("loss", F3LO, F3HI)))

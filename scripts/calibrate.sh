@@ -316,6 +316,31 @@ run_sweep "$OUT/final/std-config" "$SIZE" "$ROOT/configs/saarcor-std.yaml" \
 run_sweep "$OUT/final/vma-config" "$SIZE" "$ROOT/configs/saarcor-vma.yaml" \
 	--set chip.threads_per_rtp=16 -- --world-cache "$WC" --no-check
 
+# two runs for `make test` to rerun (scripts/figures-check.py): the assumed
+# and the chosen point, standard, 16 threads, at the search size, as the
+# final sweeps ran them (calibrate-doc.py prints the lines)
+: >"$OUT/final/checks.md"
+for pt in assumed chosen; do
+	d=$OUT/final/$pt-$SIZE
+	id=$(awk -F'\t' 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+		$c["chip.threads_per_rtp"] == "16" && $c["memory.vma.enabled"] == "false" { print $1; exit }' \
+		"$d/points.tsv")
+	[ -n "$id" ] && [ -f "$d/points/$id.json" ] || {
+		say "no standard 16-thread run in $d"
+		exit 1
+	}
+	[ "$pt" = chosen ] || set --
+	SAAR_SCENES=$SAAR_SCENES python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$d/points/$id.json" \
+		steady_state.fps cycles -- --config "$ASSUMED" --views "$VIEWS" --view "$VIEW" \
+		--size "$SIZE" --frames 2 --set chip.threads_per_rtp=16 --set memory.vma.enabled=false \
+		--no-check "$@" >>"$OUT/final/checks.md" || {
+		say "figures-check.py --emit failed"
+		exit 1
+	}
+	set --
+	while IFS= read -r a; do set -- "$@" --set "$a"; done <"$CUR"
+done
+
 # ---- the doc
 python3 "$ROOT/scripts/calibrate-doc.py" "$OUT" "$SIZE" "$CHECK_SIZE" "$ROUNDS_RUN" "$steps" \
 	"$(git -C "$ROOT" describe --always 2>/dev/null || echo unknown)$(git -C "$ROOT" diff --quiet HEAD -- \
