@@ -15,7 +15,8 @@
 # and 64 threads per RTP; two frames; the VMA off and on (and on a 16 MB
 # board, so that the on-board cache evicts); round robin and oldest-first;
 # both tile orders; core clocks on the SDRAM's clock edges (same-tick
-# event order). Reports are compared by scripts/report-diff.py: every
+# event order); two sampled frames large enough to be estimated (512x384,
+# 16 and 1 threads per RTP). Reports are compared by scripts/report-diff.py: every
 # figure but the host's (times, memory) must be equal exactly, and every
 # frame must match kernel-ref's. Exit 0 when identical, 1 when not, 2 on
 # bad use. Every run names its world cache (OUT/wc) and its warming (the
@@ -37,9 +38,11 @@ SIZE=${SIZE:-96x96}
 # whose figures are meant. a40ac76 was the one before issue 30's redesign
 # (which changed no figure: 64 reports identical); d3653d2 merged issue 31's
 # calibration, which changed the standard configs' defaults on purpose, and
-# 5ef05a6 its rerun (unit widths 6/24, tRP 2, tag-cache latency 2). Move
-# it when a change means to change figures, never to make a check pass.
-BASE_REV=5ef05a6
+# 5ef05a6 its rerun (unit widths 6/24, tRP 2, tag-cache latency 2);
+# 84267b5 widened sampled mode's interval by the fitted SDRAM factor's and
+# overlap's uncertainty (the estimated runs' intervals; no other figure).
+# Move it when a change means to change figures, never to make a check pass.
+BASE_REV=84267b5
 
 usage() {
 	echo "usage: refmatrix.sh record SAARSIM OUT_DIR | compare OLD_DIR NEW_DIR | check [REV]" >&2
@@ -120,6 +123,18 @@ record() {
 					--set chip.clock_mhz=$clk --set memory.memif.policy=$pol
 			done
 		done
+	done
+	# sampled mode's estimator: the runs above are small enough for every
+	# tile to be detailed (estimated: false, the same as cycle), so two
+	# frames at 512x384 whose middle is estimated, with the max model's
+	# fitted SDRAM factor and overlap (16 threads) and with 1 thread per
+	# RTP (the linear model's range); their estimate and interval must not
+	# move either
+	for th in 16 1; do
+		# shellcheck disable=SC2086
+		run "estimated-threads$th" --views "$VIEWS" --view conference --size 512x384 \
+			--fidelity sampled --sample-rate 0.05 --set sampling.warming=full \
+			--set chip.threads_per_rtp=$th
 	done
 	# memory traces, census and the CSV row are reports too
 	# shellcheck disable=SC2086

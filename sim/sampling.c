@@ -326,6 +326,72 @@ static double lin_param_var(const smp_piece *u, int n, const smp_piece *pc, int 
 	return ss / (n - p) * q;
 }
 
+/* The frame's middle under demand model m: the stratified ratio estimate
+ * (r->est), its variance (r->var) and degrees of freedom (r->df, before
+ * the model's fitted parameters are taken off). */
+static void ratio_est(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
+                      const smp_model *m, smp_est *r)
+{
+	double X[2] = {0, 0};
+	int nc[2] = {0, 0};
+	for (int i = 0; i < npc; i++) {
+		X[pc[i].hard] += smp_demand(&pc[i], m);
+		nc[pc[i].hard]++;
+	}
+	/* two strata when each has at least two units, else one. The
+	 * residual variance is pooled over the strata: once the demand model
+	 * fits, both hold cycles near one ratio, and a memory-bound stratum of
+	 * two or three units would otherwise leave the interval one or two
+	 * degrees of freedom */
+	strat e = stratum(u, cyc, m, 0, n, 0, X[0], nc[0]);
+	strat h = stratum(u, cyc, m, 0, n, 1, X[1], nc[1]);
+	if (e.n >= 2 && h.n >= 2) {
+		r->est = e.R * X[0] + h.R * X[1];
+		r->df = e.n + h.n - 2;
+		r->var = (e.g + h.g) * (e.ss + h.ss) / r->df;
+	} else {
+		strat a = stratum(u, cyc, m, 0, n, -1, X[0] + X[1], nc[0] + nc[1]);
+		r->est = a.R * (X[0] + X[1]);
+		r->df = a.n - 1;
+		r->var = a.n > 1 ? a.g * a.ss / r->df : INFINITY;
+	}
+}
+
+/* The max model's fitted k and g are themselves uncertain: where the
+ * units' SDRAM and compute times never come close, other values fit them
+ * almost as well and, applied to chunks where the two do, give another
+ * frame. The values whose residual sum of squares stays within the 95%
+ * joint region of the fit (ss <= ss_best (1 + p F(p, d) / d), p the
+ * parameters fitted, d the residual degrees of freedom) are taken as
+ * possible; the largest distance of their estimates from r->est, divided
+ * by the interval's t quantile, is returned as a variance, so the
+ * interval's half-width is at least that distance. */
+static double max_param_var(const smp_piece *u, const double *cyc, int n, const smp_piece *pc,
+                            int npc, double kfix, double gfix, int p, const smp_est *r)
+{
+	int d = n - 1 - p;
+	if (d < 1 || r->df < 1)
+		return 0;
+	double F = p == 1 ? smp_t975(d) * smp_t975(d) : 0.5 * d * (pow(0.05, -2.0 / d) - 1);
+	double lim = ratio_ss(u, cyc, n, &r->model) * (1 + p * F / d), dev = 0;
+	int nk = kfix > 0 ? 0 : 150, ng = gfix >= 0 ? 0 : 50;
+	for (int gs = 0; gs <= ng; gs++)
+		for (int ks = 0; ks <= nk; ks++) {
+			smp_model m = {0,
+			               kfix > 0 ? kfix : 1.0 + 0.02 * ks,
+			               {0},
+			               gfix >= 0 ? gfix : 0.02 * gs};
+			if (ratio_ss(u, cyc, n, &m) > lim)
+				continue;
+			smp_est e;
+			ratio_est(u, cyc, n, pc, npc, &m, &e);
+			double x = fabs(e.est - r->est);
+			dev = x > dev ? x : dev;
+		}
+	double t = smp_t975((int)r->df);
+	return dev > 0 && isfinite(t) ? dev * dev / (t * t) : 0;
+}
+
 void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
                   double sdram_factor, double overlap, int demand_model, smp_est *r)
 {
@@ -359,30 +425,10 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 		}
 	}
 	r->model = *use;
-	double X[2] = {0, 0};
-	int nc[2] = {0, 0};
-	for (int i = 0; i < npc; i++) {
-		X[pc[i].hard] += smp_demand(&pc[i], use);
-		nc[pc[i].hard]++;
-	}
-	/* two strata when each has at least two units, else one. The
-	 * residual variance is pooled over the strata: once the demand model
-	 * fits, both hold cycles near one ratio, and a memory-bound stratum of
-	 * two or three units would otherwise leave the interval one or two
-	 * degrees of freedom */
-	strat e = stratum(u, cyc, use, 0, n, 0, X[0], nc[0]);
-	strat h = stratum(u, cyc, use, 0, n, 1, X[1], nc[1]);
-	if (e.n >= 2 && h.n >= 2) {
-		r->est = e.R * X[0] + h.R * X[1];
-		r->df = e.n + h.n - 2;
-		r->var = (e.g + h.g) * (e.ss + h.ss) / r->df;
-	} else {
-		strat a = stratum(u, cyc, use, 0, n, -1, X[0] + X[1], nc[0] + nc[1]);
-		r->est = a.R * (X[0] + X[1]);
-		r->df = a.n - 1;
-		r->var = a.n > 1 ? a.g * a.ss / r->df : INFINITY;
-	}
+	ratio_est(u, cyc, n, pc, npc, use, r);
 	r->df -= extra; /* the model's fitted parameters */
 	if (use->linear)
 		r->var = (r->var + lin_param_var(u, n, pc, npc, use, lss)) * infl;
+	else if (fitk || fitg)
+		r->var += max_param_var(u, cyc, n, pc, npc, sdram_factor, overlap, fitk + fitg, r);
 }

@@ -60,7 +60,9 @@ double smp_t975(int df);
  * units u (cycles cyc, strata u[j].hard) and the middle's npc pieces pc
  * (the units' own among them), with the demand model picked by
  * sampling.demand_model (enum cfg_demand_model), sampling.sdram_factor
- * (0 = fitted) and sampling.overlap (negative = fitted). */
+ * (0 = fitted) and sampling.overlap (negative = fitted). Its variance
+ * holds the fitted parameters' uncertainty too (the linear model's
+ * coefficients; the max model's k and g, docs/fidelity.md). */
 void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
                   double sdram_factor, double overlap, int demand_model, smp_est *r);
 
