@@ -511,6 +511,17 @@ if has_view sponza; then
 	    --set shading.max_depth=0 --no-check
 	SP="$SIM_S $WALL_S $(jget "$TMP/sp.json" cycles)"
 fi
+# figures-check lines (scripts/figures-check.py): `make test` reruns the
+# Sponza target run and the default policy's run below without a world
+# cache and compares their figures with the section's
+CHECKS=$TMP/checks
+: >"$CHECKS"
+check_line() { # REPORT KEY... -- ARGS...
+	SAAR_SCENES=$SCENES python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$@" >>"$CHECKS" ||
+		die "figures-check.py --emit failed"
+}
+[ -z "$SP" ] || check_line "$TMP/sp.json" cycles -- --views "$VIEWS" --view sponza --size 128x128 \
+	--set shading.max_depth=0 --no-check
 # (ii) + (iii) Conference 1024x768: hierarchy with the kernel-ref check (the
 # same frame, one host thread, in the same process), then the fixed model
 CF=
@@ -560,6 +571,8 @@ for pol in fifo round_robin frfcfs; do
 	    --set memory.memif.policy="$pol"
 	printf '%s %s %s %s %s\n' "$pol" "$(jget "$TMP/mp.json" cycles)" "$(jget "$TMP/mp.json" fps)" \
 	    "$(jget "$TMP/mp.json" sdram_utilisation)" "$(jget "$TMP/mp.json" waiting_memory)" >>"$MROWS"
+	[ "$pol" != frfcfs ] || check_line "$TMP/mp.json" cycles fps -- --views "$VIEWS" \
+		--view "$rp_view" --size 512x384 --no-check --set memory.memif.policy="$pol"
 done
 # (vii) the world cache (--world-cache): what a sweep point costs on one
 # view without it, when it stores, and on a hit (docs/kernel-ref.md cites
@@ -650,6 +663,7 @@ SECTION=$TMP/section_saarsim
 	echo "| policy | cycles/frame | fps at $MHZ MHz | SDRAM bus busy | threads waiting for memory |"
 	echo "|---|---:|---:|---:|---:|"
 	awk '{ printf "| %s | %d | %.1f | %.1f%% | %.1f%% |\n", $1, $2, $3, 100 * $4, 100 * $5 }' "$MROWS"
+	cat "$CHECKS"
 	echo
 	echo "### World cache ($rp_view 1024x768, sampled, one run each)"
 	echo

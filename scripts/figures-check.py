@@ -2,7 +2,9 @@
 """scripts/figures-check.py: the generated documents' figures are the program's.
 
 A document that a script writes from runs (docs/DYNAMIC.md, DRT.md,
-ACCEL.md, VALIDATION.md, NUMERICS.md) carries, inside its generated part,
+ACCEL.md, VALIDATION.md, NUMERICS.md, FIDELITY.md, CALIBRATION.md and
+PERFORMANCE.md's `make bench` and `make bench-ratio` sections) carries,
+inside its generated part,
 one or more lines
 
     <!-- figures-check: saarsim ARGS ; KEY=VALUE ; KEY=VALUE ... -->
