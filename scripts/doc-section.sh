@@ -42,9 +42,11 @@ doc_load() {
 }
 
 # doc_commit: HEAD's short hash, with " (plus uncommitted changes)" when a
-# tracked file differs from it (the figures may not be HEAD's).
+# tracked file outside docs/ differs from it (the figures may not be
+# HEAD's; a document, such as another section just written, moves none).
 doc_commit() {
 	_dc=$(git rev-parse --short HEAD)
-	[ -z "$(git status --porcelain --untracked-files=no)" ] || _dc="$_dc (plus uncommitted changes)"
+	[ -z "$(git status --porcelain --untracked-files=no -- . ':!docs')" ] ||
+		_dc="$_dc (plus uncommitted changes)"
 	printf '%s\n' "$_dc"
 }
