@@ -111,6 +111,22 @@ static double ratio_ss(const smp_piece *u, const double *cyc, int n, const smp_m
 	return ss;
 }
 
+/* The max model's (k, g) grid, shared by the fit and its uncertainty
+ * (max_param_var): k in [1, 4], g in [0, 1], steps of 0.02; a given k
+ * (kfix > 0) or g (gfix >= 0) is the only point on its axis. grid_steps
+ * gives the last step on each axis, grid_model the model at (ks, gs). */
+static void grid_steps(double kfix, double gfix, int *nk, int *ng)
+{
+	*nk = kfix > 0 ? 0 : 150;
+	*ng = gfix >= 0 ? 0 : 50;
+}
+
+static smp_model grid_model(double kfix, double gfix, int ks, int gs)
+{
+	smp_model m = {0, kfix > 0 ? kfix : 1.0 + 0.02 * ks, {0}, gfix >= 0 ? gfix : 0.02 * gs};
+	return m;
+}
+
 /* The max model's k and g for n units (demand, cycles). Where a unit's
  * SDRAM time nears its compute time, its cycles follow k x SDRAM time, k
  * about 1.5 for the standard SDRAM's row misses; with k = 1 those units
@@ -125,16 +141,14 @@ static double ratio_ss(const smp_piece *u, const double *cyc, int n, const smp_m
 void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, double gfix, double *k,
                  double *g)
 {
-	int nk = kfix > 0 ? 0 : 150, ng = gfix >= 0 ? 0 : 50;
+	int nk, ng;
+	grid_steps(kfix, gfix, &nk, &ng);
 	double sbest = INFINITY;
 	*k = kfix > 0 ? kfix : 1;
 	*g = gfix >= 0 ? gfix : 0;
 	for (int gs = 0; gs <= ng; gs++)
 		for (int ks = 0; ks <= nk; ks++) {
-			smp_model m = {0,
-			               kfix > 0 ? kfix : 1.0 + 0.02 * ks,
-			               {0},
-			               gfix >= 0 ? gfix : 0.02 * gs};
+			smp_model m = grid_model(kfix, gfix, ks, gs);
 			double ss = ratio_ss(u, cyc, n, &m);
 			if ((gs == 0 && ks == 0) || ss < sbest * (1 - 1e-6)) {
 				sbest = ss;
@@ -374,13 +388,11 @@ static double max_param_var(const smp_piece *u, const double *cyc, int n, const 
 		return 0;
 	double F = p == 1 ? smp_t975(d) * smp_t975(d) : 0.5 * d * (pow(0.05, -2.0 / d) - 1);
 	double lim = ratio_ss(u, cyc, n, &r->model) * (1 + p * F / d), dev = 0;
-	int nk = kfix > 0 ? 0 : 150, ng = gfix >= 0 ? 0 : 50;
+	int nk, ng;
+	grid_steps(kfix, gfix, &nk, &ng);
 	for (int gs = 0; gs <= ng; gs++)
 		for (int ks = 0; ks <= nk; ks++) {
-			smp_model m = {0,
-			               kfix > 0 ? kfix : 1.0 + 0.02 * ks,
-			               {0},
-			               gfix >= 0 ? gfix : 0.02 * gs};
+			smp_model m = grid_model(kfix, gfix, ks, gs);
 			if (ratio_ss(u, cyc, n, &m) > lim)
 				continue;
 			smp_est e;
