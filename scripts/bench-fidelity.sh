@@ -102,11 +102,13 @@ EOF
 # figures-check lines (scripts/figures-check.py): `make test` reruns a few
 # of the runs this file shows, without a world cache, and compares their
 # figures with the ones here. check_line FILE REPORT KEY... -- ARGS...
-# appends the line for a run made with ARGS to FILE.
+# appends the line for a run made with ARGS to FILE (doc-section.sh's
+# doc_check_line).
+. scripts/doc-section.sh
 check_line() {
 	cf_file=$1
 	shift
-	SAAR_SCENES="$SC" python3 scripts/figures-check.py --emit saarsim "$@" >>"$cf_file" || {
+	doc_check_line "$cf_file" "$SC" "$@" || {
 		echo "bench-fidelity: figures-check.py --emit failed" >&2
 		return 1
 	}

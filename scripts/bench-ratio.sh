@@ -82,9 +82,8 @@ for v in $VLIST; do
 		r=$((r + 1))
 	done
 	if [ ! -s "$TMP/checks" ]; then
-		SAAR_SCENES=$SCENES python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$TMP/r.json" \
-			cycles fps -- --views "$VIEWS" --view "$v" --size "$SIZE" >"$TMP/checks" ||
-			die "figures-check.py --emit failed"
+		doc_check_line "$TMP/checks" "$SCENES" "$TMP/r.json" cycles fps -- --views "$VIEWS" \
+			--view "$v" --size "$SIZE" || die "figures-check.py --emit failed"
 	fi
 	# rtref's default render of the same frame (the frustum walk on its
 	# own tree), one thread: its best render_ms over RUNS runs

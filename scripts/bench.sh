@@ -516,9 +516,8 @@ fi
 # cache and compares their figures with the section's
 CHECKS=$TMP/checks
 : >"$CHECKS"
-check_line() { # REPORT KEY... -- ARGS...
-	SAAR_SCENES=$SCENES python3 "$ROOT/scripts/figures-check.py" --emit saarsim "$@" >>"$CHECKS" ||
-		die "figures-check.py --emit failed"
+check_line() { # REPORT KEY... -- ARGS... (doc-section.sh)
+	doc_check_line "$CHECKS" "$SCENES" "$@" || die "figures-check.py --emit failed"
 }
 [ -z "$SP" ] || check_line "$TMP/sp.json" cycles -- --views "$VIEWS" --view sponza --size 128x128 \
 	--set shading.max_depth=0 --no-check

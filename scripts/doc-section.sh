@@ -41,6 +41,18 @@ doc_load() {
 	cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo "?"
 }
 
+# doc_check_line FILE SCENES REPORT KEY... -- ARGS...: appends to FILE the
+# figures-check line (scripts/figures-check.py --emit; `make test` reruns
+# it) of a saarsim run made with ARGS whose report is REPORT, the shared
+# scenes folder SCENES written as $SCENES; nonzero when --emit fails.
+# Scripts/ is found under ROOT, else the current folder.
+doc_check_line() {
+	_cl_file=$1 _cl_scenes=$2
+	shift 2
+	SAAR_SCENES=$_cl_scenes python3 "${ROOT:-.}/scripts/figures-check.py" --emit saarsim "$@" \
+		>>"$_cl_file"
+}
+
 # doc_commit: HEAD's short hash, with " (plus uncommitted changes)" when a
 # tracked file outside docs/ differs from it (the figures may not be
 # HEAD's; a document, such as another section just written, moves none).
