@@ -631,6 +631,36 @@ Test(fidelity, sdram_factor_tightens_conference, .timeout = 300)
 	world_free(&w);
 }
 
+/* Mistake: the fitted k and g's uncertainty taken from every value of
+ * their grid instead of those the units cannot rule out (the joint
+ * region of max_param_var): every interval would widen, also where the
+ * units pin k and g down, and no coverage test would see it. On
+ * Conference at 1024x768 (16 threads, rate 0.1) the interval with k and g
+ * fitted is at most a quarter wider than with the same values given
+ * (sampling.sdram_factor, sampling.overlap: nothing fitted, no term). */
+Test(fidelity, fitted_k_widens_little_where_the_units_pin_it, .timeout = 300)
+{
+	world w;
+	saar_config c;
+	shared_view(&w, &c, "conference", 1024, 768);
+	c.fidelity = CFG_FIDELITY_SAMPLED;
+	c.sampling.rate = 0.1;
+	c.sampling.demand_model = CFG_DEMAND_MAX;
+	chip *y = tu_run_chip(&w, &c);
+	double k = y->fid.model.k, g = y->fid.model.g, fitted = y->fid.half[0];
+	chip_destroy(y);
+	c.sampling.sdram_factor = k;
+	c.sampling.overlap = g;
+	y = tu_run_chip(&w, &c);
+	double given = y->fid.half[0];
+	chip_destroy(y);
+	cr_log_info("k %.2f, g %.2f: half-width %.0f fitted, %.0f given", k, g, fitted, given);
+	cr_assert(given > 0 && fitted >= given, "fitted %g, given %g", fitted, given);
+	cr_assert_leq(fitted, 1.25 * given, "fitted k and g: half-width %g, given: %g", fitted,
+	              given);
+	world_free(&w);
+}
+
 /* The linear model's fit on units made to a known law: cycles = sum(beta x
  * lin) with +-1% noise give back beta; a regressor that is zero in every
  * unit (the host bus without VMA) gets 0; a law that would need a negative
