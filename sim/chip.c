@@ -1035,6 +1035,7 @@ uint64_t chip_run_region(chip *c, int end)
 /* The resource behind regressor i of the linear demand model: every unit
  * kind, then SDRAM and host bus. */
 _Static_assert(SMP_LIN == UNIT_NKINDS + 2, "sampling.h SMP_LIN: the unit kinds, SDRAM, host bus");
+_Static_assert(SMP_COMP == RES_SDRAM - RES_UNIT, "sampling.h SMP_COMP: the unit kinds, the L1s");
 static int lin_res(int i)
 {
 	return i < UNIT_NKINDS ? RES_UNIT + i : i == UNIT_NKINDS ? RES_SDRAM : RES_HOSTBUS;
@@ -1058,8 +1059,11 @@ smp_piece chip_piece(const chip *c, const double *a, const double *b)
 			p.sdram = d;
 		else if (r == RES_HOSTBUS)
 			p.hbus = d;
-		else if (d > p.comp)
-			p.comp = d;
+		else {
+			p.res[r - RES_UNIT] = d;
+			if (d > p.comp)
+				p.comp = d;
+		}
 	}
 	for (int i = 0; i < SMP_LIN; i++)
 		p.lin[i] = b[lin_res(i)] - a[lin_res(i)];

@@ -34,7 +34,7 @@
 
 static const char *const thread_sched_names[] = {"round_robin", "oldest_first", NULL};
 static const char *const accel_names[] = {"kd", "grid", NULL};
-static const char *const demand_model_names[] = {"auto", "max", "linear", NULL};
+static const char *const demand_model_names[] = {"auto", "max", "linear", "pnorm", NULL};
 static const char *const warming_names[] = {"auto", "full", "stored", NULL};
 static const char *const jump_names[] = {"relax", "drain", "mixed", "skip", "auto", NULL};
 static const char *const tile_order_names[] = {"scanline", "morton", NULL};
@@ -180,8 +180,12 @@ static const cfg_key keys_src[] = {
              "busiest resource with SDRAM time x sdram_factor, plus the overlap term "
              "(sampling.overlap; many threads: throughput bound), "
              "linear = a non-negative sum of unit issue cycles, SDRAM and host-bus time fitted "
-             "to the units (few threads: latency bound; needs 30 units), auto = linear when its "
-             "leave-one-out error over the units is below the max model's residual variance"},
+             "to the units (few threads: latency bound; needs 30 units), pnorm = the p-norm of "
+             "every compute resource, SDRAM and host-bus time, p fitted to the units (units "
+             "that take turns: a chunk with two resources alike runs above its busiest; "
+             "sdram_factor and overlap unused), auto = linear when its "
+             "leave-one-out error over the units is below the max model's residual variance, "
+             "else max"},
     {ENUM("sampling.warming", sampling.warming, warming_names),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: auto = stored when the run has a world cache (a folder in "

@@ -33,7 +33,12 @@ typedef enum { CFG_SCHED_ROUND_ROBIN, CFG_SCHED_OLDEST_FIRST } cfg_thread_sched;
 /* chip.accel: what the traversal unit walks (issue 34) */
 typedef enum { CFG_ACCEL_KD, CFG_ACCEL_GRID } cfg_accel;
 /* sampling.demand_model (docs/fidelity.md "Demand models") */
-typedef enum { CFG_DEMAND_AUTO, CFG_DEMAND_MAX, CFG_DEMAND_LINEAR } cfg_demand_model;
+typedef enum {
+	CFG_DEMAND_AUTO,
+	CFG_DEMAND_MAX,
+	CFG_DEMAND_LINEAR,
+	CFG_DEMAND_PNORM
+} cfg_demand_model;
 /* sampling.warming (docs/fidelity.md "Stored warming") */
 /* auto: stored when the run has a world cache (chip_create resolves it:
  * a chip's cfg holds FULL or STORED) */

@@ -80,7 +80,7 @@ static void fidfig_get(const chip *c, fidfig *x)
  * "max" or "linear", "none" when every tile was detailed. */
 static const char *model_name(const chip_fidelity *F)
 {
-	return F->exact ? "none" : F->model.linear ? "linear" : "max";
+	return F->exact ? "none" : F->model.linear ? "linear" : F->model.p > 0 ? "pnorm" : "max";
 }
 
 /* "max, SDRAM factor 1.52, overlap 0.30" or "linear", for the text line. */
@@ -88,6 +88,8 @@ static const char *model_str(const chip_fidelity *F, char *buf, size_t n)
 {
 	if (F->model.linear)
 		snprintf(buf, n, "%s", model_name(F));
+	else if (F->model.p > 0)
+		snprintf(buf, n, "%s, p %.2f", model_name(F), F->model.p);
 	else
 		snprintf(buf, n, "%s, SDRAM factor %.2f, overlap %.2f", model_name(F), F->model.k,
 		         F->model.g);
@@ -182,16 +184,22 @@ static void fidelity_json(jsonw *j, const chip *c)
 			jsonw_num(j, F->mem_ratio);
 		else
 			jsonw_null(j);
+		int maxm = !F->exact && !F->model.linear && !(F->model.p > 0);
 		jsonw_key(j, "sdram_factor");
-		if (F->exact || F->model.linear)
-			jsonw_null(j);
-		else
+		if (maxm)
 			jsonw_num(j, F->model.k);
-		jsonw_key(j, "overlap");
-		if (F->exact || F->model.linear)
-			jsonw_null(j);
 		else
+			jsonw_null(j);
+		jsonw_key(j, "overlap");
+		if (maxm)
 			jsonw_num(j, F->model.g);
+		else
+			jsonw_null(j);
+		jsonw_key(j, "norm_exponent");
+		if (!F->exact && F->model.p > 0)
+			jsonw_num(j, F->model.p);
+		else
+			jsonw_null(j);
 		jsonw_key(j, "demand_coefficients");
 		if (F->exact || !F->model.linear) {
 			jsonw_null(j);

@@ -29,10 +29,33 @@ static double demand_kg(const smp_piece *p, double k, double g)
 	return demand_k(p, k) + g * lo;
 }
 
+/* The p-norm of a piece's resources (every compute resource, SDRAM and
+ * host-bus time): where one resource far exceeds the others it is that
+ * one, where several are alike, more (two equal ones 2^(1/p) times one).
+ * Packets that keep several units busy in turn do not overlap them
+ * perfectly: a chunk whose shading and intersection demands are alike runs
+ * well above the busiest of them (docs/fidelity.md "Demand models"). */
+static double demand_p(const smp_piece *p, double e)
+{
+	double m = p->comp > p->hbus ? p->comp : p->hbus;
+	m = p->sdram > m ? p->sdram : m;
+	if (m <= 0)
+		return 0;
+	double s = 0;
+	for (int i = 0; i < SMP_COMP; i++)
+		if (p->res[i] > 0)
+			s += pow(p->res[i] / m, e);
+	if (p->sdram > 0)
+		s += pow(p->sdram / m, e);
+	if (p->hbus > 0)
+		s += pow(p->hbus / m, e);
+	return m * pow(s, 1 / e);
+}
+
 double smp_demand(const smp_piece *p, const smp_model *m)
 {
 	if (!m->linear)
-		return demand_kg(p, m->k, m->g);
+		return m->p > 0 ? demand_p(p, m->p) : demand_kg(p, m->k, m->g);
 	double x = 0;
 	for (int i = 0; i < SMP_LIN; i++)
 		x += m->beta[i] * p->lin[i];
@@ -112,7 +135,7 @@ static double ratio_ss(const smp_piece *u, const double *cyc, int n, const smp_m
 }
 
 /* The max model's (k, g) grid, shared by the fit and its uncertainty
- * (max_param_var): k in [1, 4], g in [0, 1], steps of 0.02; a given k
+ * (param_var): k in [1, 4], g in [0, 1], steps of 0.02; a given k
  * (kfix > 0) or g (gfix >= 0) is the only point on its axis. grid_steps
  * gives the last step on each axis, grid_model the model at (ks, gs). */
 static void grid_steps(double kfix, double gfix, int *nk, int *ng)
@@ -123,7 +146,7 @@ static void grid_steps(double kfix, double gfix, int *nk, int *ng)
 
 static smp_model grid_model(double kfix, double gfix, int ks, int gs)
 {
-	smp_model m = {0, kfix > 0 ? kfix : 1.0 + 0.02 * ks, {0}, gfix >= 0 ? gfix : 0.02 * gs};
+	smp_model m = {0, kfix > 0 ? kfix : 1.0 + 0.02 * ks, {0}, gfix >= 0 ? gfix : 0.02 * gs, 0};
 	return m;
 }
 
@@ -156,6 +179,36 @@ void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, doub
 				*g = m.g;
 			}
 		}
+}
+
+/* The p-norm model's grid: p = 1 to 4 in steps of 0.1, then 5, 6, 8, 12,
+ * 16; step SMP_PSTEPS is p = infinity, the plain busiest resource (the max
+ * model with k = 1, g = 0). */
+#define SMP_PSTEPS 36
+static smp_model p_model(int i)
+{
+	static const double hi[5] = {5, 6, 8, 12, 16};
+	smp_model m = {0, 1, {0}, 0, 0};
+	m.p = i < 31 ? 1 + 0.1 * i : i < SMP_PSTEPS ? hi[i - 31] : 0;
+	return m;
+}
+
+/* The p fitted to n units: the one under which one ratio fits them best,
+ * the largest such (infinity, the busiest resource, when no unit tells
+ * the values apart). */
+smp_model smp_fit_p(const smp_piece *u, const double *cyc, int n)
+{
+	smp_model best = p_model(SMP_PSTEPS);
+	double sbest = ratio_ss(u, cyc, n, &best);
+	for (int i = SMP_PSTEPS - 1; i >= 0; i--) {
+		smp_model m = p_model(i);
+		double ss = ratio_ss(u, cyc, n, &m);
+		if (ss < sbest * (1 - 1e-6)) {
+			sbest = ss;
+			best = m;
+		}
+	}
+	return best;
 }
 
 double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n)
@@ -371,17 +424,19 @@ static void ratio_est(const smp_piece *u, const double *cyc, int n, const smp_pi
 	}
 }
 
-/* The max model's fitted k and g are themselves uncertain: where the
- * units' SDRAM and compute times never come close, other values fit them
- * almost as well and, applied to chunks where the two do, give another
- * frame. The values whose residual sum of squares stays within the 95%
+/* A fitted model's parameters are themselves uncertain: where the units'
+ * SDRAM and compute times never come close (the max model's k and g), or
+ * no two resources are alike (the p-norm model's p), other values fit
+ * them almost as well and, applied to chunks where they do, give another
+ * frame. The values of the model's grid (pnorm: p_model's, else the max
+ * model's k and g) whose residual sum of squares stays within the 95%
  * joint region of the fit (ss <= ss_best (1 + p F(p, d) / d), p the
  * parameters fitted, d the residual degrees of freedom) are taken as
  * possible; the largest distance of their estimates from r->est, divided
  * by the interval's t quantile, is returned as a variance, so the
  * interval's half-width is at least that distance. */
-static double max_param_var(const smp_piece *u, const double *cyc, int n, const smp_piece *pc,
-                            int npc, double kfix, double gfix, int p, const smp_est *r)
+static double param_var(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
+                        int pnorm, double kfix, double gfix, int p, const smp_est *r)
 {
 	int d = n - 1 - p;
 	if (d < 1 || r->df < 1)
@@ -390,16 +445,17 @@ static double max_param_var(const smp_piece *u, const double *cyc, int n, const 
 	double lim = ratio_ss(u, cyc, n, &r->model) * (1 + p * F / d), dev = 0;
 	int nk, ng;
 	grid_steps(kfix, gfix, &nk, &ng);
-	for (int gs = 0; gs <= ng; gs++)
-		for (int ks = 0; ks <= nk; ks++) {
-			smp_model m = grid_model(kfix, gfix, ks, gs);
-			if (ratio_ss(u, cyc, n, &m) > lim)
-				continue;
-			smp_est e;
-			ratio_est(u, cyc, n, pc, npc, &m, &e);
-			double x = fabs(e.est - r->est);
-			dev = x > dev ? x : dev;
-		}
+	int count = pnorm ? SMP_PSTEPS + 1 : (nk + 1) * (ng + 1);
+	for (int i = 0; i < count; i++) {
+		smp_model m =
+		    pnorm ? p_model(i) : grid_model(kfix, gfix, i % (nk + 1), i / (nk + 1));
+		if (ratio_ss(u, cyc, n, &m) > lim)
+			continue;
+		smp_est e;
+		ratio_est(u, cyc, n, pc, npc, &m, &e);
+		double x = fabs(e.est - r->est);
+		dev = x > dev ? x : dev;
+	}
 	double t = smp_t975((int)r->df);
 	return dev > 0 && isfinite(t) ? dev * dev / (t * t) : 0;
 }
@@ -416,7 +472,17 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 	 * degree of freedom; infl: how much larger the linear model's
 	 * leave-one-out error is than its residuals say, by which its variance
 	 * is widened */
-	smp_model mm = {0, sdram_factor, {0}, overlap}, ml = {1, 1, {0}, 0};
+	smp_model mm = {0, sdram_factor, {0}, overlap, 0}, ml = {1, 1, {0}, 0, 0};
+	if (demand_model == CFG_DEMAND_PNORM) {
+		smp_model mp = smp_fit_p(u, cyc, n);
+		r->model = mp;
+		ratio_est(u, cyc, n, pc, npc, &mp, r);
+		/* p is a fitted parameter even where the fit keeps infinity (no
+		 * unit's resources alike): the middle's may be */
+		r->df -= 1;
+		r->var += param_var(u, cyc, n, pc, npc, 1, 1, 0, 1, r);
+		return;
+	}
 	int fitk = mm.k <= 0, fitg = mm.g < 0, extra = 0;
 	if (fitk || fitg)
 		smp_fit_max(u, cyc, n, sdram_factor, overlap, &mm.k, &mm.g);
@@ -442,5 +508,5 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 	if (use->linear)
 		r->var = (r->var + lin_param_var(u, n, pc, npc, use, lss)) * infl;
 	else if (fitk || fitg)
-		r->var += max_param_var(u, cyc, n, pc, npc, sdram_factor, overlap, fitk + fitg, r);
+		r->var += param_var(u, cyc, n, pc, npc, 0, sdram_factor, overlap, fitk + fitg, r);
 }

@@ -19,19 +19,23 @@
  * names them, chip_lin_name); hard: memory bound (sampling.hard_share),
  * its stratum. */
 enum { SMP_LIN = UNIT_NKINDS + 2 };
+#define SMP_COMP 9 /* compute resources: the unit kinds, the L1 ports */
 typedef struct smp_piece {
 	double comp, sdram, hbus;
+	double res[SMP_COMP]; /* each compute resource (comp is the largest) */
 	double lin[SMP_LIN];
 	int hard;
 } smp_piece;
 
 /* How a piece's demand follows from its resources: max(comp, k x sdram,
- * hbus) + g x min(comp, k x sdram), or sum(beta x lin). */
+ * hbus) + g x min(comp, k x sdram), sum(beta x lin), or the p-norm of
+ * res, sdram and hbus. */
 typedef struct smp_model {
 	int linear;
 	double k;
 	double beta[SMP_LIN];
 	double g; /* the overlap term's share (max model) */
+	double p; /* > 0: the p-norm model, ||(res, sdram, hbus)||_p */
 } smp_model;
 
 /* The estimate of a frame's middle: cycles, their variance and degrees of
@@ -51,6 +55,8 @@ double smp_fit_sdram_factor(const smp_piece *u, const double *cyc, int n);
  * fixes k, gfix >= 0 fixes g, the others are fitted (sampling.c). */
 void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, double gfix, double *k,
                  double *g);
+/* The p-norm model fitted to n units' demands and cycles (sampling.c). */
+smp_model smp_fit_p(const smp_piece *u, const double *cyc, int n);
 /* The linear model's non-negative least-squares fit (beta); returns the
  * number of regressors kept, 0 when none fits. */
 int smp_fit_linear(const smp_piece *u, const double *cyc, int n, double beta[SMP_LIN]);
@@ -62,7 +68,8 @@ double smp_t975(int df);
  * sampling.demand_model (enum cfg_demand_model), sampling.sdram_factor
  * (0 = fitted) and sampling.overlap (negative = fitted). Its variance
  * holds the fitted parameters' uncertainty too (the linear model's
- * coefficients; the max model's k and g, docs/fidelity.md). */
+ * coefficients; the max model's k and g; the p-norm model's p,
+ * docs/fidelity.md). */
 void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece *pc, int npc,
                   double sdram_factor, double overlap, int demand_model, smp_est *r);
 
