@@ -137,17 +137,18 @@ drt_rows() { # appends rows to $1
 			--set chip.threads_per_rtp=16
 		reps=${BENCH_DRT_REPS:-1}
 		run truth "$@" >"$TMP/dtruth.kv" || continue
-		pmodes=
-		for r in $DRT_RATES; do pmodes="$pmodes pnorm:$r"; done
-		for mode in functional $DRT_RATES $pmodes; do
+		mmodes=
+		for r in $DRT_RATES; do mmodes="$mmodes max:$r"; done
+		for mode in functional $DRT_RATES $mmodes; do
 			if [ "$mode" = functional ]; then
 				run pt "$@" --fidelity functional >"$TMP/dpt.kv" || continue
-			elif [ "${mode#pnorm:}" != "$mode" ]; then
-				# the p-norm demand model (opt-in; docs/fidelity.md)
-				run pt "$@" --fidelity sampled --sample-rate "${mode#pnorm:}" \
-					--set sampling.warming=full --set sampling.demand_model=pnorm \
+			elif [ "${mode#max:}" != "$mode" ]; then
+				# the max demand model alone (auto chooses between it and
+				# the p-norm model; docs/fidelity.md)
+				run pt "$@" --fidelity sampled --sample-rate "${mode#max:}" \
+					--set sampling.warming=full --set sampling.demand_model=max \
 					>"$TMP/dpt.kv" || continue
-				mode="${mode#pnorm:} pnorm"
+				mode="${mode#max:} max"
 			else
 				# full warming, as before auto chose stored with a cache
 				run pt "$@" --fidelity sampled --sample-rate "$mode" --set sampling.warming=full \
@@ -197,7 +198,7 @@ drt_section() {
 		echo "<!-- BEGIN fidelity-drt -->"
 		echo "## Distribution ray tracing"
 		echo
-		echo "The DRT views of configs/drt-views.yaml (seed 000: spp samples per pixel with a thin lens, area lights, glossy reflection and camera motion; docs/views.md), standard config, 16 threads, one frame at $DRT_SIZE; each mode against cycle (the truth). Written by \`BENCH_ONLY=drt sh scripts/bench-fidelity.sh\` (also part of \`make bench-fidelity\`) on $(date -u +%Y-%m-%d), $(nproc) host cores; host times (\`host.sim_s\`) are the fastest of ${BENCH_DRT_REPS:-1} run(s). *inside*: the cycle fps lies in the sampled run's 95% interval; *(exact)*: the units and warm-ups covered every tile; *pnorm*: \`sampling.demand_model: pnorm\` (the p-norm demand model, opt-in; the other sampled rows take the default, \`auto\`); hit-rate errors in percentage points."
+		echo "The DRT views of configs/drt-views.yaml (seed 000: spp samples per pixel with a thin lens, area lights, glossy reflection and camera motion; docs/views.md), standard config, 16 threads, one frame at $DRT_SIZE; each mode against cycle (the truth). Written by \`BENCH_ONLY=drt sh scripts/bench-fidelity.sh\` (also part of \`make bench-fidelity\`) on $(date -u +%Y-%m-%d), $(nproc) host cores; host times (\`host.sim_s\`) are the fastest of ${BENCH_DRT_REPS:-1} run(s). *inside*: the cycle fps lies in the sampled run's 95% interval; *(exact)*: the units and warm-ups covered every tile; *max*: \`sampling.demand_model: max\` (the max demand model alone; the other sampled rows take the default, \`auto\`, which chooses between it and the p-norm model, docs/fidelity.md); hit-rate errors in percentage points."
 		echo
 		echo "| view | spp | mode | size | cycle sim s | mode sim s | speed-up | cycle fps | mode fps | fps err % | CI lo | CI hi | inside | shade hit err | kd | list | tri | SDRAM MB err % |"
 		echo "|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"

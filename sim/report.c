@@ -196,7 +196,7 @@ static void fidelity_json(jsonw *j, const chip *c)
 		else
 			jsonw_null(j);
 		jsonw_key(j, "norm_exponent");
-		if (!F->exact && F->model.p > 0)
+		if (!F->exact && F->model.p > 0 && isfinite(F->model.p))
 			jsonw_num(j, F->model.p);
 		else
 			jsonw_null(j);

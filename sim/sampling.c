@@ -39,8 +39,8 @@ static double demand_p(const smp_piece *p, double e)
 {
 	double m = p->comp > p->hbus ? p->comp : p->hbus;
 	m = p->sdram > m ? p->sdram : m;
-	if (m <= 0)
-		return 0;
+	if (m <= 0 || isinf(e))
+		return m > 0 ? m : 0;
 	double s = 0;
 	for (int i = 0; i < SMP_COMP; i++)
 		if (p->res[i] > 0)
@@ -182,14 +182,14 @@ void smp_fit_max(const smp_piece *u, const double *cyc, int n, double kfix, doub
 }
 
 /* The p-norm model's grid: p = 1 to 4 in steps of 0.1, then 5, 6, 8, 12,
- * 16; step SMP_PSTEPS is p = infinity, the plain busiest resource (the max
- * model with k = 1, g = 0). */
+ * 16; step SMP_PSTEPS is p = infinity (INFINITY), the plain busiest
+ * resource (the max model's demand with k = 1, g = 0). */
 #define SMP_PSTEPS 36
 static smp_model p_model(int i)
 {
 	static const double hi[5] = {5, 6, 8, 12, 16};
 	smp_model m = {0, 1, {0}, 0, 0};
-	m.p = i < 31 ? 1 + 0.1 * i : i < SMP_PSTEPS ? hi[i - 31] : 0;
+	m.p = i < 31 ? 1 + 0.1 * i : i < SMP_PSTEPS ? hi[i - 31] : INFINITY;
 	return m;
 }
 
@@ -464,42 +464,46 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
                   double sdram_factor, double overlap, int demand_model, smp_est *r)
 {
 	/* the demand model: max, with the SDRAM factor and the overlap share
-	 * fitted or given, or
-	 * linear, fitted when there are 30 units or more; auto takes the one
-	 * whose units' error is smaller: the max model's residual variance
-	 * per degree of freedom against the linear model's leave-one-out error
-	 * (PRESS / n). extra: parameters fitted beyond the ratio, each a
-	 * degree of freedom; infl: how much larger the linear model's
-	 * leave-one-out error is than its residuals say, by which its variance
-	 * is widened */
-	smp_model mm = {0, sdram_factor, {0}, overlap, 0}, ml = {1, 1, {0}, 0, 0};
-	if (demand_model == CFG_DEMAND_PNORM) {
-		smp_model mp = smp_fit_p(u, cyc, n);
-		r->model = mp;
-		ratio_est(u, cyc, n, pc, npc, &mp, r);
-		/* p is a fitted parameter even where the fit keeps infinity (no
-		 * unit's resources alike): the middle's may be */
-		r->df -= 1;
-		r->var += param_var(u, cyc, n, pc, npc, 1, 1, 0, 1, r);
-		return;
-	}
-	int fitk = mm.k <= 0, fitg = mm.g < 0, extra = 0;
-	if (fitk || fitg)
+	 * fitted or given; pnorm, p fitted; or linear, fitted when there are
+	 * 30 units or more. auto takes linear when its leave-one-out error
+	 * (PRESS / n) is below the max model's residual variance per degree
+	 * of freedom, else the one of max and pnorm with the smaller residual
+	 * variance per degree of freedom. Linear is weighed against max
+	 * alone: the p-norm model's in-sample variance beside linear's
+	 * out-of-sample error took pnorm where linear had fitted better (8
+	 * threads per RTP, docs/fidelity.md). extra: parameters fitted beyond
+	 * the ratio, each a degree of freedom; infl: how much larger the
+	 * linear model's leave-one-out error is than its residuals say, by
+	 * which its variance is widened */
+	smp_model mm = {0, sdram_factor, {0}, overlap, 0}, ml = {1, 1, {0}, 0, 0}, mp = mm;
+	int fitk = mm.k <= 0, fitg = mm.g < 0, auto_ = demand_model == CFG_DEMAND_AUTO;
+	if ((fitk || fitg) && demand_model != CFG_DEMAND_PNORM)
 		smp_fit_max(u, cyc, n, sdram_factor, overlap, &mm.k, &mm.g);
-	int plin =
-	    demand_model != CFG_DEMAND_MAX && n >= 30 ? smp_fit_linear(u, cyc, n, ml.beta) : 0;
+	int extra = (fitk && mm.k > 1) + (fitg && mm.g > 0);
+	double smax = n - 1 - extra > 0 ? ratio_ss(u, cyc, n, &mm) / (n - 1 - extra) : INFINITY;
 	const smp_model *use = &mm;
-	extra = (fitk && mm.k > 1) + (fitg && mm.g > 0);
+	int plin = (auto_ || demand_model == CFG_DEMAND_LINEAR) && n >= 30
+	               ? smp_fit_linear(u, cyc, n, ml.beta)
+	               : 0;
 	double infl = 1, lss = 0;
 	if (plin) {
 		double ss, press = lin_press(u, cyc, n, &ml, &ss);
 		lss = ss;
-		double smax = ratio_ss(u, cyc, n, &mm) / (n - 1 - extra);
-		if (demand_model == CFG_DEMAND_LINEAR || press / n < smax) {
+		if (!auto_ || press / n < smax) {
 			use = &ml;
 			extra = plin - 1;
 			infl = ss > 0 ? press / n / (ss / (n - plin)) : 1;
 			infl = infl > 1 ? infl : 1;
+		}
+	}
+	if ((auto_ && use == &mm) || demand_model == CFG_DEMAND_PNORM) {
+		mp = smp_fit_p(u, cyc, n);
+		/* p is a fitted parameter even where the fit keeps infinity (no
+		 * unit's resources alike): the middle's may be */
+		double sp = n > 2 ? ratio_ss(u, cyc, n, &mp) / (n - 2) : INFINITY;
+		if (!auto_ || sp < smax) {
+			use = &mp;
+			extra = 1;
 		}
 	}
 	r->model = *use;
@@ -507,6 +511,8 @@ void smp_estimate(const smp_piece *u, const double *cyc, int n, const smp_piece 
 	r->df -= extra; /* the model's fitted parameters */
 	if (use->linear)
 		r->var = (r->var + lin_param_var(u, n, pc, npc, use, lss)) * infl;
+	else if (use == &mp)
+		r->var += param_var(u, cyc, n, pc, npc, 1, 1, 0, 1, r);
 	else if (fitk || fitg)
 		r->var += param_var(u, cyc, n, pc, npc, 0, sdram_factor, overlap, fitk + fitg, r);
 }

@@ -35,7 +35,7 @@ typedef struct smp_model {
 	double k;
 	double beta[SMP_LIN];
 	double g; /* the overlap term's share (max model) */
-	double p; /* > 0: the p-norm model, ||(res, sdram, hbus)||_p */
+	double p; /* > 0: the p-norm model, ||(res, sdram, hbus)||_p (may be INFINITY) */
 } smp_model;
 
 /* The estimate of a frame's middle: cycles, their variance and degrees of
