@@ -183,9 +183,9 @@ static const cfg_key keys_src[] = {
              "to the units (few threads: latency bound; needs 30 units), pnorm = the p-norm of "
              "every compute resource, SDRAM and host-bus time, p fitted to the units (units "
              "that take turns: a chunk with two resources alike runs above its busiest; "
-             "sdram_factor and overlap unused), auto = the one whose units' error is smallest: "
-             "max's and pnorm's residual variance per degree of freedom, linear's leave-one-out "
-             "error"},
+             "sdram_factor and overlap unused), auto = linear when its leave-one-out error over "
+             "the units is below the max model's residual variance, else max or pnorm, "
+             "whichever has the smaller residual variance per degree of freedom"},
     {ENUM("sampling.warming", sampling.warming, warming_names),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: auto = stored when the run has a world cache (a folder in "

@@ -77,13 +77,14 @@ static void fidfig_get(const chip *c, fidfig *x)
 }
 
 /* The demand model of the last frame (docs/fidelity.md "Demand models"):
- * "max" or "linear", "none" when every tile was detailed. */
+ * "max", "pnorm" or "linear", "none" when every tile was detailed. */
 static const char *model_name(const chip_fidelity *F)
 {
 	return F->exact ? "none" : F->model.linear ? "linear" : F->model.p > 0 ? "pnorm" : "max";
 }
 
-/* "max, SDRAM factor 1.52, overlap 0.30" or "linear", for the text line. */
+/* "max, SDRAM factor 1.52, overlap 0.30", "pnorm, p 1.50" or "linear", for
+ * the text line. */
 static const char *model_str(const chip_fidelity *F, char *buf, size_t n)
 {
 	if (F->model.linear)
