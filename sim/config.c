@@ -166,14 +166,15 @@ static const cfg_key keys_src[] = {
              "max(compute, k x SDRAM, host bus) (plus sampling.overlap's term), for the SDRAM's "
              "row misses and turnarounds; "
              "0 = fitted to the frame's units (the k in [1, 4] under which one ratio fits them "
-             "best), > 0 = this k"},
+             "best), > 0 = this k (the max model's: auto may take pnorm, which has no k)"},
     {FLT("sampling.overlap", sampling.overlap, -1, -1, 4, ""),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: the share g of the smaller of compute and k x SDRAM time "
              "added to each chunk's demand, max(compute, k x SDRAM, host bus) + g x "
              "min(compute, k x SDRAM), for the memory latency that compute and memory "
              "time alike leave unhidden; -1 = fitted with k to the frame's units (the g in "
-             "[0, 1] under which one ratio fits them best), 0 = none, > 0 = this g"},
+             "[0, 1] under which one ratio fits them best), 0 = none, > 0 = this g (the max "
+             "model's: auto may take pnorm, which has no g)"},
     {ENUM("sampling.demand_model", sampling.demand_model, demand_model_names),
      .source = "a run setting (docs/fidelity.md)",
      .desc = "fidelity sampled: how a chunk's cycles follow its resource demands: max = its "
