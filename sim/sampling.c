@@ -37,8 +37,7 @@ static double demand_kg(const smp_piece *p, double k, double g)
  * well above the busiest of them (docs/fidelity.md "Demand models"). */
 static double demand_p(const smp_piece *p, double e)
 {
-	double m = p->comp > p->hbus ? p->comp : p->hbus;
-	m = p->sdram > m ? p->sdram : m;
+	double m = demand_k(p, 1); /* the busiest resource */
 	if (m <= 0 || isinf(e))
 		return m > 0 ? m : 0;
 	double s = 0;
