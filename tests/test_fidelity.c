@@ -323,6 +323,24 @@ Test(fidelity, interval_covers_small_cases)
 	world_free(&w);
 }
 
+/* The billiard table with distribution ray tracing (configs/drt-views.yaml,
+ * 16 samples per pixel) at 512x384, standard config, 16 threads per RTP:
+ * loads it into w, returns its true cycles (a cycle run) and
+ * leaves c set for sampled runs at rate 0.05 with full warming. */
+static double billiard_sampled(world *w, saar_config *c)
+{
+	tu_load_world(w, NULL, "configs/drt-views.yaml", "billiard-drt");
+	cr_assert_eq(w->v.drt.spp, 16);
+	cfg_defaults(c);
+	c->frame.width = 512;
+	c->frame.height = 384;
+	c->chip.threads_per_rtp = 16;
+	double truth = truth_then_sampled(w, c);
+	c->sampling.rate = 0.05;
+	c->sampling.warming = CFG_WARMING_FULL;
+	return truth;
+}
+
 /* Mistake: an interval that takes the fitted SDRAM factor k and overlap g
  * as known. On the billiard table with distribution ray tracing (16
  * samples per pixel, 512x384, the shipped defaults) the eight units of
@@ -336,16 +354,8 @@ Test(fidelity, interval_covers_small_cases)
 Test(fidelity, interval_covers_an_unknown_sdram_factor, .timeout = 300)
 {
 	world w;
-	tu_load_world(&w, NULL, "configs/drt-views.yaml", "billiard-drt");
-	cr_assert_eq(w.v.drt.spp, 16);
 	saar_config c;
-	cfg_defaults(&c);
-	c.frame.width = 512;
-	c.frame.height = 384;
-	c.chip.threads_per_rtp = 16;
-	double truth = truth_then_sampled(&w, &c);
-	c.sampling.rate = 0.05;
-	c.sampling.warming = CFG_WARMING_FULL;
+	double truth = billiard_sampled(&w, &c);
 	c.sampling.demand_model = CFG_DEMAND_MAX; /* auto takes pnorm here */
 	for (int k = 0; k < 2; k++) {
 		c.sampling.offset = 0.5 + 0.2 * k;
@@ -370,15 +380,8 @@ Test(fidelity, interval_covers_an_unknown_sdram_factor, .timeout = 300)
 Test(fidelity, pnorm_estimates_the_billiard_table, .timeout = 300)
 {
 	world w;
-	tu_load_world(&w, NULL, "configs/drt-views.yaml", "billiard-drt");
 	saar_config c;
-	cfg_defaults(&c);
-	c.frame.width = 512;
-	c.frame.height = 384;
-	c.chip.threads_per_rtp = 16;
-	double truth = truth_then_sampled(&w, &c);
-	c.sampling.rate = 0.05;
-	c.sampling.warming = CFG_WARMING_FULL;
+	double truth = billiard_sampled(&w, &c);
 	for (int k = 0; k < 2; k++) {
 		c.sampling.offset = 0.5 + 0.2 * k;
 		c.sampling.demand_model = CFG_DEMAND_MAX;
@@ -649,7 +652,7 @@ static smp_piece res_piece(double rgs, double isect, double mem, double host)
 /* The p-norm model (smp_demand, smp_fit_p): the demand is the p-norm of
  * every compute resource, SDRAM and host-bus time; units whose cycles
  * follow one p give it back, units on their busiest resource alone give
- * infinity (p = 0: the plain busiest resource). Catches a resource left
+ * p = infinity (the plain busiest resource). Catches a resource left
  * out of the norm (SDRAM, host bus, or all but the busiest), the fit
  * keeping the first p or the smallest instead of the best, and a tie
  * settled away from the busiest resource. */
