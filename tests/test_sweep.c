@@ -785,3 +785,69 @@ Test(sweep, census_need_reads_columns_by_name)
 	unlink(p);
 	rmdir(dir);
 }
+
+/* census-need.py fits the estimator's demand models, not the max model
+ * alone. Here 40 middle chunks follow the 2-norm of their two busy units
+ * (cycles 2 sqrt(rgs^2 + isect^2), isect 1000, rgs 1000 and 200 in turn):
+ * under the p-norm model, fitted to all the chunks, one ratio fits them
+ * (s = 0, p = 2), and auto takes it; the max model's busiest resource is
+ * 1000 in every chunk, so its spread is that of the cycles, 2828 and 2040:
+ * s = 0.162 sqrt(40/39) = 0.164. Named mistakes: the p-norm of the
+ * busiest resource alone (every p then fits as badly as the max model),
+ * and the max model whichever fits better. A model it does not know is
+ * refused. */
+Test(sweep, census_need_takes_the_pnorm_model)
+{
+	char dir[256], p[512], t[512], e[512], cmd[2048], hdr[1024];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/c.csv", dir);
+	snprintf(t, sizeof t, "%s/t.md", dir);
+	snprintf(e, sizeof e, "%s/e.txt", dir);
+	census_header(dir, hdr, sizeof hdr);
+	FILE *f = fopen(p, "w");
+	cr_assert(f);
+	fprintf(f, "%s\n", hdr);
+	for (int j = 0; j < 42; j++) {
+		double rgs = j % 2 ? 200 : 1000, isect = 1000;
+		double cyc = 2 * sqrt(rgs * rgs + isect * isect);
+		char h[1024];
+		snprintf(h, sizeof h, "%s", hdr);
+		int first = 1;
+		for (char *tok = strtok(h, ","); tok; tok = strtok(NULL, ","), first = 0) {
+			double v = !strcmp(tok, "frame")        ? 1
+			           : !strcmp(tok, "first_tile") ? 64.0 * j
+			           : !strcmp(tok, "tiles")      ? 64
+			           : !strcmp(tok, "cycles")     ? cyc
+			           : !strcmp(tok, "rgs")        ? rgs
+			           : !strcmp(tok, "isect")      ? isect
+			                                        : 0;
+			fprintf(f, "%s%.9g", first ? "" : ",", v);
+		}
+		fputc('\n', f);
+	}
+	fclose(f);
+	const char *model[3] = {"", "--model pnorm ", "--model max "};
+	const char *want[3][2] = {{"| std | 16 | 40 | 0% | 0.000 | ", "| pnorm, p 2.0 |"},
+	                          {"| std | 16 | 40 | 0% | 0.000 | ", "| pnorm, p 2.0 |"},
+	                          {"| std | 16 | 40 | 0% | 0.164 | ", "| max, k 1.00, g 0.00 |"}};
+	for (int k = 0; k < 3; k++) {
+		snprintf(cmd, sizeof cmd, "python3 %s/scripts/census-need.py %sstd 16 64 %s > %s",
+		         root(), model[k], p, t);
+		cr_assert_eq(tu_run(cmd), 0, "%s", cmd);
+		char *s = slurp(t);
+		cr_assert(s && strstr(s, want[k][0]) && strstr(s, want[k][1]), "%s: %s", cmd, s);
+		free(s);
+	}
+	const char *bad[] = {"--model linear std 16 64 ", "--model"};
+	for (int k = 0; k < 2; k++) {
+		snprintf(cmd, sizeof cmd, "python3 %s/scripts/census-need.py %s%s >/dev/null 2>%s",
+		         root(), bad[k], k ? "" : p, e);
+		cr_assert_eq(tu_run(cmd), 2, "%s", bad[k]);
+		cr_assert_eq(count_lines(e), 1, "one line for %s", bad[k]);
+		cr_assert_eq(count_in(e, "census-need.py: --model"), 1, "%s", bad[k]);
+	}
+	unlink(e);
+	unlink(t);
+	unlink(p);
+	rmdir(dir);
+}
