@@ -445,8 +445,9 @@ static int fid_init(chip *c)
 	F->est = calloc(nf, sizeof *F->est);
 	F->half = calloc(nf, sizeof *F->half);
 	F->floor = calloc(nf, sizeof *F->floor);
+	F->even_floor = calloc(nf, sizeof *F->even_floor);
 	F->prev_rtp = calloc((size_t)c->nrtp * UNIT_NKINDS, sizeof *F->prev_rtp);
-	if (!F->est || !F->half || !F->floor || !F->prev_rtp)
+	if (!F->est || !F->half || !F->floor || !F->even_floor || !F->prev_rtp)
 		return -1;
 	if (F->mode != CFG_FIDELITY_SAMPLED)
 		return 0;
@@ -967,6 +968,7 @@ void chip_destroy(chip *c)
 	free(c->fid.est);
 	free(c->fid.half);
 	free(c->fid.floor);
+	free(c->fid.even_floor);
 	free(c->fid.prev_rtp);
 	free(c->fid.unit_rate);
 	free(c->fid.unit_pc);
@@ -1124,9 +1126,12 @@ void chip_resource_bound(chip *c)
 	chip_fidelity *F = &c->fid;
 	double d[RES_N];
 	chip_demand(c, d);
+	F->even_bound = 0;
 	for (int r = 0; r < RES_N; r++) {
 		F->res_cycles[r] = d[r] - F->prev_dem[r];
 		F->prev_dem[r] = d[r];
+		if (F->res_cycles[r] > F->even_bound) /* units: spread evenly (chip_demand) */
+			F->even_bound = F->res_cycles[r];
 	}
 	for (int k = 0; k < UNIT_NKINDS; k++) {
 		double most = 0;

@@ -114,11 +114,17 @@ typedef struct chip_fidelity {
 	/* sampled, last frame: the measured head (to the first unit's end)
 	 * and tail (from the last region's start), cycles */
 	double head_cyc, tail_cyc;
-	double *floor;     /* per frame: the busiest-resource bound (cycles can't be lower) */
+	double *floor; /* per frame: the busiest-resource bound (cycles can't be lower) */
+	/* per frame: the same bound with each unit kind's work spread evenly
+	 * over the RTPs, below any run of the same work whichever RTP each
+	 * tile went to; sampled: the interval's low end (the busiest RTP of
+	 * the run's own tile order can exceed the cycle run's) */
+	double *even_floor;
 	double *unit_rate; /* last frame: cycles per unit of demand of each unit */
 	/* busiest-resource bound, last frame: cycles each resource needs */
 	double res_cycles[RES_N];
-	int bound_by; /* enum chip_res */
+	int bound_by;      /* enum chip_res */
+	double even_bound; /* the bound with the units' work spread evenly over the RTPs */
 	double prev_dem[RES_N];
 	/* per RTP and unit kind (nrtp x UNIT_NKINDS): issue cycles per
 	 * instance at the last frame's end (the bound takes the busiest RTP) */

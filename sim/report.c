@@ -62,7 +62,7 @@ static void fidfig_get(const chip *c, fidfig *x)
 	for (int f = f0; f < c->frames_done; f++) {
 		s += F->est[f];
 		h2 += F->half[f] * F->half[f];
-		fl += F->floor[f];
+		fl += F->even_floor[f];
 	}
 	double hz = c->cfg.chip.clock_mhz * 1e6;
 	x->mode = cfg_enum_name(&c->cfg, "fidelity");
@@ -70,6 +70,12 @@ static void fidfig_get(const chip *c, fidfig *x)
 	x->half = n ? sqrt(h2) / n : 0;
 	x->fps = ratio(hz, x->cycles);
 	x->fps_lo = ratio(hz, x->cycles + x->half);
+	/* sampled: never below the bound of the frame's work spread evenly
+	 * over the RTPs; the estimate itself stays at or above the busiest
+	 * RTP's work in this run (frame.c), so the run's per-RTP utilisation
+	 * stays a rate, but the cycle run hands tiles to the RTPs in another
+	 * order, and its busiest RTP may hold less (docs/fidelity.md "A floor
+	 * from the sampled run's own tile order") */
 	x->lo = fmax(x->cycles - x->half, F->mode == CFG_FIDELITY_SAMPLED ? ratio(fl, n) : -1);
 	x->fps_hi = x->lo > 0 ? hz / x->lo : -1;
 	x->fps_bound = ratio(hz, F->res_cycles[F->bound_by]);

@@ -75,6 +75,7 @@ int chip_run(chip *c, diag *d)
 			hier_get_stats(&c->mem, &c->frame_mem[f]);
 		chip_resource_bound(c);
 		F->floor[f] = F->res_cycles[F->bound_by];
+		F->even_floor[f] = F->even_bound;
 		if (F->mode == CFG_FIDELITY_FUNCTIONAL) {
 			/* no timing: the frame's cycles are the bound */
 			F->est[f] = F->floor[f];
