@@ -351,16 +351,6 @@ Test(saarsim_cli, interrupted_run_leaves_no_temporaries, .timeout = 120)
 	}
 }
 
-/* The number after "key": in JSON text s (the first occurrence). */
-static double json_num(const char *s, const char *key)
-{
-	char k[128];
-	snprintf(k, sizeof k, "\"%s\":", key);
-	const char *p = strstr(s, k);
-	cr_assert(p, "no %s in the report", key);
-	return strtod(p + strlen(k), NULL);
-}
-
 /* A config inside every key's range can want more host memory than the
  * host has (1024 RTPs x 1024 threads: 14 GB; four 1 GB L1s: 7 GB; a 64 GB
  * board through the VMA: 8 GB); such a run is refused before the chip is
@@ -432,7 +422,8 @@ Test(saarsim_cli, host_memory_estimate_bounds_the_peak, .timeout = 120)
 		snprintf(args, sizeof args, "%s --no-check --report %s/r.json", cases[i], dir);
 		cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
 		const char *r = tu_squeeze_json(slurp("r.json"));
-		double est = json_num(r, "mem_estimate_mb"), peak = json_num(r, "peak_rss_mb");
+		double est = tu_json_num(r, "mem_estimate_mb"),
+		       peak = tu_json_num(r, "peak_rss_mb");
 		cr_assert(est >= low * peak && est <= 3 * peak + 64,
 		          "%s: estimate %.0f MB, peak %.0f MB", cases[i], est, peak);
 	}
@@ -476,8 +467,8 @@ Test(saarsim_cli, functional_run_has_no_thread_shares)
 	snprintf(args, sizeof args, "--size 16x16 --report %s/r.json", dir);
 	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
 	r = tu_squeeze_json(slurp("r.json"));
-	double sum = json_num(r, "idle") + json_num(r, "running") + json_num(r, "waiting_memory") +
-	             json_num(r, "waiting_unit");
+	double sum = tu_json_num(r, "idle") + tu_json_num(r, "running") +
+	             tu_json_num(r, "waiting_memory") + tu_json_num(r, "waiting_unit");
 	cr_assert_float_eq(sum, 1.0, 1e-6);
 }
 
@@ -1437,8 +1428,8 @@ Test(saarsim_cli, drt_keys_are_their_flags)
 		cr_assert_eq(saarsim(args), 0, "%s: %s", runs[i][1], slurp("err"));
 		snprintf(name, sizeof name, "%s.json", runs[i][0]);
 		char *r = tu_squeeze_json(slurp(name));
-		cyc[i] = json_num(r, "cycles_per_frame");
-		rays[i] = json_num(strstr(r, "\"rays\":"), "total");
+		cyc[i] = tu_json_num(r, "cycles_per_frame");
+		rays[i] = tu_json_num(strstr(r, "\"rays\":"), "total");
 	}
 	cr_assert(cyc[1] == cyc[0] && rays[1] == rays[0], "keys differ from their flags");
 	cr_assert(cyc[2] == cyc[0] && rays[2] == rays[0], "a key won over its flag");

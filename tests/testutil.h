@@ -297,6 +297,37 @@ static inline char *tu_squeeze_json(char *s)
 	return s;
 }
 
+/* The number i (from 0) after "key": in JSON text s (its first
+ * occurrence): the value itself when it is a number (i = 0), else the
+ * i-th element of the array it opens. */
+static inline double tu_json_nth(const char *s, const char *key, int i)
+{
+	char k[128];
+	snprintf(k, sizeof k, "\"%s\":", key);
+	const char *p = strstr(s, k);
+	cr_assert(p, "no %s in the report", key);
+	p += strlen(k);
+	while (strchr(" \t\r\n[", *p) && *p)
+		p++;
+	for (int j = 0; j < i; j++) {
+		char *e;
+		strtod(p, &e);
+		cr_assert(e != p, "%s: fewer than %d numbers", key, i + 1);
+		for (p = e; *p && strchr(" \t\r\n,", *p); p++)
+			;
+	}
+	char *e;
+	double v = strtod(p, &e);
+	cr_assert(e != p, "%s: no number at %d", key, i);
+	return v;
+}
+
+/* The number after "key": in JSON text s (the first occurrence). */
+static inline double tu_json_num(const char *s, const char *key)
+{
+	return tu_json_nth(s, key, 0);
+}
+
 /* dir/err must be exactly one line "prog: ..." containing what. */
 static inline void tu_one_line(const char *dir, const char *prog, const char *what)
 {
