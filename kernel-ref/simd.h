@@ -89,13 +89,63 @@ static inline fv fv_sel(iv m, fv a, fv b)
 {
 	return (fv)((m & (iv)a) | (~m & (iv)b));
 }
+/* a < b ? a : b per lane (b when either is NaN, and of two zeros): the
+ * semantics of x86's min instructions, so those where there are (gcc
+ * made a compare and a blend of the select) */
 static inline fv fv_min(fv a, fv b)
 {
+#if defined(__AVX512F__)
+	__m512 x, y;
+	memcpy(&x, &a, sizeof x);
+	memcpy(&y, &b, sizeof y);
+	x = _mm512_min_ps(x, y);
+	memcpy(&a, &x, sizeof a);
+	return a;
+#elif defined(__AVX__)
+	__m256 x, y;
+	memcpy(&x, &a, sizeof x);
+	memcpy(&y, &b, sizeof y);
+	x = _mm256_min_ps(x, y);
+	memcpy(&a, &x, sizeof a);
+	return a;
+#elif defined(__SSE__)
+	__m128 x, y;
+	memcpy(&x, &a, sizeof x);
+	memcpy(&y, &b, sizeof y);
+	x = _mm_min_ps(x, y);
+	memcpy(&a, &x, sizeof a);
+	return a;
+#else
 	return fv_sel(a < b, a, b);
+#endif
 }
+/* a > b ? a : b per lane (b when either is NaN, and of two zeros) */
 static inline fv fv_max(fv a, fv b)
 {
+#if defined(__AVX512F__)
+	__m512 x, y;
+	memcpy(&x, &a, sizeof x);
+	memcpy(&y, &b, sizeof y);
+	x = _mm512_max_ps(x, y);
+	memcpy(&a, &x, sizeof a);
+	return a;
+#elif defined(__AVX__)
+	__m256 x, y;
+	memcpy(&x, &a, sizeof x);
+	memcpy(&y, &b, sizeof y);
+	x = _mm256_max_ps(x, y);
+	memcpy(&a, &x, sizeof a);
+	return a;
+#elif defined(__SSE__)
+	__m128 x, y;
+	memcpy(&x, &a, sizeof x);
+	memcpy(&y, &b, sizeof y);
+	x = _mm_max_ps(x, y);
+	memcpy(&a, &x, sizeof a);
+	return a;
+#else
 	return fv_sel(a > b, a, b);
+#endif
 }
 static inline fv fv_abs(fv a)
 {
@@ -151,7 +201,9 @@ static inline iv iv_from_bits(unsigned b)
 #else
 	const iv bit = {1, 2, 4, 8};
 #endif
-	return (iv_set1((int32_t)b) & bit) != 0;
+	/* == bit, not != 0: each lane's bit is one bit, and an equality is
+	 * one compare where != is two */
+	return (iv_set1((int32_t)b) & bit) == bit;
 #endif
 }
 
