@@ -72,6 +72,13 @@ static inline float fv_hmin(fv v)
 	__m512 x;
 	memcpy(&x, &v, sizeof x);
 	return _mm512_reduce_min_ps(x);
+#elif SIMD_W == 8 && defined(__AVX__)
+	__m256 x;
+	memcpy(&x, &v, sizeof x);
+	__m128 h = _mm_min_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1));
+	h = _mm_min_ps(h, _mm_movehl_ps(h, h));
+	h = _mm_min_ss(h, _mm_movehdup_ps(h));
+	return _mm_cvtss_f32(h);
 #else
 	float a = v[0];
 	for (int l = 1; l < SIMD_W; l++)
@@ -85,6 +92,13 @@ static inline float fv_hmax(fv v)
 	__m512 x;
 	memcpy(&x, &v, sizeof x);
 	return _mm512_reduce_max_ps(x);
+#elif SIMD_W == 8 && defined(__AVX__)
+	__m256 x;
+	memcpy(&x, &v, sizeof x);
+	__m128 h = _mm_max_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1));
+	h = _mm_max_ps(h, _mm_movehl_ps(h, h));
+	h = _mm_max_ss(h, _mm_movehdup_ps(h));
+	return _mm_cvtss_f32(h);
 #else
 	float a = v[0];
 	for (int l = 1; l < SIMD_W; l++)
