@@ -179,8 +179,16 @@ uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *sta
 	return pkt_trav_begin_fp(s, p, m, stack, stack_max, NULL);
 }
 
-uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *stack,
-                           int stack_max, const pkt_precision *prec)
+/* pkt_trav_begin_fp in two passes over the lane groups: first 1/d, the
+ * best hit's start and the clip to the scene box (the rays that enter),
+ * then the intersection constants (Woop's permutation and shear). With
+ * lazy set and full-precision traversal, a packet that enters nothing
+ * stops after the first pass: rc's other constants are then not set, so
+ * only a caller that traces nothing after a 0 (pkt_trace_with) asks for
+ * it. Half the primary packets of the scanned models' views miss the box
+ * (docs/PERFORMANCE.md). */
+static uint64_t trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack,
+                           int stack_max, const pkt_precision *prec, int lazy)
 {
 	s->fpt = prec && !prec->trav.full ? &prec->trav : NULL;
 	s->fpi = prec && !prec->isect.full ? &prec->isect : NULL;
@@ -201,45 +209,8 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		/* invalid lanes: all-zero constants, empty segment, no hit */
 		iv valid = iv_from_bits(gb);
 		fv dx = fv_load(p->dx + o), dy = fv_load(p->dy + o), dz = fv_load(p->dz + o);
-		/* Woop's permutation, as isect_prepare: kz = dominant axis,
-		 * kx, ky the next ones cyclically, swapped when d[kz] < 0 */
-		fv ax = fv_abs(dx), ay = fv_abs(dy), az = fv_abs(dz);
-		iv xy = ax > ay;
-		iv kz0 = xy & (ax > az), kz1 = ~xy & (ay > az), kz2 = ~kz0 & ~kz1;
-		fv dkz = sel3(kz0, kz1, dx, dy, dz);
-		iv neg = dkz < zero;
-		/* unswapped: kx = kz + 1, ky = kz + 2 (mod 3); d[kz] < 0 swaps them */
-		iv kx0 = (iv)fv_sel(neg, (fv)kz1, (fv)kz2) & valid;
-		iv kx1 = (iv)fv_sel(neg, (fv)kz2, (fv)kz0) & valid;
-		iv ky0 = (iv)fv_sel(neg, (fv)kz2, (fv)kz1) & valid;
-		iv ky1 = (iv)fv_sel(neg, (fv)kz0, (fv)kz2) & valid;
-		fv dkx = sel3(kx0, kx1, dx, dy, dz), dky = sel3(ky0, ky1, dx, dy, dz);
 		fv id[3] = {fv_sel(valid, one / dx, zero), fv_sel(valid, one / dy, zero),
 		            fv_sel(valid, one / dz, zero)};
-#if defined(__x86_64__) && defined(__GNUC__)
-		/* an empty asm hides how id was made: gcc 12 otherwise redid two
-		 * of its divisions unmasked for sz (seven divisions in all) */
-		__asm__("" : "+v"(id[0]), "+v"(id[1]), "+v"(id[2]));
-#endif
-		fv_store(rc->sx + o, fv_sel(valid, dkx / dkz, zero));
-		fv_store(rc->sy + o, fv_sel(valid, dky / dkz, zero));
-		/* 1 / d[kz] is the one of the three that dkz picks (an invalid
-		 * lane's are all zero): five divisions, not six */
-		fv_store(rc->sz + o, sel3(kz0, kz1, id[0], id[1], id[2]));
-		kz0 &= valid;
-		kz1 &= valid;
-		memcpy(rc->kz0 + o, &kz0, sizeof kz0);
-		memcpy(rc->kz1 + o, &kz1, sizeof kz1);
-		memcpy(rc->kx0 + o, &kx0, sizeof kx0);
-		memcpy(rc->kx1 + o, &kx1, sizeof kx1);
-		memcpy(rc->ky0 + o, &ky0, sizeof ky0);
-		memcpy(rc->ky1 + o, &ky1, sizeof ky1);
-		iv ks[6] = {kz0, kz1, kx0, kx1, ky0, ky1};
-		/* this loop and the clip's unrolled: gcc's loops kept their
-		 * vectors and mk in memory */
-		TRAV_UNROLL(6)
-		for (int k = 0; k < 6; k++)
-			mk[k] |= (uint64_t)iv_bits(ks[k]) << o;
 		fv_store(rc->idx + o, id[0]);
 		fv_store(rc->idy + o, id[1]);
 		fv_store(rc->idz + o, id[2]);
@@ -267,12 +238,61 @@ uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *
 		fv_store(s->cur.tf + o, tf);
 		enter |= (uint64_t)(iv_bits(tn <= tf) & gb) << o;
 	}
-	uniform_perm(rc, p, mk);
-	if (s->fpt)
-		enter = clip_fp(s, p, m);
 	s->cur.node = 0;
 	s->cur.mask = enter;
+	if (lazy && !enter && !s->fpt)
+		return 0;
+	for (int g = 0; g < NGROUPS; g++) {
+		int o = SIMD_W * g;
+		unsigned gb = grp_bits(p->valid, g);
+		iv valid = iv_from_bits(gb);
+		fv dx = fv_load(p->dx + o), dy = fv_load(p->dy + o), dz = fv_load(p->dz + o);
+		/* Woop's permutation, as isect_prepare: kz = dominant axis,
+		 * kx, ky the next ones cyclically, swapped when d[kz] < 0 */
+		fv ax = fv_abs(dx), ay = fv_abs(dy), az = fv_abs(dz);
+		iv xy = ax > ay;
+		iv kz0 = xy & (ax > az), kz1 = ~xy & (ay > az), kz2 = ~kz0 & ~kz1;
+		fv dkz = sel3(kz0, kz1, dx, dy, dz);
+		iv neg = dkz < zero;
+		/* unswapped: kx = kz + 1, ky = kz + 2 (mod 3); d[kz] < 0 swaps them */
+		iv kx0 = (iv)fv_sel(neg, (fv)kz1, (fv)kz2) & valid;
+		iv kx1 = (iv)fv_sel(neg, (fv)kz2, (fv)kz0) & valid;
+		iv ky0 = (iv)fv_sel(neg, (fv)kz2, (fv)kz1) & valid;
+		iv ky1 = (iv)fv_sel(neg, (fv)kz0, (fv)kz2) & valid;
+		fv dkx = sel3(kx0, kx1, dx, dy, dz), dky = sel3(ky0, ky1, dx, dy, dz);
+		fv_store(rc->sx + o, fv_sel(valid, dkx / dkz, zero));
+		fv_store(rc->sy + o, fv_sel(valid, dky / dkz, zero));
+		/* 1 / d[kz] is the one of the three that dkz picks (an invalid
+		 * lane's are all zero): five divisions, not six */
+		fv_store(rc->sz + o, sel3(kz0, kz1, fv_load(rc->idx + o), fv_load(rc->idy + o),
+		                          fv_load(rc->idz + o)));
+		kz0 &= valid;
+		kz1 &= valid;
+		memcpy(rc->kz0 + o, &kz0, sizeof kz0);
+		memcpy(rc->kz1 + o, &kz1, sizeof kz1);
+		memcpy(rc->kx0 + o, &kx0, sizeof kx0);
+		memcpy(rc->kx1 + o, &kx1, sizeof kx1);
+		memcpy(rc->ky0 + o, &ky0, sizeof ky0);
+		memcpy(rc->ky1 + o, &ky1, sizeof ky1);
+		iv ks[6] = {kz0, kz1, kx0, kx1, ky0, ky1};
+		/* this loop and the clip's unrolled: gcc's loops kept their
+		 * vectors and mk in memory */
+		TRAV_UNROLL(6)
+		for (int k = 0; k < 6; k++)
+			mk[k] |= (uint64_t)iv_bits(ks[k]) << o;
+	}
+	uniform_perm(rc, p, mk);
+	if (s->fpt) {
+		enter = clip_fp(s, p, m);
+		s->cur.mask = enter;
+	}
 	return enter;
+}
+
+uint64_t pkt_trav_begin_fp(trav_state *s, packet *p, const mimg *m, trav_entry *stack,
+                           int stack_max, const pkt_precision *prec)
+{
+	return trav_begin(s, p, m, stack, stack_max, prec, 0);
 }
 
 /* ---- one traversal step ------------------------------------------------ */
@@ -607,7 +627,7 @@ uint64_t pkt_trace_with(packet *p, const mimg *m, trav_entry *stack, int stack_m
                         const pkt_precision *prec, int cull, pkt_runner run)
 {
 	trav_state st;
-	uint64_t entered = pkt_trav_begin_fp(&st, p, m, stack, stack_max, prec);
+	uint64_t entered = trav_begin(&st, p, m, stack, stack_max, prec, 1);
 	if (!entered)
 		return 0;
 	pkt_cone cone;

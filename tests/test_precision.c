@@ -287,3 +287,58 @@ Test(precision, one_mantissa_bit_finishes, .timeout = 300)
 	stress_result r = stress_sphere_fp(1, 0, 16, &p1);
 	cr_assert_gt(r.rays, 0);
 }
+
+/* A packet of rays that pass just above the scene box (each origin a
+ * little higher, each direction along x with a slight fall): at full
+ * precision none enters the box; in a coarse traversal format, whose clip
+ * is widened by that format's error bound, some do. */
+static void grazing_packet(packet *p, const aabb *b)
+{
+	pkt_clear(p, PKT_PRIMARY, 0);
+	float h = b->hi.y - b->lo.y, wdt = b->hi.x - b->lo.x;
+	for (int i = 0; i < PKT_RAYS; i++) {
+		p->ox[i] = b->lo.x - 0.5f * wdt;
+		p->oy[i] = b->hi.y + h * (0.002f + 0.002f * (float)i);
+		p->oz[i] = 0.5f * (b->lo.z + b->hi.z);
+		p->dx[i] = 1.0f;
+		p->dy[i] = -1e-4f;
+		p->dz[i] = 0.0f;
+		p->tmax[i] = INFINITY;
+	}
+	p->valid = ~0ull;
+	p->n = PKT_RAYS;
+}
+
+/* pkt_trace_fp stops a packet after the clip when no ray enters the box
+ * (traverse.c's trav_begin, lazy), at full precision only: a reduced
+ * traversal format redoes the clip in that format, which can let rays in
+ * that the full-precision clip kept out. The mistake this catches: the
+ * stop taken in a reduced format too (those rays never traversed;
+ * tests/mutants/99-lazy-clip-in-a-reduced-format.patch). The reference
+ * is the chip's way, which sets every constant up first
+ * (pkt_trav_begin_fp) and then runs the same loop (pkt_trace_run). */
+Test(precision, a_reduced_clip_lets_in_what_the_full_clip_kept_out)
+{
+	world w;
+	load_default(&w);
+	static packet a, b;
+	static trav_entry stack[PKT_STACK_MAX];
+	trav_state s;
+	grazing_packet(&a, &w.m.bounds);
+	cr_assert_eq(pkt_trav_begin(&s, &a, &w.m, stack, PKT_STACK_MAX), 0,
+	             "the set-up is wrong: a ray enters the box at full precision");
+	pkt_precision pr = reduced(2, 1, 0);
+	grazing_packet(&b, &w.m.bounds);
+	uint64_t want = pkt_trav_begin_fp(&s, &b, &w.m, stack, PKT_STACK_MAX, &pr);
+	cr_assert_neq(want, 0, "the set-up is wrong: no ray enters in the 2-bit format");
+	trav_counts cw = {0}, cg = {0};
+	pkt_trace_run(&s, &b, &w.m, NULL, &cw);
+	grazing_packet(&a, &w.m.bounds);
+	uint64_t got = pkt_trace_fp(&a, &w.m, stack, PKT_STACK_MAX, &cg, &pr);
+	cr_assert_eq(got, want, "entered %#llx, the full set-up's %#llx", (unsigned long long)got,
+	             (unsigned long long)want);
+	cr_assert_eq(cg.node_steps, cw.node_steps, "%llu node steps, the full set-up's %llu",
+	             (unsigned long long)cg.node_steps, (unsigned long long)cw.node_steps);
+	cr_assert_gt(cw.node_steps, 0);
+	world_free(&w);
+}
