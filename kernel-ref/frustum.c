@@ -344,6 +344,29 @@ static uint64_t fru_lanes(fru_walker *w, kd_node n, int near_below, int uni, tra
 	fv split = fv_set1(kd_split(n));
 	iv nb = iv_set1(near_below ? -1 : 0);
 	uint64_t nm = 0, fm = 0;
+	if (uni && split[0] == split[0]) {
+		/* every 1/d finite and of one sign, every origin and the split
+		 * finite (fru_setup): no distance is NaN, and a ray of the mask
+		 * enters its node no later than its best hit (fru_live at each
+		 * pop, the far test below at each step), which the near child
+		 * keeps */
+		for (int g = 0; g < NGROUPS; g++) {
+			unsigned gb = grp_bits(w->mask, g);
+			int o = SIMD_W * g;
+			fv tn = fv_load(w->cur->tn + o), tf = fv_load(w->cur->tf + o);
+			fv ts = (split - fv_load(org + o)) * fv_load(idv + o);
+			fv err = fv_abs(ts) * fv_set1(FRU_GAMMA3);
+			fv n_f = fv_min(tf, ts + err), f_n = fv_max(tn, ts - err);
+			fv_store(w->cur->tf + o, n_f);
+			fv_store(far->tn + o, f_n);
+			fv_store(far->tf + o, tf);
+			fv best = fv_load(p->t + o);
+			nm |= (uint64_t)(iv_bits(tn <= n_f) & gb) << o;
+			fm |= (uint64_t)(iv_bits((f_n <= tf) & (f_n <= best)) & gb) << o;
+		}
+		*fmask = fm;
+		return nm;
+	}
 	for (int g = 0; g < NGROUPS; g++) {
 		unsigned gb = grp_bits(w->mask, g);
 		int o = SIMD_W * g;
