@@ -179,25 +179,12 @@ uint64_t pkt_trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *sta
 	return pkt_trav_begin_fp(s, p, m, stack, stack_max, NULL);
 }
 
-/* pkt_trav_begin_fp in two passes over the lane groups: first 1/d, the
- * best hit's start and the clip to the scene box (the rays that enter),
- * then the intersection constants (Woop's permutation and shear). With
- * lazy set and full-precision traversal, a packet that enters nothing
- * stops after the first pass: rc's other constants are then not set, so
- * only a caller that traces nothing after a 0 (pkt_trace_with) asks for
- * it. Half the primary packets of the scanned models' views miss the box
- * (docs/PERFORMANCE.md). */
-static uint64_t trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack,
-                           int stack_max, const pkt_precision *prec, int lazy)
+/* trav_begin's first pass: 1/d, the best hit's start (tmax, no triangle)
+ * and the clip to the scene box; returns the rays that enter it. */
+static uint64_t begin_clip(trav_state *s, packet *p, const mimg *m)
 {
-	s->fpt = prec && !prec->trav.full ? &prec->trav : NULL;
-	s->fpi = prec && !prec->isect.full ? &prec->isect : NULL;
-	s->stack = stack;
-	s->stack_max = stack_max;
-	s->sp = 0;
-	s->shadow = p->type == PKT_SHADOW;
 	pkt_rayc *rc = &s->rc;
-	uint64_t enter = 0, mk[6] = {0};
+	uint64_t enter = 0;
 	const fv zero = fv_set1(0.0f), one = fv_set1(1.0f);
 	const fv lo[3] = {fv_set1(m->bounds.lo.x), fv_set1(m->bounds.lo.y),
 	                  fv_set1(m->bounds.lo.z)};
@@ -238,10 +225,15 @@ static uint64_t trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *
 		fv_store(s->cur.tf + o, tf);
 		enter |= (uint64_t)(iv_bits(tn <= tf) & gb) << o;
 	}
-	s->cur.node = 0;
-	s->cur.mask = enter;
-	if (lazy && !enter && !s->fpt)
-		return 0;
+	return enter;
+}
+
+/* trav_begin's second pass: the intersection constants, Woop's
+ * permutation and shear (isect_prepare) of every lane, and the
+ * permutation's lane masks merged into mk. */
+static void begin_shear(pkt_rayc *rc, const packet *p, uint64_t mk[6])
+{
+	const fv zero = fv_set1(0.0f);
 	for (int g = 0; g < NGROUPS; g++) {
 		int o = SIMD_W * g;
 		unsigned gb = grp_bits(p->valid, g);
@@ -281,7 +273,32 @@ static uint64_t trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *
 		for (int k = 0; k < 6; k++)
 			mk[k] |= (uint64_t)iv_bits(ks[k]) << o;
 	}
-	uniform_perm(rc, p, mk);
+}
+
+/* pkt_trav_begin_fp in two passes over the lane groups: first 1/d, the
+ * best hit's start and the clip to the scene box (the rays that enter),
+ * then the intersection constants (Woop's permutation and shear). With
+ * lazy set and full-precision traversal, a packet that enters nothing
+ * stops after the first pass: rc's other constants are then not set, so
+ * only a caller that traces nothing after a 0 (pkt_trace_with) asks for
+ * it. Half the primary packets of the scanned models' views miss the box
+ * (docs/PERFORMANCE.md). */
+static uint64_t trav_begin(trav_state *s, packet *p, const mimg *m, trav_entry *stack,
+                           int stack_max, const pkt_precision *prec, int lazy)
+{
+	s->fpt = prec && !prec->trav.full ? &prec->trav : NULL;
+	s->fpi = prec && !prec->isect.full ? &prec->isect : NULL;
+	s->stack = stack;
+	s->stack_max = stack_max;
+	s->sp = 0;
+	s->shadow = p->type == PKT_SHADOW;
+	uint64_t enter = begin_clip(s, p, m), mk[6] = {0};
+	s->cur.node = 0;
+	s->cur.mask = enter;
+	if (lazy && !enter && !s->fpt)
+		return 0;
+	begin_shear(&s->rc, p, mk);
+	uniform_perm(&s->rc, p, mk);
 	if (s->fpt) {
 		enter = clip_fp(s, p, m);
 		s->cur.mask = enter;
