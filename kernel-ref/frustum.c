@@ -64,47 +64,44 @@ static inline float mx2(float a, float b)
 	return a > b ? a : b;
 }
 
-/* Smallest and largest lane of v (no NaN lanes): a reduction tree with
- * AVX-512, else lane by lane. */
-static inline float fv_hmin(fv v)
+#if SIMD_W == 8 && defined(__AVX__)
+/* the lanes' smaller (most 0) or larger (most 1) of a and b */
+static inline __m128 m128_ext(__m128 a, __m128 b, int most)
+{
+	return most ? _mm_max_ps(a, b) : _mm_min_ps(a, b);
+}
+#endif
+
+/* The smallest (most 0) or largest (most 1) lane of v (no NaN lanes): a
+ * reduction tree with AVX-512, or with AVX the halves, then the quarters,
+ * then the last pair; else lane by lane. */
+static inline float fv_hext(fv v, int most)
 {
 #if SIMD_W == 16 && defined(__AVX512F__)
 	__m512 x;
 	memcpy(&x, &v, sizeof x);
-	return _mm512_reduce_min_ps(x);
+	return most ? _mm512_reduce_max_ps(x) : _mm512_reduce_min_ps(x);
 #elif SIMD_W == 8 && defined(__AVX__)
 	__m256 x;
 	memcpy(&x, &v, sizeof x);
-	__m128 h = _mm_min_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1));
-	h = _mm_min_ps(h, _mm_movehl_ps(h, h));
-	h = _mm_min_ss(h, _mm_movehdup_ps(h));
+	__m128 h = m128_ext(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1), most);
+	h = m128_ext(h, _mm_movehl_ps(h, h), most);
+	h = m128_ext(h, _mm_movehdup_ps(h), most);
 	return _mm_cvtss_f32(h);
 #else
 	float a = v[0];
 	for (int l = 1; l < SIMD_W; l++)
-		a = v[l] < a ? v[l] : a;
+		a = (most ? v[l] > a : v[l] < a) ? v[l] : a;
 	return a;
 #endif
 }
+static inline float fv_hmin(fv v)
+{
+	return fv_hext(v, 0);
+}
 static inline float fv_hmax(fv v)
 {
-#if SIMD_W == 16 && defined(__AVX512F__)
-	__m512 x;
-	memcpy(&x, &v, sizeof x);
-	return _mm512_reduce_max_ps(x);
-#elif SIMD_W == 8 && defined(__AVX__)
-	__m256 x;
-	memcpy(&x, &v, sizeof x);
-	__m128 h = _mm_max_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1));
-	h = _mm_max_ps(h, _mm_movehl_ps(h, h));
-	h = _mm_max_ss(h, _mm_movehdup_ps(h));
-	return _mm_cvtss_f32(h);
-#else
-	float a = v[0];
-	for (int l = 1; l < SIMD_W; l++)
-		a = v[l] > a ? v[l] : a;
-	return a;
-#endif
+	return fv_hext(v, 1);
 }
 
 #define FRU_RANGES 6 /* in one pass (fru_setup) */

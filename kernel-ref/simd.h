@@ -89,32 +89,22 @@ static inline fv fv_sel(iv m, fv a, fv b)
 {
 	return (fv)((m & (iv)a) | (~m & (iv)b));
 }
+/* x86's min or max instruction (op) on two fv, where there is one: a
+ * vector cast is the bits unchanged */
+#if defined(__AVX512F__)
+#define FV_X86(op, a, b) ((fv)_mm512_##op##_ps((__m512)(a), (__m512)(b)))
+#elif defined(__AVX__)
+#define FV_X86(op, a, b) ((fv)_mm256_##op##_ps((__m256)(a), (__m256)(b)))
+#elif defined(__SSE__)
+#define FV_X86(op, a, b) ((fv)_mm_##op##_ps((__m128)(a), (__m128)(b)))
+#endif
 /* a < b ? a : b per lane (b when either is NaN, and of two zeros): the
  * semantics of x86's min instructions, so those where there are (gcc
  * made a compare and a blend of the select) */
 static inline fv fv_min(fv a, fv b)
 {
-#if defined(__AVX512F__)
-	__m512 x, y;
-	memcpy(&x, &a, sizeof x);
-	memcpy(&y, &b, sizeof y);
-	x = _mm512_min_ps(x, y);
-	memcpy(&a, &x, sizeof a);
-	return a;
-#elif defined(__AVX__)
-	__m256 x, y;
-	memcpy(&x, &a, sizeof x);
-	memcpy(&y, &b, sizeof y);
-	x = _mm256_min_ps(x, y);
-	memcpy(&a, &x, sizeof a);
-	return a;
-#elif defined(__SSE__)
-	__m128 x, y;
-	memcpy(&x, &a, sizeof x);
-	memcpy(&y, &b, sizeof y);
-	x = _mm_min_ps(x, y);
-	memcpy(&a, &x, sizeof a);
-	return a;
+#ifdef FV_X86
+	return FV_X86(min, a, b);
 #else
 	return fv_sel(a < b, a, b);
 #endif
@@ -122,27 +112,8 @@ static inline fv fv_min(fv a, fv b)
 /* a > b ? a : b per lane (b when either is NaN, and of two zeros) */
 static inline fv fv_max(fv a, fv b)
 {
-#if defined(__AVX512F__)
-	__m512 x, y;
-	memcpy(&x, &a, sizeof x);
-	memcpy(&y, &b, sizeof y);
-	x = _mm512_max_ps(x, y);
-	memcpy(&a, &x, sizeof a);
-	return a;
-#elif defined(__AVX__)
-	__m256 x, y;
-	memcpy(&x, &a, sizeof x);
-	memcpy(&y, &b, sizeof y);
-	x = _mm256_max_ps(x, y);
-	memcpy(&a, &x, sizeof a);
-	return a;
-#elif defined(__SSE__)
-	__m128 x, y;
-	memcpy(&x, &a, sizeof x);
-	memcpy(&y, &b, sizeof y);
-	x = _mm_max_ps(x, y);
-	memcpy(&a, &x, sizeof a);
-	return a;
+#ifdef FV_X86
+	return FV_X86(max, a, b);
 #else
 	return fv_sel(a > b, a, b);
 #endif
