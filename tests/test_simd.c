@@ -12,7 +12,9 @@
  * operands swapped (tests/mutants/98-fv-min-operands-swapped.patch), which
  * gives the same minimum of two ordinary numbers and another value for a
  * NaN or a pair of zeros. iv_from_bits sets the lanes whose bit is set,
- * for any pattern of bits.
+ * for any pattern of bits; the mistake: a lane's masked bit compared with
+ * 1, not with its own bit, so only lane 0 is ever set
+ * (tests/mutants/102-iv-from-bits-lane-zero-only.patch).
  */
 #include <math.h>
 #include <stdint.h>
