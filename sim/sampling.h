@@ -9,6 +9,7 @@
 #ifndef SAAR_SIM_SAMPLING_H
 #define SAAR_SIM_SAMPLING_H
 
+#include "mem/memport.h"
 #include "sim/config.h"
 #include "units/unit_table.h"
 
@@ -19,7 +20,8 @@
  * names them, chip_lin_name); hard: memory bound (sampling.hard_share),
  * its stratum. */
 enum { SMP_LIN = UNIT_NKINDS + 2 };
-#define SMP_COMP 9 /* compute resources: the unit kinds, the L1 ports */
+/* compute resources: the unit kinds, the L1 ports (enum chip_res) */
+enum { SMP_COMP = UNIT_NKINDS + MEM_NTYPES };
 typedef struct smp_piece {
 	double comp, sdram, hbus;
 	double res[SMP_COMP]; /* each compute resource (comp is the largest) */
