@@ -106,12 +106,13 @@ const repl_policy repl_plru = {
 #define REPL_EXTRA 16
 
 static const repl_policy *const builtin[] = {&repl_lru, &repl_plru, &repl_fifo};
+#define NBUILTIN ((int)(sizeof builtin / sizeof *builtin))
 static const repl_policy *extra[REPL_EXTRA];
 static int nextra;
 
 const repl_policy *repl_find(const char *name)
 {
-	for (size_t i = 0; i < sizeof builtin / sizeof *builtin; i++)
+	for (int i = 0; i < NBUILTIN; i++)
 		if (!strcmp(builtin[i]->name, name))
 			return builtin[i];
 	for (int i = 0; i < nextra; i++)
@@ -132,8 +133,8 @@ const char *repl_names(char *buf, size_t n)
 {
 	size_t at = 0;
 	buf[0] = 0;
-	for (int i = 0; i < (int)(sizeof builtin / sizeof *builtin) + nextra; i++) {
-		const repl_policy *p = i < 3 ? builtin[i] : extra[i - 3];
+	for (int i = 0; i < NBUILTIN + nextra; i++) {
+		const repl_policy *p = i < NBUILTIN ? builtin[i] : extra[i - NBUILTIN];
 		int k = snprintf(buf + at, n - at, "%s%s", i ? ", " : "", p->name);
 		if (k < 0 || (size_t)k >= n - at)
 			break;
