@@ -16,6 +16,8 @@
 #                   writes docs/ACCEL.md (scripts/accel.sh)
 #   make mutate     mutation tests: each tests/mutants/ patch must be caught
 #                   by the tests it names (docs/TESTING.md)
+#   make extend-check  docs/extending.md's unit-kind walk-through built and
+#                   run in a scratch copy (tests/extend/, docs/TESTING.md)
 #   make install    install binaries into $(PREFIX)/bin
 #   make SANITIZE=1 test   the same under ASan/UBSan (build-san/)
 #   make fuzz-smoke libFuzzer harnesses, each run briefly (docs/TESTING.md)
@@ -97,7 +99,7 @@ TEST_C   := $(wildcard tests/*.c)
 TEST_OBJ := $(TEST_C:%.c=$(B)/%.o)
 PROGS    := $(B)/rtref $(B)/saarsim-stress $(if $(wildcard sim/main.c),$(B)/saarsim) $(if $(wildcard traces/replay.c),$(B)/saarsim-replay)
 
-.PHONY: all run test readme-check figures-check bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets bench-frontier stress validate calibrate drt dynamic accel mutate install clean deps
+.PHONY: all run test readme-check figures-check extend-check bench bench-fidelity bench-profile bench-scale bench-sampled bench-ratio bench-footprint bench-offsets bench-frontier stress validate calibrate drt dynamic accel mutate install clean deps
 all: $(PROGS) $(PLUGIN)
 
 deps: $(DEPSTAMP)
@@ -279,6 +281,12 @@ fuzz-smoke: fuzz all
 mutate:
 	sh scripts/mutate.sh
 
+# docs/extending.md's unit-kind walk-through (tests/extend/unit-clip.patch)
+# applied to a scratch copy (build-extend/), built and run; `make test`
+# checks only that the page and the patch show the same lines.
+extend-check:
+	sh scripts/extend-check.sh
+
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin
 	install -m 755 $(PROGS) $(DESTDIR)$(PREFIX)/bin/
@@ -286,6 +294,6 @@ install: all
 	install -m 644 $(PLUGIN) $(DESTDIR)$(PREFIX)/lib/saarsim/
 
 clean:
-	rm -rf build build-san build-fuzz build-mutate
+	rm -rf build build-san build-fuzz build-mutate build-extend
 
 -include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(MAINS:%.c=$(B)/%.d)

@@ -174,3 +174,41 @@ Test(scripts, documents_show_the_programs_figures, .timeout = 900)
 	cr_assert_eq(rc, 1, "a changed fps was not found:\n%s", out);
 	cr_assert(strstr(out, "fps shown ") && strstr(out, "0 of 1 runs"), "%s", out);
 }
+
+/* docs/extending.md's unit-kind walk-through is the patch `make
+ * extend-check` builds and runs (tests/extend/unit-clip.patch; the build
+ * takes a minute, so `make test` checks only that the two agree,
+ * scripts/extend-doc.py): every code line the page's example shows is a
+ * line of the patch, and the patch changes only the page's three places.
+ * Catches a page edited without its patch (the walk-through still showed
+ * four unit kinds in its enum for weeks after the fifth, and a literal
+ * SMP_COMP stopped its build unseen: a sixth kind is what it adds now),
+ * and a patch that needs a file outside the three places. */
+Test(scripts, extending_walkthrough_is_the_checked_patch)
+{
+	char dir[256], cmd[2048];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cmd, sizeof cmd, "python3 '%s/scripts/extend-doc.py' >'%s/ok' 2>&1", root(), dir);
+	const int rc = tu_run(cmd);
+	const char *out = tu_slurp(dir, "ok");
+	cr_assert_eq(rc, 0, "%s", out);
+	const char *at = out;
+	all_of_at_least(&at, "extend-doc: ", 20, "lines of the example", out);
+	/* the same page with two kinds of the enum swapped: refused */
+	snprintf(cmd, sizeof cmd,
+	         "sed 's/UNIT_XFORM, UNIT_CLIP/UNIT_CLIP, UNIT_XFORM/' '%s/docs/extending.md' "
+	         ">'%s/bad.md' && python3 '%s/scripts/extend-doc.py' --doc '%s/bad.md' "
+	         ">'%s/bad' 2>&1",
+	         root(), dir, root(), dir, dir);
+	cr_assert_eq(tu_run(cmd), 1, "a changed line passed: %s", tu_slurp(dir, "bad"));
+	cr_assert(strstr(tu_slurp(dir, "bad"), "UNIT_CLIP, UNIT_XFORM"), "%s",
+	          tu_slurp(dir, "bad"));
+	/* the patch with a fourth place (the config's file): refused */
+	snprintf(cmd, sizeof cmd,
+	         "{ cat '%s/tests/extend/unit-clip.patch'; printf '%%s\\n' "
+	         "'--- a/sim/config.c' '+++ b/sim/config.c' '@@ -1 +1 @@' '-a' '+b'; } "
+	         ">'%s/p' && python3 '%s/scripts/extend-doc.py' --patch '%s/p' >'%s/four' 2>&1",
+	         root(), dir, root(), dir, dir);
+	cr_assert_eq(tu_run(cmd), 1, "a fourth place passed: %s", tu_slurp(dir, "four"));
+	cr_assert(strstr(tu_slurp(dir, "four"), "sim/config.c"), "%s", tu_slurp(dir, "four"));
+}
