@@ -36,12 +36,19 @@ fail() {
 	exit 1
 }
 
+[ $# -eq 0 ] || die "usage: sh scripts/extend-check.sh (no arguments; JOBS and SAAR_SCENES from the environment)"
 for tool in rsync patch make python3; do
 	command -v "$tool" >/dev/null 2>&1 || die "$tool is needed"
 done
 case $SCENES in /*) ;; *) SCENES=$(pwd)/$SCENES ;; esac
 mkdir -p "$SRC" "$LOG" || die "cannot make $WORK"
 rm -f "$LOG"/*
+# Files in the repository name the shared scenes by a path relative to it
+# (configs/drt-views.yaml: ../../shared/scenes/...): beside the copy, as
+# beside the repository, ../shared is the shared folder (as scripts/mutate.sh).
+if [ -d "$SCENES" ] && [ ! -e "$WORK/shared" ]; then
+	ln -s "$(cd "$SCENES/.." && pwd)" "$WORK/shared" || die "cannot link $WORK/shared"
+fi
 
 python3 "$REPO/scripts/extend-doc.py" >"$LOG/doc.txt" 2>&1 ||
 	fail "the page and the patch differ: $(cat "$LOG/doc.txt")"
