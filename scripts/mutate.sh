@@ -210,6 +210,17 @@ check that it fails on the mistake, then add the patch (`diff -u` with
 paths a/FILE and b/FILE) under its header. `MUTATE_ONLY=pattern make
 mutate` runs the matching mutants only (and leaves this page alone).
 
+The build follows the host's vector width (`ARCH`, docs/kernel-ref.md), so
+code under `#if __AVX512F__`, `__AVX__` or `__SSE__` is compiled on some
+hosts only. A mutant of such code plants its mistake in every width's
+branch, or it is caught on one kind of host and not compiled on the
+other: mutants 98, 100 and 102, written on the AMD (AVX2) host, changed
+the AVX branch alone, and session 59's run on the Intel (AVX-512) host
+found them uncaught; they now change every branch. For the same reason a
+mistake may show in a test on one host only: mutant 85 (the SLP
+vectorizer left on) fails the stress suite on the AMD host and not on the
+Intel one, so it names only the test written for it.
+
 EOF
 		echo "Last run: $(date -u +%Y-%m-%d), $rev: $caught of $total mutants caught,"
 		echo "$full_note; $took on $JOBS jobs."
