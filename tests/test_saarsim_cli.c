@@ -569,6 +569,28 @@ Test(saarsim_cli, csv_of_other_columns_is_refused)
 	free(two);
 }
 
+/* A field holding a comma or a quote is quoted in the CSV (RFC 4180, the
+ * quote doubled), so a config named `std, "q"` stays one field: Python's
+ * csv module reads the rows with the header's field count and the name
+ * back, and a second run appends to the file (its row check reads the
+ * quoted row as one). Catches fields written bare (the row then has one
+ * field too many: the next run refuses the file). */
+Test(saarsim_cli, csv_quotes_fields_with_commas_and_quotes)
+{
+	char p[512], args[2048], cmd[2048];
+	tu_write(p, sizeof p, dir, "c.yaml", "name: 'std, \"q\"'\n");
+	snprintf(args, sizeof args,
+	         "--config %s --size 16x16 --set chip.rtps=1 --no-check --csv %s/q.csv", p, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	cr_assert_eq(saarsim(args), 0, "the second run refused the first's row: %s", slurp("err"));
+	snprintf(cmd, sizeof cmd,
+	         "python3 -c 'import csv, sys; r = list(csv.reader(open(sys.argv[1])));"
+	         " sys.exit(0 if len(r) == 3 and all(len(x) == len(r[0]) for x in r)"
+	         " and r[1][0] == r[2][0] == \"std, \\\"q\\\"\" else 1)' '%s/q.csv'",
+	         dir);
+	cr_assert_eq(tu_run(cmd), 0, "the CSV does not read back: %s", slurp("q.csv"));
+}
+
 /* Runs appending to one CSV at once keep every row: each used to rename
  * its copy of the old rows plus its own over the others' (24 runs left 4
  * rows). */
