@@ -591,6 +591,57 @@ Test(saarsim_cli, csv_quotes_fields_with_commas_and_quotes)
 	cr_assert_eq(tu_run(cmd), 0, "the CSV does not read back: %s", slurp("q.csv"));
 }
 
+/* A sampled run on the linear demand model reports its coefficients by
+ * regressor (fidelity.demand_coefficients): one per unit kind, in the
+ * table's order, then sdram and hostbus, every one a number >= 0; on a
+ * flat scene without the VMA the transformation unit and the host bus do
+ * no work, so their regressors are zero in every unit and their
+ * coefficients 0 (docs/fidelity.md). BART Robots at 256x192, one thread
+ * per RTP, rate 0.2, where the linear fit holds. Catches the coefficients
+ * named by another list (chip_res_name's: the L1s in place of sdram and
+ * hostbus) or written in another order. */
+Test(saarsim_cli, linear_model_coefficients_are_named_by_regressor, .timeout = 120)
+{
+	char views[512], args[2048];
+	SCENE_OR_SKIP(views, "views.yaml");
+	snprintf(args, sizeof args,
+	         "--views %s --view robots --size 256x192 --set chip.threads_per_rtp=1 "
+	         "--fidelity sampled --sample-rate 0.2 --set sampling.demand_model=linear "
+	         "--no-check --world-cache off --report %s/r.json",
+	         views, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *r = tu_squeeze_json(slurp("r.json"));
+	cr_assert(strstr(r, "\"demand_model\":\"linear\""),
+	          "the run did not take the linear model");
+	char *o = strstr(r, "\"demand_coefficients\":{");
+	cr_assert(o, "no coefficients object: %s", r);
+	o += strlen("\"demand_coefficients\":");
+	char *end = strchr(o, '}');
+	cr_assert(end);
+	end[1] = 0;
+	const char *names[UNIT_NKINDS + 2];
+	for (int k = 0; k < UNIT_NKINDS; k++)
+		names[k] = unit_table[k].name;
+	names[UNIT_NKINDS] = "sdram";
+	names[UNIT_NKINDS + 1] = "hostbus";
+	const char *at = o;
+	double sum = 0;
+	for (int i = 0; i < UNIT_NKINDS + 2; i++) {
+		char key[64];
+		snprintf(key, sizeof key, "\"%s\":", names[i]);
+		const char *k = strstr(o, key);
+		cr_assert(k, "coefficients lack %s: %s", names[i], o);
+		cr_assert(k >= at, "%s out of the regressors' order: %s", names[i], o);
+		at = k;
+		double v = strtod(k + strlen(key), NULL);
+		cr_assert(v >= 0 && isfinite(v), "%s: %g", names[i], v);
+		sum += v;
+	}
+	cr_assert_eq(tu_json_num(o, "xform"), 0.0, "%s", o);
+	cr_assert_eq(tu_json_num(o, "hostbus"), 0.0, "%s", o);
+	cr_assert_gt(sum, 0, "every coefficient is 0: %s", o);
+}
+
 /* Runs appending to one CSV at once keep every row: each used to rename
  * its copy of the old rows plus its own over the others' (24 runs left 4
  * rows). */
