@@ -15,7 +15,7 @@
 # The generated documents' figures and the README's examples are not run:
 # the clip op adds time to every packet, so they are meant to differ.
 # Exit 0 when all hold, 1 when one does not (its log named), 2 on bad use.
-# Takes about two minutes on two cores.
+# Takes about a minute on two cores.
 set -u
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 WORK=$REPO/build-extend
@@ -43,19 +43,12 @@ done
 case $SCENES in /*) ;; *) SCENES=$(pwd)/$SCENES ;; esac
 mkdir -p "$SRC" "$LOG" || die "cannot make $WORK"
 rm -f "$LOG"/*
-# Files in the repository name the shared scenes by a path relative to it
-# (configs/drt-views.yaml: ../../shared/scenes/...): beside the copy, as
-# beside the repository, ../shared is the shared folder (as scripts/mutate.sh).
-if [ -d "$SCENES" ] && [ ! -e "$WORK/shared" ]; then
-	ln -s "$(cd "$SCENES/.." && pwd)" "$WORK/shared" || die "cannot link $WORK/shared"
-fi
+. "$REPO/scripts/scratch-lib.sh"
+scratch_link_shared "$WORK" "$SCENES"
 
 python3 "$REPO/scripts/extend-doc.py" >"$LOG/doc.txt" 2>&1 ||
 	fail "the page and the patch differ: $(cat "$LOG/doc.txt")"
-# the repository's files as they are (changes not committed included),
-# build folders left out and kept in the copy
-rsync -rlc --delete --exclude=/.git --exclude=/build-extend/ --exclude=/build-mutate/ \
-	--filter=':- .gitignore' "$REPO/" "$SRC/" || die "cannot copy the repository into $SRC"
+scratch_sync "$REPO" "$SRC"
 (cd "$SRC" && patch -p1 -s --no-backup-if-mismatch) <"$REPO/tests/extend/unit-clip.patch" \
 	>"$LOG/patch.txt" 2>&1 || fail "the patch does not apply: $(cat "$LOG/patch.txt")"
 say "applied tests/extend/unit-clip.patch; building the copy"

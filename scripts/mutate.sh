@@ -53,21 +53,11 @@ for tool in rsync patch make timeout; do
 	command -v "$tool" >/dev/null 2>&1 || die "$tool is needed"
 done
 case $SCENES in /*) ;; *) SCENES=$(pwd)/$SCENES ;; esac
-# Files in the repository name the shared scenes by a path relative to the
-# repository (configs/drt-views.yaml: ../../shared/scenes/...): beside the
-# copy, as beside the repository, ../shared is the shared folder.
-mkdir -p "$WORK"
-if [ -d "$SCENES" ] && [ ! -e "$WORK/shared" ]; then
-	ln -s "$(cd "$SCENES/.." && pwd)" "$WORK/shared" || die "cannot link $WORK/shared"
-fi
+. "$REPO/scripts/scratch-lib.sh"
+scratch_link_shared "$WORK" "$SCENES"
 
-# Mirrors the repository into $SRC: changed files only (-c: by content, so
-# a file a mutant touched is copied back and, with a fresh mtime, rebuilt);
-# ignored files (build folders) stay out and are kept in the copy.
 sync_copy() {
-	rsync -rlc --delete --exclude=/.git --exclude=/build-mutate/ \
-	    --filter=':- .gitignore' "$REPO/" "$SRC/" ||
-	    die "cannot copy the repository into $SRC"
+	scratch_sync "$REPO" "$SRC"
 }
 
 build() { # log file
