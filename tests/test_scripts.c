@@ -175,6 +175,15 @@ Test(scripts, documents_show_the_programs_figures, .timeout = 900)
 	cr_assert(strstr(out, "fps shown ") && strstr(out, "0 of 1 runs"), "%s", out);
 }
 
+/* Runs cmd, extend-doc.py on a spoiled page or patch (its output in
+ * dir/name): it must be refused (exit 1), naming want. */
+static void extend_doc_refuses(const char *dir, const char *cmd, const char *name, const char *want,
+                               const char *what)
+{
+	cr_assert_eq(tu_run(cmd), 1, "%s passed: %s", what, tu_slurp(dir, name));
+	cr_assert(strstr(tu_slurp(dir, name), want), "%s", tu_slurp(dir, name));
+}
+
 /* docs/extending.md's unit-kind walk-through is the patch `make
  * extend-check` builds and runs (tests/extend/unit-clip.patch; the build
  * takes a minute, so `make test` checks only that the two agree,
@@ -200,15 +209,12 @@ Test(scripts, extending_walkthrough_is_the_checked_patch)
 	         ">'%s/bad.md' && python3 '%s/scripts/extend-doc.py' --doc '%s/bad.md' "
 	         ">'%s/bad' 2>&1",
 	         root(), dir, root(), dir, dir);
-	cr_assert_eq(tu_run(cmd), 1, "a changed line passed: %s", tu_slurp(dir, "bad"));
-	cr_assert(strstr(tu_slurp(dir, "bad"), "UNIT_CLIP, UNIT_XFORM"), "%s",
-	          tu_slurp(dir, "bad"));
+	extend_doc_refuses(dir, cmd, "bad", "UNIT_CLIP, UNIT_XFORM", "a changed line");
 	/* the patch with a fourth place (the config's file): refused */
 	snprintf(cmd, sizeof cmd,
 	         "{ cat '%s/tests/extend/unit-clip.patch'; printf '%%s\\n' "
 	         "'--- a/sim/config.c' '+++ b/sim/config.c' '@@ -1 +1 @@' '-a' '+b'; } "
 	         ">'%s/p' && python3 '%s/scripts/extend-doc.py' --patch '%s/p' >'%s/four' 2>&1",
 	         root(), dir, root(), dir, dir);
-	cr_assert_eq(tu_run(cmd), 1, "a fourth place passed: %s", tu_slurp(dir, "four"));
-	cr_assert(strstr(tu_slurp(dir, "four"), "sim/config.c"), "%s", tu_slurp(dir, "four"));
+	extend_doc_refuses(dir, cmd, "four", "sim/config.c", "a fourth place");
 }
