@@ -123,8 +123,13 @@ static int write_job(const char *path, const img_job *j, af_group *g, diag *d)
 		diag_set(d, path, 0, 0, "cannot write image: %s", strerror(errno));
 		goto out;
 	}
-	if ((j->y ? p->write_y32f(a.tmp, ext, j->w, j->h, j->y, err, sizeof err)
-	          : p->write_rgb(a.tmp, ext, j->w, j->h, j->rgb8, j->rgbf, err, sizeof err)) != 0) {
+	/* the plugin reads the file back (a write cut short): libpng's
+	 * default handler prints "libpng error: ..." itself */
+	int quiet = diag_quiet_begin();
+	int wr = j->y ? p->write_y32f(a.tmp, ext, j->w, j->h, j->y, err, sizeof err)
+	              : p->write_rgb(a.tmp, ext, j->w, j->h, j->rgb8, j->rgbf, err, sizeof err);
+	diag_quiet_end(quiet);
+	if (wr != 0) {
 		af_abort(&a);
 		diag_set(d, path, 0, 0, "cannot write image: %s", err);
 		goto out;
@@ -172,8 +177,32 @@ int img_write_values(const char *path, int w, int h, const float *v, af_group *g
 	return write_job(path, &j, g, d);
 }
 
+/* The formats the programs write (--out, --heatmap: their --help lists
+ * them). Others OpenImageIO would write are refused before the run:
+ * libjpeg's default error handler, which OpenImageIO's JPEG writer keeps,
+ * ends the process with status 1 on a failed write. */
+static int out_format(const char *path, diag *d)
+{
+	static const char *const ok[] = {"png", "exr", "ppm", "tif", "tiff"};
+	char ext[32];
+	ext_of(path, ext, sizeof ext);
+	for (size_t i = 0; i < sizeof ok / sizeof *ok; i++)
+		if (!strcmp(ext, ok[i]))
+			return 0;
+	if (!*ext)
+		return diag_set(d, path, 0, 0,
+		                "cannot write image: no extension to name its format (.png, .exr, "
+		                ".ppm or .tif)");
+	return diag_set(d, path, 0, 0,
+	                "cannot write image: '.%s' is not a format written here (.png, .exr, "
+	                ".ppm or .tif)",
+	                ext);
+}
+
 int img_can_write(const char *path, diag *d)
 {
+	if (out_format(path, d))
+		return -1;
 	const img_plugin *p;
 	void *lib = plugin_open(&p, path, d);
 	if (!lib)
@@ -216,7 +245,7 @@ int img_reserve(const char *path, diag *d)
 
 int img_reserve_file(const char *path, diag *d)
 {
-	return not_a_folder(path, d) ? -1 : reserve_temp(path, d);
+	return not_a_folder(path, d) || out_format(path, d) ? -1 : reserve_temp(path, d);
 }
 
 int img_read_rgba8(const char *path, int *w, int *h, uint8_t **rgba, diag *d)

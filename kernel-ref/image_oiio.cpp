@@ -9,6 +9,7 @@
 #include <OpenImageIO/imageio.h>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <string>
 #include <vector>
@@ -30,8 +31,41 @@ static int fail(char *err, size_t errlen, const std::string &what)
 	return -1;
 }
 
+/* Reads back the file write_spec has just closed: the whole image, of
+ * spec's size and channels, and for 8-bit pixels the very bytes written.
+ * A writer can "succeed" on a file cut short: OpenImageIO's PNG writer
+ * took no notice of a failed write (the file-size limit), so a truncated
+ * PNG was renamed into place with exit status 0. */
+static int read_back(const char *path, const char *ext_c, const ImageSpec &spec, TypeDesc type,
+                     const void *px, char *err, size_t errlen)
+{
+	auto in = ImageInput::open(path);
+	if (!in)
+		return fail(err, errlen,
+		            "written file does not read back: " + one_line(OIIO::geterror()));
+	const ImageSpec &got = in->spec();
+	if (got.width != spec.width || got.height != spec.height || got.nchannels != spec.nchannels)
+		return fail(err, errlen, "written file reads back as another image");
+	size_t n = (size_t)spec.width * (size_t)spec.height * (size_t)spec.nchannels;
+	std::vector<uint8_t> back(n * type.size());
+	if (!in->read_image(0, 0, 0, spec.nchannels, type, back.data()) || in->has_error())
+		return fail(err, errlen,
+		            "written file does not read back: " + one_line(in->geterror()));
+	in->close();
+	/* png, ppm and tif keep 8-bit pixels exactly; floats were stored as
+	 * halves and JPEG is lossy, so of those only the reading back is
+	 * checked */
+	std::string ext = ext_c;
+	bool exact = ext == "png" || ext == "ppm" || ext == "tif" || ext == "tiff";
+	if (exact && type == TypeDesc::UINT8 && spec.format == TypeDesc::UINT8 &&
+	    std::memcmp(back.data(), px, n) != 0)
+		return fail(err, errlen, "written file reads back with other pixels");
+	return 0;
+}
+
 /* Writes one image of `spec` from pixels px of type `type`: create,
- * open, write, close, each error one line. Both writers below end here. */
+ * open, write, close, read back (read_back), each error one line. Both
+ * writers below end here. */
 static int write_spec(const char *path, const char *ext_c, const ImageSpec &spec, TypeDesc type,
                       const void *px, char *err, size_t errlen)
 {
@@ -49,7 +83,9 @@ static int write_spec(const char *path, const char *ext_c, const ImageSpec &spec
 			e = one_line(out->geterror());
 			ok = false;
 		}
-		return ok ? 0 : fail(err, errlen, e);
+		if (!ok)
+			return fail(err, errlen, e);
+		return read_back(path, ext_c, spec, type, px, err, errlen);
 	} catch (const std::exception &x) {
 		return fail(err, errlen, x.what());
 	}

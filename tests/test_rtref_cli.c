@@ -363,3 +363,21 @@ Test(rtref_cli, bad_scene_files_are_one_line, .timeout = 120)
 	one_line_naming("g.ase: unsupported scene format '.ase'");
 	cr_assert_not(exists("f.png"));
 }
+
+/* rtref's frame cut short by the file-size limit: one line naming it,
+ * exit 2, neither the frame nor --stats left (it ended with status 0 and
+ * a truncated PNG); a .jpg is refused before the render. */
+Test(rtref_cli, image_write_cut_short_or_unlisted_format_is_refused)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 256x256 --out %s/x.png --stats %s/s.json", dir, dir);
+	cr_assert_eq(tu_run_env("trap '' XFSZ; ulimit -f 4;", dir, "rtref", args), 2, "%s",
+	             slurp("err"));
+	one_line_naming("x.png");
+	cr_assert(!exists("x.png") && !exists("s.json"), "a file was left");
+	cr_assert_eq(tu_temps(dir, "x.png"), 0);
+	snprintf(args, sizeof args, "--size 16x16 --out %s/x.jpg", dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("x.jpg");
+	cr_assert_not(exists("x.jpg"));
+}

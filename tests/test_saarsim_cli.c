@@ -303,6 +303,30 @@ Test(saarsim_cli, outputs_are_checked_before_the_run)
 	one_line_naming("not a regular file");
 }
 
+/* A frame whose write is cut short (the file-size limit: the PNG writer
+ * took no notice and the run ended with status 0, a 4 KB PNG of 8.7 KB
+ * renamed into place) is one line naming it, exit 2, and no file; and
+ * --out formats outside --help's list are refused before the run
+ * (libjpeg ended a failed .jpg write with status 1 and its own message). */
+Test(saarsim_cli, image_write_cut_short_or_unlisted_format_is_refused)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--quiet --size 256x256 --no-check --out %s/b.png", dir);
+	cr_assert_eq(tu_run_env("trap '' XFSZ; ulimit -f 4;", dir, "saarsim", args), 2, "%s",
+	             slurp("err"));
+	one_line_naming("b.png");
+	cr_assert_not(exists("b.png"), "a cut-short frame was left in place");
+	cr_assert_eq(tu_temps(dir, "b.png"), 0);
+	static const char *const bad[] = {"f.jpg", "f.bmp", "f"};
+	for (int i = 0; i < 3; i++) {
+		snprintf(args, sizeof args, "--size 16x16 --out %s/%s --report %s/r.json", dir,
+		         bad[i], dir);
+		cr_assert_eq(saarsim(args), 2, "%s", bad[i]);
+		one_line_naming(bad[i]);
+		cr_assert(!exists(bad[i]) && !exists("r.json"), "%s: a file was written", bad[i]);
+	}
+}
+
 /* A run ended by SIGTERM or SIGINT removes the temporaries of its outputs
  * (an 8 MB t.gz.XXXXXX trace was left) and still ends by the signal; the
  * --heatmap folder it made is removed too (an empty folder was left: only
