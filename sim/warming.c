@@ -582,6 +582,12 @@ static int skip_counters(wm *r, chip *c)
 		int keep = r->is_max[i];
 		for (size_t k = 0; k < nw && !keep; k++)
 			keep = wp[k] == r->cnt[i];
+		/* the threads' time by state is timing's own too: rolled back,
+		 * the shares were those of the last region's ends alone (24%
+		 * idle on Conference, 1% in cycle mode) */
+		for (int q = 0; q < c->nrtp && !keep; q++)
+			for (int s = 0; s < THR_NSTATES && !keep; s++)
+				keep = c->rtp[q].occ[s] == r->cnt[i];
 		if (!keep)
 			r->sk[r->nsk++] = r->cnt[i];
 	}
