@@ -68,6 +68,10 @@ static void node_fetched(thr_ctx *t)
 	tli_node_decode(L->rec, &L->n);
 	uint64_t mask = L->mask[L->sp];
 	L->leaf = tl_pkt_box(&L->n.box, t->p, mask);
+	if (L->steps == 1) { /* the root: its box is the scene's */
+		thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(mask & ~L->leaf));
+		thr_count(t, C_BOX_MISS_PACKETS, (uint64_t)!L->leaf);
+	}
 	thr_count(t, C_TL_STEPS, 1);
 	thr_use(t, UNIT_TRAV, thr_pop(mask), node_done);
 }

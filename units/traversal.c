@@ -29,11 +29,16 @@ uint64_t tu_enter(thr_ctx *t)
 	    pkt_trav_begin_fp(&t->ts, t->p, thr_img(t), t->stack, PKT_STACK_MAX, &t->env->prec);
 	t->sp = 0;
 	t->steps = 0;
-	thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
-	if (!enter) {
-		thr_count(t, C_BOX_MISS_PACKETS, 1);
-		t->env->route.finish(t);
+	/* the scene box: inside an instance of a two-level scene (the
+	 * packet is the transformation unit's, thr_tl.q) this is an object's
+	 * box, whose misses are no scene-box misses (the top level counts
+	 * those at its root, toplevel.c node_fetched) */
+	if (!(t->tl && t->p == &t->tl->q)) {
+		thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
+		thr_count(t, C_BOX_MISS_PACKETS, (uint64_t)!enter);
 	}
+	if (!enter)
+		t->env->route.finish(t);
 	return enter;
 }
 
