@@ -98,6 +98,10 @@ void fig_span(const chip *c, int f0, int f1, memfig *m)
 	m->fps = ratio(c->cfg.chip.clock_mhz * 1e6, m->cycles);
 	for (int k = 0; k < HR_N; k++)
 		m->hit[k] = -1.0;
+	/* -1 (null, "-" in the text) where there is nothing to measure: the
+	 * fixed model has no SDRAM, a span with no engine time (functional)
+	 * no bus time */
+	m->meta_share = m->row_hit_rate = m->sdram_util = m->pci_util = -1;
 	if (!c->frame_mem) {
 		const mem_counts *a = f0 ? &c->frame_port[f0 - 1] : &zero_p,
 		                 *b = &c->frame_port[f1 - 1];
@@ -144,6 +148,8 @@ void fig_span(const chip *c, int f0, int f1, memfig *m)
 	                a->sdram.row_conflicts;
 	m->row_hit_rate = rows ? (double)rh / (double)rows : -1;
 	double ticks = (double)(b->now_ticks - a->now_ticks);
+	if (ticks <= 0)
+		return;
 	/* with the busy time of regions a skip handed over (hier_params.h) */
 	m->sdram_util = ratio((double)(b->sdram.busy_ticks + b->skipped_sdram_busy_ticks -
 	                               a->sdram.busy_ticks - a->skipped_sdram_busy_ticks),

@@ -78,7 +78,9 @@ static void fidfig_get(const chip *c, fidfig *x)
 	 * from the sampled run's own tile order") */
 	x->lo = fmax(x->cycles - x->half, F->mode == CFG_FIDELITY_SAMPLED ? ratio(fl, n) : -1);
 	x->fps_hi = x->lo > 0 ? hz / x->lo : -1;
-	x->fps_bound = ratio(hz, F->res_cycles[F->bound_by]);
+	/* a frame takes whole cycles: the bound's, rounded up as a
+	 * functional frame's cycles_per_frame are (frame.c) */
+	x->fps_bound = ratio(hz, ceil(F->res_cycles[F->bound_by]));
 	x->bound_by = chip_res_name(F->bound_by);
 }
 
@@ -125,7 +127,7 @@ static void fidelity_text(FILE *f, const chip *c)
 		fprintf(f,
 		        "  fidelity functional: no timing; fps <= %.2f (a bound: the busiest "
 		        "resource is %s, %.0f cycles/frame)\n",
-		        x.fps_bound, x.bound_by, F->res_cycles[F->bound_by]);
+		        x.fps_bound, x.bound_by, ceil(F->res_cycles[F->bound_by]));
 	else if (chip_estimates(&c->cfg)) {
 		char ms[64], ws[96];
 		fprintf(f,
@@ -284,8 +286,8 @@ static void memfig_json(jsonw *j, const memfig *m)
 	jsonw_obj_end(j);
 	knum_or_null(j, "meta_share", m->meta_share);
 	knum_or_null(j, "sdram_row_hit_rate", m->row_hit_rate);
-	jsonw_knum(j, "sdram_utilisation", m->sdram_util);
-	jsonw_knum(j, "pci_utilisation", m->pci_util);
+	knum_or_null(j, "sdram_utilisation", m->sdram_util);
+	knum_or_null(j, "pci_utilisation", m->pci_util);
 	jsonw_obj_end(j);
 }
 
@@ -443,11 +445,15 @@ void report_text(FILE *f, const report_info *ri)
 				pct(f, fig_hit_name(k), m.hit[k]);
 		fputs("\n  SDRAM:", f);
 		pct(f, "row hits", m.row_hit_rate);
-		fprintf(f, ", bus busy %.1f%%,", 100 * m.sdram_util);
+		fputc(',', f);
+		pct(f, "bus busy", m.sdram_util);
+		fputc(',', f);
 		pct(f, "meta-data", m.meta_share);
 		fputs(" of accesses", f);
-		if (g->memory.vma.enabled)
-			fprintf(f, "; PCI busy %.1f%%", 100 * m.pci_util);
+		if (g->memory.vma.enabled) {
+			fputc(';', f);
+			pct(f, "PCI busy", m.pci_util);
+		}
 		fputc('\n', f);
 	}
 	if (stall_cycles(c, 0) >= 0) {

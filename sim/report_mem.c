@@ -9,6 +9,17 @@ static double ratio(uint64_t a, uint64_t b)
 	return b ? (double)a / (double)b : 0.0;
 }
 
+/* Key k: v, or null when there is nothing to measure. */
+static void knum_null_if(jsonw *w, const char *k, double v, int none)
+{
+	if (none) {
+		jsonw_key(w, k);
+		jsonw_null(w);
+	} else {
+		jsonw_knum(w, k, v);
+	}
+}
+
 static void cache_json(jsonw *w, const char *key, const cache_stats *c)
 {
 	jsonw_key(w, key);
@@ -77,15 +88,17 @@ void hier_write_json(const hier_stats *s, jsonw *w)
 	jsonw_kuint(w, "bytes", d->read_bytes + d->write_bytes);
 	jsonw_kuint(w, "meta_accesses", meta);
 	jsonw_kuint(w, "data_accesses", all - meta);
-	jsonw_knum(w, "meta_share", ratio(meta, all));
+	/* null where there is nothing to share or time (a functional run's
+	 * SDRAM has no rows opened, no bus time) */
+	knum_null_if(w, "meta_share", ratio(meta, all), !all);
 	jsonw_kuint(w, "row_hits", d->row_hits);
 	jsonw_kuint(w, "row_empty", d->row_empty);
 	jsonw_kuint(w, "row_conflicts", d->row_conflicts);
-	jsonw_knum(w, "row_hit_rate", ratio(d->row_hits, rows));
+	knum_null_if(w, "row_hit_rate", ratio(d->row_hits, rows), !rows);
 	/* a skip's regions were on the bus too (skipped_*: hier_params.h) */
 	uint64_t sbusy = d->busy_ticks + s->skipped_sdram_busy_ticks;
 	jsonw_kuint(w, "busy_ns", sbusy / 1000);
-	jsonw_knum(w, "utilization", ratio(sbusy, s->now_ticks));
+	knum_null_if(w, "utilization", ratio(sbusy, s->now_ticks), !s->now_ticks);
 	double run_s = s->run_ticks ? (double)s->run_ticks * 1e-12 : secs;
 	jsonw_knum(w, "bandwidth_gb_s",
 	           run_s > 0 ? (double)(d->read_bytes + d->write_bytes) / run_s / 1e9 : 0.0);
@@ -119,7 +132,7 @@ void hier_write_json(const hier_stats *s, jsonw *w)
 		jsonw_kuint(w, "bytes", b->bytes);
 		uint64_t hbusy = b->busy_ticks + s->skipped_hostbus_busy_ticks;
 		jsonw_kuint(w, "busy_ns", hbusy / 1000);
-		jsonw_knum(w, "utilization", ratio(hbusy, s->now_ticks));
+		knum_null_if(w, "utilization", ratio(hbusy, s->now_ticks), !s->now_ticks);
 		jsonw_knum(w, "peak_mb_s", s->hostbus_peak_bytes_per_s / 1e6);
 		jsonw_obj_end(w);
 	}

@@ -79,9 +79,9 @@ static void span_rules(rc_list *o, const rc_figs *f, const char *what, const mem
 	snprintf(w, sizeof w, "%s.sdram_row_hit_rate", what);
 	rate(o, w, m->row_hit_rate, 1);
 	snprintf(w, sizeof w, "%s.sdram_utilisation", what);
-	rate(o, w, m->sdram_util, 0);
+	rate(o, w, m->sdram_util, 1);
 	snprintf(w, sizeof w, "%s.pci_utilisation", what);
-	rate(o, w, m->pci_util, 0);
+	rate(o, w, m->pci_util, 1);
 	/* a busy bus moved bytes (the audit's "PCI 0.00 MB/frame, busy 99.7%") */
 	if (m->sdram_util > 0 && !(m->sdram_mb > 0))
 		fail(o, "%s: SDRAM busy (%.1f%%) moved bytes (%.6g MB)", what, 100 * m->sdram_util,

@@ -1119,6 +1119,48 @@ Test(saarsim_cli, shares_of_no_sdram_access_are_null)
 	}
 }
 
+/* What a run cannot measure is null (JSON) and "-" (text), not 0: a
+ * functional run times no bus ("SDRAM: ... bus busy 0.0%" beside 0.64
+ * MB/frame, the busiest resource being the SDRAM), the fixed model has
+ * no SDRAM (its shares, row hits and bus time were 0). And a functional
+ * run's bound is one figure: its text said "289254 cycles = 1842.67 fps"
+ * in the headline and "fps <= 1842.68 ... 289253 cycles/frame" below. */
+Test(saarsim_cli, measures_of_nothing_are_null_not_zero)
+{
+	char args[1024];
+	snprintf(args, sizeof args,
+	         "--size 32x32 --fidelity functional --no-check --config configs/saarcor-vma.yaml "
+	         "--report %s/f.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *out = slurp("out");
+	cr_assert(strstr(out, ", bus busy -,") && strstr(out, "; PCI busy -"), "%s", out);
+	const char *ss = strstr(slurp("f.json"), "\"steady_state\": {");
+	cr_assert(ss);
+	cr_assert(!strncmp(jval(ss, JKEYS("sdram_utilisation")), " null", 5));
+	cr_assert(!strncmp(jval(ss, JKEYS("pci_utilisation")), " null", 5));
+	const char *h = strstr(out, "cycles per frame "), *b = strstr(out, "fps <= ");
+	cr_assert(h && b, "%s", out);
+	double hc, hf, bf, bc;
+	cr_assert_eq(sscanf(h, "cycles per frame %lf = %lf fps", &hc, &hf), 2);
+	char res[32];
+	cr_assert_eq(
+	    sscanf(b, "fps <= %lf (a bound: the busiest resource is %31s %lf", &bf, res, &bc), 3,
+	    "%s", b);
+	cr_assert(hc == bc && hf == bf, "headline %.0f cycles = %.2f fps, bound %.0f = %.2f", hc,
+	          hf, bc, bf);
+	snprintf(args, sizeof args,
+	         "--size 32x32 --no-check --set memory.model=fixed --report %s/x.json", dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	ss = strstr(slurp("x.json"), "\"steady_state\": {");
+	cr_assert(ss);
+	const char *keys[] = {"meta_share", "sdram_row_hit_rate", "sdram_utilisation",
+	                      "pci_utilisation"};
+	for (int k = 0; k < 4; k++)
+		cr_assert(!strncmp(jval(ss, JKEYS(keys[k])), " null", 5), "fixed model: %s %.20s",
+		          keys[k], jval(ss, JKEYS(keys[k])));
+}
+
 /* Issue 31: a 2-frame VMA run's headline fps is the mean over the cold
  * and the warm frame, several times below the steady state; the mistake
  * caught is a headline that does not say so (the old "cycles per frame
