@@ -897,16 +897,29 @@ int cli_parse_int(const char *flag, const char *s, long lo, long hi, long *out, 
 	return 0;
 }
 
+/* A side of --size: digits only (strtol would take leading blanks and a
+ * sign, so " 64x64" and "+64x64" were accepted and "64x64 " refused), at
+ * most 9 of them (no overflow); -1 when there are none. */
+static long size_side(const char *s, const char **end)
+{
+	long v = 0;
+	int n = 0;
+	while (*s >= '0' && *s <= '9' && n < 9) {
+		v = v * 10 + (*s++ - '0');
+		n++;
+	}
+	*end = s;
+	return n ? v : -1;
+}
+
 int cli_parse_size(const char *s, int *w, int *h, diag *d)
 {
-	char *end;
-	errno = 0;
-	long a = strtol(s, &end, 10);
-	if (end == s || (*end != 'x' && *end != 'X') || errno)
+	const char *end;
+	long a = size_side(s, &end);
+	if (a < 0 || (*end != 'x' && *end != 'X'))
 		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
-	const char *q = end + 1;
-	long b = strtol(q, &end, 10);
-	if (end == q || *end || errno)
+	long b = size_side(end + 1, &end);
+	if (b < 0 || *end)
 		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
 	if (a < 1 || a > 16384 || b < 1 || b > 16384)
 		return diag_set(d, "--size", 0, 0, "%s is out of range (1..16384 each)", s);

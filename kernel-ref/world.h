@@ -129,7 +129,8 @@ extern const char world_usage[];
  * ("FLAG: message"); cli_bad prints "prog: msg" as the one stderr line and
  * returns DIAG_EXIT for main to return. */
 int cli_parse_int(const char *flag, const char *s, long lo, long hi, long *out, diag *d);
-/* "WxH", each 1..16384 (flag --size in messages). */
+/* "WxH", each 1..16384, digits only: no blank, sign or other byte (flag
+ * --size in messages). */
 int cli_parse_size(const char *s, int *w, int *h, diag *d);
 int cli_bad(const char *prog, const char *msg);
 /* The output of frame i of an animation of `frames` frames: path itself

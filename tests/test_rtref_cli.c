@@ -363,3 +363,26 @@ Test(rtref_cli, bad_scene_files_are_one_line, .timeout = 120)
 	one_line_naming("g.ase: unsupported scene format '.ase'");
 	cr_assert_not(exists("f.png"));
 }
+
+/* Mistake: --size's sides read by strtol, which takes a leading blank or
+ * sign: " 64x64" and "+64x64" were accepted while "64x64 " was refused.
+ * Every such size is refused by both programs (one line, exit 2); plain
+ * digits still pass. */
+Test(rtref_cli, size_is_digits_only)
+{
+	char args[1024];
+	const char *bad[] = {"' 64x64'", "+64x64", "'64x64 '", "64x+64",
+	                     "'64x 64'", "64x-8",  "'\t8x8'"};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		snprintf(args, sizeof args, "--size %s --out %s/f.png", bad[k], dir);
+		cr_assert_eq(rtref(args), 2, "--size %s", bad[k]);
+		one_line_naming("--size");
+		cr_assert_not(exists("f.png"));
+		snprintf(args, sizeof args, "--size %s --dry-run", bad[k]);
+		cr_assert_eq(tu_prog(dir, "saarsim", args), 2, "saarsim --size %s", bad[k]);
+		tu_one_line(dir, "saarsim", "--size");
+	}
+	snprintf(args, sizeof args, "--size 16X12 --out %s/f.png", dir);
+	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+	cr_assert_eq(tu_prog(dir, "saarsim", "--size 16x12 --dry-run"), 0, "%s", slurp("err"));
+}
