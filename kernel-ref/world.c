@@ -35,11 +35,11 @@ const char world_usage[] =
     "  --grid-lambda F --grid-macro N --grid-packet 1|4|8 --grid-mailbox 0|1 --grid-cull 0|1\n"
     "                        the grid: cells per triangle (5), macrocell side (6, 0: none),\n"
     "                        rays per frustum side (8; 1: single rays), mailboxing (1),\n"
-    "                        frustum culling (1)\n"
+    "                        frustum culling (1); with the grid only\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
-    "  --no-lights           no lights: no shadow rays\n"
+    "  --no-lights           no lights: no shadow rays (not with --light)\n"
     "  --spp N (1|4|16|64) --aperture F --focus F --light-size F --gloss F --motion X,Y,Z\n"
     "                        distribution ray tracing (override the view's drt; docs/views.md)\n"
     "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n"
@@ -154,6 +154,8 @@ static int grid_flag(world_opts *o, const char *a, const char *v, diag *d)
 {
 	long n;
 	double x;
+	if (strcmp(a, "--accel"))
+		o->grid_flag = a;
 	if (!strcmp(a, "--accel")) {
 		if (strcmp(v, "kd") && strcmp(v, "grid"))
 			return diag_set(d, a, 0, 0, "expected kd or grid, got '%s'", v);
@@ -218,6 +220,9 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		takes |= strcmp(a, with_value[k]) == 0;
 	if (!takes) {
 		if (strcmp(a, "--no-lights") == 0 || strcmp(a, "--two-level") == 0) {
+			if (a[2] == 'n' && o->nlights)
+				return diag_set(d, a, 0, 0,
+				                "not with --light (no lights, or these)");
 			*(a[2] == 'n' ? &o->no_lights : &o->two_level) = 1;
 			(*i)++;
 			return 1;
@@ -264,6 +269,8 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->have_fov = 1;
 		o->cam.fov_deg = (float)x;
 	} else if (!strcmp(a, "--light")) {
+		if (o->no_lights)
+			return diag_set(d, a, 0, 0, "not with --no-lights (these lights, or none)");
 		if (o->nlights == VIEW_MAX_LIGHTS)
 			return diag_set(d, a, 0, 0, "at most %d lights", VIEW_MAX_LIGHTS);
 		o->lights[o->nlights].color = v3(1, 1, 1);
@@ -297,6 +304,15 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->kd_footprint_given = 1;
 	}
 	return 1;
+}
+
+int world_opts_check(const world_opts *o, diag *d)
+{
+	if (o->grid_flag && o->accel != WORLD_ACCEL_GRID)
+		return diag_set(d, o->grid_flag, 0, 0,
+		                "applies to the grid only (--accel grid); this run traces the "
+		                "kd-tree");
+	return 0;
 }
 
 const char *world_cache_name(int status)

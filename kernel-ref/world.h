@@ -55,6 +55,7 @@ typedef struct world_opts {
 	 * (--grid-lambda, --grid-macro, --grid-packet, --grid-mailbox) */
 	int accel;
 	grid_params gp;
+	const char *grid_flag; /* the last --grid-* flag given, or NULL (world_opts_check) */
 } world_opts;
 
 enum { WORLD_ACCEL_KD, WORLD_ACCEL_GRID };
@@ -113,6 +114,12 @@ void world_opts_default(world_opts *o);
  * --kd-leaf-size n, --kd-empty-bonus f, --kd-footprint f, --world-cache DIR|off,
  * --world-cache-max MB. */
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
+
+/* The world flags that contradict each other once every flag is parsed
+ * (and, for saarsim, the config read: chip.accel grid is --accel grid): a
+ * --grid-* flag without the grid. -1 with d set ("--grid-packet: ..."). The
+ * parser itself refuses --no-lights with --light. */
+int world_opts_check(const world_opts *o, diag *d);
 
 /* rtref's own tree (kernel-ref.md, "rtref's own tree"), after the flags
  * are parsed: unless --kd-footprint named a footprint, the footprint of

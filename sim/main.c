@@ -378,6 +378,8 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 		cfg->chip.accel = CFG_ACCEL_GRID;
 	if (cfg->chip.accel == CFG_ACCEL_GRID)
 		a->wo.accel = WORLD_ACCEL_GRID;
+	if (world_opts_check(&a->wo, d))
+		return cli_bad("saarsim", d->msg);
 	if (a->wo.accel == WORLD_ACCEL_GRID && a->wo.two_level)
 		return cli_bad("saarsim", "--accel grid: not with --two-level (one or the other)");
 	/* kernel-ref's grid tracer has neither cones nor reduced formats (its

@@ -386,3 +386,41 @@ Test(rtref_cli, size_is_digits_only)
 	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
 	cr_assert_eq(tu_prog(dir, "saarsim", "--size 16x12 --dry-run"), 0, "%s", slurp("err"));
 }
+
+/* Mistake: options that contradict each other accepted, one of them then
+ * ignored without a word: --light after --no-lights (no shadow rays), a
+ * --grid-* flag on a kd-tree run, rtref's packet-only --cone-cull and
+ * --per-lane with --single-ray, saarsim-stress's --views with
+ * --no-precision. Each is one line and exit 2 before anything runs, and
+ * the flags still work where they apply. */
+Test(rtref_cli, contradictory_options_are_refused)
+{
+	static const struct {
+		const char *prog, *args, *names;
+	} bad[] = {
+	    {"rtref", "--cone-cull --single-ray", "--cone-cull"},
+	    {"rtref", "--single-ray --per-lane", "--per-lane"},
+	    {"rtref", "--grid-packet 1", "--grid-packet"},
+	    {"rtref", "--accel kd --grid-cull 0", "--grid-cull"},
+	    {"rtref", "--no-lights --light 1,1,1", "--light"},
+	    {"saarsim", "--light 1,1,1 --no-lights --dry-run", "--no-lights"},
+	    {"saarsim", "--grid-macro 0 --dry-run", "--grid-macro"},
+	    {"saarsim-stress", "--views /nonexistent.yaml --quick --no-precision", "--views"},
+	    {"saarsim-stress", "--quick --out", "--out needs a value"},
+	};
+	char args[1024];
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		snprintf(args, sizeof args, "%s --out %s/f.png", bad[k].args, dir);
+		if (!strcmp(bad[k].prog, "saarsim-stress"))
+			snprintf(args, sizeof args, "%s", bad[k].args);
+		cr_assert_eq(tu_prog(dir, bad[k].prog, args), 2, "%s %s", bad[k].prog, bad[k].args);
+		tu_one_line(dir, bad[k].prog, bad[k].names);
+		cr_assert_not(exists("f.png"));
+	}
+	cr_assert_eq(rtref("--size 16x16 --accel grid --grid-packet 1 --no-lights"), 0, "%s",
+	             slurp("err"));
+	cr_assert_eq(rtref("--size 16x16 --single-ray --light 1,1,1 --light 2,2,2"), 0, "%s",
+	             slurp("err"));
+	cr_assert_eq(tu_prog(dir, "saarsim", "--set chip.accel=grid --grid-macro 0 --dry-run"), 0,
+	             "%s", slurp("err"));
+}
