@@ -385,10 +385,17 @@ int main(int argc, char **argv)
 		return rc;
 	/* an unwritable --out folder fails now, its format once the scene is
 	 * imported (img_reserve_file in image.h: not beside the importer's
-	 * fork), both before the run */
-	if (a.out && img_reserve_file(a.out, &d))
+	 * fork), both before the run; an animation's numbered files all of them
+	 * (frame 0's reserved, the others' paths checked) */
+	char ob[4096], sb[4096];
+	const char *out0 = cli_frame_path(a.out, a.frames, 0, ob, sizeof ob);
+	const char *stats0 = cli_frame_path(a.stats, a.frames, 0, sb, sizeof sb);
+	if (out0 && img_reserve_file(out0, &d))
 		return cli_bad("rtref", d.msg);
-	if (a.stats && strcmp(a.stats, "-") && af_reserve(a.stats, "", &d))
+	if (stats0 && strcmp(stats0, "-") && af_reserve(stats0, "", &d))
+		return cli_bad("rtref", d.msg);
+	if (cli_check_frame_paths(a.out, a.frames, &d) ||
+	    cli_check_frame_paths(a.stats, a.frames, &d))
 		return cli_bad("rtref", d.msg);
 	world w;
 	if (world_load(&w, &a.wo, &d))

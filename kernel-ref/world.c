@@ -4,6 +4,7 @@
 #include "kernel-ref/world.h"
 
 #include "kernel-ref/aff.h"
+#include "kernel-ref/atomicfile.h"
 #include "kernel-ref/image.h"
 #include "kernel-ref/spd.h"
 #include "kernel-ref/twolevel.h"
@@ -15,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 const char world_usage[] =
@@ -953,6 +955,22 @@ const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_
 		dot = path + strlen(path);
 	snprintf(buf, n, "%.*s-%04d%s", (int)(dot - path), path, i, dot);
 	return buf;
+}
+
+int cli_check_frame_paths(const char *path, int frames, diag *d)
+{
+	char buf[4096];
+	struct stat st;
+	for (int i = 1; path && strcmp(path, "-") && i < frames; i++) {
+		const char *p = cli_frame_path(path, frames, i, buf, sizeof buf);
+		afile a;
+		if (lstat(p, &st) != 0)
+			continue; /* made by the write, in frame 0's folder */
+		if (af_open(&a, p, "", 0))
+			return af_diag(d, p);
+		af_abort(&a);
+	}
+	return 0;
 }
 
 int cli_bad(const char *prog, const char *msg)

@@ -144,6 +144,12 @@ int cli_bad(const char *prog, const char *msg);
  * for one frame (or "-"), else path with "-NNNN" (i, four digits or more)
  * before its extension ("out.png" -> "out-0003.png"); buf holds it. */
 const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_t n);
+/* Frames 1 .. frames - 1 of an animation's numbered output (frame 0 the
+ * caller reserves, which checks the folder all of them share): each path
+ * that exists already must be writable as atomicfile.h writes (not a
+ * folder, device or FIFO), so a frame's output fails before any frame runs
+ * instead of after the frames before it. -1 with d set (af_diag's line). */
+int cli_check_frame_paths(const char *path, int frames, diag *d);
 
 int world_load(world *w, const world_opts *o, diag *d);
 

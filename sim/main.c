@@ -756,6 +756,10 @@ int main(int argc, char **argv)
 	fa.report = cli_frame_path(a.report, nanim, 0, rb, sizeof rb);
 	if (reserve_outputs(&fa, &cfg, &d))
 		return cli_bad("saarsim", d.msg);
+	/* the other frames' numbered files too, before any frame runs */
+	if (cli_check_frame_paths(a.out, a.warm ? cfg.frame.frames : nanim, &d) ||
+	    cli_check_frame_paths(a.report, nanim, &d))
+		return cli_bad("saarsim", d.msg);
 	if (a.dry) /* no scene import: the formats now */
 		return check_image_formats(&fa, &d) ? cli_bad("saarsim", d.msg) : 0;
 	world w;

@@ -424,3 +424,39 @@ Test(rtref_cli, contradictory_options_are_refused)
 	cr_assert_eq(tu_prog(dir, "saarsim", "--set chip.accel=grid --grid-macro 0 --dry-run"), 0,
 	             "%s", slurp("err"));
 }
+
+/* Mistake: an animation's numbered outputs checked for frame 0 only (the
+ * unnumbered path, or f-0000), so a later frame's path that names a
+ * folder failed after the frames before it were rendered and written.
+ * Every numbered path is checked before the first frame: one line naming
+ * the path, exit 2, no frame written; a plain file at a later path is
+ * replaced as usual. */
+Test(rtref_cli, numbered_outputs_are_checked_before_the_first_frame)
+{
+	char aff[512], args[2048], sub[600];
+	tu_write(aff, sizeof aff, dir, "t.aff",
+	         "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 1\nresolution 8 8\n"
+	         "l 0 5 5\nf 0.5 0.5 0.5 1 0 0 0 1\np 3\n-1 -1 0\n1 -1 0\n0 1 0\n");
+	snprintf(sub, sizeof sub, "%s/f-0002.png", dir);
+	cr_assert_eq(mkdir(sub, 0777), 0);
+	snprintf(args, sizeof args, "--scene %s --anim-fps 2 --frames 3 --size 8x8 --out %s/f.png",
+	         aff, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("f-0002.png");
+	cr_assert_not(exists("f-0000.png") || exists("f-0001.png"));
+	snprintf(sub, sizeof sub, "%s/r-0001.json", dir);
+	cr_assert_eq(mkdir(sub, 0777), 0);
+	snprintf(args, sizeof args,
+	         "--scene %s --anim-fps 2 --frames 2 --size 8x8 --out %s/g.png --report %s/r.json",
+	         aff, dir, dir);
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 2);
+	tu_one_line(dir, "saarsim", "r-0001.json");
+	cr_assert_not(exists("g-0000.png") || exists("r-0000.json"));
+	/* a file at a later frame's path is written over */
+	tu_write(sub, sizeof sub, dir, "h-0001.png", "old");
+	snprintf(args, sizeof args, "--scene %s --anim-fps 2 --frames 2 --size 8x8 --out %s/h.png",
+	         aff, dir);
+	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+	cr_assert(exists("h-0000.png"));
+	cr_assert_neq(strcmp(slurp("h-0001.png"), "old"), 0);
+}
