@@ -512,7 +512,7 @@ static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, obs 
 			af_diag(d, a->trace);
 			return -1;
 		}
-		if (chip_trace_mem(c, trace_tmp->tmp, d))
+		if (chip_trace_mem(c, trace_tmp->tmp, a->trace, d))
 			return -1;
 	}
 	if (a->census && chip_census_on(c, d))
