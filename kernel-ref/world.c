@@ -704,6 +704,20 @@ static void fp_framed_eye(kd_params *k, const world *w)
 	}
 }
 
+/* A scene a views file named that fails to load: its message (which
+ * names the scene) after the place of the view's `scene:` value, so the
+ * user sees which file and line to fix. */
+static int view_scene_failed(const world *w, const world_opts *o, diag *d)
+{
+	int line, col;
+	if (o->scene || !o->views || !w->v.scene[0] ||
+	    view_scene_at(o->views, o->view, &line, &col))
+		return -1;
+	char m[sizeof d->msg + 8];
+	snprintf(m, sizeof m, "scene %s", d->msg);
+	return diag_set(d, o->views, line, col, "%s", m);
+}
+
 int world_load(world *w, const world_opts *o, diag *d)
 {
 	memset(w, 0, sizeof *w);
@@ -728,11 +742,13 @@ int world_load(world *w, const world_opts *o, diag *d)
 	kd_params kp = view_kd(w, o, path);
 	if (!aff && cache_lookup(w, o, &kp, path, parts, cfile, sizeof cfile, &ckey, d)) {
 		free(ckey);
-		return -1;
+		return view_scene_failed(w, o, d);
 	}
 	if (aff ? load_aff(w, o, path, &sv, &aff_has_view, d)
-	        : !w->cache && load_scene(w, path, &sv, w->cache_dir ? &files : NULL, d))
+	        : !w->cache && load_scene(w, path, &sv, w->cache_dir ? &files : NULL, d)) {
+		view_scene_failed(w, o, d);
 		goto fail;
+	}
 	/* a procedural scene brings its standard view, an AFF scene its
 	 * camera at the time, unless a views file gave one */
 	if ((spd || aff_has_view) && !o->views)
