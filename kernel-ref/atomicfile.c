@@ -197,13 +197,34 @@ int af_open(afile *a, const char *path, const char *suffix, int want_file)
 	return 0;
 }
 
-/* Closes a->f; -1 with errno set on a write error. */
+/* Why an earlier write to f failed. stdio keeps only the error flag, not
+ * the write's errno (which every call since may have changed), and an
+ * error once reported as EIO said "Input/output error" for a file over
+ * the size limit (ulimit -f) or a full disk. So one byte is written again
+ * where the file ends, where the failed write stopped: the same cause
+ * fails it with its own errno (the file is a temporary, removed after the
+ * error anyway). EIO when it succeeds. */
+static int write_errno(FILE *f)
+{
+	int fd = fileno(f);
+	struct stat st;
+	if (fd < 0 || fstat(fd, &st) != 0)
+		return EIO;
+	errno = 0;
+	if (pwrite(fd, "", 1, st.st_size) == 1)
+		return EIO;
+	return errno ? errno : EIO;
+}
+
+/* Closes a->f; -1 with errno set on a write error (its own reason). */
 static int af_close(afile *a)
 {
 	int err = 0;
 	if (a->f) {
+		fflush(a->f); /* what is buffered fails now, with its errno */
 		if (ferror(a->f))
-			err = EIO;
+			err = write_errno(a->f);
+		errno = 0;
 		if (fclose(a->f) != 0 && !err)
 			err = errno ? errno : EIO;
 		a->f = NULL;

@@ -29,26 +29,28 @@
 
 static void usage(FILE *f)
 {
-	fprintf(f,
-	        "usage: rtref [options]\n"
-	        "  --size WxH            frame size (default 512x512; 1..16384 each)\n"
-	        "  --threads N           host threads (default 1; 1..1024)\n"
-	        "  --depth N             reflection/refraction depth (default 3; 0..16)\n"
-	        "  --no-shadows          primary (and secondary) rays only, no shadow rays\n"
-	        "  --single-ray          trace with the scalar single-ray path (for checking)\n"
-	        "  --cone-cull           packets skip leaf triangles outside their rays' cone\n"
-	        "                        (seed 004; the same frame; packet path only)\n"
-	        "  --per-lane            trace packets by the chip's per-lane traversal instead\n"
-	        "                        of the packet interval walk (frustum.h; the same frame)\n"
-	        "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
-	        "  --stats FILE.json     write statistics as JSON\n"
-	        "  --frames N            AFF scene with --anim-fps: N frames (1..100000) at\n"
-	        "                        T + i/F, written as FILE-0000.png, FILE-0001.png, ...\n"
-	        "  --fp-trav E,M         traversal in a reduced format: E exponent (2..8) and M\n"
-	        "                        mantissa bits (1..23); default full float (8,23)\n"
-	        "  --fp-isect E,M        intersection (the Woop test) in a reduced format\n"
-	        "  --fp-shade E,M        shading in a reduced format\n"
-	        "  --fp-round MODE       their rounding: nearest (default), zero, up, down\n");
+	fprintf(
+	    f,
+	    "usage: rtref [options]\n"
+	    "  --size WxH            frame size (default 512x512; 1..16384 each)\n"
+	    "  --threads N           host threads (default 1; 1..1024)\n"
+	    "  --depth N             reflection/refraction depth (default 3; 0..16)\n"
+	    "  --no-shadows          primary (and secondary) rays only, no shadow rays\n"
+	    "  --single-ray          trace with the scalar single-ray path (for checking)\n"
+	    "  --cone-cull           packets skip leaf triangles outside their rays' cone\n"
+	    "                        (seed 004; the same frame; packets: not with --single-ray)\n"
+	    "  --per-lane            trace packets by the chip's per-lane traversal instead\n"
+	    "                        of the packet interval walk (frustum.h; the same frame;\n"
+	    "                        not with --single-ray)\n"
+	    "  --out FILE            write the frame (.png, .exr, .ppm, .tif)\n"
+	    "  --stats FILE.json     write statistics as JSON\n"
+	    "  --frames N            AFF scene with --anim-fps: N frames (1..100000) at\n"
+	    "                        T + i/F, written as FILE-0000.png, FILE-0001.png, ...\n"
+	    "  --fp-trav E,M         traversal in a reduced format: E exponent (2..8) and M\n"
+	    "                        mantissa bits (1..23); default full float (8,23)\n"
+	    "  --fp-isect E,M        intersection (the Woop test) in a reduced format\n"
+	    "  --fp-shade E,M        shading in a reduced format\n"
+	    "  --fp-round MODE       their rounding: nearest (default), zero, up, down\n");
 	fputs(world_usage, f);
 }
 
@@ -286,6 +288,13 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 		a->ro.prec = &a->prec;
 	if (a->frames > 1 && !a->wo.have_anim_fps)
 		return cli_bad("rtref", "--frames: needs --anim-fps F (frame i is at T + i/F)");
+	if (world_opts_check(&a->wo, d))
+		return cli_bad("rtref", d->msg);
+	/* the packet-only options would be ignored without a word */
+	if (a->ro.single_ray && (a->ro.cone_cull || !a->ro.frustum))
+		return cli_bad("rtref", a->ro.cone_cull
+		                            ? "--cone-cull: packets only, not with --single-ray"
+		                            : "--per-lane: packets only, not with --single-ray");
 	world_opts_packet_tree(&a->wo, a->ro.height); /* rtref's own tree */
 	return -1;
 }
@@ -376,10 +385,17 @@ int main(int argc, char **argv)
 		return rc;
 	/* an unwritable --out folder fails now, its format once the scene is
 	 * imported (img_reserve_file in image.h: not beside the importer's
-	 * fork), both before the run */
-	if (a.out && img_reserve_file(a.out, &d))
+	 * fork), both before the run; an animation's numbered files all of them
+	 * (frame 0's reserved, the others' paths checked) */
+	char ob[4096], sb[4096];
+	const char *out0 = cli_frame_path(a.out, a.frames, 0, ob, sizeof ob);
+	const char *stats0 = cli_frame_path(a.stats, a.frames, 0, sb, sizeof sb);
+	if (out0 && img_reserve_file(out0, &d))
 		return cli_bad("rtref", d.msg);
-	if (a.stats && strcmp(a.stats, "-") && af_reserve(a.stats, "", &d))
+	if (stats0 && strcmp(stats0, "-") && af_reserve(stats0, "", &d))
+		return cli_bad("rtref", d.msg);
+	if (cli_check_frame_paths(a.out, a.frames, &d) ||
+	    cli_check_frame_paths(a.stats, a.frames, &d))
 		return cli_bad("rtref", d.msg);
 	world w;
 	if (world_load(&w, &a.wo, &d))

@@ -333,9 +333,14 @@ static int parse_args(int argc, char **argv, opts *o)
 	snprintf(o->vbuf, sizeof o->vbuf, "%s/views.yaml", sc && *sc ? sc : "../shared/scenes");
 	o->views = o->vbuf;
 	for (int i = 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--out") && i + 1 < argc)
+		int value = !strcmp(argv[i], "--out") || !strcmp(argv[i], "--views");
+		if (value && i + 1 >= argc) {
+			fprintf(stderr, "saarsim-stress: %s needs a value\n", argv[i]);
+			return 2;
+		}
+		if (!strcmp(argv[i], "--out"))
 			o->out = argv[++i];
-		else if (!strcmp(argv[i], "--views") && i + 1 < argc)
+		else if (!strcmp(argv[i], "--views"))
 			o->views = argv[++i], o->views_given = 1;
 		else if (!strcmp(argv[i], "--quick"))
 			o->quick = 1;
@@ -359,6 +364,12 @@ static int parse_args(int argc, char **argv, opts *o)
 			        argv[i]);
 			return 2;
 		}
+	}
+	/* the views feed the precision table only: ignored without a word */
+	if (o->views_given && !o->precision) {
+		fprintf(stderr, "saarsim-stress: --views: for the precision table, not with "
+		                "--no-precision\n");
+		return 2;
 	}
 	return -1;
 }

@@ -91,6 +91,8 @@ static int check_item(void *ctx, const yl_item *it)
 		return 0;
 	if (!s)
 		return node_err(y, it->key, "view names must be plain strings");
+	if (!*s) /* --view cannot name it */
+		return node_err(y, it->key, "empty view name");
 	if (strlen(s) >= VIEW_NAME_MAX)
 		return node_err(y, it->key, "view name is longer than %d characters",
 		                VIEW_NAME_MAX - 1);
@@ -402,7 +404,7 @@ int view_load(view *v, const char *file, const char *name, diag *d)
 			/* the names that fit in one message, then how many more */
 			char list[600] = "";
 			size_t len = 0;
-			int more = 0;
+			int more = 0, shown = 0;
 			for (yaml_node_pair_t *p = views->data.mapping.pairs.start;
 			     p < views->data.mapping.pairs.top; p++) {
 				const char *s = scalar(node(&y, p->key));
@@ -411,19 +413,38 @@ int view_load(view *v, const char *file, const char *name, diag *d)
 					continue;
 				}
 				len += (size_t)snprintf(list + len, sizeof list - len, "%s%s",
-				                        len ? ", " : "", s);
+				                        shown++ ? ", " : "", s);
 			}
 			char tail[48] = "";
 			if (more)
 				snprintf(tail, sizeof tail, " and %d more", more);
 			diag_set(d, file, 0, 0, "no view named '%s'; available views: %s%s", name,
-			         len ? list : "(none)", tail);
+			         shown ? list : "(none)", tail);
 		}
 	}
 	yaml_document_delete(&y.doc);
 	if (rc != 0)
 		memset(v, 0, sizeof *v);
 	return rc;
+}
+
+int view_scene_at(const char *file, const char *name, int *line, int *col)
+{
+	yfile y;
+	diag d;
+	*line = *col = 0;
+	if (yfile_open(&y, file, &d) != 0)
+		return -1;
+	yaml_node_t *views = views_map(&y);
+	yaml_node_t *vn = views ? map_get(&y, views, name, NULL) : NULL;
+	yaml_node_t *sn =
+	    vn && vn->type == YAML_MAPPING_NODE ? map_get(&y, vn, "scene", NULL) : NULL;
+	if (sn) {
+		*line = (int)sn->start_mark.line + 1;
+		*col = (int)sn->start_mark.column + 1;
+	}
+	yaml_document_delete(&y.doc);
+	return sn ? 0 : -1;
 }
 
 int view_list(const char *file, char (*names)[VIEW_NAME_MAX], int max, diag *d)

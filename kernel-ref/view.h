@@ -58,6 +58,11 @@ typedef struct view {
  * "file:line:col: message". */
 int view_load(view *v, const char *file, const char *name, diag *d);
 
+/* Where view `name`'s `scene:` value starts in `file` (1-based), for a
+ * message about the scene it names (world_load: "views.yaml:3:12: scene
+ * x.obj: cannot open ..."); -1 (and 0, 0) when the file no longer says. */
+int view_scene_at(const char *file, const char *name, int *line, int *col);
+
 /* Lists the view names in `file` in file order (at most max); returns the
  * count or -1 with diag. */
 int view_list(const char *file, char (*names)[VIEW_NAME_MAX], int max, diag *d);

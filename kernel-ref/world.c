@@ -4,6 +4,7 @@
 #include "kernel-ref/world.h"
 
 #include "kernel-ref/aff.h"
+#include "kernel-ref/atomicfile.h"
 #include "kernel-ref/image.h"
 #include "kernel-ref/spd.h"
 #include "kernel-ref/twolevel.h"
@@ -15,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 const char world_usage[] =
@@ -30,16 +32,16 @@ const char world_usage[] =
     "  --two-level           AFF scene: trace through a kd-tree per rigid object (built\n"
     "                        once) under a tree of instances rebuilt per frame; saarsim:\n"
     "                        a transformation unit, animations on one warm chip\n"
-    "  --accel kd|grid       rtref: trace the kd-tree (default) or a uniform grid rebuilt with\n"
-    "                        every frame (seed 003; the same image)\n"
+    "  --accel kd|grid       trace the kd-tree (default) or a uniform grid rebuilt with\n"
+    "                        every frame (seed 003; the same image; saarsim: chip.accel)\n"
     "  --grid-lambda F --grid-macro N --grid-packet 1|4|8 --grid-mailbox 0|1 --grid-cull 0|1\n"
     "                        the grid: cells per triangle (5), macrocell side (6, 0: none),\n"
     "                        rays per frustum side (8; 1: single rays), mailboxing (1),\n"
-    "                        frustum culling (1)\n"
+    "                        frustum culling (1); with the grid only\n"
     "  --views FILE --view N camera and lights from a views file (format: docs/views.md)\n"
     "  --eye X,Y,Z --lookat X,Y,Z --up X,Y,Z --fov DEG   camera (override the view)\n"
     "  --light X,Y,Z         point light (repeatable; replaces the view's lights)\n"
-    "  --no-lights           no lights: no shadow rays\n"
+    "  --no-lights           no lights: no shadow rays (not with --light)\n"
     "  --spp N (1|4|16|64) --aperture F --focus F --light-size F --gloss F --motion X,Y,Z\n"
     "                        distribution ray tracing (override the view's drt; docs/views.md)\n"
     "  --kd-cost-trav F --kd-cost-isect F --kd-max-depth N --kd-leaf-size N --kd-empty-bonus F\n"
@@ -154,6 +156,8 @@ static int grid_flag(world_opts *o, const char *a, const char *v, diag *d)
 {
 	long n;
 	double x;
+	if (strcmp(a, "--accel"))
+		o->grid_flag = a;
 	if (!strcmp(a, "--accel")) {
 		if (strcmp(v, "kd") && strcmp(v, "grid"))
 			return diag_set(d, a, 0, 0, "expected kd or grid, got '%s'", v);
@@ -218,6 +222,9 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		takes |= strcmp(a, with_value[k]) == 0;
 	if (!takes) {
 		if (strcmp(a, "--no-lights") == 0 || strcmp(a, "--two-level") == 0) {
+			if (a[2] == 'n' && o->nlights)
+				return diag_set(d, a, 0, 0,
+				                "not with --light (no lights, or these)");
 			*(a[2] == 'n' ? &o->no_lights : &o->two_level) = 1;
 			(*i)++;
 			return 1;
@@ -264,6 +271,8 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->have_fov = 1;
 		o->cam.fov_deg = (float)x;
 	} else if (!strcmp(a, "--light")) {
+		if (o->no_lights)
+			return diag_set(d, a, 0, 0, "not with --no-lights (these lights, or none)");
 		if (o->nlights == VIEW_MAX_LIGHTS)
 			return diag_set(d, a, 0, 0, "at most %d lights", VIEW_MAX_LIGHTS);
 		o->lights[o->nlights].color = v3(1, 1, 1);
@@ -297,6 +306,15 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 		o->kd_footprint_given = 1;
 	}
 	return 1;
+}
+
+int world_opts_check(const world_opts *o, diag *d)
+{
+	if (o->grid_flag && o->accel != WORLD_ACCEL_GRID)
+		return diag_set(d, o->grid_flag, 0, 0,
+		                "applies to the grid only (--accel grid); this run traces the "
+		                "kd-tree");
+	return 0;
 }
 
 const char *world_cache_name(int status)
@@ -686,6 +704,20 @@ static void fp_framed_eye(kd_params *k, const world *w)
 	}
 }
 
+/* A scene a views file named that fails to load: its message (which
+ * names the scene) after the place of the view's `scene:` value, so the
+ * user sees which file and line to fix. */
+static int view_scene_failed(const world *w, const world_opts *o, diag *d)
+{
+	int line, col;
+	if (o->scene || !o->views || !w->v.scene[0] ||
+	    view_scene_at(o->views, o->view, &line, &col))
+		return -1;
+	char m[sizeof d->msg + 8];
+	snprintf(m, sizeof m, "scene %s", d->msg);
+	return diag_set(d, o->views, line, col, "%s", m);
+}
+
 int world_load(world *w, const world_opts *o, diag *d)
 {
 	memset(w, 0, sizeof *w);
@@ -710,11 +742,13 @@ int world_load(world *w, const world_opts *o, diag *d)
 	kd_params kp = view_kd(w, o, path);
 	if (!aff && cache_lookup(w, o, &kp, path, parts, cfile, sizeof cfile, &ckey, d)) {
 		free(ckey);
-		return -1;
+		return view_scene_failed(w, o, d);
 	}
 	if (aff ? load_aff(w, o, path, &sv, &aff_has_view, d)
-	        : !w->cache && load_scene(w, path, &sv, w->cache_dir ? &files : NULL, d))
+	        : !w->cache && load_scene(w, path, &sv, w->cache_dir ? &files : NULL, d)) {
+		view_scene_failed(w, o, d);
 		goto fail;
+	}
 	/* a procedural scene brings its standard view, an AFF scene its
 	 * camera at the time, unless a views file gave one */
 	if ((spd || aff_has_view) && !o->views)
@@ -897,16 +931,29 @@ int cli_parse_int(const char *flag, const char *s, long lo, long hi, long *out, 
 	return 0;
 }
 
+/* A side of --size: digits only (strtol would take leading blanks and a
+ * sign, so " 64x64" and "+64x64" were accepted and "64x64 " refused), at
+ * most 9 of them (no overflow); -1 when there are none. */
+static long size_side(const char *s, const char **end)
+{
+	long v = 0;
+	int n = 0;
+	while (*s >= '0' && *s <= '9' && n < 9) {
+		v = v * 10 + (*s++ - '0');
+		n++;
+	}
+	*end = s;
+	return n ? v : -1;
+}
+
 int cli_parse_size(const char *s, int *w, int *h, diag *d)
 {
-	char *end;
-	errno = 0;
-	long a = strtol(s, &end, 10);
-	if (end == s || (*end != 'x' && *end != 'X') || errno)
+	const char *end;
+	long a = size_side(s, &end);
+	if (a < 0 || (*end != 'x' && *end != 'X'))
 		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
-	const char *q = end + 1;
-	long b = strtol(q, &end, 10);
-	if (end == q || *end || errno)
+	long b = size_side(end + 1, &end);
+	if (b < 0 || *end)
 		return diag_set(d, "--size", 0, 0, "expected WxH, got '%s'", s);
 	if (a < 1 || a > 16384 || b < 1 || b > 16384)
 		return diag_set(d, "--size", 0, 0, "%s is out of range (1..16384 each)", s);
@@ -924,6 +971,22 @@ const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_
 		dot = path + strlen(path);
 	snprintf(buf, n, "%.*s-%04d%s", (int)(dot - path), path, i, dot);
 	return buf;
+}
+
+int cli_check_frame_paths(const char *path, int frames, diag *d)
+{
+	char buf[4096];
+	struct stat st;
+	for (int i = 1; path && strcmp(path, "-") && i < frames; i++) {
+		const char *p = cli_frame_path(path, frames, i, buf, sizeof buf);
+		afile a;
+		if (lstat(p, &st) != 0)
+			continue; /* made by the write, in frame 0's folder */
+		if (af_open(&a, p, "", 0))
+			return af_diag(d, p);
+		af_abort(&a);
+	}
+	return 0;
 }
 
 int cli_bad(const char *prog, const char *msg)

@@ -55,6 +55,7 @@ typedef struct world_opts {
 	 * (--grid-lambda, --grid-macro, --grid-packet, --grid-mailbox) */
 	int accel;
 	grid_params gp;
+	const char *grid_flag; /* the last --grid-* flag given, or NULL (world_opts_check) */
 } world_opts;
 
 enum { WORLD_ACCEL_KD, WORLD_ACCEL_GRID };
@@ -114,6 +115,12 @@ void world_opts_default(world_opts *o);
  * --world-cache-max MB. */
 int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d);
 
+/* The world flags that contradict each other once every flag is parsed
+ * (and, for saarsim, the config read: chip.accel grid is --accel grid): a
+ * --grid-* flag without the grid. -1 with d set ("--grid-packet: ..."). The
+ * parser itself refuses --no-lights with --light. */
+int world_opts_check(const world_opts *o, diag *d);
+
 /* rtref's own tree (kernel-ref.md, "rtref's own tree"), after the flags
  * are parsed: unless --kd-footprint named a footprint, the footprint of
  * rtref's primary packet (TILE_W pixels on an image height pixels high)
@@ -129,13 +136,20 @@ extern const char world_usage[];
  * ("FLAG: message"); cli_bad prints "prog: msg" as the one stderr line and
  * returns DIAG_EXIT for main to return. */
 int cli_parse_int(const char *flag, const char *s, long lo, long hi, long *out, diag *d);
-/* "WxH", each 1..16384 (flag --size in messages). */
+/* "WxH", each 1..16384, digits only: no blank, sign or other byte (flag
+ * --size in messages). */
 int cli_parse_size(const char *s, int *w, int *h, diag *d);
 int cli_bad(const char *prog, const char *msg);
 /* The output of frame i of an animation of `frames` frames: path itself
  * for one frame (or "-"), else path with "-NNNN" (i, four digits or more)
  * before its extension ("out.png" -> "out-0003.png"); buf holds it. */
 const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_t n);
+/* Frames 1 .. frames - 1 of an animation's numbered output (frame 0 the
+ * caller reserves, which checks the folder all of them share): each path
+ * that exists already must be writable as atomicfile.h writes (not a
+ * folder, device or FIFO), so a frame's output fails before any frame runs
+ * instead of after the frames before it. -1 with d set (af_diag's line). */
+int cli_check_frame_paths(const char *path, int frames, diag *d);
 
 int world_load(world *w, const world_opts *o, diag *d);
 

@@ -281,6 +281,10 @@ static int on_scalar(yl *y, const yaml_event_t *ev)
 		return -1;
 	if (ev->data.scalar.length > INT32_MAX)
 		return too_big(y);
+	/* a "\0" escape: every reader takes the value as a C string, cut
+	 * there ("good.obj\0x" loaded good.obj without a word) */
+	if (memchr(ev->data.scalar.value, 0, ev->data.scalar.length))
+		return at(y, ev->start_mark, "a NUL byte (\\0) in a string");
 	int id =
 	    yaml_document_add_scalar(y->doc, tag_of(ev->data.scalar.tag), ev->data.scalar.value,
 	                             (int)ev->data.scalar.length, ev->data.scalar.style);

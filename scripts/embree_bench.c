@@ -235,10 +235,16 @@ static int parse_size(const char *s, int *w, int *h)
 {
 	char *end;
 	errno = 0;
+	/* digits only, as saarsim's and rtref's --size: strtol alone takes a
+	 * leading blank or sign */
+	if (*s < '0' || *s > '9')
+		return -1;
 	long a = strtol(s, &end, 10);
 	if (end == s || (*end != 'x' && *end != 'X') || errno)
 		return -1;
 	const char *q = end + 1;
+	if (*q < '0' || *q > '9')
+		return -1;
 	long b = strtol(q, &end, 10);
 	if (end == q || *end || errno || a < 1 || a > 16384 || b < 1 || b > 16384)
 		return -1;

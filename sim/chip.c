@@ -341,12 +341,12 @@ static void trace_tap(void *ctx, const mem_req *r)
 		c->trace_err = 1;
 }
 
-int chip_trace_mem(chip *c, const char *path, diag *d)
+int chip_trace_mem(chip *c, const char *path, const char *name, diag *d)
 {
 	c->trace = malloc(sizeof *c->trace);
 	if (!c->trace)
 		return diag_set(d, "chip", 0, 0, "out of memory for the trace writer");
-	if (mtr_open_write(c->trace, path, d)) {
+	if (mtr_open_write_as(c->trace, path, name ? name : path, d)) {
 		free(c->trace);
 		c->trace = NULL;
 		return -1;

@@ -258,8 +258,9 @@ chip *chip_create(const saar_config *cfg, const world *w, diag *d);
 void chip_destroy(chip *c);
 /* Records every memory request into path (traces/memtrace.h) from now on;
  * chip_trace_close writes the end record. The caller makes it atomic (tmp
- * path + rename). */
-int chip_trace_mem(chip *c, const char *path, diag *d);
+ * path + rename); messages name the file `name` (the user's path), or path
+ * when name is NULL. */
+int chip_trace_mem(chip *c, const char *path, const char *name, diag *d);
 int chip_trace_close(chip *c, diag *d);
 /* Keeps a census from now on: the resource demand (chip_demand's
  * resources) and cycles of every chunk of fid.unit_tiles tiles in hand-out

@@ -378,6 +378,8 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 		cfg->chip.accel = CFG_ACCEL_GRID;
 	if (cfg->chip.accel == CFG_ACCEL_GRID)
 		a->wo.accel = WORLD_ACCEL_GRID;
+	if (world_opts_check(&a->wo, d))
+		return cli_bad("saarsim", d->msg);
 	if (a->wo.accel == WORLD_ACCEL_GRID && a->wo.two_level)
 		return cli_bad("saarsim", "--accel grid: not with --two-level (one or the other)");
 	/* kernel-ref's grid tracer has neither cones nor reduced formats (its
@@ -510,7 +512,7 @@ static int simulate(chip *c, const cli *a, afile *trace_tmp, afile *tl_tmp, obs 
 			af_diag(d, a->trace);
 			return -1;
 		}
-		if (chip_trace_mem(c, trace_tmp->tmp, d))
+		if (chip_trace_mem(c, trace_tmp->tmp, a->trace, d))
 			return -1;
 	}
 	if (a->census && chip_census_on(c, d))
@@ -753,6 +755,10 @@ int main(int argc, char **argv)
 	fa.out = cli_frame_path(a.out, a.warm ? cfg.frame.frames : nanim, 0, ob, sizeof ob);
 	fa.report = cli_frame_path(a.report, nanim, 0, rb, sizeof rb);
 	if (reserve_outputs(&fa, &cfg, &d))
+		return cli_bad("saarsim", d.msg);
+	/* the other frames' numbered files too, before any frame runs */
+	if (cli_check_frame_paths(a.out, a.warm ? cfg.frame.frames : nanim, &d) ||
+	    cli_check_frame_paths(a.report, nanim, &d))
 		return cli_bad("saarsim", d.msg);
 	if (a.dry) /* no scene import: the formats now */
 		return check_image_formats(&fa, &d) ? cli_bad("saarsim", d.msg) : 0;

@@ -158,7 +158,7 @@ static chip *chip_reads(walk *k, const world *w, const saar_config *c, uint64_t 
 	diag d;
 	chip *ch = chip_create(c, w, &d);
 	cr_assert(ch, "%s", d.msg);
-	cr_assert_eq(chip_trace_mem(ch, path, &d), 0, "%s", d.msg);
+	cr_assert_eq(chip_trace_mem(ch, path, NULL, &d), 0, "%s", d.msg);
 	cr_assert_eq(chip_run(ch, &d), 0, "%s", d.msg);
 	cr_assert_eq(chip_trace_close(ch, &d), 0, "%s", d.msg);
 	memset(k, 0, sizeof *k);

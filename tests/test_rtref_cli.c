@@ -381,3 +381,101 @@ Test(rtref_cli, image_write_cut_short_or_unlisted_format_is_refused)
 	one_line_naming("x.jpg");
 	cr_assert_not(exists("x.jpg"));
 }
+
+/* Mistake: --size's sides read by strtol, which takes a leading blank or
+ * sign: " 64x64" and "+64x64" were accepted while "64x64 " was refused.
+ * Every such size is refused by both programs (one line, exit 2); plain
+ * digits still pass. */
+Test(rtref_cli, size_is_digits_only)
+{
+	char args[1024];
+	const char *bad[] = {"' 64x64'", "+64x64", "'64x64 '", "64x+64",
+	                     "'64x 64'", "64x-8",  "'\t8x8'"};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		snprintf(args, sizeof args, "--size %s --out %s/f.png", bad[k], dir);
+		cr_assert_eq(rtref(args), 2, "--size %s", bad[k]);
+		one_line_naming("--size");
+		cr_assert_not(exists("f.png"));
+		snprintf(args, sizeof args, "--size %s --dry-run", bad[k]);
+		cr_assert_eq(tu_prog(dir, "saarsim", args), 2, "saarsim --size %s", bad[k]);
+		tu_one_line(dir, "saarsim", "--size");
+	}
+	snprintf(args, sizeof args, "--size 16X12 --out %s/f.png", dir);
+	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+	cr_assert_eq(tu_prog(dir, "saarsim", "--size 16x12 --dry-run"), 0, "%s", slurp("err"));
+}
+
+/* Mistake: options that contradict each other accepted, one of them then
+ * ignored without a word: --light after --no-lights (no shadow rays), a
+ * --grid-* flag on a kd-tree run, rtref's packet-only --cone-cull and
+ * --per-lane with --single-ray, saarsim-stress's --views with
+ * --no-precision. Each is one line and exit 2 before anything runs, and
+ * the flags still work where they apply. */
+Test(rtref_cli, contradictory_options_are_refused)
+{
+	static const struct {
+		const char *prog, *args, *names;
+	} bad[] = {
+	    {"rtref", "--cone-cull --single-ray", "--cone-cull"},
+	    {"rtref", "--single-ray --per-lane", "--per-lane"},
+	    {"rtref", "--grid-packet 1", "--grid-packet"},
+	    {"rtref", "--accel kd --grid-cull 0", "--grid-cull"},
+	    {"rtref", "--no-lights --light 1,1,1", "--light"},
+	    {"saarsim", "--light 1,1,1 --no-lights --dry-run", "--no-lights"},
+	    {"saarsim", "--grid-macro 0 --dry-run", "--grid-macro"},
+	    {"saarsim-stress", "--views /nonexistent.yaml --quick --no-precision", "--views"},
+	    {"saarsim-stress", "--quick --out", "--out needs a value"},
+	};
+	char args[1024];
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		snprintf(args, sizeof args, "%s --out %s/f.png", bad[k].args, dir);
+		if (!strcmp(bad[k].prog, "saarsim-stress"))
+			snprintf(args, sizeof args, "%s", bad[k].args);
+		cr_assert_eq(tu_prog(dir, bad[k].prog, args), 2, "%s %s", bad[k].prog, bad[k].args);
+		tu_one_line(dir, bad[k].prog, bad[k].names);
+		cr_assert_not(exists("f.png"));
+	}
+	cr_assert_eq(rtref("--size 16x16 --accel grid --grid-packet 1 --no-lights"), 0, "%s",
+	             slurp("err"));
+	cr_assert_eq(rtref("--size 16x16 --single-ray --light 1,1,1 --light 2,2,2"), 0, "%s",
+	             slurp("err"));
+	cr_assert_eq(tu_prog(dir, "saarsim", "--set chip.accel=grid --grid-macro 0 --dry-run"), 0,
+	             "%s", slurp("err"));
+}
+
+/* Mistake: an animation's numbered outputs checked for frame 0 only (the
+ * unnumbered path, or f-0000), so a later frame's path that names a
+ * folder failed after the frames before it were rendered and written.
+ * Every numbered path is checked before the first frame: one line naming
+ * the path, exit 2, no frame written; a plain file at a later path is
+ * replaced as usual. */
+Test(rtref_cli, numbered_outputs_are_checked_before_the_first_frame)
+{
+	char aff[512], args[2048], sub[600];
+	tu_write(aff, sizeof aff, dir, "t.aff",
+	         "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 1\nresolution 8 8\n"
+	         "l 0 5 5\nf 0.5 0.5 0.5 1 0 0 0 1\np 3\n-1 -1 0\n1 -1 0\n0 1 0\n");
+	snprintf(sub, sizeof sub, "%s/f-0002.png", dir);
+	cr_assert_eq(mkdir(sub, 0777), 0);
+	snprintf(args, sizeof args, "--scene %s --anim-fps 2 --frames 3 --size 8x8 --out %s/f.png",
+	         aff, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("f-0002.png");
+	cr_assert_not(exists("f-0000.png") || exists("f-0001.png"));
+	snprintf(sub, sizeof sub, "%s/r-0001.json", dir);
+	cr_assert_eq(mkdir(sub, 0777), 0);
+	snprintf(args, sizeof args,
+	         "--scene %s --anim-fps 2 --frames 2 --size 8x8 --out %s/g.png --report "
+	         "%s/r.json",
+	         aff, dir, dir);
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 2);
+	tu_one_line(dir, "saarsim", "r-0001.json");
+	cr_assert_not(exists("g-0000.png") || exists("r-0000.json"));
+	/* a file at a later frame's path is written over */
+	tu_write(sub, sizeof sub, dir, "h-0001.png", "old");
+	snprintf(args, sizeof args, "--scene %s --anim-fps 2 --frames 2 --size 8x8 --out %s/h.png",
+	         aff, dir);
+	cr_assert_eq(rtref(args), 0, "%s", slurp("err"));
+	cr_assert(exists("h-0000.png"));
+	cr_assert_neq(strcmp(slurp("h-0001.png"), "old"), 0);
+}

@@ -1618,3 +1618,31 @@ Test(saarsim_cli, scene_import_forks_before_the_image_plugin_loads)
 	cr_assert(!strncmp(e, "rtref: ", 7) && strstr(e, "f3.nosuchformat") && !strchr(e, '\n')[1],
 	          "not one line naming the file: %s", e);
 }
+
+/* Mistake: a write that failed reported as the temporary's name or with
+ * the wrong reason: --trace-mem said "a.gz.4jT7i9: write error" (the
+ * temporary, no reason), --report "write failed: Input/output error"
+ * (stdio's error flag kept, the write's errno lost) when the file-size
+ * limit stopped it. Under `ulimit -f 4` (SIGXFSZ ignored, as a shell may
+ * run it) each names the user's path and "File too large"; no temporary
+ * is left. */
+Test(saarsim_cli, failed_write_names_the_path_and_the_reason)
+{
+	static const char *const outs[][2] = {{"--trace-mem", "a.gz"}, {"--report", "r.json"}};
+	for (int k = 0; k < 2; k++) {
+		char cmd[2048];
+		snprintf(
+		    cmd, sizeof cmd,
+		    "cd %s && trap '' XFSZ && ulimit -f 4 && %s/saarsim --size 32x32 --no-check "
+		    "--world-cache off %s %s >out 2>err",
+		    dir, tu_bin_dir(), outs[k][0], outs[k][1]);
+		cr_assert_eq(tu_run(cmd), 2, "%s", outs[k][0]);
+		char what[64];
+		snprintf(what, sizeof what, "%s: cannot write: File too large", outs[k][1]);
+		if (k == 1)
+			snprintf(what, sizeof what, "%s: write failed: File too large", outs[k][1]);
+		one_line_naming(what);
+		cr_assert_not(exists(outs[k][1]));
+		cr_assert_eq(tu_temps(dir, outs[k][1]), 0, "%s left a temporary", outs[k][0]);
+	}
+}

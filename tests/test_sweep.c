@@ -851,3 +851,39 @@ Test(sweep, census_need_takes_the_pnorm_model)
 	unlink(p);
 	rmdir(dir);
 }
+
+/* Mistake: the sweep folder made by `mkdir -p DIR || bad ...`, so an --out
+ * that names a file or cannot be made printed mkdir's own line before the
+ * sweep's; and a scene file checked only for being readable, so a
+ * truncated .obj.gz passed the checks and then failed every point (exit
+ * 1). Each is one line, exit 2, before any point runs. */
+Test(sweep, bad_out_and_bad_scene_file_are_one_line, .timeout = 60)
+{
+	char dir[256], env[4200], cmd[16384], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	tu_write(path, sizeof path, dir, "file", "x");
+	/* the first bytes of a gzip stream, and no more */
+	tu_write_bytes(path, sizeof path, dir, "t.obj.gz", "\x1f\x8b\x08\x00\x00\x00\x00\x00", 8);
+	static const char *const bad[][2] = {
+	    {"--out %s/file --scene spd:tetra:0 --set chip.rtps=1", "/file: not a folder"},
+	    {"--out /proc/sweep-x --scene spd:tetra:0 --set chip.rtps=1", "cannot create"},
+	    {"--out %s/file/sub --scene spd:tetra:0 --set chip.rtps=1", "cannot create"},
+	    {"--out %s/o --scene %s/t.obj.gz --set chip.rtps=1", "t.obj.gz"},
+	};
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		char args[1024];
+		snprintf(args, sizeof args, bad[i][0], dir, dir);
+		snprintf(cmd, sizeof cmd, "%s sh %s/scripts/sweep %s 2>%s/err >/dev/null", env,
+		         root(), args, dir);
+		cr_expect_eq(tu_run(cmd), 2, "%s", args);
+		snprintf(path, sizeof path, "%s/err", dir);
+		char *err = slurp(path);
+		cr_expect_eq(count_lines(path), 1, "one line for: %s\n%s", args, err);
+		cr_expect(err && !strncmp(err, "sweep: ", 7), "%s", err);
+		cr_expect_geq(count_in(path, bad[i][1]), 1, "%s: %s", bad[i][1], err);
+		free(err);
+	}
+	snprintf(path, sizeof path, "%s/o", dir);
+	cr_expect_not(exists(path), "the sweep folder made for a bad scene");
+}

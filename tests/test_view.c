@@ -428,3 +428,68 @@ Test(view, scene_without_view_is_framed_by_its_box)
 		world_free(&w);
 	}
 }
+
+/* Mistake: a "\0" escape taken as the end of the string: libyaml keeps
+ * the NUL inside the value, every reader takes values as C strings, so
+ * `scene: "good.obj\0x"` loaded good.obj with exit 0. A NUL in any string
+ * (a value or a key, views file or config: the same reader) is refused at
+ * its node. */
+Test(view, nul_in_a_string_is_refused)
+{
+	expect_error("    scene: \"s.obj\\0x\"\n" CAM, 4, "\"s.obj",
+	             "a NUL byte (\\0) in a string");
+	expect_error("    note: \"\\0\"\n" CAM, 4, "\"\\0", "a NUL byte (\\0) in a string");
+	char dir[256], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(path, sizeof path, dir, "c.yaml", "name: \"x\\0y\"\n");
+	char args[700];
+	snprintf(args, sizeof args, "--config %s --dry-run", path);
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 2);
+	tu_one_line(dir, "saarsim", "c.yaml:1:7: a NUL byte");
+}
+
+/* Mistake: a scene that a view names and that does not load reported
+ * without the views file (`x.obj: cannot open scene file: ...`), so the
+ * user is not shown which view's line names it. The message names the
+ * views file at the `scene:` value's line and column, then the scene and
+ * its own reason, for a missing file and an unknown procedural scene. */
+Test(view, scene_that_does_not_load_is_named_at_its_view)
+{
+	char path[512];
+	write_views(path, sizeof path, "    scene: nonexist.obj\n" CAM);
+	char dir[512];
+	snprintf(dir, sizeof dir, "%.*s", (int)(strrchr(path, '/') - path), path);
+	char args[1200], want[1200];
+	snprintf(args, sizeof args, "--views %s --view a --size 8x8", path);
+	cr_assert_eq(tu_prog(dir, "rtref", args), 2);
+	snprintf(want, sizeof want,
+	         "%s:4:12: scene %s/nonexist.obj: cannot open scene file: No such file", path, dir);
+	tu_one_line(dir, "rtref", want);
+	write_views(path, sizeof path, "    scene: spd:nope\n" CAM);
+	snprintf(dir, sizeof dir, "%.*s", (int)(strrchr(path, '/') - path), path);
+	snprintf(args, sizeof args, "--views %s --view a --size 8x8 --no-check", path);
+	cr_assert_eq(tu_prog(dir, "saarsim", args), 2);
+	snprintf(want, sizeof want, "%s:4:12: scene spd:nope: unknown procedural scene", path);
+	tu_one_line(dir, "saarsim", want);
+}
+
+/* Mistake: a view named "" loaded, though --view cannot name it, and the
+ * unknown-name message then said "available views: (none)" for a file
+ * that has views (the list's separator was decided by its length, and an
+ * empty first name added nothing). An empty name is refused at its key;
+ * the list names every view. */
+Test(view, empty_view_name_is_refused)
+{
+	char dir[256], path[512];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(path, sizeof path, dir, "v.yaml", "views:\n  x:\n" CAM "  \"\":\n" CAM);
+	view v;
+	diag d = {{0}};
+	cr_assert_eq(view_load(&v, path, "a", &d), -1);
+	char want[700];
+	snprintf(want, sizeof want, "%s:4:3: empty view name", path);
+	cr_assert_str_eq(d.msg, want);
+	char names[4][VIEW_NAME_MAX];
+	cr_assert_eq(view_list(path, names, 4, &d), -1);
+	cr_assert_str_eq(d.msg, want);
+}

@@ -41,13 +41,38 @@ static uint64_t get64(const unsigned char *p)
 
 /* ---- writer ---- */
 
+/* The line for a gzwrite or gzclose that failed, e the errno right after
+ * it: the system's reason when zlib's error is one of the system's (a full
+ * disk, the file-size limit), else zlib's own. */
+static int write_err(mtr_writer *w, int zerr, int e, const char *zmsg, diag *d)
+{
+	const char *why = zerr == Z_ERRNO && e ? strerror(e) : zmsg && *zmsg ? zmsg : "write error";
+	return diag_set(d, w->path, 0, 0, "cannot write: %s", why);
+}
+
+/* gzwrite of n bytes; -1 with d set when it wrote less. */
+static int gz_put(mtr_writer *w, const void *p, unsigned n, diag *d)
+{
+	errno = 0;
+	if (gzwrite(w->gz, p, n) == (int)n)
+		return 0;
+	int e = errno, zerr;
+	const char *zmsg = gzerror(w->gz, &zerr);
+	return write_err(w, zerr, e, zmsg, d);
+}
+
 int mtr_open_write(mtr_writer *w, const char *path, diag *d)
 {
+	return mtr_open_write_as(w, path, path, d);
+}
+
+int mtr_open_write_as(mtr_writer *w, const char *path, const char *name, diag *d)
+{
 	memset(w, 0, sizeof *w);
-	snprintf(w->path, sizeof w->path, "%s", path);
+	snprintf(w->path, sizeof w->path, "%s", name);
 	gzFile gz = gzopen(path, MTR_GZ_MODE);
 	if (!gz)
-		return diag_set(d, path, 0, 0, "cannot write: %s", strerror(errno ? errno : EIO));
+		return diag_set(d, name, 0, 0, "cannot write: %s", strerror(errno ? errno : EIO));
 	w->gz = gz;
 	gzbuffer(gz, 1u << 17);
 	unsigned char h[MTR_HEADER_SIZE] = {0};
@@ -55,10 +80,10 @@ int mtr_open_write(mtr_writer *w, const char *path, diag *d)
 	put32(h + 8, MTR_VERSION);
 	put32(h + 12, 0);
 	put32(h + 16, MTR_FIELDS);
-	if (gzwrite(gz, h, sizeof h) != (int)sizeof h) {
+	if (gz_put(w, h, sizeof h, d)) {
 		gzclose(gz);
 		w->gz = NULL;
-		return diag_set(d, path, 0, 0, "write error");
+		return -1;
 	}
 	return 0;
 }
@@ -72,9 +97,7 @@ static int flush_w(mtr_writer *w, diag *d)
 	put32(w->buf + 4, w->used);
 	unsigned len = MTR_BLOCK_HDR + w->used;
 	w->nrec = w->used = 0;
-	if (gzwrite(w->gz, w->buf, len) != (int)len)
-		return diag_set(d, w->path, 0, 0, "write error");
-	return 0;
+	return gz_put(w, w->buf, len, d);
 }
 
 int mtr_write(mtr_writer *w, const mtr_rec *r, diag *d)
@@ -112,10 +135,12 @@ int mtr_close_write(mtr_writer *w, diag *d)
 	put32(end, 0);
 	put32(end + 4, 8);
 	put64(end + 8, w->n);
-	if (!rc && gzwrite(w->gz, end, sizeof end) != (int)sizeof end)
-		rc = diag_set(d, w->path, 0, 0, "write error");
-	if (gzclose(w->gz) != Z_OK && !rc)
-		rc = diag_set(d, w->path, 0, 0, "write error on close");
+	if (!rc)
+		rc = gz_put(w, end, sizeof end, d);
+	errno = 0;
+	int zc = gzclose(w->gz);
+	if (zc != Z_OK && !rc)
+		rc = write_err(w, zc, errno, NULL, d);
 	w->gz = NULL;
 	return rc;
 }

@@ -103,6 +103,9 @@ typedef struct mtr_reader {
 } mtr_reader;
 
 int mtr_open_write(mtr_writer *w, const char *path, diag *d);
+/* The same, messages naming the file `name` (the user's path, when path is
+ * the temporary it is written under): "name: cannot write: reason". */
+int mtr_open_write_as(mtr_writer *w, const char *path, const char *name, diag *d);
 /* Appends one record; -1 on an I/O error, a type >= 4, a write flag > 1 or
  * bytes > MTR_MAX_BYTES. */
 int mtr_write(mtr_writer *w, const mtr_rec *r, diag *d);
