@@ -558,6 +558,8 @@ static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, afile 
 	ri->group = &outs;
 	if (a->out && fb_write(&ri->c->fb, a->out, &outs, d))
 		goto fail;
+	/* once, for the JSON and the CSV alike (the CSV's was taken again
+	 * after the heat maps and the timeline: a later time) */
 	ri->wall_ms = now_ms() - t_start;
 	if (a->report && report_json(a->report, ri, d))
 		goto fail;
@@ -581,7 +583,6 @@ static int write_outputs(const cli *a, report_info *ri, afile *trace_tmp, afile 
 			goto fail;
 		}
 	}
-	ri->wall_ms = now_ms() - t_start;
 	/* other runs appending to the same CSV wait from here until our
 	 * rename is done, so no row is lost */
 	if (a->csv)
@@ -773,7 +774,9 @@ int main(int argc, char **argv)
 			fa.out = cli_frame_path(a.out, cfg.frame.frames, cfg.frame.frames - 1, ob,
 			                        sizeof ob);
 		}
-		rc = run_frame(&fa, &cfg, &w, i, limit_mb, t_start, &d);
+		/* each cold frame's wall time is its own (the second's held the
+		 * first's); the first's holds the start of the process too */
+		rc = run_frame(&fa, &cfg, &w, i, limit_mb, i ? now_ms() : t_start, &d);
 	}
 	world_free(&w);
 	return rc;
