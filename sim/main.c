@@ -472,8 +472,48 @@ static int check_image_formats(const cli *a, diag *d)
  * (af_reserve); so does a census the run cannot keep, before the world
  * loads. An image format the plugin cannot write fails once the scene is
  * imported, still before the run (check_image_formats). */
+/* Path p as the file it names: its folder's real path and its last
+ * name (the file itself need not exist yet), into out. */
+static void output_key(const char *p, char *out, size_t n)
+{
+	char dirpart[4096], real[4096];
+	const char *slash = strrchr(p, '/');
+	snprintf(dirpart, sizeof dirpart, "%.*s", slash ? (int)(slash - p) + 1 : 1,
+	         slash ? p : ".");
+	if (!realpath(dirpart, real))
+		snprintf(real, sizeof real, "%s", dirpart);
+	snprintf(out, n, "%s/%s", real, slash ? slash + 1 : p);
+}
+
+/* Two output options naming one file: each writes its temporary and the
+ * last rename wins, so one output is silently lost (--csv and --census
+ * on one path kept the CSV alone). */
+static int outputs_distinct(const cli *a, diag *d)
+{
+	const char *flag[] = {"--out",    "--csv",       "--report",
+	                      "--census", "--trace-mem", "--timeline"};
+	const char *path[] = {a->out, a->csv, a->report, a->census, a->trace, a->timeline};
+	enum { N = sizeof path / sizeof *path };
+	static char key[N][8192];
+	for (int i = 0; i < N; i++) {
+		if (!path[i] || !strcmp(path[i], "-"))
+			continue;
+		output_key(path[i], key[i], sizeof key[i]);
+		for (int j = 0; j < i; j++)
+			if (path[j] && strcmp(path[j], "-") && !strcmp(key[i], key[j]))
+				return diag_set(
+				    d, path[i], 0, 0,
+				    "%s and %s name the same file (each would replace the "
+				    "other's)",
+				    flag[j], flag[i]);
+	}
+	return 0;
+}
+
 static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 {
+	if (outputs_distinct(a, d))
+		return -1;
 	if (a->out && img_reserve_file(a->out, d))
 		return -1;
 	if (a->csv && (report_csv_check(a->csv, d) || af_reserve(a->csv, "", d)))

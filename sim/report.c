@@ -322,13 +322,14 @@ static void check_text(FILE *f, const char *ref, const img_cmp *m, int cached)
 	        cached ? ", its frame from the world cache" : "");
 }
 
-/* The mean over the frames of a per-frame update figure. */
-static uint64_t anim_mean(const chip *c, const uint64_t *v)
+/* The mean over the frames of a per-frame update figure (not rounded:
+ * the text prints it as the JSON's update_bytes is rounded). */
+static double anim_mean(const chip *c, const uint64_t *v)
 {
-	uint64_t s = 0;
+	double s = 0;
 	for (int f = 0; f < c->frames_done; f++)
-		s += v[f];
-	return c->frames_done ? s / (uint64_t)c->frames_done : 0;
+		s += (double)v[f];
+	return c->frames_done ? s / c->frames_done : 0;
 }
 
 static double anim_mean_ms(const chip *c)
@@ -352,16 +353,14 @@ void report_text(FILE *f, const report_info *ri)
 		view_describe(&ri->w->v, vd, sizeof vd);
 		fprintf(f, "  view: %s\n", vd);
 	}
+	fprintf(f, "  chip: %d RTP%s x %d thread%s at %g MHz; ", g->chip.rtps,
+	        g->chip.rtps == 1 ? "" : "s", g->chip.threads_per_rtp,
+	        g->chip.threads_per_rtp == 1 ? "" : "s", g->chip.clock_mhz);
 	if (c->frame_mem)
-		fprintf(
-		    f,
-		    "  chip: %d RTPs x %d threads at %g MHz; memory hierarchy, %d MB SDRAM, %s\n",
-		    g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz, g->memory.sdram.mb,
-		    g->memory.vma.enabled ? "VMA over the host bus" : "no VMA");
+		fprintf(f, "memory hierarchy, %d MB SDRAM, %s\n", g->memory.sdram.mb,
+		        g->memory.vma.enabled ? "VMA over the host bus" : "no VMA");
 	else
-		fprintf(f, "  chip: %d RTPs x %d threads at %g MHz; memory fixed, %d cycles\n",
-		        g->chip.rtps, g->chip.threads_per_rtp, g->chip.clock_mhz,
-		        g->memory.latency);
+		fprintf(f, "memory fixed, %d cycles\n", g->memory.latency);
 	fprintf(f, "  cycles per frame %.0f = %.2f fps%s", ratio((double)cyc, c->frames_done),
 	        fig_fps(c), c->fid.mode == CFG_FIDELITY_FUNCTIONAL ? " (bound)" : "");
 	if (c->frames_done > 1) {
@@ -379,13 +378,13 @@ void report_text(FILE *f, const report_info *ri)
 		fprintf(
 		    f,
 		    "  two-level: %u instances of %u objects; %llu top-level steps, %llu "
-		    "transformations, %llu to the world; update %llu bytes = %.3f ms over the host "
+		    "transformations, %llu to the world; update %lld bytes = %.3f ms over the host "
 		    "bus%s\n",
 		    c->w->tl->ninst, c->w->tl->nobj,
 		    (unsigned long long)get(c, "toplevel.node_steps"),
 		    (unsigned long long)get(c, "xform.instances"),
 		    (unsigned long long)(chip_rtp_sum(c, "xform.ops") - get(c, "xform.instances")),
-		    (unsigned long long)anim_mean(c, c->frame_update), anim_mean_ms(c),
+		    llround(anim_mean(c, c->frame_update)), anim_mean_ms(c),
 		    c->frames_done > 1 ? " (mean per frame)" : "");
 	if (c->w->grid) /* the rays line's kd steps are then the grid's slice steps */
 		fprintf(f,
@@ -405,15 +404,17 @@ void report_text(FILE *f, const report_info *ri)
 	else
 		fputs(" not timed (functional mode: no thread states)", f);
 	uint64_t steps = get(c, "trav.node_steps"), tests = get(c, "isect.tri_tests");
+	char per[32] = "-"; /* no test, no ratio (it read 0.00:1) */
+	if (tests)
+		snprintf(per, sizeof per, "%.2f", (double)steps / (double)tests);
 	fprintf(f,
 	        "\n  rays: %llu primary, %llu shadow, %llu reflection, %llu refraction; "
-	        "%llu kd steps, %llu triangle tests (%.2f:1), %llu stack overflows\n",
+	        "%llu kd steps, %llu triangle tests (%s:1), %llu stack overflows\n",
 	        (unsigned long long)get(c, "rays.primary"),
 	        (unsigned long long)get(c, "rays.shadow"),
 	        (unsigned long long)get(c, "rays.reflection"),
 	        (unsigned long long)get(c, "rays.refraction"), (unsigned long long)steps,
-	        (unsigned long long)tests, ratio((double)steps, (double)tests),
-	        (unsigned long long)get(c, "trav.stack_overflows"));
+	        (unsigned long long)tests, per, (unsigned long long)get(c, "trav.stack_overflows"));
 	memfig m;
 	/* the fixed model has no SDRAM: its bytes are the memory port's */
 	const char *mem_name = c->frame_mem ? "SDRAM" : "memory port";

@@ -1195,6 +1195,33 @@ Test(saarsim_cli, host_wall_time_is_one_figure_per_frame, .timeout = 120)
 	          w1, w0, l1);
 }
 
+/* Two output options naming one file (by any spelling) are refused
+ * before the run: each wrote its temporary and the last rename won
+ * (--csv and --census on one path kept the CSV alone). And the text's
+ * small forms: one RTP and one thread are singular, and a frame without
+ * a triangle test has no steps-per-test ratio (it read 0.00:1). */
+Test(saarsim_cli, outputs_naming_one_file_are_refused)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 16x16 --csv %s/x.csv --census %s/./x.csv", dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--csv and --census name the same file");
+	cr_assert_not(exists("x.csv"));
+	snprintf(args, sizeof args, "--size 16x16 --report %s/r.json --timeline %s/r.json", dir,
+	         dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--report and --timeline name the same file");
+	snprintf(args, sizeof args,
+	         "--size 16x16 --set chip.rtps=1 --set chip.threads_per_rtp=1 --eye 0,0,-100 "
+	         "--lookat 0,0,-200 --no-check --report %s/r.json --csv %s/x.csv",
+	         dir, dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	char *out = slurp("out");
+	cr_assert(strstr(out, "chip: 1 RTP x 1 thread at ") &&
+	              strstr(out, " 0 triangle tests (-:1), "),
+	          "%s", out);
+}
+
 /* Issue 31: a 2-frame VMA run's headline fps is the mean over the cold
  * and the warm frame, several times below the steady state; the mistake
  * caught is a headline that does not say so (the old "cycles per frame
