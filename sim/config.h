@@ -206,6 +206,21 @@ const cfg_key *cfg_keys(size_t *n);
 /* The key with this exact dotted path, or NULL. */
 const cfg_key *cfg_find(const char *path);
 
+/* Where each key's value came from, for the checks after loading
+ * (cfg_validate_at): a line and column of the config file, or a command
+ * line flag. The config itself keeps no such record (two configs of the
+ * same values are the same bytes). */
+#define CFG_KEYS_MAX 320
+typedef struct cfg_origin {
+	const char *file; /* the config file read (cfg_load_at's name), or NULL */
+	struct {
+		const char *who; /* the flag that set it ("--set"), NULL: the file or default */
+		int line, col;   /* in the file; 0 with no who: the default */
+		int seq;         /* the order of setting: 0 = never set */
+	} key[CFG_KEYS_MAX];
+	int seq;
+} cfg_origin;
+
 /* ---- loading ---- */
 
 void cfg_defaults(saar_config *c);
@@ -218,7 +233,19 @@ int cfg_set(saar_config *c, const char *assignment, diag *d);
 /* cfg_set on behalf of `who` (a shorthand flag such as --kd-leaf-size):
  * its messages start with who instead of --set. */
 int cfg_set_as(saar_config *c, const char *who, const char *assignment, diag *d);
-/* Checks that involve several keys. Errors: "config: ...". */
+/* cfg_load, cfg_set_as and cfg_validate that keep (and name) where each
+ * value came from: o (NULL: not kept) is reset by cfg_load_at and must
+ * outlive the file name and `who` given (a program's argv does). */
+int cfg_load_at(saar_config *c, const char *file, cfg_origin *o, diag *d);
+int cfg_set_at(saar_config *c, const char *who, const char *assignment, cfg_origin *o, diag *d);
+/* The checks a value passes only with the others (cross-key checks) or
+ * that the memory's builder makes (sim/memconfig.h memcfg_check: the
+ * stack, the caches' geometry, the SDRAM and host bus): all the checks of
+ * a config that need no scene. An error is named by where the value at
+ * fault came from: "FILE:LINE:COL: ...", "--set: ..." (the flag that set
+ * it), or "config: ..." for a default or without o. */
+int cfg_validate_at(const saar_config *c, const cfg_origin *o, diag *d);
+/* cfg_validate_at without origins. Errors: "config: ...". */
 int cfg_validate(const saar_config *c, diag *d);
 
 /* Name of an enum key's current value (for reports), NULL if not an enum. */

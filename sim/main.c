@@ -158,7 +158,7 @@ static int bare_flag(const char *a)
 
 /* The shorthand flag's "key=value" through the config, the whole value
  * (cfg_set refuses one too long), its messages naming the flag. */
-static int set_key(saar_config *cfg, const char *flag, const char *value, diag *d)
+static int set_key(saar_config *cfg, const char *flag, const char *value, cfg_origin *o, diag *d)
 {
 	const char *key = key_flag(flag);
 	size_t n = strlen(key) + strlen(value) + 2;
@@ -166,7 +166,7 @@ static int set_key(saar_config *cfg, const char *flag, const char *value, diag *
 	if (!kv)
 		return diag_set(d, flag, 0, 0, "out of memory");
 	snprintf(kv, n, "%s=%s", key, value);
-	int rc = cfg_set_as(cfg, flag, kv, d);
+	int rc = cfg_set_at(cfg, flag, kv, o, d);
 	free(kv);
 	return rc;
 }
@@ -258,7 +258,8 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
  * *sampling_flag: the last sampling one (--sample-rate, --unit-tiles, ...).
  * The first pass accepted every argument, so this walk sees the same
  * option/value pairs: world flags are skipped by the same parser. */
-static int set_flags(int argc, char **argv, saar_config *cfg, const char **sampling_flag, diag *d)
+static int set_flags(int argc, char **argv, saar_config *cfg, cfg_origin *o,
+                     const char **sampling_flag, diag *d)
 {
 	world_opts skip;
 	world_opts_default(&skip);
@@ -271,9 +272,9 @@ static int set_flags(int argc, char **argv, saar_config *cfg, const char **sampl
 			i++;
 			continue;
 		}
-		if (!strcmp(a, "--set") && cfg_set(cfg, argv[i + 1], d))
+		if (!strcmp(a, "--set") && cfg_set_at(cfg, "--set", argv[i + 1], o, d))
 			return -1;
-		if (key_flag(a) && set_key(cfg, a, argv[i + 1], d))
+		if (key_flag(a) && set_key(cfg, a, argv[i + 1], o, d))
 			return -1;
 		if (key_flag(a) && !strncmp(key_flag(a), "sampling.", 9))
 			*sampling_flag = a;
@@ -347,10 +348,13 @@ static int drt_from_config(const saar_config *cfg, world_opts *wo, diag *d)
 static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uint64_t *limit_mb,
                             diag *d)
 {
-	if (a->config ? cfg_load(cfg, a->config, d) : (cfg_defaults(cfg), 0))
+	/* where each value came from: a later check names it */
+	static cfg_origin origin;
+	memset(&origin, 0, sizeof origin);
+	if (a->config ? cfg_load_at(cfg, a->config, &origin, d) : (cfg_defaults(cfg), 0))
 		return cli_bad("saarsim", d->msg);
 	const char *sampling_flag;
-	if (set_flags(argc, argv, cfg, &sampling_flag, d))
+	if (set_flags(argc, argv, cfg, &origin, &sampling_flag, d))
 		return cli_bad("saarsim", d->msg);
 	/* a sampling flag on a run that does not sample would be ignored
 	 * without a word */
@@ -395,7 +399,7 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 			return cli_bad("saarsim", d->msg);
 		cfg->frame.frames = (int)nframes;
 	}
-	if (cfg_validate(cfg, d))
+	if (cfg_validate_at(cfg, &origin, d))
 		return cli_bad("saarsim", d->msg);
 	if (hm_limit_mb(a->mem_limit, limit_mb, d))
 		return cli_bad("saarsim", d->msg);

@@ -1552,3 +1552,37 @@ Test(saarsim_cli, scene_import_forks_before_the_image_plugin_loads)
 	cr_assert(!strncmp(e, "rtref: ", 7) && strstr(e, "f3.nosuchformat") && !strchr(e, '\n')[1],
 	          "not one line naming the file: %s", e);
 }
+
+/* A value that passes its key's range but not the checks after loading
+ * (the memory's geometry, the stack) is refused with where it came from,
+ * the file's line and column or the flag, by the run and by --dry-run
+ * alike; and a stack that names fixed beside other levels is refused,
+ * not run as the fixed model. Catches saarsim's front end dropping the
+ * origins ("saarsim: config: memory.sdram.banks ..." named no file). */
+Test(saarsim_cli, config_checks_after_loading_name_the_file_and_line)
+{
+	char cfgf[512], args[1024];
+	tu_write(cfgf, sizeof cfgf, dir, "banks.yaml",
+	         "name: b\nmemory:\n  sdram:\n    banks: 3\n");
+	const char *runs[] = {"--size 16x16 --out %s/f.png", "--dry-run --out %s/f.png"};
+	for (int r = 0; r < 2; r++) {
+		char run[256];
+		snprintf(run, sizeof run, runs[r], dir);
+		snprintf(args, sizeof args, "%s --config %s", run, cfgf);
+		cr_assert_eq(saarsim(args), 2, "%s", args);
+		one_line_naming("banks.yaml:4:12: memory.sdram.banks must be a power of two");
+		const char *bad[][2] = {
+		    {"--set memory.sdram.row_bytes=100", "--set: memory.sdram.row_bytes"},
+		    {"--set memory.l1.tri.replacement=bogus", "--set: memory.l1.tri.replacement"},
+		    {"--set memory.levels=l1,l1,sdram", "--set: memory.levels 'l1,l1,sdram'"},
+		    {"--set memory.levels=fixed,garbage", "--set: memory.levels 'fixed,garbage'"},
+		    {"--set memory.levels=fixed,l1,sdram", "--set: memory.levels 'fixed,l1,sdram'"},
+		    {"--set memory.hostbus.width_bits=12", "--set: memory.hostbus"}};
+		for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+			snprintf(args, sizeof args, "%s %s", run, bad[k][0]);
+			cr_assert_eq(saarsim(args), 2, "%s", args);
+			one_line_naming(bad[k][1]);
+		}
+		cr_assert_not(exists("f.png"));
+	}
+}

@@ -104,6 +104,7 @@ static void feed(eng *e, void *ctx, uint64_t arg)
 
 typedef struct opts {
 	saar_config cfg;
+	cfg_origin origin; /* where each value came from (cfg_validate_at names it) */
 	const char *trace, *json;
 	int timing;
 	uint64_t image_bytes; /* reads at or above it bypass the L1s */
@@ -130,6 +131,7 @@ static int parse_image_bytes(const char *v, uint64_t *out)
 static int parse_args(int argc, char **argv, opts *o, diag *d)
 {
 	cfg_defaults(&o->cfg);
+	memset(&o->origin, 0, sizeof o->origin);
 	o->trace = o->json = NULL;
 	o->timing = 0;
 	o->image_bytes = UINT64_MAX;
@@ -147,10 +149,10 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 			return 0;
 		}
 		if (!strcmp(a, "--config") && i + 1 < argc) {
-			if (cfg_load(&o->cfg, argv[++i], d))
+			if (cfg_load_at(&o->cfg, argv[++i], &o->origin, d))
 				return fail(d);
 		} else if (!strcmp(a, "--set") && i + 1 < argc) {
-			if (cfg_set(&o->cfg, argv[++i], d))
+			if (cfg_set_at(&o->cfg, "--set", argv[++i], &o->origin, d))
 				return fail(d);
 		} else if (!strcmp(a, "--timing")) {
 			o->timing = 1;
@@ -171,7 +173,7 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 	}
 	if (!o->trace)
 		return usage("no trace given");
-	if (cfg_validate(&o->cfg, d))
+	if (cfg_validate_at(&o->cfg, &o->origin, d))
 		return fail(d);
 	return -1;
 }
