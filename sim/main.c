@@ -14,9 +14,12 @@
  * CSV row. Bad input: one line "saarsim: ..." on stderr, exit status 2, no
  * output file changed (each is written to a temporary file, and all are
  * renamed into place together once every one is complete). --dry-run stops
- * after the checks that need no world (every argument, the config, the
- * output formats, the CSV's columns): exit 0 if they pass, nothing loaded
- * or written (scripts/sweep checks its pass-through arguments with it).
+ * after the checks that need no world (every argument, the config with
+ * every memory check, the output formats, the CSV's columns, and
+ * world_check: the scene and view flags, the camera and drt flags over the
+ * view where it is known before the scene loads): exit 0 if they pass, no
+ * scene loaded (a views file is read), nothing written (scripts/sweep
+ * checks its common arguments with it, once per target).
  * An AFF scene with --anim-fps F makes --frames N an animation: N chip
  * runs at times T + i/F, each checked, each with numbered outputs
  * (run_frame; docs/views.md "Flags").
@@ -73,8 +76,10 @@ static void usage(FILE *f)
 	       "  --quiet               no progress line (shown on a terminal after 2 s)\n"
 	       "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
 	       "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
-	       "  --dry-run             check the arguments and the config, then exit (no scene\n"
-	       "                        loaded, nothing run or written)\n"
+	       "  --dry-run             every check that needs no scene (arguments, config,\n"
+	       "                        camera and drt flags over a views file's or the\n"
+	       "                        embedded scene's view), then exit (no scene loaded,\n"
+	       "                        nothing run or written)\n"
 	       "  --list-config         print every config key and exit\n"
 	       "  --config-doc          print docs/config.md and exit\n");
 	fputs(world_usage, f);
@@ -758,8 +763,12 @@ int main(int argc, char **argv)
 	fa.report = cli_frame_path(a.report, nanim, 0, rb, sizeof rb);
 	if (reserve_outputs(&fa, &cfg, &d))
 		return cli_bad("saarsim", d.msg);
-	if (a.dry) /* no scene import: the formats now */
-		return check_image_formats(&fa, &d) ? cli_bad("saarsim", d.msg) : 0;
+	/* no scene import: what world_load would refuse without the scene
+	 * (the views file is read), and the formats now */
+	if (a.dry)
+		return world_check(&a.wo, &d) || check_image_formats(&fa, &d)
+		           ? cli_bad("saarsim", d.msg)
+		           : 0;
 	world w;
 	memset(&w, 0, sizeof w);
 	rc = 0;

@@ -1586,3 +1586,47 @@ Test(saarsim_cli, config_checks_after_loading_name_the_file_and_line)
 		cr_assert_not(exists("f.png"));
 	}
 }
+
+/* --dry-run refuses what the run refuses without its scene: the drt and
+ * camera flags over the view (the embedded scene's, a views file's) or
+ * alone (a scene's own view), --view without --views, --two-level and
+ * --anim-time on a scene that is not AFF; each with the run's own line.
+ * What needs the scene passes (an AFF file not read, a lone --eye on a
+ * procedural scene). Catches --dry-run leaving the world's checks to
+ * world_load (each of these exited 0, and a sweep's pre-check passed
+ * them on to fail at every point). */
+Test(saarsim_cli, dry_run_refuses_what_the_run_refuses)
+{
+	char args[2048];
+	const char *bad[][2] = {
+	    {"--spp 2", "--spp: spp must be 1, 4, 16 or 64"},
+	    {"--view x", "--view: needs --views FILE"},
+	    {"--up 0,0,0", "up must not be the zero vector"},
+	    {"--eye 0,0,0 --lookat 0,0,0", "eye and lookat are the same point"},
+	    {"--two-level", "--two-level: needs an AFF scene"},
+	    {"--anim-time 3", "--anim-time: needs an AFF scene"},
+	    {"--scene spd:tetra:1 --up 0,0,0", "up must not be the zero vector"},
+	    {"--scene spd:tetra:1 --eye 1,2,3 --lookat 1,2,3", "eye and lookat are the same point"},
+	    {"--scene spd:tetra:1 --eye 0,0,0 --lookat 0,1,0 --up 0,2,0", "up is parallel"},
+	    {"--scene spd:tetra:1 --gloss 0.5", "--gloss: gloss must be 0"}};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		for (int dry = 1; dry >= 0; dry--) {
+			snprintf(args, sizeof args, "%s --size 8x8 --no-check %s --out %s/f.png",
+			         dry ? "--dry-run" : "", bad[k][0], dir);
+			cr_assert_eq(saarsim(args), 2, "%s", args);
+			one_line_naming(bad[k][1]);
+		}
+	}
+	char views[512];
+	snprintf(views, sizeof views, "--views %s/views.yaml", tu_scenes_dir());
+	const char *good[] = {"--scene %s/a.aff --two-level --anim-time 3",
+	                      "--scene spd:tetra:1 --eye 1,2,3", "--scene spd:tetra:1 --up 0,0,1",
+	                      "%s --view conference --spp 4 --fov 50"};
+	for (size_t k = 0; k < sizeof good / sizeof *good; k++) {
+		char g[1024];
+		snprintf(g, sizeof g, good[k], k == 3 ? views : dir);
+		snprintf(args, sizeof args, "--dry-run %s --out %s/f.png", g, dir);
+		cr_assert_eq(saarsim(args), 0, "%s: %s", args, slurp("err"));
+	}
+	cr_assert_not(exists("f.png"));
+}
