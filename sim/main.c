@@ -221,39 +221,36 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 			        "saarsim: %s: unknown option or missing value (see --help)\n", f);
 			return DIAG_EXIT;
 		}
-		const char *v = argv[i + 1];
-		if (!strcmp(f, "--config"))
-			a->config = v;
-		else if (!strcmp(f, "--set") || key_flag(f))
-			; /* applied below, in order, once the config file is read */
-		else if (!strcmp(f, "--size"))
-			a->size = v;
-		else if (!strcmp(f, "--out"))
-			a->out = v;
-		else if (!strcmp(f, "--report"))
-			a->report = v;
-		else if (!strcmp(f, "--frames"))
-			a->frames = v;
-		else if (!strcmp(f, "--csv"))
-			a->csv = v;
-		else if (!strcmp(f, "--trace-mem"))
-			a->trace = v;
-		else if (!strcmp(f, "--census"))
-			a->census = v;
-		else if (!strcmp(f, "--host-mem-limit"))
-			a->mem_limit = v;
-		else if (!strcmp(f, "--timeline"))
-			a->timeline = v;
-		else if (!strcmp(f, "--timeline-window"))
-			a->tl_window = v;
-		else if (!strcmp(f, "--timeline-max-events"))
-			a->tl_max = v;
-		else if (!strcmp(f, "--heatmap"))
-			a->heatmap = v;
-		else {
-			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
+		/* saarsim's options of one value: a second would silently drop
+		 * the first (--set and the key flags are applied in order) */
+		const struct {
+			const char *flag, **slot;
+		} one[] = {{"--config", &a->config},
+		           {"--size", &a->size},
+		           {"--out", &a->out},
+		           {"--report", &a->report},
+		           {"--frames", &a->frames},
+		           {"--csv", &a->csv},
+		           {"--trace-mem", &a->trace},
+		           {"--census", &a->census},
+		           {"--host-mem-limit", &a->mem_limit},
+		           {"--timeline", &a->timeline},
+		           {"--timeline-window", &a->tl_window},
+		           {"--timeline-max-events", &a->tl_max},
+		           {"--heatmap", &a->heatmap}};
+		size_t k = 0, n = sizeof one / sizeof *one;
+		while (k < n && strcmp(f, one[k].flag))
+			k++;
+		if (k < n && *one[k].slot) {
+			fprintf(stderr, "saarsim: %s given twice (it takes one value)\n", f);
 			return DIAG_EXIT;
 		}
+		if (k < n)
+			*one[k].slot = argv[i + 1];
+		else if (strcmp(f, "--set") && !key_flag(f)) {
+			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
+			return DIAG_EXIT;
+		} /* --set and the key flags: applied in order once the file is read */
 		i += 2;
 	}
 	return -1;

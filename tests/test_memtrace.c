@@ -558,3 +558,31 @@ Test(memtrace, replay_checks_the_config_without_timing)
 		}
 	}
 }
+
+/* saarsim-replay reads --config before every --set, wherever they stand
+ * (as saarsim does), and refuses a second --config: the file was loaded
+ * where it stood, undoing the --set before it, and a second file dropped
+ * the first. Catches the file loaded in its place on the command line. */
+Test(memtrace, replay_reads_the_config_first_and_once)
+{
+	char dir[64], p[128], a[128], cmd[1024];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/t.gz", dir);
+	write_trace(p, 2000);
+	tu_write(a, sizeof a, dir, "a.yaml", "memory.sdram.banks: 8\n");
+	snprintf(cmd, sizeof cmd,
+	         "%s/saarsim-replay --set memory.sdram.banks=3 --config %s %s >%s/out 2>%s/err",
+	         tu_bin_dir(), a, p, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	tu_one_line(dir, "saarsim-replay", "--set: memory.sdram.banks must be a power of two");
+	snprintf(cmd, sizeof cmd, "%s/saarsim-replay --config %s --config %s %s >%s/out 2>%s/err",
+	         tu_bin_dir(), a, a, p, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	tu_one_line(dir, "saarsim-replay", "--config given twice");
+	/* the --set after the file wins, and a good one replays */
+	snprintf(cmd, sizeof cmd,
+	         "%s/saarsim-replay --set memory.sdram.banks=2 --config %s --json %s/r.json %s "
+	         ">%s/out 2>%s/err",
+	         tu_bin_dir(), a, dir, p, dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s: %s", cmd, tu_slurp(dir, "err"));
+}

@@ -1630,3 +1630,51 @@ Test(saarsim_cli, dry_run_refuses_what_the_run_refuses)
 	}
 	cr_assert_not(exists("f.png"));
 }
+
+/* An option of one value given twice is refused, one line naming it: the
+ * first was dropped without a word (--config a.yaml --config b.yaml ran
+ * b alone, a's duplicate key unseen; --out a.png --out b.png wrote b
+ * only). --set and the shorthand key flags stay repeatable, the last
+ * given winning; --size wins over frame.width wherever it stands.
+ * Catches a repeated option overriding the first. */
+Test(saarsim_cli, single_value_option_given_twice_is_refused)
+{
+	char a[512], b[512], args[2048];
+	tu_write(a, sizeof a, dir, "a.yaml", "chip.rtps: 2\nchip.rtps: 3\n");
+	tu_write(b, sizeof b, dir, "b.yaml", "chip.rtps: 2\n");
+	const char *twice[][2] = {{"--config %s/a.yaml --config %s/b.yaml", "--config given twice"},
+	                          {"--out %s/a.png --out %s/b.png", "--out given twice"},
+	                          {"--report %s/a.json --report %s/b.json", "--report given twice"},
+	                          {"--csv %s/a.csv --csv %s/b.csv", "--csv given twice"},
+	                          {"--size 8x8 --size 16x%s16", "--size given twice"},
+	                          {"--frames 1 --frames 2%s", "--frames given twice"}};
+	for (size_t k = 0; k < sizeof twice / sizeof *twice; k++) {
+		for (int dry = 0; dry < 2; dry++) {
+			char t[1024];
+			snprintf(t, sizeof t, twice[k][0], dir, k == 4 || k == 5 ? "" : dir);
+			snprintf(args, sizeof args, "%s--size 8x8 --no-check %s",
+			         dry ? "--dry-run " : "", t);
+			if (k == 4)
+				snprintf(args, sizeof args, "%s--no-check %s",
+				         dry ? "--dry-run " : "", t);
+			cr_assert_eq(saarsim(args), 2, "%s", args);
+			one_line_naming(twice[k][1]);
+		}
+	}
+	cr_assert_not(exists("a.png") || exists("b.png") || exists("a.json") || exists("b.json"));
+	/* repeatable: --set and the key flags, the last given wins */
+	cr_assert_eq(saarsim("--dry-run --set chip.rtps=1 --set chip.rtps=2 --fidelity cycle "
+	                     "--fidelity functional --kd-leaf-size 2 --kd-leaf-size 3"),
+	             0, "%s", slurp("err"));
+	/* --size over frame.width, before or after it */
+	const char *order[] = {"--set frame.width=24 --size 16x8",
+	                       "--size 16x8 --set frame.width=24"};
+	for (int k = 0; k < 2; k++) {
+		snprintf(args, sizeof args,
+		         "--no-check --fidelity functional %s --report %s/r.json", order[k], dir);
+		cr_assert_eq(saarsim(args), 0, "%s: %s", args, slurp("err"));
+		char *r = slurp("r.json");
+		cr_assert_eq(JNUM(r, "config", "frame", "width"), 16, "%s", args);
+		cr_assert_eq(JNUM(r, "config", "frame", "height"), 8, "%s", args);
+	}
+}

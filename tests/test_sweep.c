@@ -895,4 +895,13 @@ Test(sweep, common_arguments_are_checked_with_the_targets_first)
 	         env, root(), dir, sf, dir);
 	snprintf(path, sizeof path, "%s/err", dir);
 	cr_assert_eq(tu_run(cmd), 0, "%s: %s", cmd, slurp(path));
+	/* saarsim takes --report and --csv once: the sweep gives each point
+	 * its own, so one after -- is refused (every point failed with it) */
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/out2 --scene spd:tetra:1 --size 16x16 "
+	         "--set chip.rtps=1,2 --slurm -- --report %s/r.json >/dev/null 2>%s/err",
+	         env, root(), dir, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	cr_assert_eq(count_lines(path), 1);
+	cr_assert_eq(count_in(path, "sweep: -- --report: "), 1, "%s", slurp(path));
 }

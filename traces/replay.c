@@ -135,6 +135,7 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 	o->trace = o->json = NULL;
 	o->timing = 0;
 	o->image_bytes = UINT64_MAX;
+	const char *cfgfile = NULL;
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i];
 		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -149,17 +150,27 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 			return 0;
 		}
 		if (!strcmp(a, "--config") && i + 1 < argc) {
-			if (cfg_load_at(&o->cfg, argv[++i], &o->origin, d))
-				return fail(d);
+			if (cfgfile) {
+				fprintf(
+				    stderr,
+				    "saarsim-replay: --config given twice (it takes one value)\n");
+				return DIAG_EXIT;
+			}
+			cfgfile = argv[++i];
 		} else if (!strcmp(a, "--set") && i + 1 < argc) {
-			if (cfg_set_at(&o->cfg, "--set", argv[++i], &o->origin, d))
-				return fail(d);
+			i++; /* applied below, once the file is read */
 		} else if (!strcmp(a, "--timing")) {
 			o->timing = 1;
 		} else if (!strcmp(a, "--image-bytes") && i + 1 < argc) {
 			if (parse_image_bytes(argv[++i], &o->image_bytes))
 				return DIAG_EXIT;
 		} else if (!strcmp(a, "--json") && i + 1 < argc) {
+			if (o->json) {
+				fprintf(
+				    stderr,
+				    "saarsim-replay: --json given twice (it takes one value)\n");
+				return DIAG_EXIT;
+			}
 			o->json = argv[++i];
 		} else if (a[0] == '-' && a[1]) {
 			char what[256];
@@ -173,6 +184,18 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 	}
 	if (!o->trace)
 		return usage("no trace given");
+	/* the file first, then every --set in order (as saarsim: a --set
+	 * before --config is not undone by it) */
+	if (cfgfile && cfg_load_at(&o->cfg, cfgfile, &o->origin, d))
+		return fail(d);
+	for (int i = 1; i < argc; i++) { /* the same walk: every option took its value */
+		const char *a = argv[i];
+		if (!strcmp(a, "--set") && cfg_set_at(&o->cfg, "--set", argv[i + 1], &o->origin, d))
+			return fail(d);
+		if (!strcmp(a, "--set") || !strcmp(a, "--config") || !strcmp(a, "--image-bytes") ||
+		    !strcmp(a, "--json"))
+			i++;
+	}
 	if (cfg_validate_at(&o->cfg, &o->origin, d))
 		return fail(d);
 	return -1;
