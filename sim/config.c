@@ -18,7 +18,6 @@
 #include "kernel-ref/kdtree.h"
 #include "kernel-ref/world.h"
 #include "kernel-ref/yload.h"
-#include "sim/memconfig.h"
 
 #include <errno.h>
 #include <math.h>
@@ -966,11 +965,10 @@ static int last_set(const cfg_origin *o, const char *name, size_t n)
 	}
 }
 
-/* msg (a check's message, which starts with the key or section at
- * fault) into d, named by where that value came from: the file's line
- * and column, the flag that set it, or "config" (a default, or no o). */
-static int blame(const cfg_origin *o, const char *msg, diag *d)
+int cfg_blame(const cfg_origin *o, const char *msg, diag *d)
 {
+	if (!strncmp(msg, "config: ", 8))
+		msg += 8;
 	int k = o ? last_set(o, msg, strcspn(msg, " :'")) : -1;
 	if (k < 0)
 		return diag_set(d, "config", 0, 0, "%s", msg);
@@ -998,21 +996,13 @@ int cfg_validate_at(const saar_config *c, const cfg_origin *o, diag *d)
 		snprintf(msg, sizeof msg,
 		         "%s disagrees with memory.levels '%s' set before it; set one or the other",
 		         o && o->key[v].seq > o->key[m].seq ? keys[v].path : keys[m].path, l);
-		return blame(o, msg, d);
+		return cfg_blame(o, msg, d);
 	}
 	/* sampling.overlap: fitted (negative) is -1, a given share 0 or more */
 	if (c->sampling.overlap < 0 && c->sampling.overlap != -1) {
 		snprintf(msg, sizeof msg, "sampling.overlap %g: -1 (fitted) or a share from 0 to 4",
 		         c->sampling.overlap);
-		return blame(o, msg, d);
-	}
-	/* the memory as its builder checks it (a message "config: KEY ...") */
-	diag md;
-	if (memcfg_check(c, &md)) {
-		const char *m = md.msg;
-		if (!strncmp(m, "config: ", 8))
-			m += 8;
-		return blame(o, m, d);
+		return cfg_blame(o, msg, d);
 	}
 	/* No other key constrains another today. (A packet is an 8 x 8 tile: both
 	 * packet keys' ranges are [8, 8].) chip.stack_depth may be below the

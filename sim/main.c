@@ -38,6 +38,7 @@
 #include "sim/chip.h"
 #include "sim/config.h"
 #include "sim/hostmem.h"
+#include "sim/memconfig.h"
 #include "sim/observe.h"
 #include "sim/report.h"
 #include "sim/reportcheck.h"
@@ -401,7 +402,7 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 			return cli_bad("saarsim", d->msg);
 		cfg->frame.frames = (int)nframes;
 	}
-	if (cfg_validate_at(cfg, &origin, d))
+	if (memcfg_validate(cfg, &origin, d))
 		return cli_bad("saarsim", d->msg);
 	if (hm_limit_mb(a->mem_limit, limit_mb, d))
 		return cli_bad("saarsim", d->msg);

@@ -170,6 +170,14 @@ int memcfg_check(const saar_config *cfg, diag *d)
 	return M->vma.enabled ? vma_check(hp.sdram.bytes, &hp.vma, d) : 0;
 }
 
+int memcfg_validate(const saar_config *cfg, const cfg_origin *o, diag *d)
+{
+	if (cfg_validate_at(cfg, o, d))
+		return -1;
+	diag md;
+	return memcfg_check(cfg, &md) ? cfg_blame(o, md.msg, d) : 0;
+}
+
 int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,
                   mem_store *store, diag *d)
 {

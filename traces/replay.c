@@ -104,7 +104,7 @@ static void feed(eng *e, void *ctx, uint64_t arg)
 
 typedef struct opts {
 	saar_config cfg;
-	cfg_origin origin; /* where each value came from (cfg_validate_at names it) */
+	cfg_origin origin; /* where each value came from (memcfg_validate names it) */
 	const char *trace, *json;
 	int timing;
 	uint64_t image_bytes; /* reads at or above it bypass the L1s */
@@ -196,7 +196,7 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 		    !strcmp(a, "--json"))
 			i++;
 	}
-	if (cfg_validate_at(&o->cfg, &o->origin, d))
+	if (memcfg_validate(&o->cfg, &o->origin, d))
 		return fail(d);
 	return -1;
 }
