@@ -568,6 +568,33 @@ static void cam_flags(const world_opts *o, camera *c)
 		c->fov_deg = o->cam.fov_deg;
 }
 
+/* The drt flags over the view's p, checked (drt_problem); a problem is
+ * named by the flag, or by the drt.* key that stood for it. */
+static int drt_flags_over(drt_params *p, const world_opts *o, diag *d)
+{
+	const drt_params *q = &o->drt;
+	unsigned h = o->have_drt;
+	p->spp = h & 1 ? q->spp : p->spp;
+	p->aperture = h & 2 ? q->aperture : p->aperture;
+	p->focus = h & 4 ? q->focus : p->focus;
+	p->light_size = h & 8 ? q->light_size : p->light_size;
+	p->gloss = h & 16 ? q->gloss : p->gloss;
+	p->motion = h & 32 ? q->motion : p->motion;
+	const char *key, *prob = drt_problem(p, &key);
+	if (prob) { /* the flag of the key (the views file's name for it) */
+		static const char *const keys[] = {"spp",        "aperture", "focus",
+		                                   "light_size", "gloss",    "motion"};
+		int k = 0;
+		while (k < 5 && strcmp(keys[k], key))
+			k++;
+		char key_name[32];
+		snprintf(key_name, sizeof key_name, "drt.%s", keys[k]);
+		return diag_set(d, o->drt_from_config & (1u << k) ? key_name : drt_flags[k], 0, 0,
+		                "%s", prob);
+	}
+	return 0;
+}
+
 /* The camera and light flags override the view. */
 static int apply_view_flags(world *w, const world_opts *o, diag *d)
 {
@@ -585,27 +612,8 @@ static int apply_view_flags(world *w, const world_opts *o, diag *d)
 		w->view_changed = 1;
 	}
 	if (o->have_drt) {
-		drt_params *p = &w->v.drt;
-		const drt_params *q = &o->drt;
-		unsigned h = o->have_drt;
-		p->spp = h & 1 ? q->spp : p->spp;
-		p->aperture = h & 2 ? q->aperture : p->aperture;
-		p->focus = h & 4 ? q->focus : p->focus;
-		p->light_size = h & 8 ? q->light_size : p->light_size;
-		p->gloss = h & 16 ? q->gloss : p->gloss;
-		p->motion = h & 32 ? q->motion : p->motion;
-		const char *key, *prob = drt_problem(p, &key);
-		if (prob) { /* the flag of the key (the views file's name for it) */
-			static const char *const keys[] = {"spp",        "aperture", "focus",
-			                                   "light_size", "gloss",    "motion"};
-			int k = 0;
-			while (k < 5 && strcmp(keys[k], key))
-				k++;
-			char key_name[32];
-			snprintf(key_name, sizeof key_name, "drt.%s", keys[k]);
-			return diag_set(d, o->drt_from_config & (1u << k) ? key_name : drt_flags[k],
-			                0, 0, "%s", prob);
-		}
+		if (drt_flags_over(&w->v.drt, o, d))
+			return -1;
 		w->view_changed = 1;
 	}
 	view_place_default_light(&w->v, &w->s);
@@ -716,6 +724,71 @@ static int view_scene_failed(const world *w, const world_opts *o, diag *d)
 	char m[sizeof d->msg + 8];
 	snprintf(m, sizeof m, "scene %s", d->msg);
 	return diag_set(d, o->views, line, col, "%s", m);
+}
+
+/* The unit axis least along v: v x it is at least 0.8 |v| long. */
+static vec3 axis_across(vec3 v)
+{
+	float x = fabsf(v.x), y = fabsf(v.y), z = fabsf(v.z);
+	return x <= y && x <= z ? v3(1, 0, 0) : y <= z ? v3(0, 1, 0) : v3(0, 0, 1);
+}
+
+/* The camera flags when the view is not known before the scene loads:
+ * what they decide alone (eye and lookat apart, up not zero, up across
+ * the direction when all three are given, fov), the rest of the camera
+ * made up so that it passes. */
+static int cam_flags_alone(const world_opts *o, diag *d)
+{
+	camera c;
+	memset(&c, 0, sizeof c);
+	c.fov_deg = o->have_fov ? o->cam.fov_deg : 60.0f;
+	c.up = o->have_up ? o->cam.up : v3(0, 1, 0);
+	if (o->have_eye && o->have_lookat) {
+		c.eye = o->cam.eye;
+		c.lookat = o->cam.lookat;
+		if (!o->have_up)
+			c.up = axis_across(v3_sub(c.lookat, c.eye));
+	} else {
+		c.eye = v3(0, 0, 0);
+		c.lookat = axis_across(c.up);
+	}
+	return camera_validate(&c, "--eye/--lookat/--up/--fov", d);
+}
+
+int world_check(const world_opts *o, diag *d)
+{
+	static view v; /* the view: large, and only ever one check at a time */
+	memset(&v, 0, sizeof v);
+	int known = 1; /* the view is known before the scene loads */
+	if (o->view && !o->views)
+		return diag_set(d, "--view", 0, 0, "needs --views FILE");
+	if (o->views && !o->view)
+		return diag_set(d, "--views", 0, 0, "needs --view NAME");
+	if (o->views) {
+		if (view_load(&v, o->views, o->view, d))
+			return -1;
+	} else if (!o->scene) {
+		view_default(&v);
+	} else {
+		known = 0;
+	}
+	const char *path = o->scene ? o->scene : (o->views && v.scene[0]) ? v.scene : NULL;
+	if ((o->have_anim_time || o->have_anim_fps || o->two_level) && !aff_is(path))
+		return diag_set(d,
+		                o->have_anim_time  ? "--anim-time"
+		                : o->have_anim_fps ? "--anim-fps"
+		                                   : "--two-level",
+		                0, 0, "needs an AFF scene (--scene FILE.aff)");
+	if (o->have_eye || o->have_lookat || o->have_up || o->have_fov) {
+		if (!known && cam_flags_alone(o, d))
+			return -1;
+		camera c = v.cam;
+		cam_flags(o, &c);
+		if (known && camera_validate(&c, "--eye/--lookat/--up/--fov", d))
+			return -1;
+	}
+	/* the view's drt where it is known, else none (each flag alone) */
+	return o->have_drt ? drt_flags_over(&v.drt, o, d) : 0;
 }
 
 int world_load(world *w, const world_opts *o, diag *d)

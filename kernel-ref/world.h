@@ -151,6 +151,13 @@ const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_
  * instead of after the frames before it. -1 with d set (af_diag's line). */
 int cli_check_frame_paths(const char *path, int frames, diag *d);
 
+/* The checks world_load makes that need no scene: --view with --views,
+ * --anim-time, --anim-fps and --two-level on an AFF scene (by its name),
+ * and the camera and drt flags over the view where it is known before
+ * the scene loads (a views file's, read here, or the embedded scene's
+ * default), else what the flags decide alone. saarsim --dry-run. 0, or
+ * -1 with d set, as world_load's message. */
+int world_check(const world_opts *o, diag *d);
 int world_load(world *w, const world_opts *o, diag *d);
 
 /* An AFF world moved to time t: the scene flattened again at t, the view

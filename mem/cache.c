@@ -21,9 +21,8 @@ static size_t mshr_words(uint32_t mshrs)
 	return ((size_t)mshrs + 63) / 64;
 }
 
-int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
+int cache_check(const cache_params *p, const char *what, diag *d)
 {
-	memset(c, 0, sizeof *c);
 	if (p->ways < 1 || p->line_bytes < 1 || p->mshrs < 1 || p->ports < 1)
 		return diag_set(d, "config", 0, 0, "%s: ways, line, mshrs and ports must be >= 1",
 		                what);
@@ -38,11 +37,20 @@ int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
 	if (rp->check && rp->check(p->ways))
 		return diag_set(d, "config", 0, 0, "%s: replacement %s cannot manage %u ways (%s)",
 		                what, rp->name, p->ways, rp->desc);
+	return 0;
+}
+
+int cache_init(cache *c, const cache_params *p, const char *what, diag *d)
+{
+	memset(c, 0, sizeof *c);
+	if (cache_check(p, what, d))
+		return -1;
+	const repl_policy *rp = p->repl ? p->repl : &repl_lru;
 	c->p = *p;
 	c->p.repl = c->rp = rp;
 	c->stamp_hit = rp->stamp_hit;
 	c->stamp_fill = rp->stamp_fill;
-	c->nsets = (uint32_t)(p->size_bytes / per_set);
+	c->nsets = (uint32_t)(p->size_bytes / ((uint64_t)p->ways * p->line_bytes));
 	while (c->hash_bits < 63 && (1ull << c->hash_bits) < c->nsets)
 		c->hash_bits++;
 	c->set_mask = !(c->nsets & (c->nsets - 1)) ? c->nsets - 1 : 0;

@@ -131,6 +131,9 @@ typedef struct cache {
 
 #define CACHE_INVALID UINT64_MAX
 
+/* cache_init's checks of p alone (nothing allocated): 0, or -1 with d
+ * set ("config: WHAT: ..."). */
+int cache_check(const cache_params *p, const char *what, diag *d);
 /* Validates p (sizes >= 1, at least one set) and allocates. Errors name
  * `what` ("memory.l1.kd"). */
 int cache_init(cache *c, const cache_params *p, const char *what, diag *d);

@@ -490,20 +490,20 @@ static const char *level_names(char *buf, size_t n)
  * without them is refused), then the levels below them, each standing on
  * the one its `on` names, the last on nothing. -1 with d set when the
  * names do not stack. */
-static int parse_stack(hier *h, const char *spec, diag *d)
+static int parse_stack(const hlevel **stack, int *nstack, const char *spec, diag *d)
 {
 	char names[128];
-	int l1 = 0;
+	int l1 = 0, n = 0;
 	for (const char *p = spec; *p;) {
 		p += strspn(p, ", ");
 		size_t k = strcspn(p, ", ");
 		if (!k)
 			break;
 		const hlevel *l = NULL;
-		if (k == 2 && !strncmp(p, "l1", 2) && !h->nstack && !l1)
+		if (k == 2 && !strncmp(p, "l1", 2) && !n && !l1)
 			l1 = 1;
-		else if (h->nstack < HIER_MAXLEVELS && (l = hlevel_find(p, k)))
-			h->stack[h->nstack++] = l;
+		else if (n < HIER_MAXLEVELS && (l = hlevel_find(p, k)))
+			stack[n++] = l;
 		else
 			return diag_set(d, "config", 0, 0,
 			                "memory.levels '%s': '%.*s' is no level here (levels: %s; "
@@ -511,9 +511,10 @@ static int parse_stack(hier *h, const char *spec, diag *d)
 			                spec, (int)k, p, level_names(names, sizeof names));
 		p += k;
 	}
-	int ok = l1 && h->nstack > 0 && !h->stack[h->nstack - 1]->on;
-	for (int i = 0; ok && i + 1 < h->nstack; i++)
-		ok = h->stack[i]->on && !strcmp(h->stack[i]->on, h->stack[i + 1]->name);
+	*nstack = n;
+	int ok = l1 && n > 0 && !stack[n - 1]->on;
+	for (int i = 0; ok && i + 1 < n; i++)
+		ok = stack[i]->on && !strcmp(stack[i]->on, stack[i + 1]->name);
 	if (!ok)
 		return diag_set(
 		    d, "config", 0, 0,
@@ -521,6 +522,13 @@ static int parse_stack(hier *h, const char *spec, diag *d)
 		    "standing on the next (vma on sdram), the last on nothing (sdram)",
 		    spec);
 	return 0;
+}
+
+int hier_check_levels(const char *spec, diag *d)
+{
+	const hlevel *stack[HIER_MAXLEVELS];
+	int n;
+	return parse_stack(stack, &n, spec, d);
 }
 
 /* -1 with d set when the image cannot be addressed: no level of the
@@ -547,7 +555,7 @@ int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_
 	hier *h = calloc(1, sizeof *h);
 	if (!h)
 		return diag_set(d, "config", 0, 0, "out of memory");
-	if (parse_stack(h, hp->levels, d) || image_fits(h, hp, image_bytes, d)) {
+	if (parse_stack(h->stack, &h->nstack, hp->levels, d) || image_fits(h, hp, image_bytes, d)) {
 		free(h);
 		return -1;
 	}

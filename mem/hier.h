@@ -46,6 +46,9 @@
  * Returns 0, or -1 with d set. */
 int hier_init(memport *p, eng *e, eng_clock core, const hier_params *hp, uint64_t image_bytes,
               mem_store *store, diag *d);
+/* hier_init's check of the stack hp->levels names ("l1,vma,sdram"),
+ * nothing built: 0, or -1 with d set ("config: memory.levels ..."). */
+int hier_check_levels(const char *spec, diag *d);
 /* Is p a hierarchy model? */
 int hier_is(const memport *p);
 /* Copies every counter; -1 if p is not a hierarchy. */

@@ -143,6 +143,20 @@ uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p, uint64_t line
 	       (p->tag_cache_enabled ? cache_host_bytes(&tp) : 0);
 }
 
+int vma_check(uint64_t sdram_bytes, const vma_params *p, diag *d)
+{
+	if (p->ways < 1 || p->line < 1)
+		return diag_set(d, "config", 0, 0,
+		                "memory.vma.ways and memory.vma.line must be >= 1");
+	cache_params lp = vma_l2_params(sdram_bytes, p), tp = vma_tag_params(p);
+	if (lp.size_bytes == 0)
+		return diag_set(d, "config", 0, 0,
+		                "memory.sdram.mb: on-board memory too small for one VMA set");
+	if (cache_check(&lp, "memory.vma", d))
+		return -1;
+	return p->tag_cache_enabled ? cache_check(&tp, "memory.vma.tag_cache", d) : 0;
+}
+
 int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram_bytes,
              const vma_params *p, mem_store *ms, diag *d)
 {
@@ -152,14 +166,10 @@ int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram
 	v->mi = mi;
 	v->hb = hb;
 	v->p = *p;
-	if (p->ways < 1 || p->line < 1)
-		return diag_set(d, "config", 0, 0,
-		                "memory.vma.ways and memory.vma.line must be >= 1");
+	if (vma_check(sdram_bytes, p, d))
+		return -1;
 	v->meta_set_bytes = p->ways * VMA_META_BYTES_PER_LINE;
 	cache_params lp = vma_l2_params(sdram_bytes, p);
-	if (lp.size_bytes == 0)
-		return diag_set(d, "config", 0, 0,
-		                "memory.sdram.mb: on-board memory too small for one VMA set");
 	if (tcache_init(&v->l2, &lp, ms ? TC_DATA : 0, "memory.vma", d))
 		return -1;
 	v->meta_base = lp.size_bytes;

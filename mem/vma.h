@@ -93,6 +93,10 @@ typedef struct vma {
 	vma_stats s;
 } vma;
 
+/* vma_init's checks of p for sdram_bytes of on-board memory, nothing
+ * allocated: 0, or -1 with d set ("config: ..."). */
+int vma_check(uint64_t sdram_bytes, const vma_params *p, diag *d);
+
 /* Sizes the L2 from sdram_bytes; errors name the memory.vma keys. ms:
  * host memory's bytes (NULL: no data). */
 int vma_init(vma *v, eng *e, eng_clock core, memif *mi, hbus *hb, uint64_t sdram_bytes,

@@ -419,6 +419,7 @@ static const cfg_key keys_src[] = {
  * (units/unit_table.h), built once (keys_init) before any use. */
 #define NSRC  (sizeof keys_src / sizeof keys_src[0])
 #define NKEYS (NSRC - 1 + 3 * UNIT_NKINDS)
+_Static_assert(NKEYS <= CFG_KEYS_MAX, "cfg_origin holds CFG_KEYS_MAX keys");
 static cfg_key keys[NKEYS];
 /* the unit keys' paths and descriptions */
 static char unit_text[UNIT_NKINDS][3][2][96];
@@ -760,6 +761,7 @@ static void unknown_key(char *err, size_t n, const char *p, bool want_section)
 typedef struct loader {
 	saar_config *c;
 	const char *file;
+	cfg_origin *o; /* NULL: not kept */
 	diag *d;
 	int root_map;    /* the root is a mapping: its keys are read */
 	int seen[NKEYS]; /* line where each key was set, 0 = not yet */
@@ -828,6 +830,12 @@ static int check_item(void *ctx, const yl_item *it)
 	L->seen[i] = (int)kn->start_mark.line + 1;
 	if (set_value(L->c, k, (const char *)vn->data.scalar.value, msg, sizeof msg))
 		return err_at(L, vn, "%s%s", msg, "");
+	if (L->o) {
+		L->o->key[i].who = NULL;
+		L->o->key[i].line = (int)vn->start_mark.line + 1;
+		L->o->key[i].col = (int)vn->start_mark.column + 1;
+		L->o->key[i].seq = ++L->o->seq;
+	}
 	return 0;
 }
 
@@ -846,21 +854,30 @@ static void name_from_file(saar_config *c, const char *file)
 
 int cfg_load(saar_config *c, const char *file, diag *d)
 {
+	return cfg_load_at(c, file, NULL, d);
+}
+
+int cfg_load_at(saar_config *c, const char *file, cfg_origin *o, diag *d)
+{
 	cfg_defaults(c);
+	if (o) {
+		memset(o, 0, sizeof *o);
+		o->file = file;
+	}
 	FILE *f;
 	int st = in_open(file, &f);
 	if (st)
 		return diag_set(d, file, 0, 0, "cannot open: %s", in_strerror(st));
-	loader L = {.c = c, .file = file, .d = d};
-	yl_opts o = {.what = "a config",
-	             .syntax = "YAML syntax error",
-	             .max_bytes = CFG_FILE_MAX,
-	             .max_nodes = CFG_NODES_MAX,
-	             .max_depth = YL_DEPTH_MAX,
-	             .check = check_item,
-	             .ctx = &L};
+	loader L = {.c = c, .file = file, .o = o, .d = d};
+	yl_opts yo = {.what = "a config",
+	              .syntax = "YAML syntax error",
+	              .max_bytes = CFG_FILE_MAX,
+	              .max_nodes = CFG_NODES_MAX,
+	              .max_depth = YL_DEPTH_MAX,
+	              .check = check_item,
+	              .ctx = &L};
 	yaml_document_t doc;
-	int rc = yl_load(&doc, f, file, &o, d);
+	int rc = yl_load(&doc, f, file, &yo, d);
 	fclose(f);
 	if (rc)
 		return -1;
@@ -893,6 +910,11 @@ static int trim(char *out, size_t n, const char *b, const char *e)
 
 int cfg_set_as(saar_config *c, const char *who, const char *assignment, diag *d)
 {
+	return cfg_set_at(c, who, assignment, NULL, d);
+}
+
+int cfg_set_at(saar_config *c, const char *who, const char *assignment, cfg_origin *o, diag *d)
+{
 	char key[256], val[512], msg[512];
 	const char *eq = strchr(assignment, '=');
 	if (!eq)
@@ -909,6 +931,12 @@ int cfg_set_as(saar_config *c, const char *who, const char *assignment, diag *d)
 	}
 	if (set_value(c, k, val, msg, sizeof msg))
 		return diag_set(d, who, 0, 0, "%s", msg);
+	if (o) {
+		size_t i = (size_t)(k - keys);
+		o->key[i].who = who;
+		o->key[i].line = o->key[i].col = 0;
+		o->key[i].seq = ++o->seq;
+	}
 	return 0;
 }
 
@@ -917,24 +945,65 @@ int cfg_set(saar_config *c, const char *assignment, diag *d)
 	return cfg_set_as(c, "--set", assignment, d);
 }
 
+/* The key set last among those whose path starts with the n bytes of
+ * name (a key, a section, "memory.vma.tag_cache"), else among those of
+ * the section around it, and so on out; -1 when none was set. */
+static int last_set(const cfg_origin *o, const char *name, size_t n)
+{
+	for (;;) {
+		int best = -1;
+		for (size_t i = 0; i < NKEYS; i++)
+			if (o->key[i].seq && !strncmp(keys[i].path, name, n) &&
+			    (best < 0 || o->key[i].seq > o->key[best].seq))
+				best = (int)i;
+		if (best >= 0)
+			return best;
+		while (n > 0 && name[n - 1] != '.')
+			n--;
+		if (n-- <= 1)
+			return -1;
+	}
+}
+
+int cfg_blame(const cfg_origin *o, const char *msg, diag *d)
+{
+	if (!strncmp(msg, "config: ", 8))
+		msg += 8;
+	int k = o ? last_set(o, msg, strcspn(msg, " :'")) : -1;
+	if (k < 0)
+		return diag_set(d, "config", 0, 0, "%s", msg);
+	if (o->key[k].who)
+		return diag_set(d, o->key[k].who, 0, 0, "%s", msg);
+	return diag_set(d, o->file, o->key[k].line, o->key[k].col, "%s", msg);
+}
+
 int cfg_validate(const saar_config *c, diag *d)
 {
+	return cfg_validate_at(c, NULL, d);
+}
+
+int cfg_validate_at(const saar_config *c, const cfg_origin *o, diag *d)
+{
+	char msg[sizeof d->msg];
 	/* memory.levels set the model and the VMA; a later key must not
-	 * contradict it */
+	 * contradict it (named by the one of the two set last) */
 	const char *l = c->memory.levels;
 	if (*l && (levels_has(l, "fixed") ? c->memory.model != CFG_MEM_FIXED
 	                                  : c->memory.model != CFG_MEM_HIERARCHY ||
-	                                        c->memory.vma.enabled != levels_has(l, "vma")))
-		return diag_set(
-		    d, "config", 0, 0,
-		    "memory.levels '%s' disagrees with memory.model or memory.vma.enabled "
-		    "set after it; set one or the other",
-		    l);
+	                                        c->memory.vma.enabled != levels_has(l, "vma"))) {
+		size_t m = (size_t)(cfg_find("memory.model") - keys),
+		       v = (size_t)(cfg_find("memory.vma.enabled") - keys);
+		snprintf(msg, sizeof msg,
+		         "%s disagrees with memory.levels '%s' set before it; set one or the other",
+		         o && o->key[v].seq > o->key[m].seq ? keys[v].path : keys[m].path, l);
+		return cfg_blame(o, msg, d);
+	}
 	/* sampling.overlap: fitted (negative) is -1, a given share 0 or more */
-	if (c->sampling.overlap < 0 && c->sampling.overlap != -1)
-		return diag_set(d, "config", 0, 0,
-		                "sampling.overlap %g: -1 (fitted) or a share from 0 to 4",
-		                c->sampling.overlap);
+	if (c->sampling.overlap < 0 && c->sampling.overlap != -1) {
+		snprintf(msg, sizeof msg, "sampling.overlap %g: -1 (fitted) or a share from 0 to 4",
+		         c->sampling.overlap);
+		return cfg_blame(o, msg, d);
+	}
 	/* No other key constrains another today. (A packet is an 8 x 8 tile: both
 	 * packet keys' ranges are [8, 8].) chip.stack_depth may be below the
 	 * tree depth: the traversal unit spills the entries beyond it to
@@ -1108,10 +1177,19 @@ void cfg_write_markdown(FILE *f)
 	      "`--sample-rate`, `--unit-tiles`, `--warmup-tiles` and `--kd-cost-trav`,\n"
 	      "`--kd-cost-isect`, `--kd-max-depth`, `--kd-leaf-size`, `--kd-empty-bonus`,\n"
 	      "`--kd-footprint` are `--set` of their keys, with the same checks; among\n"
-	      "them and `--set` the last given wins. Checks that involve several keys\n"
-	      "run after all overrides. Every report embeds the resolved config under\n"
-	      "`\"config\"`, nested along the dotted paths, so a report says exactly what\n"
-	      "was simulated.\n\n"
+	      "them and `--set` the last given wins. `--size` and `--frames` set\n"
+	      "`frame.width`, `frame.height` and `frame.frames` after the file and every\n"
+	      "`--set`, wherever they stand on the command line: they win over those\n"
+	      "keys. saarsim's options of one value (`--config`, `--size`, `--frames`,\n"
+	      "`--out`, `--report`, `--csv`, ...) are given at most once: a second is\n"
+	      "refused (`saarsim: --config given twice`), not a silent override of the\n"
+	      "first. Checks that involve several keys, and the memory's (the stack\n"
+	      "`memory.levels` names, each cache's geometry and replacement policy, the\n"
+	      "SDRAM's and the host bus's parameters, the VMA's on-board cache), run\n"
+	      "after all overrides, before any scene is loaded (also by `--dry-run` and\n"
+	      "by saarsim-replay); their errors name where the value came from (\"Errors\"\n"
+	      "below). Every report embeds the resolved config under `\"config\"`, nested\n"
+	      "along the dotted paths, so a report says exactly what was simulated.\n\n"
 	      "*Provenance*: **published** values come from the SaarCOR description in the\n"
 	      "seed paper (Wald et al., *Realtime Ray Tracing and its use for Interactive\n"
 	      "Global Illumination*, EG 2003 STAR, §4; `seed 002` below); **assumed** values\n"
@@ -1195,6 +1273,19 @@ void cfg_write_markdown(FILE *f)
 	      "--set: expected key=value, got 'chip.rtps'\n"
 	      "--set: unknown key 'chip.rtp' (did you mean 'chip.rtps'?)\n"
 	      "--set: chip.masked_packets: expected true or false, got 'maybe'\n"
+	      "```\n\n"
+	      "The checks after loading name the file's line and column of the value at\n"
+	      "fault, or the flag that set it; a check of several keys names the one set\n"
+	      "last (a default names `config`):\n\n"
+	      "```\n"
+	      "cfg.yaml:3:12: memory.sdram.banks must be a power of two <= 64, got 3\n"
+	      "--set: memory.sdram.row_bytes must be a power of two >= the bus width, got 100\n"
+	      "--set: memory.levels 'fixed,l1,sdram': fixed stands alone (one latency for every "
+	      "access, no levels beside it)\n"
+	      "cfg.yaml:5:18: memory.l1.kd.replacement: unknown replacement policy 'bogus' "
+	      "(registered: lru, plru, fifo)\n"
+	      "--set: memory.vma.enabled disagrees with memory.levels 'l1,vma,sdram' set before "
+	      "it; set one or the other\n"
 	      "```\n",
 	      f);
 }

@@ -206,6 +206,21 @@ const cfg_key *cfg_keys(size_t *n);
 /* The key with this exact dotted path, or NULL. */
 const cfg_key *cfg_find(const char *path);
 
+/* Where each key's value came from, for the checks after loading
+ * (memcfg_validate, cfg_blame): a line and column of the config file, or a command
+ * line flag. The config itself keeps no such record (two configs of the
+ * same values are the same bytes). */
+#define CFG_KEYS_MAX 320
+typedef struct cfg_origin {
+	const char *file; /* the config file read (cfg_load_at's name), or NULL */
+	struct {
+		const char *who; /* the flag that set it ("--set"), NULL: the file or default */
+		int line, col;   /* in the file; 0 with no who: the default */
+		int seq;         /* the order of setting: 0 = never set */
+	} key[CFG_KEYS_MAX];
+	int seq;
+} cfg_origin;
+
 /* ---- loading ---- */
 
 void cfg_defaults(saar_config *c);
@@ -218,8 +233,26 @@ int cfg_set(saar_config *c, const char *assignment, diag *d);
 /* cfg_set on behalf of `who` (a shorthand flag such as --kd-leaf-size):
  * its messages start with who instead of --set. */
 int cfg_set_as(saar_config *c, const char *who, const char *assignment, diag *d);
-/* Checks that involve several keys. Errors: "config: ...". */
+/* cfg_load, cfg_set_as and cfg_validate that keep (and name) where each
+ * value came from: o (NULL: not kept) is reset by cfg_load_at and must
+ * outlive the file name and `who` given (a program's argv does). */
+int cfg_load_at(saar_config *c, const char *file, cfg_origin *o, diag *d);
+int cfg_set_at(saar_config *c, const char *who, const char *assignment, cfg_origin *o, diag *d);
+/* The checks a value passes only with the others (cross-key checks; the
+ * memory's own: memcfg_validate in sim/memconfig.h, which runs this
+ * first). An error is named by where the value at fault came from
+ * (cfg_blame). */
+int cfg_validate_at(const saar_config *c, const cfg_origin *o, diag *d);
+/* cfg_validate_at without origins. Errors: "config: ...". */
 int cfg_validate(const saar_config *c, diag *d);
+/* A check's message msg, which starts with the key or section at fault
+ * ("memory.sdram.banks must be ...", "memory.l1.kd: ..."; a leading
+ * "config: " is dropped), into d named by where that value came from:
+ * "FILE:LINE:COL: msg" (the value in the config file), "--set: msg" (the
+ * flag that set it), or "config: msg" (a default, or o NULL). A section
+ * names the key of it set last, a key never set the one set last around
+ * it. Returns -1. */
+int cfg_blame(const cfg_origin *o, const char *msg, diag *d);
 
 /* Name of an enum key's current value (for reports), NULL if not an enum. */
 const char *cfg_enum_name(const saar_config *c, const char *path);

@@ -14,9 +14,12 @@
  * CSV row. Bad input: one line "saarsim: ..." on stderr, exit status 2, no
  * output file changed (each is written to a temporary file, and all are
  * renamed into place together once every one is complete). --dry-run stops
- * after the checks that need no world (every argument, the config, the
- * output formats, the CSV's columns): exit 0 if they pass, nothing loaded
- * or written (scripts/sweep checks its pass-through arguments with it).
+ * after the checks that need no world (every argument, the config with
+ * every memory check, the output formats, the CSV's columns, and
+ * world_check: the scene and view flags, the camera and drt flags over the
+ * view where it is known before the scene loads): exit 0 if they pass, no
+ * scene loaded (a views file is read), nothing written (scripts/sweep
+ * checks its common arguments with it, once per target).
  * An AFF scene with --anim-fps F makes --frames N an animation: N chip
  * runs at times T + i/F, each checked, each with numbered outputs
  * (run_frame; docs/views.md "Flags").
@@ -35,6 +38,7 @@
 #include "sim/chip.h"
 #include "sim/config.h"
 #include "sim/hostmem.h"
+#include "sim/memconfig.h"
 #include "sim/observe.h"
 #include "sim/report.h"
 #include "sim/reportcheck.h"
@@ -73,8 +77,10 @@ static void usage(FILE *f)
 	       "  --quiet               no progress line (shown on a terminal after 2 s)\n"
 	       "  --host-mem-limit MB   refuse a run estimated to need more host memory\n"
 	       "                        (default SAARSIM_HOST_MEM_MB, else 4096)\n"
-	       "  --dry-run             check the arguments and the config, then exit (no scene\n"
-	       "                        loaded, nothing run or written)\n"
+	       "  --dry-run             every check that needs no scene (arguments, config,\n"
+	       "                        camera and drt flags over a views file's or the\n"
+	       "                        embedded scene's view), then exit (no scene loaded,\n"
+	       "                        nothing run or written)\n"
 	       "  --list-config         print every config key and exit\n"
 	       "  --config-doc          print docs/config.md and exit\n");
 	fputs(world_usage, f);
@@ -158,7 +164,7 @@ static int bare_flag(const char *a)
 
 /* The shorthand flag's "key=value" through the config, the whole value
  * (cfg_set refuses one too long), its messages naming the flag. */
-static int set_key(saar_config *cfg, const char *flag, const char *value, diag *d)
+static int set_key(saar_config *cfg, const char *flag, const char *value, cfg_origin *o, diag *d)
 {
 	const char *key = key_flag(flag);
 	size_t n = strlen(key) + strlen(value) + 2;
@@ -166,7 +172,7 @@ static int set_key(saar_config *cfg, const char *flag, const char *value, diag *
 	if (!kv)
 		return diag_set(d, flag, 0, 0, "out of memory");
 	snprintf(kv, n, "%s=%s", key, value);
-	int rc = cfg_set_as(cfg, flag, kv, d);
+	int rc = cfg_set_at(cfg, flag, kv, o, d);
 	free(kv);
 	return rc;
 }
@@ -216,39 +222,36 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
 			        "saarsim: %s: unknown option or missing value (see --help)\n", f);
 			return DIAG_EXIT;
 		}
-		const char *v = argv[i + 1];
-		if (!strcmp(f, "--config"))
-			a->config = v;
-		else if (!strcmp(f, "--set") || key_flag(f))
-			; /* applied below, in order, once the config file is read */
-		else if (!strcmp(f, "--size"))
-			a->size = v;
-		else if (!strcmp(f, "--out"))
-			a->out = v;
-		else if (!strcmp(f, "--report"))
-			a->report = v;
-		else if (!strcmp(f, "--frames"))
-			a->frames = v;
-		else if (!strcmp(f, "--csv"))
-			a->csv = v;
-		else if (!strcmp(f, "--trace-mem"))
-			a->trace = v;
-		else if (!strcmp(f, "--census"))
-			a->census = v;
-		else if (!strcmp(f, "--host-mem-limit"))
-			a->mem_limit = v;
-		else if (!strcmp(f, "--timeline"))
-			a->timeline = v;
-		else if (!strcmp(f, "--timeline-window"))
-			a->tl_window = v;
-		else if (!strcmp(f, "--timeline-max-events"))
-			a->tl_max = v;
-		else if (!strcmp(f, "--heatmap"))
-			a->heatmap = v;
-		else {
-			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
+		/* saarsim's options of one value: a second would silently drop
+		 * the first (--set and the key flags are applied in order) */
+		const struct {
+			const char *flag, **slot;
+		} one[] = {{"--config", &a->config},
+		           {"--size", &a->size},
+		           {"--out", &a->out},
+		           {"--report", &a->report},
+		           {"--frames", &a->frames},
+		           {"--csv", &a->csv},
+		           {"--trace-mem", &a->trace},
+		           {"--census", &a->census},
+		           {"--host-mem-limit", &a->mem_limit},
+		           {"--timeline", &a->timeline},
+		           {"--timeline-window", &a->tl_window},
+		           {"--timeline-max-events", &a->tl_max},
+		           {"--heatmap", &a->heatmap}};
+		size_t k = 0, n = sizeof one / sizeof *one;
+		while (k < n && strcmp(f, one[k].flag))
+			k++;
+		if (k < n && *one[k].slot) {
+			fprintf(stderr, "saarsim: %s given twice (it takes one value)\n", f);
 			return DIAG_EXIT;
 		}
+		if (k < n)
+			*one[k].slot = argv[i + 1];
+		else if (strcmp(f, "--set") && !key_flag(f)) {
+			fprintf(stderr, "saarsim: %s: unknown option (see --help)\n", f);
+			return DIAG_EXIT;
+		} /* --set and the key flags: applied in order once the file is read */
 		i += 2;
 	}
 	return -1;
@@ -258,7 +261,8 @@ static int parse_args(int argc, char **argv, cli *a, diag *d)
  * *sampling_flag: the last sampling one (--sample-rate, --unit-tiles, ...).
  * The first pass accepted every argument, so this walk sees the same
  * option/value pairs: world flags are skipped by the same parser. */
-static int set_flags(int argc, char **argv, saar_config *cfg, const char **sampling_flag, diag *d)
+static int set_flags(int argc, char **argv, saar_config *cfg, cfg_origin *o,
+                     const char **sampling_flag, diag *d)
 {
 	world_opts skip;
 	world_opts_default(&skip);
@@ -271,9 +275,9 @@ static int set_flags(int argc, char **argv, saar_config *cfg, const char **sampl
 			i++;
 			continue;
 		}
-		if (!strcmp(a, "--set") && cfg_set(cfg, argv[i + 1], d))
+		if (!strcmp(a, "--set") && cfg_set_at(cfg, "--set", argv[i + 1], o, d))
 			return -1;
-		if (key_flag(a) && set_key(cfg, a, argv[i + 1], d))
+		if (key_flag(a) && set_key(cfg, a, argv[i + 1], o, d))
 			return -1;
 		if (key_flag(a) && !strncmp(key_flag(a), "sampling.", 9))
 			*sampling_flag = a;
@@ -347,10 +351,13 @@ static int drt_from_config(const saar_config *cfg, world_opts *wo, diag *d)
 static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uint64_t *limit_mb,
                             diag *d)
 {
-	if (a->config ? cfg_load(cfg, a->config, d) : (cfg_defaults(cfg), 0))
+	/* where each value came from: a later check names it */
+	static cfg_origin origin;
+	memset(&origin, 0, sizeof origin);
+	if (a->config ? cfg_load_at(cfg, a->config, &origin, d) : (cfg_defaults(cfg), 0))
 		return cli_bad("saarsim", d->msg);
 	const char *sampling_flag;
-	if (set_flags(argc, argv, cfg, &sampling_flag, d))
+	if (set_flags(argc, argv, cfg, &origin, &sampling_flag, d))
 		return cli_bad("saarsim", d->msg);
 	/* a sampling flag on a run that does not sample would be ignored
 	 * without a word */
@@ -397,7 +404,7 @@ static int config_from_args(int argc, char **argv, cli *a, saar_config *cfg, uin
 			return cli_bad("saarsim", d->msg);
 		cfg->frame.frames = (int)nframes;
 	}
-	if (cfg_validate(cfg, d))
+	if (memcfg_validate(cfg, &origin, d))
 		return cli_bad("saarsim", d->msg);
 	if (hm_limit_mb(a->mem_limit, limit_mb, d))
 		return cli_bad("saarsim", d->msg);
@@ -801,8 +808,12 @@ int main(int argc, char **argv)
 	if (cli_check_frame_paths(a.out, a.warm ? cfg.frame.frames : nanim, &d) ||
 	    cli_check_frame_paths(a.report, nanim, &d))
 		return cli_bad("saarsim", d.msg);
-	if (a.dry) /* no scene import: the formats now */
-		return check_image_formats(&fa, &d) ? cli_bad("saarsim", d.msg) : 0;
+	/* no scene import: what world_load would refuse without the scene
+	 * (the views file is read), and the formats now */
+	if (a.dry)
+		return world_check(&a.wo, &d) || check_image_formats(&fa, &d)
+		           ? cli_bad("saarsim", d.msg)
+		           : 0;
 	world w;
 	memset(&w, 0, sizeof w);
 	rc = 0;

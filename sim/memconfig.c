@@ -101,8 +101,7 @@ int memcfg_hier(const saar_config *cfg, hier_params *hp, diag *d)
 			return -1;
 		hp->l1[t] = hier_l1_params(cfg, t);
 	}
-	if (M->vma.enabled &&
-	    (known_policy("memory.vma.replacement", M->vma.replacement, d) ||
+	if ((known_policy("memory.vma.replacement", M->vma.replacement, d) ||
 	     known_policy("memory.vma.tag_cache_replacement", M->vma.tag_cache_replacement, d)))
 		return -1;
 	hp->sdram =
@@ -130,6 +129,53 @@ int memcfg_hier(const saar_config *cfg, hier_params *hp, diag *d)
 	hp->vma = hier_vma_params(cfg);
 	hier_hbus_params(cfg, &hp->hbus);
 	return 0;
+}
+
+/* The number of names in the stack list l ("l1, vma,sdram": 3). */
+static int level_count(const char *l)
+{
+	int n = 0;
+	for (const char *p = l + strspn(l, ", "); *p; p += strspn(p, ", ")) {
+		n++;
+		p += strcspn(p, ", ");
+	}
+	return n;
+}
+
+int memcfg_check(const saar_config *cfg, diag *d)
+{
+	const __typeof__(cfg->memory) *M = &cfg->memory;
+	char what[32];
+	hier_params hp;
+	if (memcfg_hier(cfg, &hp, d))
+		return -1;
+	/* fixed is a model of its own: one latency, no levels */
+	int fixed = cfg->memory.model == CFG_MEM_FIXED;
+	if (*M->levels && fixed && level_count(M->levels) != 1)
+		return diag_set(d, "config", 0, 0,
+		                "memory.levels '%s': fixed stands alone (one latency for every "
+		                "access, no levels beside it)",
+		                M->levels);
+	if (!(*M->levels && fixed) && hier_check_levels(hp.levels, d))
+		return -1;
+	for (int t = 0; t < MEM_NTYPES; t++) {
+		snprintf(what, sizeof what, "memory.l1.%s", mem_type_name(t));
+		if (cache_check(&hp.l1[t], what, d))
+			return -1;
+	}
+	sdram_timing st;
+	hbus hb;
+	if (sdram_derive(&hp.sdram, &st, d) || hbus_init(&hb, &hp.hbus, d))
+		return -1;
+	return M->vma.enabled ? vma_check(hp.sdram.bytes, &hp.vma, d) : 0;
+}
+
+int memcfg_validate(const saar_config *cfg, const cfg_origin *o, diag *d)
+{
+	if (cfg_validate_at(cfg, o, d))
+		return -1;
+	diag md;
+	return memcfg_check(cfg, &md) ? cfg_blame(o, md.msg, d) : 0;
 }
 
 int mem_init_hier(memport *p, eng *e, eng_clock core, const saar_config *cfg, uint64_t image_bytes,

@@ -9,6 +9,7 @@
 #include "kernel-ref/jsonw.h"
 #include "kernel-ref/yload.h"
 #include "sim/config.h"
+#include "sim/memconfig.h"
 #include "tests/testutil.h"
 
 /* Loads text from a fresh temporary file; returns cfg_load's result and
@@ -419,7 +420,8 @@ Test(config, overlap_between_fitted_and_none_is_refused)
 	cr_assert_eq(cfg_validate(&c, &d), 0, "%s", d.msg);
 	cr_assert_eq(cfg_set(&c, "sampling.overlap=-0.5", &d), 0, "%s", d.msg);
 	cr_assert_eq(cfg_validate(&c, &d), -1);
-	cr_assert_str_eq(d.msg, "config: sampling.overlap -0.5: -1 (fitted) or a share from 0 to 4");
+	cr_assert_str_eq(d.msg,
+	                 "config: sampling.overlap -0.5: -1 (fitted) or a share from 0 to 4");
 }
 
 /* Runs a writer into a temporary file and returns its text (malloc'd). */
@@ -621,5 +623,82 @@ Test(config, shipped_configs_name_every_fidelity_mode)
 			snprintf(kv, sizeof kv, "fidelity=%s", modes[m]);
 			cr_assert_eq(cfg_set(&c, kv, &d), 0, "%s: %s", kv, d.msg);
 		}
+	}
+}
+
+/* The checks after loading (the memory's builder's, cross-key) name
+ * where the value at fault came from, as the loader's own errors do: the
+ * file's line and column of the value, or the flag that set it; a check
+ * of several keys of a section names the one set last. Catches the
+ * loader keeping no line for a key (the message said "config: ..." and
+ * named neither the file nor the line). */
+Test(config, checks_after_loading_name_the_file_or_the_flag)
+{
+	saar_config c;
+	cfg_origin o;
+	diag d = {{0}};
+	char dir[64], path[128], want[1200];
+	tu_tmpdir(dir, sizeof dir);
+	tu_write(path, sizeof path, dir, "banks.yaml", "name: b\nmemory:\n  sdram: {banks: 3}\n");
+	cr_assert_eq(cfg_load_at(&c, path, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, &o, &d), -1);
+	snprintf(want, sizeof want,
+	         "%s:3:18: memory.sdram.banks must be a power of two <= 64, got 3", path);
+	cr_assert_str_eq(d.msg, want);
+	/* a flag set after the file takes the blame for its own key */
+	cr_assert_eq(cfg_set_at(&c, "--set", "memory.sdram.banks=4", &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set_at(&c, "--set", "memory.sdram.row_bytes=100", &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, &o, &d), -1);
+	cr_assert_str_eq(d.msg, "--set: memory.sdram.row_bytes must be a power of two >= the bus "
+	                        "width, got 100");
+	/* the cache's ways from the file, its policy from a flag: the flag,
+	 * set last, is named */
+	tu_write(path, sizeof path, dir, "ways.yaml", "memory.l1.kd.ways: 3\n");
+	cr_assert_eq(cfg_load_at(&c, path, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set_at(&c, "--set", "memory.l1.kd.replacement=plru", &o, &d), 0);
+	cr_assert_eq(memcfg_validate(&c, &o, &d), -1);
+	cr_assert(!strncmp(d.msg, "--set: memory.l1.kd: replacement plru cannot manage 3 ways", 58),
+	          "%s", d.msg);
+	/* a replacement name no policy has, from the file */
+	tu_write(path, sizeof path, dir, "repl.yaml", "memory:\n  vma:\n    replacement: bogus\n");
+	cr_assert_eq(cfg_load_at(&c, path, &o, &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, &o, &d), -1);
+	snprintf(want, sizeof want, "%s:3:18: memory.vma.replacement: unknown replacement policy",
+	         path);
+	cr_assert(!strncmp(d.msg, want, strlen(want)), "%s", d.msg);
+	/* without origins: "config" */
+	cr_assert_eq(memcfg_validate(&c, NULL, &d), -1);
+	cr_assert(!strncmp(d.msg, "config: memory.vma.replacement: ", 32), "%s", d.msg);
+}
+
+/* memory.levels: fixed is a model alone (one latency for every access);
+ * a stack that names it beside anything is bad input, as the stacks the
+ * hierarchy cannot build are, and is refused by the checks before any
+ * run. Catches a stack that merely holds "fixed" taken for the fixed
+ * model (fixed,garbage ran the fixed model without a word, while
+ * saarsim-replay refused it). */
+Test(config, fixed_level_stands_alone)
+{
+	const char *bad[] = {"fixed,garbage", "fixed,fixed", "fixed,l1,sdram", "l1,fixed"};
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		saar_config c;
+		diag d = {{0}};
+		char kv[64];
+		cfg_defaults(&c);
+		snprintf(kv, sizeof kv, "memory.levels=%s", bad[i]);
+		cr_assert_eq(cfg_set(&c, kv, &d), 0, "%s", d.msg);
+		cr_assert_eq(memcfg_validate(&c, NULL, &d), -1, "%s accepted", bad[i]);
+		cr_assert(!strncmp(d.msg, "config: memory.levels '", 23), "%s", d.msg);
+	}
+	const char *good[] = {"fixed", " fixed ", "l1,sdram", "l1,vma,sdram"};
+	for (size_t i = 0; i < sizeof good / sizeof *good; i++) {
+		saar_config c;
+		diag d = {{0}};
+		char kv[64];
+		cfg_defaults(&c);
+		snprintf(kv, sizeof kv, "memory.levels=%s", good[i]);
+		cr_assert_eq(cfg_set(&c, kv, &d), 0, "%s", d.msg);
+		cr_assert_eq(memcfg_validate(&c, NULL, &d), 0, "%s: %s", good[i], d.msg);
 	}
 }

@@ -527,3 +527,62 @@ Test(memtrace, runaway_records_are_refused)
 		}
 	}
 }
+
+/* saarsim-replay checks the config as saarsim does, with or without
+ * --timing: the functional replay builds the L1s (and the VMA) only, yet
+ * a bad SDRAM geometry, replacement name or stack is bad input all the
+ * same (one line naming where the value came from, exit 2). Catches the
+ * checks left to the timed hierarchy's builder (without --timing these
+ * ran to exit 0, replacement bogus replayed as LRU). */
+Test(memtrace, replay_checks_the_config_without_timing)
+{
+	char dir[64], p[128], cfgf[128], cmd[1024];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/t.gz", dir);
+	write_trace(p, 2000);
+	tu_write(cfgf, sizeof cfgf, dir, "banks.yaml", "memory:\n  sdram:\n    banks: 3\n");
+	const char *bad[][2] = {
+	    {"--set memory.sdram.banks=3", "--set: memory.sdram.banks"},
+	    {"--set memory.sdram.row_bytes=100", "--set: memory.sdram.row_bytes"},
+	    {"--set memory.l1.kd.replacement=bogus", "'bogus'"},
+	    {"--set memory.levels=fixed,junk", "memory.levels 'fixed,junk'"},
+	    {"--config %s", "banks.yaml:3:12: memory.sdram.banks"}};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		char args[256];
+		snprintf(args, sizeof args, bad[k][0], cfgf);
+		for (int timing = 0; timing < 2; timing++) {
+			snprintf(cmd, sizeof cmd, "%s/saarsim-replay %s %s %s >%s/out.txt 2>%s/err",
+			         tu_bin_dir(), args, timing ? "--timing" : "", p, dir, dir);
+			cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+			tu_one_line(dir, "saarsim-replay", bad[k][1]);
+		}
+	}
+}
+
+/* saarsim-replay reads --config before every --set, wherever they stand
+ * (as saarsim does), and refuses a second --config: the file was loaded
+ * where it stood, undoing the --set before it, and a second file dropped
+ * the first. Catches the file loaded in its place on the command line. */
+Test(memtrace, replay_reads_the_config_first_and_once)
+{
+	char dir[64], p[128], a[128], cmd[1024];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(p, sizeof p, "%s/t.gz", dir);
+	write_trace(p, 2000);
+	tu_write(a, sizeof a, dir, "a.yaml", "memory.sdram.banks: 8\n");
+	snprintf(cmd, sizeof cmd,
+	         "%s/saarsim-replay --set memory.sdram.banks=3 --config %s %s >%s/out 2>%s/err",
+	         tu_bin_dir(), a, p, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	tu_one_line(dir, "saarsim-replay", "--set: memory.sdram.banks must be a power of two");
+	snprintf(cmd, sizeof cmd, "%s/saarsim-replay --config %s --config %s %s >%s/out 2>%s/err",
+	         tu_bin_dir(), a, a, p, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	tu_one_line(dir, "saarsim-replay", "--config given twice");
+	/* the --set after the file wins, and a good one replays */
+	snprintf(cmd, sizeof cmd,
+	         "%s/saarsim-replay --set memory.sdram.banks=2 --config %s --json %s/r.json %s "
+	         ">%s/out 2>%s/err",
+	         tu_bin_dir(), a, dir, p, dir, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s: %s", cmd, tu_slurp(dir, "err"));
+}

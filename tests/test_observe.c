@@ -223,7 +223,7 @@ Test(observe, bad_flags_one_line_no_file)
 	    {"--timeline %s/t.json --timeline-window a:9", "--timeline-window"},
 	    {"--timeline %s/t.json --timeline-window -1:9", "--timeline-window"},
 	    {"--timeline %s/t.json --timeline-max-events 0", "--timeline-max-events"},
-	    {"--timeline-window 0:9 --report %s/t.json", "--timeline-window"},
+	    {"--timeline-window 0:9 --csv %s/t.json", "--timeline-window"},
 	    {"--timeline %s/no/such/dir/t.json", "--timeline: "},
 	};
 	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {

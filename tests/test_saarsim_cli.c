@@ -1707,3 +1707,129 @@ Test(saarsim_cli, failed_write_names_the_path_and_the_reason)
 		cr_assert_eq(tu_temps(dir, outs[k][1]), 0, "%s left a temporary", outs[k][0]);
 	}
 }
+
+/* A value that passes its key's range but not the checks after loading
+ * (the memory's geometry, the stack) is refused with where it came from,
+ * the file's line and column or the flag, by the run and by --dry-run
+ * alike; and a stack that names fixed beside other levels is refused,
+ * not run as the fixed model. Catches saarsim's front end dropping the
+ * origins ("saarsim: config: memory.sdram.banks ..." named no file). */
+Test(saarsim_cli, config_checks_after_loading_name_the_file_and_line)
+{
+	char cfgf[512], args[1024];
+	tu_write(cfgf, sizeof cfgf, dir, "banks.yaml",
+	         "name: b\nmemory:\n  sdram:\n    banks: 3\n");
+	const char *runs[] = {"--size 16x16 --out %s/f.png", "--dry-run --out %s/f.png"};
+	for (int r = 0; r < 2; r++) {
+		char run[256];
+		snprintf(run, sizeof run, runs[r], dir);
+		snprintf(args, sizeof args, "%s --config %s", run, cfgf);
+		cr_assert_eq(saarsim(args), 2, "%s", args);
+		one_line_naming("banks.yaml:4:12: memory.sdram.banks must be a power of two");
+		const char *bad[][2] = {
+		    {"--set memory.sdram.row_bytes=100", "--set: memory.sdram.row_bytes"},
+		    {"--set memory.l1.tri.replacement=bogus", "--set: memory.l1.tri.replacement"},
+		    {"--set memory.levels=l1,l1,sdram", "--set: memory.levels 'l1,l1,sdram'"},
+		    {"--set memory.levels=fixed,garbage", "--set: memory.levels 'fixed,garbage'"},
+		    {"--set memory.levels=fixed,l1,sdram", "--set: memory.levels 'fixed,l1,sdram'"},
+		    {"--set memory.hostbus.width_bits=12", "--set: memory.hostbus"}};
+		for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+			snprintf(args, sizeof args, "%s %s", run, bad[k][0]);
+			cr_assert_eq(saarsim(args), 2, "%s", args);
+			one_line_naming(bad[k][1]);
+		}
+		cr_assert_not(exists("f.png"));
+	}
+}
+
+/* --dry-run refuses what the run refuses without its scene: the drt and
+ * camera flags over the view (the embedded scene's, a views file's) or
+ * alone (a scene's own view), --view without --views, --two-level and
+ * --anim-time on a scene that is not AFF; each with the run's own line.
+ * What needs the scene passes (an AFF file not read, a lone --eye on a
+ * procedural scene). Catches --dry-run leaving the world's checks to
+ * world_load (each of these exited 0, and a sweep's pre-check passed
+ * them on to fail at every point). */
+Test(saarsim_cli, dry_run_refuses_what_the_run_refuses)
+{
+	char args[2048];
+	const char *bad[][2] = {
+	    {"--spp 2", "--spp: spp must be 1, 4, 16 or 64"},
+	    {"--view x", "--view: needs --views FILE"},
+	    {"--up 0,0,0", "up must not be the zero vector"},
+	    {"--eye 0,0,0 --lookat 0,0,0", "eye and lookat are the same point"},
+	    {"--two-level", "--two-level: needs an AFF scene"},
+	    {"--anim-time 3", "--anim-time: needs an AFF scene"},
+	    {"--scene spd:tetra:1 --up 0,0,0", "up must not be the zero vector"},
+	    {"--scene spd:tetra:1 --eye 1,2,3 --lookat 1,2,3", "eye and lookat are the same point"},
+	    {"--scene spd:tetra:1 --eye 0,0,0 --lookat 0,1,0 --up 0,2,0", "up is parallel"},
+	    {"--scene spd:tetra:1 --gloss 0.5", "--gloss: gloss must be 0"}};
+	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+		for (int dry = 1; dry >= 0; dry--) {
+			snprintf(args, sizeof args, "%s --size 8x8 --no-check %s --out %s/f.png",
+			         dry ? "--dry-run" : "", bad[k][0], dir);
+			cr_assert_eq(saarsim(args), 2, "%s", args);
+			one_line_naming(bad[k][1]);
+		}
+	}
+	char views[512];
+	snprintf(views, sizeof views, "--views %s/views.yaml", tu_scenes_dir());
+	const char *good[] = {"--scene %s/a.aff --two-level --anim-time 3",
+	                      "--scene spd:tetra:1 --eye 1,2,3", "--scene spd:tetra:1 --up 0,0,1",
+	                      "%s --view conference --spp 4 --fov 50"};
+	for (size_t k = 0; k < sizeof good / sizeof *good; k++) {
+		char g[1024];
+		snprintf(g, sizeof g, good[k], k == 3 ? views : dir);
+		snprintf(args, sizeof args, "--dry-run %s --out %s/f.png", g, dir);
+		cr_assert_eq(saarsim(args), 0, "%s: %s", args, slurp("err"));
+	}
+	cr_assert_not(exists("f.png"));
+}
+
+/* An option of one value given twice is refused, one line naming it: the
+ * first was dropped without a word (--config a.yaml --config b.yaml ran
+ * b alone, a's duplicate key unseen; --out a.png --out b.png wrote b
+ * only). --set and the shorthand key flags stay repeatable, the last
+ * given winning; --size wins over frame.width wherever it stands.
+ * Catches a repeated option overriding the first. */
+Test(saarsim_cli, single_value_option_given_twice_is_refused)
+{
+	char a[512], b[512], args[2048];
+	tu_write(a, sizeof a, dir, "a.yaml", "chip.rtps: 2\nchip.rtps: 3\n");
+	tu_write(b, sizeof b, dir, "b.yaml", "chip.rtps: 2\n");
+	const char *twice[][2] = {{"--config %s/a.yaml --config %s/b.yaml", "--config given twice"},
+	                          {"--out %s/a.png --out %s/b.png", "--out given twice"},
+	                          {"--report %s/a.json --report %s/b.json", "--report given twice"},
+	                          {"--csv %s/a.csv --csv %s/b.csv", "--csv given twice"},
+	                          {"--size 8x8 --size 16x%s16", "--size given twice"},
+	                          {"--frames 1 --frames 2%s", "--frames given twice"}};
+	for (size_t k = 0; k < sizeof twice / sizeof *twice; k++) {
+		for (int dry = 0; dry < 2; dry++) {
+			char t[1024];
+			snprintf(t, sizeof t, twice[k][0], dir, k == 4 || k == 5 ? "" : dir);
+			snprintf(args, sizeof args, "%s--size 8x8 --no-check %s",
+			         dry ? "--dry-run " : "", t);
+			if (k == 4)
+				snprintf(args, sizeof args, "%s--no-check %s",
+				         dry ? "--dry-run " : "", t);
+			cr_assert_eq(saarsim(args), 2, "%s", args);
+			one_line_naming(twice[k][1]);
+		}
+	}
+	cr_assert_not(exists("a.png") || exists("b.png") || exists("a.json") || exists("b.json"));
+	/* repeatable: --set and the key flags, the last given wins */
+	cr_assert_eq(saarsim("--dry-run --set chip.rtps=1 --set chip.rtps=2 --fidelity cycle "
+	                     "--fidelity functional --kd-leaf-size 2 --kd-leaf-size 3"),
+	             0, "%s", slurp("err"));
+	/* --size over frame.width, before or after it */
+	const char *order[] = {"--set frame.width=24 --size 16x8",
+	                       "--size 16x8 --set frame.width=24"};
+	for (int k = 0; k < 2; k++) {
+		snprintf(args, sizeof args,
+		         "--no-check --fidelity functional %s --report %s/r.json", order[k], dir);
+		cr_assert_eq(saarsim(args), 0, "%s: %s", args, slurp("err"));
+		char *r = slurp("r.json");
+		cr_assert_eq(JNUM(r, "config", "frame", "width"), 16, "%s", args);
+		cr_assert_eq(JNUM(r, "config", "frame", "height"), 8, "%s", args);
+	}
+}

@@ -501,7 +501,12 @@ Test(sweep, bad_pass_through_args_fail_first)
 	char dir[256], env[4200], cmd[16384], path[512];
 	tu_tmpdir(dir, sizeof dir);
 	env_prefix(env, sizeof env);
-	const char *bad[] = {"--no-such-flag", "--frames 0", "--set chip.rtps=x"};
+	/* and what the run refuses after loading, or with the scene: a bad
+	 * drt or camera flag, a memory value out of the SDRAM's geometry
+	 * (each point failed with it, exit 1) */
+	const char *bad[] = {"--no-such-flag", "--frames 0", "--set chip.rtps=x",
+	                     "--spp 2",        "--up 0,0,0", "--set memory.sdram.banks=3",
+	                     "--two-level"};
 	for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
 		snprintf(cmd, sizeof cmd,
 		         "%s sh %s/scripts/sweep --out %s/out --scene spd:tetra:1 --size 16x16 "
@@ -886,4 +891,55 @@ Test(sweep, bad_out_and_bad_scene_file_are_one_line, .timeout = 60)
 	}
 	snprintf(path, sizeof path, "%s/o", dir);
 	cr_expect_not(exists(path), "the sweep folder made for a bad scene");
+}
+
+/* The common arguments (--config, those after --) are checked with each
+ * target as its points get them, before the --set values: a bad value in
+ * the config file is named by the file and line, not blamed on the first
+ * --set (whose check ran a tiny run with the config: "sweep: --set
+ * chip.rtps=1: config: memory.sdram.banks ..."), and a flag that needs
+ * the targets' kind of scene (--two-level, AFF) is not refused for the
+ * embedded scene that no point renders. Catches the --set values checked
+ * before the common arguments, and the common arguments checked without
+ * the targets. */
+Test(sweep, common_arguments_are_checked_with_the_targets_first)
+{
+	char dir[256], env[4200], cmd[16384], path[512], sf[300], cfg[300];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	/* a scene file that loads (each is loaded once before the points) */
+	tu_write(sf, sizeof sf, dir, "s.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+	tu_write(cfg, sizeof cfg, dir, "banks3.yaml", "memory:\n  sdram:\n    banks: 3\n");
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/out --config %s --scene %s --size 16x16 "
+	         "--set chip.rtps=1,2 --slurm 2>%s/err",
+	         env, root(), dir, cfg, sf, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	snprintf(path, sizeof path, "%s/err", dir);
+	cr_assert_eq(count_lines(path), 1);
+	cr_assert_eq(count_in(path, "banks3.yaml:3:12: memory.sdram.banks must be"), 1, "%s",
+	             slurp(path));
+	cr_assert_eq(count_in(path, "--set"), 0, "%s", slurp(path));
+	snprintf(path, sizeof path, "%s/out", dir);
+	cr_assert(access(path, F_OK) != 0, "the sweep folder was made");
+	/* --two-level with an AFF target passes the checks (the slurm back
+	 * end runs nothing) */
+	tu_write(sf, sizeof sf, dir, "a.aff",
+	         "v\nfrom 0 0 9\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 8 8\n"
+	         "m\nvertices 3\n0 0 0\n1 0 0\n0 1 0\ntriangles 1\n0 1 2\n");
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/out --scene %s --size 16x16 "
+	         "--set chip.rtps=1,2 --slurm -- --two-level >/dev/null 2>%s/err",
+	         env, root(), dir, sf, dir);
+	snprintf(path, sizeof path, "%s/err", dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s: %s", cmd, slurp(path));
+	/* saarsim takes --report and --csv once: the sweep gives each point
+	 * its own, so one after -- is refused (every point failed with it) */
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/out2 --scene spd:tetra:1 --size 16x16 "
+	         "--set chip.rtps=1,2 --slurm -- --report %s/r.json >/dev/null 2>%s/err",
+	         env, root(), dir, dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	cr_assert_eq(count_lines(path), 1);
+	cr_assert_eq(count_in(path, "sweep: -- --report: "), 1, "%s", slurp(path));
 }

@@ -104,6 +104,7 @@ static void feed(eng *e, void *ctx, uint64_t arg)
 
 typedef struct opts {
 	saar_config cfg;
+	cfg_origin origin; /* where each value came from (memcfg_validate names it) */
 	const char *trace, *json;
 	int timing;
 	uint64_t image_bytes; /* reads at or above it bypass the L1s */
@@ -130,9 +131,11 @@ static int parse_image_bytes(const char *v, uint64_t *out)
 static int parse_args(int argc, char **argv, opts *o, diag *d)
 {
 	cfg_defaults(&o->cfg);
+	memset(&o->origin, 0, sizeof o->origin);
 	o->trace = o->json = NULL;
 	o->timing = 0;
 	o->image_bytes = UINT64_MAX;
+	const char *cfgfile = NULL;
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i];
 		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -147,17 +150,27 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 			return 0;
 		}
 		if (!strcmp(a, "--config") && i + 1 < argc) {
-			if (cfg_load(&o->cfg, argv[++i], d))
-				return fail(d);
+			if (cfgfile) {
+				fprintf(
+				    stderr,
+				    "saarsim-replay: --config given twice (it takes one value)\n");
+				return DIAG_EXIT;
+			}
+			cfgfile = argv[++i];
 		} else if (!strcmp(a, "--set") && i + 1 < argc) {
-			if (cfg_set(&o->cfg, argv[++i], d))
-				return fail(d);
+			i++; /* applied below, once the file is read */
 		} else if (!strcmp(a, "--timing")) {
 			o->timing = 1;
 		} else if (!strcmp(a, "--image-bytes") && i + 1 < argc) {
 			if (parse_image_bytes(argv[++i], &o->image_bytes))
 				return DIAG_EXIT;
 		} else if (!strcmp(a, "--json") && i + 1 < argc) {
+			if (o->json) {
+				fprintf(
+				    stderr,
+				    "saarsim-replay: --json given twice (it takes one value)\n");
+				return DIAG_EXIT;
+			}
 			o->json = argv[++i];
 		} else if (a[0] == '-' && a[1]) {
 			char what[256];
@@ -171,7 +184,19 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 	}
 	if (!o->trace)
 		return usage("no trace given");
-	if (cfg_validate(&o->cfg, d))
+	/* the file first, then every --set in order (as saarsim: a --set
+	 * before --config is not undone by it) */
+	if (cfgfile && cfg_load_at(&o->cfg, cfgfile, &o->origin, d))
+		return fail(d);
+	for (int i = 1; i < argc; i++) { /* the same walk: every option took its value */
+		const char *a = argv[i];
+		if (!strcmp(a, "--set") && cfg_set_at(&o->cfg, "--set", argv[i + 1], &o->origin, d))
+			return fail(d);
+		if (!strcmp(a, "--set") || !strcmp(a, "--config") || !strcmp(a, "--image-bytes") ||
+		    !strcmp(a, "--json"))
+			i++;
+	}
+	if (memcfg_validate(&o->cfg, &o->origin, d))
 		return fail(d);
 	return -1;
 }
