@@ -635,6 +635,14 @@ static int build(builder *b, const scene *s)
 	return 0;
 }
 
+int kd_depth_limit(int max_depth, uint32_t ntris)
+{
+	if (max_depth > 0)
+		return max_depth;
+	long md = lround(8.0 + 1.3 * log2((double)(ntris ? ntris : 1)));
+	return md > 60 ? 60 : (int)md;
+}
+
 int kd_build(kdtree *t, const scene *s, const kd_params *params, diag *d)
 {
 	struct timespec t0, t1;
@@ -661,10 +669,7 @@ int kd_build(kdtree *t, const scene *s, const kd_params *params, diag *d)
 	if (s->ntris == 0 || s->ntris > MAX_TRIS)
 		return diag_set(d, s->name, 0, 0, "kd-tree needs 1 to %u triangles, scene has %u",
 		                MAX_TRIS, s->ntris);
-	if (p.max_depth == 0) {
-		long md = lround(8.0 + 1.3 * log2((double)s->ntris));
-		p.max_depth = md > 60 ? 60 : (int)md;
-	}
+	p.max_depth = kd_depth_limit(p.max_depth, s->ntris);
 	builder b = {.s = s, .p = p, .t = t};
 	t->bounds = s->bounds;
 	int rc = build(&b, s);

@@ -21,6 +21,7 @@
 #include "kernel-ref/atomicfile.h"
 #include "kernel-ref/infile.h"
 #include "sim/hostmem.h"
+#include "sim/memconfig.h"
 #include "sim/report_mem.h"
 #include "sim/reportcheck.h"
 
@@ -543,8 +544,18 @@ static void json_run(jsonw *j, const report_info *ri)
 	const world *w = ri->w;
 	const saar_config *g = &c->cfg;
 	jsonw_kstr(j, "program", "saarsim");
+	/* the config as simulated: the host bus's "the preset's" (0, -1)
+	 * written as the preset's values (they were nowhere in the report) */
+	static saar_config rc; /* large: not on the stack */
+	rc = *g;
+	hbus_params hp;
+	hier_hbus_params(g, &hp);
+	rc.memory.hostbus.width_bits = (int)hp.width_bits;
+	rc.memory.hostbus.clock_mhz = hp.clock_mhz;
+	rc.memory.hostbus.burst = (int)hp.burst;
+	rc.memory.hostbus.latency_ns = hp.latency_ns;
 	jsonw_key(j, "config");
-	cfg_write_json(g, j);
+	cfg_write_json(&rc, j);
 	jsonw_kstr(j, "scene", w->scene_label);
 	jsonw_kstr(j, "view", w->v.name);
 	view_json(j, &w->v);
@@ -560,6 +571,14 @@ static void json_run(jsonw *j, const report_info *ri)
 	kv(j, "nodes", w->kd.nnodes);
 	kv(j, "leaves", w->kd.nleaves);
 	jsonw_kint(j, "depth", w->kd.depth);
+	/* the limit the build used (config kdtree.max_depth, 0: automatic);
+	 * two-level scenes build one tree per object, each with its own */
+	if (w->tl) {
+		jsonw_key(j, "depth_limit");
+		jsonw_null(j);
+	} else {
+		jsonw_kint(j, "depth_limit", kd_depth_limit(g->kdtree.max_depth, w->s.ntris));
+	}
 	kv(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_obj_end(j);
 	kv(j, "memory_image_bytes", w->m.size);

@@ -1222,6 +1222,28 @@ Test(saarsim_cli, outputs_naming_one_file_are_refused)
 	          "%s", out);
 }
 
+/* The report's config is the one simulated: the host bus's "the
+ * preset's" placeholders (width_bits 0, clock_mhz 0, burst 0, latency_ns
+ * -1) were written as given, and the values the PCI preset put in their
+ * place (32 bits, 33 MHz, 32 phases, 300 ns) were nowhere; likewise the
+ * kd-tree's automatic depth limit (kdtree.max_depth 0). */
+Test(saarsim_cli, report_config_is_resolved)
+{
+	char args[1024];
+	snprintf(args, sizeof args,
+	         "--size 16x16 --no-check --config configs/saarcor-vma.yaml --report %s/r.json",
+	         dir);
+	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));
+	const char *r = slurp("r.json");
+	cr_assert_eq(JNUM(r, "config", "memory", "hostbus", "width_bits"), 32);
+	cr_assert_eq(JDBL(r, "config", "memory", "hostbus", "clock_mhz"), 33.0);
+	cr_assert_eq(JNUM(r, "config", "memory", "hostbus", "burst"), 32);
+	cr_assert_eq(JDBL(r, "config", "memory", "hostbus", "latency_ns"), 300.0);
+	double n = JDBL(r, "triangles");
+	cr_assert_eq(JNUM(r, "kdtree", "depth_limit"),
+	             (unsigned long long)lround(8 + 1.3 * log2(n)), "%g triangles", n);
+}
+
 /* Issue 31: a 2-frame VMA run's headline fps is the mean over the cold
  * and the warm frame, several times below the steady state; the mistake
  * caught is a headline that does not say so (the old "cycles per frame
