@@ -273,14 +273,15 @@ static void io_close(struct aiFileIO *io, struct aiFile *af)
  * without complaint, and by the time a NaN reaches scene_finish the line
  * is lost. So the `v` and `vn` lines are checked here, with their line,
  * and so are the `f` lines' indices (obj_face). */
-/* The indices of an `f` line: each v, v/vt, v//vn or v/vt/vn must name an
- * element defined above it (1..count, or -1..-count from the last), as
- * Assimp only says "index out of range" without the line. */
 /* The most corners an `f` line may have: Assimp triangulates a polygon
  * in time quadratic in its corners (16384 took 3 s, a fuzzed 600 KB file
  * of one 300,000-corner face ran into the import's CPU limit). */
 #define OBJ_FACE_MAX 16384
 
+/* The indices of an `f` line: each v, v/vt, v//vn or v/vt/vn must name an
+ * element defined above it (1..count, or -1..-count from the last), as
+ * Assimp only says "index out of range" without the line; and at most
+ * OBJ_FACE_MAX of them. */
 static int obj_face(const char *p, const char *t, const char *eol, const long cnt[3],
                     const char *file, int line, diag *d)
 {

@@ -107,12 +107,12 @@ typedef struct kdtree {
 
 void kd_params_default(kd_params *p);
 
-/* Builds the tree. Fails (diag, -1) only on bad parameters or out of
- * memory; any valid scene builds. */
 /* The depth limit a build of ntris triangles uses: max_depth, or with 0
  * (automatic) 8 + 1.3 log2(ntris), at most 60. */
 int kd_depth_limit(int max_depth, uint32_t ntris);
 
+/* Builds the tree. Fails (diag, -1) only on bad parameters or out of
+ * memory; any valid scene builds. */
 int kd_build(kdtree *t, const scene *s, const kd_params *p, diag *d);
 void kd_free(kdtree *t);
 

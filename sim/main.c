@@ -474,11 +474,6 @@ static int check_image_formats(const cli *a, diag *d)
 	return 0;
 }
 
-/* Every output's temporary is made now, so a missing or read-only folder
- * or a CSV of other columns fails before the run, not after it
- * (af_reserve); so does a census the run cannot keep, before the world
- * loads. An image format the plugin cannot write fails once the scene is
- * imported, still before the run (check_image_formats). */
 /* Path p as the file it names: its folder's real path and its last
  * name (the file itself need not exist yet), into out. */
 static void output_key(const char *p, char *out, size_t n)
@@ -517,6 +512,11 @@ static int outputs_distinct(const cli *a, diag *d)
 	return 0;
 }
 
+/* Every output's temporary is made now, so two outputs on one file, a
+ * missing or read-only folder or a CSV of other columns fails before the
+ * run, not after it (af_reserve); so does a census the run cannot keep,
+ * before the world loads. An image format the plugin cannot write fails
+ * once the scene is imported, still before the run (check_image_formats). */
 static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 {
 	if (outputs_distinct(a, d))
