@@ -390,6 +390,16 @@ int main(int argc, char **argv)
 	char ob[4096], sb[4096];
 	const char *out0 = cli_frame_path(a.out, a.frames, 0, ob, sizeof ob);
 	const char *stats0 = cli_frame_path(a.stats, a.frames, 0, sb, sizeof sb);
+	/* numbered alike, so frame 0's names tell (--out x.ppm --stats x.ppm
+	 * left the stats in x.ppm) */
+	if (out0 && stats0 && strcmp(stats0, "-")) {
+		static char ko[8192], ks[8192];
+		cli_output_key(out0, ko, sizeof ko);
+		cli_output_key(stats0, ks, sizeof ks);
+		if (!strcmp(ko, ks))
+			return cli_bad("rtref", "--out and --stats name the same file (each would "
+			                        "replace the other's)");
+	}
 	if (out0 && img_reserve_file(out0, &d))
 		return cli_bad("rtref", d.msg);
 	if (stats0 && strcmp(stats0, "-") && af_reserve(stats0, "", &d))

@@ -219,7 +219,16 @@ int world_parse_arg(world_opts *o, int argc, char **argv, int *i, diag *d)
 	                                         "--grid-cull"};
 	int takes = 0;
 	for (size_t k = 0; k < sizeof with_value / sizeof *with_value; k++)
-		takes |= strcmp(a, with_value[k]) == 0;
+		if (strcmp(a, with_value[k]) == 0) {
+			takes = 1;
+			/* one value each, given once: a second was a silent
+			 * override of the first (--light repeats; the --kd-* flags
+			 * are saarsim's --set of their keys, the last one winning) */
+			int repeats = !strcmp(a, "--light") || !strncmp(a, "--kd-", 5);
+			if (!repeats && (o->given & (1ull << k)))
+				return diag_set(d, a, 0, 0, "given twice (it takes one value)");
+			o->given |= 1ull << k;
+		}
 	if (!takes) {
 		if (strcmp(a, "--no-lights") == 0 || strcmp(a, "--two-level") == 0) {
 			if (a[2] == 'n' && o->nlights)
@@ -1044,6 +1053,17 @@ const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_
 		dot = path + strlen(path);
 	snprintf(buf, n, "%.*s-%04d%s", (int)(dot - path), path, i, dot);
 	return buf;
+}
+
+void cli_output_key(const char *p, char *out, size_t n)
+{
+	char dirpart[4096], real[4096];
+	const char *slash = strrchr(p, '/');
+	snprintf(dirpart, sizeof dirpart, "%.*s", slash ? (int)(slash - p) + 1 : 1,
+	         slash ? p : ".");
+	if (!realpath(dirpart, real))
+		snprintf(real, sizeof real, "%s", dirpart);
+	snprintf(out, n, "%s/%s", real, slash ? slash + 1 : p);
 }
 
 int cli_check_frame_paths(const char *path, int frames, diag *d)

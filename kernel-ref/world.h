@@ -56,6 +56,7 @@ typedef struct world_opts {
 	int accel;
 	grid_params gp;
 	const char *grid_flag; /* the last --grid-* flag given, or NULL (world_opts_check) */
+	uint64_t given;        /* world_parse_arg's flags of one value seen so far (a bit each) */
 } world_opts;
 
 enum { WORLD_ACCEL_KD, WORLD_ACCEL_GRID };
@@ -150,6 +151,10 @@ const char *cli_frame_path(const char *path, int frames, int i, char *buf, size_
  * folder, device or FIFO), so a frame's output fails before any frame runs
  * instead of after the frames before it. -1 with d set (af_diag's line). */
 int cli_check_frame_paths(const char *path, int frames, diag *d);
+/* Output path p as the file it names, into out: its folder's real path
+ * and its last name (the file need not exist yet), so two spellings of
+ * one file ("a.csv", "./a.csv", a link to the folder) compare equal. */
+void cli_output_key(const char *p, char *out, size_t n);
 
 /* The checks world_load makes that need no scene: --view with --views,
  * --anim-time, --anim-fps and --two-level on an AFF scene (by its name),

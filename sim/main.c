@@ -474,53 +474,75 @@ static int check_image_formats(const cli *a, diag *d)
 	return 0;
 }
 
-/* Path p as the file it names: its folder's real path and its last
- * name (the file itself need not exist yet), into out. */
-static void output_key(const char *p, char *out, size_t n)
-{
-	char dirpart[4096], real[4096];
-	const char *slash = strrchr(p, '/');
-	snprintf(dirpart, sizeof dirpart, "%.*s", slash ? (int)(slash - p) + 1 : 1,
-	         slash ? p : ".");
-	if (!realpath(dirpart, real))
-		snprintf(real, sizeof real, "%s", dirpart);
-	snprintf(out, n, "%s/%s", real, slash ? slash + 1 : p);
-}
-
 /* Two output options naming one file: each writes its temporary and the
  * last rename wins, so one output is silently lost (--csv and --census
- * on one path kept the CSV alone). */
-static int outputs_distinct(const cli *a, diag *d)
+ * on one path kept the CSV alone). Every file a run writes counts: an
+ * animation's numbered frames and reports (nout, nrep of them) and the
+ * files --heatmap writes into its folder (--out hm/cycles.png was
+ * replaced by the heat map). */
+static int outputs_distinct(const cli *a, int nout, int nrep, diag *d)
 {
-	const char *flag[] = {"--out",    "--csv",       "--report",
-	                      "--census", "--trace-mem", "--timeline"};
-	const char *path[] = {a->out, a->csv, a->report, a->census, a->trace, a->timeline};
-	enum { N = sizeof path / sizeof *path };
-	static char key[N][8192];
-	for (int i = 0; i < N; i++) {
-		if (!path[i] || !strcmp(path[i], "-"))
-			continue;
-		output_key(path[i], key[i], sizeof key[i]);
-		for (int j = 0; j < i; j++)
-			if (path[j] && strcmp(path[j], "-") && !strcmp(key[i], key[j]))
-				return diag_set(
-				    d, path[i], 0, 0,
-				    "%s and %s name the same file (each would replace the "
-				    "other's)",
-				    flag[j], flag[i]);
+	typedef struct {
+		const char *flag;
+		char key[8192];
+	} ofile;
+	int nheat = 0;
+	while (a->heatmap && obs_heat_files[nheat])
+		nheat++;
+	size_t cap = (size_t)nout + (size_t)nrep + 4 + (size_t)nheat, n = 0;
+	ofile *f = malloc(cap * sizeof *f);
+	if (!f)
+		return diag_set(d, "saarsim", 0, 0, "out of memory");
+	char buf[8192];
+	/* in the order of the options' listing: --out, --csv, --report,
+	 * --census, --trace-mem, --timeline, --heatmap */
+	const char *one[][2] = {{"--csv", a->csv},
+	                        {"--census", a->census},
+	                        {"--trace-mem", a->trace},
+	                        {"--timeline", a->timeline}};
+	for (int i = 0; a->out && strcmp(a->out, "-") && i < nout; i++) {
+		f[n].flag = "--out";
+		cli_output_key(cli_frame_path(a->out, nout, i, buf, sizeof buf), f[n++].key,
+		               sizeof f[0].key);
 	}
-	return 0;
+	for (int k = 0; k < 4; k++) {
+		if (k == 1) /* --report after --csv */
+			for (int i = 0; a->report && strcmp(a->report, "-") && i < nrep; i++) {
+				f[n].flag = "--report";
+				cli_output_key(cli_frame_path(a->report, nrep, i, buf, sizeof buf),
+				               f[n++].key, sizeof f[0].key);
+			}
+		if (one[k][1] && strcmp(one[k][1], "-")) {
+			f[n].flag = one[k][0];
+			cli_output_key(one[k][1], f[n++].key, sizeof f[0].key);
+		}
+	}
+	for (int i = 0; i < nheat; i++) {
+		f[n].flag = "--heatmap";
+		heat_file(buf, sizeof buf, a->heatmap, i);
+		cli_output_key(buf, f[n++].key, sizeof f[0].key);
+	}
+	int rc = 0;
+	for (size_t i = 0; i < n && !rc; i++)
+		for (size_t j = 0; j < i && !rc; j++)
+			if (!strcmp(f[i].key, f[j].key))
+				rc =
+				    diag_set(d, f[i].key, 0, 0,
+				             "%s and %s name the same file (each would replace the "
+				             "other's)",
+				             f[j].flag, f[i].flag);
+	free(f);
+	return rc;
 }
 
-/* Every output's temporary is made now, so two outputs on one file, a
- * missing or read-only folder or a CSV of other columns fails before the
- * run, not after it (af_reserve); so does a census the run cannot keep,
- * before the world loads. An image format the plugin cannot write fails
- * once the scene is imported, still before the run (check_image_formats). */
+/* Every output's temporary is made now (two outputs on one file were
+ * refused before: outputs_distinct), so a missing or read-only folder or
+ * a CSV of other columns fails before the run, not after it (af_reserve);
+ * so does a census the run cannot keep, before the world loads. An image
+ * format the plugin cannot write fails once the scene is imported, still
+ * before the run (check_image_formats). */
 static int reserve_outputs(const cli *a, const saar_config *cfg, diag *d)
 {
-	if (outputs_distinct(a, d))
-		return -1;
 	if (a->out && img_reserve_file(a->out, d))
 		return -1;
 	if (a->csv && (report_csv_check(a->csv, d) || af_reserve(a->csv, "", d)))
@@ -802,7 +824,8 @@ int main(int argc, char **argv)
 	char ob[4096], rb[4096];
 	fa.out = cli_frame_path(a.out, a.warm ? cfg.frame.frames : nanim, 0, ob, sizeof ob);
 	fa.report = cli_frame_path(a.report, nanim, 0, rb, sizeof rb);
-	if (reserve_outputs(&fa, &cfg, &d))
+	if (outputs_distinct(&a, a.warm ? cfg.frame.frames : nanim, nanim, &d) ||
+	    reserve_outputs(&fa, &cfg, &d))
 		return cli_bad("saarsim", d.msg);
 	/* the other frames' numbered files too, before any frame runs */
 	if (cli_check_frame_paths(a.out, a.warm ? cfg.frame.frames : nanim, &d) ||

@@ -136,6 +136,7 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 	o->timing = 0;
 	o->image_bytes = UINT64_MAX;
 	const char *cfgfile = NULL;
+	int image_bytes_given = 0;
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i];
 		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -162,6 +163,12 @@ static int parse_args(int argc, char **argv, opts *o, diag *d)
 		} else if (!strcmp(a, "--timing")) {
 			o->timing = 1;
 		} else if (!strcmp(a, "--image-bytes") && i + 1 < argc) {
+			if (image_bytes_given++) {
+				fprintf(stderr,
+				        "saarsim-replay: --image-bytes given twice (it takes one "
+				        "value)\n");
+				return DIAG_EXIT;
+			}
 			if (parse_image_bytes(argv[++i], &o->image_bytes))
 				return DIAG_EXIT;
 		} else if (!strcmp(a, "--json") && i + 1 < argc) {
