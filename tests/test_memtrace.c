@@ -430,6 +430,7 @@ Test(memtrace, replay_tool)
 	const char *bad[] = {"--image-bytes '' %s",
 	                     "--image-bytes -1 %s",
 	                     "--image-bytes 99999999999999999999 %s",
+	                     "--image-bytes 5 --image-bytes 6 %s", /* the second won */
 	                     "--bogus %s",
 	                     "%s %s",
 	                     ""};

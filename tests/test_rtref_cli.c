@@ -479,3 +479,20 @@ Test(rtref_cli, numbered_outputs_are_checked_before_the_first_frame)
 	cr_assert(exists("h-0000.png"));
 	cr_assert_neq(strcmp(slurp("h-0001.png"), "old"), 0);
 }
+
+/* rtref's --out and --stats naming one file (the stats replaced the
+ * frame: x.ppm held JSON), and a flag of one value given twice (the
+ * second silently won), are one line each, exit 2, before the render. */
+Test(rtref_cli, one_file_for_two_outputs_and_flags_given_twice_are_refused)
+{
+	char args[1024];
+	snprintf(args, sizeof args, "--size 16x16 --out %s/x.ppm --stats %s/./x.ppm", dir, dir);
+	cr_assert_eq(rtref(args), 2);
+	one_line_naming("--out and --stats name the same file");
+	cr_assert_not(exists("x.ppm"));
+	cr_assert_eq(rtref("--size 16x16 --scene spd:balls:1 --scene spd:balls:2"), 2);
+	one_line_naming("--scene: given twice");
+	cr_assert_eq(rtref("--size 16x16 --light 1,1,1 --light 2,2,2 --kd-leaf-size 2 "
+	                   "--kd-leaf-size 3"),
+	             0, "%s", slurp("err"));
+}

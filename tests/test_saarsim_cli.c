@@ -1211,6 +1211,25 @@ Test(saarsim_cli, outputs_naming_one_file_are_refused)
 	         dir);
 	cr_assert_eq(saarsim(args), 2);
 	one_line_naming("--report and --timeline name the same file");
+	/* the files --heatmap writes into its folder, and an animation's
+	 * numbered ones, count (--out hm/cycles.png was the heat map) */
+	snprintf(args, sizeof args,
+	         "--size 16x16 --no-check --heatmap %s/hm --out %s/hm/cycles.png", dir, dir);
+	cr_assert_eq(saarsim(args), 2);
+	one_line_naming("--out and --heatmap name the same file");
+	char aff[512], big[2048];
+	snprintf(aff, sizeof aff, "%s/bart_robots_aff/aff/Robot.aff", tu_scenes_dir());
+	if (access(aff, R_OK) == 0) {
+		snprintf(big, sizeof big,
+		         "--scene %s --anim-fps 2 --frames 2 --size 16x16 --report %s/x.json --csv "
+		         "%s/x-0001.json",
+		         aff, dir, dir);
+		cr_assert_eq(saarsim(big), 2);
+		one_line_naming("--csv and --report name the same file");
+	}
+	/* a flag of one value, given twice: the second no silent override */
+	cr_assert_eq(saarsim("--size 16x16 --fov 40 --fov 50 --dry-run"), 2);
+	one_line_naming("--fov: given twice");
 	snprintf(args, sizeof args,
 	         "--size 16x16 --set chip.rtps=1 --set chip.threads_per_rtp=1 --eye 0,0,-100 "
 	         "--lookat 0,0,-200 --no-check --report %s/r.json --csv %s/x.csv",

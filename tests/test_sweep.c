@@ -943,3 +943,72 @@ Test(sweep, common_arguments_are_checked_with_the_targets_first)
 	cr_assert_eq(count_lines(path), 1);
 	cr_assert_eq(count_in(path, "sweep: -- --report: "), 1, "%s", slurp(path));
 }
+
+/* Checks that judged a point without what the sweep gives it: the common
+ * arguments' dry runs ran without the swept values (`-- --grid-lambda 3`
+ * with `--set chip.accel=grid` was refused, though every point takes
+ * it), and the scene file's load check ran with --config alone (a config
+ * of a 1 MB board refused a 2 MB scene that every swept
+ * memory.sdram.mb fits). Also: a cold animation after `--` is refused (a
+ * point keeps one report; its collection failed), and the sweep's copy
+ * of saarsim has the image plugin beside it (textured scenes failed). */
+Test(sweep, checks_take_the_swept_values_and_no_config_for_the_scene)
+{
+	char dir[256], env[4200], cmd[16384], path[512], sf[300], cfg[300];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	/* the build's own saarsim (env_prefix's copy has no plugin beside it) */
+	char bin[4096];
+	const char *b = tu_bin_dir();
+	if (b[0] == '/')
+		snprintf(bin, sizeof bin, "%s", b);
+	else
+		cr_assert(getcwd(bin, 3000) && snprintf(bin + strlen(bin), 1000, "/%s", b) > 0);
+	snprintf(cmd, sizeof cmd,
+	         "SAARSIM='%s/saarsim' sh %s/scripts/sweep --out %s/g --size 16x16 --scene "
+	         "spd:tetra:1 --set chip.accel=grid --set chip.rtps=1,2 --slurm -- --grid-lambda 3 "
+	         ">/dev/null 2>%s/err",
+	         bin, root(), dir, dir);
+	snprintf(path, sizeof path, "%s/err", dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s: %s", cmd, slurp(path));
+	snprintf(path, sizeof path, "%s/g/bin/libsaar-oiio.so", dir);
+	cr_assert(exists(path), "no image plugin beside the sweep's saarsim");
+	/* the kd value's points would refuse the grid flag: named with it */
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/g2 --size 16x16 --scene spd:tetra:1 "
+	         "--set chip.accel=grid,kd --slurm -- --grid-lambda 3 >/dev/null 2>%s/err",
+	         env, root(), dir, dir);
+	snprintf(path, sizeof path, "%s/err", dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	cr_assert_eq(count_lines(path), 1);
+	cr_assert_eq(count_in(path, "--set chip.accel=kd)"), 1, "%s", slurp(path));
+	/* a scene of 20,000 triangles (about 2 MB of image) against a 1 MB
+	 * board in the config, each swept size room enough */
+	snprintf(sf, sizeof sf, "%s/big.obj", dir);
+	FILE *f = fopen(sf, "w");
+	cr_assert(f);
+	for (int i = 0; i < 101; i++)
+		for (int j = 0; j < 101; j++)
+			fprintf(f, "v %d %d %d\n", i, j, (i * j) % 7);
+	for (int i = 0; i < 100; i++)
+		for (int j = 0; j < 100; j++) {
+			int a = i * 101 + j + 1;
+			fprintf(f, "f %d %d %d\nf %d %d %d\n", a, a + 1, a + 101, a + 1, a + 102,
+			        a + 101);
+		}
+	fclose(f);
+	tu_write(cfg, sizeof cfg, dir, "small.yaml", "memory:\n  sdram:\n    mb: 1\n");
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/b --config %s --scene %s --size 16x16 "
+	         "--set memory.sdram.mb=32,64 --slurm >/dev/null 2>%s/err",
+	         env, root(), dir, cfg, sf, dir);
+	cr_assert_eq(tu_run(cmd), 0, "%s: %s", cmd, slurp(path));
+	snprintf(cmd, sizeof cmd,
+	         "%s sh %s/scripts/sweep --out %s/a --scene spd:tetra:1 --size 16x16 "
+	         "--set chip.rtps=1,2 --slurm -- --anim-fps 2 >/dev/null 2>%s/err",
+	         env, root(), dir, dir);
+	cr_assert_eq(tu_run(cmd), 2, "%s", cmd);
+	cr_assert_eq(count_lines(path), 1);
+	cr_assert_eq(count_in(path, "sweep: -- --anim-fps: a cold animation"), 1, "%s",
+	             slurp(path));
+}
