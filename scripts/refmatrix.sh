@@ -55,7 +55,10 @@ usage() {
 run() {
 	name=$1
 	shift
-	if ! "$BIN" --size "$SIZE" --world-cache "$OUT/wc" "$@" --report "$OUT/$name.json" \
+	# saarsim takes --size once: a run that names its own keeps it
+	rsize=$SIZE
+	for a in "$@"; do [ "$a" != --size ] || rsize=; done
+	if ! "$BIN" ${rsize:+--size "$rsize"} --world-cache "$OUT/wc" "$@" --report "$OUT/$name.json" \
 		>"$OUT/$name.txt" 2>&1; then
 		echo "refmatrix: $name failed (see $OUT/$name.txt)" >&2
 		FAIL=1
