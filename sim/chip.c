@@ -68,7 +68,7 @@ static const unit_route pipeline_two_level = {
     .triangles = isu_next,
     .traverse = tu_step,
     .finish = tlu_finish,
-    .object = tu_begin,
+    .object = tu_begin_object,
     .shade = rgs_finish,
 };
 

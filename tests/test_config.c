@@ -672,6 +672,18 @@ Test(config, checks_after_loading_name_the_file_or_the_flag)
 	cr_assert(!strncmp(d.msg, "config: memory.vma.replacement: ", 32), "%s", d.msg);
 }
 
+/* memcfg_validate of the default config with memory.levels set to v
+ * (cfg_set takes it: the stack is checked after loading), d its error. */
+static int levels_check(const char *v, diag *d)
+{
+	saar_config c;
+	char kv[64];
+	cfg_defaults(&c);
+	snprintf(kv, sizeof kv, "memory.levels=%s", v);
+	cr_assert_eq(cfg_set(&c, kv, d), 0, "%s", d->msg);
+	return memcfg_validate(&c, NULL, d);
+}
+
 /* memory.levels: fixed is a model alone (one latency for every access);
  * a stack that names it beside anything is bad input, as the stacks the
  * hierarchy cannot build are, and is refused by the checks before any
@@ -682,23 +694,13 @@ Test(config, fixed_level_stands_alone)
 {
 	const char *bad[] = {"fixed,garbage", "fixed,fixed", "fixed,l1,sdram", "l1,fixed"};
 	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
-		saar_config c;
 		diag d = {{0}};
-		char kv[64];
-		cfg_defaults(&c);
-		snprintf(kv, sizeof kv, "memory.levels=%s", bad[i]);
-		cr_assert_eq(cfg_set(&c, kv, &d), 0, "%s", d.msg);
-		cr_assert_eq(memcfg_validate(&c, NULL, &d), -1, "%s accepted", bad[i]);
+		cr_assert_eq(levels_check(bad[i], &d), -1, "%s accepted", bad[i]);
 		cr_assert(!strncmp(d.msg, "config: memory.levels '", 23), "%s", d.msg);
 	}
 	const char *good[] = {"fixed", " fixed ", "l1,sdram", "l1,vma,sdram"};
 	for (size_t i = 0; i < sizeof good / sizeof *good; i++) {
-		saar_config c;
 		diag d = {{0}};
-		char kv[64];
-		cfg_defaults(&c);
-		snprintf(kv, sizeof kv, "memory.levels=%s", good[i]);
-		cr_assert_eq(cfg_set(&c, kv, &d), 0, "%s", d.msg);
-		cr_assert_eq(memcfg_validate(&c, NULL, &d), 0, "%s: %s", good[i], d.msg);
+		cr_assert_eq(levels_check(good[i], &d), 0, "%s: %s", good[i], d.msg);
 	}
 }

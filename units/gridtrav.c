@@ -46,7 +46,7 @@ void gtu_begin(thr_ctx *t)
 		t->env->route.finish(t);
 		return;
 	}
-	uint64_t enter = tu_enter(t);
+	uint64_t enter = tu_enter(t, 1);
 	if (!enter)
 		return;
 	grid_walk_begin(&t->grid->w, v->grid, &t->ts, t->p, enter);

@@ -23,17 +23,13 @@ static void cone_built(eng *e, void *ctx, uint64_t arg)
 	tu_step(ctx);
 }
 
-uint64_t tu_enter(thr_ctx *t)
+uint64_t tu_enter(thr_ctx *t, int scene_box)
 {
 	uint64_t enter =
 	    pkt_trav_begin_fp(&t->ts, t->p, thr_img(t), t->stack, PKT_STACK_MAX, &t->env->prec);
 	t->sp = 0;
 	t->steps = 0;
-	/* the scene box: inside an instance of a two-level scene (the
-	 * packet is the transformation unit's, thr_tl.q) this is an object's
-	 * box, whose misses are no scene-box misses (the top level counts
-	 * those at its root, toplevel.c node_fetched) */
-	if (!(t->tl && t->p == &t->tl->q)) {
+	if (scene_box) { /* not an object's box, whose misses are no scene's */
 		thr_count(t, C_BOX_MISS_RAYS, (uint64_t)thr_pop(t->p->valid & ~enter));
 		thr_count(t, C_BOX_MISS_PACKETS, (uint64_t)!enter);
 	}
@@ -42,10 +38,12 @@ uint64_t tu_enter(thr_ctx *t)
 	return enter;
 }
 
-void tu_begin(thr_ctx *t)
+/* tu_begin and tu_begin_object: the packet enters the tree whose box is
+ * the scene's (scene_box 1) or an object's (0). */
+static void begin(thr_ctx *t, int scene_box)
 {
 	thr_env *v = t->env;
-	uint64_t enter = tu_enter(t);
+	uint64_t enter = tu_enter(t, scene_box);
 	if (!enter)
 		return;
 	if (v->cone_cull) {
@@ -57,6 +55,16 @@ void tu_begin(thr_ctx *t)
 		return;
 	}
 	tu_step(t);
+}
+
+void tu_begin(thr_ctx *t)
+{
+	begin(t, 1);
+}
+
+void tu_begin_object(thr_ctx *t)
+{
+	begin(t, 0);
 }
 
 /* A stack entry in memory (THR_STACK_ENTRY_BYTES): node index (4), ray

@@ -30,11 +30,15 @@
 
 /* The thread's packet enters the ray-tracing core. */
 void tu_begin(thr_ctx *t);
-/* The packet's rays clipped to the scene's box (the traversal state set
- * up, the box misses counted); none entered: the packet went on to
- * shading (route.finish) and 0 is returned. The kd and grid traversal
- * units both start this way. */
-uint64_t tu_enter(thr_ctx *t);
+/* The same inside an instance of a two-level scene (route.object): the
+ * tree is an object's, whose box misses are no scene-box misses (the top
+ * level counts those at its root, toplevel.c node_fetched). */
+void tu_begin_object(thr_ctx *t);
+/* The packet's rays clipped to its tree's box (the traversal state set
+ * up; with scene_box, the box is the scene's and its misses are counted);
+ * none entered: the packet went on to shading (route.finish) and 0 is
+ * returned. The kd and grid traversal units both start this way. */
+uint64_t tu_enter(thr_ctx *t, int scene_box);
 /* The next traversal step (after a leaf's triangles, or a node). */
 void tu_step(thr_ctx *t);
 
