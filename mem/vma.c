@@ -143,6 +143,16 @@ uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p, uint64_t line
 	       (p->tag_cache_enabled ? cache_host_bytes(&tp) : 0);
 }
 
+int vma_check_params(const vma_params *p, diag *d)
+{
+	if (p->ways < 1 || p->line < 1)
+		return diag_set(d, "config", 0, 0,
+		                "memory.vma.ways and memory.vma.line must be >= 1");
+	/* on board memory of exactly one set with its meta-data */
+	uint64_t one_set = (uint64_t)p->ways * (p->line + VMA_META_BYTES_PER_LINE);
+	return vma_check(one_set, p, d);
+}
+
 int vma_check(uint64_t sdram_bytes, const vma_params *p, diag *d)
 {
 	if (p->ways < 1 || p->line < 1)

@@ -96,6 +96,11 @@ typedef struct vma {
 /* vma_init's checks of p for sdram_bytes of on-board memory, nothing
  * allocated: 0, or -1 with d set ("config: ..."). */
 int vma_check(uint64_t sdram_bytes, const vma_params *p, diag *d);
+/* vma_check's checks that need no on-board size: the ways, the line, the
+ * replacement policies and the tag cache's geometry. For a config whose
+ * stack has no VMA: its keys are checked all the same, so a bad value is
+ * refused when it is set, not later when the VMA is turned on. */
+int vma_check_params(const vma_params *p, diag *d);
 
 /* Sizes the L2 from sdram_bytes; errors name the memory.vma keys. ms:
  * host memory's bytes (NULL: no data). */

@@ -167,7 +167,9 @@ int memcfg_check(const saar_config *cfg, diag *d)
 	hbus hb;
 	if (sdram_derive(&hp.sdram, &st, d) || hbus_init(&hb, &hp.hbus, d))
 		return -1;
-	return M->vma.enabled ? vma_check(hp.sdram.bytes, &hp.vma, d) : 0;
+	/* an unused VMA's keys too (the host bus's are checked above) */
+	return M->vma.enabled ? vma_check(hp.sdram.bytes, &hp.vma, d)
+	                      : vma_check_params(&hp.vma, d);
 }
 
 int memcfg_validate(const saar_config *cfg, const cfg_origin *o, diag *d)

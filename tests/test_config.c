@@ -704,3 +704,42 @@ Test(config, fixed_level_stands_alone)
 		cr_assert_eq(levels_check(good[i], &d), 0, "%s: %s", good[i], d.msg);
 	}
 }
+
+/* The VMA's own keys are checked when the stack has no VMA, as the host
+ * bus's are: a tag cache geometry the VMA could not build is refused when
+ * it is set, not in the later run that turns the VMA on. The on-board
+ * size is not held against an unused VMA (a small board without it is a
+ * fine config). Catches the check running only with memory.vma.enabled
+ * (plru over 3 tag-cache ways passed). */
+Test(config, unused_vma_keys_are_checked)
+{
+	saar_config c;
+	diag d = {{0}};
+	cfg_defaults(&c);
+	cr_assert(!c.memory.vma.enabled, "the default config has no VMA");
+	cr_assert_eq(cfg_set(&c, "memory.vma.tag_cache_ways=3", &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, NULL, &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "memory.vma.tag_cache_replacement=plru", &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, NULL, &d), -1, "plru over 3 tag-cache ways accepted");
+	cr_assert(
+	    !strncmp(d.msg, "config: memory.vma.tag_cache: replacement plru cannot manage 3", 62),
+	    "%s", d.msg);
+	/* the same with the VMA on */
+	cr_assert_eq(cfg_set(&c, "memory.vma.enabled=true", &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, NULL, &d), -1);
+	/* the on-board cache's own policy, VMA off */
+	cfg_defaults(&c);
+	cr_assert_eq(cfg_set(&c, "memory.vma.ways=3", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "memory.vma.replacement=plru", &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, NULL, &d), -1, "plru over 3 VMA ways accepted");
+	cr_assert(!strncmp(d.msg, "config: memory.vma: replacement plru cannot manage 3", 51), "%s",
+	          d.msg);
+	/* a board too small for one VMA set is fine while the VMA is off */
+	cfg_defaults(&c);
+	cr_assert_eq(cfg_set(&c, "memory.sdram.mb=1", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "memory.vma.line=65536", &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "memory.vma.ways=32", &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, NULL, &d), 0, "%s", d.msg);
+	cr_assert_eq(cfg_set(&c, "memory.vma.enabled=true", &d), 0, "%s", d.msg);
+	cr_assert_eq(memcfg_validate(&c, NULL, &d), -1, "1 MB of 2 MB sets accepted with the VMA");
+}
