@@ -285,6 +285,34 @@ Test(sweep, sshloginfile_backend, .timeout = 120)
 	cr_assert_eq(count_lines(path), 3, "a header and two points");
 }
 
+/* The sweep takes the sizes saarsim takes and refuses the others, so a
+ * sweep refuses nothing a single run would take. Catches the sweep's own
+ * --size check drifting from cli_parse_size (it refused 064x048 and
+ * 64X48, which saarsim takes). */
+Test(sweep, size_taken_as_saarsim_takes_it)
+{
+	char dir[256], env[4200], cmd[16384];
+	tu_tmpdir(dir, sizeof dir);
+	env_prefix(env, sizeof env);
+	const char *sizes[] = {"064X048", "64x48",   "1x16384", "000016384x1", "0x8",
+	                       "8x00",    "16385x8", " 64x48",  "64x48 ",      "+64x48",
+	                       "1xx1",    "64x",     "x64",     "0000000001x1"};
+	int taken = 0;
+	for (size_t i = 0; i < sizeof sizes / sizeof *sizes; i++) {
+		snprintf(cmd, sizeof cmd, "%s/saarsim --dry-run --size '%s' >/dev/null 2>&1",
+		         tu_bin_dir(), sizes[i]);
+		int want = tu_run(cmd);
+		cr_assert(want == 0 || want == 2, "saarsim --size '%s': status %d", sizes[i], want);
+		taken += want == 0;
+		snprintf(cmd, sizeof cmd,
+		         "%s sh %s/scripts/sweep --out %s/o%zu --scene spd:tetra:1 --size '%s' "
+		         "--slurm >/dev/null 2>&1",
+		         env, root(), dir, i, sizes[i]);
+		cr_expect_eq(tu_run(cmd), want, "sweep --size '%s'", sizes[i]);
+	}
+	cr_assert_eq(taken, 4, "saarsim takes the first four sizes only");
+}
+
 Test(sweep, bad_input_exit_2)
 {
 	char dir[256], env[4200], cmd[16384];
