@@ -132,14 +132,19 @@ static inline void *tcache_pop(tcache *t, tc_wait **list)
 	return w->who;
 }
 /* Retries the parked requests while an MSHR is free: retry(ctx, who,
- * since, now) returns 0 when who got through (it leaves the FIFO), 1 when
- * refused again (it stays at the head; resuming stops). */
-typedef int (*tc_retry)(void *ctx, void *who, uint64_t since, uint64_t now);
+ * since, at) returns 0 when who got through (it leaves the FIFO), 1 when
+ * refused again (it stays at the head; resuming stops). at is now, or the
+ * tick who was parked for when that is later: a request parked for its
+ * port slot (a tick ahead of the fill that frees an MSHR) is looked up
+ * again no earlier than that slot, and its wait, at - since, is never
+ * negative (a wrapped stall count, and misses sent before the read's own
+ * port slot, with single-ported caches). */
+typedef int (*tc_retry)(void *ctx, void *who, uint64_t since, uint64_t at);
 static inline void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx)
 {
 	while (t->stall && cache_mshr_free(&t->c)) {
 		tc_wait *w = t->stall;
-		if (retry(ctx, w->who, w->since, now))
+		if (retry(ctx, w->who, w->since, w->since > now ? w->since : now))
 			break; /* stays at the head */
 		t->stall = w->next;
 		if (!t->stall)

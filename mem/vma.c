@@ -348,11 +348,11 @@ static uint64_t meta_addr(const vma *v, uint32_t set)
 }
 
 /* A piece refused for lack of a tag-cache MSHR, retried (tc_retry). */
-static int meta_retry(void *ctx, void *who, uint64_t since, uint64_t now)
+static int meta_retry(void *ctx, void *who, uint64_t since, uint64_t at)
 {
 	vma *v = ctx;
-	v->s.stall_ticks += now - since;
-	meta_phase(v, who, now);
+	v->s.stall_ticks += at - since;
+	meta_phase(v, who, at);
 	return 0; /* an MSHR is free: it cannot be refused */
 }
 
@@ -399,11 +399,11 @@ static void meta_phase(vma *v, vma_piece *p, uint64_t t)
 }
 
 /* A piece refused for lack of an on-board-cache MSHR, retried. */
-static int data_retry(void *ctx, void *who, uint64_t since, uint64_t now)
+static int data_retry(void *ctx, void *who, uint64_t since, uint64_t at)
 {
 	vma *v = ctx;
-	v->s.stall_ticks += now - since;
-	data_phase(v, who, now);
+	v->s.stall_ticks += at - since;
+	data_phase(v, who, at);
 	return 0; /* an MSHR is free: it cannot be refused */
 }
 

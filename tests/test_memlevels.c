@@ -126,3 +126,47 @@ Test(memlevels, config_key_names_the_stack)
 	cr_assert(strstr(d.msg, "memory.levels") && strstr(d.msg, "dram"), "%s", d.msg);
 	eng_destroy(e);
 }
+
+static void count_done(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	(*(int *)ctx)++;
+}
+
+/* A read refused for lack of an MSHR is parked for its port slot, which
+ * may lie ahead of the fill that frees an MSHR: it is looked up again no
+ * earlier than its slot, so its time waiting for an MSHR lies inside its
+ * wait, and the sum over reads is never above the sum of their waits.
+ * One port, all in one cycle: 17 misses to distinct lines (16 MSHRs),
+ * then 200 reads of the first line, whose port slots run 217 cycles
+ * ahead. Catches a parked read resumed at the fill before its slot (the
+ * wait now - since below zero wrapped the stall count to about 1e16). */
+Test(memlevels, a_parked_read_waits_for_its_port_slot)
+{
+	saar_config c;
+	diag d;
+	cfg_defaults(&c);
+	cr_assert_eq(cfg_set(&c, "memory.l1.kd.ports=1", &d), 0, "%s", d.msg);
+	hier_params hp;
+	cr_assert_eq(memcfg_hier(&c, &hp, &d), 0, "%s", d.msg);
+	eng *e = eng_create(64);
+	memport mp;
+	cr_assert_eq(hier_init(&mp, e, eng_clock_mhz(533), &hp, 1 << 20, NULL, &d), 0, "%s", d.msg);
+	int done = 0;
+	for (int k = 0; k < 217; k++) {
+		mem_req q = {k < 17 ? (uint64_t)k * 4096 : 0, 8, MEM_KD, 0, 0, NULL, 0};
+		mem_access(&mp, &q, count_done, &done, 0);
+	}
+	eng_run(e, ENG_FOREVER);
+	hier_stats s;
+	cr_assert_eq(hier_get_stats(&mp, &s), 0);
+	cr_assert_eq(done, 217, "every read answered");
+	cr_assert_gt(s.mshr_stall_cycles[MEM_KD], 0, "no read waited for an MSHR: nothing tested");
+	cr_assert_leq(s.mshr_stall_cycles[MEM_KD], s.wait_cycles[MEM_KD],
+	              "MSHR stall %llu cycles above the reads' whole wait %llu",
+	              (unsigned long long)s.mshr_stall_cycles[MEM_KD],
+	              (unsigned long long)s.wait_cycles[MEM_KD]);
+	mem_free(&mp);
+	eng_destroy(e);
+}
