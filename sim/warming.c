@@ -34,7 +34,7 @@
 
 _Static_assert(WM_NDEM == RES_N, "warming.h WM_NDEM is chip.h RES_N");
 
-#define WM_MAGIC "saarwm05"
+#define WM_MAGIC "saarwm06"
 
 typedef struct wm_head {
 	char magic[8];

@@ -205,6 +205,33 @@ Test(warming, without_a_world_cache_the_stretches_run)
 	world_free(&w);
 }
 
+/* Every count by packet type (units/thread.h's thr_type_counter and the
+ * L1 lookups by ray type) of sampled chip s equal to cycle chip t's: the
+ * work is cycle's exactly, and so is its split by type. */
+static void same_split_by_type(const chip *s, const chip *t, const char *what)
+{
+	hier_stats hs, ht;
+	cr_assert_eq(hier_get_stats(&s->mem, &hs), 0);
+	cr_assert_eq(hier_get_stats(&t->mem, &ht), 0);
+	uint64_t shadow = 0;
+	for (int p = 0; p < PKT_NTYPES; p++) {
+		for (int k = 0; k < TC_NCOUNTERS; k++)
+			cr_assert_eq(*s->env.ct[p][k], *t->env.ct[p][k],
+			             "%s: %s packets' counter %d: %llu, cycle %llu", what,
+			             pkt_type_name(p), k, (unsigned long long)*s->env.ct[p][k],
+			             (unsigned long long)*t->env.ct[p][k]);
+		for (int ty = 0; ty < MEM_NTYPES; ty++)
+			cr_assert_eq(hs.ray_lookups[p][ty], ht.ray_lookups[p][ty],
+			             "%s: %s rays' L1 %d lookups: %llu, cycle %llu", what,
+			             pkt_type_name(p), ty,
+			             (unsigned long long)hs.ray_lookups[p][ty],
+			             (unsigned long long)ht.ray_lookups[p][ty]);
+		if (p == PKT_SHADOW)
+			shadow = *t->env.ct[p][TC_NODE_STEPS];
+	}
+	cr_assert_gt(shadow, 0, "%s: no shadow packets: no split to check", what);
+}
+
 /* Traffic and the estimate against cycle on frame c (every offset o of
  * n): memory-port requests within 1%, PCI bytes within pci_tol, the
  * interval around cycle's fps. */
@@ -345,6 +372,7 @@ Test(warming, drain_counts_every_l1_request_once)
 			             "offset %.2f, type %d: %llu L1 requests, cycle %llu",
 			             c.sampling.offset, ty, (unsigned long long)hs.reads[ty],
 			             (unsigned long long)ht.reads[ty]);
+		same_split_by_type(s, t, "drain");
 		chip_destroy(s);
 	}
 	chip_destroy(t);
@@ -397,6 +425,7 @@ Test(warming, skip_counts_as_cycle_and_estimates_as_drain)
 			             "offset %.2f, type %d: %llu L1 requests, cycle %llu",
 			             c.sampling.offset, ty, (unsigned long long)hs.reads[ty],
 			             (unsigned long long)ht.reads[ty]);
+		same_split_by_type(s, t, "skip");
 		double sd = (double)(hs.sdram.read_bytes + hs.sdram.write_bytes) /
 		                (double)(hu.sdram.read_bytes + hu.sdram.write_bytes) -
 		            1,

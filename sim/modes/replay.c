@@ -314,6 +314,7 @@ int mode_replay_save(const thr_ctx *t, mode_replay_state *s)
 	s->rays = (int16_t)m->frays;
 	s->off = (uint64_t)(m->rp - st);
 	s->age = t->age;
+	s->ptype = t->ptype;
 	memcpy(s->raddr, m->raddr, sizeof s->raddr);
 	memcpy(s->rbytes, m->rbytes, sizeof s->rbytes);
 	return 0;
@@ -334,7 +335,8 @@ int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
 	m->fnext = NULL;
 	const uint8_t *end = NULL, *st = NULL;
 	int ok = s->rec < 0;
-	if (!ok && r && (uint32_t)s->rec < r->npk && s->kind >= 0 && s->kind < UNIT_NKINDS) {
+	if (!ok && r && (uint32_t)s->rec < r->npk && s->kind >= 0 && s->kind < UNIT_NKINDS &&
+	    s->ptype >= 0 && s->ptype < PKT_NTYPES) {
 		st = pr_stream(r, (uint32_t)s->rec, &end);
 		ok = s->off <= (uint64_t)(end - st);
 	}
@@ -351,6 +353,7 @@ int mode_replay_restore(const pktrec *r, thr_ctx *t, const mode_replay_state *s)
 	m->fkind = s->kind;
 	m->frays = s->rays;
 	t->age = s->age;
+	t->ptype = s->ptype;
 	memcpy(m->raddr, s->raddr, sizeof m->raddr);
 	memcpy(m->rbytes, s->rbytes, sizeof m->rbytes);
 	if (t->state == THR_IDLE)

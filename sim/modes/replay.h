@@ -47,6 +47,10 @@ typedef struct mode_replay_state {
 	uint64_t off, age;
 	uint64_t raddr[MEM_NTYPES];
 	uint32_t rbytes[MEM_NTYPES];
+	/* the packet's type (thr_ctx.ptype): what its later work counts
+	 * under by ray type (a restored slot kept the type of the packet it
+	 * ran before) */
+	int32_t ptype;
 } mode_replay_state;
 
 /* Thread t's state (functional, between steps); -1 when it cannot be
