@@ -39,13 +39,16 @@ static char *rec_key(const chip *c)
 	if (gr)
 		snprintf(gk, sizeof gk, "grid %a %d %d %d %d\n", gr->p.lambda, gr->p.macro,
 		         gr->p.packet, gr->p.mailbox, gr->p.cull);
+	/* cone culling changes the packets' work (their cone tests, the
+	 * triangles culled): a record is its own (3: the key before it named
+	 * no cone, so a record of either setting was replayed for the other) */
 	int n = asprintf(&key,
-	                 "saarsim packet record 2\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
-	                 "counters %d shade %zu\n%s",
+	                 "saarsim packet record 3\n%sfp %d %d %d %d %d %d round %d\nstack %d\n"
+	                 "cone %d\ncounters %d shade %zu\n%s",
 	                 fk, g->chip.fp.trav.exp, g->chip.fp.trav.mant, g->chip.fp.isect.exp,
 	                 g->chip.fp.isect.mant, g->chip.fp.shade.exp, g->chip.fp.shade.mant,
-	                 g->chip.fp.round, g->chip.stack_depth, (int)C_NCOUNTERS,
-	                 sizeof(shade_counts), gk);
+	                 g->chip.fp.round, g->chip.stack_depth, g->chip.cone_cull ? 1 : 0,
+	                 (int)C_NCOUNTERS, sizeof(shade_counts), gk);
 	free(fk);
 	return n < 0 ? NULL : key;
 }
