@@ -1149,6 +1149,21 @@ Test(saarsim_cli, measures_of_nothing_are_null_not_zero)
 	    "%s", b);
 	cr_assert(hc == bc && hf == bf, "headline %.0f cycles = %.2f fps, bound %.0f = %.2f", hc,
 	          hf, bc, bf);
+	/* the JSON's fidelity section too: the same whole cycles and fps
+	 * (its estimate and interval were the unrounded bound: 139382.06
+	 * cycles, 3824.02 fps against the headline's 139383 and 3823.996) */
+	const char *fj = slurp("f.json"), *fid = strstr(fj, "\"fidelity\": {"),
+	           *st = strstr(fj, "\"steady_state\": {");
+	cr_assert(fid && st);
+	double fps = JDBL(fj, "fps"), cyc = JDBL(fid, "cycles_per_frame");
+	cr_assert_eq(cyc, hc, "fidelity.cycles_per_frame %.2f, headline %.0f", cyc, hc);
+	const double v[] = {JDBL(fid, "fps"), strtod(jval(fid, JKEYS("fps_ci95")) + 2, NULL),
+	                    JDBL(fid, "fps_bound"), JDBL(st, "fps")};
+	for (int k = 0; k < 4; k++)
+		cr_assert_eq(v[k], fps,
+		             "figure %d (fidelity fps, its interval, its bound, the steady "
+		             "state's): %.9g, fps %.9g",
+		             k, v[k], fps);
 	snprintf(args, sizeof args,
 	         "--size 32x32 --no-check --set memory.model=fixed --report %s/x.json", dir);
 	cr_assert_eq(saarsim(args), 0, "%s", slurp("err"));

@@ -77,9 +77,11 @@ int chip_run(chip *c, diag *d)
 		F->floor[f] = F->res_cycles[F->bound_by];
 		F->even_floor[f] = F->even_bound;
 		if (F->mode == CFG_FIDELITY_FUNCTIONAL) {
-			/* no timing: the frame's cycles are the bound */
-			F->est[f] = F->floor[f];
-			c->frame_cycles[f] = (uint64_t)ceil(F->est[f]);
+			/* no timing: the frame's cycles are the bound, in whole
+			 * cycles (the estimate too: the report's fidelity figures
+			 * are then the headline's) */
+			F->est[f] = ceil(F->floor[f]);
+			c->frame_cycles[f] = (uint64_t)F->est[f];
 		} else {
 			/* an estimate below the bound is impossible */
 			if (F->est[f] < F->floor[f])
