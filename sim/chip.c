@@ -554,6 +554,7 @@ static int chip_base(chip *c, const saar_config *cfg, const world *w)
 		image = c->gimg.bytes;
 		image_size = c->gimg.size;
 	}
+	c->image_bytes = image_size;
 	c->spill_base = (image_size + 4095) & ~(uint64_t)4095;
 	c->regs = w->m;
 	c->regs.bytes = NULL;

@@ -177,6 +177,8 @@ typedef struct chip {
 	rgc g;
 	framebuf fb;
 	uint64_t *frame_cycles; /* per frame */
+	uint64_t image_bytes;   /* the chip's memory image: the world's, with the top level's
+	                         * or the grid's structures after it */
 	uint64_t spill_base;    /* stack spills live at and above it (after the image) */
 	/* cumulative counters at the end of each frame: frame f's own figures
 	 * are the difference to frame f-1 */

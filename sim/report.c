@@ -581,7 +581,7 @@ static void json_run(jsonw *j, const report_info *ri)
 	}
 	kv(j, "budget_leaves", w->kd.nbudget_leaves);
 	jsonw_obj_end(j);
-	kv(j, "memory_image_bytes", w->m.size);
+	kv(j, "memory_image_bytes", c->image_bytes);
 	kv(j, "spill_base", c->spill_base);
 
 	kv(j, "frames", (uint64_t)c->frames_done);

@@ -1889,3 +1889,36 @@ Test(saarsim_cli, single_value_option_given_twice_is_refused)
 		cr_assert_eq(JNUM(r, "config", "frame", "height"), 8, "%s", args);
 	}
 }
+
+/* memory_image_bytes is the chip's image, whose size rounded up to 4 KB is
+ * spill_base, also where the grid's cells or a two-level scene's objects
+ * and top level follow the scene's image. Catches the report writing the
+ * flat world's image (sponza with the grid: 11.2 MB beside a spill base
+ * at 14.3 MB, the size the fit check then named). */
+Test(saarsim_cli, memory_image_is_the_chips)
+{
+	char aff[512], args[1024];
+	SCENE_OR_SKIP(aff, "bart_robots_aff/aff/Robot.aff");
+	const char *runs[] = {"", "--accel grid", "--scene '%s' --two-level"};
+	uint64_t flat = 0;
+	for (int k = 0; k < 3; k++) {
+		char extra[600];
+		snprintf(extra, sizeof extra, runs[k], aff);
+		snprintf(args, sizeof args,
+		         "--size 16x16 --fidelity functional --no-check --world-cache off %s "
+		         "--report %s/m%d.json",
+		         extra, dir, k);
+		cr_assert_eq(saarsim(args), 0, "%s: %s", args, slurp("err"));
+		char name[16];
+		snprintf(name, sizeof name, "m%d.json", k);
+		const char *j = slurp(name);
+		uint64_t img = JNUM(j, "memory_image_bytes"), sb = JNUM(j, "spill_base");
+		cr_assert_eq((img + 4095) & ~(uint64_t)4095, sb,
+		             "%s: memory_image_bytes %llu, spill_base %llu", runs[k],
+		             (unsigned long long)img, (unsigned long long)sb);
+		if (k == 0)
+			flat = img;
+		else if (k == 1)
+			cr_assert_gt(img, flat, "the grid's image holds the scene's and its cells");
+	}
+}
