@@ -66,11 +66,14 @@ typedef struct vma_params {
 typedef struct vma_stats {
 	uint64_t reads, read_bytes, writes, write_bytes;
 	uint64_t meta_reads, meta_writes, meta_bytes; /* SDRAM meta-data traffic */
-	uint64_t data_reads, data_writes, data_bytes; /* SDRAM data traffic (incl. fills) */
-	uint64_t host_fetches, host_fetch_bytes;      /* lines fetched over the host bus */
-	uint64_t host_writes, host_write_bytes;       /* write-around */
-	uint64_t stall_ticks;                         /* waited for a free MSHR */
-	uint64_t writebacks, writeback_bytes;         /* dirty lines written back to host memory */
+	/* SDRAM data traffic: on-board hits, writes and the fetched lines'
+	 * fills; a dirty victim's read out of SDRAM is a write-back's
+	 * (writebacks, writeback_bytes), not counted here */
+	uint64_t data_reads, data_writes, data_bytes;
+	uint64_t host_fetches, host_fetch_bytes; /* lines fetched over the host bus */
+	uint64_t host_writes, host_write_bytes;  /* write-around */
+	uint64_t stall_ticks;                    /* waited for a free MSHR */
+	uint64_t writebacks, writeback_bytes;    /* dirty lines written back to host memory */
 } vma_stats;
 
 typedef struct vma_piece vma_piece;
