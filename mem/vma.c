@@ -498,11 +498,17 @@ int vma_read(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, void *
 }
 
 /* The bytes [a, a + n) of a write (src at addr) into the on-board line
- * in slot, which becomes dirty, or around it into host memory. */
+ * in slot, which becomes dirty and, as a read's hit would, the most
+ * recent of its set for the replacement (the on-board cache replaces as
+ * the L1s do, §4.2: a line just written stayed the least recent, and the
+ * next fill of its set evicted it and paid its write-back), or around it
+ * into host memory. */
 static void write_data(vma *v, uint32_t slot, int on_board, uint64_t a, uint32_t n,
                        const uint8_t *src)
 {
 	if (on_board) {
+		cache *c = &v->l2.c;
+		cache_use(c, slot / c->p.ways, &c->way[slot]);
 		set_dirty(v, slot, 1);
 		uint8_t *d = src ? line_data(v, slot) : NULL;
 		if (d)

@@ -9,6 +9,7 @@
  */
 #include <string.h>
 
+#include "mem/hier_level.h"
 #include "sim/config.h"
 #include "sim/memconfig.h"
 #include "sim/report_mem.h"
@@ -237,4 +238,56 @@ Test(vma, fetched_lines_are_written_on_board)
 	cr_assert_eq(s.memif.writes[MEMIF_META], f, "%llu META writes for %llu fetches",
 	             (unsigned long long)s.memif.writes[MEMIF_META], (unsigned long long)f);
 	cr_assert_eq(s.vma.meta_writes, f);
+}
+
+static void vma_answered(eng *e, void *ctx, uint64_t arg)
+{
+	(void)e;
+	(void)arg;
+	(*(int *)ctx)++;
+}
+
+/* A write into an on-board line is a use of it for the replacement, as a
+ * read's hit is: four lines A-D fill one on-board set (A the least
+ * recent), A is written (dirty), a fifth line E of the set is read: the
+ * victim is B, not the line just written, so nothing is written back.
+ * Timed and functional alike. Catches the write leaving the line's
+ * recency as it was (A evicted at once and written back over PCI). */
+Test(vma, a_write_is_a_use_of_its_line)
+{
+	for (int timed = 0; timed < 2; timed++) {
+		saar_config c;
+		setup(&c, 1, 1);
+		c.memory.vma.hash = CFG_HASH_NONE;
+		hier_params hp;
+		diag d;
+		cr_assert_eq(memcfg_hier(&c, &hp, &d), 0, "%s", d.msg);
+		eng *e = eng_create(64);
+		memport mp;
+		/* a 4 KB image: the reads above it bypass the L1s */
+		cr_assert_eq(hier_init(&mp, e, eng_clock_mhz(533), &hp, 4096, NULL, &d), 0, "%s",
+		             d.msg);
+		hier *h = mp.impl;
+		uint64_t ns = h->v.l2.c.nsets, L = h->v.p.line, A = 1000;
+		int done = 0;
+		uint64_t seq[] = {A, A + ns, A + 2 * ns, A + 3 * ns, A, A + 4 * ns};
+		for (int k = 0; k < 6; k++) {
+			mem_req q = {seq[k] * L, 8, MEM_KD, k == 4, 0, NULL, 0};
+			if (!timed)
+				mem_access_func(&mp, &q);
+			else if (k == 4)
+				mem_access(&mp, &q, NULL, NULL, 0);
+			else
+				mem_access(&mp, &q, vma_answered, &done, 0);
+			eng_run(e, ENG_FOREVER);
+		}
+		hier_stats s;
+		cr_assert_eq(hier_get_stats(&mp, &s), 0);
+		cr_assert_eq(s.vma.host_fetches, 5, "%s: five lines fetched",
+		             timed ? "timed" : "functional");
+		cr_assert_eq(s.vma.writebacks, 0, "%s: the line just written was evicted",
+		             timed ? "timed" : "functional");
+		mem_free(&mp);
+		eng_destroy(e);
+	}
 }
