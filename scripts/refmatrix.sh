@@ -45,7 +45,7 @@ SIZE=${SIZE:-96x96}
 # it fits better; the refmatrix's estimated Conference runs keep theirs).
 # 60470f9 (session 61): a read refused for lack of an MSHR is retried no
 # earlier than its port slot (MSHR stall, memif queue and wait cycles move
-# by a few in 12 reports; no frame's cycles), and a functional frame's
+# by a few in 13 reports; no frame's cycles), and a functional frame's
 # fidelity figures are its whole cycles (the 10 functional reports). The
 # reports between bea6677 and it changed figures on purpose too (session
 # 60: null for what a run cannot measure, the host bus's resolved keys).
