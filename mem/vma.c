@@ -348,11 +348,11 @@ static uint64_t meta_addr(const vma *v, uint32_t set)
 }
 
 /* A piece refused for lack of a tag-cache MSHR, retried (tc_retry). */
-static int meta_retry(void *ctx, void *who, uint64_t since, uint64_t at)
+static int meta_retry(void *ctx, void *who, uint64_t since, uint64_t now)
 {
 	vma *v = ctx;
-	v->s.stall_ticks += at - since;
-	meta_phase(v, who, at);
+	v->s.stall_ticks += tc_waited(since, now);
+	meta_phase(v, who, now);
 	return 0; /* an MSHR is free: it cannot be refused */
 }
 
@@ -399,11 +399,11 @@ static void meta_phase(vma *v, vma_piece *p, uint64_t t)
 }
 
 /* A piece refused for lack of an on-board-cache MSHR, retried. */
-static int data_retry(void *ctx, void *who, uint64_t since, uint64_t at)
+static int data_retry(void *ctx, void *who, uint64_t since, uint64_t now)
 {
 	vma *v = ctx;
-	v->s.stall_ticks += at - since;
-	data_phase(v, who, at);
+	v->s.stall_ticks += tc_waited(since, now);
+	data_phase(v, who, now);
 	return 0; /* an MSHR is free: it cannot be refused */
 }
 
@@ -517,6 +517,29 @@ static void write_data(vma *v, uint32_t slot, int on_board, uint64_t a, uint32_t
 		v->oom = 1;
 }
 
+/* A write's meta-data (§4.2: "parts of this meta data is required for
+ * every memory access"): the set's record, from the tag cache if it holds
+ * it (a write allocates no entry there and is no use of it: the tag
+ * cache's counts stay one lookup per on-board read), else read from
+ * SDRAM; and the record written back when the write makes its line dirty
+ * (dirties). Timed (mi): the SDRAM accesses are posted at t; functional
+ * (NULL): counted, their traffic made from the counts (hier_vma.c).
+ * Returns -1 when the memory interface is out of memory. */
+static int write_meta(vma *v, memif *mi, uint64_t t, uint64_t line, int dirties)
+{
+	uint32_t set = cache_set_of(&v->l2.c, line);
+	for (int w = 0; w < 2; w++) {
+		if (w ? !dirties : v->p.tag_cache_enabled && cache_probe(&v->tag.c, set, NULL))
+			continue;
+		*(w ? &v->s.meta_writes : &v->s.meta_reads) += 1;
+		v->s.meta_bytes += v->meta_set_bytes;
+		if (mi && memif_submit(mi, t, MEMIF_META, meta_addr(v, set), v->meta_set_bytes, w,
+		                       NULL, NULL, 0))
+			return -1;
+	}
+	return 0;
+}
+
 int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, const void *src)
 {
 	v->s.writes++;
@@ -528,6 +551,8 @@ int vma_write(vma *v, uint64_t t, int type, uint64_t addr, uint32_t bytes, const
 		uint32_t n = (uint32_t)((end < lend ? end : lend) - a);
 		uint32_t slot = 0;
 		int on = cache_probe(&v->l2.c, line, &slot);
+		if (write_meta(v, v->mi, t, line, on && !is_dirty(v, slot)))
+			return -1;
 		write_data(v, slot, on, a, n, src ? (const uint8_t *)src + (a - addr) : NULL);
 		if (on) {
 			v->s.data_writes++;
@@ -565,6 +590,7 @@ void vma_access_func(vma *v, uint64_t addr, uint32_t bytes, int write, void *dat
 		if (write) {
 			uint32_t slot = 0;
 			int on = cache_probe(&v->l2.c, line, &slot);
+			write_meta(v, NULL, 0, line, on && !is_dirty(v, slot));
 			write_data(v, slot, on, at, n, pd);
 			if (on) {
 				v->s.data_writes++;

@@ -135,14 +135,13 @@ static void count_done(eng *e, void *ctx, uint64_t arg)
 }
 
 /* A read refused for lack of an MSHR is parked for its port slot, which
- * may lie ahead of the fill that frees an MSHR: it is looked up again no
- * earlier than its slot, so its time waiting for an MSHR lies inside its
- * wait, and the sum over reads is never above the sum of their waits.
- * One port, all in one cycle: 17 misses to distinct lines (16 MSHRs),
- * then 200 reads of the first line, whose port slots run 217 cycles
- * ahead. Catches a parked read resumed at the fill before its slot (the
- * wait now - since below zero wrapped the stall count to about 1e16). */
-Test(memlevels, a_parked_read_waits_for_its_port_slot)
+ * may lie ahead of the fill that frees an MSHR: its wait for an MSHR is
+ * then none, never below zero, so the sum over reads is never above the
+ * sum of their waits. One port, all in one cycle: 17 misses to distinct
+ * lines (16 MSHRs), then 200 reads of the first line, whose port slots
+ * run 217 cycles ahead. Catches the wait now - since taken below zero
+ * (it wrapped the stall count to about 1e16). */
+Test(memlevels, a_parked_reads_wait_is_never_below_zero)
 {
 	saar_config c;
 	diag d;

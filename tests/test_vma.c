@@ -291,3 +291,56 @@ Test(vma, a_write_is_a_use_of_its_line)
 		eng_destroy(e);
 	}
 }
+
+/* A spill write reads its set's meta-data record like any on-board access
+ * (§4.2) and writes it back when it dirties its line: line A is read (its
+ * record now in the tag cache), written (clean to dirty: one record
+ * write, no read), written again (already dirty: nothing), and line B of
+ * another set, never read, is written around the board (its record read
+ * from SDRAM, none written). Timed and functional alike, and the memory
+ * interface's meta traffic is the VMA's. Catches writes that take no
+ * meta-data at all (the model until session 61). */
+Test(vma, a_write_reads_and_writes_meta_data)
+{
+	for (int timed = 0; timed < 2; timed++) {
+		saar_config c;
+		setup(&c, 1, 1);
+		c.memory.vma.hash = CFG_HASH_NONE;
+		hier_params hp;
+		diag d;
+		cr_assert_eq(memcfg_hier(&c, &hp, &d), 0, "%s", d.msg);
+		eng *e = eng_create(64);
+		memport mp;
+		cr_assert_eq(hier_init(&mp, e, eng_clock_mhz(533), &hp, 4096, NULL, &d), 0, "%s",
+		             d.msg);
+		hier *h = mp.impl;
+		uint64_t L = h->v.p.line, A = 1000;
+		const char *what = timed ? "timed" : "functional";
+		int done = 0;
+		/* read A, write A, write A, write B; the meta counts after each */
+		uint64_t seq[] = {A, A, A, A + 1}, reads[4], writes[4];
+		for (int k = 0; k < 4; k++) {
+			mem_req q = {seq[k] * L, 8, MEM_KD, k > 0, 0, NULL, 0};
+			if (!timed)
+				mem_access_func(&mp, &q);
+			else
+				mem_access(&mp, &q, k ? NULL : vma_answered, &done, 0);
+			eng_run(e, ENG_FOREVER);
+			hier_stats s;
+			cr_assert_eq(hier_get_stats(&mp, &s), 0);
+			reads[k] = s.vma.meta_reads;
+			writes[k] = s.vma.meta_writes;
+			if (timed)
+				cr_assert_eq(s.memif.bytes[MEMIF_META], s.vma.meta_bytes,
+				             "memif meta bytes = the VMA's, after access %d", k);
+		}
+		cr_assert_eq(reads[1], reads[0], "%s: A's record is in the tag cache", what);
+		cr_assert_eq(writes[1], writes[0] + 1, "%s: A made dirty: its record written", what);
+		cr_assert_eq(reads[2] - reads[1] + writes[2] - writes[1], 0,
+		             "%s: A already dirty: no meta-data traffic", what);
+		cr_assert_eq(reads[3], reads[2] + 1, "%s: B's record read from SDRAM", what);
+		cr_assert_eq(writes[3], writes[2], "%s: B written around: no record write", what);
+		mem_free(&mp);
+		eng_destroy(e);
+	}
+}
