@@ -191,7 +191,7 @@ void jsonw_num(jsonw *w, double v)
 	else if (v == floor(v) && fabs(v) < 1e15)
 		fprintf(w->f, "%.1f", v);
 	else
-		fprintf(w->f, "%.9g", v);
+		fprintf(w->f, w->exact ? "%.17g" : "%.9g", v);
 }
 
 void jsonw_int(jsonw *w, int64_t v)

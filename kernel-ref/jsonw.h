@@ -32,6 +32,10 @@ typedef struct jsonw {
 	 * catch it, and jsonw_close fails naming it. */
 	uint64_t keys[JSONW_MAX_KEYS];
 	int nkeys, mark[JSONW_MAX_DEPTH];
+	/* numbers written so that reading them back gives the same double
+	 * (%.17g) instead of the report's 9 significant digits: for text that
+	 * keys a cache, where two values must never print alike */
+	int exact;
 	char dup[64]; /* the first repeated key, "" while none */
 } jsonw;
 

@@ -156,6 +156,17 @@ Test(warming, timing_keys_reuse_it_l1_sizes_do_not)
 	cr_assert_eq(k->warm_state, WARM_BUILT, "%s", chip_warm_name(k->warm_state));
 	chip_destroy(k);
 	cr_assert_eq(tu_find_files(dir, "warming-", path, sizeof path), 2);
+	/* a core clock 4e-8 MHz away, alike to 9 digits (532.907007707 and
+	 * 532.907007747) but a period of 1877 ps against 1876: a warming run
+	 * of its own (the key's config had printed both alike, and the second
+	 * loaded the first's demands in another clock's cycles) */
+	c.chip.clock_mhz = 532.907007707;
+	chip_destroy(tu_run_chip(&w, &c));
+	c.chip.clock_mhz = 532.907007747;
+	chip *ck = tu_run_chip(&w, &c);
+	cr_assert_eq(ck->warm_state, WARM_BUILT, "another clock: %s",
+	             chip_warm_name(ck->warm_state));
+	chip_destroy(ck);
 	world_free(&w);
 }
 

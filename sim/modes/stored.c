@@ -159,6 +159,7 @@ static char *warm_key(const chip *c, int gl, int gf)
 		return NULL;
 	jsonw w;
 	jsonw_init_file(&w, f);
+	w.exact = 1; /* two clocks that print alike to 9 digits had shared a file */
 	cfg_write_json(&k, &w);
 	/* the done records (sampling.jump drain or mixed) make a file of
 	 * their own: a relax needs none, and counting them costs */
