@@ -177,6 +177,22 @@ static int text_check(const char *buf, size_t len, long first_line, const char *
 	return 0;
 }
 
+/* The import looked for rp and found neither it nor rp.gz (real_path):
+ * both are passed to the cache's watch as absent (scene_file_fn), so the
+ * built scene is not reused once one appears. */
+static void report_absent(memcache *c, const char *rp)
+{
+	if (!c->fn)
+		return;
+	char a[PATH_MAX_LEN + 4];
+	snprintf(a, sizeof a, "%c%s", SCENE_FILE_ABSENT, rp);
+	c->fn(c->fn_ctx, a);
+	if (!ends_with(rp, ".gz")) {
+		snprintf(a, sizeof a, "%c%s.gz", SCENE_FILE_ABSENT, rp);
+		c->fn(c->fn_ctx, a);
+	}
+}
+
 static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char *mode)
 {
 	memcache *c = (memcache *)io->UserData;
@@ -199,6 +215,8 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 				if (!c->err[0] && st != ENOENT)
 					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp,
 					         in_strerror(st));
+				if (st == ENOENT)
+					report_absent(c, rp);
 				return NULL;
 			}
 		} else {
@@ -216,6 +234,8 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *name, const char 
 			if (st) {
 				if (!c->err[0] && st != ENOENT)
 					snprintf(c->err, sizeof c->err, "%.250s: %.250s", rp, err);
+				if (st == ENOENT)
+					report_absent(c, rp);
 				import_oom |= oom_text(err);
 				return NULL;
 			}

@@ -75,9 +75,14 @@ int scene_load(scene *s, const char *path, diag *d);
 
 /* scene_load, and calls fn(ctx, path) for the scene file and every other
  * file the import opens through Assimp (an MTL, a glTF buffer): what a
- * cache of the built scene must watch (worldcache.c). Textures are not
- * passed; their paths are in s->texs. fn may see a path more than once;
- * it runs in the calling process, after the import. */
+ * cache of the built scene must watch (worldcache.c). A file the import
+ * looked for and did not find (an OBJ's missing MTL: the import goes on
+ * with default materials) is passed too, its path after the byte
+ * SCENE_FILE_ABSENT: the cache must see it appear. Textures are not
+ * passed (a missing one fails the import); their paths are in s->texs.
+ * fn may see a path more than once; it runs in the calling process, after
+ * the import. */
+#define SCENE_FILE_ABSENT '\x01'
 typedef void (*scene_file_fn)(void *ctx, const char *path);
 int scene_load_files(scene *s, const char *path, scene_file_fn fn, void *ctx, diag *d);
 

@@ -60,10 +60,39 @@
 
 /* ---- the files a scene came from ---- */
 
+/* The absolute path of a file that does not exist, after the byte
+ * SCENE_FILE_ABSENT (malloc'd): its folder's real path and its name, or,
+ * when the folder does not exist either (Assimp looks for an MTL under
+ * names such as "dir//dir/./name"), the path itself made absolute. NULL
+ * when out of memory or the working folder is unknown. */
+static char *absent_path(const char *path)
+{
+	const char *slash = strrchr(path, '/');
+	char dir[PATH_MAX], cwd[PATH_MAX];
+	int n = slash ? snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path)
+	              : snprintf(dir, sizeof dir, ".");
+	char *rd = n >= 0 && (size_t)n < sizeof dir ? realpath(dir[0] ? dir : "/", NULL) : NULL,
+	     *out = NULL;
+	int r;
+	if (rd)
+		r = asprintf(&out, "%c%s/%s", SCENE_FILE_ABSENT, strcmp(rd, "/") ? rd : "",
+		             slash ? slash + 1 : path);
+	else if (path[0] == '/')
+		r = asprintf(&out, "%c%s", SCENE_FILE_ABSENT, path);
+	else
+		r = getcwd(cwd, sizeof cwd)
+		        ? asprintf(&out, "%c%s/%s", SCENE_FILE_ABSENT, cwd, path)
+		        : -1;
+	free(rd);
+	return r < 0 ? NULL : out;
+}
+
 void wc_files_add(void *ctx, const char *path)
 {
 	wc_files *f = ctx;
-	char *rp = realpath(path, NULL);
+	/* a file the import looked for and did not find: watched for
+	 * appearing (an OBJ's MTL added later changes the scene) */
+	char *rp = path[0] == SCENE_FILE_ABSENT ? absent_path(path + 1) : realpath(path, NULL);
 	if (!rp) {
 		f->lost = 1; /* opened a moment ago; cannot watch it, so do not store */
 		return;
@@ -477,7 +506,8 @@ static uint32_t take_u32(wcin *r)
 	return v;
 }
 
-/* The recorded files, each still of the recorded size and time. */
+/* The recorded files, each still of the recorded size and time, and
+ * those recorded absent (size -1) still absent. */
 static int files_unchanged(wcin *r)
 {
 	uint32_t n = take_u32(r);
@@ -495,6 +525,11 @@ static int files_unchanged(wcin *r)
 		path[len] = '\0';
 		memcpy(want, v, sizeof want);
 		struct stat st;
+		if (want[0] == -1) {
+			if (stat(path, &st) == 0 || (errno != ENOENT && errno != ENOTDIR))
+				return 0;
+			continue;
+		}
 		if (stat(path, &st) != 0 || (int64_t)st.st_size != want[0] ||
 		    (int64_t)st.st_mtim.tv_sec != want[1] || (int64_t)st.st_mtim.tv_nsec != want[2])
 			return 0;
@@ -651,14 +686,21 @@ int wc_put(const char *file, const char *key, const wc_files *f, const wc_part *
 	put(&w, key, strlen(key));
 	put_u32(&w, f ? (uint32_t)f->n : 0);
 	for (int i = 0; f && i < f->n; i++) {
+		/* an absent file: its path and -1s, for files_unchanged */
+		const char *p = f->path[i] + (f->path[i][0] == SCENE_FILE_ABSENT);
 		struct stat st;
-		if (stat(f->path[i], &st) != 0) {
-			w.bad = 1;
-			break;
+		int64_t v[3] = {-1, -1, -1};
+		if (p == f->path[i]) {
+			if (stat(p, &st) != 0) {
+				w.bad = 1;
+				break;
+			}
+			v[0] = st.st_size;
+			v[1] = st.st_mtim.tv_sec;
+			v[2] = st.st_mtim.tv_nsec;
 		}
-		int64_t v[3] = {st.st_size, st.st_mtim.tv_sec, st.st_mtim.tv_nsec};
-		put_u32(&w, (uint32_t)strlen(f->path[i]));
-		put(&w, f->path[i], strlen(f->path[i]));
+		put_u32(&w, (uint32_t)strlen(p));
+		put(&w, p, strlen(p));
 		put(&w, v, sizeof v);
 	}
 	for (int i = 0; i < nparts; i++)

@@ -163,6 +163,39 @@ Test(worldcache, changed_source_files_miss)
 	world_free(&w);
 }
 
+/* An MTL the OBJ names but that is missing when the world is built (the
+ * import goes on with default materials) is watched for appearing: once
+ * it is there, the cached world is not reused (a new memory image, the
+ * one a build without the cache makes), and then that one is. Catches a
+ * missing file left out of the watched files: the world of default
+ * materials was reused after the MTL appeared, and the frame kept its
+ * old colours while both checks, rendering from the same stale world,
+ * said identical. */
+Test(worldcache, a_missing_file_that_appears_misses)
+{
+	char dir[256], cache[300], obj[512], p[512], mtl[512];
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
+	snprintf(mtl, sizeof mtl, "%s/quad.mtl", dir);
+	snprintf(p, sizeof p, "%s/quad.mtl.away", dir);
+	cr_assert_eq(rename(mtl, p), 0);
+	world w;
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "stored without its MTL");
+	uint32_t plain = wc_crc(w.m.bytes, w.m.size);
+	world_free(&w);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT, "still missing: a hit");
+	world_free(&w);
+	cr_assert_eq(rename(p, mtl), 0);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "the MTL appeared: a miss");
+	cr_assert_neq(wc_crc(w.m.bytes, w.m.size), plain, "the MTL's colours are in the image");
+	world b;
+	load(&b, obj, NULL, -1);
+	same_world(&w, &b);
+	world_free(&b);
+	world_free(&w);
+	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
+	world_free(&w);
+}
+
 /* The texels come through the image plugin, a file apart from the
  * program: a rebuilt plugin (here a copy whose time moves on) misses. */
 Test(worldcache, rebuilt_image_plugin_misses)
