@@ -669,6 +669,26 @@ static int chip_memory(chip *c, diag *d)
 {
 	const saar_config *cfg = &c->cfg;
 	int mrc;
+	/* Without the VMA the chip's memory is on board: the image, and the
+	 * stack spill area after it when a stack shallower than kernel-ref's
+	 * can spill (every thread slot has room for PKT_STACK_MAX entries,
+	 * thr_spill_addr). A spill past the board had been served as rows the
+	 * board does not have, without a word. */
+	uint64_t board = (uint64_t)cfg->memory.sdram.mb << 20,
+	         area = (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
+	if (cfg->memory.model == CFG_MEM_HIERARCHY && !cfg->memory.vma.enabled &&
+	    cfg->chip.stack_depth < PKT_STACK_MAX && c->spill_base <= board &&
+	    c->spill_base + area > board)
+		return diag_set(
+		    d, "config", 0, 0,
+		    "the stack spill area (%d RTPs x %d threads x %d entries of %u bytes = "
+		    "%.1f MB, after the %.1f MB image) does not fit in on-board memory "
+		    "(memory.sdram.mb = %d) with chip.stack_depth %d < %d: raise "
+		    "memory.sdram.mb or chip.stack_depth, use fewer threads, or enable the "
+		    "virtual memory architecture (memory.vma.enabled: true)",
+		    c->nrtp, c->tpr, PKT_STACK_MAX, THR_SPILL_STRIDE, (double)area / (1 << 20),
+		    (double)c->spill_base / (1 << 20), (int)cfg->memory.sdram.mb,
+		    (int)cfg->chip.stack_depth, PKT_STACK_MAX);
 	if (cfg->memory.model == CFG_MEM_HIERARCHY)
 		mrc = mem_init_hier(&c->mem, c->e, c->clk, cfg, c->spill_base, &c->store, d);
 	else if ((mrc = mem_init_fixed(&c->mem, c->e, c->clk, cfg->memory.latency, &c->store)))

@@ -1922,3 +1922,31 @@ Test(saarsim_cli, memory_image_is_the_chips)
 			cr_assert_gt(img, flat, "the grid's image holds the scene's and its cells");
 	}
 }
+
+/* Without the VMA the stack spill area must fit on board after the image
+ * when the stack can spill: 4 RTPs x 64 threads have 16 MB of it, which a
+ * 1 MB board refuses at depth 1 (one line, exit 2, no output), takes at
+ * kernel-ref's depth 64 (nothing spills) and takes through the VMA; an 8
+ * MB board takes 4 x 16 threads' 4 MB. Catches spills served past the
+ * board's end as rows it does not have (the run went through, 8,837
+ * spills up to 13.5 MB on a 2 MB board, image identical, no warning). */
+Test(saarsim_cli, spill_area_must_fit_on_board)
+{
+	char args[1024];
+	const char *base =
+	    "--size 32x32 --no-check --world-cache off --set chip.threads_per_rtp=64 "
+	    "--set memory.sdram.mb=1";
+	snprintf(args, sizeof args, "%s --set chip.stack_depth=1 --out %s/f.png --report %s/r.json",
+	         base, dir, dir);
+	cr_assert_eq(saarsim(args), 2, "%s", slurp("err"));
+	one_line_naming("the stack spill area (4 RTPs x 64 threads x 64 entries of 1024 bytes");
+	cr_assert_not(exists("f.png") || exists("r.json"));
+	snprintf(args, sizeof args, "%s --set chip.stack_depth=64", base);
+	cr_assert_eq(saarsim(args), 0, "depth 64: %s", slurp("err"));
+	snprintf(args, sizeof args, "%s --set chip.stack_depth=1 --set memory.vma.enabled=true",
+	         base);
+	cr_assert_eq(saarsim(args), 0, "through the VMA: %s", slurp("err"));
+	cr_assert_eq(saarsim("--size 32x32 --no-check --world-cache off --set memory.sdram.mb=8 "
+	                     "--set chip.stack_depth=1"),
+	             0, "4 MB of spill area on 8 MB: %s", slurp("err"));
+}
