@@ -263,6 +263,13 @@ int rc_check(const rc_figs *f, rc_list *o)
 		if (!near(s, 1))
 			fail(o, "threads: the four shares add up to 1 (%.9g)", s);
 	}
+	/* the shares are the states' times over their own sum, so the sum
+	 * above cannot fail: the times themselves must fill every context's
+	 * whole frame time (each context is in one state at a time) */
+	if (f->thread_ps_want && f->thread_ps != f->thread_ps_want)
+		fail(o,
+		     "threads: the states' times add up to contexts x frame time (%llu ps != %llu)",
+		     U(f->thread_ps), U(f->thread_ps_want));
 	double sd = 0, pci = 0;
 	for (int i = 0; i < f->frames; i++) {
 		char w[32];
@@ -351,6 +358,15 @@ int rc_figs_get(const chip *c, rc_figs *f)
 			f->rtp_util[k * f->nrtp + r] = fig_util(c, k, r);
 	}
 	f->threads_timed = fig_thread_shares(c, f->share);
+	f->thread_ps = 0;
+	for (int k = 0; k < THR_NSTATES; k++) {
+		char name[64];
+		snprintf(name, sizeof name, "threads.%s_ps", chip_state_name(k));
+		f->thread_ps += chip_rtp_sum(c, name);
+	}
+	f->thread_ps_want = c->cfg.fidelity != CFG_FIDELITY_FUNCTIONAL && !chip_estimates(&c->cfg)
+	                        ? chip_cycles(c) * c->clk.period * (uint64_t)(c->nrtp * c->tpr)
+	                        : 0;
 	ray_type_figs(c, f);
 	return 0;
 }

@@ -52,6 +52,11 @@ typedef struct rc_figs {
 	double *rtp_util;         /* units.*.per_rtp_utilisation: [kind * nrtp + rtp] */
 	int threads_timed;
 	double share[THR_NSTATES]; /* threads.* */
+	/* the states' times summed (threads.*_ps over the RTPs) and, where
+	 * every cycle was simulated (cycle; sampled with every tile
+	 * detailed), what they must add up to: contexts x the frames' time
+	 * (0: not checked) */
+	uint64_t thread_ps, thread_ps_want;
 	/* ray_types (issue 32): the per-type counters summed over the types,
 	 * and the totals they split (traversal.*, the units' busy cycles and
 	 * rays summed over the RTPs) */

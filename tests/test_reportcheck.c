@@ -149,6 +149,9 @@ SPOIL(frame_cycles_copy_off, f->per_frame[0].cycles += 1)
 SPOIL(util_over_1, f->util[UNIT_ISECT] = 1.2)
 SPOIL(rtp_util_negative, f->rtp_util[UNIT_TRAV * f->nrtp] = -0.1)
 SPOIL(shares_off, f->share[0] += 0.1)
+/* a state's time lost (a thread in no state for a while, or counted in
+ * two): the shares, normalised by their own sum, cannot show it */
+SPOIL(thread_time_off, f->thread_ps -= 1876)
 SPOIL(hit_rate_over_1, f->per_frame[0].hit[MEM_KD] = 1.5)
 SPOIL(sdram_util_over_1, f->steady.sdram_util = 1.3)
 SPOIL(row_hit_rate_over_1, f->steady.row_hit_rate = 1.1)
@@ -196,6 +199,8 @@ Test(reportcheck, each_invariant_can_fail, .timeout = 300)
 	    {util_over_1, "units.isect.utilisation: a rate in [0, 1]", "utilisation", 0},
 	    {rtp_util_negative, "units.trav.per_rtp_utilisation[0]: a rate", "RTP utilisation", 0},
 	    {shares_off, "threads: the four shares add up to 1", "thread shares", 0},
+	    {thread_time_off, "threads: the states' times add up to contexts x frame time",
+	     "thread state time", 1},
 	    {hit_rate_over_1, "per_frame[0].hit_rate.l1.kd: a rate", "hit rate", 0},
 	    {sdram_util_over_1, "steady_state.sdram_utilisation: a rate", "SDRAM utilisation", 0},
 	    {row_hit_rate_over_1, "steady_state.sdram_row_hit_rate: a rate", "row hit rate", 0},
