@@ -676,6 +676,15 @@ static int chip_memory(chip *c, diag *d)
 	 * board does not have, without a word. */
 	uint64_t board = (uint64_t)cfg->memory.sdram.mb << 20,
 	         area = (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
+	/* and its addresses are the chip's: 32 bits (docs/memory-map.md) */
+	if (cfg->chip.stack_depth < PKT_STACK_MAX && c->spill_base + area > ((uint64_t)1 << 32))
+		return diag_set(
+		    d, "config", 0, 0,
+		    "the stack spill area (%d RTPs x %d threads x %d entries of %u bytes = "
+		    "%.1f GB) ends past the chip's 32-bit addresses with chip.stack_depth "
+		    "%d < %d: use fewer RTPs or threads, or raise chip.stack_depth",
+		    c->nrtp, c->tpr, PKT_STACK_MAX, THR_SPILL_STRIDE, (double)area / (1 << 30),
+		    (int)cfg->chip.stack_depth, PKT_STACK_MAX);
 	if (cfg->memory.model == CFG_MEM_HIERARCHY && !cfg->memory.vma.enabled &&
 	    cfg->chip.stack_depth < PKT_STACK_MAX && c->spill_base <= board &&
 	    c->spill_base + area > board)

@@ -1949,4 +1949,12 @@ Test(saarsim_cli, spill_area_must_fit_on_board)
 	cr_assert_eq(saarsim("--size 32x32 --no-check --world-cache off --set memory.sdram.mb=8 "
 	                     "--set chip.stack_depth=1"),
 	             0, "4 MB of spill area on 8 MB: %s", slurp("err"));
+	/* through the VMA too, the area's addresses are the chip's 32 bits:
+	 * 64 RTPs x 1024 threads x 64 KB end past 4 GB */
+	cr_assert_eq(
+	    saarsim("--size 8x8 --no-check --world-cache off --set memory.vma.enabled=true "
+	            "--set chip.rtps=64 --set chip.threads_per_rtp=1024 "
+	            "--set chip.stack_depth=1"),
+	    2);
+	one_line_naming("ends past the chip's 32-bit addresses");
 }
