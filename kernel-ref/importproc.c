@@ -168,24 +168,36 @@ static void wr_str(wr *w, const char *s)
 typedef struct pathlist {
 	char **p;
 	uint32_t n, cap;
+	int lost; /* a name could not be kept */
 } pathlist;
 
+/* Adds path to the list the parent gets. A name that cannot be kept (the
+ * list full, too long, out of memory) is not dropped in silence: the list
+ * ends with an empty name (child_main), which the parent's watch cannot
+ * resolve (wc_files_add: the world is then not stored), instead of a file
+ * left unwatched. */
 static void pl_add(void *ctx, const char *path)
 {
 	pathlist *pl = ctx;
-	if (pl->n == IMP_MAX_PATHS || strlen(path) >= IMP_MAX_PATH)
+	if (pl->n + 1 >= IMP_MAX_PATHS || strlen(path) >= IMP_MAX_PATH) {
+		pl->lost = 1; /* the last slot is the empty name's */
 		return;
+	}
 	if (pl->n == pl->cap) {
 		uint32_t cap = pl->cap ? 2 * pl->cap : 16;
 		char **np = realloc(pl->p, cap * sizeof *np);
-		if (!np)
+		if (!np) {
+			pl->lost = 1;
 			return;
+		}
 		pl->p = np;
 		pl->cap = cap;
 	}
 	char *c = strdup(path);
 	if (c)
 		pl->p[pl->n++] = c;
+	else
+		pl->lost = 1;
 }
 
 static void pl_free(pathlist *pl)
@@ -355,9 +367,11 @@ static _Noreturn void child_main(const char *path, int want_files, const imp_lim
 		wr_scene(&w, &s);
 	else
 		wr_str(&w, d.msg);
-	wr_u32(&w, pl.n);
+	wr_u32(&w, pl.n + (uint32_t)pl.lost);
 	for (uint32_t i = 0; i < pl.n; i++)
 		wr_str(&w, pl.p[i]);
+	if (pl.lost)
+		wr_str(&w, "");
 	wr_put(&w, IMP_END, sizeof IMP_END);
 	wr_flush(&w);
 	_exit(w.failed ? 3 : 0);

@@ -196,6 +196,32 @@ Test(worldcache, a_missing_file_that_appears_misses)
 	world_free(&w);
 }
 
+/* More names than the import's process can pass back (65536: here 9000
+ * missing MTLs, each looked for under eight names) leave the world
+ * unstored rather than unwatched. Catches the names past the limit
+ * dropped in silence (the world stored, its file list short). */
+Test(worldcache, names_past_the_limit_are_not_stored)
+{
+	char dir[256], cache[300], obj[512];
+	tu_tmpdir(dir, sizeof dir);
+	snprintf(cache, sizeof cache, "%s/cache", dir);
+	size_t cap = 9000 * 24 + 64, n = 0;
+	char *text = malloc(cap);
+	cr_assert(text);
+	for (int k = 0; k < 9000; k++)
+		n += (size_t)snprintf(text + n, cap - n, "mtllib a%d.mtl\n", k);
+	snprintf(text + n, cap - n, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+	tu_write(obj, sizeof obj, dir, "many.obj", text);
+	free(text);
+	world w;
+	tu_capture capt = tu_stderr_begin();
+	int st = load(&w, obj, cache, -1);
+	const char *err = tu_stderr_end(capt);
+	cr_assert_eq(st, WORLD_CACHE_UNSTORED, "stored with names unwatched");
+	cr_assert(strstr(err, "a source file could not be recorded"), "%s", err);
+	world_free(&w);
+}
+
 /* The texels come through the image plugin, a file apart from the
  * program: a rebuilt plugin (here a copy whose time moves on) misses. */
 Test(worldcache, rebuilt_image_plugin_misses)
