@@ -39,12 +39,23 @@ int sudoku_spp_ok(int spp)
 	return spp == 1 || spp == 4 || spp == 16 || spp == 64;
 }
 
+/* dim / 16 where the offsets and orders below would repeat every 16
+ * dimensions (n <= 16: 1, 4 and 16 samples), else 0: with 1, 4 and 16
+ * samples dimension d + 16 (a glossy bounce, a 14th light) had been the
+ * very points of dimension d (a light, the image plane); 64 samples never
+ * repeated them and keep their points. */
+static int dim_wrap(int dim, int spp)
+{
+	return spp <= 16 ? dim / 16 : 0;
+}
+
 int sudoku_pattern(uint32_t x, uint32_t y, int dim, int spp)
 {
 	/* each dimension reads the tiling at its own offset, a whole number
 	 * of bordered blocks, so each 4x4 pixel block still takes all 16
 	 * patterns (cooperative in every dimension) */
-	uint32_t ox = 4u * (uint32_t)(dim % 4), oy = 4u * (uint32_t)((dim + dim / 4) % 4);
+	uint32_t ox = 4u * (uint32_t)(dim % 4),
+	         oy = 4u * (uint32_t)((dim + dim / 4 + dim_wrap(dim, spp)) % 4);
 	int k = sudoku_grid[(y + oy) % SUDOKU_N][(x + ox) % SUDOKU_N];
 	return spp == 4 ? k % 4 : k;
 }
@@ -66,9 +77,24 @@ void sudoku_sample(uint32_t x, uint32_t y, int s, int dim, int spp, float *u, fl
 	}
 	/* the dimension's own order of its samples: s -> (a s + c) mod n, a odd */
 	int n = spp == 1 ? SUDOKU_N : spp;
-	int a = (2 * dim + 1) % n, c = (7 * dim) % n;
-	int sp = (s * a + c) % n;
+	int a = (2 * dim + 1) % n, c = (7 * dim + dim_wrap(dim, spp)) % n;
 	int k = sudoku_pattern(x, y, dim, spp);
+	int sp = (s * a + c) % n;
+	if (spp == 1) {
+		/* One sample per pixel: the 16 pixels of a 4x4 block (patterns
+		 * 0..15) take one point each of the 16-point arrangement with one
+		 * point in every row, every column and every 4x4 block of the
+		 * lattice (row r, column 4 (r mod 4) + r / 4), the pixel's pattern
+		 * picking its row in the dimension's own order: the block's
+		 * points are spread as its patterns' are at 16 samples. (Sample 0
+		 * of the pixel's pattern had put every pixel in one row: every
+		 * lens sample on one ring, every light sample on one line off
+		 * the light's centre, every glossy ray at one angle.) */
+		int r = (k * a + c) % SUDOKU_N;
+		*u = ((float)(4 * (r % 4) + r / 4) + 0.5f) / (float)SUDOKU_N;
+		*v = ((float)r + 0.5f) / (float)SUDOKU_N;
+		return;
+	}
 	if (n == 4) {
 		int col = col_of(&sudoku_grid2[0][0], 4, sp, k);
 		*u = ((float)col + 0.5f) / 4.0f;

@@ -15,14 +15,18 @@
  * 4 samples per pixel use an order-2 solution's four 4-sample patterns in
  * the same way (pattern S[..] mod 4: each 4 x 4 pixel block of the tiling
  * holds each of them four times); 64 merge four order-4 patterns (k, k+4,
- * k+8, k+12); 1 sample per pixel takes the pattern's first sample in the
- * non-image dimensions and the pixel centre on the image plane (so a
- * one-sample frame is today's pinhole frame).
+ * k+8, k+12); 1 sample per pixel takes, in the non-image dimensions, one
+ * point of a 16-point arrangement with one point in every row, column and
+ * 4 x 4 block of the lattice, its pattern picking which (so a 4 x 4 pixel
+ * block's points are spread as at 16 samples), and the pixel centre on the
+ * image plane (so a one-sample frame is today's pinhole frame).
  *
  * Every dimension of a ray's sample (image plane, lens, time, each light,
  * glossy reflection per depth) takes its own pattern: the tiling is read
  * at an offset and the samples in a permuted order that depend on the
- * dimension, so the dimensions of one ray are not the same point. A
+ * dimension (with 1, 4 and 16 samples also on dim / 16: dimensions 16
+ * apart would otherwise repeat), so the dimensions of one ray are not the
+ * same point. A
  * sample is a pure function of (pixel, sample index, dimension, spp): the
  * same for any frame, thread count or schedule (stable for a still view,
  * §4: no scintillation).

@@ -128,6 +128,63 @@ Test(drt, four_and_sixty_four_samples_are_stratified)
 			}
 }
 
+/* Mistake: one sample per pixel the same row of the lattice in every
+ * pixel (sample 0 of each pixel's pattern: every lens sample on one ring,
+ * every area-light point on one line off the light's centre, every
+ * glossy ray at one angle; the frame biased, not noisy). The 16 pixels of
+ * every 4x4 block take 16 points with one in every row, column and 4x4
+ * block of the lattice, in every dimension but the image plane's (the
+ * pixel centre). */
+Test(drt, one_sample_per_pixel_spreads_every_dimension)
+{
+	for (int dim = SUDOKU_DIM_LENS; dim < SUDOKU_DIM_GLOSS + 16; dim++)
+		for (int by = 0; by < 16; by += 4)
+			for (int bx = 0; bx < 16; bx += 4) {
+				unsigned rows = 0, cols = 0, blks = 0;
+				for (int p = 0; p < 16; p++) {
+					float u, v;
+					int cx, cy;
+					sudoku_sample((uint32_t)(bx + p % 4),
+					              (uint32_t)(by + p / 4), 0, dim, 1, &u, &v);
+					cell(u, v, 16, &cx, &cy);
+					rows |= 1u << cy;
+					cols |= 1u << cx;
+					blks |= 1u << (cy / 4 * 4 + cx / 4);
+				}
+				cr_assert(
+				    rows == 0xffff && cols == 0xffff && blks == 0xffff,
+				    "1 spp, dim %d, block (%d,%d): rows %04x cols %04x blocks %04x",
+				    dim, bx, by, rows, cols, blks);
+			}
+}
+
+/* Mistake: two dimensions of one ray the very same points (the tiling
+ * offsets and sample orders repeated every 16 dimensions with 1, 4 and 16
+ * samples: a glossy bounce took the points of a light, a 14th light those
+ * of the image plane). Every pair of the 35 dimensions, at every sample
+ * count, over a 16x16 tile. */
+Test(drt, dimensions_are_not_the_same_points)
+{
+	static const int spps[] = {1, 4, 16, 64};
+	for (int k = 0; k < 4; k++)
+		for (int d1 = 0; d1 < SUDOKU_DIM_GLOSS + 16; d1++)
+			for (int d2 = d1 + 1; d2 < SUDOKU_DIM_GLOSS + 16; d2++) {
+				int same = 1;
+				for (uint32_t y = 0; y < 16 && same; y++)
+					for (uint32_t x = 0; x < 16 && same; x++)
+						for (int s = 0; s < spps[k] && same; s++) {
+							float u1, v1, u2, v2;
+							sudoku_sample(x, y, s, d1, spps[k], &u1,
+							              &v1);
+							sudoku_sample(x, y, s, d2, spps[k], &u2,
+							              &v2);
+							same = u1 == u2 && v1 == v2;
+						}
+				cr_assert(!same, "%d spp: dimensions %d and %d are the same points",
+				          spps[k], d1, d2);
+			}
+}
+
 /* Mistake: one sample per pixel off the pixel centre on the image plane
  * (the default frame would change), or a sampler whose answer depends on
  * the order it is asked in (state: a random generator, a counter), which
