@@ -880,14 +880,41 @@ fail:
 	return -1;
 }
 
+/* The reference frame's key: the frame's (wc_frame_key), and what else
+ * changes the stored render's counts though not its image: cone culling,
+ * the interval walk and another tracer than the kd-tree (the grid with
+ * its parameters). A frame without any keeps the key it had. malloc'd;
+ * NULL when out of memory. */
+static char *reference_key(const world *w, const render_opts *o)
+{
+	char *fk = wc_frame_key(w->cache_prog, w->image_crc, w->m.size, &w->v, o);
+	if (!fk || (!o->cone_cull && !o->frustum && !o->tracer))
+		return fk;
+	char more[256];
+	const grid *g = w->grid && o->tracer == &w->grid->tracer ? w->grid : NULL;
+	int m = snprintf(more, sizeof more, "reference cone %d frustum %d tracer %s", o->cone_cull,
+	                 o->frustum,
+	                 !o->tracer ? "kd"
+	                 : g        ? "grid"
+	                            : "two-level");
+	if (g)
+		m += snprintf(more + m, sizeof more - (size_t)m, " %a %d %d %d %d", g->p.lambda,
+		              g->p.macro, g->p.packet, g->p.mailbox, g->p.cull);
+	size_t n = strlen(fk) + (size_t)m + 2;
+	char *key = malloc(n);
+	if (key)
+		snprintf(key, n, "%s%s\n", fk, more);
+	free(fk);
+	return key;
+}
+
 int world_reference_rgb8(const world *w, const render_opts *o, uint8_t *rgb, render_stats *st,
                          int *cached, diag *d)
 {
 	size_t n = (size_t)o->width * (size_t)o->height * 3;
 	char file[PATH_MAX], *key = NULL;
 	*cached = 0;
-	if (w->cache_dir &&
-	    (key = wc_frame_key(w->cache_prog, w->image_crc, w->m.size, &w->v, o)) &&
+	if (w->cache_dir && (key = reference_key(w, o)) &&
 	    wc_file(file, sizeof file, w->cache_dir, "frame", key)) {
 		free(key);
 		key = NULL;

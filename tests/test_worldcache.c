@@ -222,6 +222,37 @@ Test(worldcache, names_past_the_limit_are_not_stored)
 	world_free(&w);
 }
 
+/* The reference frame's cached render carries its counts as well as its
+ * image: a render with cone culling or by the interval walk counts other
+ * work for the same image, so each has its own entry, and a plain render
+ * keeps its key. Catches the key without them (a cached reference of
+ * another walk handed its counts, and its time, to the check). */
+Test(worldcache, reference_frames_of_other_walks_have_their_own_entries)
+{
+	char dir[256], cache[300], obj[512];
+	fresh_scene(dir, sizeof dir, cache, sizeof cache, obj, sizeof obj);
+	world w;
+	load(&w, obj, cache, -1);
+	render_opts o;
+	render_opts_default(&o);
+	o.width = o.height = 16;
+	o.threads = 1;
+	uint8_t rgb[16 * 16 * 3];
+	render_stats st;
+	diag d;
+	int cached;
+	for (int k = 0; k < 3; k++) {
+		o.cone_cull = k == 1;
+		o.frustum = k == 2;
+		for (int again = 0; again < 2; again++) {
+			cr_assert_eq(world_reference_rgb8(&w, &o, rgb, &st, &cached, &d), 0, "%s",
+			             d.msg);
+			cr_assert_eq(cached, again, "walk %d, %s", k, again ? "again" : "first");
+		}
+	}
+	world_free(&w);
+}
+
 /* The texels come through the image plugin, a file apart from the
  * program: a rebuilt plugin (here a copy whose time moves on) misses. */
 Test(worldcache, rebuilt_image_plugin_misses)
