@@ -205,13 +205,13 @@ static int walk(hl1 *l, hreq *q, uint64_t t)
 }
 
 /* A read refused for lack of an MSHR, retried after a fill (tc_retry). */
-static int l1_retry(void *ctx, void *who, uint64_t since, uint64_t now)
+static int l1_retry(void *ctx, void *who, uint64_t waited, uint64_t now)
 {
 	hl1 *l = ctx;
 	hreq *q = who;
 	if (walk(l, q, now))
 		return 1; /* stays at the head */
-	l->h->stall_ticks[q->type] += tc_waited(since, now);
+	l->h->stall_ticks[q->type] += waited;
 	if (--q->pending == 0) /* the guard */
 		finish(l->h, q);
 	return 0;

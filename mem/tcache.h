@@ -138,19 +138,19 @@ static inline uint64_t tc_waited(uint64_t since, uint64_t now)
 	return now > since ? now - since : 0;
 }
 /* Retries the parked requests while an MSHR is free: retry(ctx, who,
- * since, now) returns 0 when who got through (it leaves the FIFO), 1 when
- * refused again (it stays at the head; resuming stops). A request parked
- * for its port slot may be resumed by a fill before that slot: its wait
- * for an MSHR is then none (tc_waited), not below zero. (It is looked up
- * at the fill, before its slot: a known approximation, docs/memory.md
- * "MSHRs"; looking it up at its slot moves Conference 1024x768's cycles
- * by 0.04-0.06%.) */
-typedef int (*tc_retry)(void *ctx, void *who, uint64_t since, uint64_t now);
+ * waited, now) returns 0 when who got through (it leaves the FIFO), 1 when
+ * refused again (it stays at the head; resuming stops); waited is its wait
+ * for an MSHR so far. A request parked for its port slot may be resumed by
+ * a fill before that slot: its wait is then none (tc_waited), not below
+ * zero. (It is looked up at the fill, before its slot: a known
+ * approximation, docs/memory.md "MSHRs"; looking it up at its slot moves
+ * Conference 1024x768's cycles by 0.04-0.06%.) */
+typedef int (*tc_retry)(void *ctx, void *who, uint64_t waited, uint64_t now);
 static inline void tcache_resume(tcache *t, uint64_t now, tc_retry retry, void *ctx)
 {
 	while (t->stall && cache_mshr_free(&t->c)) {
 		tc_wait *w = t->stall;
-		if (retry(ctx, w->who, w->since, now))
+		if (retry(ctx, w->who, tc_waited(w->since, now), now))
 			break; /* stays at the head */
 		t->stall = w->next;
 		if (!t->stall)

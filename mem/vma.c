@@ -145,12 +145,9 @@ uint64_t vma_host_bytes(uint64_t sdram_bytes, const vma_params *p, uint64_t line
 
 int vma_check_params(const vma_params *p, diag *d)
 {
-	if (p->ways < 1 || p->line < 1)
-		return diag_set(d, "config", 0, 0,
-		                "memory.vma.ways and memory.vma.line must be >= 1");
-	/* on board memory of exactly one set with its meta-data */
-	uint64_t one_set = (uint64_t)p->ways * (p->line + VMA_META_BYTES_PER_LINE);
-	return vma_check(one_set, p, d);
+	/* vma_check on a board of exactly one set with its meta-data (its
+	 * ways and line are checked first) */
+	return vma_check((uint64_t)p->ways * (p->line + VMA_META_BYTES_PER_LINE), p, d);
 }
 
 int vma_check(uint64_t sdram_bytes, const vma_params *p, diag *d)
@@ -348,10 +345,10 @@ static uint64_t meta_addr(const vma *v, uint32_t set)
 }
 
 /* A piece refused for lack of a tag-cache MSHR, retried (tc_retry). */
-static int meta_retry(void *ctx, void *who, uint64_t since, uint64_t now)
+static int meta_retry(void *ctx, void *who, uint64_t waited, uint64_t now)
 {
 	vma *v = ctx;
-	v->s.stall_ticks += tc_waited(since, now);
+	v->s.stall_ticks += waited;
 	meta_phase(v, who, now);
 	return 0; /* an MSHR is free: it cannot be refused */
 }
@@ -399,10 +396,10 @@ static void meta_phase(vma *v, vma_piece *p, uint64_t t)
 }
 
 /* A piece refused for lack of an on-board-cache MSHR, retried. */
-static int data_retry(void *ctx, void *who, uint64_t since, uint64_t now)
+static int data_retry(void *ctx, void *who, uint64_t waited, uint64_t now)
 {
 	vma *v = ctx;
-	v->s.stall_ticks += tc_waited(since, now);
+	v->s.stall_ticks += waited;
 	data_phase(v, who, now);
 	return 0; /* an MSHR is free: it cannot be refused */
 }

@@ -514,6 +514,13 @@ static void thread_free(thr_ctx *t)
 
 /* The chip's frame, engine, per-frame figures and the memory's bytes (the
  * image, then every slot's spill area); -1 when out of memory. */
+/* The stack spill area's bytes: room for PKT_STACK_MAX entries of every
+ * thread slot, after spill_base (thr_spill_addr). */
+static uint64_t spill_area(const chip *c)
+{
+	return (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
+}
+
 static int chip_base(chip *c, const saar_config *cfg, const world *w)
 {
 	c->cfg = *cfg;
@@ -558,8 +565,7 @@ static int chip_base(chip *c, const saar_config *cfg, const world *w)
 	c->spill_base = (image_size + 4095) & ~(uint64_t)4095;
 	c->regs = w->m;
 	c->regs.bytes = NULL;
-	uint64_t space =
-	    c->spill_base + (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
+	uint64_t space = c->spill_base + spill_area(c);
 	if (!c->e || !c->frame_cycles || !c->frame_port ||
 	    (cfg->memory.model == CFG_MEM_HIERARCHY && !c->frame_mem) ||
 	    ms_init(&c->store, image, image_size, space))
@@ -674,8 +680,7 @@ static int chip_memory(chip *c, diag *d)
 	 * can spill (every thread slot has room for PKT_STACK_MAX entries,
 	 * thr_spill_addr). A spill past the board had been served as rows the
 	 * board does not have, without a word. */
-	uint64_t board = (uint64_t)cfg->memory.sdram.mb << 20,
-	         area = (uint64_t)c->nrtp * (uint64_t)c->tpr * PKT_STACK_MAX * THR_SPILL_STRIDE;
+	uint64_t board = (uint64_t)cfg->memory.sdram.mb << 20, area = spill_area(c);
 	/* and its addresses are the chip's: 32 bits (docs/memory-map.md) */
 	if (cfg->chip.stack_depth < PKT_STACK_MAX && c->spill_base + area > ((uint64_t)1 << 32))
 		return diag_set(

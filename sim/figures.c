@@ -45,16 +45,23 @@ double fig_fps(const chip *c)
 	return ratio(c->cfg.chip.clock_mhz * 1e6, cyc);
 }
 
-int fig_thread_shares(const chip *c, double share[THR_NSTATES])
+uint64_t fig_thread_ps(const chip *c, uint64_t ps[THR_NSTATES])
 {
 	char name[64];
-	double tot = 0;
+	uint64_t tot = 0;
 	for (int s = 0; s < THR_NSTATES; s++) {
 		snprintf(name, sizeof name, "threads.%s_ps", chip_state_name(s));
-		tot += share[s] = (double)chip_rtp_sum(c, name);
+		tot += ps[s] = chip_rtp_sum(c, name);
 	}
+	return tot;
+}
+
+int fig_thread_shares(const chip *c, double share[THR_NSTATES])
+{
+	uint64_t ps[THR_NSTATES];
+	double tot = (double)fig_thread_ps(c, ps);
 	for (int s = 0; s < THR_NSTATES; s++)
-		share[s] = tot > 0 ? share[s] / tot : 0;
+		share[s] = tot > 0 ? (double)ps[s] / tot : 0;
 	return tot > 0;
 }
 

@@ -37,6 +37,9 @@ double fig_fps(const chip *c);
 /* Utilisation of unit kind k (UNIT_*): issue cycles / (cycles x units of
  * the kind), over the chip (rtp < 0) or one RTP. */
 double fig_util(const chip *c, int kind, int rtp);
+/* The thread contexts' time in each state (threads.<state>_ps over the
+ * RTPs) into ps; returns their sum. */
+uint64_t fig_thread_ps(const chip *c, uint64_t ps[THR_NSTATES]);
 /* The thread states' shares of threads x time (THR_NSTATES of them);
  * returns 0 (shares all 0) when no thread time was timed (functional). */
 int fig_thread_shares(const chip *c, double share[THR_NSTATES]);

@@ -358,12 +358,8 @@ int rc_figs_get(const chip *c, rc_figs *f)
 			f->rtp_util[k * f->nrtp + r] = fig_util(c, k, r);
 	}
 	f->threads_timed = fig_thread_shares(c, f->share);
-	f->thread_ps = 0;
-	for (int k = 0; k < THR_NSTATES; k++) {
-		char name[64];
-		snprintf(name, sizeof name, "threads.%s_ps", chip_state_name(k));
-		f->thread_ps += chip_rtp_sum(c, name);
-	}
+	uint64_t ps[THR_NSTATES];
+	f->thread_ps = fig_thread_ps(c, ps);
 	f->thread_ps_want = c->cfg.fidelity != CFG_FIDELITY_FUNCTIONAL && !chip_estimates(&c->cfg)
 	                        ? chip_cycles(c) * c->clk.period * (uint64_t)(c->nrtp * c->tpr)
 	                        : 0;

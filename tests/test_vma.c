@@ -247,6 +247,49 @@ static void vma_answered(eng *e, void *ctx, uint64_t arg)
 	(*(int *)ctx)++;
 }
 
+/* A VMA hierarchy over a 1 MB board with unhashed sets and a 4 KB image
+ * (the reads above it bypass the L1s), for tests that place lines in
+ * chosen on-board sets. */
+typedef struct vma_rig {
+	eng *e;
+	memport mp;
+	hier *h;
+	int done;
+} vma_rig;
+
+static void vma_rig_init(vma_rig *r)
+{
+	saar_config c;
+	setup(&c, 1, 1);
+	c.memory.vma.hash = CFG_HASH_NONE;
+	hier_params hp;
+	diag d;
+	cr_assert_eq(memcfg_hier(&c, &hp, &d), 0, "%s", d.msg);
+	r->e = eng_create(64);
+	cr_assert_eq(hier_init(&r->mp, r->e, eng_clock_mhz(533), &hp, 4096, NULL, &d), 0, "%s",
+	             d.msg);
+	r->h = r->mp.impl;
+	r->done = 0;
+}
+
+/* One access of kd line `line` (a posted write, or a read), timed or
+ * functional, run to its end. */
+static void vma_rig_access(vma_rig *r, uint64_t line, int write, int timed)
+{
+	mem_req q = {line * r->h->v.p.line, 8, MEM_KD, (uint8_t)write, 0, NULL, 0};
+	if (!timed)
+		mem_access_func(&r->mp, &q);
+	else
+		mem_access(&r->mp, &q, write ? NULL : vma_answered, &r->done, 0);
+	eng_run(r->e, ENG_FOREVER);
+}
+
+static void vma_rig_free(vma_rig *r)
+{
+	mem_free(&r->mp);
+	eng_destroy(r->e);
+}
+
 /* A write into an on-board line is a use of it for the replacement, as a
  * read's hit is: four lines A-D fill one on-board set (A the least
  * recent), A is written (dirty), a fifth line E of the set is read: the
@@ -256,39 +299,19 @@ static void vma_answered(eng *e, void *ctx, uint64_t arg)
 Test(vma, a_write_is_a_use_of_its_line)
 {
 	for (int timed = 0; timed < 2; timed++) {
-		saar_config c;
-		setup(&c, 1, 1);
-		c.memory.vma.hash = CFG_HASH_NONE;
-		hier_params hp;
-		diag d;
-		cr_assert_eq(memcfg_hier(&c, &hp, &d), 0, "%s", d.msg);
-		eng *e = eng_create(64);
-		memport mp;
-		/* a 4 KB image: the reads above it bypass the L1s */
-		cr_assert_eq(hier_init(&mp, e, eng_clock_mhz(533), &hp, 4096, NULL, &d), 0, "%s",
-		             d.msg);
-		hier *h = mp.impl;
-		uint64_t ns = h->v.l2.c.nsets, L = h->v.p.line, A = 1000;
-		int done = 0;
+		vma_rig r;
+		vma_rig_init(&r);
+		uint64_t ns = r.h->v.l2.c.nsets, A = 1000;
 		uint64_t seq[] = {A, A + ns, A + 2 * ns, A + 3 * ns, A, A + 4 * ns};
-		for (int k = 0; k < 6; k++) {
-			mem_req q = {seq[k] * L, 8, MEM_KD, k == 4, 0, NULL, 0};
-			if (!timed)
-				mem_access_func(&mp, &q);
-			else if (k == 4)
-				mem_access(&mp, &q, NULL, NULL, 0);
-			else
-				mem_access(&mp, &q, vma_answered, &done, 0);
-			eng_run(e, ENG_FOREVER);
-		}
+		for (int k = 0; k < 6; k++)
+			vma_rig_access(&r, seq[k], k == 4, timed);
 		hier_stats s;
-		cr_assert_eq(hier_get_stats(&mp, &s), 0);
+		cr_assert_eq(hier_get_stats(&r.mp, &s), 0);
 		cr_assert_eq(s.vma.host_fetches, 5, "%s: five lines fetched",
 		             timed ? "timed" : "functional");
 		cr_assert_eq(s.vma.writebacks, 0, "%s: the line just written was evicted",
 		             timed ? "timed" : "functional");
-		mem_free(&mp);
-		eng_destroy(e);
+		vma_rig_free(&r);
 	}
 }
 
@@ -303,31 +326,16 @@ Test(vma, a_write_is_a_use_of_its_line)
 Test(vma, a_write_reads_and_writes_meta_data)
 {
 	for (int timed = 0; timed < 2; timed++) {
-		saar_config c;
-		setup(&c, 1, 1);
-		c.memory.vma.hash = CFG_HASH_NONE;
-		hier_params hp;
-		diag d;
-		cr_assert_eq(memcfg_hier(&c, &hp, &d), 0, "%s", d.msg);
-		eng *e = eng_create(64);
-		memport mp;
-		cr_assert_eq(hier_init(&mp, e, eng_clock_mhz(533), &hp, 4096, NULL, &d), 0, "%s",
-		             d.msg);
-		hier *h = mp.impl;
-		uint64_t L = h->v.p.line, A = 1000;
+		vma_rig r;
+		vma_rig_init(&r);
+		uint64_t A = 1000;
 		const char *what = timed ? "timed" : "functional";
-		int done = 0;
 		/* read A, write A, write A, write B; the meta counts after each */
 		uint64_t seq[] = {A, A, A, A + 1}, reads[4], writes[4];
 		for (int k = 0; k < 4; k++) {
-			mem_req q = {seq[k] * L, 8, MEM_KD, k > 0, 0, NULL, 0};
-			if (!timed)
-				mem_access_func(&mp, &q);
-			else
-				mem_access(&mp, &q, k ? NULL : vma_answered, &done, 0);
-			eng_run(e, ENG_FOREVER);
+			vma_rig_access(&r, seq[k], k > 0, timed);
 			hier_stats s;
-			cr_assert_eq(hier_get_stats(&mp, &s), 0);
+			cr_assert_eq(hier_get_stats(&r.mp, &s), 0);
 			reads[k] = s.vma.meta_reads;
 			writes[k] = s.vma.meta_writes;
 			if (timed)
@@ -335,12 +343,12 @@ Test(vma, a_write_reads_and_writes_meta_data)
 				             "memif meta bytes = the VMA's, after access %d", k);
 		}
 		cr_assert_eq(reads[1], reads[0], "%s: A's record is in the tag cache", what);
-		cr_assert_eq(writes[1], writes[0] + 1, "%s: A made dirty: its record written", what);
+		cr_assert_eq(writes[1], writes[0] + 1, "%s: A made dirty: its record written",
+		             what);
 		cr_assert_eq(reads[2] - reads[1] + writes[2] - writes[1], 0,
 		             "%s: A already dirty: no meta-data traffic", what);
 		cr_assert_eq(reads[3], reads[2] + 1, "%s: B's record read from SDRAM", what);
 		cr_assert_eq(writes[3], writes[2], "%s: B written around: no record write", what);
-		mem_free(&mp);
-		eng_destroy(e);
+		vma_rig_free(&r);
 	}
 }

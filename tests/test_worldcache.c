@@ -133,6 +133,19 @@ Test(worldcache, hit_is_the_built_world)
 	world_free(&w2);
 }
 
+/* w, just stored after a miss, is the world a build without the cache
+ * makes, and the next load of obj is a hit; frees w. */
+static void stored_is_built_then_hit(world *w, const char *obj, const char *cache)
+{
+	world b;
+	load(&b, obj, NULL, -1);
+	same_world(w, &b);
+	world_free(&b);
+	world_free(w);
+	cr_assert_eq(load(w, obj, cache, -1), WORLD_CACHE_HIT);
+	world_free(w);
+}
+
 Test(worldcache, changed_source_files_miss)
 {
 	char dir[256], cache[300], obj[512], p[512];
@@ -146,13 +159,7 @@ Test(worldcache, changed_source_files_miss)
 	touch_ahead(dir, "quad.mtl", 5);
 	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "a changed MTL is a miss");
 	cr_assert_neq(wc_crc(w.m.bytes, w.m.size), white);
-	world b;
-	load(&b, obj, NULL, -1);
-	same_world(&w, &b);
-	world_free(&b);
-	world_free(&w);
-	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
-	world_free(&w);
+	stored_is_built_then_hit(&w, obj, cache);
 	/* the texture changes */
 	uint8_t px[2 * 2 * 3] = {0};
 	diag d;
@@ -187,13 +194,7 @@ Test(worldcache, a_missing_file_that_appears_misses)
 	cr_assert_eq(rename(p, mtl), 0);
 	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_STORED, "the MTL appeared: a miss");
 	cr_assert_neq(wc_crc(w.m.bytes, w.m.size), plain, "the MTL's colours are in the image");
-	world b;
-	load(&b, obj, NULL, -1);
-	same_world(&w, &b);
-	world_free(&b);
-	world_free(&w);
-	cr_assert_eq(load(&w, obj, cache, -1), WORLD_CACHE_HIT);
-	world_free(&w);
+	stored_is_built_then_hit(&w, obj, cache);
 }
 
 /* More names than the import's process can pass back (65536: here 9000
